@@ -1,0 +1,50 @@
+"""Shared test helpers: the location of ../shared/data and a factory for small synthetic wrfout files."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+WRF_SUPERCELL = SHARED_DATA / "wrf" / "wrfout_quarter_ss_0130.nc"
+WRF_THOMPSON = SHARED_DATA / "wrf" / "wrf_d01_allvars_cropped.nc"
+
+
+def shared_file(path: Path) -> Path:
+    """The path, or skip the test with a reason when ../shared/data is absent."""
+    if not path.is_file():
+        pytest.skip(f"shared data file {path} is absent (tests use ../shared/data relative to the repository)")
+    return path
+
+
+def write_wrfout(path: Path, *, nz=6, ny=4, nx=5, times=("2020-01-01_00:00:00",), drop=(), override=None,
+                 mp_physics=6, dx=1000.0, species=("QCLOUD", "QRAIN", "QICE", "QSNOW", "QGRAUP"),
+                 dz_w=500.0, terrain=None):
+    """A small, self-consistent wrfout-like NetCDF file (hydrostatic-ish base state, flat terrain)."""
+    import xarray as xr
+    nt = len(times)
+    zw = np.arange(nz + 1, dtype=np.float64) * dz_w
+    zw = np.broadcast_to(zw[:, None, None], (nz + 1, ny, nx)).copy()
+    if terrain is not None:
+        zw = zw * (1 - terrain[None] / zw[-1:]) + terrain[None]
+    zm = 0.5 * (zw[1:] + zw[:-1])
+    pb = 1e5 * np.exp(-zm / 8000.0)
+    data = {
+        "P": np.zeros((nt, nz, ny, nx)), "PB": np.broadcast_to(pb, (nt, nz, ny, nx)).copy(),
+        "T": np.full((nt, nz, ny, nx), 5.0), "QVAPOR": np.full((nt, nz, ny, nx), 0.005),
+        "PH": np.zeros((nt, nz + 1, ny, nx)), "PHB": np.broadcast_to(zw * 9.81, (nt, nz + 1, ny, nx)).copy(),
+    }
+    for s in species:
+        data[s] = np.zeros((nt, nz, ny, nx))
+    data.update(override or {})
+    dims_m = ("Time", "bottom_top", "south_north", "west_east")
+    dims_w = ("Time", "bottom_top_stag", "south_north", "west_east")
+    ds = xr.Dataset({k: ((dims_w if k in ("PH", "PHB") and np.shape(v)[1] == nz + 1 else dims_m)
+                         if np.ndim(v) == 4 else tuple(f"d{i}_{k}" for i in range(np.ndim(v))), np.asarray(v, np.float32))
+                     for k, v in data.items() if k not in drop})
+    ds["Times"] = (("Time",), np.array([t.encode() for t in times], dtype="S19"))
+    ds.attrs.update({"MP_PHYSICS": np.int32(mp_physics), "DX": np.float32(dx), "DY": np.float32(dx),
+                     "TITLE": "OUTPUT FROM A TEST FACTORY", "MAP_PROJ": np.int32(0)})
+    ds.to_netcdf(path)
+    return path

@@ -1,0 +1,155 @@
+"""Eq. 1-6 and 8 against hand-computed numbers; species presets; orientation through optics."""
+import numpy as np
+import pytest
+
+import weather_mi as wm
+from weather_mi.species import preset
+
+
+def hyd_one_point(name, q=1e-3, rho=1.0):
+    a = np.zeros((3, 4, 5))
+    a[1, 2, 3] = q
+    return wm.from_arrays({name: a}, rho, (100.0, 100.0, 100.0))
+
+
+@pytest.mark.parametrize("name,expected", [
+    ("cloud", 0.15),                     # 3 * 1 * 1e-3 / (2 * 1000 * 1e-5)
+    ("ice", 3e-3 / (2 * 917 * 1e-3)),    # 1.636e-3
+    ("rain", 1.5e-3),                    # 3e-3 / (2 * 1000 * 1e-3)
+    ("snow", 7.5e-3),                    # 3e-3 / (2 * 100 * 2e-3)
+    ("graupel", 1.5e-3),                 # 3e-3 / (2 * 400 * 2.5e-3)
+])
+def test_eq4_paper_preset_by_hand(name, expected):
+    vol = wm.optical_volume(hyd_one_point(name), species="paper")
+    i = vol.species.index(name)
+    assert vol.beta_ext[i, 1, 2, 3] == pytest.approx(expected, rel=1e-6)
+    assert vol.beta_total[1, 2, 3] == pytest.approx(expected, rel=1e-6)
+    assert vol.beta_ext.dtype == np.float32 and vol.beta_total.dtype == np.float32
+
+
+def test_eq1_to_eq3_consistent_with_eq4():
+    # Eq. 1-3 from first principles: sigma = 2 pi R^2, eta = rho q / (rho_p 4/3 pi R^3)
+    r, rho_p, rho_air, q = 10e-6, 1000.0, 0.9, 2e-3
+    beta_eq3 = 2 * np.pi * r ** 2 * rho_air * q / (rho_p * 4 / 3 * np.pi * r ** 3)
+    vol = wm.optical_volume(hyd_one_point("cloud", q, rho_air), species="paper")
+    assert vol.beta_total[1, 2, 3] == pytest.approx(beta_eq3, rel=1e-6)
+
+
+def test_eq6_sum_and_eq8_weights_mixture():
+    a = np.zeros((2, 2, 2))
+    a[0, 0, 0] = 1e-3
+    hyd = wm.from_arrays({"cloud": a, "snow": 2 * a}, 1.0, (1.0, 1.0, 1.0))
+    vol = wm.optical_volume(hyd, species="paper")
+    b_cloud, b_snow = 0.15, 3 * 2e-3 / (2 * 100 * 2e-3)  # 0.15, 0.015
+    assert vol.beta_total[0, 0, 0] == pytest.approx(b_cloud + b_snow, rel=1e-6)
+    sp = preset("paper")
+    w_c = np.mean(sp["cloud"].albedo_rgb) * b_cloud
+    w_s = np.mean(sp["snow"].albedo_rgb) * b_snow
+    assert vol.weights[0, 0, 0, 0] == pytest.approx(w_c / (w_c + w_s), rel=1e-5)
+    assert vol.weights[3, 0, 0, 0] == pytest.approx(w_s / (w_c + w_s), rel=1e-5)
+    assert np.all(vol.weights[:, 1, 1, 1] == 0)  # nothing scatters there
+    np.testing.assert_allclose(vol.weights.sum(axis=0)[0, 0, 0], 1.0, rtol=1e-6)
+    expected_alb = (np.array(sp["cloud"].albedo_rgb) * b_cloud + np.array(sp["snow"].albedo_rgb) * b_snow) / (b_cloud + b_snow)
+    np.testing.assert_allclose(vol.albedo[0, 0, 0], expected_alb, rtol=1e-6)
+
+
+def test_scale_multiplies_one_species_only():
+    a = np.full((2, 2, 2), 1e-3)
+    hyd = wm.from_arrays({"cloud": a, "ice": a}, 1.0, (1.0, 1.0, 1.0))
+    base = wm.optical_volume(hyd)
+    scaled = wm.optical_volume(hyd, scale={"ice": 2.0})
+    np.testing.assert_allclose(scaled.beta_ext[1], 2 * base.beta_ext[1], rtol=1e-6)
+    np.testing.assert_array_equal(scaled.beta_ext[0], base.beta_ext[0])
+    with pytest.raises(wm.WeatherDataError, match="hail"):
+        wm.optical_volume(hyd, scale={"hail": 2.0})
+
+
+def test_albedo_physics_close_to_unity():
+    # optics-notes: co-albedo 1e-7..1e-6 for 10 um droplets at 550 nm, ~3e-4 in the red for 1 mm rain
+    sp = preset("paper")
+    assert 1e-7 <= 1 - sp["cloud"].albedo_rgb[1] <= 1e-6
+    assert 1e-4 <= 1 - sp["rain"].albedo_rgb[0] <= 6e-4
+    assert all(a > 0.999 for s in sp for a in s.albedo_rgb)
+
+
+def test_paper_preset_table_ii_and_iii():
+    sp = preset("paper")
+    assert [s.radius_m for s in sp] == pytest.approx([1e-5, 1e-3, 1e-3, 2e-3, 2.5e-3])
+    assert [s.phase_class for s in sp] == ["water", "ice", "water", "ice", "ice"]
+    assert sp["cloud"].color_rgb == (1, 0, 0) and sp["ice"].color_rgb == (1, 0, 1)
+    assert sp["rain"].color_rgb == (0, 0, 1) and sp["snow"].color_rgb == (1, 1, 0)
+    assert sp["graupel"].color_rgb == (0, 1, 0)
+    phys = preset("physical")
+    assert 10e-6 <= phys["ice"].radius_m <= 125e-6  # WRF effective radii (optics-notes)
+
+
+def test_overrides_and_bad_species():
+    sp = preset("paper", {"ice": {"radius_m": 30e-6}}, scale={"snow": 0.5}, albedo=0.9)
+    assert sp["ice"].radius_m == 30e-6 and sp["snow"].scale == 0.5
+    assert sp["cloud"].albedo_rgb == (0.9, 0.9, 0.9)
+    with pytest.raises(wm.WeatherDataError, match="hail"):
+        preset("paper", {"hail": {"radius_m": 1e-3}})
+    with pytest.raises(wm.WeatherDataError, match="radius_m"):
+        preset("paper", {"ice": {"radius_m": -1.0}})
+    with pytest.raises(wm.WeatherDataError, match="physical"):
+        preset("nonsense")
+
+
+def test_model_effective_radius_used_by_physical_preset():
+    a = np.zeros((1, 1, 2))
+    a[0, 0, :] = 1e-3
+    r = np.array([[[20e-6, 0.0]]])
+    hyd = wm.from_arrays({"cloud": a}, 1.0, (1.0, 1.0, 1.0), r_eff={"cloud": r})
+    vol = wm.optical_volume(hyd, species="physical")
+    assert vol.beta_total[0, 0, 0] == pytest.approx(3e-3 / (2 * 1000 * 20e-6), rel=1e-6)
+    assert vol.beta_total[0, 0, 1] == pytest.approx(3e-3 / (2 * 1000 * 10e-6), rel=1e-6)  # fallback
+    paper = wm.optical_volume(hyd, species="paper")
+    assert paper.beta_total[0, 0, 0] == pytest.approx(0.15, rel=1e-6)
+
+
+def test_orientation_and_bbox_from_arrays():
+    a = np.zeros((3, 4, 5))
+    a[2, 1, 4] = 1e-3  # top, second row north, easternmost column
+    hyd = wm.from_arrays({"rain": a}, 1.0, (10.0, 20.0, 30.0), origin=(5.0, 10.0, 15.0))
+    vol = wm.optical_volume(hyd)
+    k, j, i = np.unravel_index(np.argmax(vol.beta_total), vol.shape)
+    assert (k, j, i) == (2, 1, 4)
+    assert float(hyd.x[i]) == 15.0 + 4 * 30 and float(hyd.y[j]) == 10.0 + 20 and float(hyd.z[k]) == 25.0
+    assert vol.bbox == ((0.0, 0.0, 0.0), (150.0, 80.0, 30.0))
+    assert vol.spacing == (10.0, 20.0, 30.0)
+
+
+def test_from_arrays_bad_input():
+    a = np.zeros((2, 3, 4))
+    with pytest.raises(wm.WeatherDataError, match="shape"):
+        wm.from_arrays({"cloud": a, "ice": np.zeros((2, 3, 5))}, 1.0, (1, 1, 1))
+    with pytest.raises(wm.WeatherDataError, match="NaN"):
+        wm.from_arrays({"cloud": np.full((2, 3, 4), np.nan)}, 1.0, (1, 1, 1))
+    with pytest.raises(wm.WeatherDataError, match="species name"):
+        wm.from_arrays({"hail": a}, 1.0, (1, 1, 1))
+    with pytest.raises(wm.WeatherDataError, match="rho_air"):
+        wm.from_arrays({"cloud": a}, np.ones(3), (1, 1, 1))
+    with pytest.raises(wm.WeatherDataError, match="spacing"):
+        wm.from_arrays({"cloud": a}, 1.0, (1, 0, 1))
+    neg = a.copy()
+    neg[0, 0, 0] = -1e-9
+    hyd = wm.from_arrays({"cloud": neg}, 1.0, (1, 1, 1))
+    assert hyd.attrs["n_negative_clipped"] == 1 and float(hyd.q_cloud.min()) == 0.0
+
+
+def test_raw_optics_from_arrays():
+    beta = np.random.default_rng(0).random((3, 4, 5)).astype(np.float32)
+    vol = wm.OpticalVolume.from_arrays(beta, albedo=0.9, bbox=((0, 0, 0), (5, 4, 3)))
+    assert vol.albedo.shape == (3, 4, 5, 3) and np.all(vol.albedo == np.float32(0.9))
+    with pytest.raises(wm.WeatherDataError, match="albedo"):
+        wm.OpticalVolume.from_arrays(beta, albedo=np.ones((2, 2)))
+
+
+def test_large_grid_memory_layout():
+    # a small stand-in for the 500 x 500 x 100 case (benchmarks/load_optics.py measures the real one)
+    shape = (10, 50, 50)
+    q = np.random.default_rng(1).random(shape, dtype=np.float32) * 1e-3
+    hyd = wm.from_arrays({s: q for s in wm.SPECIES_NAMES}, 1.0, (100, 1000, 1000))
+    vol = wm.optical_volume(hyd)
+    assert vol.beta_ext.shape == (5,) + shape and vol.weights.dtype == np.float32
+    np.testing.assert_allclose(vol.weights.sum(axis=0), 1.0, rtol=1e-5)

@@ -1,0 +1,29 @@
+"""weather-mi: physically based rendering of numerical-weather-model hydrometeors.
+
+    import weather_mi as wm
+    hyd = wm.open_wrf("wrfout_d01_....nc", time=-1)      # Hydrometeors (xarray.Dataset)
+    hyd = wm.synthetic.supercell()
+    vol = wm.optical_volume(hyd, species=wm.species.preset("paper"), scale={"ice": 2.0})
+"""
+from __future__ import annotations
+
+from . import atmosphere, hydrometeors, species
+from .errors import WeatherDataError
+from .hydrometeors import SPECIES_NAMES, from_arrays, validate
+from .io import open_wrf
+from .optics import OpticalVolume, optical_volume
+
+__version__ = "0.1.0"
+
+__all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les",
+           "optical_volume", "OpticalVolume", "species", "synthetic", "hydrometeors", "atmosphere", "phase"]
+
+
+def __getattr__(name):
+    # submodules imported on first use (the phase tables pull in miepython/numba)
+    import importlib
+    if name in ("phase", "synthetic"):
+        return importlib.import_module(f".{name}", __name__)
+    if name == "open_les":
+        return importlib.import_module(".io.les", __name__).open_les
+    raise AttributeError(f"module 'weather_mi' has no attribute {name!r}")

@@ -1,0 +1,171 @@
+"""Optics of a Hydrometeors dataset: the paper's Eq. 1-6 and the Eq. 8 mixture weights.
+
+Eq. 1  sigma_ext = 2 pi R^2                       (extinction efficiency 2 for large particles)
+Eq. 2  eta = rho_air q / (rho_particle V),  V = 4/3 pi R^3
+Eq. 3  beta_ext = sigma_ext eta
+Eq. 4  beta_ext = 3 rho_air q / (2 rho_particle R)  (1/m; what this module computes)
+Eq. 5  omega = beta_sca / beta_ext
+Eq. 6  beta_ext = sum over species
+Eq. 8  P(Theta, s) = sum_s P_s(Theta) beta_sca,s(s) / sum_s beta_sca,s(s)  ->  weights w_s
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import xarray as xr
+
+from .errors import WeatherDataError
+from .hydrometeors import DIMS, SPECIES_NAMES, bbox_of, check_species_name, validate
+from .species import SpeciesSet, preset
+
+
+@dataclass
+class OpticalVolume:
+    """Everything both renderers consume (DESIGN.md): per-species extinction ``beta_ext`` (S, z, y, x)
+    in 1/m, ``beta_total`` (z, y, x) Eq. 6, mixture single-scattering ``albedo`` (z, y, x, 3), Eq. 8
+    scattering ``weights`` (S, z, y, x; zero where nothing scatters), world ``bbox``
+    ((x0, y0, z0), (x1, y1, z1)) in metres, and one phase table per species (built on first access
+    from ``phase_mode`` when not given). All grids are float32, indexed [z, y, x]."""
+
+    species: tuple[str, ...]
+    beta_ext: np.ndarray
+    beta_total: np.ndarray
+    albedo: np.ndarray
+    weights: np.ndarray
+    bbox: tuple[tuple[float, float, float], tuple[float, float, float]]
+    species_set: SpeciesSet | None = None
+    phase_mode: str = "per_species"
+    attrs: dict = field(default_factory=dict)
+    _phase_tables: list | None = field(default=None, repr=False)
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return tuple(self.beta_total.shape)
+
+    @property
+    def spacing(self) -> tuple[float, float, float]:
+        """(dz, dy, dx) in metres."""
+        (x0, y0, z0), (x1, y1, z1) = self.bbox
+        nz, ny, nx = self.shape
+        return ((z1 - z0) / nz, (y1 - y0) / ny, (x1 - x0) / nx)
+
+    @property
+    def phase_tables(self) -> list:
+        if self._phase_tables is None:
+            from . import phase
+            if self.species_set is None:
+                raise WeatherDataError("OpticalVolume", "phase_tables", "phase tables or a species set")
+            self._phase_tables = phase.for_species(list(self.species_set), mode=self.phase_mode)
+        return self._phase_tables
+
+    @phase_tables.setter
+    def phase_tables(self, tables) -> None:
+        if tables is not None and len(tables) != len(self.species):
+            raise WeatherDataError("OpticalVolume", "phase_tables",
+                                   f"one table per species ({len(self.species)})", f"{len(tables)} tables")
+        self._phase_tables = None if tables is None else list(tables)
+
+    def optical_depth_z(self) -> np.ndarray:
+        """Vertical optical depth of every column (y, x): sum of beta_total dz."""
+        return self.beta_total.sum(axis=0, dtype=np.float64) * self.spacing[0]
+
+    @classmethod
+    def from_arrays(cls, beta_ext, albedo=1.0, phase=None, bbox=((0, 0, 0), (1, 1, 1)),
+                    name: str = "medium") -> "OpticalVolume":
+        """Raw optics: a (z, y, x) extinction grid (1/m), an albedo (number, (z, y, x) or (z, y, x, 3)),
+        one phase table and a bounding box ((x0, y0, z0), (x1, y1, z1)) in metres."""
+        src = "OpticalVolume.from_arrays"
+        beta = np.ascontiguousarray(beta_ext, dtype=np.float32)
+        if beta.ndim != 3:
+            raise WeatherDataError(src, "beta_ext", "a (z, y, x) array in 1/m", f"shape {beta.shape}")
+        if not np.all(np.isfinite(beta)) or np.any(beta < 0):
+            raise WeatherDataError(src, "beta_ext", "finite extinction >= 0 (1/m)")
+        alb = np.asarray(albedo, dtype=np.float32)
+        if alb.ndim == 3:
+            alb = alb[..., None]
+        try:
+            alb = np.ascontiguousarray(np.broadcast_to(alb, beta.shape + (3,)), dtype=np.float32)
+        except ValueError as exc:
+            raise WeatherDataError(src, "albedo", "a number, (z, y, x) or (z, y, x, 3) array",
+                                   f"shape {np.shape(albedo)}") from exc
+        if np.any(alb < 0) or np.any(alb > 1) or not np.all(np.isfinite(alb)):
+            raise WeatherDataError(src, "albedo", "single-scattering albedo in [0, 1]")
+        lo, hi = (tuple(float(v) for v in p) for p in bbox)
+        if not all(h > l for l, h in zip(lo, hi)):
+            raise WeatherDataError(src, "bbox", "((x0, y0, z0), (x1, y1, z1)) with x1 > x0, y1 > y0, z1 > z0")
+        weights = (beta > 0).astype(np.float32)[None]
+        vol = cls((name,), beta[None], beta, alb, weights, (lo, hi), None, "given", {"source": src})
+        if phase is not None:
+            vol.phase_tables = [phase]
+        return vol
+
+
+def _radius_field(hyd: xr.Dataset, name: str, default_m: float, use_model: bool):
+    """Per-voxel equivalent radius (m): the model's effective radius where given (> 0), else the species'."""
+    var = f"r_eff_{name}"
+    if use_model and var in hyd:
+        r = hyd[var].values.astype(np.float32)
+        return np.where(r > 0, r, np.float32(default_m))
+    return default_m
+
+
+def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
+                   scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
+                   phase_tables: Sequence | None = None, model_radii: bool | None = None) -> OpticalVolume:
+    """Optics of ``hyd`` (Eq. 1-6, 8).
+
+    species     : a SpeciesSet or a preset name ("paper", "physical").
+    scale       : per-species scaling factors, e.g. {"ice": 2.0} (multiplies that species' mass).
+    phase       : "per_species" (five tables) or "paper" (one water and one ice table), built lazily.
+    model_radii : use the model's effective radii (r_eff_<species>) where present; default True
+                  except for the "paper" preset, which reproduces the paper's fixed radii.
+    """
+    validate(hyd)
+    sp = preset(species) if isinstance(species, str) else species
+    for name in scale or {}:
+        check_species_name(name, "optical_volume", f"scale[{name!r}]")
+    sp = sp.with_overrides(scale={n: sp[n].scale * f for n, f in (scale or {}).items()})
+    if phase not in ("per_species", "paper"):
+        raise WeatherDataError("optical_volume", "phase", '"per_species" or "paper"', repr(phase))
+    use_model = (sp.preset_name != "paper") if model_radii is None else bool(model_radii)
+
+    rho = hyd["rho_air"].values.astype(np.float32)
+    shape = rho.shape
+    n_s = len(SPECIES_NAMES)
+    beta_ext = np.empty((n_s,) + shape, np.float32)
+    weights = np.empty((n_s,) + shape, np.float32)
+    albedo_sum = np.zeros(shape + (3,), np.float32)
+    for i, s in enumerate(sp):
+        r = _radius_field(hyd, s.name, s.radius_m, use_model)
+        q = hyd[f"q_{s.name}"].values
+        beta_ext[i] = s.beta_ext_per_m(rho, q.astype(np.float32, copy=False), r)  # Eq. 4
+        albedo_sum += beta_ext[i][..., None] * np.asarray(s.albedo_rgb, np.float32)  # sum omega beta (Eq. 5)
+    beta_total = beta_ext.sum(axis=0)  # Eq. 6
+    # Eq. 8 weights from scattering coefficients beta_sca,s = omega_s beta_s (channel-mean albedo;
+    # the channels differ by < 1e-3 for every hydrometeor)
+    for i, s in enumerate(sp):
+        np.multiply(beta_ext[i], np.float32(np.mean(s.albedo_rgb)), out=weights[i])
+    sca_total = weights.sum(axis=0)
+    nonzero = sca_total > 0
+    np.divide(weights, sca_total, out=weights, where=nonzero)
+    weights[:, ~nonzero] = 0.0
+    # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
+    # trilinear interpolation at cloud edges does not blend in a dark value
+    albedo = np.empty_like(albedo_sum)
+    has_ext = beta_total > 0
+    np.divide(albedo_sum, beta_total[..., None], out=albedo, where=has_ext[..., None])
+    total_ext = float(beta_total.sum(dtype=np.float64))
+    fill = (albedo_sum.reshape(-1, 3).sum(axis=0, dtype=np.float64) / total_ext) if total_ext > 0 \
+        else np.mean([s.albedo_rgb for s in sp], axis=0)
+    albedo[~has_ext] = fill.astype(np.float32)
+    np.clip(albedo, 0.0, 1.0, out=albedo)
+
+    attrs = {k: v for k, v in hyd.attrs.items()}
+    attrs["species_preset"] = sp.preset_name
+    attrs["model_radii"] = use_model
+    vol = OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase, attrs)
+    if phase_tables is not None:
+        vol.phase_tables = phase_tables
+    return vol
