@@ -1,0 +1,44 @@
+"""Mitsuba dictionaries for an OpticalVolume: the ``heterogeneous`` medium (extinction grid, albedo
+grid) with the ``hydrometeor_mixture`` phase function (Eq. 8) on the volume's bounding box."""
+from __future__ import annotations
+
+import numpy as np
+
+from .optics import OpticalVolume
+from .variant import ensure_registered
+
+
+def phase_arrays(vol: OpticalVolume):
+    """(mu (N,), values (S, N, 3), weights (z, y, x, S)) as the plugin takes them."""
+    from .plugins.hydrometeor_mixture import prepare_tables
+    mu, values = prepare_tables(vol.phase_tables)
+    weights = np.ascontiguousarray(np.moveaxis(vol.weights, 0, -1), dtype=np.float32)
+    return mu, values, weights
+
+
+def phase_dict(vol: OpticalVolume) -> dict:
+    """``hydrometeor_mixture`` phase function for ``vol``."""
+    import mitsuba as mi
+    from .plugins.hydrometeor_mixture import bbox_transform
+    ensure_registered()
+    mu, values, weights = phase_arrays(vol)
+    return {"type": "hydrometeor_mixture", "mu": mi.TensorXf(mu[:, None]), "values": mi.TensorXf(values),
+            "weights": mi.TensorXf(weights), "to_world": bbox_transform(vol.bbox)}
+
+
+def medium_dict(vol: OpticalVolume) -> dict:
+    """``heterogeneous`` medium: sigma_t = beta_total (1/m, grey), RGB albedo, mixture phase, all on
+    the volume's bounding box (grids indexed [z, y, x, channel], last axis world x)."""
+    import mitsuba as mi
+    from .plugins.hydrometeor_mixture import bbox_transform
+    to_world = bbox_transform(vol.bbox)
+    return {
+        "type": "heterogeneous",
+        "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(vol.beta_total[..., None]),
+                    "to_world": to_world, "filter_type": "trilinear"},
+        "albedo": {"type": "gridvolume", "data": mi.TensorXf(vol.albedo), "to_world": to_world,
+                   "filter_type": "trilinear"},
+        "scale": 1.0,
+        "has_spectral_extinction": False,
+        "phase": phase_dict(vol),
+    }
