@@ -14,13 +14,17 @@ from .io import open_wrf
 from .optics import OpticalVolume, optical_volume
 from .variant import ensure_registered, set_variant
 from .medium import medium_dict, phase_dict
+from .scene import Camera, Ground, SceneSpec, Sky, Sun
+from .imageio import Image
+from .reference import render_reference
 
 ensure_registered()  # Mitsuba plugins usable from dict and XML scenes once weather_mi is imported
 
 __version__ = "0.1.0"
 
 __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les",
-           "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict", "species", "synthetic", "hydrometeors", "atmosphere", "phase"]
+           "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
+           "Camera", "Ground", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "species", "synthetic", "hydrometeors", "atmosphere", "phase"]
 
 
 def __getattr__(name):

@@ -1,0 +1,117 @@
+"""Images out of either renderer: radiance with its standard error and metadata; EXR for data
+(OpenEXR), PNG for eyes (sRGB transfer function from colour-science)."""
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclass
+class Image:
+    """``radiance`` and ``stderr`` are (H, W, 3) float32 arrays (row 0 at the top of the picture), in
+    W/m^2/sr per RGB channel (or reflectance pi L / (mu0 E) when ``metadata['normalize']`` says so)."""
+
+    radiance: np.ndarray
+    stderr: np.ndarray | None = None
+    metadata: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self.radiance = np.ascontiguousarray(self.radiance, dtype=np.float32)
+        if self.radiance.ndim != 3 or self.radiance.shape[2] != 3:
+            raise ValueError(f"Image radiance must be (H, W, 3), got {self.radiance.shape}")
+        if self.stderr is None:
+            self.stderr = np.full_like(self.radiance, np.nan)
+        self.stderr = np.ascontiguousarray(self.stderr, dtype=np.float32)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.radiance.shape[:2]
+
+    def relative_stderr(self, mask: np.ndarray | None = None) -> float:
+        """Mean over pixels (optionally masked) of stderr / radiance, channel-averaged."""
+        lum = self.radiance.mean(axis=2)
+        err = self.stderr.mean(axis=2)
+        ok = lum > 0 if mask is None else (mask & (lum > 0))
+        return float(np.mean(err[ok] / lum[ok])) if np.any(ok) else float("nan")
+
+    def save(self, path) -> Path:
+        """Write an EXR: R, G, B radiance, stderr.R/G/B, and the metadata as a JSON header attribute."""
+        return write_exr(path, self.radiance, self.stderr, self.metadata)
+
+    def save_png(self, path, exposure: float | None = None) -> Path:
+        """Write a tone-mapped sRGB preview: radiance x exposure, clipped, sRGB-encoded. The default
+        exposure maps the 99.5th percentile of the luminance to 1."""
+        return write_png(path, self.radiance, exposure)
+
+    @classmethod
+    def load(cls, path) -> "Image":
+        radiance, stderr, metadata = read_exr(path)
+        return cls(radiance, stderr, metadata)
+
+
+def write_exr(path, radiance: np.ndarray, stderr: np.ndarray | None = None, metadata: dict | None = None) -> Path:
+    import OpenEXR
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    channels = {c: np.ascontiguousarray(radiance[..., i], dtype=np.float32) for i, c in enumerate("RGB")}
+    if stderr is not None:
+        for i, c in enumerate("RGB"):
+            channels[f"stderr.{c}"] = np.ascontiguousarray(stderr[..., i], dtype=np.float32)
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
+              "weather_mi": json.dumps(metadata or {}, default=_json_default)}
+    tmp = path.with_name(path.name + ".tmp.exr")
+    with OpenEXR.File(header, channels) as f:
+        f.write(str(tmp))
+    os.replace(tmp, path)
+    return path
+
+
+def read_exr(path):
+    """(radiance, stderr or None, metadata) from an EXR written by :func:`write_exr` (or any RGB EXR)."""
+    import OpenEXR
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        ch = f.channels()
+        meta = f.header().get("weather_mi")
+        metadata = json.loads(meta) if isinstance(meta, str) else {}
+        radiance = np.stack([np.asarray(ch[c].pixels, np.float32) for c in "RGB"], axis=-1)
+        stderr = None
+        if all(f"stderr.{c}" in ch for c in "RGB"):
+            stderr = np.stack([np.asarray(ch[f"stderr.{c}"].pixels, np.float32) for c in "RGB"], axis=-1)
+    return radiance, stderr, metadata
+
+
+def auto_exposure(radiance: np.ndarray, percentile: float = 99.5) -> float:
+    lum = radiance.mean(axis=2)
+    ref = float(np.percentile(lum[np.isfinite(lum)], percentile)) if lum.size else 1.0
+    return 1.0 / ref if ref > 0 else 1.0
+
+
+def to_srgb8(radiance: np.ndarray, exposure: float | None = None) -> np.ndarray:
+    """Display colour shared by every image of the project: linear radiance x exposure, clipped to
+    [0, 1], sRGB transfer function (IEC 61966-2-1, colour-science), 8 bits."""
+    import colour
+    exposure = auto_exposure(radiance) if exposure is None else float(exposure)
+    linear = np.clip(np.nan_to_num(radiance * exposure), 0.0, 1.0)
+    return np.round(colour.cctf_encoding(linear, function="sRGB") * 255).astype(np.uint8)
+
+
+def write_png(path, radiance: np.ndarray, exposure: float | None = None) -> Path:
+    from PIL import Image as PILImage
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    PILImage.fromarray(to_srgb8(radiance, exposure)).save(path)
+    return path
+
+
+def _json_default(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON-serialisable: {type(o).__name__}")

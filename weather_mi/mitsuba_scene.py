@@ -1,0 +1,100 @@
+"""SceneSpec + OpticalVolume -> Mitsuba 3 scene dictionary (the kernel side of scene.py)."""
+from __future__ import annotations
+
+import numpy as np
+
+from .medium import medium_dict
+from .optics import OpticalVolume
+from .scene import Camera, SceneSpec, Sky, Sun
+from .variant import ensure_registered
+
+FAR_CLIP_M = 1e7
+
+
+def _look_at(camera: Camera):
+    import mitsuba as mi
+    return mi.ScalarTransform4f().look_at(origin=list(camera.origin), target=list(camera.target), up=list(camera.up))
+
+
+def sensor_dict(spec: SceneSpec) -> dict:
+    """Perspective (horizontal fov) or orthographic sensor with a box filter (independent pixels)."""
+    import mitsuba as mi
+    cam = spec.camera
+    film = {"type": "hdrfilm", "width": int(spec.width), "height": int(spec.height),
+            "rfilter": {"type": "box"}, "pixel_format": "rgb", "component_format": "float32"}
+    if cam.kind == "orthographic":
+        to_world = _look_at(cam) @ mi.ScalarTransform4f().scale([cam.ortho_width / 2, cam.ortho_height / 2, 1.0])
+        return {"type": "orthographic", "to_world": to_world, "film": film,
+                "near_clip": 1e-3, "far_clip": FAR_CLIP_M}
+    return {"type": "perspective", "fov": float(cam.fov), "fov_axis": "x", "to_world": _look_at(cam),
+            "film": film, "near_clip": 1.0, "far_clip": FAR_CLIP_M}
+
+
+def sun_dict(sun: Sun) -> dict:
+    return {"type": "directional", "direction": (-sun.to_sun).tolist(),
+            "irradiance": {"type": "rgb", "value": list(sun.irradiance)}}
+
+
+_SUNSKY_SUN_IRRADIANCE: dict = {}
+
+
+def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
+    """RGB irradiance normal to the beam of the Hosek-Wilkie sun of Mitsuba's ``sunsky`` for this sun
+    position (Monte Carlo over its disc, cached): used to scale its sky to our sun's irradiance."""
+    import drjit as dr
+    import mitsuba as mi
+    key = (mi.variant(), round(sun.elevation, 3), round(float(turbidity), 3))
+    if key not in _SUNSKY_SUN_IRRADIANCE:
+        emitter = mi.load_dict({"type": "sunsky", "sun_direction": sun.to_sun.tolist(), "sky_scale": 0.0,
+                                "turbidity": float(turbidity)})
+        n = 1 << 16
+        it = dr.zeros(mi.Interaction3f, n)
+        rng = np.random.default_rng(1)
+        sample = mi.Point2f(*(rng.random((2, n)).astype(np.float32)))
+        ds, weight = emitter.sample_direction(it, sample)
+        cos = dr.dot(ds.d, mi.Vector3f(*(float(v) for v in sun.to_sun)))
+        e = np.array(weight * cos)
+        _SUNSKY_SUN_IRRADIANCE[key] = np.asarray(e).reshape(3, -1).mean(axis=1) if e.ndim > 1 else np.full(3, e.mean())
+    return _SUNSKY_SUN_IRRADIANCE[key]
+
+
+def sky_dict(sky: Sky, sun: Sun) -> dict:
+    """Constant sky, or Hosek-Wilkie sky (sun part off: the sun is the ``directional`` emitter) with
+    the physical sky-to-sun ratio kept: sky_scale = our sun irradiance / the model sun's irradiance."""
+    if sky.kind == "constant":
+        return {"type": "constant", "radiance": {"type": "rgb", "value": list(sky.radiance)}}
+    model_sun = sunsky_sun_irradiance(sun, sky.turbidity)
+    scale = float(np.mean(sun.irradiance) / max(float(np.mean(model_sun)), 1e-30))
+    return {"type": "sunsky", "sun_direction": sun.to_sun.tolist(), "sun_scale": 0.0, "sky_scale": scale,
+            "turbidity": float(sky.turbidity), "albedo": float(sky.ground_albedo)}
+
+
+def ground_dict(spec: SceneSpec, vol_bbox) -> dict:
+    """A Lambertian rectangle at the ground height, wide enough to fill the view (100 x the bbox)."""
+    import mitsuba as mi
+    (x0, y0, _), (x1, y1, _) = vol_bbox
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    half = 50.0 * max(x1 - x0, y1 - y0, 1.0)
+    to_world = mi.ScalarTransform4f().translate([cx, cy, spec.ground.height]).scale([half, half, 1.0])
+    return {"type": "rectangle", "to_world": to_world,
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(spec.ground.albedo)}}}
+
+
+def medium_shape_dict(vol: OpticalVolume) -> dict:
+    """The volume's bounding box as a ``cube`` with a null BSDF holding the medium."""
+    import mitsuba as mi
+    lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
+    to_world = mi.ScalarTransform4f().translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist())
+    return {"type": "cube", "to_world": to_world, "bsdf": {"type": "null"}, "interior": medium_dict(vol)}
+
+
+def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
+    """The whole Mitsuba scene: camera, sun, sky, ground, the medium in its box, the integrator."""
+    ensure_registered()
+    d = {"type": "scene", "integrator": integrator, "sensor": sensor_dict(spec), "sun": sun_dict(spec.sun),
+         "medium_box": medium_shape_dict(vol)}
+    if spec.sky is not None:
+        d["sky"] = sky_dict(spec.sky, spec.sun)
+    if spec.ground is not None:
+        d["ground"] = ground_dict(spec, vol.bbox)
+    return d

@@ -1,0 +1,192 @@
+"""The scene description shared by both renderers: camera, sun, sky, ground, image size, seed.
+
+Conventions (DESIGN.md): world frame x east, y north, z up, metres. Directions are given by azimuth
+(degrees clockwise from north) and elevation (degrees above the horizon). The sun is an irradiance
+(W/m^2 per RGB channel) on a plane normal to its beam; images are radiance in the same units per sr.
+Perspective field of view is horizontal (degrees).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+
+def direction_from_angles(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
+    """Unit vector towards (azimuth clockwise from north, elevation above horizon): (east, north, up)."""
+    a, e = math.radians(azimuth_deg), math.radians(elevation_deg)
+    return np.array([math.sin(a) * math.cos(e), math.cos(a) * math.cos(e), math.sin(e)])
+
+
+def _rgb(value, name: str) -> tuple[float, float, float]:
+    arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (3,))
+    if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise ValueError(f"{name} must be a non-negative number or three numbers (RGB), got {value!r}")
+    return tuple(float(v) for v in arr)
+
+
+@dataclass(frozen=True)
+class Sun:
+    """The sun: direction by azimuth/elevation (degrees) and irradiance normal to the beam (W/m^2, RGB)."""
+
+    azimuth: float = 240.0
+    elevation: float = 35.0
+    irradiance: tuple = (1.0, 1.0, 1.0)
+
+    def __post_init__(self):
+        if not 0.0 < float(self.elevation) <= 90.0:
+            raise ValueError(f"Sun elevation must be above the horizon (0 < elevation <= 90 degrees), "
+                             f"got {self.elevation}")
+        object.__setattr__(self, "irradiance", _rgb(self.irradiance, "Sun irradiance"))
+
+    @property
+    def to_sun(self) -> np.ndarray:
+        """Unit vector pointing towards the sun (the light arrives along -to_sun)."""
+        return direction_from_angles(self.azimuth, self.elevation)
+
+    @property
+    def mu0(self) -> float:
+        """Cosine of the solar zenith angle."""
+        return math.sin(math.radians(self.elevation))
+
+
+@dataclass(frozen=True)
+class Sky:
+    """Diffuse skylight: ``"sunsky"`` (Hosek-Wilkie, oriented by the Sun and scaled so that its sun
+    would give this scene's sun irradiance) or ``"constant"`` with a radiance (W/m^2/sr, RGB)."""
+
+    kind: str = "sunsky"
+    radiance: tuple = (0.05, 0.07, 0.1)
+    turbidity: float = 3.0
+    ground_albedo: float = 0.3
+
+    def __post_init__(self):
+        if self.kind not in ("sunsky", "constant"):
+            raise ValueError(f"Sky kind must be 'sunsky' or 'constant', got {self.kind!r}")
+        object.__setattr__(self, "radiance", _rgb(self.radiance, "Sky radiance"))
+        if not 1.0 <= float(self.turbidity) <= 10.0:
+            raise ValueError(f"Sky turbidity must be in [1, 10], got {self.turbidity}")
+
+
+@dataclass(frozen=True)
+class Ground:
+    """A flat Lambertian ground at ``height`` metres (above MSL) with an RGB albedo."""
+
+    albedo: tuple = (0.15, 0.15, 0.15)
+    height: float = 0.0
+
+    def __post_init__(self):
+        alb = _rgb(self.albedo, "Ground albedo")
+        if max(alb) > 1.0:
+            raise ValueError(f"Ground albedo must be in [0, 1], got {self.albedo!r}")
+        object.__setattr__(self, "albedo", alb)
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole camera (``origin`` looking at ``target``, horizontal ``fov`` in degrees) or an
+    orthographic one (``kind="orthographic"``, ``ortho_width`` x ``ortho_height`` metres)."""
+
+    origin: tuple
+    target: tuple
+    up: tuple = (0.0, 0.0, 1.0)
+    fov: float = 45.0
+    kind: str = "perspective"
+    ortho_width: float = 0.0
+    ortho_height: float = 0.0
+
+    def __post_init__(self):
+        o, t, u = (np.asarray(v, dtype=np.float64) for v in (self.origin, self.target, self.up))
+        if o.shape != (3,) or t.shape != (3,) or u.shape != (3,) or not np.all(np.isfinite(np.r_[o, t, u])):
+            raise ValueError("Camera origin, target and up must be three finite numbers each")
+        fwd = t - o
+        if np.linalg.norm(fwd) == 0:
+            raise ValueError("Camera target must differ from its origin")
+        if np.linalg.norm(np.cross(fwd, u)) < 1e-9 * np.linalg.norm(fwd) * np.linalg.norm(u):
+            raise ValueError("Camera up vector must not be parallel to the viewing direction")
+        if self.kind not in ("perspective", "orthographic"):
+            raise ValueError(f"Camera kind must be 'perspective' or 'orthographic', got {self.kind!r}")
+        if self.kind == "perspective" and not 0 < self.fov < 180:
+            raise ValueError(f"Camera fov must be in (0, 180) degrees, got {self.fov}")
+        if self.kind == "orthographic" and not (self.ortho_width > 0 and self.ortho_height > 0):
+            raise ValueError("An orthographic camera needs a positive width and height in metres")
+        for name, v in (("origin", o), ("target", t), ("up", u)):
+            object.__setattr__(self, name, tuple(float(x) for x in v))
+
+    @property
+    def forward(self) -> np.ndarray:
+        f = np.subtract(self.target, self.origin)
+        return f / np.linalg.norm(f)
+
+    @classmethod
+    def orbit(cls, vol_or_bbox, azimuth: float = 200.0, elevation: float = 8.0, distance: float | None = None,
+              fov: float = 45.0, target=None) -> "Camera":
+        """A camera on a sphere around the volume: it stands at ``azimuth`` (degrees clockwise from
+        north, seen from the target) and ``elevation`` above the target (the bbox centre by default),
+        at ``distance`` metres (default: far enough that the whole bbox fits the field of view)."""
+        (x0, y0, z0), (x1, y1, z1) = _bbox(vol_or_bbox)
+        centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2]) if target is None else np.asarray(target, float)
+        if distance is None:
+            radius = 0.5 * math.dist((x0, y0, z0), (x1, y1, z1))
+            distance = 1.05 * radius / math.sin(math.radians(fov) / 2)
+        origin = centre + distance * direction_from_angles(azimuth, elevation)
+        up = (0.0, 0.0, 1.0) if abs(elevation) < 89.9 else tuple(-direction_from_angles(azimuth, 0.0))
+        return cls(tuple(origin), tuple(centre), up, fov)
+
+    @classmethod
+    def orthographic(cls, center, direction=(0.0, 0.0, -1.0), width: float = 1.0, height: float = 1.0,
+                     up=None) -> "Camera":
+        """An orthographic camera looking along ``direction`` through ``center``; the film covers
+        ``width`` x ``height`` metres. Looking straight down, the top of the image is north."""
+        c = np.asarray(center, dtype=np.float64)
+        d = np.asarray(direction, dtype=np.float64)
+        d = d / np.linalg.norm(d)
+        if up is None:
+            up = (0.0, 1.0, 0.0) if abs(d[2]) > 0.99 else (0.0, 0.0, 1.0)
+        return cls(tuple(c), tuple(c + d), tuple(up), 0.0, "orthographic", float(width), float(height))
+
+
+def _bbox(vol_or_bbox):
+    bbox = getattr(vol_or_bbox, "bbox", vol_or_bbox)
+    lo, hi = (tuple(float(v) for v in p) for p in bbox)
+    return lo, hi
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """Everything about a picture except the medium: drives both renderers identically."""
+
+    camera: Camera
+    sun: Sun = field(default_factory=Sun)
+    sky: Sky | None = field(default_factory=Sky)
+    ground: Ground | None = field(default_factory=Ground)
+    width: int = 300
+    height: int = 300
+    seed: int = 0
+
+    def __post_init__(self):
+        if int(self.width) < 1 or int(self.height) < 1:
+            raise ValueError(f"Image size must be positive, got {self.width} x {self.height}")
+        if self.ground is not None and self.camera.origin[2] <= self.ground.height:
+            raise ValueError(f"Camera at z = {self.camera.origin[2]:.1f} m is inside the ground "
+                             f"(ground height {self.ground.height:.1f} m)")
+
+    def to_dict(self) -> dict:
+        """A JSON-serialisable description (for image metadata and checkpoints)."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SceneSpec":
+        return cls(camera=Camera(**d["camera"]), sun=Sun(**d["sun"]),
+                   sky=None if d.get("sky") is None else Sky(**d["sky"]),
+                   ground=None if d.get("ground") is None else Ground(**d["ground"]),
+                   width=d["width"], height=d["height"], seed=d["seed"])
+
+
+def default_spec(vol, width: int = 300, height: int = 300, **kw) -> SceneSpec:
+    """The demo view: camera to the south-south-west, low, sun in the south-west."""
+    return SceneSpec(camera=Camera.orbit(vol, azimuth=kw.pop("camera_azimuth", 200.0),
+                                         elevation=kw.pop("camera_elevation", 8.0),
+                                         distance=kw.pop("distance", None), fov=kw.pop("fov", 45.0)),
+                     width=width, height=height, **kw)
