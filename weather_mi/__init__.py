@@ -10,7 +10,7 @@ from __future__ import annotations
 from . import atmosphere, hydrometeors, species
 from .errors import WeatherDataError
 from .hydrometeors import SPECIES_NAMES, from_arrays, validate
-from .io import open_wrf
+from .io import open_les, open_wrf
 from .optics import OpticalVolume, optical_volume
 from .variant import ensure_registered, set_variant
 from .medium import medium_dict, phase_dict
@@ -32,6 +32,4 @@ def __getattr__(name):
     import importlib
     if name in ("phase", "synthetic"):
         return importlib.import_module(f".{name}", __name__)
-    if name == "open_les":
-        return importlib.import_module(".io.les", __name__).open_les
     raise AttributeError(f"module 'weather_mi' has no attribute {name!r}")

@@ -1,4 +1,5 @@
 """Readers that turn model output into the Hydrometeors contract (see weather_mi.hydrometeors)."""
+from .les import open_les
 from .wrf import open_wrf
 
-__all__ = ["open_wrf"]
+__all__ = ["open_les", "open_wrf"]
