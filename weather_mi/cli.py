@@ -1,4 +1,8 @@
-"""Command line: ``weather-mi info FILE | --demo supercell|cumulus``."""
+"""Command line.
+
+    weather-mi info FILE | --demo supercell|cumulus
+    weather-mi render FILE | --demo supercell|cumulus [options] -o out.exr
+"""
 from __future__ import annotations
 
 import argparse
@@ -60,6 +64,54 @@ def info_text(hyd, species: str = "paper") -> str:
     return "\n".join(lines)
 
 
+def _parse_scale(items: list[str]) -> dict[str, float]:
+    out = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            sep = ""
+        if not sep:
+            raise WeatherDataError("--scale", item, "SPECIES=FACTOR, e.g. ice=2")
+    return out
+
+
+def _parse_size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError as exc:
+        raise WeatherDataError("--size", text, "WIDTHxHEIGHT, e.g. 512x512") from exc
+    return w, h
+
+
+def render_command(args) -> Path:
+    """Build the volume and the scene from the arguments, render the reference, write EXR + PNG."""
+    from .optics import optical_volume
+    from .reference import render_reference
+    from .scene import Camera, Ground, SceneSpec, Sky, Sun
+    width, height = _parse_size(args.size)
+    hyd = load_input(args.file, args.demo, _parse_time(args.time))
+    vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase)
+    sky = None if args.sky == "none" else Sky(args.sky)
+    ground = None if args.ground_albedo < 0 else Ground(albedo=args.ground_albedo,
+                                                        height=min(0.0, vol.bbox[0][2]))
+    spec = SceneSpec(camera=Camera.orbit(vol, azimuth=args.camera_azimuth, elevation=args.camera_elevation,
+                                         distance=args.distance, fov=args.fov),
+                     sun=Sun(args.sun_azimuth, args.sun_elevation), sky=sky, ground=ground,
+                     width=width, height=height, seed=args.seed)
+    out = Path(args.output)
+    ckpt = out.with_name(out.name + ".ckpt.npz")
+    img = render_reference(spec, vol, spp=args.spp, integrator=args.integrator, checkpoint=ckpt,
+                           resume=ckpt if args.resume else None)
+    img.save(out)
+    png = img.save_png(out.with_suffix(".png"), exposure=args.exposure)
+    ckpt.unlink(missing_ok=True)
+    print(f"wrote {out} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s, "
+          f"mean relative standard error {img.relative_stderr():.3f})")
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="weather-mi", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -69,12 +121,37 @@ def main(argv: list[str] | None = None) -> int:
     src.add_argument("--demo", choices=DEMOS, help="a built-in demo storm")
     info.add_argument("--time", default="-1", help="time index or timestamp (WRF)")
     info.add_argument("--species", default="paper", choices=("paper", "physical"))
+    render = sub.add_parser("render", help="path-trace the ground-truth image (EXR + PNG)")
+    src = render.add_mutually_exclusive_group(required=True)
+    src.add_argument("file", nargs="?", help="wrfout NetCDF or LES text file")
+    src.add_argument("--demo", choices=DEMOS, help="a built-in demo storm")
+    render.add_argument("--time", default="-1", help="time index or timestamp (WRF)")
+    render.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
+    render.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
+    render.add_argument("--scale", action="append", metavar="SPECIES=FACTOR", help="e.g. --scale ice=2")
+    render.add_argument("--sun-azimuth", type=float, default=240.0)
+    render.add_argument("--sun-elevation", type=float, default=35.0)
+    render.add_argument("--camera-azimuth", type=float, default=200.0)
+    render.add_argument("--camera-elevation", type=float, default=8.0)
+    render.add_argument("--distance", type=float, default=None, help="camera distance (m); default fits the box")
+    render.add_argument("--fov", type=float, default=45.0, help="horizontal field of view (degrees)")
+    render.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none"))
+    render.add_argument("--ground-albedo", type=float, default=0.15, help="negative: no ground")
+    render.add_argument("--size", default="320x240", help="WIDTHxHEIGHT")
+    render.add_argument("--spp", type=int, default=64)
+    render.add_argument("--seed", type=int, default=0)
+    render.add_argument("--integrator", default="majorant", choices=("majorant", "volpath"))
+    render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")
+    render.add_argument("--resume", action="store_true", help="continue from OUTPUT.ckpt.npz")
+    render.add_argument("-o", "--output", default="weather-mi.exr")
     args = parser.parse_args(argv)
     try:
         if args.command == "info":
             hyd = load_input(args.file, args.demo, _parse_time(args.time))
             print(info_text(hyd, args.species))
-    except WeatherDataError as exc:
+        elif args.command == "render":
+            render_command(args)
+    except (WeatherDataError, ValueError) as exc:
         print(f"weather-mi: error: {exc}", file=sys.stderr)
         return 2
     return 0

@@ -1,6 +1,8 @@
 """SceneSpec + OpticalVolume -> Mitsuba 3 scene dictionary (the kernel side of scene.py)."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .medium import medium_dict
@@ -8,7 +10,21 @@ from .optics import OpticalVolume
 from .scene import Camera, SceneSpec, Sky, Sun
 from .variant import ensure_registered
 
-FAR_CLIP_M = 1e7
+FAR_CLIP_M = 1e8
+RAY_EPSILON = 8.9e-5  # Mitsuba's math::RayEpsilon (float32): spawned rays skip (1 + max|p|) x this
+
+
+def recentred(spec: SceneSpec, vol: OpticalVolume):
+    """The scene translated so that the volume's bbox centre is the origin (float32 precision and
+    Mitsuba's ray offsets scale with |p|). Returns (spec, vol, offset) with world = shifted + offset."""
+    lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
+    c = (lo + hi) / 2
+    c[2] = 0.0  # keep heights: the ground plane and z-dependent quantities stay readable
+    cam = replace(spec.camera, origin=tuple(np.asarray(spec.camera.origin) - c),
+                  target=tuple(np.asarray(spec.camera.target) - c))
+    vol2 = replace(vol, bbox=(tuple(lo - c), tuple(hi - c)))
+    vol2._phase_tables = vol._phase_tables if vol._phase_tables is not None else vol.phase_tables
+    return replace(spec, camera=cam), vol2, c
 
 
 def _look_at(camera: Camera):
@@ -23,7 +39,9 @@ def sensor_dict(spec: SceneSpec) -> dict:
     film = {"type": "hdrfilm", "width": int(spec.width), "height": int(spec.height),
             "rfilter": {"type": "box"}, "pixel_format": "rgb", "component_format": "float32"}
     if cam.kind == "orthographic":
-        to_world = _look_at(cam) @ mi.ScalarTransform4f().scale([cam.ortho_width / 2, cam.ortho_height / 2, 1.0])
+        # Mitsuba's orthographic film spans [-1, 1] horizontally and [-1/aspect, 1/aspect] vertically
+        aspect = spec.width / spec.height
+        to_world = _look_at(cam) @ mi.ScalarTransform4f().scale([cam.ortho_width / 2, cam.ortho_height / 2 * aspect, 1.0])
         return {"type": "orthographic", "to_world": to_world, "film": film,
                 "near_clip": 1e-3, "far_clip": FAR_CLIP_M}
     return {"type": "perspective", "fov": float(cam.fov), "fov_axis": "x", "to_world": _look_at(cam),
@@ -50,7 +68,8 @@ def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
         n = 1 << 16
         it = dr.zeros(mi.Interaction3f, n)
         rng = np.random.default_rng(1)
-        sample = mi.Point2f(*(rng.random((2, n)).astype(np.float32)))
+        from .jitarrays import aligned_float
+        sample = mi.Point2f(*(aligned_float(mi, u) for u in rng.random((2, n))))
         ds, weight = emitter.sample_direction(it, sample)
         cos = dr.dot(ds.d, mi.Vector3f(*(float(v) for v in sun.to_sun)))
         e = np.array(weight * cos)
@@ -70,20 +89,27 @@ def sky_dict(sky: Sky, sun: Sun) -> dict:
 
 
 def ground_dict(spec: SceneSpec, vol_bbox) -> dict:
-    """A Lambertian rectangle at the ground height, wide enough to fill the view (100 x the bbox)."""
+    """A Lambertian rectangle at the ground height, wide enough to reach the horizon."""
     import mitsuba as mi
     (x0, y0, _), (x1, y1, _) = vol_bbox
     cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
-    half = 50.0 * max(x1 - x0, y1 - y0, 1.0)
+    half = 1e7  # 10,000 km: the ground reaches the horizon within a fraction of a pixel
     to_world = mi.ScalarTransform4f().translate([cx, cy, spec.ground.height]).scale([half, half, 1.0])
     return {"type": "rectangle", "to_world": to_world,
             "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(spec.ground.albedo)}}}
 
 
-def medium_shape_dict(vol: OpticalVolume) -> dict:
-    """The volume's bounding box as a ``cube`` with a null BSDF holding the medium."""
+def medium_shape_dict(vol: OpticalVolume, floor_m: float | None = None) -> dict:
+    """The volume's bounding box as a ``cube`` with a null BSDF holding the medium. With a ground at
+    ``floor_m``, the box starts above it by three times Mitsuba's ray offset: coincident or too close
+    faces of the box and the ground make rays skip the ground. The grids keep the full bbox."""
     import mitsuba as mi
     lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
+    if floor_m is not None:
+        gap = 3.0 * RAY_EPSILON * (1.0 + float(np.max(np.abs(np.r_[lo, hi]))))
+        lo[2] = max(lo[2], floor_m + gap)
+        if lo[2] >= hi[2]:
+            raise ValueError(f"the volume lies entirely below the ground at {floor_m} m")
     to_world = mi.ScalarTransform4f().translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist())
     return {"type": "cube", "to_world": to_world, "bsdf": {"type": "null"}, "interior": medium_dict(vol)}
 
@@ -92,7 +118,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
     """The whole Mitsuba scene: camera, sun, sky, ground, the medium in its box, the integrator."""
     ensure_registered()
     d = {"type": "scene", "integrator": integrator, "sensor": sensor_dict(spec), "sun": sun_dict(spec.sun),
-         "medium_box": medium_shape_dict(vol)}
+         "medium_box": medium_shape_dict(vol, None if spec.ground is None else spec.ground.height)}
     if spec.sky is not None:
         d["sky"] = sky_dict(spec.sky, spec.sun)
     if spec.ground is not None:

@@ -100,7 +100,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     import mitsuba as mi
     from tqdm.auto import tqdm
 
-    from .mitsuba_scene import scene_dict
+    from .mitsuba_scene import recentred, scene_dict
 
     spp_list = _passes(spec, int(spp), passes)
     key = _fingerprint(spec, vol, spp_list, integrator, max_depth, normalize, mi.variant())
@@ -117,7 +117,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         mean, m2, done, seconds = state["mean"], state["m2"], int(state["done"]), float(state["seconds"])
         ckpt = ckpt or resume_path
 
-    scene = mi.load_dict(scene_dict(spec, vol, integrator_dict(vol, integrator, max_depth)))
+    spec_k, vol_k, _ = recentred(spec, vol)  # kernel-side coordinates: bbox centred on the origin
+    scene = mi.load_dict(scene_dict(spec_k, vol_k, integrator_dict(vol_k, integrator, max_depth)))
     scale = 1.0
     if normalize == "reflectance":
         scale = np.pi / (spec.sun.mu0 * np.asarray(spec.sun.irradiance))

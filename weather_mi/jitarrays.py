@@ -1,0 +1,16 @@
+"""Host arrays handed to Dr.Jit kernels."""
+from __future__ import annotations
+
+import numpy as np
+
+
+def aligned_float(mi, a) -> "mi.Float":
+    """A Dr.Jit Float from numpy data held in 64-byte aligned memory. (The LLVM backend may use host
+    memory in place, and a kernel's IR records the alignment it sees: unaligned arrays one frame and
+    aligned ones the next would compile a new kernel.)"""
+    a = np.ascontiguousarray(a, dtype=np.float32).ravel()
+    buf = np.empty(a.size + 16, dtype=np.float32)
+    off = (-buf.ctypes.data % 64) // 4
+    out = buf[off:off + a.size]
+    out[:] = a
+    return mi.Float(out)

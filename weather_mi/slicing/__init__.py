@@ -1,0 +1,19 @@
+"""The interactive approximation: half-angle slicing with translucent light transport (Dr.Jit)."""
+from __future__ import annotations
+
+from .modes import TABLE_IV, SliceMode, SliceParams
+from .renderer import SliceRenderer
+
+
+def render_slices(spec, vol, mode: SliceMode = SliceMode(), slices: int = 128, light_res: int = 256,
+                  params: SliceParams | None = None, detail_field=None, uniform_phase=None, **param_kw):
+    """Render ``vol`` as seen by ``spec`` with half-angle slicing; returns an Image in the same units,
+    framing and conventions as ``render_reference``. Interactive parameters go in ``params`` (or as
+    keywords: scale=, albedo=, cone_angle_deg=, forward_fraction=, ambient=). For many frames, keep a
+    SliceRenderer and call its ``frame`` method (nothing recompiles between frames)."""
+    params = params or SliceParams(**param_kw)
+    renderer = SliceRenderer(vol, mode, slices, light_res, detail_field=detail_field, uniform_phase=uniform_phase)
+    return renderer.frame(spec, params)
+
+
+__all__ = ["SliceMode", "SliceParams", "SliceRenderer", "render_slices", "TABLE_IV"]

@@ -1,0 +1,64 @@
+"""The slicer's background, the same as the reference's: sky radiance along each pixel ray, and a lit
+Lambertian ground (sun attenuated by the cloud's light buffer, plus skylight)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene import SceneSpec
+
+
+def _sky_emitter(spec: SceneSpec, cache: dict | None):
+    """Mitsuba's sky emitter for this spec. With a ``cache`` (a renderer's), one instance per variant
+    and sky is kept and updated in place (sun direction, scale), so a moving sun recompiles nothing."""
+    import mitsuba as mi
+    from ..mitsuba_scene import sky_dict
+    d = sky_dict(spec.sky, spec.sun)
+    cache = {} if cache is None else cache
+    key = (mi.variant(), spec.sky.turbidity, spec.sky.ground_albedo)
+    if key not in cache:
+        cache[key] = mi.load_dict({**d, "sky_scale": 1.0})  # the scale is applied outside: it is a
+    emitter = cache[key]                                     # kernel literal in Mitsuba's sunsky
+    params = mi.traverse(emitter)
+    params["sun_direction"] = mi.Vector3f(*d["sun_direction"])
+    params.update()
+    return emitter, d["sky_scale"]
+
+
+def sky_radiance(spec: SceneSpec, dirs: np.ndarray, cache: dict | None = None) -> np.ndarray:
+    """Sky radiance (N, 3) seen along unit directions (N, 3); zero without a sky."""
+    dirs = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
+    if spec.sky is None:
+        return np.zeros_like(dirs)
+    if spec.sky.kind == "constant":
+        return np.broadcast_to(np.asarray(spec.sky.radiance), dirs.shape).copy()
+    import drjit as dr
+    import mitsuba as mi
+    emitter, scale = _sky_emitter(spec, cache)
+    si = dr.zeros(mi.SurfaceInteraction3f, dirs.shape[0])
+    from ..jitarrays import aligned_float
+    si.wi = -mi.Vector3f(*(aligned_float(mi, dirs[:, i]) for i in range(3)))
+    return scale * np.asarray(emitter.eval(si), dtype=np.float64).T.reshape(-1, 3)
+
+
+def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | None = None) -> np.ndarray:
+    """Irradiance (W/m^2, RGB) of the sky on a horizontal surface: pi L for a constant sky; for the
+    Hosek-Wilkie sky, pi x the mean radiance over cosine-distributed directions (stratified)."""
+    if spec.sky is None:
+        return np.zeros(3)
+    if spec.sky.kind == "constant":
+        return np.pi * np.asarray(spec.sky.radiance)
+    side = int(np.sqrt(n))
+    u, v = np.meshgrid((np.arange(side) + 0.5) / side, (np.arange(side) + 0.5) / side)
+    r, phi = np.sqrt(u.ravel()), 2 * np.pi * v.ravel()
+    dirs = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(1 - r * r, 0))], axis=1)
+    return np.pi * sky_radiance(spec, dirs, cache).mean(axis=0)
+
+
+def ground_hits(spec: SceneSpec, origins: np.ndarray, dirs: np.ndarray):
+    """Distance along each ray to the ground plane (inf where it does not hit)."""
+    if spec.ground is None:
+        return np.full(origins.shape[:-1], np.inf)
+    dz = dirs[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (spec.ground.height - origins[..., 2]) / dz
+    return np.where((dz < 0) & (t > 0), t, np.inf)

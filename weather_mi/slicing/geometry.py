@@ -1,0 +1,98 @@
+"""Geometry of half-angle slicing (Kniss et al. 2003): camera rays, slice axis and planes, light frame.
+
+With v the camera's forward direction and l the unit vector towards the light:
+  v . l > 0 (looking towards the light, back-lit): slice axis s = normalize(v + l), eye composited back to front;
+  otherwise (front-lit):                          s = normalize(l - v), eye composited front to back.
+In both cases s . l > 0, so slices are visited from the light's side (decreasing s . x) and the
+light buffer advances away from the light. Path length across one slice: spacing / |s . d| along a
+ray of direction d (the same for eye and light rays when d is v or l: spacing / cos(half angle)).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..scene import Camera, SceneSpec
+
+
+def camera_rays(spec: SceneSpec) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel-centre rays (origins, unit directions), each (H, W, 3), row 0 at the top of the picture,
+    matching Mitsuba's ``perspective`` (horizontal fov) and ``orthographic`` sensors."""
+    cam: Camera = spec.camera
+    w, h = int(spec.width), int(spec.height)
+    fwd = cam.forward
+    left = np.cross(np.asarray(cam.up, float), fwd)
+    left /= np.linalg.norm(left)
+    up = np.cross(fwd, left)
+    # film coordinates of pixel centres: x to the right, y down; Mitsuba's camera x axis is "left"
+    xs = 1.0 - 2.0 * (np.arange(w) + 0.5) / w            # +1 at the left edge
+    ys = 1.0 - 2.0 * (np.arange(h) + 0.5) / h            # +1 at the top edge
+    gx, gy = np.meshgrid(xs, ys)
+    if cam.kind == "orthographic":
+        origins = (np.asarray(cam.origin)[None, None] + gx[..., None] * (cam.ortho_width / 2) * left
+                   + gy[..., None] * (cam.ortho_height / 2) * up)
+        dirs = np.broadcast_to(fwd, origins.shape).copy()
+        return origins, dirs
+    tan_x = math.tan(math.radians(cam.fov) / 2)
+    tan_y = tan_x * h / w
+    dirs = fwd[None, None] + gx[..., None] * tan_x * left + gy[..., None] * tan_y * up
+    dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+    origins = np.broadcast_to(np.asarray(cam.origin, float), dirs.shape).copy()
+    return origins, dirs
+
+
+def orthonormal_frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors completing n to a right-handed orthonormal frame (e1, e2, n)."""
+    a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(a, n)
+    e1 /= np.linalg.norm(e1)
+    return e1, np.cross(n, e1)
+
+
+def bbox_corners(bbox) -> np.ndarray:
+    (x0, y0, z0), (x1, y1, z1) = bbox
+    return np.array([[x, y, z] for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)], dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class SliceGeometry:
+    """Slice planes s . x = d_k, k = 0..n-1, from the light's side, and the light-buffer frame."""
+
+    axis: np.ndarray          # s, unit
+    to_light: np.ndarray      # l, unit
+    back_to_front: bool       # eye compositing order (informational: compositing is order-free here)
+    d_first: float            # d_0 (the slice nearest the light), metres along s
+    spacing: float            # metres between slices along s
+    n_slices: int
+    e1: np.ndarray            # light-buffer axes (perpendicular to l)
+    e2: np.ndarray
+    u_range: tuple[float, float]
+    v_range: tuple[float, float]
+
+    @property
+    def light_step_m(self) -> float:
+        """Path length of a light ray across one slice: spacing / (s . l)."""
+        return self.spacing / float(np.dot(self.axis, self.to_light))
+
+    def slice_of(self, d: np.ndarray) -> np.ndarray:
+        """Continuous slice index of points with s . x = d (0 at the first slice)."""
+        return (self.d_first - d) / self.spacing
+
+
+def slice_geometry(view_dir: np.ndarray, to_light: np.ndarray, bbox, n_slices: int) -> SliceGeometry:
+    v = np.asarray(view_dir, float) / np.linalg.norm(view_dir)
+    l = np.asarray(to_light, float) / np.linalg.norm(to_light)
+    back_to_front = float(np.dot(v, l)) > 0.0
+    s = v + l if back_to_front else l - v
+    if np.linalg.norm(s) < 1e-6:  # looking exactly away from the light: slice along the light
+        s = l.copy()
+    s /= np.linalg.norm(s)
+    corners = bbox_corners(bbox)
+    d = corners @ s
+    spacing = (d.max() - d.min()) / n_slices
+    e1, e2 = orthonormal_frame(l)
+    u, w = corners @ e1, corners @ e2
+    return SliceGeometry(s, l, back_to_front, float(d.max() - spacing / 2), float(spacing), int(n_slices),
+                         e1, e2, (float(u.min()), float(u.max())), (float(w.min()), float(w.max())))
