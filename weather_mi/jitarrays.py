@@ -8,7 +8,8 @@ def aligned_float(mi, a) -> "mi.Float":
     """A Dr.Jit Float from numpy data held in 64-byte aligned memory. (The LLVM backend may use host
     memory in place, and a kernel's IR records the alignment it sees: unaligned arrays one frame and
     aligned ones the next would compile a new kernel.)"""
-    a = np.ascontiguousarray(a, dtype=np.float32).ravel()
+    big = np.finfo(np.float32).max
+    a = np.clip(np.asarray(a, dtype=np.float64), -big, big).astype(np.float32).ravel()
     buf = np.empty(a.size + 16, dtype=np.float32)
     off = (-buf.ctypes.data % 64) // 4
     out = buf[off:off + a.size]

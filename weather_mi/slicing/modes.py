@@ -55,11 +55,13 @@ class SliceParams:
     ambient: float = 0.0
 
     def __post_init__(self):
-        if not 0.0 < self.cone_angle_deg < 90.0:
+        # values may be Dr.Jit arrays (for differentiation): only plain numbers are range-checked
+        number = lambda v: isinstance(v, (int, float))  # noqa: E731
+        if number(self.cone_angle_deg) and not 0.0 < self.cone_angle_deg < 90.0:
             raise ValueError(f"cone_angle_deg must be in (0, 90), got {self.cone_angle_deg}")
-        if self.forward_fraction is not None and not 0.0 <= self.forward_fraction <= 1.0:
+        if number(self.forward_fraction) and not 0.0 <= self.forward_fraction <= 1.0:
             raise ValueError(f"forward_fraction must be in [0, 1], got {self.forward_fraction}")
-        if self.albedo is not None and not 0.0 <= self.albedo <= 1.0:
+        if number(self.albedo) and not 0.0 <= self.albedo <= 1.0:
             raise ValueError(f"albedo must be in [0, 1], got {self.albedo}")
         if any(v < 0 for v in self.scale.values()):
             raise ValueError("scalings must be >= 0")

@@ -99,8 +99,9 @@ class SliceRenderer:
                 raise ValueError(f"detail_field must have the volume's shape {self.shape}, got {detail.shape}")
             beta_s = beta_s * detail[..., None]
         self.beta_s = mi.Float(np.ascontiguousarray(beta_s).ravel())  # (z, y, x, S) flattened
-        self.lo = np.asarray(vol.bbox[0], dtype=np.float64)
+        self.lo = np.asarray(vol.bbox[0], dtype=np.float64)   # the grid's box (texture coordinates)
         self.hi = np.asarray(vol.bbox[1], dtype=np.float64)
+        self.occ_lo, self.occ_hi = _occupied_box(beta_s.sum(axis=-1), self.lo, self.hi)  # where slices go
         tables = list(vol.phase_tables)
         if mode.phase == "uniform":
             u = uniform_phase if uniform_phase is not None else tables[0]
@@ -134,11 +135,12 @@ class SliceRenderer:
         albedo = self.albedo_rgb if params.albedo is None else np.full((self.n_species, 3), params.albedo)
         omega = albedo.mean(axis=1)
         tint = albedo / np.maximum(omega[:, None], 1e-12)
-        theta0 = math.radians(params.cone_angle_deg)
+        cone = params.cone_angle_deg
+        theta0 = math.radians(float(cone[0]) if __import__("drjit").is_array_v(cone) else float(cone))
         if self.mode.light == "low_albedo":
             fwd = np.zeros(self.n_species)
         elif params.forward_fraction is not None:
-            fwd = np.full(self.n_species, params.forward_fraction)
+            fwd = [params.forward_fraction] * self.n_species  # may be a Dr.Jit Float with gradients
         else:
             fwd = np.array([_cone_fraction(t, theta0) for t in self.tables])
         return scale, omega, tint, fwd
@@ -148,9 +150,9 @@ class SliceRenderer:
         mi, dr = self.mi, __import__("drjit")
         S = self.n_species
         n_vox = int(np.prod(self.shape))
-        sc = [dr.opaque(mi.Float, float(v)) for v in scale]
-        om = [dr.opaque(mi.Float, float(v)) for v in omega]
-        fw = [dr.opaque(mi.Float, float(v)) for v in fwd]
+        sc = [_param(mi, v) for v in scale]
+        om = [_param(mi, v) for v in omega]
+        fw = [_param(mi, v) for v in fwd]
         self._grad_inputs = {"scale": sc, "omega": om, "forward": fw}
         vox = dr.arange(mi.UInt32, n_vox)
         ext = mi.Float(0.0)
@@ -183,15 +185,15 @@ class SliceRenderer:
         q0 = (p0 - self.lo) / span
         qs = step / span
         # where each light ray is inside the box, in slice units: k in [k_in, k_out]
-        k_in, k_out = _ray_box(p0, np.broadcast_to(step, p0.shape), (self.lo, self.hi), clamp_start=False)
+        k_in, k_out = _ray_box(p0, np.broadcast_to(step, p0.shape), (self.occ_lo, self.occ_hi), clamp_start=False)
         q0x, q0y, q0z = (_aligned_float(mi, q0[:, i]) for i in range(3))
         qsx, qsy, qsz = (dr.opaque(mi.Float, float(qs[i])) for i in range(3))
         kin, kout = _aligned_float(mi, k_in), _aligned_float(mi, k_out)
         dl = dr.opaque(mi.Float, g.light_step_m)
         du = (g.u_range[1] - g.u_range[0]) / R
         dv = (g.v_range[1] - g.v_range[0]) / R
-        radius = g.light_step_m * math.tan(math.radians(params.cone_angle_deg))
-        rx, ry = dr.opaque(mi.Float, radius / du), dr.opaque(mi.Float, radius / dv)
+        radius = _param(mi, g.light_step_m) * dr.tan(_param(mi, params.cone_angle_deg) * (math.pi / 180.0))
+        rx, ry = radius * _param(mi, 1.0 / du), radius * _param(mi, 1.0 / dv)
         translucent = self.mode.light == "translucent"
 
         store = dr.zeros(mi.Float, (N + 1) * R * R * 2)
@@ -246,7 +248,7 @@ class SliceRenderer:
             colour = self.colors[sidx] if self.mode.species_colors else tint[sidx]
             K.append(p * colour[None] * sun[None])
         # ray extent in the volume, clipped by the ground
-        t0, t1 = _ray_box(o, d, (self.lo, self.hi))
+        t0, t1 = _ray_box(o, d, (self.occ_lo, self.occ_hi))
         tg = ground_hits(spec, o, d)
         t1 = np.minimum(t1, tg)
         sd = d @ s
@@ -283,8 +285,8 @@ class SliceRenderer:
         Kd = [[F(K[si][:, c]) for c in range(3)] for si in range(S)]
         Ki = [[dr.opaque(mi.Float, float((self.colors[si] if self.mode.species_colors else tint[si])[c]
                                           * sun[c] / (4 * np.pi))) for c in range(3)] for si in range(S)]
-        amb = params.ambient * sky_irradiance_horizontal(spec, cache=self._sky_cache) / np.pi if spec.sky is not None else np.zeros(3)
-        amb = [dr.opaque(mi.Float, float(a)) for a in amb]
+        e_amb = sky_irradiance_horizontal(spec, cache=self._sky_cache) / np.pi if spec.sky is not None else np.zeros(3)
+        amb = [_param(mi, params.ambient) * _param(mi, a) for a in e_amb]
         sdotd = F(sd)
         de = spacing / dr.abs(sdotd)
 
@@ -377,7 +379,7 @@ class SliceRenderer:
         t_start = time.perf_counter()
         scale, omega, tint, fwd = self._species_vectors(params)
         self._build_textures(scale, omega, fwd)
-        g = slice_geometry(spec.camera.forward, spec.sun.to_sun, (self.lo, self.hi), self.slices)
+        g = slice_geometry(spec.camera.forward, spec.sun.to_sun, (self.occ_lo, self.occ_hi), self.slices)
         self._light_pass(g, params)
         if not self.differentiable:
             dr.eval(self.tex_light.tensor())
@@ -392,11 +394,38 @@ class SliceRenderer:
         self.transmittance = np.asarray(transmittance, dtype=np.float32).reshape(H, W)
         self.timing = {"light_s": t_light - t_start, "eye_s": t_eye - t_light, "total_s": t_eye - t_start}
         meta = {"renderer": "slicing", "mode": self.mode.__dict__, "slices": self.slices,
-                "light_res": self.light_res, "params": {**params.__dict__}, "seconds": t_eye - t_start,
+                "light_res": self.light_res, "params": {k: (v if not __import__("drjit").is_array_v(v) else "drjit") for k, v in params.__dict__.items()}, "seconds": t_eye - t_start,
                 "back_to_front": g.back_to_front, "scene": spec.to_dict(),
                 "species_preset": self.vol.attrs.get("species_preset"), "source": self.vol.attrs.get("source"),
-                "forward_fraction_per_species": fwd.tolist()}
+                "forward_fraction_per_species": [float(v) if not __import__("drjit").is_array_v(v) else None for v in fwd]}
         return Image(rgb, np.zeros_like(rgb), meta)
+
+
+def _param(mi, value):
+    """A per-frame scalar for a kernel: Dr.Jit arrays pass through (they may carry gradients),
+    Python numbers become opaque values (so a new value does not recompile)."""
+    import drjit as dr
+    if dr.is_array_v(value):
+        return value
+    return dr.opaque(mi.Float, float(value))
+
+
+def _occupied_box(beta_total: np.ndarray, lo: np.ndarray, hi: np.ndarray):
+    """World box around the voxels with extinction, widened by the reach of trilinear interpolation
+    (half a voxel beyond the neighbouring centres) and clipped to the grid's box."""
+    nz, ny, nx = beta_total.shape
+    cell = (hi - lo) / np.array([nx, ny, nz])
+    occ = beta_total > 0
+    if not occ.any():
+        return lo.copy(), lo + cell  # an empty volume: one cell, nothing in it
+    idx = []
+    for axis in (2, 1, 0):  # x, y, z
+        other = tuple(a for a in range(3) if a != axis)
+        nz_idx = np.nonzero(occ.any(axis=other))[0]
+        idx.append((nz_idx[0], nz_idx[-1]))
+    i0 = np.array([a for a, _ in idx], dtype=np.float64)
+    i1 = np.array([b for _, b in idx], dtype=np.float64)
+    return np.maximum(lo + (i0 - 1.0) * cell, lo), np.minimum(lo + (i1 + 2.0) * cell, hi)
 
 
 def _interleave(mi, channels):
