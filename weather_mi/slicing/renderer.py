@@ -107,11 +107,6 @@ class SliceRenderer:
             u = uniform_phase if uniform_phase is not None else tables[0]
             tables = [u] * self.n_species
         self.tables = tables
-        self.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (1 + self.n_species,), np.float32)),
-                                    use_accel=False)
-        self.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (2,), np.float32)), use_accel=False)
-        self.tex_light = mi.Texture3f(mi.TensorXf(np.zeros((self.slices + 1, light_res, light_res, 2), np.float32)),
-                                      use_accel=False)  # channels: direct D, indirect I
         sp = vol.species_set
         if sp is not None:
             self.albedo_rgb = np.array([sp[n].albedo_rgb for n in vol.species])          # (S, 3)
@@ -121,6 +116,18 @@ class SliceRenderer:
                 if np.any(vol.beta_total > 0) else np.ones(3)
             self.albedo_rgb = np.broadcast_to(mean_alb, (self.n_species, 3)).copy()
             self.colors = np.ones((self.n_species, 3))
+        # species that scatter alike into the eye (same phase table and colour) share one channel
+        keys = []
+        for si in range(self.n_species):
+            colour = self.colors[si] if mode.species_colors else np.round(
+                self.albedo_rgb[si] / max(self.albedo_rgb[si].mean(), 1e-12), 3)
+            keys.append((_table_key(self.tables[si]), tuple(np.round(colour, 3))))
+        self.groups = [[si for si in range(self.n_species) if keys[si] == k] for k in dict.fromkeys(keys)]
+        self.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (1 + len(self.groups),), np.float32)),
+                                    use_accel=False)
+        self.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (2,), np.float32)), use_accel=False)
+        self.tex_light = mi.Texture3f(mi.TensorXf(np.zeros((self.slices + 1, light_res, light_res, 2), np.float32)),
+                                      use_accel=False)  # channels: direct D, indirect I
         self.timing = {}
         self._sky_cache: dict = {}
 
@@ -163,7 +170,13 @@ class SliceRenderer:
             ext += b
             sca.append(b * om[s])
             beta_fwd += b * om[s] * fw[s]
-        eye = mi.TensorXf(_interleave(mi, [ext] + sca), shape=self.shape + (1 + S,))
+        grouped = []
+        for members in self.groups:
+            g_sca = sca[members[0]]
+            for si in members[1:]:
+                g_sca = g_sca + sca[si]
+            grouped.append(g_sca)
+        eye = mi.TensorXf(_interleave(mi, [ext] + grouped), shape=self.shape + (1 + len(self.groups),))
         light = mi.TensorXf(_interleave(mi, [ext, beta_fwd]), shape=self.shape + (2,))
         self.tex_eye.set_tensor(eye)
         self.tex_light_src.set_tensor(light)
@@ -242,11 +255,13 @@ class SliceRenderer:
         # scattering angle of sunlight into each pixel ray: cos Theta = l . d
         cos_t = d @ g.to_light
         sun = np.asarray(spec.sun.irradiance)
-        K = []  # per species and channel: P_s(Theta) x tint x E_sun  (W/m^2/sr per unit beta_sca)
-        for sidx in range(S):
-            p = _phase_value(self.tables[sidx], cos_t)
-            colour = self.colors[sidx] if self.mode.species_colors else tint[sidx]
+        K, tints = [], []  # per species group and channel: P(Theta) x tint x E_sun (per unit beta_sca)
+        for members in self.groups:
+            p = _phase_value(self.tables[members[0]], cos_t)
+            colour = self.colors[members[0]] if self.mode.species_colors else np.mean(tint[members], axis=0)
             K.append(p * colour[None] * sun[None])
+            tints.append(colour)
+        G = len(self.groups)
         # ray extent in the volume, clipped by the ground
         t0, t1 = _ray_box(o, d, (self.occ_lo, self.occ_hi))
         tg = ground_hits(spec, o, d)
@@ -282,9 +297,8 @@ class SliceRenderer:
         inv_du = dr.opaque(mi.Float, 1.0 / (g.u_range[1] - g.u_range[0]))
         inv_dv = dr.opaque(mi.Float, 1.0 / (g.v_range[1] - g.v_range[0]))
         n_planes = dr.opaque(mi.Float, float(g.n_slices + 1))
-        Kd = [[F(K[si][:, c]) for c in range(3)] for si in range(S)]
-        Ki = [[dr.opaque(mi.Float, float((self.colors[si] if self.mode.species_colors else tint[si])[c]
-                                          * sun[c] / (4 * np.pi))) for c in range(3)] for si in range(S)]
+        Kd = [[F(K[gi][:, c]) for c in range(3)] for gi in range(G)]
+        Ki = [[dr.opaque(mi.Float, float(tints[gi][c] * sun[c] / (4 * np.pi))) for c in range(3)] for gi in range(G)]
         e_amb = sky_irradiance_horizontal(spec, cache=self._sky_cache) / np.pi if spec.sky is not None else np.zeros(3)
         amb = [_param(mi, params.ambient) * _param(mi, a) for a in e_amb]
         sdotd = F(sd)
@@ -315,12 +329,12 @@ class SliceRenderer:
             src = [mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)]     # sum_s beta_sca,s P_s tint E
             diffuse = [mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)]  # sum_s beta_sca,s tint E / (4 pi)
             sca_total = mi.Float(0.0)
-            for si in range(S):
-                b = dr.maximum(vals[1 + si], 0.0)
+            for gi in range(G):
+                b = dr.maximum(vals[1 + gi], 0.0)
                 sca_total += b
                 for c in range(3):
-                    src[c] += b * Kd[si][c]
-                    diffuse[c] += b * Ki[si][c]
+                    src[c] += b * Kd[gi][c]
+                    diffuse[c] += b * Ki[gi][c]
             C0 = C0 + w * (src[0] * direct + diffuse[0] * indirect + sca_total * amb[0])
             C1 = C1 + w * (src[1] * direct + diffuse[1] * indirect + sca_total * amb[1])
             C2 = C2 + w * (src[2] * direct + diffuse[2] * indirect + sca_total * amb[2])
@@ -399,6 +413,14 @@ class SliceRenderer:
                 "species_preset": self.vol.attrs.get("species_preset"), "source": self.vol.attrs.get("source"),
                 "forward_fraction_per_species": [float(v) if not __import__("drjit").is_array_v(v) else None for v in fwd]}
         return Image(rgb, np.zeros_like(rgb), meta)
+
+
+def _table_key(table) -> str:
+    """Content hash of a phase table (equal tables scatter alike, whichever object holds them)."""
+    import hashlib
+    h = hashlib.sha1(np.ascontiguousarray(table.theta, dtype=np.float64).tobytes())
+    h.update(np.ascontiguousarray(table.values, dtype=np.float64).tobytes())
+    return h.hexdigest()
 
 
 def _param(mi, value):
