@@ -7,7 +7,7 @@
 """
 from __future__ import annotations
 
-from . import atmosphere, hydrometeors, species
+from . import atmosphere, hydrometeors, species, synthetic
 from .errors import WeatherDataError
 from .hydrometeors import SPECIES_NAMES, from_arrays, validate
 from .io import open_les, open_wrf
@@ -30,6 +30,6 @@ __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open
 def __getattr__(name):
     # submodules imported on first use (the phase tables pull in miepython/numba)
     import importlib
-    if name in ("phase", "synthetic"):
+    if name == "phase":
         return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'weather_mi' has no attribute {name!r}")
