@@ -17,6 +17,8 @@ from .medium import medium_dict, phase_dict
 from .scene import Camera, Ground, SceneSpec, Sky, Sun
 from .imageio import Image
 from .reference import render_reference
+from .slicing import SliceMode, SliceParams, SliceRenderer, render_slices
+from . import cli, imageio, scene
 
 ensure_registered()  # Mitsuba plugins usable from dict and XML scenes once weather_mi is imported
 
@@ -24,7 +26,8 @@ __version__ = "0.1.0"
 
 __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les",
            "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
-           "Camera", "Ground", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "species", "synthetic", "hydrometeors", "atmosphere", "phase"]
+           "Camera", "Ground", "SceneSpec", "Sky", "Sun", "Image", "render_reference",
+           "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "species", "synthetic", "hydrometeors", "atmosphere", "phase"]
 
 
 def __getattr__(name):
