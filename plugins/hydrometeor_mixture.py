@@ -2,9 +2,12 @@
 
     P(Theta, x) = sum_s w_s(x) P_s(Theta),   w_s = beta_sca,s / sum_s' beta_sca,s'        (Eq. 8)
 
-Each species table is held piecewise linear in mu = cos(Theta) on one common node set (the union of
-the tables' angle grids, so forward peaks, halos and rainbows stay resolved), per RGB channel, and
-normalised so that 2 pi * integral p dmu = 1 exactly in that representation. The weights w_s(x) are a
+Each species table is held piecewise linear in the versine v = 1 - cos(Theta) on one common node
+set (the union of the tables' angle grids, so forward peaks, halos and rainbows stay resolved), per
+RGB channel, and normalised so that 2 pi * integral p dv = 1 exactly in that representation. The
+versine keeps float32 resolution near forward (a 1 mm raindrop's diffraction peak is ~0.02 deg
+wide; cos(Theta) cannot tell those angles apart in float32); in ``eval_pdf`` it is computed as
+|wo + wi|^2 / 2, which is exact there too. The weights w_s(x) are a
 grid (z, y, x, S) on the medium's bounding box, looked up trilinearly (texel centres at (i + 0.5)/N,
 as Mitsuba's ``gridvolume``) and renormalised to sum to 1 (equal weights where all are zero).
 
@@ -13,7 +16,7 @@ channel-mean table (exact inversion of a piecewise-linear density: a quadratic p
 ``eval_pdf`` returns the per-channel value sum_s w_s p_s,c and pdf = sum_s w_s pbar_s, which is
 exactly the density the sampler draws from, so sample weights are value / pdf per channel.
 
-Properties (Python dict scenes): ``mu`` (TensorXf, N ascending nodes in [-1, 1]), ``values``
+Properties (Python dict scenes): ``nodes`` (TensorXf, N ascending versines 1 - cos in [0, 2]), ``values``
 (TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S) and ``to_world`` (the bounding box
 as a transform of the unit cube). From XML: ``filename``, an ``.npz`` written by
 :func:`save_npz` with the same arrays plus ``bbox``.
@@ -30,47 +33,47 @@ PLUGIN_NAME = "hydrometeor_mixture"
 
 # ---------------------------------------------------------------- numpy side: table preparation
 
-def common_mu_nodes(tables, max_nodes: int = 16384) -> np.ndarray:
-    """Ascending mu = cos(theta) nodes: the union of the tables' theta grids (thinned if too many)."""
+def common_nodes(tables, max_nodes: int = 16384) -> np.ndarray:
+    """Ascending versine nodes v = 1 - cos(theta): the union of the tables' theta grids (thinned if
+    too many), distinct in float32."""
     theta = np.unique(np.concatenate([np.asarray(t.theta, np.float64) for t in tables] + [[0.0, np.pi]]))
     theta = theta[(theta >= 0) & (theta <= np.pi)]
     if theta.size > max_nodes:
         keep = np.unique(np.round(np.linspace(0, theta.size - 1, max_nodes)).astype(int))
         theta = theta[keep]
-    # nodes distinct in float32 (the renderer's precision): cos(theta) is flat near 0 and pi
-    mu = np.unique(np.cos(theta).astype(np.float32)).astype(np.float64)
-    mu[0], mu[-1] = -1.0, 1.0
-    return mu
+    v = np.unique((2.0 * np.sin(theta / 2) ** 2).astype(np.float32)).astype(np.float64)  # 1 - cos, accurately
+    v[0], v[-1] = 0.0, 2.0
+    return v
 
 
-def _normalise_mu(mu: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Scale p (N, ...) so that 2 pi * trapezoid(p, mu) = 1 (piecewise linear in mu)."""
-    integral = 2 * np.pi * np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(mu)[:, None], axis=0)
+def _normalise(v: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Scale p (N, ...) so that 2 pi * trapezoid(p, v) = 1 (piecewise linear in v = 1 - cos)."""
+    integral = 2 * np.pi * np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(v)[:, None], axis=0)
     return p / integral
 
 
 def prepare_tables(tables, max_nodes: int = 16384):
-    """(mu (N,), values (S, N, 3)) in 1/sr from PhaseTable-like objects (``theta`` ascending in
-    radians, ``values`` (len(theta), 3) in 1/sr), resampled linearly in mu onto common nodes."""
-    mu = common_mu_nodes(tables, max_nodes)
-    out = np.empty((len(tables), mu.size, 3))
+    """(nodes v = 1 - cos (N,), values (S, N, 3)) in 1/sr from PhaseTable-like objects (``theta``
+    ascending in radians, ``values`` (len(theta), 3) in 1/sr), resampled linearly in v."""
+    v = common_nodes(tables, max_nodes)
+    out = np.empty((len(tables), v.size, 3))
     for s, t in enumerate(tables):
         th = np.asarray(t.theta, np.float64)
         vals = np.asarray(t.values, np.float64).reshape(th.size, -1)
         if vals.shape[1] == 1:
             vals = np.repeat(vals, 3, axis=1)
-        tmu, order = np.cos(th)[::-1], slice(None, None, -1)
+        tv = 2.0 * np.sin(th / 2) ** 2
         for c in range(3):
-            out[s, :, c] = np.interp(mu, tmu, vals[order, c])
-        out[s] = _normalise_mu(mu, out[s])
-    return mu.astype(np.float32), out.astype(np.float32)
+            out[s, :, c] = np.interp(v, tv, vals[:, c])
+        out[s] = _normalise(v, out[s])
+    return v.astype(np.float32), out.astype(np.float32)
 
 
-def marginal_cdf(mu: np.ndarray, values: np.ndarray):
-    """Channel-mean density pbar (S, N) and its CDF in mu (S, N), 0 at mu = -1 and 1 at mu = 1."""
-    mu = np.asarray(mu, np.float64)
-    pbar = _normalise_mu(mu, np.asarray(values, np.float64).mean(axis=2).T).T
-    seg = 2 * np.pi * 0.5 * (pbar[:, 1:] + pbar[:, :-1]) * np.diff(mu)[None]
+def marginal_cdf(v: np.ndarray, values: np.ndarray):
+    """Channel-mean density pbar (S, N) and its CDF in v (S, N), 0 forward (v = 0), 1 at v = 2."""
+    v = np.asarray(v, np.float64)
+    pbar = _normalise(v, np.asarray(values, np.float64).mean(axis=2).T).T
+    seg = 2 * np.pi * 0.5 * (pbar[:, 1:] + pbar[:, :-1]) * np.diff(v)[None]
     cdf = np.concatenate([np.zeros((pbar.shape[0], 1)), np.cumsum(seg, axis=1)], axis=1)
     cdf /= cdf[:, -1:]
     return pbar, cdf
@@ -82,9 +85,9 @@ def bbox_transform(bbox) -> "mi.ScalarTransform4f":
     return mi.ScalarTransform4f().translate(lo.tolist()).scale((hi - lo).tolist())
 
 
-def save_npz(path, mu, values, weights, bbox) -> None:
+def save_npz(path, nodes, values, weights, bbox) -> None:
     """Write everything the plugin needs for use from a Mitsuba XML file (``filename`` property)."""
-    np.savez(path, mu=np.asarray(mu, np.float32), values=np.asarray(values, np.float32),
+    np.savez(path, nodes=np.asarray(nodes, np.float32), values=np.asarray(values, np.float32),
              weights=np.asarray(weights, np.float32), bbox=np.asarray(bbox, np.float64))
 
 
@@ -114,29 +117,29 @@ class HydrometeorMixture(mi.PhaseFunction):
         mi.PhaseFunction.__init__(self, props)
         if "filename" in props:
             data = np.load(str(props["filename"]))
-            mu, values, weights = data["mu"], data["values"], data["weights"]
+            nodes, values, weights = data["nodes"], data["values"], data["weights"]
             to_world = bbox_transform(data["bbox"])
         else:
-            mu = np.asarray(props["mu"], np.float32).ravel()
+            nodes = np.asarray(props["nodes"], np.float32).ravel()
             values = np.asarray(props["values"], np.float32)
             weights = np.asarray(props["weights"], np.float32)
             to_world = props["to_world"] if "to_world" in props else mi.ScalarTransform4f()
-        if values.ndim != 3 or values.shape[1] != mu.size or values.shape[2] != 3:
-            raise ValueError(f"{PLUGIN_NAME}: 'values' must be S x N x 3 with N = len(mu) = {mu.size}; "
+        if values.ndim != 3 or values.shape[1] != nodes.size or values.shape[2] != 3:
+            raise ValueError(f"{PLUGIN_NAME}: 'values' must be S x N x 3 with N = len(nodes) = {nodes.size}; "
                              f"got {values.shape}")
         if weights.ndim != 4 or weights.shape[3] != values.shape[0]:
             raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {values.shape[0]}; "
                              f"got {weights.shape}")
-        self.n_species, self.n_nodes = int(values.shape[0]), int(mu.size)
+        self.n_species, self.n_nodes = int(values.shape[0]), int(nodes.size)
         inverse = np.linalg.inv(np.array(to_world.matrix, dtype=np.float64).reshape(4, 4))
         self.to_local = mi.Transform4f(mi.ScalarTransform4f(inverse.astype(np.float32).tolist()))
-        self._set_tables(mu, values)
+        self._set_tables(nodes, values)
         self.weights = mi.Texture3f(mi.TensorXf(np.ascontiguousarray(weights)), use_accel=False)
         self.m_flags = mi.PhaseFunctionFlags.Anisotropic
 
-    def _set_tables(self, mu, values):
-        pbar, cdf = marginal_cdf(mu, values)
-        self.mu = _storage(mu)
+    def _set_tables(self, nodes, values):
+        pbar, cdf = marginal_cdf(nodes, values)
+        self.nodes = _storage(nodes)
         self.val = [_storage(values[:, :, c]) for c in range(3)]  # (S * N) per channel
         self.pbar = _storage(pbar)
         self.cdf = _storage(cdf)
@@ -154,14 +157,14 @@ class HydrometeorMixture(mi.PhaseFunction):
         inv = dr.rcp(dr.select(empty, 1.0, total))
         return [dr.select(empty, 1.0 / self.n_species, wi * inv) for wi in w]
 
-    def _segment(self, cos_theta):
-        """Node index i with mu_i <= cos_theta < mu_i+1 and the linear weight t in [0, 1]."""
+    def _segment(self, v):
+        """Node index i with v_i <= v < v_i+1 and the linear weight t in [0, 1]."""
         n = self.n_nodes
-        idx = dr.binary_search(1, n - 1, lambda k: _gather(self.mu, k) <= cos_theta) - 1
+        idx = dr.binary_search(1, n - 1, lambda k: _gather(self.nodes, k) <= v) - 1
         idx = dr.clip(idx, 0, n - 2)
-        mu0 = _gather(self.mu, idx)
-        mu1 = _gather(self.mu, idx + 1)
-        t = dr.clip((cos_theta - mu0) / dr.maximum(mu1 - mu0, 1e-30), 0.0, 1.0)
+        v0 = _gather(self.nodes, idx)
+        v1 = _gather(self.nodes, idx + 1)
+        t = dr.clip((v - v0) / dr.maximum(v1 - v0, 1e-30), 0.0, 1.0)
         return idx, t
 
     def _lerp(self, table, index, t):
@@ -169,10 +172,10 @@ class HydrometeorMixture(mi.PhaseFunction):
         v1 = _gather(table, index + 1)
         return v0 + (v1 - v0) * t
 
-    def _eval(self, mei, cos_theta, active):
-        """(per-channel value, pdf) of the mixture at scattering cosine cos_theta."""
+    def _eval(self, mei, v, active):
+        """(per-channel value, pdf) of the mixture at versine v = 1 - cos(Theta)."""
         w = self._weights_at(mei)
-        idx, t = self._segment(cos_theta)
+        idx, t = self._segment(v)
         value = [mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)]
         pdf = mi.Float(0.0)
         for s in range(self.n_species):
@@ -185,7 +188,7 @@ class HydrometeorMixture(mi.PhaseFunction):
     # ------------------------------------------------------------ PhaseFunction interface
     def sample(self, ctx, mei, sample1, sample2, active=True):
         w = self._weights_at(mei)
-        # pick a species with probability w_s (sample1), then invert its CDF in mu (sample2.x)
+        # pick a species with probability w_s (sample1), then invert its CDF in v (sample2.x)
         species = mi.UInt32(0)
         acc = mi.Float(0.0)
         for s in range(self.n_species - 1):
@@ -198,27 +201,28 @@ class HydrometeorMixture(mi.PhaseFunction):
         idx = dr.clip(idx, 0, n - 2)
         k = base + idx
         c0 = _gather(self.cdf, k)
-        mu0 = _gather(self.mu, idx)
-        mu1 = _gather(self.mu, idx + 1)
+        v0 = _gather(self.nodes, idx)
+        v1 = _gather(self.nodes, idx + 1)
         f0 = _gather(self.pbar, k) * (2.0 * dr.pi)
         f1 = _gather(self.pbar, k + 1) * (2.0 * dr.pi)
-        # solve f0 x + (f1 - f0) x^2 / (2 dmu) = u - c0 for x in [0, dmu] (stable root)
-        dmu = mu1 - mu0
+        # solve f0 x + (f1 - f0) x^2 / (2 dv) = u - c0 for x in [0, dv] (stable root)
+        dmu = v1 - v0
         r = dr.maximum(u - c0, 0.0)
         a = (f1 - f0) / (2.0 * dmu)
         disc = dr.maximum(f0 * f0 + 4.0 * a * r, 0.0)
         x = dr.select(f0 + dr.sqrt(disc) > 0.0, 2.0 * r / (f0 + dr.sqrt(disc)), 0.5 * dmu)
-        cos_theta = dr.clip(mu0 + dr.clip(x, 0.0, dmu), -1.0, 1.0)
-        sin_theta = dr.safe_sqrt(1.0 - cos_theta * cos_theta)
+        v = dr.clip(v0 + dr.clip(x, 0.0, dmu), 0.0, 2.0)
+        cos_theta = 1.0 - v
+        sin_theta = dr.safe_sqrt(v * (2.0 - v))
         sin_phi, cos_phi = dr.sincos(2.0 * dr.pi * sample2.y)
         wo = mei.to_world(mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, -cos_theta))
-        value, pdf = self._eval(mei, cos_theta, active)
+        value, pdf = self._eval(mei, v, active)
         weight = dr.select(pdf > 0.0, value / pdf, 0.0)
         return wo, mi.Spectrum(weight), pdf
 
     def eval_pdf(self, ctx, mei, wo, active=True):
-        cos_theta = dr.dot(wo, -mei.wi)
-        value, pdf = self._eval(mei, cos_theta, active)
+        h = wo + mei.wi  # |wo + wi|^2 = 2 (1 - cos Theta): accurate near forward
+        value, pdf = self._eval(mei, 0.5 * dr.squared_norm(h), active)
         return mi.Spectrum(value), pdf
 
     def traverse(self, cb):

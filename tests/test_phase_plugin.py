@@ -27,9 +27,9 @@ def hg_table(g, tint=(1.0, 1.0, 1.0)):
 
 def plugin_npz(tmp_path, weights, tables=None):
     tables = tables or [hg_table(g) for g in GS[: weights.shape[-1]]]
-    mu, values = hm.prepare_tables(tables)
+    nodes, values = hm.prepare_tables(tables)
     path = tmp_path / "mix.npz"
-    hm.save_npz(path, mu, values, weights.astype(np.float32), ((0, 0, 0), (1, 1, 1)))
+    hm.save_npz(path, nodes, values, weights.astype(np.float32), ((0, 0, 0), (1, 1, 1)))
     return path
 
 
@@ -38,10 +38,23 @@ def constant_weights(w):
 
 
 def test_prepared_tables_normalised_and_match_closed_form():
-    mu, values = hm.prepare_tables([hg_table(0.85)])
-    integral = 2 * np.pi * np.sum(0.5 * (values[0, 1:, 1] + values[0, :-1, 1]) * np.diff(mu))
+    v, values = hm.prepare_tables([hg_table(0.85)])
+    integral = 2 * np.pi * np.sum(0.5 * (values[0, 1:, 1] + values[0, :-1, 1]) * np.diff(v))
     assert integral == pytest.approx(1.0, abs=1e-5)
-    np.testing.assert_allclose(values[0, ::50, 0], hg(0.85, np.arccos(mu[::50])), rtol=5e-3)
+    np.testing.assert_allclose(values[0, ::50, 0], hg(0.85, np.arccos(1 - v[::50].astype(float))), rtol=5e-3)
+
+
+def test_narrow_forward_peak_keeps_its_mean_cosine():
+    """A peak 0.02 deg wide (a raindrop's diffraction) survives the float32 node set: the mean
+    cosine of the prepared table equals the closed-form HG value."""
+    g = 0.99995  # HG with a forward lobe of ~0.01 deg
+    theta = np.unique(np.r_[0.0, np.geomspace(1e-7, 1e-2, 400), np.linspace(1e-2, np.pi, 800)])
+    table = types.SimpleNamespace(theta=theta, values=np.stack([hg(g, theta)] * 3, axis=1))
+    v, values = hm.prepare_tables([table])
+    v = v.astype(float)
+    p = values[0, :, 1].astype(float)
+    mean_cos = 2 * np.pi * np.sum(0.5 * ((1 - v[1:]) * p[1:] + (1 - v[:-1]) * p[:-1]) * np.diff(v))
+    assert mean_cos == pytest.approx(g, abs=2e-4)
 
 
 @pytest.mark.parametrize("weights", [(1.0,), (0.5, 0.3, 0.2), (0.1, 0.0, 0.0, 0.9), (0.25, 0.25, 0.25, 0.25)])
@@ -87,8 +100,8 @@ def test_weights_vary_in_space_trilinearly(tmp_path):
     weights = np.zeros((1, 1, 2, 2), np.float32)
     weights[0, 0, 0] = (1, 0)
     weights[0, 0, 1] = (0, 1)
-    mu, values = hm.prepare_tables([hg_table(0.85), hg_table(0.0)])
-    phase = mi.load_dict({"type": "hydrometeor_mixture", "mu": mi.TensorXf(mu[:, None]),
+    nodes, values = hm.prepare_tables([hg_table(0.85), hg_table(0.0)])
+    phase = mi.load_dict({"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]),
                           "values": mi.TensorXf(values), "weights": mi.TensorXf(weights),
                           "to_world": hm.bbox_transform(((0, 0, 0), (2000, 10, 10)))})
     ct = [0.3]
@@ -139,7 +152,7 @@ def test_medium_dict_from_optical_volume():
 
 
 def test_bad_shapes_rejected():
-    mu, values = hm.prepare_tables([hg_table(0.85)])
+    nodes, values = hm.prepare_tables([hg_table(0.85)])
     with pytest.raises(Exception, match="weights"):
-        mi.load_dict({"type": "hydrometeor_mixture", "mu": mi.TensorXf(mu[:, None]),
+        mi.load_dict({"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]),
                       "values": mi.TensorXf(values), "weights": mi.TensorXf(np.ones((2, 2, 2, 3), np.float32))})

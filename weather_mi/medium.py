@@ -9,11 +9,11 @@ from .variant import ensure_registered
 
 
 def phase_arrays(vol: OpticalVolume):
-    """(mu (N,), values (S, N, 3), weights (z, y, x, S)) as the plugin takes them."""
+    """(nodes v = 1 - cos (N,), values (S, N, 3), weights (z, y, x, S)) as the plugin takes them."""
     from .plugins.hydrometeor_mixture import prepare_tables
-    mu, values = prepare_tables(vol.phase_tables)
+    nodes, values = prepare_tables(vol.phase_tables)
     weights = np.ascontiguousarray(np.moveaxis(vol.weights, 0, -1), dtype=np.float32)
-    return mu, values, weights
+    return nodes, values, weights
 
 
 def phase_dict(vol: OpticalVolume) -> dict:
@@ -21,8 +21,8 @@ def phase_dict(vol: OpticalVolume) -> dict:
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     ensure_registered()
-    mu, values, weights = phase_arrays(vol)
-    return {"type": "hydrometeor_mixture", "mu": mi.TensorXf(mu[:, None]), "values": mi.TensorXf(values),
+    nodes, values, weights = phase_arrays(vol)
+    return {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
             "weights": mi.TensorXf(weights), "to_world": bbox_transform(vol.bbox)}
 
 

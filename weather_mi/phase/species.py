@@ -1,0 +1,64 @@
+"""Phase tables for a set of hydrometeor species (duck-typed: ``name``, ``radius_m``, ``phase_class``).
+
+Modes
+-----
+"per_species" (physical): cloud -> :func:`mie_cloud` (r_eff 10 um, v_eff 0.1); rain -> :func:`mie_rain`
+    at the species' ``radius_m``; ice -> :func:`ice_crystals` ("column"); snow -> :func:`snow`;
+    graupel -> :func:`graupel`.
+"paper" (Riley et al., section 5.2): one water table for every ``phase_class == "water"`` species and
+    one ice table for every ``"ice"`` species, as the paper used Wendling et al.'s water and ice
+    curves; here :func:`mie_cloud` and :func:`ice_crystals` ("column").
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from .ice import graupel, ice_crystals, snow
+from .mie import mie_cloud, mie_rain
+from .table import PhaseTable
+
+MODES = ("per_species", "paper")
+QUALITIES = ("test", "default", "high")
+
+
+def _attr(sp, name):
+    try:
+        return getattr(sp, name)
+    except AttributeError:
+        raise TypeError(f"species object {sp!r} has no attribute {name!r} (needs name, radius_m, phase_class)") from None
+
+
+def table_for(sp, mode: str = "per_species", quality: str = "default") -> PhaseTable:
+    """The phase table of one species object."""
+    if mode not in MODES:
+        raise ValueError(f"mode must be one of {', '.join(map(repr, MODES))}, got {mode!r}")
+    if quality not in QUALITIES:
+        raise ValueError(f"quality must be one of {', '.join(map(repr, QUALITIES))}, got {quality!r}")
+    if mode == "paper":
+        cls = _attr(sp, "phase_class")
+        if cls == "water":
+            return mie_cloud(quality=quality)
+        if cls == "ice":
+            return ice_crystals("column", quality=quality)
+        raise ValueError(f"phase_class must be 'water' or 'ice', got {cls!r}")
+    name = _attr(sp, "name")
+    if name == "cloud":
+        return mie_cloud(quality=quality)
+    if name == "rain":
+        return mie_rain(radius=float(_attr(sp, "radius_m")), quality=quality)
+    if name == "ice":
+        return ice_crystals("column", quality=quality)
+    if name == "snow":
+        return snow(quality=quality)
+    if name == "graupel":
+        return graupel(quality=quality)
+    raise ValueError(f"species name must be one of cloud, ice, rain, snow, graupel; got {name!r}")
+
+
+def for_species(species: Sequence, mode: str = "per_species", quality: str = "default") -> list[PhaseTable]:
+    """One :class:`PhaseTable` per entry of ``species``, in order (see the module doc for the
+    mapping). Tables are cached on disk and in memory, so repeated species cost nothing."""
+    return [table_for(sp, mode, quality) for sp in species]
+
+
+__all__ = ["for_species", "table_for", "MODES"]
