@@ -2,6 +2,7 @@
 
     weather-mi info FILE | --demo supercell|cumulus
     weather-mi render FILE | --demo supercell|cumulus [options] -o out.exr
+    weather-mi validate -o DIR [--quick]
 """
 from __future__ import annotations
 
@@ -144,6 +145,10 @@ def main(argv: list[str] | None = None) -> int:
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")
     render.add_argument("--resume", action="store_true", help="continue from OUTPUT.ckpt.npz")
     render.add_argument("-o", "--output", default="weather-mi.exr")
+    val = sub.add_parser("validate", help="the validation study: slicer against path-traced ground truth")
+    val.add_argument("-o", "--output", default="validation-report", help="report folder")
+    val.add_argument("--quick", action="store_true", help="small images and samples: a few minutes")
+    val.add_argument("--config", choices=("full", "quick", "tiny"), default=None)
     args = parser.parse_args(argv)
     try:
         if args.command == "info":
@@ -151,6 +156,10 @@ def main(argv: list[str] | None = None) -> int:
             print(info_text(hyd, args.species))
         elif args.command == "render":
             render_command(args)
+        elif args.command == "validate":
+            from .study import run
+            report = run(args.output, args.config or ("quick" if args.quick else "full"))
+            print(f"wrote {report}")
     except (WeatherDataError, ValueError) as exc:
         print(f"weather-mi: error: {exc}", file=sys.stderr)
         return 2

@@ -37,6 +37,7 @@ class OpticalVolume:
     bbox: tuple[tuple[float, float, float], tuple[float, float, float]]
     species_set: SpeciesSet | None = None
     phase_mode: str = "per_species"
+    phase_quality: str = "default"
     attrs: dict = field(default_factory=dict)
     _phase_tables: list | None = field(default=None, repr=False)
 
@@ -57,7 +58,8 @@ class OpticalVolume:
             from . import phase
             if self.species_set is None:
                 raise WeatherDataError("OpticalVolume", "phase_tables", "phase tables or a species set")
-            self._phase_tables = phase.for_species(list(self.species_set), mode=self.phase_mode)
+            self._phase_tables = phase.for_species(list(self.species_set), mode=self.phase_mode,
+                                                   quality=self.phase_quality)
         return self._phase_tables
 
     @phase_tables.setter
@@ -96,7 +98,7 @@ class OpticalVolume:
         if not all(h > l for l, h in zip(lo, hi)):
             raise WeatherDataError(src, "bbox", "((x0, y0, z0), (x1, y1, z1)) with x1 > x0, y1 > y0, z1 > z0")
         weights = (beta > 0).astype(np.float32)[None]
-        vol = cls((name,), beta[None], beta, alb, weights, (lo, hi), None, "given", {"source": src})
+        vol = cls((name,), beta[None], beta, alb, weights, (lo, hi), None, "given", attrs={"source": src})
         if phase is not None:
             vol.phase_tables = [phase]
         return vol
@@ -113,7 +115,8 @@ def _radius_field(hyd: xr.Dataset, name: str, default_m: float, use_model: bool)
 
 def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
-                   phase_tables: Sequence | None = None, model_radii: bool | None = None) -> OpticalVolume:
+                   phase_tables: Sequence | None = None, model_radii: bool | None = None,
+                   phase_quality: str = "default") -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
     species     : a SpeciesSet or a preset name ("paper", "physical").
@@ -121,6 +124,7 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     phase       : "per_species" (five tables) or "paper" (one water and one ice table), built lazily.
     model_radii : use the model's effective radii (r_eff_<species>) where present; default True
                   except for the "paper" preset, which reproduces the paper's fixed radii.
+    phase_quality : "default", "high" or "test" (small, fast tables) for the lazily built tables.
     """
     validate(hyd)
     sp = preset(species) if isinstance(species, str) else species
@@ -165,7 +169,8 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
-    vol = OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase, attrs)
+    vol = OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
+                        phase_quality, attrs)
     if phase_tables is not None:
         vol.phase_tables = phase_tables
     return vol
