@@ -56,7 +56,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="300 x 300 only, 2 frames")
     ap.add_argument("--variant", default=None)
-    ap.add_argument("--light-res", type=int, default=256)
+    ap.add_argument("--light-res", type=int, default=128)
     args = ap.parse_args()
     variant = wm.set_variant(args.variant)
     vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")

@@ -36,7 +36,7 @@ class StudyConfig:
     height: int = 192
     spp: int = 256
     slices: int = 128
-    light_res: int = 256
+    light_res: int = 128
     scenes: tuple = ("demo-supercell", "wrf-supercell", "bomex")
     lightings: tuple = ("front", "side", "back")
     convergence_slices: tuple = (64, 128, 256, 512)

@@ -18,9 +18,12 @@ def _sky_emitter(spec: SceneSpec, cache: dict | None):
     if key not in cache:
         cache[key] = mi.load_dict({**d, "sky_scale": 1.0})  # the scale is applied outside: it is a
     emitter = cache[key]                                     # kernel literal in Mitsuba's sunsky
-    params = mi.traverse(emitter)
-    params["sun_direction"] = mi.Vector3f(*d["sun_direction"])
-    params.update()
+    sun_key = (key, "sun")
+    if cache.get(sun_key) != tuple(d["sun_direction"]):      # updating recomputes the sky's tables
+        params = mi.traverse(emitter)
+        params["sun_direction"] = mi.Vector3f(*d["sun_direction"])
+        params.update()
+        cache[sun_key] = tuple(d["sun_direction"])
     return emitter, d["sky_scale"]
 
 
@@ -47,11 +50,17 @@ def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | N
         return np.zeros(3)
     if spec.sky.kind == "constant":
         return np.pi * np.asarray(spec.sky.radiance)
+    memo = (spec.sky, spec.sun, n)
+    if cache is not None and memo in cache:
+        return cache[memo]
     side = int(np.sqrt(n))
     u, v = np.meshgrid((np.arange(side) + 0.5) / side, (np.arange(side) + 0.5) / side)
     r, phi = np.sqrt(u.ravel()), 2 * np.pi * v.ravel()
     dirs = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(1 - r * r, 0))], axis=1)
-    return np.pi * sky_radiance(spec, dirs, cache).mean(axis=0)
+    e = np.pi * sky_radiance(spec, dirs, cache).mean(axis=0)
+    if cache is not None:
+        cache[memo] = e
+    return e
 
 
 def ground_hits(spec: SceneSpec, origins: np.ndarray, dirs: np.ndarray):

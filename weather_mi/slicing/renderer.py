@@ -76,7 +76,7 @@ class SliceRenderer:
     ``frame(spec, params)`` renders; textures and kernels are reused from frame to frame."""
 
     def __init__(self, vol: OpticalVolume, mode: SliceMode = SliceMode(), slices: int = 128,
-                 light_res: int = 256, detail_field: np.ndarray | None = None, uniform_phase=None,
+                 light_res: int = 128, detail_field: np.ndarray | None = None, uniform_phase=None,
                  differentiable: bool = False):
         from ..variant import ensure_registered
         ensure_registered()
@@ -211,11 +211,12 @@ class SliceRenderer:
 
         store = dr.zeros(mi.Float, (N + 1) * R * R * 2)
         lane = dr.arange(mi.UInt32, R * R)
-        D = dr.full(mi.Float, 1.0, R * R)
-        I = dr.zeros(mi.Float, R * R)
-        for k in range(N):
-            kf = dr.opaque(mi.Float, float(k))
-            # the two halves of slab k, [k - 1/2, k] and [k, k + 1/2], clipped to the box (slice units)
+        plane = dr.opaque(mi.UInt32, R * R)
+
+        def through_slab(k, D, I):
+            """Carry the light through slab k in two halves, [k - 1/2, k] and [k, k + 1/2] clipped to
+            the box (slice units); store the light at plane k."""
+            kf = mi.Float(k)
             a = dr.clip(kf - 0.5, kin, kout)
             m = dr.clip(kf, kin, kout)
             b = dr.clip(kf + 0.5, kin, kout)
@@ -227,20 +228,39 @@ class SliceRenderer:
             t2 = dr.exp(-ext * dl * (b - m))
             D_mid = D * t1
             I_mid = I * t1 + (D + I) * (1.0 - t1) * ratio
-            at = (lane + dr.opaque(mi.UInt32, k * R * R)) * 2
+            at = (lane + k * plane) * 2
             dr.scatter(store, D_mid, at)
             dr.scatter(store, I_mid, at + 1)
-            D = D_mid * t2
-            I = I_mid * t2 + (D_mid + I_mid) * (1.0 - t2) * ratio
-            if translucent:
-                dr.eval(D, I, store)
-                I = _blur(mi, dr, I, R, rx, ry)
-            if not self.differentiable:
-                dr.eval(D, I, store)
+            return D_mid * t2, I_mid * t2 + (D_mid + I_mid) * (1.0 - t2) * ratio
+
+        D = dr.full(mi.Float, 1.0, R * R)
+        I = dr.zeros(mi.Float, R * R)
+        if translucent or self.differentiable:
+            # the blur reads neighbouring texels of the previous slice: one launch per slice
+            for k in range(N):
+                D, I = through_slab(dr.opaque(mi.UInt32, k), D, I)
+                if translucent:
+                    dr.eval(D, I, store)
+                    I = _blur(mi, dr, I, R, rx, ry)
+                if not self.differentiable:
+                    dr.eval(D, I, store)
+        else:
+            # no blur: every light ray is independent, so all slices run in one kernel
+            n_slices = dr.opaque(mi.UInt32, N)
+
+            def body(k, D, I):
+                D, I = through_slab(k, D, I)
+                return k + 1, D, I
+
+            _, D, I = dr.while_loop((dr.zeros(mi.UInt32, R * R), D, I), lambda k, D, I: k < n_slices, body)
+            dr.eval(D, I)  # one kernel for the loop and its stores
         at = (lane + dr.opaque(mi.UInt32, N * R * R)) * 2
         dr.scatter(store, D, at)
         dr.scatter(store, I, at + 1)
+        if not self.differentiable:
+            dr.eval(store)
         self.tex_light.set_tensor(mi.TensorXf(store, shape=(N + 1, R, R, 2)))
+        self._light_store = store
         self._light_frame = (g, du, dv)
 
     # ------------------------------------------------------------------ eye pass
@@ -248,9 +268,12 @@ class SliceRenderer:
         mi, dr = self.mi, __import__("drjit")
         S = self.n_species
         H, W = spec.height, spec.width
-        origins, dirs = camera_rays(spec)
-        o = origins.reshape(-1, 3)
-        d = dirs.reshape(-1, 3)
+        ray_key = ("rays", spec.camera, spec.width, spec.height)
+        if ray_key not in self._sky_cache:
+            origins, dirs = camera_rays(spec)
+            o, d = origins.reshape(-1, 3), dirs.reshape(-1, 3)
+            self._sky_cache[ray_key] = (o, d, _ray_box(o, d, (self.occ_lo, self.occ_hi)))
+        o, d, (t0, t1) = self._sky_cache[ray_key]
         s = g.axis
         # scattering angle of sunlight into each pixel ray: cos Theta = l . d
         cos_t = d @ g.to_light
@@ -263,7 +286,6 @@ class SliceRenderer:
             tints.append(colour)
         G = len(self.groups)
         # ray extent in the volume, clipped by the ground
-        t0, t1 = _ray_box(o, d, (self.occ_lo, self.occ_hi))
         tg = ground_hits(spec, o, d)
         t1 = np.minimum(t1, tg)
         sd = d @ s
@@ -278,8 +300,15 @@ class SliceRenderer:
         k_lo, k_hi = np.minimum(ka, kb), np.maximum(ka, kb)
 
         # background: sky along the ray, or the lit ground
-        bg = sky_radiance(spec, d, self._sky_cache)
         hit_ground = np.isfinite(tg)
+        bg_key = ("background", spec.camera, spec.sun, spec.sky, spec.ground, spec.width, spec.height)
+        if bg_key not in self._sky_cache:  # the sky seen by each pixel: only when view or sun change
+            self._sky_cache = {k: v for k, v in self._sky_cache.items() if not (isinstance(k, tuple) and k
+                                                                              and k[0] == "background")}
+            bg = np.zeros_like(d)
+            bg[~hit_ground] = sky_radiance(spec, d[~hit_ground], self._sky_cache)
+            self._sky_cache[bg_key] = bg
+        bg = self._sky_cache[bg_key]
         pg = o + np.where(hit_ground, tg, 0.0)[:, None] * d
 
         F = lambda a: _aligned_float(mi, a)  # noqa: E731
@@ -311,6 +340,28 @@ class SliceRenderer:
             before = kf < 0  # between the light and the first slice: unattenuated sunlight
             return dr.select(before, 1.0, direct), dr.select(before, 0.0, indirect)
 
+        R = self.light_res
+        store = self._light_store
+        fR = float(R)
+
+        def light_on_plane(px, py, pz, kf):
+            """Bilinear lookup in the light buffer of the nearest slice plane (eye samples lie on the
+            planes except for clipped end segments): 4 packed gathers instead of a trilinear fetch."""
+            x = dr.clip((px * e1[0] + py * e1[1] + pz * e1[2] - u0) * inv_du * fR - 0.5, 0.0, fR - 1.0)
+            y = dr.clip((px * e2[0] + py * e2[1] + pz * e2[2] - v0) * inv_dv * fR - 0.5, 0.0, fR - 1.0)
+            x0 = dr.minimum(mi.UInt32(x), R - 2)
+            y0 = dr.minimum(mi.UInt32(y), R - 2)
+            fx, fy = x - mi.Float(x0), y - mi.Float(y0)
+            k = mi.UInt32(dr.clip(dr.round(kf), 0.0, n_planes - 1.0))
+            base = (k * R + y0) * R + x0
+            a = dr.gather(mi.Array2f, store, base)
+            b = dr.gather(mi.Array2f, store, base + 1)
+            c = dr.gather(mi.Array2f, store, base + R)
+            d = dr.gather(mi.Array2f, store, base + R + 1)
+            val = (a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy
+            before = kf < -0.5
+            return dr.select(before, 1.0, val[0]), dr.select(before, 0.0, val[1])
+
         def body(i, T, C0, C1, C2, active):
             kc = F_start + F_step * mi.Float(i)
             # slab [k - 1/2, k + 1/2] clipped to the ray's span in the box; sample at its middle
@@ -323,7 +374,7 @@ class SliceRenderer:
             q = mi.Point3f((px - lo[0]) * inv_span[0], (py - lo[1]) * inv_span[1], (pz - lo[2]) * inv_span[2])
             vals = self.tex_eye.eval(q)
             ext = dr.maximum(vals[0], 0.0)
-            direct, indirect = light_at(px, py, pz, kf)
+            direct, indirect = light_on_plane(px, py, pz, kf)
             alpha = 1.0 - dr.exp(-ext * de * seg)
             w = dr.select(ext > 0, T * alpha / dr.maximum(ext, 1e-30), 0.0)
             src = [mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)]     # sum_s beta_sca,s P_s tint E
@@ -397,11 +448,13 @@ class SliceRenderer:
         self._light_pass(g, params)
         if not self.differentiable:
             dr.eval(self.tex_light.tensor())
+        dr.sync_thread()  # kernels run asynchronously: wait before reading the clock
         t_light = time.perf_counter()
         out, transmittance = self._eye_pass(g, spec, params, scale, omega, tint)
         if return_arrays:
             return out, transmittance
         dr.eval(out, transmittance)
+        dr.sync_thread()
         t_eye = time.perf_counter()
         H, W = spec.height, spec.width
         rgb = np.stack([np.asarray(c, dtype=np.float32) for c in out], axis=-1).reshape(H, W, 3)
