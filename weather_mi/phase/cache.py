@@ -3,7 +3,9 @@
 Folder: ``$WEATHER_MI_CACHE`` if set, else ``~/.cache/weather-mi/phase/`` (``$XDG_CACHE_HOME`` is
 honoured). File name: ``<constructor>-<sha256 of (constructor, parameters, CODE_VERSION)>.npz``.
 Bump :data:`CODE_VERSION` whenever a change alters computed tables. Tables loaded once are also
-kept in memory for the life of the process.
+kept in memory for the life of the process. The package ships the default-quality tables of both
+species presets in ``weather_mi/phase/data/`` (same file names; regenerate them with
+``python -m weather_mi.phase.seed``), so a fresh installation renders without building them.
 """
 from __future__ import annotations
 
@@ -19,6 +21,7 @@ import numpy as np
 from .table import PhaseTable
 
 CODE_VERSION = "phase-1"
+SHIPPED = Path(__file__).resolve().parent / "data"
 _MEMORY: dict[str, PhaseTable] = {}
 
 
@@ -90,6 +93,8 @@ def cached_table(name: str, params: Mapping, compute: Callable[[], PhaseTable], 
     table = _MEMORY.get(key)
     if table is None:
         table = load(path)
+        if table is None and (SHIPPED / path.name).is_file():
+            table = load(SHIPPED / path.name)
         if table is None:
             table = compute()
             try:
