@@ -69,6 +69,21 @@ class OpticalVolume:
                                    f"one table per species ({len(self.species)})", f"{len(tables)} tables")
         self._phase_tables = None if tables is None else list(tables)
 
+    def occupied_bbox(self, threshold_per_m: float = 0.0):
+        """World box ((x0, y0, z0), (x1, y1, z1)) of the cells whose extinction exceeds the threshold
+        (the whole bbox when none does)."""
+        occ = self.beta_total > threshold_per_m
+        if not occ.any():
+            return self.bbox
+        (x0, y0, z0), (x1, y1, z1) = self.bbox
+        dz, dy, dx = self.spacing
+        lo, hi = [], []
+        for axis, start, step in ((2, x0, dx), (1, y0, dy), (0, z0, dz)):
+            idx = np.nonzero(occ.any(axis=tuple(a for a in range(3) if a != axis)))[0]
+            lo.append(start + idx[0] * step)
+            hi.append(start + (idx[-1] + 1) * step)
+        return tuple(lo), tuple(hi)
+
     def optical_depth_z(self) -> np.ndarray:
         """Vertical optical depth of every column (y, x): sum of beta_total dz."""
         return self.beta_total.sum(axis=0, dtype=np.float64) * self.spacing[0]

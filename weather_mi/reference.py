@@ -77,6 +77,7 @@ def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, integrator, max_
 
 
 def _save_checkpoint(path: Path, state: dict) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp.npz")
     np.savez(tmp, **state)
     os.replace(tmp, path)

@@ -123,9 +123,11 @@ class Camera:
     def orbit(cls, vol_or_bbox, azimuth: float = 200.0, elevation: float = 8.0, distance: float | None = None,
               fov: float = 45.0, target=None) -> "Camera":
         """A camera on a sphere around the volume: it stands at ``azimuth`` (degrees clockwise from
-        north, seen from the target) and ``elevation`` above the target (the bbox centre by default),
-        at ``distance`` metres (default: far enough that the whole bbox fits the field of view)."""
-        (x0, y0, z0), (x1, y1, z1) = _bbox(vol_or_bbox)
+        north, seen from the target) and ``elevation`` above the target, at ``distance`` metres. Given
+        an OpticalVolume, it frames the cloud (the box of cells with extinction), else the box; the
+        default target is the box centre and the default distance makes the box fit the view."""
+        box = vol_or_bbox.occupied_bbox() if hasattr(vol_or_bbox, "occupied_bbox") else vol_or_bbox
+        (x0, y0, z0), (x1, y1, z1) = _bbox(box)
         centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2]) if target is None else np.asarray(target, float)
         if distance is None:
             radius = 0.5 * math.dist((x0, y0, z0), (x1, y1, z1))
