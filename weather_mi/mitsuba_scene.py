@@ -63,15 +63,23 @@ def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
     import mitsuba as mi
     key = (mi.variant(), round(sun.elevation, 3), round(float(turbidity), 3))
     if key not in _SUNSKY_SUN_IRRADIANCE:
-        emitter = mi.load_dict({"type": "sunsky", "sun_direction": sun.to_sun.tolist(), "sky_scale": 0.0,
-                                "turbidity": float(turbidity)})
+        # one emitter per variant and turbidity, its sun moved through traverse: a new emitter per sun
+        # position would bake the position into a new kernel (a recompilation whenever the sun moves)
+        ekey = ("emitter", mi.variant(), round(float(turbidity), 3))
+        if ekey not in _SUNSKY_SUN_IRRADIANCE:
+            _SUNSKY_SUN_IRRADIANCE[ekey] = mi.load_dict({"type": "sunsky", "sun_direction": sun.to_sun.tolist(),
+                                                         "sky_scale": 0.0, "turbidity": float(turbidity)})
+        emitter = _SUNSKY_SUN_IRRADIANCE[ekey]
+        params = mi.traverse(emitter)
+        params["sun_direction"] = mi.Vector3f(*(float(v) for v in sun.to_sun))
+        params.update()
         n = 1 << 16
         it = dr.zeros(mi.Interaction3f, n)
         rng = np.random.default_rng(1)
         from .jitarrays import aligned_float
         sample = mi.Point2f(*(aligned_float(mi, u) for u in rng.random((2, n))))
         ds, weight = emitter.sample_direction(it, sample)
-        cos = dr.dot(ds.d, mi.Vector3f(*(float(v) for v in sun.to_sun)))
+        cos = dr.dot(ds.d, mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in sun.to_sun)))  # no literals
         e = np.array(weight * cos)
         _SUNSKY_SUN_IRRADIANCE[key] = np.asarray(e).reshape(3, -1).mean(axis=1) if e.ndim > 1 else np.full(3, e.mean())
     return _SUNSKY_SUN_IRRADIANCE[key]
