@@ -173,3 +173,34 @@ def test_frame_is_differentiable():
         fd = (f(x0 + h) - f(x0 - h)) / (2 * h)
         assert abs(fd) > 0
         assert grad == pytest.approx(fd, rel=0.05), name
+
+
+def blob_volume():
+    """An asymmetric, optically thick blob (a tall lobe and a wide lobe) with sharp edges, 3 km across."""
+    z, y, x = np.meshgrid(*(np.linspace(-1, 1, n) for n in (20, 24, 28)), indexing="ij")
+    tall = ((x + 0.3) / 0.35) ** 2 + (y / 0.4) ** 2 + ((z - 0.1) / 0.8) ** 2
+    wide = ((x - 0.35) / 0.45) ** 2 + ((y - 0.1) / 0.45) ** 2 + ((z + 0.35) / 0.3) ** 2
+    beta = np.where(np.minimum(tall, wide) < 1.0, 0.05, 0.0).astype(np.float32)  # 1/m: tau ~ 50 across
+    return wm.OpticalVolume.from_arrays(beta, 0.9, hg_table(0.85), ((-1500.0, -1500.0, 1000.0), (1500.0, 1500.0, 3000.0)))
+
+
+@pytest.mark.parametrize("sun_azimuth", [180.0, 0.0], ids=["front-lit", "back-lit"])
+def test_silhouette_matches_the_path_tracer(sun_azimuth):
+    """Pixels where the reference's eye-ray transmittance is below 0.5 (a path-traced image of the same
+    volume made purely absorbing, seen against a uniform sky of radiance 1: its radiance IS the
+    transmittance) overlap the slicer's with IoU >= 0.98, with the camera south of the cloud and the
+    sun behind it (front-lit) or in front of it (back-lit, looking towards the sun)."""
+    vol = blob_volume()
+    cam = wm.Camera.orbit(vol, azimuth=180, elevation=10, fov=40)
+    spec = wm.SceneSpec(camera=cam, sun=wm.Sun(sun_azimuth, 25), sky=None, ground=None, width=48, height=36)
+    r = SliceRenderer(vol, SliceMode("uniform", "translucent"), slices=96, light_res=48)
+    r.frame(spec)
+    assert (float(np.dot(cam.forward, spec.sun.to_sun)) > 0) == (sun_azimuth == 0.0)  # both slicing orders
+    absorbing = wm.OpticalVolume.from_arrays(vol.beta_total, 0.0, hg_table(0.0), vol.bbox)
+    t_spec = wm.SceneSpec(camera=cam, sun=spec.sun, sky=wm.Sky("constant", radiance=1.0), ground=None,
+                          width=48, height=36)
+    t_ref = wm.render_reference(t_spec, absorbing, spp=64, integrator="volpath", progress=False).radiance.mean(axis=2)
+    ref_cloud, approx_cloud = t_ref < 0.5, r.transmittance < 0.5
+    assert 150 < ref_cloud.sum() < 0.8 * ref_cloud.size  # the blob fills part of the picture
+    iou = (ref_cloud & approx_cloud).sum() / (ref_cloud | approx_cloud).sum()
+    assert iou >= 0.98, f"silhouette IoU {iou:.3f}"
