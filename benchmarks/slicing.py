@@ -12,8 +12,6 @@ from __future__ import annotations
 import argparse
 import statistics
 
-import numpy as np
-
 import weather_mi as wm
 from weather_mi.slicing import TABLE_IV, SliceParams, SliceRenderer
 
@@ -21,19 +19,11 @@ PAPER_FPS = {"uniform/low-albedo": 5.1, "uniform/translucent": 4.3, "per-species
              "per-species/translucent/detail": 1.2}
 
 
-def detail_field(shape, seed=0):
-    """A mean-one multiplicative detail field (log-normal smooth noise), standing in until
-    weather_mi.detail is available."""
-    try:
-        from weather_mi import detail
-        return detail.field(shape, seed=seed)
-    except (ImportError, AttributeError):
-        rng = np.random.default_rng(seed)
-        n = np.fft.irfftn(np.fft.rfftn(rng.standard_normal(shape)) *
-                          np.exp(-sum(np.meshgrid(*[np.fft.fftfreq(s) ** 2 for s in shape[:-1]],
-                                                  np.fft.rfftfreq(shape[-1]) ** 2, indexing="ij")) * 200), shape)
-        n /= n.std()
-        return np.exp(0.5 * n - 0.125).astype(np.float32)
+def detail_field(vol, seed=0):
+    """The simulated turbulent detail of weather_mi.detail (a mean-one multiplier on the grid)."""
+    from weather_mi import detail
+    spacing = tuple((hi - lo) / n for lo, hi, n in zip(vol.bbox[0][::-1], vol.bbox[1][::-1], vol.shape))
+    return detail.field(vol.shape, seed=seed, spacing_m=spacing)
 
 
 def bench(vol, size, slices, light_res, frames, phase_tables):
@@ -41,7 +31,7 @@ def bench(vol, size, slices, light_res, frames, phase_tables):
     rows = []
     for name, mode in TABLE_IV.items():
         r = SliceRenderer(vol, mode, slices=slices, light_res=light_res,
-                          detail_field=detail_field(vol.shape) if mode.detail else None)
+                          detail_field=detail_field(vol) if mode.detail else None)
         r.frame(spec)  # warm-up: compiles
         t = []
         for i in range(frames):

@@ -30,6 +30,9 @@ def _check_inputs(spec: SceneSpec, vol: OpticalVolume, spp: int, normalize, inte
         raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
     if normalize not in (None, "reflectance"):
         raise ValueError(f"normalize must be None or 'reflectance', got {normalize!r}")
+    if normalize == "reflectance" and min(spec.sun.irradiance) <= 0:
+        raise ValueError(f"normalize='reflectance' divides by the sun's irradiance: every channel must be > 0, "
+                         f"got {spec.sun.irradiance}")
     if variant is not None:
         import mitsuba as mi
         if variant not in mi.variants():
@@ -72,6 +75,9 @@ def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, integrator, max_
                         default=str).encode())
     for a in (vol.beta_total, vol.albedo, vol.weights):
         h.update(np.ascontiguousarray(a).tobytes())
+    for t in vol.phase_tables:  # the phase functions are part of the scene too
+        h.update(np.ascontiguousarray(t.theta, np.float64).tobytes())
+        h.update(np.ascontiguousarray(t.values, np.float64).tobytes())
     h.update(json.dumps([list(map(float, p)) for p in vol.bbox]).encode())
     return h.hexdigest()
 
@@ -112,10 +118,10 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     m2 = np.zeros((h, w, 3))
     done, seconds = 0, 0.0
     if resume_path is not None and resume_path.is_file():
-        state = np.load(resume_path)
-        if str(state["key"]) != key:
-            raise ValueError(f"checkpoint {resume_path} belongs to a different scene, volume or sample plan")
-        mean, m2, done, seconds = state["mean"], state["m2"], int(state["done"]), float(state["seconds"])
+        with np.load(resume_path) as state:
+            if str(state["key"]) != key:
+                raise ValueError(f"checkpoint {resume_path} belongs to a different scene, volume or sample plan")
+            mean, m2, done, seconds = state["mean"], state["m2"], int(state["done"]), float(state["seconds"])
         ckpt = ckpt or resume_path
 
     spec_k, vol_k, _ = recentred(spec, vol)  # kernel-side coordinates: bbox centred on the origin
