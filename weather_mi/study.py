@@ -127,7 +127,8 @@ def side_by_side(path: Path, ref: Image, approx: Image, exposure: float) -> Path
 
 # ---------------------------------------------------------------- calibration
 
-def calibrate(vol, specs, refs, masks, cfg: StudyConfig, start: SliceParams, mode: SliceMode):
+def calibrate(vol, specs, refs, masks, cfg: StudyConfig, start: SliceParams, mode: SliceMode,
+              progress: bool = False):
     """Fit forward fraction, cone angle and ambient fraction of the slicer to the references by
     gradient descent with Dr.Jit reverse-mode AD through whole frames (loss: relative MSE over cloud
     pixels, averaged over the training views). Returns (params, loss history)."""
@@ -140,8 +141,9 @@ def calibrate(vol, specs, refs, masks, cfg: StudyConfig, start: SliceParams, mod
     theta = np.array([math.log(ff0 / (1 - ff0)), math.log(start.cone_angle_deg), math.log(max(start.ambient, 0.05))])
     m1, m2 = np.zeros(3), np.zeros(3)
     lr, history = 0.15, []
-    for it in range(cfg.calibration_iterations):
-        x = [mi.Float(float(v)) for v in theta]
+    from tqdm.auto import tqdm
+    for it in tqdm(range(cfg.calibration_iterations), desc="calibration", disable=not progress):
+        x = [dr.opaque(mi.Float, float(v)) for v in theta]  # opaque: a literal would recompile every step
         for v in x:
             dr.enable_grad(v)
         params = SliceParams(forward_fraction=dr.rcp(1 + dr.exp(-x[0])), cone_angle_deg=dr.exp(x[1]),
@@ -152,7 +154,7 @@ def calibrate(vol, specs, refs, masks, cfg: StudyConfig, start: SliceParams, mod
             out, _ = r.frame(spec, params, return_arrays=True)
             target = ref.radiance.reshape(-1, 3)
             w = mask.reshape(-1).astype(np.float32)
-            eps = 1e-2 * float(np.mean(target[w > 0] ** 2)) if w.any() else 1.0
+            eps = dr.opaque(mi.Float, 1e-2 * float(np.mean(target[w > 0] ** 2)) if w.any() else 1.0)
             loss = mi.Float(0.0)
             for c in range(3):
                 tc = mi.Float(target[:, c].astype(np.float32))
@@ -260,7 +262,8 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True) -> P
         mode = TABLE_IV["per-species/translucent"]
         vol = scenes[first][0]
         fitted, history = calibrate(vol, [refs[k][0] for k in train], [refs[k][1] for k in train],
-                                    [refs[k][2] for k in train], cfg, SliceParams(forward_fraction=0.5), mode)
+                                    [refs[k][2] for k in train], cfg, SliceParams(forward_fraction=0.5), mode,
+                                    progress=progress)
         for key in train + test:
             spec, ref, mask = refs[key]
             v = scenes[key[0]][0]
