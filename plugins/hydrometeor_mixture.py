@@ -110,6 +110,13 @@ def _gather(src, index):
     return dr.gather(mi.Float, src, index)
 
 
+def _gather4(src, index):
+    """src[4 index : 4 index + 4] as a Vector4f: one packet load per lane in JIT variants."""
+    if isinstance(src, list):
+        return mi.Vector4f(*src[4 * int(index): 4 * int(index) + 4])
+    return dr.gather(mi.Vector4f, src, index)
+
+
 class HydrometeorMixture(mi.PhaseFunction):
     """Eq. 8 mixture of per-species tabulated phase functions with spatially varying weights."""
 
@@ -140,13 +147,16 @@ class HydrometeorMixture(mi.PhaseFunction):
     def _set_tables(self, nodes, values):
         pbar, cdf = marginal_cdf(nodes, values)
         self.nodes = _storage(nodes)
-        self.val = [_storage(values[:, :, c]) for c in range(3)]  # (S * N) per channel
+        # (S, N, 4): R, G, B value and the channel-mean pdf of every node, read as one packet
+        self.table4 = _storage(np.concatenate([np.asarray(values, np.float32), pbar[:, :, None]], axis=2))
         self.pbar = _storage(pbar)
         self.cdf = _storage(cdf)
 
     # ------------------------------------------------------------ helpers
     def _weights_at(self, mei):
         """w_s(x) for s = 0..S-1, trilinear on the bbox grid, renormalised to sum to 1."""
+        if self.n_species == 1:
+            return [mi.Float(1.0)]  # renormalised weights of one species are 1: no lookup
         p = self.to_local @ mei.p
         w = self.weights.eval(mi.Point3f(p.x, p.y, p.z))
         w = [dr.maximum(wi, 0.0) for wi in w]
@@ -167,23 +177,23 @@ class HydrometeorMixture(mi.PhaseFunction):
         t = dr.clip((v - v0) / dr.maximum(v1 - v0, 1e-30), 0.0, 1.0)
         return idx, t
 
-    def _lerp(self, table, index, t):
-        v0 = _gather(table, index)
-        v1 = _gather(table, index + 1)
-        return v0 + (v1 - v0) * t
-
-    def _eval(self, mei, v, active):
-        """(per-channel value, pdf) of the mixture at versine v = 1 - cos(Theta)."""
-        w = self._weights_at(mei)
-        idx, t = self._segment(v)
+    def _mix(self, w, idx, t):
+        """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t."""
         value = [mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)]
         pdf = mi.Float(0.0)
         for s in range(self.n_species):
             k = idx + s * self.n_nodes
+            f0 = _gather4(self.table4, k)
+            f = f0 + (_gather4(self.table4, k + 1) - f0) * t
             for c in range(3):
-                value[c] += w[s] * self._lerp(self.val[c], k, t)
-            pdf += w[s] * self._lerp(self.pbar, k, t)
+                value[c] += w[s] * f[c]
+            pdf += w[s] * f[3]
         return mi.Color3f(value[0], value[1], value[2]), pdf
+
+    def _eval(self, mei, v, active):
+        """(per-channel value, pdf) of the mixture at versine v = 1 - cos(Theta)."""
+        idx, t = self._segment(v)
+        return self._mix(self._weights_at(mei), idx, t)
 
     # ------------------------------------------------------------ PhaseFunction interface
     def sample(self, ctx, mei, sample1, sample2, active=True):
@@ -211,12 +221,14 @@ class HydrometeorMixture(mi.PhaseFunction):
         a = (f1 - f0) / (2.0 * dmu)
         disc = dr.maximum(f0 * f0 + 4.0 * a * r, 0.0)
         x = dr.select(f0 + dr.sqrt(disc) > 0.0, 2.0 * r / (f0 + dr.sqrt(disc)), 0.5 * dmu)
-        v = dr.clip(v0 + dr.clip(x, 0.0, dmu), 0.0, 2.0)
+        x = dr.clip(x, 0.0, dmu)
+        v = dr.clip(v0 + x, 0.0, 2.0)
         cos_theta = 1.0 - v
         sin_theta = dr.safe_sqrt(v * (2.0 - v))
         sin_phi, cos_phi = dr.sincos(2.0 * dr.pi * sample2.y)
         wo = mei.to_world(mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, -cos_theta))
-        value, pdf = self._eval(mei, v, active)
+        # value and pdf where v was drawn: same weights, same segment (no second search or lookup)
+        value, pdf = self._mix(w, idx, dr.clip(x / dr.maximum(dmu, 1e-30), 0.0, 1.0))
         weight = dr.select(pdf > 0.0, value / pdf, 0.0)
         return wo, mi.Spectrum(weight), pdf
 

@@ -142,6 +142,42 @@ def test_renders_like_builtin_hg_within_noise(tmp_path):
     assert np.mean(np.abs(diff / sigma) < 4) > 0.99
 
 
+def test_two_species_render_like_their_mixture_table_within_noise(tmp_path):
+    """Two co-located species with constant weights (w, 1 - w) render like one species whose table is
+    the mixture w p1 + (1 - w) p2 (computed in numpy). p1 differs per channel (HG g = 0.85 / 0.6 / 0.3
+    in R / G / B), p2 is back-scattering (HG g = -0.3). Sanity check: swapped weights differ clearly."""
+    w = 0.7
+    p1 = np.stack([hg(g, THETA) for g in (0.85, 0.6, 0.3)], axis=1)
+    p2 = np.stack([hg(-0.3, THETA)] * 3, axis=1)
+    tables = [types.SimpleNamespace(theta=THETA, values=p1), types.SimpleNamespace(theta=THETA, values=p2)]
+    mix = [types.SimpleNamespace(theta=THETA, values=w * p1 + (1 - w) * p2)]
+
+    def render(tables, weights, seed0):
+        folder = tmp_path / f"s{seed0}"
+        folder.mkdir()
+        path = plugin_npz(folder, constant_weights(weights), tables)
+        scene = slab_scene({"type": "hydrometeor_mixture", "filename": str(path)})
+        passes = np.stack([np.array(mi.render(scene, spp=64, seed=seed0 + s)) for s in range(8)])
+        return passes.mean(0), passes.std(0, ddof=1) / np.sqrt(len(passes))
+
+    def z_scores(a, b):
+        """(z of the image-mean difference, per-pixel z) between two independent renders."""
+        diff = a[0] - b[0]
+        sigma = np.sqrt(a[1] ** 2 + b[1] ** 2) + 1e-6
+        return diff.mean() / np.sqrt((sigma ** 2).mean() / diff.size), diff / sigma
+
+    # independent seeds per render, so the per-image standard errors describe the difference
+    two = render(tables, (w, 1 - w), 0)
+    one = render(mix, (1.0,), 100)
+    swapped = render(tables, (1 - w, w), 200)
+    assert np.mean(two[0]) > 0.01
+    z_mean, z_pixel = z_scores(two, one)
+    assert abs(z_mean) < 3, z_mean
+    assert np.mean(np.abs(z_pixel) < 4) > 0.99
+    z_swapped, _ = z_scores(two, swapped)
+    assert abs(z_swapped) > 8, z_swapped  # the comparison has the power to see wrong weights
+
+
 def test_medium_dict_from_optical_volume():
     a = np.zeros((3, 4, 5))
     a[1, 2, 3] = 1e-3
