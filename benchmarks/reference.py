@@ -4,12 +4,14 @@
     .venv/bin/python benchmarks/reference.py [--size 256] [--budget 45] [--equal-time 60]
                                              [--wrf ../shared/data/wrf/wrfout_quarter_ss_0130.nc]
                                              [--preset paper|physical] [--max-depth -1] [--rr-depth 5]
+                                             [--cells 8] [--integrators volpath majorant]
 
 Volume: ``wm.optical_volume(wm.synthetic.supercell())`` (the demo supercell), or with ``--wrf PATH``
 one time (``--time``, default the last) of a wrfout file through ``wm.open_wrf``. Scene:
 ``weather_mi.scene.default_spec`` (orbit camera south-south-west, low; sun in the south-west; sunsky;
-ground), built exactly as ``render_reference`` builds it (``recentred`` + ``scene_dict`` +
-``reference.integrator_dict``), square images of ``--size`` pixels.
+ground), rendered by ``render_reference`` itself (its passes, seeds and per-pixel standard errors),
+square images of ``--size`` pixels. ``--cells 2 4 8 16`` measures the majorant tracker once per
+coarse-cell size (fine voxels per majorant cell along each axis).
 
 For each integrator: one 1-spp render at 1/8 of the size ("1st render": compilation + one run), one to
 get the cost of a sample per pixel; the integrator is then measured at the largest of N, N/2, N/4,
@@ -22,8 +24,8 @@ paths/s at 32^2 than at 256^2, so scaled figures are pessimistic). From the pass
 camera paths per second, the per-pixel variance of one sample (spread of the passes x spp) and so
 the relative standard error after any time (RSE ~ 1/sqrt(time)). Errors are reported like
 ``Image.relative_stderr``: the mean over cloudy pixels of channel-mean standard error / channel-mean
-radiance. Cloudy pixels: primary-ray transmittance < 0.9 (an absorbing copy of the volume in front
-of a white sky, no sun, no ground, 32 spp of the majorant tracker). Columns:
+radiance. Cloudy pixels: primary-ray transmittance < 0.9 (``wm.render_transmittance``, 32 spp).
+Columns:
 
     RSE(run) mean RSE over cloudy pixels of this run's own passes (after its budget)
     RSE@Ts   mean RSE over cloudy pixels after T = --equal-time seconds of rendering
@@ -32,7 +34,7 @@ of a white sky, no sun, no ground, 32 spp of the majorant tracker). Columns:
 
 and the speed-up majorant/volpath at equal error, t(1%) of volpath / t(1%) of majorant.
 
-Caveats. (1) See benchmarks/majorant_tracking.py: past ``rr_depth`` stock ``volpath`` plays
+Caveats. (1) Past ``rr_depth`` stock ``volpath`` plays
 Russian roulette at every null collision, so its multiply scattered light in optically thick cores
 survives with probability ~0.95^N after N null collisions: a rare-event estimator whose cloudy mean
 reads low (about half of the majorant tracker's on the demo supercell) and whose sample variance (so
@@ -45,7 +47,6 @@ samples read low, which also favours volpath. Timings on a shared machine are no
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import sys
 import time
@@ -56,10 +57,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import mitsuba as mi  # noqa: E402
-
 import weather_mi as wm  # noqa: E402  (sets the variant, registers the plugins)
-from weather_mi.mitsuba_scene import recentred, scene_dict  # noqa: E402
-from weather_mi.reference import integrator_dict  # noqa: E402
+from weather_mi.plugins.majorant_volpath import DEFAULT_CELL  # noqa: E402
 from weather_mi.scene import default_spec  # noqa: E402
 
 DEFAULT_WRF = Path(__file__).resolve().parents[2] / "shared" / "data" / "wrf" / "wrfout_quarter_ss_0130.nc"
@@ -79,58 +78,38 @@ def load_volume(args):
     return vol, label, time.perf_counter() - t0
 
 
-def build_scene(spec, vol, integrator: str, max_depth: int, rr_depth: int | None):
-    spec_k, vol_k, _ = recentred(spec, vol)
-    integ = integrator_dict(vol_k, integrator, max_depth)
-    if rr_depth is not None:
-        integ["rr_depth"] = int(rr_depth)
-    return mi.load_dict(scene_dict(spec_k, vol_k, integ))
-
-
 def cloudy_mask(spec, vol, spp=32):
-    """Primary-ray transmittance < 0.9: the volume made purely absorbing in front of a white sky."""
-    absorbing = dataclasses.replace(vol, albedo=np.zeros_like(vol.albedo))
-    tspec = dataclasses.replace(spec, sun=wm.Sun(spec.sun.azimuth, spec.sun.elevation, irradiance=0.0),
-                                sky=wm.Sky("constant", radiance=1.0), ground=None)
-    img = wm.render_reference(tspec, absorbing, spp=spp, passes=1, integrator="majorant", progress=False)
-    tr = img.radiance.mean(axis=2)
+    """Primary-ray transmittance < 0.9."""
+    tr = wm.render_transmittance(spec, vol, spp=spp, passes=1)
     return tr < 0.9, tr
 
 
-def render1(scene, spp=1, seed=0) -> np.ndarray:
-    """One render, evaluated: ``mi.render`` only traces, its kernel runs when the image is read."""
-    return np.array(mi.render(scene, spp=spp, seed=seed))
+def render(spec, vol, integrator, args, spp, passes=1, cell=None):
+    return wm.render_reference(spec, vol, spp=spp, passes=passes, integrator=integrator, max_depth=args.max_depth,
+                               rr_depth=args.rr_depth, cell=cell or args.cells[0], progress=False)
 
 
-def time_one(scene, seed=1):
-    t0 = time.perf_counter()
-    render1(scene, seed=seed)
-    return time.perf_counter() - t0
+def time_one(spec, vol, integrator, args, cell=None):
+    """Seconds of one 1-spp render (``render_reference``'s own timing: rendering only)."""
+    return render(spec, vol, integrator, args, 1, cell=cell).metadata["seconds"]
 
 
-def measure(label, scene, budget, cloudy, t_one, min_passes=4, max_passes=256, pixel_ratio=1.0):
-    """Passes of ``scene`` (already rendered once: compiled) for ``budget`` seconds. ``pixel_ratio``:
-    (benchmark pixels) / (pixels of this scene), by which the times per spp are scaled."""
+def measure(label, spec, vol, integrator, args, budget, cloudy, t_one, pixel_ratio=1.0, cell=None):
+    """About ``budget`` seconds of passes (at least 4) of ``render_reference``; per-sample variances
+    from its per-pixel standard errors. ``pixel_ratio``: (benchmark pixels) / (pixels of ``spec``),
+    by which the times per spp are scaled."""
     spp = max(1, min(256, int(budget / 16 / max(t_one, 1e-3))))  # about 16 passes in the budget
-    n, mean, m2, pass_means = 0, None, None, []
-    t0 = time.perf_counter()
-    while n < max_passes and (n < min_passes or time.perf_counter() - t0 < budget):
-        img = render1(scene, spp=spp, seed=1000 + n).astype(np.float64)[..., :3]
-        n += 1
-        pass_means.append(float(img.mean(axis=2)[cloudy].mean()))
-        if mean is None:
-            mean, m2 = np.zeros_like(img), np.zeros_like(img)
-        delta = img - mean
-        mean += delta / n
-        m2 += delta * (img - mean)
-    wall = time.perf_counter() - t0
-    s_per_spp = wall / (n * spp)
-    h, w = mean.shape[:2]
-    var_spp = m2 / (n - 1) * spp  # variance of a one-sample pixel estimate
-    lum = mean.mean(axis=2)
-    r = dict(label=label, size=w, spp=spp, passes=n, wall=wall, s_per_spp=s_per_spp, paths=w * h / s_per_spp,
-             var_spp=var_spp, mean=mean, ok=cloudy & (lum > 0), cloudy_mean=float(lum[cloudy].mean()),
-             cloudy_se=float(np.std(pass_means, ddof=1) / math.sqrt(n)))  # from the spread of the passes
+    passes = max(4, min(256, int(budget / max(spp * t_one, 1e-3))))
+    img = render(spec, vol, integrator, args, spp * passes, passes, cell)
+    wall = img.metadata["seconds"]
+    s_per_spp = wall / (passes * spp)
+    h, w = img.radiance.shape[:2]
+    se = img.stderr.astype(np.float64)
+    lum = img.radiance.astype(np.float64).mean(axis=2)
+    se_lum = se.mean(axis=2)  # an upper bound of the channel mean's standard error
+    r = dict(label=label, size=w, spp=spp, passes=passes, wall=wall, s_per_spp=s_per_spp, paths=w * h / s_per_spp,
+             var_spp=se ** 2 * passes * spp, mean=img.radiance.astype(np.float64), ok=cloudy & (lum > 0),
+             cloudy_mean=float(lum[cloudy].mean()), cloudy_se=float(np.sqrt(np.sum(se_lum[cloudy] ** 2)) / cloudy.sum()))
     r["rse_now"] = rse_after(r, wall)  # measured: after this run's own passes, at its own size
     r["s_per_spp"] = s_per_spp * pixel_ratio  # time per spp of the benchmark image
     return r
@@ -169,6 +148,8 @@ def main(argv=None):
     ap.add_argument("--max-depth", type=int, default=-1)
     ap.add_argument("--rr-depth", type=int, default=None, help="Russian roulette start (default: plugins' 5)")
     ap.add_argument("--integrators", nargs="+", default=["volpath", "majorant"], choices=["volpath", "majorant"])
+    ap.add_argument("--cells", type=int, nargs="+", default=[DEFAULT_CELL],
+                    help="majorant-grid cell sizes (fine voxels per coarse cell) to measure")
     args = ap.parse_args(argv)
 
     t_start = time.perf_counter()
@@ -195,37 +176,36 @@ def main(argv=None):
                 raise SystemExit("no cloudy pixels in this view")
         return masks[size]
 
-    def scene(name, size):
-        return build_scene(default_spec(vol, width=size, height=size), vol, name, args.max_depth, args.rr_depth)
+    def spec_at(size):
+        return default_spec(vol, width=size, height=size)
 
     mask(args.size)
     N = args.size
+    runs = [(name, None) for name in args.integrators if name == "volpath"]
+    if "majorant" in args.integrators:
+        runs += [("majorant", c) for c in args.cells]
     rows = []
-    for name in args.integrators:
+    for name, cell in runs:
+        label = name if cell is None or len(args.cells) == 1 else f"maj c={cell}"
         # the cost of one sample per pixel, probed at 1/8 of the size; measured at the largest of
         # N, N/2, N/4, N/8 where 4 passes of 1 spp fit the budget, times scaled to N x N
         p = max(8, N // 8)
-        sc = scene(name, p)
-        t0 = time.perf_counter()
-        render1(sc)  # compile (or load from the kernel cache) and run
-        t_compile = time.perf_counter() - t0
-        cost_px = time_one(sc) / p ** 2
+        t_compile = time_one(spec_at(p), vol, name, args, cell)  # compile (or the kernel cache) and run
+        cost_px = time_one(spec_at(p), vol, name, args, cell) / p ** 2
         size = next((s for s in (N, N // 2, N // 4) if s > p and 4 * cost_px * s * s <= args.budget), p)
-        if size != p:
-            sc = scene(name, size)
-            t_one = time_one(sc, seed=0)  # warm-up at this size
-        else:
-            t_one = cost_px * p * p
-        r = measure(name, sc, args.budget, mask(size), t_one, pixel_ratio=(N / size) ** 2)
+        t_one = time_one(spec_at(size), vol, name, args, cell) if size != p else cost_px * p * p
+        r = measure(label, spec_at(size), vol, name, args, args.budget, mask(size), t_one,
+                    pixel_ratio=(N / size) ** 2, cell=cell)
         r["compile"] = t_compile
         rows.append(r)
-        print(f"  {name}: 1st render {t_compile:.1f} s, measured at {size} x {size}: {r['passes']} x {r['spp']} spp "
+        print(f"  {label}: 1st render {t_compile:.1f} s, measured at {size} x {size}: {r['passes']} x {r['spp']} spp "
               f"in {r['wall']:.1f} s", flush=True)
         if name == "volpath" and size < N and "majorant" in args.integrators:
-            sc = scene("majorant", size)  # the same reduced image with the majorant tracker
-            t_m = time_one(sc, seed=0)
-            r = measure("majorant", sc, args.budget / 3, mask(size), t_m, pixel_ratio=(N / size) ** 2)
-            r["compile"], r["matched"] = t_m, True
+            c = args.cells[0]  # the same reduced image with the majorant tracker
+            t_m = time_one(spec_at(size), vol, "majorant", args, c)
+            r = measure("majorant" if len(args.cells) == 1 else f"maj c={c}", spec_at(size), vol, "majorant", args,
+                        args.budget / 3, mask(size), t_m, pixel_ratio=(N / size) ** 2, cell=c)
+            r["compile"] = t_m
             rows.append(r)
             print(f"  majorant at the same size: {r['passes']} x {r['spp']} spp in {r['wall']:.1f} s", flush=True)
 
@@ -241,7 +221,7 @@ def main(argv=None):
               f"{r['s_per_spp']:8.3f} {r['paths']:9.3g} {r['rse_now']:8.4f} {r['rse_T']:9.4f} "
               f"{fmt_time(r['t_target']):>10s} {r['cloudy_mean']:11.5f} +- {r['cloudy_se']:.5f}")
     vol_rows = [r for r in rows if r["label"] == "volpath"]
-    maj_rows = [r for r in rows if r["label"] == "majorant"]
+    maj_rows = [r for r in rows if r["label"].startswith("maj")]
     if vol_rows and maj_rows:
         v = vol_rows[0]
         print()

@@ -37,8 +37,10 @@ Properties
 ``max_depth`` (int, -1 = infinite), ``rr_depth`` (int, 5), ``hide_emitters`` (bool, False),
 ``majorant`` (TensorXf (Z, Y, X), majorants in 1/m, i.e. already multiplied by the medium's ``scale``;
 from :func:`majorant_grid`; optional: without it the grid is built from the medium's sigma_t data at
-render time and rebuilt whenever that data changes), ``cell`` (int, 8: fine voxels per coarse cell
-along each axis, as given to :func:`majorant_grid`; on a 40 x 96 x 96 storm 2-4 were fastest),
+render time and rebuilt whenever that data changes), ``cell`` (int, ``DEFAULT_CELL`` = 2: fine voxels
+per coarse cell along each axis, as given to :func:`majorant_grid`; seconds per spp at 256 x 256 on
+the demo supercell: 1.30 / 0.64 / 0.22 / 0.22 for cells of 8 / 4 / 2 / 1, on the real WRF supercell
+0.95 (8) and 0.24 (2): ``benchmarks/reference.py --integrators majorant --cells 8 4 2 1``),
 ``to_world`` (transform of the unit cube onto the sigma_t grid's bounding box, as its gridvolume has;
 default: the bounding box of the medium's sigma_t volume; checked against it).
 
@@ -58,6 +60,7 @@ import drjit as dr
 import mitsuba as mi
 
 PLUGIN_NAME = "majorant_volpath"
+DEFAULT_CELL = 2  # fine voxels per coarse majorant cell (measured fastest on the storms; see the docstring)
 SAFETY = 1.0001
 _RR_THRESHOLD = 0.1   # ratio tracking: roulette once max(T) drops below this ...
 _RR_SURVIVE = 0.5     # ... surviving with this probability
@@ -65,7 +68,7 @@ _RR_SURVIVE = 0.5     # ... surviving with this probability
 
 # ---------------------------------------------------------------- numpy side
 
-def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = 8, safety: float = SAFETY) -> np.ndarray:
+def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: float = SAFETY) -> np.ndarray:
     """Conservative majorants of the trilinear interpolant of ``sigma_t_zyx`` on a coarse grid.
 
     ``sigma_t_zyx`` is (nz, ny, nx) (or (nz, ny, nx, C): the maximum over channels is used), indexed
@@ -207,7 +210,7 @@ class MajorantVolpath(mi.SamplingIntegrator):
         if self.rr_depth < 0:
             raise ValueError(f"{PLUGIN_NAME}: rr_depth must be >= 0, got {self.rr_depth}")
         self.hide_emitters_ = bool(props.get("hide_emitters", False))
-        self.cell = int(props.get("cell", 8))
+        self.cell = int(props.get("cell", DEFAULT_CELL))
         if self.cell < 1:
             raise ValueError(f"{PLUGIN_NAME}: cell must be >= 1, got {self.cell}")
         self.auto_majorant = "majorant" not in props

@@ -195,7 +195,7 @@ def test_spectral_extinction_and_depth_limit_agree_with_volpath():
         return mi.load_dict(d)
     a = passes(load({"type": "volpath", "max_depth": 3}), 16, 16)
     b = passes(load({"type": "majorant_volpath", "max_depth": 3, "majorant": mi.TensorXf(mv.majorant_grid(rgb, 8)),
-                     "to_world": bbox_tf()}), 16, 16, seed0=1000)
+                     "cell": 8, "to_world": bbox_tf()}), 16, 16, seed0=1000)
     assert_agree(a, b)
 
 

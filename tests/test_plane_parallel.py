@@ -43,10 +43,22 @@ def test_disort_intensity_correction_is_active_and_converged():
     assert a["R"] + a["T"] == pytest.approx(1.0, abs=1e-6)  # conservative scattering
 
 
+def plugin_asymmetry(table) -> float:
+    """Mean cosine of a table as the ``hydrometeor_mixture`` plugin represents it: piecewise linear in
+    the versine v = 1 - cos theta on its node set (so also linear in mu), exact integral of mu p."""
+    from weather_mi.plugins.hydrometeor_mixture import prepare_tables
+    nodes, values = prepare_tables([table])
+    mu = (1.0 - nodes.astype(np.float64))[::-1]
+    p = values[0].astype(np.float64).mean(axis=1)[::-1]
+    a, b, pa, pb = mu[:-1], mu[1:], p[:-1], p[1:]
+    return float(2 * np.pi * np.sum((b - a) * (pa * (2 * a + b) + pb * (a + 2 * b)) / 6.0))
+
+
 @pytest.mark.parametrize("g", [0.0, 0.75, 0.85])
 def test_hg_table_as_the_plugin_sees_it(g):
-    table = fluxes.hg_table(g)
-    assert fluxes.table_asymmetry(table) == pytest.approx(g, abs=2e-4)
+    """The renderer's HG table keeps the closed-form mean cosine g (the DISORT runs use g itself)."""
+    table = wm.phase.henyey_greenstein(g)
+    assert plugin_asymmetry(table) == pytest.approx(g, abs=2e-4)
     mu = np.cos(table.theta)
     integral = -2 * np.pi * np.trapezoid(table.values[:, 0], mu)
     assert integral == pytest.approx(1.0, abs=1e-3)
@@ -56,7 +68,7 @@ def test_van_de_hulst_rendered_direct_beam_included():
     """R and T (direct beam included) against the published values. The irradiancemeter sees only the
     diffuse transmitted light (it never reaches the directional sun); the white-patch measurement
     adds the direct beam exp(-tau / mu0) by emitter sampling."""
-    f = fluxes.slab_fluxes(VDH["tau"], VDH["albedo"], fluxes.hg_table(VDH["g"]), VDH["mu0"], spp=1 << 19,
+    f = fluxes.slab_fluxes(VDH["tau"], VDH["albedo"], wm.phase.henyey_greenstein(VDH["g"]), VDH["mu0"], spp=1 << 19,
                            passes=16, seed=11, transmittance_method="both", rr_depth=NO_RR)
     d = fluxes.disort_slab(**VDH)
     assert_agrees("R", f["R"], f["R_stderr"], VDH_R)
@@ -71,7 +83,7 @@ def test_van_de_hulst_rendered_direct_beam_included():
     (0.85, 0.99, 8.0, 1.0, 1 << 19, NO_RR),   # thick, forward-peaked (cloud-like)
 ])
 def test_slab_against_disort(g, albedo, tau, mu0, paths, rr_depth):
-    table = fluxes.hg_table(g)
+    table = wm.phase.henyey_greenstein(g)
     d = fluxes.disort_slab(tau, albedo, g, mu0)
     f = fluxes.slab_fluxes(tau, albedo, table, mu0, spp=paths, passes=16, seed=21, rr_depth=rr_depth)
     assert_agrees("R", f["R"], f["R_stderr"], d["R"])
@@ -92,7 +104,7 @@ def test_white_furnace():
         c = rng.uniform(-0.6, 0.6, 3)
         beta += np.exp(-((z - c[0]) ** 2 + (y - c[1]) ** 2 + (x - c[2]) ** 2) / 0.08)
     beta *= 0.02 / beta.max()  # up to 20 optical depths per km
-    vol = wm.OpticalVolume.from_arrays(beta, 1.0, fluxes.hg_table(0.85), ((0, 0, 0), (1000, 1000, 1000)))
+    vol = wm.OpticalVolume.from_arrays(beta, 1.0, wm.phase.henyey_greenstein(0.85), ((0, 0, 0), (1000, 1000, 1000)))
     L = np.array([0.2, 0.5, 1.0])
     spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=200.0, elevation=25.0),
                         sun=wm.Sun(240.0, 35.0, irradiance=0.0), sky=wm.Sky("constant", radiance=tuple(L)),
@@ -122,7 +134,7 @@ def _blob_volume(albedo_sw=None):
     if albedo_sw is not None:
         beta[4:8, 0:4, 0:4] = 0.02
         albedo[:, 0:8, 0:8] = albedo_sw
-    return wm.OpticalVolume.from_arrays(beta, albedo, fluxes.hg_table(0.0), ((0, 0, 0), (1600, 1600, 800)))
+    return wm.OpticalVolume.from_arrays(beta, albedo, wm.phase.henyey_greenstein(0.0), ((0, 0, 0), (1600, 1600, 800)))
 
 
 def _render(vol, camera, width, height):

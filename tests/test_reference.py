@@ -193,12 +193,27 @@ def test_checkpoint_of_another_scene_is_refused(vol, tmp_path, monkeypatch):
         (spec(seed=6, sun=wm.Sun(100.0, 40.0)), vol, {}),            # another sun
         (spec(seed=6), vol, {"spp": 12, "passes": 3}),               # another sample plan
         (spec(seed=6), vol, {"integrator": "volpath"}),              # another integrator
+        (spec(seed=6), vol, {"rr_depth": 100}),                      # another roulette
     ]
     for sp, v, kw in others:
         kw = {"spp": 8, "passes": 2, **kw}
         with pytest.raises(ValueError, match="different scene"):
             wm.render_reference(sp, v, checkpoint=ckpt, resume=True, progress=False, **kw)
     assert ckpt.read_bytes() == before
+
+
+def test_transmittance_of_a_uniform_slab_is_beer_lambert():
+    """render_transmittance through a uniform layer seen straight down: exp(-beta H) (closed form)."""
+    beta, depth = 1.2e-3, 1000.0
+    slab = wm.OpticalVolume.from_arrays(np.full((4, 4, 4), beta, np.float32), 0.9, wm.phase.henyey_greenstein(0.85),
+                                        ((-5e4, -5e4, 0.0), (5e4, 5e4, depth)))
+    cam = wm.Camera.orthographic(center=(0.0, 0.0, 3000.0), direction=(0, 0, -1), width=2000.0, height=2000.0)
+    sp = wm.SceneSpec(camera=cam, sun=wm.Sun(0.0, 40.0), sky=wm.Sky("sunsky"), ground=wm.Ground(0.3, height=-10.0),
+                      width=16, height=16)
+    t = wm.render_transmittance(sp, slab, spp=64)
+    expected = np.exp(-beta * depth)
+    se = np.sqrt(expected * (1 - expected) / (64 * t.size))  # binary delta-tracking estimates
+    assert abs(t.mean() - expected) < 4 * se
 
 
 # ---------------------------------------------------------------- files

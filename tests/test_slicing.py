@@ -186,20 +186,17 @@ def blob_volume():
 
 @pytest.mark.parametrize("sun_azimuth", [180.0, 0.0], ids=["front-lit", "back-lit"])
 def test_silhouette_matches_the_path_tracer(sun_azimuth):
-    """Pixels where the reference's eye-ray transmittance is below 0.5 (a path-traced image of the same
-    volume made purely absorbing, seen against a uniform sky of radiance 1: its radiance IS the
-    transmittance) overlap the slicer's with IoU >= 0.98, with the camera south of the cloud and the
-    sun behind it (front-lit) or in front of it (back-lit, looking towards the sun)."""
+    """Pixels where the reference's eye-ray transmittance is below 0.5 (``wm.render_transmittance``: the
+    path tracer on the volume made purely absorbing, against a sky of radiance 1) overlap the slicer's
+    with IoU >= 0.98, with the camera south of the cloud and the sun behind it (front-lit) or in
+    front of it (back-lit, looking towards the sun). A one-pixel shift gives IoU 0.89."""
     vol = blob_volume()
     cam = wm.Camera.orbit(vol, azimuth=180, elevation=10, fov=40)
     spec = wm.SceneSpec(camera=cam, sun=wm.Sun(sun_azimuth, 25), sky=None, ground=None, width=48, height=36)
     r = SliceRenderer(vol, SliceMode("uniform", "translucent"), slices=96, light_res=48)
     r.frame(spec)
     assert (float(np.dot(cam.forward, spec.sun.to_sun)) > 0) == (sun_azimuth == 0.0)  # both slicing orders
-    absorbing = wm.OpticalVolume.from_arrays(vol.beta_total, 0.0, hg_table(0.0), vol.bbox)
-    t_spec = wm.SceneSpec(camera=cam, sun=spec.sun, sky=wm.Sky("constant", radiance=1.0), ground=None,
-                          width=48, height=36)
-    t_ref = wm.render_reference(t_spec, absorbing, spp=64, integrator="volpath", progress=False).radiance.mean(axis=2)
+    t_ref = wm.render_transmittance(spec, vol, spp=64, integrator="volpath")
     ref_cloud, approx_cloud = t_ref < 0.5, r.transmittance < 0.5
     assert 150 < ref_cloud.sum() < 0.8 * ref_cloud.size  # the blob fills part of the picture
     iou = (ref_cloud & approx_cloud).sum() / (ref_cloud | approx_cloud).sum()

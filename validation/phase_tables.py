@@ -40,6 +40,20 @@ def slug(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9.]+", "_", text).strip("_").lower()
 
 
+def closed_forms():
+    """(constructor, g, exact mean cosine, exact cone fraction F(g, theta0)) of the analytic tables."""
+    from weather_mi import phase
+    return ((phase.cornette_shanks, 0.825, phase.cornette_shanks_mean_cosine, phase.cornette_shanks_cone_fraction),
+            (phase.henyey_greenstein, 0.85, lambda g: g, phase.hg_cone_fraction))
+
+
+def _kind(name: str, sp) -> str:
+    """Which angles to mark: "rain" (bows), "ice" (halos) or "water"."""
+    if name.startswith("mie_rain"):
+        return "rain"
+    return "ice" if sp.phase_class == "ice" else "water"
+
+
 def collect(plates: bool, plate_quality: str):
     """[(key, title, table, kind, used_by)] in display order; kind in {"water", "rain", "ice", "analytic"}."""
     from weather_mi import phase, species
@@ -51,19 +65,7 @@ def collect(plates: bool, plate_quality: str):
             for sp in species.preset(preset):
                 t = table_for(sp, mode=mode, quality="default")
                 if t.name not in found:
-                    if sp.name == "rain" and mode == "per_species":
-                        key, title, kind = f"mie_rain_{sp.radius_m * 1e3:g}mm", f"Mie rain, r_eff {sp.radius_m * 1e3:g} mm", "rain"
-                    elif t.name.startswith("mie_cloud"):
-                        key, title, kind = "mie_cloud", "Mie cloud, r_eff 10 um, v_eff 0.1", "water"
-                    elif t.name.startswith("snow"):
-                        key, title, kind = "snow", "Snow (rough column, roughness 0.3, 1 mm)", "ice"
-                    elif t.name.startswith("graupel"):
-                        key, title, kind = "graupel", "Graupel (rough ice sphere, roughness 0.2, 1 mm)", "ice"
-                    elif "'column'" in t.name:
-                        key, title, kind = "ice_column", "Ice columns (hexagonal, aspect 2, 30 um)", "ice"
-                    else:
-                        key, title, kind = slug(t.name), t.name, "ice" if sp.phase_class == "ice" else "water"
-                    found[t.name] = [key, title, t, kind, []]
+                    found[t.name] = [slug(t.name.split(":")[0]), t.name, t, _kind(t.name, sp), []]
                 used = found[t.name][4]
                 where = f"{preset}/{mode}"
                 if used and used[-1][0] == where:
@@ -71,7 +73,7 @@ def collect(plates: bool, plate_quality: str):
                 else:
                     used.append((where, [sp.name]))
     rows = [(k, ti, t, kind, [f"{w}: {', '.join(names)}" for w, names in used]) for k, ti, t, kind, used in found.values()]
-    order = ["mie_cloud", "mie_rain", "ice_column", "snow", "graupel"]
+    order = ["mie_cloud", "mie_rain", "ice_crystals", "snow", "graupel"]
     rows.sort(key=lambda r: next((i for i, k in enumerate(order) if r[0].startswith(k)), len(order)))
     if plates:
         t0 = time.perf_counter()
@@ -79,12 +81,12 @@ def collect(plates: bool, plate_quality: str):
         dt = time.perf_counter() - t0
         if dt > 2:
             print(f"computed ice plates ({plate_quality} quality) in {dt:.0f} s; cached in {phase.cache_dir()}")
-        at = next((i + 1 for i, r in enumerate(rows) if r[0] == "ice_column"), len(rows))
-        rows.insert(at, ("ice_plate", f"Ice plates (hexagonal, aspect 0.2, 30 um; {plate_quality} quality)", t, "ice",
-                        ["no preset (pristine-habit alternative to columns)"]))
-    rows.append(("cornette_shanks_0.825", "Cornette-Shanks g = 0.825", phase.cornette_shanks(0.825), "analytic",
-                 ["closed form"]))
-    rows.append(("hg_0.85", "Henyey-Greenstein g = 0.85", phase.henyey_greenstein(0.85), "analytic", ["closed form"]))
+        at = next((i + 1 for i, r in enumerate(rows) if r[0].startswith("ice_crystals")), len(rows))
+        rows.insert(at, (slug(t.name), f"{t.name} ({plate_quality} quality)", t, "ice",
+                         ["no preset (pristine-habit alternative to columns)"]))
+    for make, g, *_ in closed_forms():
+        t = make(g)
+        rows.append((slug(t.name), t.name, t, "analytic", ["closed form"]))
     return rows
 
 
@@ -124,7 +126,7 @@ def plot(path: Path, title: str, table, kind: str) -> None:
             ax.set_xticks(np.arange(0, 181, 20))
             ax.set_xlabel("scattering angle \u03b8 (deg)")
     axes[0].legend(fontsize=8, loc="upper right", bbox_to_anchor=(1.0, 0.93))
-    fig.suptitle(f"{title}\n{table.name}   [{table.theta.size} angles]", fontsize=10)
+    fig.suptitle(f"{title}   [{table.theta.size} angles]", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -135,8 +137,6 @@ def triple(values, fmt="{:.4f}") -> str:
 
 
 def markdown(rows) -> str:
-    from weather_mi.phase import (cornette_shanks_cone_fraction, cornette_shanks_mean_cosine,
-                                  hg_cone_fraction)
     lines = ["# Phase tables (weather_mi.phase)", "",
              "Per channel R / G / B (650 / 550 / 450 nm). g = asymmetry parameter <cos theta>; "
              "F(x) = fraction of the scattered energy within x deg of forward.", "",
@@ -147,14 +147,9 @@ def markdown(rows) -> str:
         lines.append(f"| {title} (`{key}.png`) | {t.theta.size} | {triple(t.g)} | "
                      + " | ".join(triple(x, "{:.3f}") for x in f) + f" | {'; '.join(used)} |")
     lines += ["", "Closed-form check (green channel, table vs exact):", ""]
-    for key, title, t, kind, used in rows:
-        if key.startswith("hg_"):
-            gx, fx = 0.85, [hg_cone_fraction(0.85, np.radians(d)) for d in CONES_DEG]
-        elif key.startswith("cornette"):
-            gx, fx = cornette_shanks_mean_cosine(0.825), [cornette_shanks_cone_fraction(0.825, np.radians(d))
-                                                          for d in CONES_DEG]
-        else:
-            continue
+    analytic = [r for r in rows if r[3] == "analytic"]
+    for (key, title, t, kind, used), (_, g, mean_cosine, cone) in zip(analytic, closed_forms()):
+        gx, fx = mean_cosine(g), [cone(g, np.radians(d)) for d in CONES_DEG]
         ft = [t.cone_fraction(np.radians(d))[1] for d in CONES_DEG]
         lines.append(f"- {title}: g {t.g[1]:.6f} vs {gx:.6f}; "
                      + ", ".join(f"F({d:g}\u00b0) {a:.6f} vs {float(b):.6f}" for d, a, b in zip(CONES_DEG, ft, fx)))

@@ -66,8 +66,9 @@ def run_case(g, albedo, tau, mu0, spp, integrator, seed, zenith=True, published=
              rr_depth=None) -> dict:
     """MC and DISORT numbers for one slab; ``published`` (dict with R, T) replaces DISORT as the
     flux reference when given (DISORT is still computed and reported)."""
-    from weather_mi.fluxes import disort_slab, hg_table, slab_fluxes, slab_radiance
-    table = hg_table(g)
+    from weather_mi.fluxes import disort_slab, slab_fluxes, slab_radiance
+    from weather_mi.phase import henyey_greenstein
+    table = henyey_greenstein(g)
     paths = spp * PIXELS * PIXELS
     t0 = time.perf_counter()
     ref = disort_slab(tau, albedo, g, mu0)

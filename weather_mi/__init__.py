@@ -16,7 +16,7 @@ from .variant import ensure_registered, set_variant
 from .medium import medium_dict, phase_dict
 from .scene import Camera, Ground, SceneSpec, Sky, Sun
 from .imageio import Image
-from .reference import render_reference
+from .reference import render_reference, render_transmittance
 from .slicing import SliceMode, SliceParams, SliceRenderer, render_slices
 from . import cli, imageio, scene
 
@@ -26,7 +26,7 @@ __version__ = "0.1.0"
 
 __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les",
            "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
-           "Camera", "Ground", "SceneSpec", "Sky", "Sun", "Image", "render_reference",
+           "Camera", "Ground", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "render_transmittance",
            "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "species", "synthetic", "hydrometeors", "atmosphere", "phase"]
 
 

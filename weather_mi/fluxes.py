@@ -34,7 +34,6 @@ Standard errors are the spread of independent passes (consecutive seeds) over sq
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -47,66 +46,6 @@ PATCH_HALF = 0.005
 PATCH_VIEW_HALF = 0.002
 PATCH_DEPTH = 2.0
 GAP = 1e-3
-
-
-# ---------------------------------------------------------------- phase tables
-
-@dataclass(frozen=True)
-class PhaseTableHG:
-    """A Henyey-Greenstein phase table: ``theta`` ascending (radians, 0..pi), ``values`` (N, 3) in
-    1/sr integrating to 1 over 4 pi; dense near the forward direction (resolves g = 0.85..0.9)."""
-
-    g: float
-    theta: np.ndarray
-    values: np.ndarray
-
-
-def hg_value(g: float, cos_theta) -> np.ndarray:
-    """Henyey-Greenstein p(cos theta) in 1/sr."""
-    mu = np.asarray(cos_theta, dtype=np.float64)
-    return (1.0 - g * g) / (4.0 * np.pi * (1.0 + g * g - 2.0 * g * mu) ** 1.5)
-
-
-def hg_phase_table(g: float) -> PhaseTableHG:
-    """Our own HG table: geometric theta spacing from 1e-4 to 0.3 rad, linear beyond."""
-    if not -1.0 < g < 1.0:
-        raise ValueError(f"HG asymmetry must be in (-1, 1), got {g}")
-    theta = np.unique(np.r_[0.0, np.geomspace(1e-4, 0.3, 400), np.linspace(0.3, np.pi, 1500)])
-    p = hg_value(g, np.cos(theta))
-    return PhaseTableHG(float(g), theta, np.repeat(p[:, None], 3, axis=1))
-
-
-def table_asymmetry(table) -> float:
-    """Mean cosine of a phase table as the ``hydrometeor_mixture`` plugin represents it
-    (piecewise linear on its node set, in cos theta or in the versine 1 - cos theta: both are linear in
-    mu; renormalised), channel mean."""
-    from .plugins.hydrometeor_mixture import prepare_tables
-    nodes, values = prepare_tables([table])
-    nodes = nodes.astype(np.float64)
-    p = values[0].astype(np.float64).mean(axis=1)
-    if nodes[0] >= 0.0 and nodes[-1] > 1.5:  # versine nodes v = 1 - cos in [0, 2] (linear in mu too)
-        mu, p = (1.0 - nodes)[::-1], p[::-1]
-    else:  # cosine nodes in [-1, 1]
-        mu = nodes
-    a, b = mu[:-1], mu[1:]
-    pa, pb = p[:-1], p[1:]
-    return float(2 * np.pi * np.sum((b - a) * (pa * (2 * a + b) + pb * (a + 2 * b)) / 6.0))
-
-
-def hg_table(g: float, tol: float = 2e-4):
-    """An HG table for the renderer: ``weather_mi.phase.henyey_greenstein(g)`` when that exists and
-    its plugin representation has the right mean cosine (within ``tol``), else :func:`hg_phase_table`."""
-    try:
-        from .phase import henyey_greenstein
-    except ImportError:
-        return hg_phase_table(g)
-    try:
-        table = henyey_greenstein(g)
-        if abs(table_asymmetry(table) - g) <= tol:
-            return table
-    except Exception:  # an incomplete phase module must not break the validation
-        pass
-    return hg_phase_table(g)
 
 
 # ---------------------------------------------------------------- slab geometry
@@ -160,23 +99,14 @@ def _patch_scene_parts(thickness: float) -> dict:
     return {"patch": patch, "patch_camera": cam}
 
 
-def integrator_for(vol: OpticalVolume, integrator: str, max_depth: int, rr_depth: int | None) -> dict:
-    """The integrator dictionary ``render_reference`` uses, with ``rr_depth`` (the depth at which
-    Russian roulette starts) set when given; None keeps the integrator's default (5 for volpath)."""
-    from .reference import integrator_dict
-    d = integrator_dict(vol, integrator, max_depth)
-    if rr_depth is not None:
-        d["rr_depth"] = int(rr_depth)
-    return d
-
-
 def _measure(scene_parts: dict, vol: OpticalVolume, sun, integrator: str, max_depth: int, rr_depth,
              spp: int, passes: int, seed: int) -> tuple[float, float]:
     """Mean and standard error (over passes) of the 1-pixel sensor's channel-mean value."""
     import mitsuba as mi
 
     from .mitsuba_scene import medium_shape_dict, sun_dict
-    d = {"type": "scene", "integrator": integrator_for(vol, integrator, max_depth, rr_depth),
+    from .reference import integrator_dict
+    d = {"type": "scene", "integrator": integrator_dict(vol, integrator, max_depth, rr_depth),
          "sun": sun_dict(sun), "slab": medium_shape_dict(vol)}
     d.update(scene_parts)
     scene = mi.load_dict(d)
@@ -236,9 +166,7 @@ def slab_radiance(tau: float, albedo: float, phase_table, mu0: float, spp: int =
     transmitted, camera below looking straight up. ``pixels`` x ``pixels`` image over 1% of H, ``spp``
     per pixel. Returns (mean over the pixels, its standard error).
 
-    With ``rr_depth`` None the image comes from ``render_reference`` itself; otherwise (an integrator
-    setting ``render_reference`` does not expose) from the same scene dictionary
-    (``mitsuba_scene.scene_dict``), the same seeds and normalisation, and ``rr_depth`` set."""
+    ``rr_depth``: Russian roulette start depth, as ``render_reference`` takes it."""
     from .reference import render_reference
     from .scene import Camera, SceneSpec
     if view not in ("nadir", "zenith"):
@@ -252,34 +180,11 @@ def slab_radiance(tau: float, albedo: float, phase_table, mu0: float, spp: int =
         cam = Camera.orthographic(center=(0.0, 0.0, -10 * GAP * h), direction=(0.0, 0.0, 1.0),
                                   width=0.01 * h, height=0.01 * h)
     spec = SceneSpec(camera=cam, sun=sun_for(mu0), sky=None, ground=None, width=pixels, height=pixels, seed=seed)
-    if rr_depth is None:
-        img = render_reference(spec, vol, spp=spp, max_depth=max_depth, integrator=integrator, passes=passes,
-                               normalize="reflectance", progress=False, variant=variant)
-        rad = img.radiance.astype(np.float64).mean(axis=2)
-        se = img.stderr.astype(np.float64).mean(axis=2)  # channels are identical for a grey medium
-    else:
-        rad, se = _render_passes(spec, vol, integrator, max_depth, rr_depth, spp, passes, variant)
+    img = render_reference(spec, vol, spp=spp, max_depth=max_depth, integrator=integrator, passes=passes,
+                           normalize="reflectance", progress=False, variant=variant, rr_depth=rr_depth)
+    rad = img.radiance.astype(np.float64).mean(axis=2)
+    se = img.stderr.astype(np.float64).mean(axis=2)  # channels are identical for a grey medium
     return float(rad.mean()), float(np.sqrt(np.sum(se ** 2)) / rad.size)
-
-
-def _render_passes(spec, vol, integrator, max_depth, rr_depth, spp, passes, variant):
-    """Per-pixel mean and standard error of pi L / (mu0 E) (channel mean) over ``passes`` passes,
-    seeded as ``render_reference`` seeds them."""
-    import mitsuba as mi
-
-    from .mitsuba_scene import scene_dict
-    from .variant import ensure_registered, set_variant
-    set_variant(variant) if variant is not None else ensure_registered()
-    scene = mi.load_dict(scene_dict(spec, vol, integrator_for(vol, integrator, max_depth, rr_depth)))
-    scale = np.pi / (spec.sun.mu0 * float(np.mean(spec.sun.irradiance)))
-    passes = max(2, min(passes, spp))
-    base, extra = divmod(spp, passes)
-    imgs = []
-    for i in range(passes):
-        img = mi.render(scene, spp=base + (1 if i < extra else 0), seed=(int(spec.seed) * 1_000_003 + i) % (1 << 32))
-        imgs.append(np.array(img, dtype=np.float64)[..., :3].mean(axis=2) * scale)
-    imgs = np.stack(imgs)
-    return imgs.mean(axis=0), imgs.std(axis=0, ddof=1) / np.sqrt(passes)
 
 
 # ---------------------------------------------------------------- DISORT

@@ -1,6 +1,7 @@
 """SceneSpec + OpticalVolume -> Mitsuba 3 scene dictionary (the kernel side of scene.py)."""
 from __future__ import annotations
 
+import functools
 from dataclasses import replace
 
 import numpy as np
@@ -56,6 +57,16 @@ def sun_dict(sun: Sun) -> dict:
 _SUNSKY_SUN_IRRADIANCE: dict = {}
 
 
+@functools.lru_cache(maxsize=None)
+def _sun_only_sunsky(variant: str, turbidity: float):
+    """One sun-only ``sunsky`` per variant and turbidity, its sun moved through ``traverse``: a new
+    emitter per sun position would bake the position into a new kernel (a recompilation whenever
+    the sun moves)."""
+    import mitsuba as mi
+    return mi.load_dict({"type": "sunsky", "sun_direction": [0.0, 0.0, 1.0], "sky_scale": 0.0,
+                         "turbidity": turbidity})
+
+
 def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
     """RGB irradiance normal to the beam of the Hosek-Wilkie sun of Mitsuba's ``sunsky`` for this sun
     position (Monte Carlo over its disc, cached): used to scale its sky to our sun's irradiance."""
@@ -63,13 +74,7 @@ def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
     import mitsuba as mi
     key = (mi.variant(), round(sun.elevation, 3), round(float(turbidity), 3))
     if key not in _SUNSKY_SUN_IRRADIANCE:
-        # one emitter per variant and turbidity, its sun moved through traverse: a new emitter per sun
-        # position would bake the position into a new kernel (a recompilation whenever the sun moves)
-        ekey = ("emitter", mi.variant(), round(float(turbidity), 3))
-        if ekey not in _SUNSKY_SUN_IRRADIANCE:
-            _SUNSKY_SUN_IRRADIANCE[ekey] = mi.load_dict({"type": "sunsky", "sun_direction": sun.to_sun.tolist(),
-                                                         "sky_scale": 0.0, "turbidity": float(turbidity)})
-        emitter = _SUNSKY_SUN_IRRADIANCE[ekey]
+        emitter = _sun_only_sunsky(mi.variant(), round(float(turbidity), 3))
         params = mi.traverse(emitter)
         params["sun_direction"] = mi.Vector3f(*(float(v) for v in sun.to_sun))
         params.update()

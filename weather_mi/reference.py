@@ -57,22 +57,32 @@ def _passes(spec: SceneSpec, spp: int, passes: int | None) -> list[int]:
     return [base + (1 if i < extra else 0) for i in range(passes)]
 
 
-def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int) -> dict:
+def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_depth: int | None = None,
+                    cell: int | None = None) -> dict:
+    """Mitsuba integrator dict: stock ``volpath`` or ``majorant_volpath`` with a majorant grid of
+    ``cell``^3 voxels per coarse cell (None: the plugin's ``DEFAULT_CELL``). ``rr_depth``: depth at which Russian roulette starts (None: the
+    integrators' default, 5; a huge value turns it off)."""
     if integrator == "volpath":
-        return {"type": "volpath", "max_depth": int(max_depth)}
-    import mitsuba as mi
-    from .plugins.hydrometeor_mixture import bbox_transform
-    from .plugins.majorant_volpath import majorant_grid, register
-    register()
-    maj = majorant_grid(vol.beta_total)
-    return {"type": "majorant_volpath", "max_depth": int(max_depth), "majorant": mi.TensorXf(maj),
-            "to_world": bbox_transform(vol.bbox)}
+        d = {"type": "volpath", "max_depth": int(max_depth)}
+    else:
+        import mitsuba as mi
+        from .plugins.hydrometeor_mixture import bbox_transform
+        from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid, register
+        register()
+        cell = DEFAULT_CELL if cell is None else cell
+        d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
+             "majorant": mi.TensorXf(majorant_grid(vol.beta_total, cell=int(cell))),
+             "to_world": bbox_transform(vol.bbox)}
+    if rr_depth is not None:
+        d["rr_depth"] = int(rr_depth)
+    return d
 
 
-def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, integrator, max_depth, normalize, variant) -> str:
+def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, integrator, max_depth, normalize, variant,
+                 rr_depth=None) -> str:
     h = hashlib.sha256()
-    h.update(json.dumps([spec.to_dict(), spp_list, integrator, max_depth, normalize, variant], sort_keys=True,
-                        default=str).encode())
+    h.update(json.dumps([spec.to_dict(), spp_list, integrator, max_depth, normalize, variant, rr_depth],
+                        sort_keys=True, default=str).encode())
     for a in (vol.beta_total, vol.albedo, vol.weights):
         h.update(np.ascontiguousarray(a).tobytes())
     for t in vol.phase_tables:  # the phase functions are part of the scene too
@@ -91,13 +101,16 @@ def _save_checkpoint(path: Path, state: dict) -> None:
 
 def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_depth: int = -1, *,
                      integrator: str = "majorant", passes: int | None = None, normalize: str | None = None,
-                     checkpoint=None, resume=None, progress: bool = True, variant: str | None = None) -> Image:
+                     checkpoint=None, resume=None, progress: bool = True, variant: str | None = None,
+                     rr_depth: int | None = None, cell: int | None = None) -> Image:
     """Path-trace ``vol`` as seen by ``spec`` (Mitsuba ``volpath`` or our local-majorant tracker).
 
     spp        : samples per pixel in total, split into passes (``passes``, default >= 4).
     integrator : "majorant" (delta tracking over a coarse majorant grid; default) or "volpath"
                  (Mitsuba's own, one global majorant: the reference's reference).
     normalize  : None (radiance) or "reflectance" (pi L / (mu0 E) per channel).
+    rr_depth   : depth at which Russian roulette starts (None: the integrators' default, 5).
+    cell       : fine voxels per coarse cell of the majorant grid ("majorant" only; None: the default).
     checkpoint : a .npz path written after every pass; ``resume`` (a path, or True to use
                  ``checkpoint``) continues a render from it; the scene must be identical.
     """
@@ -110,7 +123,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     from .mitsuba_scene import recentred, scene_dict
 
     spp_list = _passes(spec, int(spp), passes)
-    key = _fingerprint(spec, vol, spp_list, integrator, max_depth, normalize, mi.variant())
+    key = _fingerprint(spec, vol, spp_list, integrator, max_depth, normalize, mi.variant(), rr_depth)  # cell: speed only
     ckpt = Path(checkpoint) if checkpoint is not None else None
     resume_path = ckpt if resume is True else (Path(resume) if resume else None)
     h, w = spec.height, spec.width
@@ -125,7 +138,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         ckpt = ckpt or resume_path
 
     spec_k, vol_k, _ = recentred(spec, vol)  # kernel-side coordinates: bbox centred on the origin
-    scene = mi.load_dict(scene_dict(spec_k, vol_k, integrator_dict(vol_k, integrator, max_depth)))
+    scene = mi.load_dict(scene_dict(spec_k, vol_k, integrator_dict(vol_k, integrator, max_depth, rr_depth, cell)))
     scale = 1.0
     if normalize == "reflectance":
         scale = np.pi / (spec.sun.mu0 * np.asarray(spec.sun.irradiance))
@@ -146,11 +159,24 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     n = len(spp_list)
     stderr = np.sqrt(m2 / (n - 1) / n) if n > 1 else np.full_like(mean, np.nan)
     meta = {"renderer": "reference", "integrator": integrator, "variant": mi.variant(), "spp": int(spp),
-            "passes": n, "max_depth": int(max_depth), "seconds": seconds, "normalize": normalize,
+            "passes": n, "max_depth": int(max_depth), "rr_depth": rr_depth, "seconds": seconds, "normalize": normalize,
             "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
             "source": vol.attrs.get("source"), "time": vol.attrs.get("time"),
             "phase_mode": vol.phase_mode}
     return Image(mean.astype(np.float32), stderr.astype(np.float32), meta)
+
+
+def render_transmittance(spec: SceneSpec, vol: OpticalVolume, spp: int = 32, **kw) -> np.ndarray:
+    """Eye-ray transmittance (H, W) through ``vol`` from the path tracer: the volume made purely
+    absorbing, seen against a uniform sky of radiance 1 with no sun light and no ground, so that the
+    rendered radiance is the transmittance (unbiased delta-tracking estimate, ``spp`` samples)."""
+    from dataclasses import replace
+    from .scene import Sky, Sun
+    absorbing = replace(vol, albedo=np.zeros_like(vol.albedo))
+    t_spec = replace(spec, sun=Sun(spec.sun.azimuth, spec.sun.elevation, irradiance=0.0),
+                     sky=Sky("constant", radiance=1.0), ground=None)
+    kw.setdefault("progress", False)
+    return render_reference(t_spec, absorbing, spp=spp, **kw).radiance.mean(axis=2)
 
 
 def _current_or_default() -> str:
