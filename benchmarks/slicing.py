@@ -22,8 +22,7 @@ PAPER_FPS = {"uniform/low-albedo": 5.1, "uniform/translucent": 4.3, "per-species
 def detail_field(vol, seed=0):
     """The simulated turbulent detail of weather_mi.detail (a mean-one multiplier on the grid)."""
     from weather_mi import detail
-    spacing = tuple((hi - lo) / n for lo, hi, n in zip(vol.bbox[0][::-1], vol.bbox[1][::-1], vol.shape))
-    return detail.field(vol.shape, seed=seed, spacing_m=spacing)
+    return detail.field(vol.shape, seed=seed, spacing_m=vol.spacing)
 
 
 def bench(vol, size, slices, light_res, frames, phase_tables):

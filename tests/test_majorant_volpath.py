@@ -17,6 +17,7 @@ import mitsuba as mi
 
 import weather_mi  # noqa: F401  (variant + plugins)
 from weather_mi.plugins import majorant_volpath as mv
+from weather_mi.plugins.hydrometeor_mixture import bbox_transform
 
 mv.register()
 
@@ -28,7 +29,7 @@ SKY = np.array([0.3, 0.45, 0.7])
 # ---------------------------------------------------------------- helpers
 
 def bbox_tf(lo=LO, hi=HI):
-    return mi.ScalarTransform4f().translate(lo.tolist()).scale((hi - lo).tolist())
+    return bbox_transform((lo, hi))
 
 
 def blobs(shape=(16, 32, 32), peak=3.0):

@@ -141,6 +141,7 @@ def calibrate(vol, specs, refs, masks, cfg: StudyConfig, start: SliceParams, mod
     theta = np.array([math.log(ff0 / (1 - ff0)), math.log(start.cone_angle_deg), math.log(max(start.ambient, 0.05))])
     m1, m2 = np.zeros(3), np.zeros(3)
     lr, history = 0.15, []
+    targets = [_loss_weights(mi, dr, ref, mask) for ref, mask in zip(refs, masks)]  # once, not per step
     from tqdm.auto import tqdm
     for it in tqdm(range(cfg.calibration_iterations), desc="calibration", disable=not progress):
         x = [dr.opaque(mi.Float, float(v)) for v in theta]  # opaque: a literal would recompile every step
@@ -150,16 +151,12 @@ def calibrate(vol, specs, refs, masks, cfg: StudyConfig, start: SliceParams, mod
                              ambient=dr.exp(x[2]))
         total = 0.0
         grads = np.zeros(3)
-        for r, spec, ref, mask in zip(renderers, specs, refs, masks):
+        for r, spec, (tcs, w, eps, norm) in zip(renderers, specs, targets):
             out, _ = r.frame(spec, params, return_arrays=True)
-            target = ref.radiance.reshape(-1, 3)
-            w = mask.reshape(-1).astype(np.float32)
-            eps = dr.opaque(mi.Float, 1e-2 * float(np.mean(target[w > 0] ** 2)) if w.any() else 1.0)
             loss = mi.Float(0.0)
             for c in range(3):
-                tc = mi.Float(target[:, c].astype(np.float32))
-                loss += dr.sum(mi.Float(w) * dr.square(out[c] - tc) / (dr.square(tc) + eps))
-            loss = loss / max(3.0 * float(w.sum()), 1.0)
+                loss += dr.sum(w * dr.square(out[c] - tcs[c]) / (dr.square(tcs[c]) + eps))
+            loss = loss * norm
             dr.backward(loss)
             total += float(loss[0])
             grads += np.array([float(dr.grad(v)[0]) for v in x])
@@ -175,6 +172,16 @@ def calibrate(vol, specs, refs, masks, cfg: StudyConfig, start: SliceParams, mod
     ff = 1 / (1 + math.exp(-theta[0]))
     return SliceParams(forward_fraction=float(ff), cone_angle_deg=float(math.exp(theta[1])),
                        ambient=float(math.exp(theta[2]))), history
+
+
+def _loss_weights(mi, dr, ref, mask):
+    """Per-view constants of the calibration loss: target channels, cloud mask, the relative-error
+    floor eps (1% of the mean squared target) and 1 / (3 N_cloud)."""
+    target = ref.radiance.reshape(-1, 3).astype(np.float32)
+    w = mask.reshape(-1).astype(np.float32)
+    eps = 1e-2 * float(np.mean(target[w > 0] ** 2)) if w.any() else 1.0
+    return ([mi.Float(target[:, c]) for c in range(3)], mi.Float(w), dr.opaque(mi.Float, eps),
+            dr.opaque(mi.Float, 1.0 / max(3.0 * float(w.sum()), 1.0)))
 
 
 # ---------------------------------------------------------------- the study
@@ -223,7 +230,7 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True) -> P
             detail = None
             if mode.detail:
                 from .detail import field as detail_field
-                detail = detail_field(vol.shape, seed=0, amplitude=0.5)
+                detail = detail_field(vol.shape, seed=0, amplitude=0.5, spacing_m=vol.spacing)
             r = SliceRenderer(vol, mode, slices=cfg.slices, light_res=cfg.light_res, detail_field=detail)
             r.frame(spec)  # warm-up (compilation)
             for setting, params in settings:
