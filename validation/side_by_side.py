@@ -37,7 +37,9 @@ def main(argv=None) -> int:
     cfg = study.StudyConfig(width=width, height=height, spp=args.spp, slices=args.slices)
     vol, desc = study.load_scene("demo-supercell", cfg)
     spec = study.view(vol, args.lighting, cfg)
-    ref = wm.render_reference(spec, vol, spp=args.spp, checkpoint=out / "reference.ckpt.npz", resume=True)
+    ckpt = out / "reference.ckpt.npz"  # an interrupted run resumes; removed once the render is complete
+    ref = wm.render_reference(spec, vol, spp=args.spp, checkpoint=ckpt, resume=True)
+    ckpt.unlink(missing_ok=True)
     renderer = SliceRenderer(vol, TABLE_IV[args.mode], slices=args.slices, light_res=cfg.light_res)
     renderer.frame(spec)  # warm-up: the first frame compiles
     approx = renderer.frame(spec)
