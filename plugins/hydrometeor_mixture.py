@@ -9,12 +9,29 @@ versine keeps float32 resolution near forward (a 1 mm raindrop's diffraction pea
 wide; cos(Theta) cannot tell those angles apart in float32); in ``eval_pdf`` it is computed as
 |wo + wi|^2 / 2, which is exact there too. The weights w_s(x) are a
 grid (z, y, x, S) on the medium's bounding box, looked up trilinearly (texel centres at (i + 0.5)/N,
-as Mitsuba's ``gridvolume``) and renormalised to sum to 1 (equal weights where all are zero).
+as Mitsuba's ``gridvolume``, clamped at the edges).
 
-Sampling: pick species s with probability w_s(x), then invert the CDF of that species'
-channel-mean table (exact inversion of a piecewise-linear density: a quadratic per segment).
-``eval_pdf`` returns the per-channel value sum_s w_s p_s,c and pdf = sum_s w_s pbar_s, which is
-exactly the density the sampler draws from, so sample weights are value / pdf per channel.
+Sampling: pick species s with probability w_s(x), then draw v from that species' channel-mean
+table: its node segment from a Walker alias table (the coin is what is left of the uniform that
+chose the species), v within the segment by exact inversion of the segment's linear density (a
+quadratic). ``eval_pdf`` returns the per-channel value sum_s w_s p_s,c and pdf = sum_s w_s pbar_s,
+which is exactly the density the sampler draws from, so sample weights are value / pdf per channel.
+
+Layout for speed (every scattering event costs one ``sample`` and one ``eval_pdf``):
+- ``eval_pdf`` finds the node segment of v without a search over all nodes: a guide table of
+  equal buckets in asinh(Theta / 1 mrad) (the tables' grids are linear in Theta near forward and
+  logarithmic beyond) bounds it, and at most ``guide_steps`` (<= 3 for the shipped tables) bisection
+  steps find it; ``sample`` needs no search at all (alias table). Both replaced binary searches of
+  11 dependent loads each.
+- The weights are held as S - 1 channels packed four to a 16-byte texel, the last species being
+  1 - the sum of the others, so a trilinear lookup is 8 packet loads per 4 species
+  (``mi.Texture3f`` loads every channel of every corner separately). For that, voxels where nothing
+  scatters (all weights 0) take the weights of the nearest voxel that scatters (where the
+  renormalised lookup of the raw grid would ignore them), so that every texel sums to 1 and the
+  interpolated weights need no renormalisation; with no such voxel at all every species weighs 1/S.
+- The table rows of all species at one node are adjacent (N x S x 4: R, G, B and channel-mean pdf),
+  so one lookup touches two or three cache lines.
+- Every table is copied into memory Dr.Jit allocated (aligned), see :func:`_storage`.
 
 Properties (Python dict scenes): ``nodes`` (TensorXf, N ascending versines 1 - cos in [0, 2]), ``values``
 (TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S) and ``to_world`` (the bounding box
@@ -29,6 +46,7 @@ import drjit as dr
 import mitsuba as mi
 
 PLUGIN_NAME = "hydrometeor_mixture"
+GUIDE_THETA0 = 1e-3  # rad: the guide table's angle warp is linear below, logarithmic above
 
 
 # ---------------------------------------------------------------- numpy side: table preparation
@@ -79,6 +97,77 @@ def marginal_cdf(v: np.ndarray, values: np.ndarray):
     return pbar, cdf
 
 
+def segment_masses(v: np.ndarray, pbar: np.ndarray) -> np.ndarray:
+    """(S, N - 1) probability of every node segment under the piecewise-linear density pbar (S, N)."""
+    seg = 0.5 * (pbar[:, 1:] + pbar[:, :-1]) * np.diff(np.asarray(v, np.float64))[None]
+    return seg / seg.sum(axis=1, keepdims=True)
+
+
+def alias_table(p: np.ndarray):
+    """Walker's alias table (Vose's construction) of the discrete distribution p (M,): (prob (M,),
+    alias (M,)). Bucket j, drawn uniformly, keeps j when a uniform coin is below prob[j] and takes
+    alias[j] otherwise; that draws j with probability p[j] exactly (up to float rounding)."""
+    p = np.asarray(p, np.float64)
+    m = p.size
+    scaled = p * (m / p.sum())
+    prob, alias = np.ones(m), np.arange(m)
+    small = [j for j in range(m) if scaled[j] < 1.0]
+    large = [j for j in range(m) if scaled[j] >= 1.0]
+    while small and large:
+        j, k = small.pop(), large.pop()
+        prob[j], alias[j] = scaled[j], k
+        scaled[k] -= 1.0 - scaled[j]
+        (small if scaled[k] < 1.0 else large).append(k)
+    return prob, alias  # leftovers (rounding) keep prob 1
+
+
+def angle_warp(v, theta0: float = GUIDE_THETA0):
+    """Guide-table coordinate in [0, 1] of versines v: asinh(Theta / theta0) / asinh(pi / theta0),
+    linear in Theta below theta0 and logarithmic above, as the tables' angle grids are."""
+    theta = 2.0 * np.arcsin(np.sqrt(np.clip(np.asarray(v, np.float64), 0.0, 2.0) / 2.0))
+    return np.arcsinh(theta / theta0) / np.arcsinh(np.pi / theta0)
+
+
+def guide_table(v: np.ndarray, max_steps: int = 3, theta0: float = GUIDE_THETA0):
+    """(first (M + 1,) uint32, steps): bucket j of M equal buckets in :func:`angle_warp` holds versines
+    whose node segment lies in [first[j], first[j + 1]] (widened by one either side for float32
+    rounding), found in ``steps`` bisection steps. M grows from 2 N until steps <= max_steps."""
+    t = angle_warp(v, theta0)
+    n_seg = v.size - 1
+    m = 2 * v.size
+    while True:
+        start = np.clip(np.searchsorted(t, np.arange(m + 1) / m, side="right") - 1, 0, n_seg - 1)
+        lo = np.clip(start[:-1] - 1, 0, n_seg - 1)
+        hi = np.clip(start[1:] + 1, 0, n_seg - 1)
+        steps = int(np.ceil(np.log2(np.max(hi - lo) + 1)))
+        if steps <= max_steps or m >= 64 * v.size:
+            return np.stack([lo, hi], axis=1).astype(np.uint32), steps
+        m *= 2
+
+
+def pack_weights(weights: np.ndarray) -> np.ndarray:
+    """(z, y, x, ceil((S - 1) / 4), 4) float32: the first S - 1 weights of every voxel (renormalised to
+    sum to 1, zero-padded to whole packets of 4); voxels whose weights are all 0 take those of the
+    nearest voxel with weight (equal weights 1/S where there is none)."""
+    from scipy import ndimage
+
+    w = np.clip(np.asarray(weights, np.float64), 0.0, None)
+    n_species = w.shape[3]
+    total = w.sum(axis=3)
+    empty = total <= 0.0
+    if empty.all():
+        w = np.full(w.shape, 1.0 / n_species)
+    else:
+        w = w / np.where(empty, 1.0, total)[..., None]
+        if empty.any():
+            iz, iy, ix = ndimage.distance_transform_edt(empty, return_distances=False, return_indices=True)
+            w = w[iz, iy, ix]
+    n_packets = max(1, -(-(n_species - 1) // 4))
+    out = np.zeros(w.shape[:3] + (n_packets * 4,), np.float32)
+    out[..., : n_species - 1] = w[..., : n_species - 1]
+    return out.reshape(w.shape[:3] + (n_packets, 4))
+
+
 def bbox_transform(bbox) -> "mi.ScalarTransform4f":
     """The transform mapping the unit cube onto ((x0, y0, z0), (x1, y1, z1))."""
     lo, hi = (np.asarray(p, np.float64) for p in bbox)
@@ -98,9 +187,20 @@ def _is_scalar_variant() -> bool:
 
 
 def _storage(a: np.ndarray):
-    """A flat array to gather from: mi.Float in JIT variants, a list of floats in scalar variants."""
+    """A flat array to gather from: mi.Float in JIT variants, a list of floats in scalar variants.
+
+    The JIT array is copied into memory Dr.Jit allocated itself: ``mi.Float(numpy_array)`` maps numpy's
+    memory, which is only 16-byte aligned, and on an LLVM variant a source that is not aligned to
+    the vector width makes Dr.Jit split every packet gather into one gather per channel (drjit-core
+    ``jitc_var_gather_packet``: ``src_v->unaligned``). Which way it went changed from process to process
+    with numpy's allocations; the split kernel cost up to 2x per phase-function call."""
     flat = np.ascontiguousarray(a, np.float32).ravel()
-    return flat.astype(float).tolist() if _is_scalar_variant() else mi.Float(flat)
+    if _is_scalar_variant():
+        return flat.astype(float).tolist()
+    owned = dr.zeros(mi.Float, flat.size)  # a scatter writes into a fresh Dr.Jit allocation
+    dr.scatter(owned, mi.Float(flat), dr.arange(mi.UInt32, flat.size))
+    dr.eval(owned)
+    return owned
 
 
 def _gather(src, index):
@@ -110,6 +210,13 @@ def _gather(src, index):
     return dr.gather(mi.Float, src, index)
 
 
+def _gather2(src, index):
+    """src[2 index : 2 index + 2] as a Vector2f (one packet load per lane in JIT variants)."""
+    if isinstance(src, list):
+        return mi.Vector2f(*src[2 * int(index): 2 * int(index) + 2])
+    return dr.gather(mi.Vector2f, src, index)
+
+
 def _gather4(src, index):
     """src[4 index : 4 index + 4] as a Vector4f: one packet load per lane in JIT variants."""
     if isinstance(src, list):
@@ -117,8 +224,11 @@ def _gather4(src, index):
     return dr.gather(mi.Vector4f, src, index)
 
 
-class HydrometeorMixture(mi.PhaseFunction):
-    """Eq. 8 mixture of per-species tabulated phase functions with spatially varying weights."""
+class _Mixture:
+    """Eq. 8 mixture of per-species tabulated phase functions with spatially varying weights.
+
+    The methods only: :func:`mixture_class` joins them to the ``mi.PhaseFunction`` of the current
+    variant (a class bound to one variant's base cannot be instantiated in another)."""
 
     def __init__(self, props: mi.Properties):
         mi.PhaseFunction.__init__(self, props)
@@ -141,50 +251,98 @@ class HydrometeorMixture(mi.PhaseFunction):
         inverse = np.linalg.inv(np.array(to_world.matrix, dtype=np.float64).reshape(4, 4))
         self.to_local = mi.Transform4f(mi.ScalarTransform4f(inverse.astype(np.float32).tolist()))
         self._set_tables(nodes, values)
-        self.weights = mi.Texture3f(mi.TensorXf(np.ascontiguousarray(weights)), use_accel=False)
+        self._set_weights(weights)
         self.m_flags = mi.PhaseFunctionFlags.Anisotropic
 
     def _set_tables(self, nodes, values):
-        pbar, cdf = marginal_cdf(nodes, values)
+        pbar, _ = marginal_cdf(nodes, values)
         self.nodes = _storage(nodes)
-        # (S, N, 4): R, G, B value and the channel-mean pdf of every node, read as one packet
-        self.table4 = _storage(np.concatenate([np.asarray(values, np.float32), pbar[:, :, None]], axis=2))
+        # (N, S, 4): R, G, B value and the channel-mean pdf of every node and species, read as one packet
+        table = np.concatenate([np.asarray(values, np.float32), pbar[:, :, None]], axis=2)
+        self.table4 = _storage(np.transpose(table, (1, 0, 2)))
         self.pbar = _storage(pbar)
-        self.cdf = _storage(cdf)
+        # (S, N - 1, 2): alias table of every species' segment probabilities (prob, alias as float)
+        alias = [alias_table(m) for m in segment_masses(nodes, pbar)]
+        self.alias2 = _storage(np.stack([np.stack([pr, al.astype(np.float64)], axis=1) for pr, al in alias]))
+        # (M, 2): first and last node segment of every guide bucket (as float, exact below 2^24)
+        guide, self.guide_steps = guide_table(np.asarray(nodes, np.float64))
+        self.guide_buckets = int(guide.shape[0])
+        self.guide2 = _storage(guide.astype(np.float64))
+        self.inv_warp_norm = float(1.0 / np.arcsinh(np.pi / GUIDE_THETA0))
+
+    def _set_weights(self, weights):
+        self.weights_grid = np.array(weights, np.float32)  # z x y x x x S, as given (for traverse)
+        self.grid_shape = tuple(int(n) for n in self.weights_grid.shape[:3])
+        packed = pack_weights(self.weights_grid)
+        self.n_packets = int(packed.shape[3])
+        self.weights4 = _storage(packed)
 
     # ------------------------------------------------------------ helpers
     def _weights_at(self, mei):
-        """w_s(x) for s = 0..S-1, trilinear on the bbox grid, renormalised to sum to 1."""
+        """w_s(x) for s = 0..S-1, trilinear on the bbox grid (texel centres at (i + 0.5) / n, clamped
+        at the edges), from the S - 1 packed channels; the last is 1 - the sum of the others."""
         if self.n_species == 1:
             return [mi.Float(1.0)]  # renormalised weights of one species are 1: no lookup
         p = self.to_local @ mei.p
-        w = self.weights.eval(mi.Point3f(p.x, p.y, p.z))
-        w = [dr.maximum(wi, 0.0) for wi in w]
-        total = w[0]
+        nz, ny, nx = self.grid_shape
+        corner, frac = [], []
+        for coord, n in ((p.z, nz), (p.y, ny), (p.x, nx)):
+            u = coord * n - 0.5
+            u0 = dr.floor(u)
+            i0 = mi.Int32(u0)
+            corner.append((dr.clip(i0, 0, n - 1), dr.clip(i0 + 1, 0, n - 1)))
+            frac.append(u - u0)
+        (z0, z1), (y0, y1), (x0, x1) = corner
+        fz, fy, fx = frac
+        npk = self.n_packets
+        w = []
+        for k in range(npk):
+            def texel(z, y, x):
+                return _gather4(self.weights4, mi.UInt32(((z * ny + y) * nx + x) * npk + k))
+
+            def lerp(a, b, t):
+                return dr.fma(b - a, t, a)
+
+            c00 = lerp(texel(z0, y0, x0), texel(z0, y0, x1), fx)
+            c01 = lerp(texel(z0, y1, x0), texel(z0, y1, x1), fx)
+            c10 = lerp(texel(z1, y0, x0), texel(z1, y0, x1), fx)
+            c11 = lerp(texel(z1, y1, x0), texel(z1, y1, x1), fx)
+            v = lerp(lerp(c00, c01, fy), lerp(c10, c11, fy), fz)
+            w += [dr.maximum(v[c], 0.0) for c in range(4)]
+        w = w[: self.n_species - 1]
+        rest = 1.0 - w[0]
         for wi in w[1:]:
-            total = total + wi
-        empty = total <= 0.0
-        inv = dr.rcp(dr.select(empty, 1.0, total))
-        return [dr.select(empty, 1.0 / self.n_species, wi * inv) for wi in w]
+            rest = rest - wi
+        return w + [dr.maximum(rest, 0.0)]
 
     def _segment(self, v):
-        """Node index i with v_i <= v < v_i+1 and the linear weight t in [0, 1]."""
-        n = self.n_nodes
-        idx = dr.binary_search(1, n - 1, lambda k: _gather(self.nodes, k) <= v) - 1
-        idx = dr.clip(idx, 0, n - 2)
-        v0 = _gather(self.nodes, idx)
-        v1 = _gather(self.nodes, idx + 1)
+        """Node index i with v_i <= v < v_i+1 and the linear weight t in [0, 1]: the guide bucket of
+        v (:func:`angle_warp`) bounds i, and a few bisection steps find it (no loop, no search over
+        all nodes)."""
+        theta = 2.0 * dr.asin(dr.clip(dr.sqrt(dr.maximum(0.5 * v, 0.0)), 0.0, 1.0))
+        m = self.guide_buckets
+        j = mi.UInt32(dr.clip(dr.asinh(theta * (1.0 / GUIDE_THETA0)) * (self.inv_warp_norm * m), 0.0, m - 1.0))
+        bounds = _gather2(self.guide2, j)
+        lo, hi = mi.UInt32(bounds[0]), mi.UInt32(bounds[1])
+        for _ in range(self.guide_steps):
+            mid = (lo + hi + 1) >> 1
+            below = _gather(self.nodes, mid) <= v
+            lo = dr.select(below, mid, lo)
+            hi = dr.select(below, hi, mid - 1)
+        v0 = _gather(self.nodes, lo)
+        v1 = _gather(self.nodes, lo + 1)
         t = dr.clip((v - v0) / dr.maximum(v1 - v0, 1e-30), 0.0, 1.0)
-        return idx, t
+        return lo, t
 
     def _mix(self, w, idx, t):
         """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t."""
         value = [mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)]
         pdf = mi.Float(0.0)
-        for s in range(self.n_species):
-            k = idx + s * self.n_nodes
+        n_s = self.n_species
+        for s in range(n_s):
+            k = idx * n_s + s
             f0 = _gather4(self.table4, k)
-            f = f0 + (_gather4(self.table4, k + 1) - f0) * t
+            f = f0 + (_gather4(self.table4, k + n_s) - f0) * t
             for c in range(3):
                 value[c] += w[s] * f[c]
             pdf += w[s] * f[3]
@@ -198,36 +356,44 @@ class HydrometeorMixture(mi.PhaseFunction):
     # ------------------------------------------------------------ PhaseFunction interface
     def sample(self, ctx, mei, sample1, sample2, active=True):
         w = self._weights_at(mei)
-        # pick a species with probability w_s (sample1), then invert its CDF in v (sample2.x)
+        # species s with probability w_s (sample1); what is left of sample1 (uniform) is the coin of
+        # the alias table
         species = mi.UInt32(0)
-        acc = mi.Float(0.0)
+        acc, lower, w_sel = mi.Float(0.0), mi.Float(0.0), w[0]
         for s in range(self.n_species - 1):
             acc += w[s]
-            species += mi.UInt32(dr.select(sample1 >= acc, 1, 0))
-        n = self.n_nodes
-        base = species * n
-        u = sample2.x
-        idx = dr.binary_search(1, n - 1, lambda k: _gather(self.cdf, base + k) <= u) - 1
-        idx = dr.clip(idx, 0, n - 2)
-        k = base + idx
-        c0 = _gather(self.cdf, k)
+            above = sample1 >= acc
+            species += mi.UInt32(dr.select(above, 1, 0))
+            lower = dr.select(above, acc, lower)
+            w_sel = dr.select(above, w[s + 1], w_sel)
+        coin = dr.clip((sample1 - lower) / dr.maximum(w_sel, 1e-30), 0.0, 1.0)
+        # node segment of that species from its alias table (sample2.x picks the bucket; what is
+        # left of it, uniform and independent of the choice, places v within the segment)
+        n_seg = self.n_nodes - 1
+        u = sample2.x * n_seg
+        j = mi.UInt32(dr.clip(u, 0.0, n_seg - 1.0))
+        r = dr.clip(u - mi.Float(j), 0.0, 1.0)
+        entry = _gather2(self.alias2, species * n_seg + j)
+        idx = dr.select(coin < entry[0], j, mi.UInt32(entry[1]))
+        k = species * self.n_nodes + idx
         v0 = _gather(self.nodes, idx)
         v1 = _gather(self.nodes, idx + 1)
-        f0 = _gather(self.pbar, k) * (2.0 * dr.pi)
-        f1 = _gather(self.pbar, k + 1) * (2.0 * dr.pi)
-        # solve f0 x + (f1 - f0) x^2 / (2 dv) = u - c0 for x in [0, dv] (stable root)
+        f0 = _gather(self.pbar, k)
+        f1 = _gather(self.pbar, k + 1)
+        # invert the segment's linear density: f0 x + (f1 - f0) x^2 / (2 dv) = r (f0 + f1) dv / 2,
+        # x in [0, dv] (stable root)
         dmu = v1 - v0
-        r = dr.maximum(u - c0, 0.0)
+        rr = r * 0.5 * (f0 + f1) * dmu
         a = (f1 - f0) / (2.0 * dmu)
-        disc = dr.maximum(f0 * f0 + 4.0 * a * r, 0.0)
-        x = dr.select(f0 + dr.sqrt(disc) > 0.0, 2.0 * r / (f0 + dr.sqrt(disc)), 0.5 * dmu)
+        disc = dr.maximum(f0 * f0 + 4.0 * a * rr, 0.0)
+        x = dr.select(f0 + dr.sqrt(disc) > 0.0, 2.0 * rr / (f0 + dr.sqrt(disc)), r * dmu)
         x = dr.clip(x, 0.0, dmu)
         v = dr.clip(v0 + x, 0.0, 2.0)
         cos_theta = 1.0 - v
         sin_theta = dr.safe_sqrt(v * (2.0 - v))
         sin_phi, cos_phi = dr.sincos(2.0 * dr.pi * sample2.y)
         wo = mei.to_world(mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, -cos_theta))
-        # value and pdf where v was drawn: same weights, same segment (no second search or lookup)
+        # value and pdf where v was drawn: same weights, same segment (no search, no second lookup)
         value, pdf = self._mix(w, idx, dr.clip(x / dr.maximum(dmu, 1e-30), 0.0, 1.0))
         weight = dr.select(pdf > 0.0, value / pdf, 0.0)
         return wo, mi.Spectrum(weight), pdf
@@ -238,16 +404,37 @@ class HydrometeorMixture(mi.PhaseFunction):
         return mi.Spectrum(value), pdf
 
     def traverse(self, cb):
-        cb.put("weights", self.weights.tensor(), mi.ParamFlags.NonDifferentiable)
+        self._weights_param = mi.TensorXf(self.weights_grid) if not _is_scalar_variant() else None
+        if self._weights_param is not None:
+            cb.put("weights", self._weights_param, mi.ParamFlags.NonDifferentiable)
 
     def parameters_changed(self, keys=None):
-        self.weights.set_tensor(self.weights.tensor())
+        if getattr(self, "_weights_param", None) is not None:
+            w = np.array(self._weights_param, np.float32).reshape(self._weights_param.shape)
+            if w.ndim != 4 or w.shape[3] != self.n_species:
+                raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {self.n_species}; "
+                                 f"got {w.shape}")
+            self._set_weights(w)
 
     def to_string(self):
         return (f"HydrometeorMixture[species={self.n_species}, nodes={self.n_nodes}, "
-                f"weights grid={tuple(self.weights.shape)}]")
+                f"weights grid={self.grid_shape}]")
+
+
+_CLASSES: dict = {}
+
+
+def mixture_class() -> type:
+    """The ``hydrometeor_mixture`` phase-function class of the current Mitsuba variant."""
+    variant = mi.variant()
+    if variant not in _CLASSES:
+        # nanobind types take one base: the methods are copied, not inherited
+        methods = {k: v for k, v in vars(_Mixture).items() if k not in ("__dict__", "__weakref__")}
+        _CLASSES[variant] = type("HydrometeorMixture", (mi.PhaseFunction,), methods)
+    return _CLASSES[variant]
 
 
 def register() -> None:
     """Register ``hydrometeor_mixture`` with the current Mitsuba variant."""
-    mi.register_phase(PLUGIN_NAME, lambda props: HydrometeorMixture(props))
+    cls = mixture_class()
+    mi.register_phase(PLUGIN_NAME, lambda props: cls(props))
