@@ -45,6 +45,8 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from .variant_class import variant_class
+
 PLUGIN_NAME = "hydrometeor_mixture"
 GUIDE_THETA0 = 1e-3  # rad: the guide table's angle warp is linear below, logarithmic above
 
@@ -224,11 +226,11 @@ def _gather4(src, index):
     return dr.gather(mi.Vector4f, src, index)
 
 
-class _Mixture:
+class HydrometeorMixture:
     """Eq. 8 mixture of per-species tabulated phase functions with spatially varying weights.
 
-    The methods only: :func:`mixture_class` joins them to the ``mi.PhaseFunction`` of the current
-    variant (a class bound to one variant's base cannot be instantiated in another)."""
+    The methods only: :func:`mixture_class` puts them on the ``mi.PhaseFunction`` of the current
+    variant (see ``variant_class``)."""
 
     def __init__(self, props: mi.Properties):
         mi.PhaseFunction.__init__(self, props)
@@ -421,17 +423,9 @@ class _Mixture:
                 f"weights grid={self.grid_shape}]")
 
 
-_CLASSES: dict = {}
-
-
 def mixture_class() -> type:
     """The ``hydrometeor_mixture`` phase-function class of the current Mitsuba variant."""
-    variant = mi.variant()
-    if variant not in _CLASSES:
-        # nanobind types take one base: the methods are copied, not inherited
-        methods = {k: v for k, v in vars(_Mixture).items() if k not in ("__dict__", "__weakref__")}
-        _CLASSES[variant] = type("HydrometeorMixture", (mi.PhaseFunction,), methods)
-    return _CLASSES[variant]
+    return variant_class(HydrometeorMixture, "PhaseFunction")
 
 
 def register() -> None:

@@ -59,6 +59,8 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from .variant_class import variant_class
+
 PLUGIN_NAME = "majorant_volpath"
 DEFAULT_CELL = 2  # fine voxels per coarse majorant cell (measured fastest on the storms; see the docstring)
 SAFETY = 1.0001
@@ -129,8 +131,9 @@ def trilinear_numpy(grid_zyx: np.ndarray, p_unit: np.ndarray) -> np.ndarray:
 
 # ---------------------------------------------------------------- Mitsuba helpers
 
-class _Children(mi.TraversalCallback):
-    """Collects the direct children and values that an object exposes through ``traverse``."""
+class _Children:
+    """Collects the direct children and values that an object exposes through ``traverse`` (methods
+    of a ``mi.TraversalCallback``, see ``variant_class``)."""
 
     def __init__(self):
         mi.TraversalCallback.__init__(self)
@@ -141,7 +144,7 @@ class _Children(mi.TraversalCallback):
 
 
 def _children(obj) -> dict:
-    cb = _Children()
+    cb = variant_class(_Children, "TraversalCallback")()
     obj.traverse(cb)
     return cb.items
 
@@ -197,8 +200,11 @@ class _MediumSetup:
 
 # ---------------------------------------------------------------- integrator
 
-class MajorantVolpath(mi.SamplingIntegrator):
-    """Volumetric path tracer with DDA majorant-grid delta tracking (see the module docstring)."""
+class MajorantVolpath:
+    """Volumetric path tracer with DDA majorant-grid delta tracking (see the module docstring).
+
+    The methods only: :func:`register` puts them on the current variant's ``mi.SamplingIntegrator``
+    (see ``variant_class``)."""
 
     def __init__(self, props: mi.Properties):
         mi.SamplingIntegrator.__init__(self, props)
@@ -651,4 +657,5 @@ class MajorantVolpath(mi.SamplingIntegrator):
 
 def register() -> None:
     """Register ``majorant_volpath`` with the current Mitsuba variant."""
-    mi.register_integrator(PLUGIN_NAME, lambda props: MajorantVolpath(props))
+    cls = variant_class(MajorantVolpath, "SamplingIntegrator")
+    mi.register_integrator(PLUGIN_NAME, lambda props: cls(props))

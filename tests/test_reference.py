@@ -371,3 +371,36 @@ def test_cli_missing_input_is_a_clean_error(tmp_path, capsys, name, no_rendering
     assert str(missing) in err
     assert "Traceback" not in err
     assert not out.exists()
+
+
+def test_reference_renders_in_another_variant_of_the_same_process():
+    """The plugins are made per variant: majorant_volpath on llvm, then stock volpath with the
+    mixture phase on scalar_rgb, then majorant_volpath on llvm again, in one process (a subprocess:
+    the variant is global); the two llvm images of one seed are identical, and the scalar image
+    agrees with them within noise. majorant_volpath itself refuses scalar variants."""
+    import subprocess
+    import sys
+    script = """
+import numpy as np, weather_mi as wm
+beta = np.full((4, 4, 4), 0.01, np.float32)
+vol = wm.OpticalVolume.from_arrays(beta_ext=beta, albedo=0.99, phase=wm.phase.henyey_greenstein(0.85),
+                                   bbox=((0.0, 0.0, 1000.0), (1000.0, 1000.0, 2000.0)))
+cam = wm.Camera.orthographic(center=(500.0, -1000.0, 1500.0), direction=(0.0, 1.0, 0.0), width=800, height=600)
+spec = wm.SceneSpec(camera=cam, sun=wm.Sun(200.0, 40.0), sky=wm.Sky("constant"), width=4, height=3, seed=1)
+for variant, integrator in (("llvm_ad_rgb", "majorant"), ("scalar_rgb", "volpath"), ("llvm_ad_rgb", "majorant")):
+    img = wm.render_reference(spec, vol, spp=64, passes=4, max_depth=4, progress=False, variant=variant,
+                              integrator=integrator, rr_depth=100)
+    print(variant, float(np.mean(img.radiance)), float(np.sum(img.radiance)),
+          float(np.sqrt(np.sum(img.stderr ** 2)) / img.stderr.size))
+"""
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    rows = [line.split() for line in out.stdout.strip().splitlines()]
+    assert [r[0] for r in rows] == ["llvm_ad_rgb", "scalar_rgb", "llvm_ad_rgb"]
+    means = [float(r[1]) for r in rows]
+    se = [float(r[3]) for r in rows]
+    assert all(m > 0 for m in means)
+    assert rows[0][2] == rows[2][2]
+    assert abs(means[1] - means[0]) < 4 * np.hypot(se[0], se[1]), (means, se)
+    with pytest.raises(ValueError, match="JIT variants"):
+        wm.render_reference(spec(), cloud_volume(), spp=1, variant="scalar_rgb", integrator="majorant")

@@ -37,6 +37,9 @@ def _check_inputs(spec: SceneSpec, vol: OpticalVolume, spp: int, normalize, inte
         import mitsuba as mi
         if variant not in mi.variants():
             raise ValueError(f"unknown Mitsuba variant {variant!r}; expected one of {sorted(mi.variants())}")
+        if integrator == "majorant" and variant.startswith("scalar"):
+            raise ValueError(f"integrator 'majorant' (majorant_volpath) runs on JIT variants (llvm_ad_rgb, "
+                             f"cuda_ad_rgb), not {variant!r}: use integrator='volpath' there")
     src = str(vol.attrs.get("source", "OpticalVolume"))
     for name in ("beta_total", "albedo", "weights"):
         a = getattr(vol, name)
