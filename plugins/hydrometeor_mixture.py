@@ -26,12 +26,12 @@ Layout for speed (every scattering event costs one ``sample`` and one ``eval_pdf
 - The weights are held as S - 1 channels packed four to a 16-byte texel, the last species being
   1 - the sum of the others, so a trilinear lookup is 8 packet loads per 4 species
   (``mi.Texture3f`` loads every channel of every corner separately). For that, voxels where nothing
-  scatters (all weights 0) take the weights of the nearest voxel that scatters (where the
+  scatters (all weights 0) next to one that scatters take that neighbour's weights (where a
   renormalised lookup of the raw grid would ignore them), so that every texel sums to 1 and the
-  interpolated weights need no renormalisation; with no such voxel at all every species weighs 1/S.
-- The table rows of all species at one node are adjacent (N x S x 4: R, G, B and channel-mean pdf),
-  so one lookup touches two or three cache lines.
-- Every table is copied into memory Dr.Jit allocated (aligned), see :func:`_storage`.
+  interpolated weights need no renormalisation (:func:`pack_weights`).
+- The table rows of all species at one node are adjacent (N x S x 4: R, G, B and channel-mean pdf,
+  which is also what ``sample`` inverts), so one lookup touches two or three cache lines.
+- Every table sits in 64-byte aligned memory, see :func:`_storage`.
 
 Properties (Python dict scenes): ``nodes`` (TensorXf, N ascending versines 1 - cos in [0, 2]), ``values``
 (TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S) and ``to_world`` (the bounding box
@@ -45,6 +45,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from ..jitarrays import aligned_float
 from .variant_class import variant_class
 
 PLUGIN_NAME = "hydrometeor_mixture"
@@ -89,14 +90,10 @@ def prepare_tables(tables, max_nodes: int = 16384):
     return v.astype(np.float32), out.astype(np.float32)
 
 
-def marginal_cdf(v: np.ndarray, values: np.ndarray):
-    """Channel-mean density pbar (S, N) and its CDF in v (S, N), 0 forward (v = 0), 1 at v = 2."""
-    v = np.asarray(v, np.float64)
-    pbar = _normalise(v, np.asarray(values, np.float64).mean(axis=2).T).T
-    seg = 2 * np.pi * 0.5 * (pbar[:, 1:] + pbar[:, :-1]) * np.diff(v)[None]
-    cdf = np.concatenate([np.zeros((pbar.shape[0], 1)), np.cumsum(seg, axis=1)], axis=1)
-    cdf /= cdf[:, -1:]
-    return pbar, cdf
+def channel_mean_pdf(v: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """(S, N) channel-mean density pbar of every species (1/sr, 2 pi * integral dv = 1): the density
+    the sampler draws from."""
+    return _normalise(np.asarray(v, np.float64), np.asarray(values, np.float64).mean(axis=2).T).T
 
 
 def segment_masses(v: np.ndarray, pbar: np.ndarray) -> np.ndarray:
@@ -131,9 +128,10 @@ def angle_warp(v, theta0: float = GUIDE_THETA0):
 
 
 def guide_table(v: np.ndarray, max_steps: int = 3, theta0: float = GUIDE_THETA0):
-    """(first (M + 1,) uint32, steps): bucket j of M equal buckets in :func:`angle_warp` holds versines
-    whose node segment lies in [first[j], first[j + 1]] (widened by one either side for float32
-    rounding), found in ``steps`` bisection steps. M grows from 2 N until steps <= max_steps."""
+    """(bounds (M, 2) uint32, steps): bucket j of M equal buckets in :func:`angle_warp` holds versines
+    whose node segment lies in [bounds[j, 0], bounds[j, 1]] (widened by one segment either side for
+    float32 rounding), found in ``steps`` bisection steps. M grows from 2 N (doubling, up to 64 N)
+    until steps <= max_steps."""
     t = angle_warp(v, theta0)
     n_seg = v.size - 1
     m = 2 * v.size
@@ -149,21 +147,25 @@ def guide_table(v: np.ndarray, max_steps: int = 3, theta0: float = GUIDE_THETA0)
 
 def pack_weights(weights: np.ndarray) -> np.ndarray:
     """(z, y, x, ceil((S - 1) / 4), 4) float32: the first S - 1 weights of every voxel (renormalised to
-    sum to 1, zero-padded to whole packets of 4); voxels whose weights are all 0 take those of the
-    nearest voxel with weight (equal weights 1/S where there is none)."""
-    from scipy import ndimage
+    sum to 1, zero-padded to whole packets of 4).
 
-    w = np.clip(np.asarray(weights, np.float64), 0.0, None)
+    Voxels whose weights are all 0 (nothing scatters there) but that touch a voxel with weight (in
+    its 3 x 3 x 3 neighbourhood) take the weights of such a neighbour: they are the only empty voxels
+    a trilinear lookup at a scattering point can reach. Empty voxels farther away get equal weights
+    1/S. Every texel then sums to 1, so interpolated weights need no renormalisation."""
+    w = np.clip(np.asarray(weights, np.float32), 0.0, None)
     n_species = w.shape[3]
     total = w.sum(axis=3)
-    empty = total <= 0.0
-    if empty.all():
-        w = np.full(w.shape, 1.0 / n_species)
-    else:
-        w = w / np.where(empty, 1.0, total)[..., None]
-        if empty.any():
-            iz, iy, ix = ndimage.distance_transform_edt(empty, return_distances=False, return_indices=True)
-            w = w[iz, iy, ix]
+    full = total > 0.0
+    w /= np.where(full, total, 1.0)[..., None]
+    for axis in range(3):  # fill along z, then y, then x: reaches the whole 3 x 3 x 3 neighbourhood
+        for dst, src in ((slice(1, None), slice(None, -1)), (slice(None, -1), slice(1, None))):
+            d = (slice(None),) * axis + (dst,)
+            s_ = (slice(None),) * axis + (src,)
+            take = ~full[d] & full[s_]  # empty voxel whose neighbour (one step along axis) has weight
+            w[d][take] = w[s_][take]
+            full[d] |= take
+    w[~full] = 1.0 / n_species
     n_packets = max(1, -(-(n_species - 1) // 4))
     out = np.zeros(w.shape[:3] + (n_packets * 4,), np.float32)
     out[..., : n_species - 1] = w[..., : n_species - 1]
@@ -191,18 +193,15 @@ def _is_scalar_variant() -> bool:
 def _storage(a: np.ndarray):
     """A flat array to gather from: mi.Float in JIT variants, a list of floats in scalar variants.
 
-    The JIT array is copied into memory Dr.Jit allocated itself: ``mi.Float(numpy_array)`` maps numpy's
-    memory, which is only 16-byte aligned, and on an LLVM variant a source that is not aligned to
-    the vector width makes Dr.Jit split every packet gather into one gather per channel (drjit-core
-    ``jitc_var_gather_packet``: ``src_v->unaligned``). Which way it went changed from process to process
-    with numpy's allocations; the split kernel cost up to 2x per phase-function call."""
+    JIT arrays come from 64-byte aligned memory (``aligned_float``): ``mi.Float(numpy_array)`` uses
+    numpy's memory in place, which is only 16-byte aligned, and on an LLVM variant a source that is
+    not aligned to the vector width makes Dr.Jit split every packet gather into one gather per
+    channel (drjit-core ``jitc_var_gather_packet``: ``src_v->unaligned``). Which way it went changed
+    from process to process with numpy's allocations; the split kernel cost up to 2x per call."""
     flat = np.ascontiguousarray(a, np.float32).ravel()
     if _is_scalar_variant():
         return flat.astype(float).tolist()
-    owned = dr.zeros(mi.Float, flat.size)  # a scatter writes into a fresh Dr.Jit allocation
-    dr.scatter(owned, mi.Float(flat), dr.arange(mi.UInt32, flat.size))
-    dr.eval(owned)
-    return owned
+    return aligned_float(mi, flat)
 
 
 def _gather(src, index):
@@ -257,12 +256,11 @@ class HydrometeorMixture:
         self.m_flags = mi.PhaseFunctionFlags.Anisotropic
 
     def _set_tables(self, nodes, values):
-        pbar, _ = marginal_cdf(nodes, values)
+        pbar = channel_mean_pdf(nodes, values)
         self.nodes = _storage(nodes)
         # (N, S, 4): R, G, B value and the channel-mean pdf of every node and species, read as one packet
         table = np.concatenate([np.asarray(values, np.float32), pbar[:, :, None]], axis=2)
         self.table4 = _storage(np.transpose(table, (1, 0, 2)))
-        self.pbar = _storage(pbar)
         # (S, N - 1, 2): alias table of every species' segment probabilities (prob, alias as float)
         alias = [alias_table(m) for m in segment_masses(nodes, pbar)]
         self.alias2 = _storage(np.stack([np.stack([pr, al.astype(np.float64)], axis=1) for pr, al in alias]))
@@ -273,9 +271,10 @@ class HydrometeorMixture:
         self.inv_warp_norm = float(1.0 / np.arcsinh(np.pi / GUIDE_THETA0))
 
     def _set_weights(self, weights):
-        self.weights_grid = np.array(weights, np.float32)  # z x y x x x S, as given (for traverse)
-        self.grid_shape = tuple(int(n) for n in self.weights_grid.shape[:3])
-        packed = pack_weights(self.weights_grid)
+        weights = np.asarray(weights, np.float32)
+        self.weights = mi.TensorXf(weights)  # z x y x x x S as given: the ``weights`` parameter
+        self.grid_shape = tuple(int(n) for n in weights.shape[:3])
+        packed = pack_weights(weights)
         self.n_packets = int(packed.shape[3])
         self.weights4 = _storage(packed)
 
@@ -350,11 +349,6 @@ class HydrometeorMixture:
             pdf += w[s] * f[3]
         return mi.Color3f(value[0], value[1], value[2]), pdf
 
-    def _eval(self, mei, v, active):
-        """(per-channel value, pdf) of the mixture at versine v = 1 - cos(Theta)."""
-        idx, t = self._segment(v)
-        return self._mix(self._weights_at(mei), idx, t)
-
     # ------------------------------------------------------------ PhaseFunction interface
     def sample(self, ctx, mei, sample1, sample2, active=True):
         w = self._weights_at(mei)
@@ -377,11 +371,11 @@ class HydrometeorMixture:
         r = dr.clip(u - mi.Float(j), 0.0, 1.0)
         entry = _gather2(self.alias2, species * n_seg + j)
         idx = dr.select(coin < entry[0], j, mi.UInt32(entry[1]))
-        k = species * self.n_nodes + idx
+        k = (idx * self.n_species + species) * 4 + 3  # pbar of this species at node idx in table4
         v0 = _gather(self.nodes, idx)
         v1 = _gather(self.nodes, idx + 1)
-        f0 = _gather(self.pbar, k)
-        f1 = _gather(self.pbar, k + 1)
+        f0 = _gather(self.table4, k)
+        f1 = _gather(self.table4, k + 4 * self.n_species)
         # invert the segment's linear density: f0 x + (f1 - f0) x^2 / (2 dv) = r (f0 + f1) dv / 2,
         # x in [0, dv] (stable root)
         dmu = v1 - v0
@@ -402,21 +396,21 @@ class HydrometeorMixture:
 
     def eval_pdf(self, ctx, mei, wo, active=True):
         h = wo + mei.wi  # |wo + wi|^2 = 2 (1 - cos Theta): accurate near forward
-        value, pdf = self._eval(mei, 0.5 * dr.squared_norm(h), active)
+        idx, t = self._segment(0.5 * dr.squared_norm(h))
+        value, pdf = self._mix(self._weights_at(mei), idx, t)
         return mi.Spectrum(value), pdf
 
     def traverse(self, cb):
-        self._weights_param = mi.TensorXf(self.weights_grid) if not _is_scalar_variant() else None
-        if self._weights_param is not None:
-            cb.put("weights", self._weights_param, mi.ParamFlags.NonDifferentiable)
+        cb.put("weights", self.weights, mi.ParamFlags.NonDifferentiable)
 
     def parameters_changed(self, keys=None):
-        if getattr(self, "_weights_param", None) is not None:
-            w = np.array(self._weights_param, np.float32).reshape(self._weights_param.shape)
-            if w.ndim != 4 or w.shape[3] != self.n_species:
-                raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {self.n_species}; "
-                                 f"got {w.shape}")
-            self._set_weights(w)
+        if keys and "weights" not in keys:
+            return
+        w = np.array(self.weights, np.float32).reshape(tuple(self.weights.shape))
+        if w.ndim != 4 or w.shape[3] != self.n_species:
+            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {self.n_species}; "
+                             f"got {w.shape}")
+        self._set_weights(w)  # repacked (S - 1 per texel, empty voxels filled)
 
     def to_string(self):
         return (f"HydrometeorMixture[species={self.n_species}, nodes={self.n_nodes}, "

@@ -105,30 +105,6 @@ def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: flo
     return (np.maximum(d, 0.0) * float(safety)).astype(np.float32)
 
 
-def trilinear_numpy(grid_zyx: np.ndarray, p_unit: np.ndarray) -> np.ndarray:
-    """Reference trilinear interpolant with Mitsuba's ``gridvolume`` convention at unit-cube points
-    ``p_unit`` (..., 3) given as (x, y, z): texel centres at (i + 0.5)/N, indices clamped at borders."""
-    g = np.asarray(grid_zyx, np.float64)
-    nz, ny, nx = g.shape
-    p = np.asarray(p_unit, np.float64)
-    out_idx, out_w = [], []
-    for k, n in enumerate((nx, ny, nz)):
-        u = p[..., k] * n - 0.5
-        i0 = np.floor(u)
-        w = u - i0
-        i0 = i0.astype(np.int64)
-        out_idx.append((np.clip(i0, 0, n - 1), np.clip(i0 + 1, 0, n - 1)))
-        out_w.append(w)
-    (x0, x1), (y0, y1), (z0, z1) = out_idx
-    wx, wy, wz = out_w
-    r = 0.0
-    for zi, wzz in ((z0, 1 - wz), (z1, wz)):
-        for yi, wyy in ((y0, 1 - wy), (y1, wy)):
-            for xi, wxx in ((x0, 1 - wx), (x1, wx)):
-                r = r + g[zi, yi, xi] * wzz * wyy * wxx
-    return r
-
-
 # ---------------------------------------------------------------- Mitsuba helpers
 
 class _Children:

@@ -309,14 +309,21 @@ for variant in ("llvm_ad_rgb", "scalar_rgb", "llvm_ad_rgb"):
     assert rows[0, 6] == pytest.approx(rows[0, 7], rel=1e-5)  # sample's pdf is eval_pdf's
 
 
-def test_packed_weights_fill_empty_voxels_from_the_nearest_scattering_one():
-    w = np.zeros((1, 1, 4, 3), np.float32)
+def test_packed_weights_fill_the_empty_neighbours_of_scattering_voxels():
+    w = np.zeros((1, 1, 6, 3), np.float32)
     w[0, 0, 0] = (2.0, 1.0, 1.0)  # not normalised: packing renormalises
     w[0, 0, 3] = (0.0, 0.0, 5.0)
     packed = hm.pack_weights(w)
-    assert packed.shape == (1, 1, 4, 1, 4)
-    np.testing.assert_allclose(packed[0, 0, :, 0, :2], [[0.5, 0.25], [0.5, 0.25], [0, 0], [0, 0]])
+    assert packed.shape == (1, 1, 6, 1, 4)
+    # voxels 1 and 2 touch voxels 0 and 3, voxel 4 touches 3, voxel 5 touches nothing: 1/S
+    np.testing.assert_allclose(packed[0, 0, :, 0, :2],
+                               [[0.5, 0.25], [0.5, 0.25], [0, 0], [0, 0], [0, 0], [1 / 3, 1 / 3]], rtol=1e-6)
     assert np.all(packed[..., 2:] == 0)  # S - 1 = 2 channels stored, the rest is padding
+    # diagonal neighbours count too (3 x 3 x 3 neighbourhood)
+    d = np.zeros((3, 3, 3, 2), np.float32)
+    d[0, 0, 0] = (0.25, 0.75)
+    np.testing.assert_allclose(hm.pack_weights(d)[1, 1, 1, 0, 0], 0.25)
+    assert hm.pack_weights(d)[2, 2, 2, 0, 0] == pytest.approx(0.5)  # two steps away
     np.testing.assert_allclose(hm.pack_weights(np.zeros((2, 2, 2, 5)))[..., 0, :], 0.2)  # nothing scatters
     assert hm.pack_weights(np.ones((1, 1, 1, 9))).shape == (1, 1, 1, 2, 4)  # 8 stored weights: 2 packets
 
@@ -334,3 +341,38 @@ def test_guide_table_bounds_every_node_segment():
     j = np.clip((hm.angle_warp(probe) * m).astype(int), 0, m - 1)
     assert np.all((guide[j, 0] <= seg) & (seg <= guide[j, 1]))
     assert np.max(guide[:, 1] - guide[:, 0]) + 1 <= 2 ** steps
+
+
+def test_weights_update_through_traverse():
+    """New weights through ``mi.traverse`` + ``update()`` are repacked: species 0 (HG 0.85) everywhere,
+    then species 1 (isotropic) everywhere."""
+    nodes, values = hm.prepare_tables([hg_table(0.85), hg_table(0.0)])
+    phase = mi.load_dict({"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]),
+                          "values": mi.TensorXf(values), "weights": mi.TensorXf(constant_weights((1.0, 0.0))),
+                          "to_world": hm.bbox_transform(((0, 0, 0), (1, 1, 1)))})
+    ct = [0.3]
+    assert eval_at(phase, ct)[1][0] == pytest.approx(hg(0.85, np.arccos(0.3)), rel=2e-3)
+    params = mi.traverse(phase)
+    params["weights"] = mi.TensorXf(constant_weights((0.0, 1.0)))
+    params.update()
+    assert eval_at(phase, ct)[1][0] == pytest.approx(1 / (4 * np.pi), rel=2e-3)
+
+
+def test_eval_matches_the_prepared_tables_everywhere():
+    """eval_pdf (float32 guide-table lookup, bisection, interpolation) equals numpy's interpolation of
+    the prepared tables at 20000 angles from 1e-6 rad to pi, at the nodes and between them."""
+    nodes, values = hm.prepare_tables(physical_tables())
+    s = 2  # rain: the narrowest forward peak
+    phase = mi.load_dict({"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]),
+                          "values": mi.TensorXf(values[s:s + 1]), "weights": mi.TensorXf(constant_weights((1.0,))),
+                          "to_world": hm.bbox_transform(((0, 0, 0), (1, 1, 1)))})
+    rng = np.random.default_rng(3)
+    v_nodes = nodes.astype(np.float64)
+    theta = np.sort(np.r_[np.geomspace(1e-6, np.pi, 10000), 2 * np.arcsin(np.sqrt(v_nodes[1:-1] / 2)),
+                          rng.uniform(0, np.pi, 10000 - v_nodes.size + 2)])
+    wo = np.stack([np.sin(theta), np.zeros_like(theta), -np.cos(theta)]).astype(np.float32)
+    value = np.array(phase.eval_pdf(mi.PhaseFunctionContext(None), make_mei(theta.size), mi.Vector3f(*wo))[0])
+    w = wo.astype(np.float64)
+    v = 0.5 * (w[0] ** 2 + (w[2] + 1.0) ** 2)  # the versine of the float32 direction
+    expected = np.interp(v, v_nodes, values[s, :, 1].astype(np.float64))
+    np.testing.assert_allclose(value[1], expected, rtol=1e-4, atol=1e-7 * expected.max())

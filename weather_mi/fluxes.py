@@ -105,7 +105,7 @@ def _measure(scene_parts: dict, vol: OpticalVolume, sun, integrator: str, max_de
     import mitsuba as mi
 
     from .mitsuba_scene import medium_shape_dict, sun_dict
-    from .reference import integrator_dict
+    from .reference import integrator_dict, pass_seed
     d = {"type": "scene", "integrator": integrator_dict(vol, integrator, max_depth, rr_depth),
          "sun": sun_dict(sun), "slab": medium_shape_dict(vol)}
     d.update(scene_parts)
@@ -113,7 +113,7 @@ def _measure(scene_parts: dict, vol: OpticalVolume, sun, integrator: str, max_de
     per = max(1, -(-spp // passes))
     vals = np.empty(passes)
     for i in range(passes):
-        img = np.array(mi.render(scene, spp=per, seed=(seed * 1_000_003 + i) % (1 << 32)), dtype=np.float64)
+        img = np.array(mi.render(scene, spp=per, seed=pass_seed(seed, i)), dtype=np.float64)
         vals[i] = img[..., :3].mean()
     se = float(vals.std(ddof=1) / math.sqrt(passes)) if passes > 1 else float("nan")
     return float(vals.mean()), se

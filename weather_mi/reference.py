@@ -49,6 +49,11 @@ def _check_inputs(spec: SceneSpec, vol: OpticalVolume, spp: int, normalize, inte
         raise WeatherDataError(src, "beta_total", "extinction >= 0 (1/m)")
 
 
+def pass_seed(seed: int, i: int) -> int:
+    """Mitsuba seed of pass ``i`` of a render with scene seed ``seed`` (distinct per pass and seed)."""
+    return (int(seed) * 1_000_003 + int(i)) % (1 << 32)
+
+
 def _passes(spec: SceneSpec, spp: int, passes: int | None) -> list[int]:
     """Samples per pixel of each pass: at least 4 passes when spp allows (for the error estimate),
     and at most MAX_LANES_PER_PASS paths per pass (memory)."""
@@ -148,7 +153,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     bar = tqdm(total=len(spp_list), initial=done, desc="reference", unit="pass", disable=not progress)
     for i in range(done, len(spp_list)):
         t0 = time.perf_counter()
-        img = np.array(mi.render(scene, spp=spp_list[i], seed=int(spec.seed) * 1_000_003 + i), dtype=np.float64)
+        img = np.array(mi.render(scene, spp=spp_list[i], seed=pass_seed(spec.seed, i)), dtype=np.float64)
         img = img[..., :3] * scale
         seconds += time.perf_counter() - t0
         n = i + 1  # Welford update of per-pixel mean and M2 over pass means

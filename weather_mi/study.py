@@ -523,9 +523,9 @@ def _findings(rows) -> list[str]:
                    "multiple scattering, so light that the reference reflects back out of thick cloud (front-lit) "
                    "or diffuses through it (the bright, silver-lined edges back-lit) is missing.")
     la = [r for r in rows if r["mode"] == "uniform/low-albedo"]
-    tr = [r for r in rows if r["mode"] == "uniform/translucent" and r["setting"] == "physical-ff"]
-    if la and tr:
-        out.append("- Light transport. " + _compare_sentence("low-albedo light", la, "translucent light", tr)
+    uni = [r for r in rows if r["mode"] == "uniform/translucent" and r["setting"] == "physical-ff"]
+    if la and uni:
+        out.append("- Light transport. " + _compare_sentence("low-albedo light", la, "translucent light", uni)
                    + " Without the forward-scattered part, thick cores go dark.")
     p9 = [r for r in rows if r["setting"] == "paper-ff-0.9" and r["mode"] == "per-species/translucent"]
     ph = [r for r in rows if r["setting"] == "physical-ff" and r["mode"] == "per-species/translucent"]
@@ -540,11 +540,9 @@ def _findings(rows) -> list[str]:
         else:
             sentence += " The physical cone fraction is also the closer one here."
         out.append("- Forward fraction. " + sentence)
-    uni = [r for r in rows if r["mode"] == "uniform/translucent" and r["setting"] == "physical-ff"]
-    per = [r for r in rows if r["mode"] == "per-species/translucent" and r["setting"] == "physical-ff"]
-    if uni and per:
+    if uni and ph:
         out.append("- Phase functions. " + _compare_sentence("one phase function for all", uni,
-                                                            "per-species phase functions", per))
+                                                            "per-species phase functions", ph))
     out.append("- Not modelled by the slicer: the cloudbow (~140 deg) and glory, skylight scattered by the "
                "cloud (unless the `ambient` term is raised from its default 0: an unshadowed, isotropic stand-in) and "
                "light reflected by the ground onto the cloud base; the path tracer has all of them.")
