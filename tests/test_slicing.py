@@ -1,7 +1,6 @@
 """Half-angle slicing against closed forms: background, Beer-Lambert light buffer, single scattering;
 mode behaviour; no recompilation between frames."""
 import math
-import types
 
 import drjit as dr
 import numpy as np
@@ -15,7 +14,7 @@ def hg_table(g):
     theta = np.unique(np.r_[np.geomspace(1e-4, 0.3, 300), np.linspace(0.0, np.pi, 1500)])
     mu = np.cos(theta)
     p = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * mu) ** 1.5)
-    return types.SimpleNamespace(theta=theta, values=np.stack([p] * 3, axis=1))
+    return wm.phase.PhaseTable.from_values(theta, p)
 
 
 def slab(beta=1e-3, albedo=1.0, g=0.0, size=(8, 8, 8), bbox=((-20e3, -20e3, 1000.0), (20e3, 20e3, 2000.0))):

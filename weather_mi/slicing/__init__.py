@@ -1,7 +1,7 @@
 """The interactive approximation: half-angle slicing with translucent light transport (Dr.Jit)."""
 from __future__ import annotations
 
-from .modes import TABLE_IV, SliceMode, SliceParams
+from .modes import MODES, TABLE_IV, SliceMode, SliceParams
 from .renderer import SliceRenderer
 
 
@@ -16,4 +16,4 @@ def render_slices(spec, vol, mode: SliceMode = SliceMode(), slices: int = 128, l
     return renderer.frame(spec, params)
 
 
-__all__ = ["SliceMode", "SliceParams", "SliceRenderer", "render_slices", "TABLE_IV"]
+__all__ = ["MODES", "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "TABLE_IV"]

@@ -96,3 +96,28 @@ def slice_geometry(view_dir: np.ndarray, to_light: np.ndarray, bbox, n_slices: i
     u, w = corners @ e1, corners @ e2
     return SliceGeometry(s, l, back_to_front, float(d.max() - spacing / 2), float(spacing), int(n_slices),
                          e1, e2, (float(u.min()), float(u.max())), (float(w.min()), float(w.max())))
+
+
+def ray_box(origins, dirs, bbox, clamp_start: bool = True):
+    """Entry and exit parameters (N,) of rays o + t d with the box (t0 > t1 where they miss); with
+    ``clamp_start`` the entry is not before t = 0 (the camera)."""
+    lo, hi = (np.asarray(p, dtype=np.float64) for p in bbox)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / dirs
+        ta, tb = (lo - origins) * inv, (hi - origins) * inv
+    tmin = np.nan_to_num(np.minimum(ta, tb), nan=-np.inf)
+    tmax = np.nan_to_num(np.maximum(ta, tb), nan=np.inf)
+    t0, t1 = tmin.max(axis=-1), tmax.min(axis=-1)
+    return (np.maximum(t0, 0.0) if clamp_start else t0), t1
+
+
+def slicing_box(vol) -> tuple[np.ndarray, np.ndarray]:
+    """Where the slices go: the volume's occupied box (``OpticalVolume.occupied_bbox``) widened by
+    one cell on each side (the reach of trilinear interpolation), clipped to the grid's box."""
+    lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
+    if not np.any(vol.beta_total > 0):
+        cell = np.asarray(vol.spacing[::-1], dtype=np.float64)
+        return lo.copy(), lo + cell  # an empty volume: one cell, nothing in it
+    olo, ohi = (np.asarray(p, dtype=np.float64) for p in vol.occupied_bbox())
+    cell = np.asarray(vol.spacing[::-1], dtype=np.float64)  # (dx, dy, dz)
+    return np.maximum(olo - cell, lo), np.minimum(ohi + cell, hi)

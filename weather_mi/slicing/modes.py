@@ -1,29 +1,37 @@
-"""The paper's rendering modes (Table IV) and the parameters a user adjusts interactively."""
+"""The slicer's modes (the paper's Table IV and a multiple-scattering light model beyond it) and the
+parameters a user adjusts interactively."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
 PHASE_MODES = ("uniform", "per_species")
-LIGHT_MODES = ("low_albedo", "translucent")
+LIGHT_MODES = ("low_albedo", "translucent", "multiple")
 
 
 @dataclass(frozen=True)
 class SliceMode:
     """phase: "uniform" (one phase function for all species) or "per_species" (Eq. 8 mixture);
-    light: "low_albedo" (everything that hits a particle leaves the light) or "translucent" (light
-    scattered into a forward cone survives, blurred over the cone); detail: multiply extinction by a
-    turbulent detail field; species_colors: paint each species with its Table III colour (Fig. 2)."""
+    light: "low_albedo" (everything that hits a particle leaves the light), "translucent" (the paper:
+    light scattered into a forward cone survives and diffuses sideways) or "multiple" (beyond the
+    paper: single scattering plus multiple-scattering octaves driven by the optical depth towards the
+    sun, and skylight shadowed by the optical depth towards the zenith; see light.py and eye.py);
+    detail: multiply extinction by a turbulent detail field; species_colors: paint each species with
+    its Table III colour (Fig. 2); octaves: number of scattering orders of the "multiple" model
+    (octave 0 is single scattering)."""
 
     phase: str = "per_species"
     light: str = "translucent"
     detail: bool = False
     species_colors: bool = False
+    octaves: int = 4
 
     def __post_init__(self):
         if self.phase not in PHASE_MODES:
             raise ValueError(f"SliceMode.phase must be one of {PHASE_MODES}, got {self.phase!r}")
         if self.light not in LIGHT_MODES:
             raise ValueError(f"SliceMode.light must be one of {LIGHT_MODES}, got {self.light!r}")
+        if not 1 <= int(self.octaves) <= 8:
+            raise ValueError(f"SliceMode.octaves must be in 1..8, got {self.octaves}")
 
 
 # the four rows of the paper's Table IV
@@ -33,6 +41,13 @@ TABLE_IV = {
     "per-species/translucent": SliceMode("per_species", "translucent"),
     "per-species/translucent/detail": SliceMode("per_species", "translucent", detail=True),
 }
+# every mode the study and the benchmark run: Table IV and the light model beyond the paper
+MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple")}
+
+# Defaults of the "multiple" light model, fitted by weather_mi.slicing.calibrate on the training
+# storms (demo supercell and demo cumulus, front/side/back-lit; see README "Calibration").
+MULTIPLE_DEFAULTS = {"ms_extinction": 0.25, "ms_contribution": 0.7, "ms_eccentricity": 0.5,
+                     "sky_gain": 1.0, "sky_extinction": 0.25}
 
 
 @dataclass(frozen=True)
@@ -44,8 +59,20 @@ class SliceParams:
     cone_angle_deg   : half-angle of the forward cone whose scattered light keeps propagating.
     forward_fraction : None (from the phase tables: the fraction of scattered energy within the
                        cone, per species) or a number for all species (the paper's 0.9).
-    ambient          : fraction of the sky's mean radiance added as isotropic in-scattering
-                       (0: none, as in the paper).
+    ambient          : Table IV modes: fraction of the sky's mean radiance added as unshadowed,
+                       isotropic in-scattering (0: none, as in the paper).
+    blur_length_m    : translucent light: the forward-scattered light spreads sideways like a
+                       diffusion whose variance grows by tan^2(cone) x blur_length_m per metre
+                       travelled; None: the grid's mean voxel size, which reproduces the paper's blur
+                       of dl tan(cone) per slice at one slice per voxel (the paper's setting), and,
+                       unlike a blur per slice, does not change with the slice count.
+    ms_extinction    : "multiple" light (Wrenninge et al. 2013): octave i sees the optical depth
+                       towards the sun scaled by ms_extinction^i ...
+    ms_contribution  : ... contributes ms_contribution^i ...
+    ms_eccentricity  : ... with the phase function blended towards isotropic, ms_eccentricity^i p +
+                       (1 - ms_eccentricity^i) / (4 pi).
+    sky_gain         : "multiple" light: skylight in-scattering, sky_gain x the sky's mean radiance x
+    sky_extinction   : exp(-sky_extinction x optical depth towards the zenith).
     """
 
     scale: dict = field(default_factory=dict)
@@ -53,6 +80,12 @@ class SliceParams:
     cone_angle_deg: float = 10.0
     forward_fraction: float | None = None
     ambient: float = 0.0
+    blur_length_m: float | None = None
+    ms_extinction: float = MULTIPLE_DEFAULTS["ms_extinction"]
+    ms_contribution: float = MULTIPLE_DEFAULTS["ms_contribution"]
+    ms_eccentricity: float = MULTIPLE_DEFAULTS["ms_eccentricity"]
+    sky_gain: float = MULTIPLE_DEFAULTS["sky_gain"]
+    sky_extinction: float = MULTIPLE_DEFAULTS["sky_extinction"]
 
     def __post_init__(self):
         # values may be Dr.Jit arrays (for differentiation): only plain numbers are range-checked
@@ -63,6 +96,16 @@ class SliceParams:
             raise ValueError(f"forward_fraction must be in [0, 1], got {self.forward_fraction}")
         if number(self.albedo) and not 0.0 <= self.albedo <= 1.0:
             raise ValueError(f"albedo must be in [0, 1], got {self.albedo}")
+        if number(self.blur_length_m) and not self.blur_length_m >= 0.0:
+            raise ValueError(f"blur_length_m must be >= 0, got {self.blur_length_m}")
+        for name in ("ms_extinction", "ms_contribution", "ms_eccentricity"):
+            v = getattr(self, name)
+            if number(v) and not 0.0 <= v <= 1.0:
+                raise ValueError(f"{name} must be in [0, 1], got {v}")
+        for name in ("sky_gain", "sky_extinction", "ambient"):
+            v = getattr(self, name)
+            if number(v) and v < 0.0:
+                raise ValueError(f"{name} must be >= 0, got {v}")
         if any(v < 0 for v in self.scale.values()):
             raise ValueError("scalings must be >= 0")
 

@@ -1,0 +1,88 @@
+"""What the eye pass needs from a view that does not depend on the volume's data: the camera rays
+(clipped to the slicing box and the ground) and the background along each of them (sky radiance where
+the ray misses the ground), kept for the last few views in a bounded cache."""
+from __future__ import annotations
+
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..jitarrays import aligned_float
+from ..scene import SceneSpec
+from .background import ground_hits, sky_radiance
+from .geometry import camera_rays, ray_box
+
+
+class BoundedCache(OrderedDict):
+    """A dict that keeps its ``maxsize`` most recently used entries (least recently used evicted)."""
+
+    def __init__(self, maxsize: int):
+        super().__init__()
+        self.maxsize = int(maxsize)
+
+    def __getitem__(self, key):
+        value = super().__getitem__(key)
+        self.move_to_end(key)
+        return value
+
+    def get(self, key, default=None):
+        return self[key] if key in self else default
+
+    def __setitem__(self, key, value):
+        super().__setitem__(key, value)
+        self.move_to_end(key)
+        while len(self) > self.maxsize:
+            self.popitem(last=False)
+
+
+@dataclass
+class ViewRays:
+    """Pixel rays of one view as Dr.Jit arrays (N = width x height, row-major from the top left).
+    ``t0``/``t1``: where each ray is inside the slicing box (t1 clipped by the ground; t0 > t1:
+    misses), ``ground``: where it hits the ground (``hit_ground``), ``background``: sky radiance
+    along the ray (zero where it hits the ground, which the eye pass lights)."""
+
+    origin: object       # mi.Point3f
+    direction: object    # mi.Vector3f
+    t0: object
+    t1: object
+    hit_ground: object   # mi.Bool
+    ground: object       # mi.Point3f
+    background: object   # mi.Color3f
+    cos_to_light: np.ndarray  # (N,) numpy, for the phase functions
+    n: int
+
+
+class ViewCache:
+    """Camera rays and background radiance for the most recent views (``maxsize`` of each: an orbiting
+    camera or a moving sun does not grow memory), and the sky emitters they were made with."""
+
+    def __init__(self, box, maxsize: int = 4):
+        self.box = tuple(np.asarray(p, dtype=np.float64) for p in box)
+        self.rays = BoundedCache(maxsize)
+        self.backgrounds = BoundedCache(maxsize)
+        self.sky = BoundedCache(4 * maxsize)  # sky emitters and sky irradiance (background.py)
+
+    def get(self, mi, spec: SceneSpec) -> ViewRays:
+        ray_key = (spec.camera, spec.width, spec.height, spec.ground)
+        if ray_key not in self.rays:
+            origins, dirs = camera_rays(spec)
+            o, d = origins.reshape(-1, 3), dirs.reshape(-1, 3)
+            t0, t1 = ray_box(o, d, self.box)
+            tg = ground_hits(spec, o, d)
+            self.rays[ray_key] = (o, d, t0, np.minimum(t1, tg), tg)
+        o, d, t0, t1, tg = self.rays[ray_key]
+        hit = np.isfinite(tg)
+        bg_key = ray_key + (spec.sun.azimuth, spec.sun.elevation, spec.sun.irradiance, spec.sky)
+        if bg_key not in self.backgrounds:
+            F = lambda a: aligned_float(mi, a)  # noqa: E731
+            bg = np.zeros_like(d)
+            bg[~hit] = sky_radiance(spec, d[~hit], self.sky)
+            pg = o + np.where(hit, tg, 0.0)[:, None] * d
+            self.backgrounds[bg_key] = ViewRays(
+                mi.Point3f(*(F(o[:, i]) for i in range(3))), mi.Vector3f(*(F(d[:, i]) for i in range(3))),
+                F(t0), F(np.where(np.isfinite(t1), t1, t0)), F(hit) > 0.5,
+                mi.Point3f(*(F(pg[:, i]) for i in range(3))), mi.Color3f(*(F(bg[:, i]) for i in range(3))),
+                d @ spec.sun.to_sun, o.shape[0])
+        return self.backgrounds[bg_key]
