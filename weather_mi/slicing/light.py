@@ -12,10 +12,10 @@ a light path dl:
     F' = F exp(-(beta - beta_f) dl)       F = D + I: all light still travelling forward
 which is exact for a homogeneous slab, so that thick slabs are handled and the limit does not depend on
 the slice count (a per-slice survival factor omega f would compound once per slice). In translucent mode
-I then spreads sideways like a diffusion: a Gaussian whose variance grows by
-``variance_per_m`` (m^2 per metre of light path) x dl per slab, applied with 5 x 5 taps of exactly
-that variance (no bilinear-tap diffusion), so the spread after a given distance is the same for any
-number of slices.
+I also spreads sideways like a diffusion: a Gaussian whose variance grows by ``variance_per_m`` (m^2 per
+metre of light path), applied by operator splitting (slabs in chunks, then the chunk's accumulated
+variance with 5 x 5 taps of exactly that variance: no bilinear-tap diffusion), so the spread after a
+given distance is the same for any number of slices.
 """
 from __future__ import annotations
 
@@ -26,8 +26,10 @@ import numpy as np
 from ..jitarrays import aligned_float
 from .geometry import SliceGeometry, ray_box
 
-# largest blur variance per slab, in texels^2, that the 5-tap kernel reproduces with weights >= 0
+# largest blur variance per step, in texels^2, that the 5-tap kernel reproduces with weights >= 0
 MAX_TEXEL_VARIANCE = 4.0 / 3.0
+# sideways spread of forward-scattered light accumulated between two blur steps (texels, standard deviation)
+BLUR_STEP_TEXELS = 0.5
 
 
 def blur_weights(dr, var):
@@ -91,46 +93,60 @@ class LightVolume:
             a, m, b = (dr.clip(kf + h, kin, kout) for h in (-0.5, 0.0, 0.5))
             ext, fwd = source.eval(q0 + (0.5 * (a + b)) * qs)  # the clipped slab's middle
             ext = dr.maximum(ext, 0.0)
-            keep = dr.maximum(ext - dr.maximum(fwd, 0.0), 0.0)  # extinction of all forward light
-            t1, f1 = dr.exp(-ext * dl * (m - a)), dr.exp(-keep * dl * (m - a))
-            t2, f2 = dr.exp(-ext * dl * (b - m)), dr.exp(-keep * dl * (b - m))
-            D_mid, I_mid = D * t1, (D + I) * f1 - D * t1
+            t1, t2 = dr.exp(-ext * dl * (m - a)), dr.exp(-ext * dl * (b - m))
+            D_mid = D * t1
+            if translucent:
+                keep = dr.maximum(ext - dr.maximum(fwd, 0.0), 0.0)  # extinction of all forward light
+                f1, f2 = dr.exp(-keep * dl * (m - a)), dr.exp(-keep * dl * (b - m))
+                I_mid = (D + I) * f1 - D_mid
+            else:
+                I_mid = I
             at = (lane + k * plane) * 2
             dr.scatter(store, D_mid, at)
             dr.scatter(store, I_mid, at + 1)
-            return D_mid * t2, (D_mid + I_mid) * f2 - D_mid * t2
+            if translucent:
+                return D_mid * t2, (D_mid + I_mid) * f2 - D_mid * t2
+            return D_mid * t2, I_mid
 
         D = dr.full(mi.Float, 1.0, R * R)
         I = dr.zeros(mi.Float, R * R)
-        if translucent or self.differentiable:
-            if translucent:
-                # variance per slab in texels^2 along the buffer's two axes
-                du = (g.u_range[1] - g.u_range[0]) / R
-                dv = (g.v_range[1] - g.v_range[0]) / R
-                var = _param(mi, variance_per_m) * dl
-                wx = blur_weights(dr, var * dr.opaque(mi.Float, 1.0 / du ** 2))
-                wy = blur_weights(dr, var * dr.opaque(mi.Float, 1.0 / dv ** 2))
-            # the blur reads neighbouring texels of the previous slice: one launch per slice
-            for k in range(N):
-                if translucent and k > 0:
-                    I = _blur(mi, dr, I, R, wx, wy)
-                D, I = through_slab(dr.opaque(mi.UInt32, k), D, I)
-                dr.eval(D, I, store)  # also when differentiable: AD keeps its graph across evaluations
-                if self.differentiable:
+        chunk = N
+        if translucent:
+            # operator splitting: slabs run in chunks (one kernel each: light rays are independent
+            # within a chunk), and the sideways diffusion of the chunk's path is applied at the start of
+            # the next one; chunks are as long as keeps that variance below BLUR_STEP_TEXELS^2, so their
+            # length in metres, and the image, converge as the slice count grows
+            du = (g.u_range[1] - g.u_range[0]) / R
+            dv = (g.v_range[1] - g.v_range[0]) / R
+            var = _param(mi, variance_per_m) * dl                 # m^2 per slab
+            per_slab = float(dr.detach(var)[0]) / min(du, dv) ** 2  # texels^2 per slab
+            chunk = int(np.clip(BLUR_STEP_TEXELS ** 2 / max(per_slab, 1e-12), 1, N))
+        starts = list(range(0, N, chunk))
+        for j, k0 in enumerate(starts):
+            k1 = min(k0 + chunk, N)
+            if translucent and j > 0:
+                n_prev = dr.opaque(mi.Float, float(k0 - starts[j - 1]))
+                I = _blur(mi, dr, I, R, blur_weights(dr, var * n_prev * dr.opaque(mi.Float, 1.0 / du ** 2)),
+                          blur_weights(dr, var * n_prev * dr.opaque(mi.Float, 1.0 / dv ** 2)))
+            if self.differentiable:
+                for k in range(k0, k1):
+                    D, I = through_slab(dr.opaque(mi.UInt32, k), D, I)
+                    dr.eval(D, I, store)  # AD keeps its graph across evaluations
                     # identity gathers: their adjoints are scatters, so the reverse pass stores the
                     # adjoints of D and I at every slice instead of rebuilding the whole chain of later
                     # slices in each kernel (O(N^2) operations, minutes of LLVM time at 96 slices)
                     D = dr.gather(mi.Float, D, lane)
                     I = dr.gather(mi.Float, I, lane)
-        else:
-            # no blur: every light ray is independent, so all slices run in one kernel
-            n_slices = dr.opaque(mi.UInt32, N)
+            else:
+                stop = dr.opaque(mi.UInt32, k1)
 
-            def body(k, D, I):
-                D, I = through_slab(k, D, I)
-                return k + 1, D, I
+                def body(k, D, I):
+                    D, I = through_slab(k, D, I)
+                    return k + 1, D, I
 
-            _, D, I = dr.while_loop((dr.zeros(mi.UInt32, R * R), D, I), lambda k, D, I: k < n_slices, body)
+                _, D, I = dr.while_loop((dr.zeros(mi.UInt32, R * R) + dr.opaque(mi.UInt32, k0), D, I),
+                                        lambda k, D, I: k < stop, body)
+                dr.eval(D, I, store)
         at = (lane + dr.opaque(mi.UInt32, N * R * R)) * 2
         dr.scatter(store, D, at)
         dr.scatter(store, I, at + 1)
