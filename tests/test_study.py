@@ -1,11 +1,12 @@
-"""The validation study runs end to end on a tiny configuration and writes a readable report."""
+"""The validation study runs end to end on a tiny configuration, writes a readable report, and its
+calibration lowers the error on views it was not trained on."""
 import csv
-from dataclasses import replace
 
 import pytest
+from PIL import Image as PILImage
 
 from weather_mi.cli import main
-from weather_mi.study import CONFIGS, METRIC_KEYS, run
+from weather_mi.study import CONFIGS, METRIC_KEYS, load_scene, run
 
 
 def test_study_end_to_end_tiny(tmp_path):
@@ -18,8 +19,8 @@ def test_study_end_to_end_tiny(tmp_path):
         rows = list(csv.DictReader(f))
     modes = {r["mode"] for r in rows}
     assert {"uniform/low-albedo", "uniform/translucent", "per-species/translucent",
-            "per-species/translucent/detail"} <= modes
-    assert {r["setting"] for r in rows} >= {"physical-ff", "paper-ff-0.9", "slices=12", "cone=20deg"}
+            "per-species/translucent/detail", "per-species/multiple"} <= modes
+    assert {r["setting"] for r in rows} >= {"physical-ff", "paper-ff-0.9", "defaults", "slices=12", "cone=20deg"}
     for r in rows:
         for k in METRIC_KEYS:
             assert r[k] not in ("", None), (r["mode"], k)
@@ -27,6 +28,23 @@ def test_study_end_to_end_tiny(tmp_path):
     for png in ("demo-cumulus_front_side_by_side.png", "fig7-8_light.png", "convergence_slices.png",
                 "calibration_loss.png"):
         assert (tmp_path / png).stat().st_size > 0
+    for png in ("demo-cumulus_front_side_by_side.png", "fig7-8_light.png"):
+        assert PILImage.open(tmp_path / png).size[0] >= 320 * 2  # every panel at least 320 px wide
+
+    # calibration (trained on the front-lit view) lowers the error of the back-lit view it never saw
+    calib = [line for line in text.splitlines() if line.startswith("| demo-cumulus | back | held-out |")]
+    errors = {line.split("|")[4].strip(): float(line.split("|")[7]) for line in calib}
+    assert errors["fitted"] < errors["start"], errors
+
+
+def test_library_reads_no_repository_paths(tmp_path):
+    """Scenes from data files come only from a given folder: without one they are skipped."""
+    cfg = CONFIGS["tiny"]
+    assert load_scene("bomex", cfg) is None
+    assert load_scene("bomex", cfg, data_dir=tmp_path) is None
+    assert load_scene("demo-cumulus", cfg) is not None
+    with pytest.raises(ValueError):
+        load_scene("no-such-storm", cfg)
 
 
 def test_validate_cli_rejects_unknown_config(capsys):

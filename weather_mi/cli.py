@@ -149,6 +149,8 @@ def main(argv: list[str] | None = None) -> int:
     val.add_argument("-o", "--output", default="validation-report", help="report folder")
     val.add_argument("--quick", action="store_true", help="small images and samples: a few minutes")
     val.add_argument("--config", choices=("full", "quick", "tiny"), default=None)
+    val.add_argument("--data", default=None, help="folder of real model output (wrf/..., les/..., e.g. "
+                     "../shared/data); without it only the built-in demo storms are studied")
     args = parser.parse_args(argv)
     try:
         if args.command == "info":
@@ -158,7 +160,7 @@ def main(argv: list[str] | None = None) -> int:
             render_command(args)
         elif args.command == "validate":
             from .study import run
-            report = run(args.output, args.config or ("quick" if args.quick else "full"))
+            report = run(args.output, args.config or ("quick" if args.quick else "full"), data_dir=args.data)
             print(f"wrote {report}")
     except (WeatherDataError, ValueError) as exc:
         print(f"weather-mi: error: {exc}", file=sys.stderr)

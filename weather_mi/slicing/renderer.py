@@ -178,7 +178,6 @@ class SliceRenderer:
 
     def _eye_pass(self, g, spec: SceneSpec, params: SliceParams, tint):
         mi = self.mi
-        import drjit as dr
         rays = self.views.get(mi, spec)
         sun = np.asarray(spec.sun.irradiance, dtype=np.float64)
         F = lambda a: aligned_float(mi, a)  # noqa: E731

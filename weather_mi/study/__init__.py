@@ -1,0 +1,10 @@
+"""The validation study, in three parts: ``runs`` (scenes, views, renders and comparisons),
+``weather_mi.slicing.calibrate`` (fitting the slicer by reverse-mode AD) and ``report`` (tables,
+figures, findings)."""
+from __future__ import annotations
+
+from .report import side_by_side
+from .runs import CONFIGS, DATA_SCENES, DEMO_SCENES, METRIC_KEYS, StudyConfig, eye_transmittance, load_scene, run, view
+
+__all__ = ["CONFIGS", "DATA_SCENES", "DEMO_SCENES", "METRIC_KEYS", "StudyConfig", "eye_transmittance", "load_scene",
+           "run", "side_by_side", "view"]
