@@ -43,24 +43,21 @@ class LightModel:
         decay rates read from the light volume one slice further towards the sun."""
         import drjit as dr
         direct, indirect = self.sun.lookup(p)
-        rate = lambda now, before: dr.maximum(dr.log(dr.maximum(before, 1e-30)) - dr.log(dr.maximum(now, 1e-30)), 0.0)  # noqa: E731
+        factor, k_d, k_f = (lambda kappa: 1.0), 0.0, 0.0  # noqa: E731
         if slab is not None:
             d_prev, i_prev = self.sun.lookup(p + slab.towards_light)
-            k_d = rate(direct, d_prev)                          # optical depth of one slice, direct beam
+            k_d = _depth_between(dr, direct, d_prev)                   # one slice's depth, direct beam
+            k_f = _depth_between(dr, direct + indirect, d_prev + i_prev)  # and all forward light
+            factor = slab.factor
         if self.octaves is None:
-            if slab is None:
-                return direct, indirect, 1.0
-            d_avg = direct * slab.factor(k_d)
-            f_avg = (direct + indirect) * slab.factor(rate(direct + indirect, d_prev + i_prev))
-            return d_avg, dr.maximum(f_avg - d_avg, 0.0), 1.0
+            d_avg = direct * factor(k_d)
+            return d_avg, dr.maximum((direct + indirect) * factor(k_f) - d_avg, 0.0), 1.0
         log_d = dr.log(dr.maximum(direct, 1e-30))      # -tau
-        avg = (lambda k: slab.factor(k)) if slab is not None else (lambda k: 1.0)  # noqa: E731
-        k_d = k_d if slab is not None else 0.0
-        A, B = direct * avg(k_d), 0.0 * direct
+        A, B = direct * factor(k_d), 0.0 * direct
         ai, bi, ci = 1.0, 1.0, 1.0
         for _ in range(1, self.octaves):
             ai, bi, ci = ai * self.a, bi * self.b, ci * self.c
-            t = dr.exp(ai * log_d) * avg(ai * k_d)
+            t = dr.exp(ai * log_d) * factor(ai * k_d)
             A += bi * ci * t
             B += bi * (1.0 - ci) * t
         occ = 1.0
@@ -68,6 +65,11 @@ class LightModel:
             up, _ = self.sky.lookup(p)
             occ = dr.exp(self.sky_extinction * dr.log(dr.maximum(up, 1e-30)))
         return A, B, occ
+
+
+def _depth_between(dr, light, light_nearer_sun):
+    """Optical depth between two points on a light ray from the light they receive (>= 0)."""
+    return dr.maximum(dr.log(dr.maximum(light_nearer_sun, 1e-30)) - dr.log(dr.maximum(light, 1e-30)), 0.0)
 
 
 class SlabAverage:

@@ -28,8 +28,10 @@ from .geometry import SliceGeometry, ray_box
 
 # largest blur variance per step, in texels^2, that the 5-tap kernel reproduces with weights >= 0
 MAX_TEXEL_VARIANCE = 4.0 / 3.0
-# sideways spread of forward-scattered light accumulated between two blur steps (texels, standard deviation)
-BLUR_STEP_TEXELS = 0.5
+# variance (texels^2) that forward-scattered light accumulates between two blur steps at the reference
+# spread (see LightVolume.sweep); larger spreads up to MAX_TEXEL_VARIANCE / BLUR_STEP_VARIANCE times the
+# reference (cone angles up to ~30 deg for a 20 deg reference) are still blurred exactly
+BLUR_STEP_VARIANCE = 0.5
 
 
 def blur_weights(dr, var):
@@ -56,10 +58,15 @@ class LightVolume:
         self.store = None
 
     # ------------------------------------------------------------------ the light pass
-    def sweep(self, g: SliceGeometry, source, grid_box, translucent: bool, variance_per_m=None):
+    def sweep(self, g: SliceGeometry, source, grid_box, translucent: bool, variance_per_m=None,
+              reference_variance_per_m: float | None = None):
         """Carry the light through the slices of ``g``. ``source``: a Texture3f of (extinction,
         forward-scattering coefficient) in 1/m over ``grid_box``; ``variance_per_m``: the sideways
-        diffusion of forward-scattered light (m^2 per metre; a Dr.Jit Float or number)."""
+        diffusion of forward-scattered light (m^2 per metre; a Dr.Jit Float or number);
+        ``reference_variance_per_m`` (a number, default ``variance_per_m``): sets how many slabs run
+        between two blur steps (BLUR_STEP_VARIANCE at this spread). Keeping it independent of the
+        interactive parameters keeps the image a smooth function of them (finite differences and
+        reverse-mode gradients agree)."""
         mi = self.mi
         import drjit as dr
         R, N = self.res, g.n_slices
@@ -114,13 +121,15 @@ class LightVolume:
         if translucent:
             # operator splitting: slabs run in chunks (one kernel each: light rays are independent
             # within a chunk), and the sideways diffusion of the chunk's path is applied at the start of
-            # the next one; chunks are as long as keeps that variance below BLUR_STEP_TEXELS^2, so their
-            # length in metres, and the image, converge as the slice count grows
+            # the next one; a chunk spans the light path over which the reference spread accumulates
+            # BLUR_STEP_VARIANCE, so its length in metres, and the image, converge as slices increase
             du = (g.u_range[1] - g.u_range[0]) / R
             dv = (g.v_range[1] - g.v_range[0]) / R
             var = _param(mi, variance_per_m) * dl                 # m^2 per slab
-            per_slab = float(dr.detach(var)[0]) / min(du, dv) ** 2  # texels^2 per slab
-            chunk = int(np.clip(BLUR_STEP_TEXELS ** 2 / max(per_slab, 1e-12), 1, N))
+            ref = float(dr.detach(_param(mi, variance_per_m))[0]) if reference_variance_per_m is None \
+                else float(reference_variance_per_m)
+            per_slab = ref * g.light_step_m / min(du, dv) ** 2   # texels^2 per slab at the reference
+            chunk = int(np.clip(BLUR_STEP_VARIANCE / max(per_slab, 1e-12), 1, N))
         starts = list(range(0, N, chunk))
         for j, k0 in enumerate(starts):
             k1 = min(k0 + chunk, N)
@@ -216,9 +225,11 @@ def _blur(mi, dr, buf, R, wx, wy):
     return out
 
 
-def variance_per_metre(cone_angle_deg, blur_length_m, mi):
+def variance_per_metre(cone_angle_deg, blur_length_m, mi=None):
     """tan^2(cone) x blur length: the sideways variance (m^2) that forward-scattered light gains per
-    metre of light path."""
+    metre of light path (a Dr.Jit Float with ``mi``, else a number)."""
+    if mi is None:
+        return math.tan(math.radians(float(cone_angle_deg))) ** 2 * float(blur_length_m)
     import drjit as dr
     t = dr.tan(_param(mi, cone_angle_deg) * (math.pi / 180.0))
     return t * t * _param(mi, blur_length_m)

@@ -28,6 +28,8 @@ from .light import LightVolume, _param, variance_per_metre
 from .modes import SliceMode, SliceParams
 from .view import ViewCache
 
+# the cone angle whose spread sets the light pass's blur steps (independent of the interactive cone angle)
+REFERENCE_CONE_DEG = 20.0
 SKY_SLICES, SKY_RES = 48, 48  # the zenith light volume of the "multiple" model (diffuse light: coarse)
 
 
@@ -82,7 +84,9 @@ class SliceRenderer:
         self.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (1 + len(self.groups),), np.float32)),
                                     use_accel=False)
         self.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (2,), np.float32)), use_accel=False)
-        self.light = LightVolume(mi, self.box, self.light_res, differentiable)
+        # the "multiple" model's parameters act in the eye pass only: its light pass is not differentiated
+        # (one kernel for all slices instead of one per slice)
+        self.light = LightVolume(mi, self.box, self.light_res, differentiable and mode.light != "multiple")
         self.sky_light = None
         if mode.light == "multiple":
             self.sky_light = LightVolume(mi, self.box, min(SKY_RES, self.light_res))
@@ -153,7 +157,8 @@ class SliceRenderer:
         translucent = self.mode.light == "translucent"
         blur = params.blur_length_m if params.blur_length_m is not None else self.voxel_m
         self.light.sweep(g, self.tex_light_src, self.grid_box, translucent,
-                         variance_per_metre(params.cone_angle_deg, blur, mi) if translucent else None)
+                         variance_per_metre(params.cone_angle_deg, blur, mi) if translucent else None,
+                         variance_per_metre(REFERENCE_CONE_DEG, _number(blur)) if translucent else None)
         if self.sky_light is not None:
             self.sky_light.sweep(self._sky_geometry, self.tex_light_src, self.grid_box, False)
         dr.sync_thread()  # kernels run asynchronously: wait before reading the clock
@@ -202,6 +207,11 @@ class SliceRenderer:
             ground = (_colour(mi, rho / np.pi * sun * max(float(spec.sun.to_sun[2]), 0.0)), _colour(mi, rho / np.pi * e_sky))
         return composite(mi, g, rays, self.tex_eye, self.grid_box, phase_colour, diffuse_colour, model, ambient,
                          ground, self.differentiable)
+
+
+def _number(value) -> float:
+    import drjit as dr
+    return float(dr.detach(value)[0]) if dr.is_array_v(value) else float(value)
 
 
 def _colour(mi, rgb):
