@@ -2,7 +2,7 @@
 beside the paper's Table IV modes.
 
     .venv/bin/python validation/calibrate_slicer.py [-o out/slicer_calibration] [--data ../shared/data]
-        [--size 64x48] [--spp 32] [--iterations 40] [--slices 128]
+        [--size 64x48] [--spp 32] [--iterations 50] [--learning-rate 0.15] [--slices 128]
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them):
    training: the demo supercell and the demo cumulus (wm.synthetic), front-, side- and back-lit;
@@ -109,7 +109,8 @@ def main(argv=None) -> int:
     ap.add_argument("--data", default=str(DEFAULT_DATA))
     ap.add_argument("--size", default="64x48")
     ap.add_argument("--spp", type=int, default=32)
-    ap.add_argument("--iterations", type=int, default=40)
+    ap.add_argument("--iterations", type=int, default=50)
+    ap.add_argument("--learning-rate", type=float, default=0.15)
     ap.add_argument("--slices", type=int, default=128)
     ap.add_argument("--references-only", action="store_true")
     args = ap.parse_args(argv)
@@ -118,12 +119,13 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     cfg = StudyConfig(width=width, height=height, phase_quality="test")
     train = load_views(TRAIN, out, cfg, args.data, args.spp)
-    held = load_views(HELD_OUT, out, cfg, args.data, args.spp)
     if args.references_only:
+        load_views(HELD_OUT, out, cfg, args.data, args.spp)
         return 0
     t = time.perf_counter()
     fitted, history = calibrate(list(train.values()), start=FIT_START, iterations=args.iterations, slices=64,
-                                light_res=64, progress=True)
+                                light_res=64, learning_rate=args.learning_rate, progress=True)
+    held = load_views(HELD_OUT, out, cfg, args.data, args.spp)
     fit = {n: round(float(getattr(fitted, n)), 4) for n in MULTIPLE_PARAMS}
     print(f"fitted in {time.perf_counter() - t:.0f} s: {json.dumps(fit)}; loss {history[0]:.4g} -> {history[-1]:.4g}")
     rows_t, names = evaluate(train, fitted, args.slices)
