@@ -3,6 +3,7 @@ beside the paper's Table IV modes.
 
     .venv/bin/python validation/calibrate_slicer.py [-o out/slicer_calibration] [--data ../shared/data]
         [--size 64x48] [--spp 32] [--iterations 50] [--learning-rate 0.15] [--slices 128]
+        [--no-fit] [--noise-floor]
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them):
    training: the demo supercell and the demo cumulus (wm.synthetic), front-, side- and back-lit;
@@ -13,6 +14,9 @@ beside the paper's Table IV modes.
 3. Print, per view, CIEDE2000 and FLIP over cloud pixels for the Table IV modes, the new model with its
    shipped defaults and with the parameters fitted here; write calibration.md and a side-by-side PNG
    (reference | per-species/translucent | new model) of each held-out view, at least 320 px wide.
+   --no-fit evaluates the shipped defaults only; --noise-floor adds, per held-out view, the error of a
+   second, independent reference (seed 1) against the first: the part of every error that is the
+   reference's own Monte Carlo noise.
 """
 from __future__ import annotations
 
@@ -20,6 +24,7 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -40,7 +45,8 @@ DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
 
 def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int) -> Image:
-    path = out / f"{scene}_{lighting}_{spec.width}x{spec.height}_{spp}spp_reference.exr"
+    seed = "" if spec.seed == 0 else f"_seed{spec.seed}"
+    path = out / f"{scene}_{lighting}_{spec.width}x{spec.height}_{spp}spp{seed}_reference.exr"
     if path.is_file():
         return Image.load(path)
     t = time.perf_counter()
@@ -50,8 +56,10 @@ def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int) -> Imag
     return ref
 
 
-def load_views(names, out, cfg, data, spp):
-    views, vols = {}, {}
+def load_views(names, out, cfg, data, spp, second_seed=False):
+    """{(scene, lighting): TrainingView}; with ``second_seed`` also {(scene, lighting): a second,
+    independent reference (seed 1)} for the reference's own noise."""
+    views, vols, seconds = {}, {}, {}
     for scene, lighting in names:
         if scene not in vols:
             vols[scene] = load_scene(scene, cfg, data_dir=data)
@@ -62,17 +70,24 @@ def load_views(names, out, cfg, data, spp):
         ref = reference(out, scene, lighting, vol, spec, spp)
         mask = metrics.cloud_mask(eye_transmittance(vol, spec, 128))
         views[(scene, lighting)] = TrainingView(vol, spec, ref.radiance, mask)
-    return views
+        if second_seed:
+            seconds[(scene, lighting)] = reference(out, scene, lighting, vol, replace(spec, seed=1), spp).radiance
+    return (views, seconds) if second_seed else views
 
 
-def evaluate(views, fitted, slices, out=None):
-    """Rows of CIEDE2000 / FLIP per view and mode."""
+def evaluate(views, fitted, slices, out=None, second=None):
+    """Rows of CIEDE2000 / FLIP per view and mode (and of a second reference: the noise floor)."""
     rows = []
     candidates = [(name, mode, SliceParams()) for name, mode in MODES.items() if mode.light != "multiple"]
-    candidates += [("multiple (defaults)", MODES["per-species/multiple"], SliceParams()),
-                   ("multiple (fitted here)", MODES["per-species/multiple"], fitted)]
+    candidates += [("multiple (defaults)", MODES["per-species/multiple"], SliceParams())]
+    if fitted is not None:
+        candidates += [("multiple (fitted here)", MODES["per-species/multiple"], fitted)]
+    names = [c[0] for c in candidates] + (["reference, seed 1"] if second else [])
     for (scene, lighting), v in views.items():
         row = {"scene": scene, "lighting": lighting}
+        if second:
+            m = metrics.compare(v.reference, second[(scene, lighting)], mask=v.mask if v.mask.any() else "all")
+            row["reference, seed 1"] = (m["ciede2000"], m["flip"])
         imgs = {}
         for name, mode, params in candidates:
             detail = None
@@ -89,7 +104,7 @@ def evaluate(views, fitted, slices, out=None):
             e = auto_exposure(v.reference)
             side_by_side(out / f"{scene}_{lighting}_side_by_side.png", ref,
                          [imgs["per-species/translucent"], imgs["multiple (defaults)"]], e)
-    return rows, [c[0] for c in candidates]
+    return rows, names
 
 
 def table(rows, names, title):
@@ -113,6 +128,9 @@ def main(argv=None) -> int:
     ap.add_argument("--learning-rate", type=float, default=0.15)
     ap.add_argument("--slices", type=int, default=128)
     ap.add_argument("--references-only", action="store_true")
+    ap.add_argument("--no-fit", action="store_true", help="evaluate the shipped defaults only")
+    ap.add_argument("--noise-floor", action="store_true",
+                    help="also render a second reference (seed 1) of each held-out view and report its error")
     args = ap.parse_args(argv)
     width, height = (int(v) for v in args.size.lower().split("x"))
     out = Path(args.output)
@@ -122,20 +140,23 @@ def main(argv=None) -> int:
     if args.references_only:
         load_views(HELD_OUT, out, cfg, args.data, args.spp)
         return 0
-    t = time.perf_counter()
-    fitted, history = calibrate(list(train.values()), start=FIT_START, iterations=args.iterations, slices=64,
-                                light_res=64, learning_rate=args.learning_rate, progress=True)
-    held = load_views(HELD_OUT, out, cfg, args.data, args.spp)
-    fit = {n: round(float(getattr(fitted, n)), 4) for n in MULTIPLE_PARAMS}
-    print(f"fitted in {time.perf_counter() - t:.0f} s: {json.dumps(fit)}; loss {history[0]:.4g} -> {history[-1]:.4g}")
-    rows_t, names = evaluate(train, fitted, args.slices)
-    rows_h, _ = evaluate(held, fitted, args.slices, out)
-    text = "\n\n".join([f"# Slicer calibration ({width} x {height}, references {args.spp} spp)",
-                        f"Fitted on {len(train)} training views: `{json.dumps(fit)}`; loss {history[0]:.4g} -> "
-                        f"{history[-1]:.4g} in {len(history)} iterations.",
-                        table(rows_t, names, "Training views"), table(rows_h, names, "Held-out views")])
+    fitted, history, head = None, [], "Shipped defaults only (no fit)."
+    if not args.no_fit:
+        t = time.perf_counter()
+        fitted, history = calibrate(list(train.values()), start=FIT_START, iterations=args.iterations, slices=64,
+                                    light_res=64, learning_rate=args.learning_rate, progress=True)
+        fit = {n: round(float(getattr(fitted, n)), 4) for n in MULTIPLE_PARAMS}
+        head = (f"Fitted on {len(train)} training views in {time.perf_counter() - t:.0f} s: `{json.dumps(fit)}`; "
+                f"loss {history[0]:.4g} -> {history[-1]:.4g} in {len(history)} iterations.")
+        (out / "fitted.json").write_text(json.dumps(fit, indent=1))
+        print(head, flush=True)
+    held = load_views(HELD_OUT, out, cfg, args.data, args.spp, second_seed=args.noise_floor)
+    held, second = held if args.noise_floor else (held, None)
+    rows_t, names_t = evaluate(train, fitted, args.slices)
+    rows_h, names_h = evaluate(held, fitted, args.slices, out, second)
+    text = "\n\n".join([f"# Slicer calibration ({width} x {height}, references {args.spp} spp)", head,
+                         table(rows_t, names_t, "Training views"), table(rows_h, names_h, "Held-out views")])
     (out / "calibration.md").write_text(text + "\n")
-    (out / "fitted.json").write_text(json.dumps(fit, indent=1))
     print(text)
     return 0
 

@@ -10,9 +10,10 @@ with (A, B) = (direct, forward-scattered) light for the paper's modes (the direc
 the phase function, the blurred forward light as if diffuse, as in Kniss et al.), and for the
 "multiple" model the scattering octaves of Wrenninge et al. (2013), driven by the optical depth tau
 towards the sun read from the same light volume (direct light D = exp(-tau)):
-    A = sum_i (b c)^i D^(a^i),   B = sum_i b^i (1 - c^i) D^(a^i)
+    A = D + (1 - D_col) sum_{i>=1} (b c)^i D^(a^i),   B = (1 - D_col) sum_{i>=1} b^i (1 - c^i) D^(a^i)
 (octave i: optical depth a^i tau, weight b^i, phase c^i P + (1 - c^i) / (4 pi); octave 0 is single
-scattering). L_amb is the sky's mean radiance times ``ambient`` (paper modes, unshadowed) or
+scattering; D_col: the sunlight that crosses the whole cloud column along the sun ray, so that thin
+clouds, which scatter light once rather than many times, get little multiple scattering). L_amb is the sky's mean radiance times ``ambient`` (paper modes, unshadowed) or
 ``sky_gain`` x exp(-sky_extinction x the optical depth towards the zenith) ("multiple").
 """
 from __future__ import annotations
@@ -53,13 +54,18 @@ class LightModel:
             d_avg = direct * factor(k_d)
             return d_avg, dr.maximum((direct + indirect) * factor(k_f) - d_avg, 0.0), 1.0
         log_d = dr.log(dr.maximum(direct, 1e-30))      # -tau
-        A, B = direct * factor(k_d), 0.0 * direct
+        A, B = 0.0 * direct, 0.0 * direct
         ai, bi, ci = 1.0, 1.0, 1.0
         for _ in range(1, self.octaves):
             ai, bi, ci = ai * self.a, bi * self.b, ci * self.c
             t = dr.exp(ai * log_d) * factor(ai * k_d)
             A += bi * ci * t
             B += bi * (1.0 - ci) * t
+        # multiple scattering needs a cloud to scatter in: the octaves are weighted by the fraction of
+        # the sunlight that the whole cloud column along the sun ray through p intercepts
+        column, _ = self.sun.lookup(p, exit_plane=True)
+        A = direct * factor(k_d) + (1.0 - column) * A
+        B = (1.0 - column) * B
         occ = 1.0
         if self.sky is not None:
             up, _ = self.sky.lookup(p)

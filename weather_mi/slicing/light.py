@@ -163,9 +163,10 @@ class LightVolume:
         self.store, self.geometry = store, g
 
     # ------------------------------------------------------------------ the lookup
-    def lookup(self, p):
+    def lookup(self, p, exit_plane: bool = False):
         """(direct, indirect) light at world points ``p`` (mi.Point3f) inside a kernel: bilinear in
-        the buffer, linear between the two nearest planes; (1, 0) on the light's side of the box."""
+        the buffer, linear between the two nearest planes; (1, 0) on the light's side of the box.
+        With ``exit_plane``: the light leaving the box on the same light ray (the last plane)."""
         mi = self.mi
         import drjit as dr
         g, R = self.geometry, self.res
@@ -174,6 +175,8 @@ class LightVolume:
         x = (dr.dot(p, e1) - dr.opaque(mi.Float, g.u_range[0])) * dr.opaque(mi.Float, fR / (g.u_range[1] - g.u_range[0]))
         y = (dr.dot(p, e2) - dr.opaque(mi.Float, g.v_range[0])) * dr.opaque(mi.Float, fR / (g.v_range[1] - g.v_range[0]))
         kf = (dr.opaque(mi.Float, g.d_first) - dr.dot(p, s)) * dr.opaque(mi.Float, 1.0 / g.spacing)
+        if exit_plane:
+            kf = mi.Float(float(g.n_slices))
         x = dr.clip(x - 0.5, 0.0, fR - 1.0)
         y = dr.clip(y - 0.5, 0.0, fR - 1.0)
         kc = dr.clip(kf, 0.0, float(g.n_slices))
