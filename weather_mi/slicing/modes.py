@@ -48,8 +48,8 @@ MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple"
 # reverse-mode AD, weather_mi.slicing.calibrate; 50 iterations from calibrate.FIT_START) on the demo
 # supercell and demo cumulus, front-, side- and back-lit (64 x 48, references of 32 spp); judged on the
 # real WRF supercell, WRF plateau, BOMEX and RICO storms (README, "The slicer").
-MULTIPLE_DEFAULTS = {"ms_extinction": 0.0643, "ms_contribution": 0.5494, "ms_eccentricity": 0.0267,
-                     "sky_gain": 0.6282, "sky_extinction": 0.0221}
+MULTIPLE_DEFAULTS = {"ms_extinction": 0.0765, "ms_contribution": 0.5997, "ms_eccentricity": 0.0253,
+                     "sky_gain": 0.5418, "sky_extinction": 0.0239}
 
 
 @dataclass(frozen=True)
