@@ -277,3 +277,20 @@ def test_multiple_light_model_reduces_to_single_scattering_and_adds_light():
     assert np.all(full.radiance >= single.radiance - 1e-7)
     cloud = low.radiance.mean(axis=2) > 0
     assert full.radiance[cloud].mean() > 1.5 * single.radiance[cloud].mean()
+
+
+def test_light_outside_the_light_buffer_is_the_unattenuated_sun():
+    """Points whose sun ray misses the volume's box (beside it, below it) get the full sun, not the
+    light of the buffer's edge texels."""
+    vol = blob_volume()
+    spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=180, elevation=10, fov=40), sun=wm.Sun(200, 30),
+                        sky=None, ground=wm.Ground(0.2, height=0.0), width=16, height=12)
+    r = SliceRenderer(vol, SliceMode("uniform", "translucent"), slices=32, light_res=16)
+    r.frame(spec)
+    far = np.array([[40e3, 0.0, 0.0], [-30e3, 25e3, 10.0], [0.0, -50e3, 500.0]])
+    direct, indirect = r.light_at(far)
+    np.testing.assert_array_equal(direct, 1.0)
+    np.testing.assert_array_equal(indirect, 0.0)
+    lobe = np.array([-450.0, 0.0, 2100.0])                       # centre of the blob's tall lobe
+    shadow = (lobe - 2400.0 * np.asarray(spec.sun.to_sun))[None]  # below it, its sun ray through the lobe
+    assert r.light_at(shadow)[0][0] < 0.1

@@ -165,8 +165,9 @@ class LightVolume:
     # ------------------------------------------------------------------ the lookup
     def lookup(self, p, exit_plane: bool = False):
         """(direct, indirect) light at world points ``p`` (mi.Point3f) inside a kernel: bilinear in
-        the buffer, linear between the two nearest planes; (1, 0) on the light's side of the box.
-        With ``exit_plane``: the light leaving the box on the same light ray (the last plane)."""
+        the buffer, linear between the two nearest planes; (1, 0) on the light's side of the box and
+        outside the buffer's footprint (light rays that miss the box). With ``exit_plane``: the light
+        leaving the box on the same light ray (the last plane)."""
         mi = self.mi
         import drjit as dr
         g, R = self.geometry, self.res
@@ -177,6 +178,7 @@ class LightVolume:
         kf = (dr.opaque(mi.Float, g.d_first) - dr.dot(p, s)) * dr.opaque(mi.Float, 1.0 / g.spacing)
         if exit_plane:
             kf = mi.Float(float(g.n_slices))
+        outside = (x < 0.0) | (x > fR) | (y < 0.0) | (y > fR)
         x = dr.clip(x - 0.5, 0.0, fR - 1.0)
         y = dr.clip(y - 0.5, 0.0, fR - 1.0)
         kc = dr.clip(kf, 0.0, float(g.n_slices))
@@ -191,8 +193,8 @@ class LightVolume:
             c = dr.gather(mi.Array2f, self.store, base + R)
             d = dr.gather(mi.Array2f, self.store, base + R + 1)
             val += wk * ((a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy)
-        before = kf < -0.5
-        return dr.select(before, 1.0, val[0]), dr.select(before, 0.0, val[1])
+        unlit = (kf < -0.5) | outside
+        return dr.select(unlit, 1.0, val[0]), dr.select(unlit, 0.0, val[1])
 
     def light_at(self, points) -> tuple[np.ndarray, np.ndarray]:
         """Direct and indirect light (fractions of the light's irradiance) at world points (N, 3)."""
