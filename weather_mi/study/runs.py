@@ -1,13 +1,15 @@
-"""The validation study: the interactive approximation (half-angle slicing) against the ground truth
-(path tracing), per scene, lighting, mode and setting, written as a report folder:
+"""The validation study's runs: the interactive approximation (half-angle slicing) against the ground
+truth (path tracing), per scene, lighting, mode and setting, written as a report folder (``report.py``
+writes it; ``weather_mi.slicing.calibrate`` fits the "multiple" light model on the demo storms' views):
 
     DIR/report.md      what was rendered, the reference's noise level, the tables, what the slicer misses
     DIR/metrics.csv    one row per (scene, lighting, mode, setting), one column per metric
     DIR/*.png          side-by-side images, error maps, convergence and calibration figures
 
-``weather-mi validate -o DIR [--quick]`` runs it. The configurations (``CONFIGS``) differ only in
-size, samples and which scenes are available; every difference smaller than the reference's own
-noise floor is marked as not significant.
+``weather-mi validate -o DIR [--quick] [--data FOLDER]`` runs it. The configurations (``CONFIGS``)
+differ only in size, samples and scenes; scenes from data files are read from ``data_dir`` only (the
+library reads no repository path) and skipped without it. Every difference smaller than the
+reference's own noise floor is marked as not significant.
 """
 from __future__ import annotations
 
