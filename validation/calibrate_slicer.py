@@ -94,7 +94,7 @@ def evaluate(views, fitted, slices, out=None, second=None):
             if mode.detail:
                 from weather_mi.detail import field
                 detail = field(v.vol.shape, seed=0, amplitude=0.5, spacing_m=v.vol.spacing)
-            img = SliceRenderer(v.vol, mode, slices=slices, light_res=128, detail_field=detail).frame(v.spec, params)
+            img = SliceRenderer(v.vol, mode, slices=slices, detail_field=detail).frame(v.spec, params)
             m = metrics.compare(v.reference, img, mask=v.mask if v.mask.any() else "all")
             row[name] = (m["ciede2000"], m["flip"])
             imgs[name] = img

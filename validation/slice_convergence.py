@@ -45,7 +45,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--size", default="96x72")
     ap.add_argument("--slices", default="64,128,256,512")
-    ap.add_argument("--light-res", type=int, default=128)
+    ap.add_argument("--light-res", type=int, default=None, help="default: the slicer's automatic size")
     ap.add_argument("--scenes", default="demo-supercell,demo-cumulus")
     ap.add_argument("--lightings", default="front,side,back")
     ap.add_argument("--modes", default=",".join(MODES))
@@ -55,7 +55,8 @@ def main(argv=None) -> int:
     slices = [int(s) for s in args.slices.split(",")]
     cfg = StudyConfig(width=width, height=height, phase_quality="test")
     head = " ".join(f"{a}-{b}".rjust(9) for a, b in zip(slices, slices[1:]))
-    print(f"CIEDE2000 over cloud pixels between slice counts ({width} x {height}, light buffer {args.light_res}^2)")
+    res = f"{args.light_res}^2" if args.light_res else "automatic"
+    print(f"CIEDE2000 over cloud pixels between slice counts ({width} x {height}, light buffer {res})")
     print(f"{'scene':<16}{'light':<7}{'mode':<32}{head}")
     worst = {}
     for scene in args.scenes.split(","):

@@ -5,7 +5,7 @@ from .modes import MODES, TABLE_IV, SliceMode, SliceParams
 from .renderer import SliceRenderer
 
 
-def render_slices(spec, vol, mode: SliceMode = SliceMode(), slices: int = 128, light_res: int = 128,
+def render_slices(spec, vol, mode: SliceMode = SliceMode(), slices: int = 128, light_res: int | None = None,
                   params: SliceParams | None = None, detail_field=None, uniform_phase=None, **param_kw):
     """Render ``vol`` as seen by ``spec`` with half-angle slicing; returns an Image in the same units,
     framing and conventions as ``render_reference``. Interactive parameters go in ``params`` (or as

@@ -34,6 +34,18 @@ MAX_TEXEL_VARIANCE = 4.0 / 3.0
 BLUR_STEP_VARIANCE = 0.5
 
 
+def auto_light_res(box, spacing, low: int = 128, high: int = 256) -> int:
+    """Light-buffer texels per side for a slicing ``box`` ((lo, hi) world corners) and grid ``spacing``
+    (dz, dy, dx): enough that a texel spans at most three of the grid's thinnest cells across the box's
+    horizontal diagonal, rounded up to a multiple of 16, between ``low`` and ``high``. A flat grid with
+    thin layers (30 km columns of 500 m levels) needs a finer buffer than its width suggests, or the
+    image keeps changing with the slice count."""
+    lo, hi = (np.asarray(p, dtype=np.float64) for p in box)
+    diagonal = float(np.hypot(hi[0] - lo[0], hi[1] - lo[1]))
+    n = diagonal / (3.0 * float(min(spacing)))
+    return int(np.clip(16 * math.ceil(n / 16), low, high))
+
+
 def blur_weights(dr, var):
     """Weights (w0, w1, w2) of the symmetric 5-tap kernel [w2, w1, w0, w1, w2] whose variance is
     ``var`` texels^2 (exact up to MAX_TEXEL_VARIANCE, clamped beyond) and, above 1/3, whose fourth

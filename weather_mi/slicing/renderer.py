@@ -24,7 +24,7 @@ from ..scene import SceneSpec
 from .background import sky_irradiance_horizontal
 from .eye import LightModel, composite
 from .geometry import slice_geometry, slicing_box
-from .light import LightVolume, _param, variance_per_metre
+from .light import LightVolume, _param, auto_light_res, variance_per_metre
 from .modes import SliceMode, SliceParams
 from .view import ViewCache
 
@@ -34,17 +34,21 @@ SKY_SLICES, SKY_RES = 48, 48  # the zenith light volume of the "multiple" model 
 
 
 class SliceRenderer:
-    """An interactive half-angle slicing renderer bound to one OpticalVolume.
+    """An interactive half-angle slicing renderer bound to one OpticalVolume. ``light_res``: texels per
+    side of the light buffer (None: ``light.auto_light_res``, 128 for most storms).
 
     ``frame(spec, params)`` renders; textures, kernels and the last few views' rays are reused."""
 
     def __init__(self, vol: OpticalVolume, mode: SliceMode = SliceMode(), slices: int = 128,
-                 light_res: int = 128, detail_field: np.ndarray | None = None, uniform_phase=None,
+                 light_res: int | None = None, detail_field: np.ndarray | None = None, uniform_phase=None,
                  differentiable: bool = False):
         from ..variant import ensure_registered
         ensure_registered()
         import mitsuba as mi
         self.mi = mi
+        self.box = slicing_box(vol)                                               # where slices go
+        if light_res is None:
+            light_res = auto_light_res(self.box, vol.spacing)
         if slices < 2 or light_res < 4:
             raise ValueError(f"need at least 2 slices and a 4 x 4 light buffer, got {slices}, {light_res}")
         if mode.detail and detail_field is None:
@@ -63,7 +67,6 @@ class SliceRenderer:
             beta_s = beta_s * detail[..., None]
         self.beta_s = mi.Float(np.ascontiguousarray(beta_s).ravel())  # (z, y, x, S) flattened
         self.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
-        self.box = slicing_box(vol)                                               # where slices go
         self.voxel_m = float(np.mean(vol.spacing))
         tables = list(vol.phase_tables)
         if mode.phase == "uniform":

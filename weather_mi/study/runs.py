@@ -34,7 +34,7 @@ class StudyConfig:
     height: int = 192
     spp: int = 256
     slices: int = 128
-    light_res: int = 128
+    light_res: int | None = None  # None: the slicer's automatic light-buffer size
     scenes: tuple = ("demo-supercell", "wrf-supercell", "bomex")
     lightings: tuple = ("front", "side", "back")
     convergence_slices: tuple = (64, 128, 256, 512)
@@ -48,7 +48,7 @@ class StudyConfig:
 
 CONFIGS = {
     "full": StudyConfig(),
-    "quick": StudyConfig(width=96, height=72, spp=32, slices=96, light_res=96,
+    "quick": StudyConfig(width=96, height=72, spp=32, slices=96,
                          convergence_slices=(32, 64, 128, 256), calibration_iterations=12, phase_quality="test"),
     "tiny": StudyConfig(width=24, height=18, spp=4, slices=24, light_res=24, scenes=("demo-cumulus",),
                         lightings=("front", "back"), convergence_slices=(12, 24), cone_angles=(10.0, 20.0),
@@ -216,7 +216,7 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True, data
         test = [k for k in refs if k not in train]
         views = [TrainingView(scenes[k[0]][0], refs[k][0], refs[k][1].radiance, refs[k][2]) for k in train]
         fitted, history = calibrate(views, start=FIT_START, iterations=cfg.calibration_iterations,
-                                    slices=cfg.calibration_slices, light_res=cfg.light_res, progress=progress)
+                                    slices=cfg.calibration_slices, light_res=cfg.light_res or 64, progress=progress)
         mode = MODES["per-species/multiple"]
         for key in train + test:
             spec, ref, mask = refs[key]
