@@ -43,10 +43,11 @@ class LightModel:
         (a ``SlabAverage``), the light at the sample becomes its average over the eye's segment, with
         decay rates read from the light volume one slice further towards the sun."""
         import drjit as dr
-        direct, indirect = self.sun.lookup(p)
         factor, k_d, k_f = (lambda kappa: 1.0), 0.0, 0.0  # noqa: E731
-        if slab is not None:
-            d_prev, i_prev = self.sun.lookup(p + slab.towards_light)
+        if slab is None:
+            direct, indirect = self.sun.lookup(p)
+        else:
+            (direct, indirect), (d_prev, i_prev) = self.sun.lookup(p, with_previous=True)
             k_d = _depth_between(dr, direct, d_prev)                   # one slice's depth, direct beam
             k_f = _depth_between(dr, direct + indirect, d_prev + i_prev)  # and all forward light
             factor = slab.factor
@@ -93,10 +94,9 @@ class SlabAverage:
     more than the light one slice nearer the sun), so thick slabs are not rendered with the light of
     their middle, and the image converges faster in the slice count."""
 
-    def __init__(self, x, sigma, h, towards_light):
+    def __init__(self, x, sigma, h):
         import drjit as dr
         self.dr, self.x, self.sigma, self.h = dr, x, sigma, h
-        self.towards_light = towards_light  # world offset of one slice along the light ray, to the sun
         xh = x * h
         self.thin = xh < 1e-4
         # log of x exp(-x h) / (1 - exp(-2 x h)), guarded where thin (the factor is then 1)
@@ -138,7 +138,6 @@ def composite(mi, g: SliceGeometry, rays, tex_eye, grid_box, phase_colour, diffu
     count = dr.select(rays.t1 > rays.t0, mi.UInt32(dr.abs(dr.round(kb) - k_start) + 1.5), 0)
     k_lo, k_hi = dr.minimum(ka, kb), dr.maximum(ka, kb)
     de = spacing / dr.abs(sd)
-    to_light = mi.Vector3f(*(op(c * g.light_step_m) for c in g.to_light))
     G = len(phase_colour)
 
     def body(i, T, C, active):
@@ -150,7 +149,7 @@ def composite(mi, g: SliceGeometry, rays, tex_eye, grid_box, phase_colour, diffu
         p = o + ((d_first - kf * spacing - os_) / sd) * d
         vals = tex_eye.eval((p - glo) * inv_span)
         ext = dr.maximum(vals[0], 0.0)
-        A, B, occ = model.terms(p, SlabAverage(ext * de, k_step, 0.5 * (b - a), to_light))
+        A, B, occ = model.terms(p, SlabAverage(ext * de, k_step, 0.5 * (b - a)))
         alpha = 1.0 - dr.exp(-ext * de * (b - a))
         w = dr.select(ext > 0, T * alpha / dr.maximum(ext, 1e-30), 0.0)
         src = mi.Color3f(0.0)
