@@ -261,8 +261,10 @@ class HydrometeorMixture:
         # (N, S, 4): R, G, B value and the channel-mean pdf of every node and species, read as one packet
         table = np.concatenate([np.asarray(values, np.float32), pbar[:, :, None]], axis=2)
         self.table4 = _storage(np.transpose(table, (1, 0, 2)))
-        # (S, N - 1, 2): alias table of every species' segment probabilities (prob, alias as float)
-        alias = [alias_table(m) for m in segment_masses(nodes, pbar)]
+        # (4, S, N - 1, 2): alias tables of the segment probabilities of every species under the density
+        # of each row of table4 (R, G, B, channel mean) (prob, alias as float)
+        rows = [np.asarray(values, np.float64)[:, :, c] for c in range(3)] + [pbar]
+        alias = [alias_table(m) for row in rows for m in segment_masses(nodes, row)]
         self.alias2 = _storage(np.stack([np.stack([pr, al.astype(np.float64)], axis=1) for pr, al in alias]))
         # (M, 2): first and last node segment of every guide bucket (as float, exact below 2^24)
         guide, self.guide_steps = guide_table(np.asarray(nodes, np.float64))
@@ -351,6 +353,20 @@ class HydrometeorMixture:
 
     # ------------------------------------------------------------ PhaseFunction interface
     def sample(self, ctx, mei, sample1, sample2, active=True):
+        wo, value, pdf = self._sample(mei, mi.UInt32(3), sample1, sample2)
+        weight = dr.select(pdf > 0.0, value / pdf, 0.0)
+        return wo, mi.Spectrum(weight), pdf
+
+    def sample_channel(self, ctx, mei, channel, sample1, sample2, active=True):
+        """A direction drawn from colour channel ``channel``'s density (UInt32 per lane, 0..2: the
+        mixture sum_s w_s p_s,c) instead of the channel mean, and the per-channel value there (1/sr).
+        For history-aware channel sampling in ``majorant_volpath``, which computes the pdf itself."""
+        wo, value, _ = self._sample(mei, mi.UInt32(channel), sample1, sample2)
+        return wo, mi.Spectrum(value)
+
+    def _sample(self, mei, row, sample1, sample2):
+        """(wo, per-channel value, channel-mean pdf) of a direction drawn from the density in ``row``
+        of table4 (0..2: a colour channel; 3: the channel mean)."""
         w = self._weights_at(mei)
         # species s with probability w_s (sample1); what is left of sample1 (uniform) is the coin of
         # the alias table
@@ -369,9 +385,9 @@ class HydrometeorMixture:
         u = sample2.x * n_seg
         j = mi.UInt32(dr.clip(u, 0.0, n_seg - 1.0))
         r = dr.clip(u - mi.Float(j), 0.0, 1.0)
-        entry = _gather2(self.alias2, species * n_seg + j)
+        entry = _gather2(self.alias2, (row * self.n_species + species) * n_seg + j)
         idx = dr.select(coin < entry[0], j, mi.UInt32(entry[1]))
-        k = (idx * self.n_species + species) * 4 + 3  # pbar of this species at node idx in table4
+        k = (idx * self.n_species + species) * 4 + row  # this row's density of the species at node idx
         v0 = _gather(self.nodes, idx)
         v1 = _gather(self.nodes, idx + 1)
         f0 = _gather(self.table4, k)
@@ -391,8 +407,7 @@ class HydrometeorMixture:
         wo = mei.to_world(mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, -cos_theta))
         # value and pdf where v was drawn: same weights, same segment (no search, no second lookup)
         value, pdf = self._mix(w, idx, dr.clip(x / dr.maximum(dmu, 1e-30), 0.0, 1.0))
-        weight = dr.select(pdf > 0.0, value / pdf, 0.0)
-        return wo, mi.Spectrum(weight), pdf
+        return wo, value, pdf
 
     def eval_pdf(self, ctx, mei, wo, active=True):
         h = wo + mei.wi  # |wo + wi|^2 = 2 (1 - cos Theta): accurate near forward

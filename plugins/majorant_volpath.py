@@ -13,13 +13,48 @@ majorants along the ray with a 3-D DDA (Amanatides & Woo; pbrt-v4's ``DDAMajoran
   once the estimate is small), through null-BSDF surfaces (the medium's box), stopped by opaque ones.
 * otherwise the structure and estimators of Mitsuba's ``volpath``: analog absorption (throughput *=
   sigma_s / sigma_t at real collisions), phase-function and BSDF sampling with emitter sampling and MIS
-  (power heuristic) for environment emitters, delta emitters (``directional``) by NEE only, Russian
-  roulette after ``rr_depth``, null BSDFs passed through without counting depth, sensors inside media.
-  One difference: Russian roulette is played once per real scattering / surface vertex, whereas
+  (power heuristic) for environment emitters, delta emitters (``directional``) by NEE only,
+  null BSDFs passed through without counting depth, sensors inside media.
+  Differences: Russian roulette (below) is played once per real scattering / surface vertex, whereas
   ``volpath`` plays it at every null collision as well; with many null collisions per segment (a high
   global majorant) that makes ``volpath``'s multiple scattering a rare-event estimator that reads low
   at practical sample counts. Both are unbiased; compare them without roulette (large ``rr_depth``,
-  finite ``max_depth``) when null collisions are numerous.
+  finite ``max_depth``) when null collisions are numerous. The sun and the phase sampling: below.
+
+The sun (issue 10). With ``sun_direction`` the sun is the integrator's own light, not a scene emitter:
+a uniform disk of angular diameter ``sun_angular_diameter`` (radiance L = E / (pi sin^2 r), E the
+irradiance normal to the beam, so that the disk's irradiance equals the point sun's) or, with diameter
+0, a point (directional) sun. It is sampled at every medium and surface vertex (no emitter selection):
+a direction uniform in the disk, pdf p_sun = 1 / (2 pi v_max), v_max = 1 - cos r held as a versine for
+float32. A path that leaves the scene inside the disk collects L. Both are weighted by the power
+heuristic against the pdf q with which the vertex continues the path (below); a point sun is NEE
+only. One shadow ray per vertex: towards the scene's emitters (the sky) with probability
+``emitter_nee`` (c, default 0.25), else towards the sun; as techniques their pdfs are c x pdf_emitter
+and (1 - c) x p_sun, in both MIS weights.
+
+Continuation at a medium vertex, q(d):
+* history-aware channel sampling (Kutz et al. 2017, applied to directions): a chromatic phase
+  function (``hydrometeor_mixture``, which has ``sample_channel``) is sampled in colour channel c with
+  probability alpha_c = T_c / sum T (T: the path throughput), so q = sum_c alpha_c p_c(d) and the
+  weights p_c / q keep sum_c T_c unchanged: no channel can run away. Sampling every event from the
+  channel mean instead (``phase_channels="mean"``, the estimator before issue 10) multiplies the
+  throughput by up to 3 per event, channel by channel: over the hundreds of events of a path in a
+  storm that made colour fireflies.
+* optional sun guiding (``sun_guiding`` eps, detector-directional importance sampling as in MYSTIC's
+  VROOM, Buras & Mayer 2011): with probability eps (scaled down where the sun's shadow-ray estimate is
+  below GUIDE_SEEN) the direction is drawn towards the sun, half uniform in the disk and half from the
+  phase function about the sun's direction; q = (1 - eps) q_phase + eps (q_phase,sun + U_disk) / 2.
+  Off by default: measured in benchmarks/reference.py, the weights p / q <= 1 / (1 - eps) of the
+  unguided draws compound over multiply scattered paths and cost more variance than the guided
+  draws save.
+
+Russian roulette (``rr_mode``). "throughput" (default): survival probability min(max T, 1) after
+``rr_depth``, so a weight never grows: Mitsuba's volpath caps the survival probability at 0.95, which
+in a storm of albedo ~1 - 1e-6 plays roulette at every event and multiplies the survivors' weights by
+1/0.95 per event; the variance of that estimator is infinite (contributions at depth n do not decay
+like 0.95^n), which made the fireflies of issue 10. Long walks are cut by one survival of 1/2 at each
+depth 2^k >= LONG_WALK_DEPTH (weights grow like the depth, not exponentially; paths past 1000 events
+took 64% of the time and 0.2% of the light on the demo supercell). "volpath": the old rule.
 
 All loops are symbolic (``dr.while_loop``): one kernel per render; new sigma_t / albedo data (through
 ``mi.traverse`` + ``params.update()``), new majorant values or resolutions and new emitter parameters
@@ -34,7 +69,11 @@ channel mean, per-channel weights; unbiased; the majorant must bound every chann
 
 Properties
 ----------
-``max_depth`` (int, -1 = infinite), ``rr_depth`` (int, 5), ``hide_emitters`` (bool, False),
+``max_depth`` (int, -1 = infinite), ``rr_depth`` (int, 5), ``rr_mode`` ("throughput" | "volpath"),
+``hide_emitters`` (bool, False), ``sun_direction`` (towards the sun), ``sun_irradiance`` (RGB),
+``sun_angular_diameter`` (degrees, <= 5), ``sun_sampling`` ("mis" | "nee" | "phase": the disk by
+MIS, or by one strategy alone, for tests), ``sun_guiding`` (probability in [0, 1)), ``emitter_nee``
+(probability in (0, 1]), ``phase_channels`` ("history" | "mean"),
 ``majorant`` (TensorXf (Z, Y, X), majorants in 1/m, i.e. already multiplied by the medium's ``scale``;
 from :func:`majorant_grid`; optional: without it the grid is built from the medium's sigma_t data at
 render time and rebuilt whenever that data changes), ``cell`` (int, ``DEFAULT_CELL`` = 2: fine voxels
@@ -59,6 +98,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from ..scene import MAX_SUN_DIAMETER_DEG
 from .variant_class import variant_class
 
 PLUGIN_NAME = "majorant_volpath"
@@ -66,6 +106,22 @@ DEFAULT_CELL = 2  # fine voxels per coarse majorant cell (measured fastest on th
 SAFETY = 1.0001
 _RR_THRESHOLD = 0.1   # ratio tracking: roulette once max(T) drops below this ...
 _RR_SURVIVE = 0.5     # ... surviving with this probability
+LONG_WALK_DEPTH = 32  # see "Russian roulette" in the module docstring
+DEFAULT_EMITTER_NEE = 0.25  # probability of sampling the scene's emitters (the sky) at a vertex
+GUIDE_GROWTH = 2.0    # sun guiding: bound of the product of 1 / (1 - eps) along a path
+GUIDE_SEEN = 0.1      # sun guiding at full strength where the sun's transmittance estimate is >= this
+
+
+def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
+    """(v_max, radiance) of a uniform sun disk of angular ``diameter_deg`` whose irradiance on a plane
+    normal to its centre is ``irradiance`` (RGB): v_max = 1 - cos(radius) (computed as 2 sin^2(r/2):
+    float32 cannot hold 1 - cos of a quarter degree), radiance = E / (pi sin^2 r), because the disk
+    gives  integral_cap L cos(theta) d omega = pi sin^2(r) L  on that plane. (0, E) for a point sun."""
+    e = np.asarray(irradiance, np.float64)
+    r = np.radians(float(diameter_deg)) / 2.0
+    if r <= 0.0:
+        return 0.0, e
+    return float(2.0 * np.sin(r / 2.0) ** 2), e / (np.pi * np.sin(r) ** 2)
 
 
 # ---------------------------------------------------------------- numpy side
@@ -209,8 +265,62 @@ class MajorantVolpath:
             self.majorant = mi.TensorXf(np.ascontiguousarray(m))
         self._auto_key = None
         self.to_world = props["to_world"] if "to_world" in props else None
+        self._init_sun(props)
         # per-render state (medium, transforms, majorant lanes), filled by _setup
         self._maj = None
+
+    def _init_sun(self, props):
+        """The integrator's own sun (see the module docstring, "The sun"): ``sun_direction`` (towards the
+        sun), ``sun_irradiance`` (RGB, normal to the beam), ``sun_angular_diameter`` (degrees; 0 = a
+        point sun) and ``sun_guiding`` (probability of drawing a scattering direction from the phase
+        function centred on the sun). Without ``sun_direction`` the sun, if any, is a scene emitter."""
+        self.sun_mode = "none"
+        self.guiding = 0.0
+        self.sun_sampling = "mis"
+        self.rr_mode = str(props.get("rr_mode", "throughput"))
+        if self.rr_mode not in ("throughput", "volpath"):
+            raise ValueError(f"{PLUGIN_NAME}: 'rr_mode' must be 'throughput' or 'volpath', got {self.rr_mode!r}")
+        self.channels = str(props.get("phase_channels", "history"))
+        self.emitter_nee = float(props.get("emitter_nee", DEFAULT_EMITTER_NEE))
+        if not 0.0 < self.emitter_nee <= 1.0:
+            raise ValueError(f"{PLUGIN_NAME}: 'emitter_nee' must be in (0, 1], got {self.emitter_nee}")
+        if self.channels not in ("history", "mean"):
+            raise ValueError(f"{PLUGIN_NAME}: 'phase_channels' must be 'history' or 'mean', got {self.channels!r}")
+        if "sun_direction" not in props:
+            for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding"):
+                if name in props:
+                    raise ValueError(f"{PLUGIN_NAME}: '{name}' needs 'sun_direction'")
+            return
+        if not mi.is_rgb:
+            raise ValueError(f"{PLUGIN_NAME}: the integrator's sun needs an RGB variant, not {mi.variant()!r}")
+        d = np.asarray(props["sun_direction"], np.float64).reshape(3)
+        if not np.all(np.isfinite(d)) or np.linalg.norm(d) == 0:
+            raise ValueError(f"{PLUGIN_NAME}: 'sun_direction' must be a finite non-zero vector, got {d.tolist()}")
+        d = d / np.linalg.norm(d)
+        e = np.broadcast_to(np.asarray(props.get("sun_irradiance", 1.0), np.float64), (3,))
+        if not np.all(np.isfinite(e)) or np.any(e < 0):
+            raise ValueError(f"{PLUGIN_NAME}: 'sun_irradiance' must be >= 0, got {e.tolist()}")
+        diameter = float(props.get("sun_angular_diameter", 0.0))
+        if not 0.0 <= diameter <= MAX_SUN_DIAMETER_DEG:
+            raise ValueError(f"{PLUGIN_NAME}: 'sun_angular_diameter' must be in [0, {MAX_SUN_DIAMETER_DEG}] degrees, "
+                             f"got {diameter}")
+        self.sun_sampling = str(props.get("sun_sampling", "mis"))
+        if self.sun_sampling not in ("mis", "nee", "phase"):
+            raise ValueError(f"{PLUGIN_NAME}: 'sun_sampling' must be 'mis', 'nee' or 'phase', got {self.sun_sampling!r}")
+        self.guiding = float(props.get("sun_guiding", 0.0))
+        if not 0.0 <= self.guiding < 1.0:
+            raise ValueError(f"{PLUGIN_NAME}: 'sun_guiding' must be in [0, 1), got {self.guiding}")
+        self.sun_mode = "disk" if diameter > 0 else "point"
+        if not self.emitter_nee < 1.0:
+            raise ValueError(f"{PLUGIN_NAME}: with the integrator's sun, 'emitter_nee' must be below 1 (the rest "
+                             f"of the shadow rays go to the sun), got {self.emitter_nee}")
+        vmax, radiance = sun_disk(diameter, e)
+        # opaque: a new sun position, size or irradiance reuses the kernel
+        self.sun_dir = mi.Vector3f(*(float(v) for v in d))
+        self.sun_vmax = mi.Float(vmax)                       # versine of the disk's radius
+        self.sun_value = mi.Color3f(*(float(v) for v in (radiance if diameter > 0 else e)))
+        self.guide_p = mi.Float(self.guiding)
+        dr.make_opaque(self.sun_dir, self.sun_vmax, self.sun_value, self.guide_p)
 
     # ------------------------------------------------------------ Mitsuba object interface
     def aov_names(self):
@@ -220,10 +330,16 @@ class MajorantVolpath:
         shape = tuple(self.majorant.shape)
         return (f"MajorantVolpath[max_depth = {self.max_depth if self.max_depth != 0xFFFFFFFF else -1}, "
                 f"rr_depth = {self.rr_depth}, hide_emitters = {self.hide_emitters_}, "
-                f"majorant = {'auto' if self.auto_majorant else shape}, cell = {self.cell}]")
+                f"majorant = {'auto' if self.auto_majorant else shape}, cell = {self.cell}, "
+                f"sun = {self.sun_mode}, sun_guiding = {self.guiding}]")
 
     def traverse(self, cb):
         cb.put("majorant", self.majorant, mi.ParamFlags.NonDifferentiable)
+        if self.sun_mode != "none":
+            cb.put("sun_direction", self.sun_dir, mi.ParamFlags.NonDifferentiable)
+            cb.put("sun_value", self.sun_value, mi.ParamFlags.NonDifferentiable)
+            cb.put("sun_vmax", self.sun_vmax, mi.ParamFlags.NonDifferentiable)
+            cb.put("sun_guiding", self.guide_p, mi.ParamFlags.NonDifferentiable)
 
     def parameters_changed(self, keys=[]):
         pass
@@ -462,6 +578,21 @@ class MajorantVolpath:
         hide = self.hide_emitters_
         phase = ms.medium.phase_function() if has_medium else None
         bsdf_ctx = mi.BSDFContext()
+        has_emitters = len(scene.emitters()) > 0
+        sun_mode = self.sun_mode
+        guiding = has_medium and sun_mode != "none" and self.guiding > 0.0
+        by_channel = has_medium and self.channels == "history" and hasattr(phase, "sample_channel")
+        rr_cap = 0.95 if self.rr_mode == "volpath" else 1.0
+        c_em = self.emitter_nee
+        c_sky = c_em if sun_mode != "none" else 1.0             # share of shadow rays towards the scene's emitters
+        c_sun_hit = (1.0 - c_em) if has_emitters else 1.0         # ... towards the integrator's sun
+        sun_pdf = dr.rcp(dr.two_pi * self.sun_vmax) if sun_mode == "disk" else None
+        one_strategy = {"nee": (1.0, 0.0), "phase": (0.0, 1.0)}.get(self.sun_sampling)
+
+        def sun_mis(pdf_a, pdf_b, nee=True):  # weight of the sun-sampling or of the continuation strategy
+            if one_strategy is None:
+                return _mis_weight(pdf_a, pdf_b)
+            return one_strategy[0] if nee else one_strategy[1]
 
         ray = mi.Ray3f(ray)
         active = mi.Bool(active)
@@ -474,11 +605,15 @@ class MajorantVolpath:
             return active
 
         def body(sampler, active, depth, ray, throughput, result, si, medium, eta,
-                 last_event, last_pdf, needs_isect, specular_chain, valid_ray):
+                 last_event, last_pdf, needs_isect, specular_chain, valid_ray, last_long, guide_left):
             # ---------------- Russian roulette and depth limit
             active &= dr.any(throughput != 0.0)
-            q = dr.minimum(dr.max(throughput) * dr.square(eta), 0.95)
-            perform_rr = depth > rr_depth
+            q = dr.minimum(dr.max(throughput) * dr.square(eta), rr_cap)
+            if rr_cap == 1.0:  # long walks: survive 1/2 at depths 2^k >= LONG_WALK_DEPTH (weight ~ depth)
+                long_walk = (depth >= LONG_WALK_DEPTH) & ((depth & (depth - 1)) == 0) & (depth != last_long)
+                last_long = dr.select(long_walk, depth, last_long)
+                q = dr.select(long_walk, q * 0.5, q)
+            perform_rr = (depth > rr_depth) & (q < 1.0)
             active &= (sampler.next_1d(active) < q) | ~perform_rr
             throughput = dr.select(perform_rr, throughput * dr.rcp(q), throughput)
             active &= depth < max_depth
@@ -523,8 +658,14 @@ class MajorantVolpath:
             ds_hit = mi.DirectionSample3f(scene, si, last_event)
             em_pdf = scene.pdf_emitter_direction(last_event, ds_hit, active_e & ~count_direct)
             emitted = emitter.eval(si, active_e)
-            w_hit = dr.select(count_direct, 1.0, _mis_weight(last_pdf, em_pdf))
+            w_hit = dr.select(count_direct, 1.0, _mis_weight(last_pdf, c_sky * em_pdf))
             result = dr.select(active_e, result + throughput * w_hit * emitted, result)
+            if sun_mode == "disk":  # a ray that leaves the scene inside the sun's disk sees the sun
+                in_sun = active_surface & ~si.is_valid() & self._in_sun(ray.d)
+                if hide:
+                    in_sun &= depth != 0
+                w_hit = dr.select(count_direct, 1.0, sun_mis(last_pdf, c_sun_hit * sun_pdf, nee=False))
+                result = dr.select(in_sun, result + throughput * w_hit * mi.Spectrum(self.sun_value), result)
 
             active_surface &= si.is_valid()
             bsdf = si.bsdf(ray)
@@ -536,24 +677,100 @@ class MajorantVolpath:
             ref = dr.select(act_scatter, _as_interaction(mei), ref)
             ref = dr.select(act_e_surf, _as_interaction(si), ref)
             # (at a medium boundary the shadow ray starts in the medium on the emitter's side)
-            em_val, ds = self._sample_emitter_with_surface(scene, sampler, ref, si, act_e_surf, medium, act_e)
-            wo_local = si.to_local(ds.d)
-            bsdf_val, bsdf_pdf = bsdf.eval_pdf(bsdf_ctx, si, wo_local, act_e_surf)
-            if has_medium:
-                ph_ctx = mi.PhaseFunctionContext(sampler)
-                ph_val, ph_pdf = phase.eval_pdf(ph_ctx, mei, ds.d, act_scatter)
-                f_val = dr.select(act_e_surf, bsdf_val, ph_val)
-                f_pdf = dr.select(act_e_surf, bsdf_pdf, ph_pdf)
-            else:
-                f_val, f_pdf = bsdf_val, bsdf_pdf
-            w_nee = _mis_weight(ds.pdf, dr.select(ds.delta, 0.0, f_pdf))
-            result = dr.select(act_e, result + throughput * f_val * w_nee * em_val, result)
+            eps = mi.Float(0.0)  # probability of a sun-guided continuation at this vertex
 
-            # ---------------- phase function sampling
+            def f_eval(d):
+                """Phase function or BSDF value toward d, and the pdf with which this vertex continues
+                the path in direction d (phase: with sun guiding, the mixture of both samplers)."""
+                bsdf_val, bsdf_pdf = bsdf.eval_pdf(bsdf_ctx, si, si.to_local(d), act_e_surf)
+                if not has_medium:
+                    return bsdf_val, bsdf_pdf
+                ph_val, ph_pdf = phase.eval_pdf(mi.PhaseFunctionContext(sampler), mei, d, act_scatter)
+                ph_pdf = self._continuation_pdf(phase, sampler, mei, d, ph_val, ph_pdf, alpha, eps, act_scatter)
+                return dr.select(act_e_surf, bsdf_val, ph_val), dr.select(act_e_surf, bsdf_pdf, ph_pdf)
+
+            # history-aware channel sampling (module docstring): the phase function's colour channels
+            # are drawn in proportion alpha to the path's throughput
+            alpha = None
+            if by_channel:
+                t_sum = dr.sum(throughput)
+                alpha = throughput * dr.select(t_sum > 0.0, dr.rcp(t_sum), 0.0)
+
+            # ---------------- next-event estimation: one shadow ray per vertex, towards the integrator's
+            # sun with probability 1 - c and towards one of the scene's emitters (the sky) with
+            # probability c; as MIS techniques their pdfs are (1 - c) p_sun and c p_emitter
+            if has_emitters or sun_mode != "none":
+                if not has_emitters:
+                    pick_em = mi.Bool(False)
+                elif sun_mode == "none":
+                    pick_em = mi.Bool(True)
+                else:
+                    pick_em = sampler.next_1d(act_e) < c_em
+                em_val, ds = dr.zeros(mi.Spectrum), dr.zeros(mi.DirectionSample3f)
+                if has_emitters:
+                    ds, em_val = scene.sample_emitter_direction(ref, sampler.next_2d(act_e), False, act_e & pick_em)
+                    em_val = dr.select(ds.pdf != 0.0, em_val, 0.0)
+                    d = mi.Vector3f(ds.d)
+                    shadow = ref.spawn_ray_to(ds.p)
+                if sun_mode != "none":
+                    wo_s = self._sample_sun(sampler.next_2d(act_e)) if sun_mode == "disk" else mi.Vector3f(self.sun_dir)
+                    d = dr.select(pick_em, ds.d, wo_s) if has_emitters else wo_s
+                    shadow_sun = ref.spawn_ray(wo_s)
+                    shadow = dr.select(pick_em, shadow, shadow_sun) if has_emitters else shadow_sun
+                # (at a medium boundary the shadow ray starts in the medium on the emitter's side)
+                shadow_med = dr.select(act_e_surf & si.is_medium_transition(), si.target_medium(d), medium)
+                tr = self._transmittance(scene, sampler, shadow, shadow_med, act_e)
+                f_val, f_pdf = f_eval(d)
+                w = mi.Float(0.0)
+                if has_emitters:
+                    c = c_em if sun_mode != "none" else 1.0
+                    w_em = _mis_weight(c * ds.pdf, dr.select(ds.delta, 0.0, f_pdf)) * (1.0 / c)
+                    w = dr.select(pick_em, w_em, w)
+                if sun_mode != "none":
+                    c_sun = (1.0 - c_em) if has_emitters else 1.0
+                    if sun_mode == "disk":  # L / pdf_sun x MIS weight against continuing the path
+                        w_s = sun_mis(c_sun * sun_pdf, f_pdf) * dr.rcp(c_sun * sun_pdf)
+                    else:                   # delta: irradiance, no MIS
+                        w_s = mi.Float(1.0 / c_sun)
+                    w = dr.select(pick_em, w, w_s)
+                    em_val = dr.select(pick_em, em_val, mi.Spectrum(self.sun_value))
+                    if guiding:  # guide only where the sun is seen: elsewhere p / q > 1 would only inflate weights
+                        eps = dr.select(pick_em, 0.0, self.guide_p * dr.minimum(dr.max(tr) * (1.0 / GUIDE_SEEN), 1.0))
+                        # and only while the path's weights may still grow: an unguided draw has weight
+                        # <= 1 / (1 - eps); their product along a path stays below GUIDE_GROWTH
+                        eps = dr.select(act_scatter & ((1.0 - eps) * guide_left >= 1.0), eps, 0.0)
+                        guide_left = dr.select(act_scatter, guide_left * (1.0 - eps), guide_left)
+                result = dr.select(act_e, result + throughput * f_val * w * tr * em_val, result)
+
+            # ---------------- phase function sampling (with sun guiding: from the mixture of the phase
+            # function about the path's direction and the phase function about the sun's direction)
             if has_medium:
                 ph_ctx = mi.PhaseFunctionContext(sampler)
-                wo, ph_w, ph_pdf = phase.sample(ph_ctx, mei, sampler.next_1d(act_scatter),
+                if guiding or by_channel:
+                    mei_s = mei
+                    if guiding:
+                        u_g = sampler.next_1d(act_scatter)
+                        toward_sun = act_scatter & (u_g < eps)
+                        # half the guided draws uniform in the disk, half from the phase function about it
+                        in_disk = toward_sun & (u_g < 0.5 * eps) if sun_mode == "disk" else mi.Bool(False)
+                        mei_s = self._about_sun(mei, toward_sun)
+                    if by_channel:
+                        u = sampler.next_1d(act_scatter)
+                        channel = mi.UInt32(dr.select(u >= alpha[0], 1, 0) + dr.select(u >= alpha[0] + alpha[1], 1, 0))
+                        wo, ph_val = phase.sample_channel(ph_ctx, mei_s, channel, sampler.next_1d(act_scatter),
+                                                          sampler.next_2d(act_scatter), act_scatter)
+                        ph_pdf = None  # the channel mixture's pdf follows from the values
+                    else:
+                        wo, _, _ = phase.sample(ph_ctx, mei_s, sampler.next_1d(act_scatter),
                                                 sampler.next_2d(act_scatter), act_scatter)
+                    if guiding:  # the values are needed about the path's own direction
+                        wo = dr.select(in_disk, self._sample_sun(sampler.next_2d(act_scatter)), wo)
+                        ph_val, ph_pdf = phase.eval_pdf(ph_ctx, mei, wo, act_scatter)
+                    ph_pdf = self._continuation_pdf(phase, sampler, mei, wo, ph_val, ph_pdf, alpha, eps, act_scatter)
+                    ph_w = ph_val * dr.select(ph_pdf > 0.0, dr.rcp(ph_pdf), 0.0)
+                else:
+                    wo, ph_w, ph_pdf = phase.sample(ph_ctx, mei, sampler.next_1d(act_scatter),
+                                                    sampler.next_2d(act_scatter), act_scatter)
                 act_scatter &= ph_pdf > 0.0
                 throughput = dr.select(act_scatter, throughput * ph_w, throughput)
                 ray = dr.select(act_scatter, mei.spawn_ray(wo), ray)
@@ -579,24 +796,57 @@ class MajorantVolpath:
             medium = dr.select(trans, si.target_medium(ray.d), medium)
             active &= active_surface | act_scatter
             return (sampler, active, depth, ray, throughput, result, si, medium, eta,
-                    last_event, last_pdf, needs_isect, specular_chain, valid_ray)
+                    last_event, last_pdf, needs_isect, specular_chain, valid_ray, last_long, guide_left)
 
         state = (sampler, active, mi.UInt32(0), ray, mi.Spectrum(1.0), mi.Spectrum(0.0),
                  dr.zeros(mi.SurfaceInteraction3f), med0, mi.Float(1.0), dr.zeros(mi.Interaction3f),
-                 mi.Float(1.0), mi.Bool(True), mi.Bool(active & (not hide)), valid_ray)
+                 mi.Float(1.0), mi.Bool(True), mi.Bool(active & (not hide)), valid_ray, mi.UInt32(0),
+                 mi.Float(GUIDE_GROWTH))
         state = dr.while_loop(state=state, cond=cond, body=body, label="majorant_volpath")
         result, valid_ray = state[5], state[13]
         return result, valid_ray, []
 
-    def _sample_emitter_with_surface(self, scene, sampler, ref, si, act_e_surf, medium, active):
-        """NEE from a medium vertex or a surface vertex; at a surface that is a medium boundary the
-        shadow ray starts in the medium on the side of the sampled direction (as volpath)."""
-        ds, em_val = scene.sample_emitter_direction(ref, sampler.next_2d(active), False, active)
-        active = mi.Bool(active) & (ds.pdf != 0.0)
-        em_val = dr.select(active, em_val, 0.0)
-        medium = dr.select(act_e_surf & si.is_medium_transition(), si.target_medium(ds.d), medium)
-        tr = self._transmittance(scene, sampler, ref.spawn_ray_to(ds.p), medium, active)
-        return em_val * tr, ds
+    # ------------------------------------------------------------ the integrator's sun
+    def _sample_sun(self, sample):
+        """A direction uniform in the sun's disk (a cap of versine v_max about ``sun_dir``), built from
+        the versine so that float32 keeps its angle (pdf 1 / (2 pi v_max))."""
+        v = sample.x * self.sun_vmax
+        sin_t = dr.safe_sqrt(v * (2.0 - v))
+        s, c = dr.sincos(dr.two_pi * sample.y)
+        return mi.Frame3f(self.sun_dir).to_world(mi.Vector3f(sin_t * c, sin_t * s, 1.0 - v))
+
+    def _in_sun(self, d):
+        """Whether unit direction d lies in the sun's disk: versine |d - s|^2 / 2 <= v_max."""
+        return dr.squared_norm(d - self.sun_dir) * 0.5 <= self.sun_vmax
+
+    def _about_sun(self, mei, toward_sun):
+        """``mei`` whose incident direction is replaced, where ``toward_sun``, by the one for which the
+        phase function's forward direction is the sun's direction (wi = -sun_dir)."""
+        m = mi.MediumInteraction3f(mei)
+        m.wi = dr.select(toward_sun, -mi.Vector3f(self.sun_dir), mei.wi)
+        m.sh_frame = mi.Frame3f(m.wi)
+        return m
+
+    def _continuation_pdf(self, phase, sampler, mei, d, value, pdf, alpha, eps, active):
+        """pdf with which a medium vertex continues the path in direction d, given the phase function's
+        per-channel ``value`` and its own ``pdf`` there:
+        * history-aware channels (``alpha`` not None): sum_c alpha_c p_c(d), channel c drawn with
+          probability alpha_c and d from its density;
+        * sun guiding (detector-directional importance sampling, Buras & Mayer 2011): d drawn about the
+          path's direction with probability 1 - eps and towards the sun with probability eps (eps per
+          vertex, see ``sample``), half of these uniform in the sun's disk U and half from the phase
+          function about the sun: (1 - eps) q(d | wi) + eps (q(d | -sun) + U(d)) / 2."""
+        def q(val, p):
+            return p if alpha is None else dr.sum(alpha * val)
+        out = q(value, pdf)
+        if self.guiding > 0.0 and self.sun_mode != "none":
+            val_s, pdf_s = phase.eval_pdf(mi.PhaseFunctionContext(sampler), self._about_sun(mei, mi.Bool(True)), d, active)
+            guide = q(val_s, pdf_s)
+            if self.sun_mode == "disk":  # half of the guided draws are uniform in the disk
+                disk = dr.select(self._in_sun(d), dr.rcp(dr.two_pi * self.sun_vmax), 0.0)
+                guide = 0.5 * (guide + disk)
+            out = (1.0 - eps) * out + eps * guide
+        return out
 
     def _transmittance(self, scene, sampler, ray, medium, active):
         """Transmittance along a shadow ray (its maxt is the distance to the emitter sample)."""

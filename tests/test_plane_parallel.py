@@ -107,7 +107,7 @@ def test_white_furnace():
     vol = wm.OpticalVolume.from_arrays(beta, 1.0, wm.phase.henyey_greenstein(0.85), ((0, 0, 0), (1000, 1000, 1000)))
     L = np.array([0.2, 0.5, 1.0])
     spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=200.0, elevation=25.0),
-                        sun=wm.Sun(240.0, 35.0, irradiance=0.0), sky=wm.Sky("constant", radiance=tuple(L)),
+                        sun=wm.Sun(240.0, 35.0, irradiance=0.0, angular_diameter_deg=0.0), sky=wm.Sky("constant", radiance=tuple(L)),
                         ground=None, width=24, height=24, seed=5)
     img = wm.render_reference(spec, vol, spp=128, integrator="volpath", passes=16, progress=False)
     rad, se = img.radiance.astype(np.float64), img.stderr.astype(np.float64)
@@ -138,7 +138,7 @@ def _blob_volume(albedo_sw=None):
 
 
 def _render(vol, camera, width, height):
-    spec = wm.SceneSpec(camera=camera, sun=wm.Sun(0.0, 90.0, 1.0), sky=None, ground=None,
+    spec = wm.SceneSpec(camera=camera, sun=wm.Sun(0.0, 90.0, 1.0, angular_diameter_deg=0.0), sky=None, ground=None,
                         width=width, height=height, seed=1)
     return wm.render_reference(spec, vol, spp=16, integrator="volpath", passes=4, progress=False)
 

@@ -37,7 +37,9 @@ SIDE_VIEW = wm.Camera.orthographic(center=(500.0, -1000.0, 1500.0), direction=(0
 
 def spec(seed=1, camera=SIDE_VIEW, sun=None, **kw) -> wm.SceneSpec:
     kw.setdefault("sky", wm.Sky("constant"))
-    return wm.SceneSpec(camera=camera, sun=sun or wm.Sun(200.0, 40.0), width=W, height=H, seed=seed, **kw)
+    # a point sun: the pipeline is tested with both integrators (volpath has no sun disk)
+    return wm.SceneSpec(camera=camera, sun=sun or wm.Sun(200.0, 40.0, angular_diameter_deg=0.0), width=W, height=H,
+                        seed=seed, **kw)
 
 
 def render(sp, vol, spp=16, passes=4, **kw) -> wm.Image:
@@ -260,7 +262,8 @@ def test_metadata_describes_the_render():
     hyd = wm.from_arrays({"cloud": q}, rho_air=1.0, spacing=(200.0, 200.0, 200.0), origin=(1100.0, 100.0, 100.0),
                          source="test arrays")
     vol = wm.optical_volume(hyd, species="physical")
-    sp = wm.SceneSpec(camera=wm.Camera.orbit(vol), sky=wm.Sky("constant"), width=W, height=H, seed=2)
+    sp = wm.SceneSpec(camera=wm.Camera.orbit(vol), sun=wm.Sun(angular_diameter_deg=0.0), sky=wm.Sky("constant"),
+                      width=W, height=H, seed=2)
     img = render(sp, vol, spp=6, passes=3, integrator="volpath", max_depth=16)
     m = img.metadata
     assert m["spp"] == 6 and m["passes"] == 3 and m["max_depth"] == 16
@@ -269,8 +272,10 @@ def test_metadata_describes_the_render():
     assert m["species_preset"] == "physical"
     assert m["source"] == "test arrays"
     assert m["integrator"] == "volpath" and m["variant"] == mi.variant() and m["renderer"] == "reference"
-    assert m["normalize"] is None
+    assert m["normalize"] is None and m["sun"] == "scene emitter"
     assert img.radiance.max() > 0
+    noise = m["noise"]  # the noise figures over cloud pixels
+    assert noise["cloud_pixels"] > 0 and 0 < noise["rse_mean"] < noise["worst_se_over_mean"] * 50
 
 
 # ---------------------------------------------------------------- bad input, before any rendering
@@ -386,7 +391,8 @@ beta = np.full((4, 4, 4), 0.01, np.float32)
 vol = wm.OpticalVolume.from_arrays(beta_ext=beta, albedo=0.99, phase=wm.phase.henyey_greenstein(0.85),
                                    bbox=((0.0, 0.0, 1000.0), (1000.0, 1000.0, 2000.0)))
 cam = wm.Camera.orthographic(center=(500.0, -1000.0, 1500.0), direction=(0.0, 1.0, 0.0), width=800, height=600)
-spec = wm.SceneSpec(camera=cam, sun=wm.Sun(200.0, 40.0), sky=wm.Sky("constant"), width=4, height=3, seed=1)
+spec = wm.SceneSpec(camera=cam, sun=wm.Sun(200.0, 40.0, angular_diameter_deg=0.0), sky=wm.Sky("constant"), width=4,
+                    height=3, seed=1)
 for variant, integrator in (("llvm_ad_rgb", "majorant"), ("scalar_rgb", "volpath"), ("llvm_ad_rgb", "majorant")):
     img = wm.render_reference(spec, vol, spp=64, passes=4, max_depth=4, progress=False, variant=variant,
                               integrator=integrator, rr_depth=100)

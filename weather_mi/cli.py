@@ -86,6 +86,13 @@ def _parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def default_ground_distance_km(vol) -> float:
+    """How far a photographer stands from a storm: 0.55 x the cloud's horizontal extent, and at least
+    1.2 x the height of its top (40 km for the demo supercell, 5.6 km for the demo cumulus)."""
+    (x0, y0, _), (x1, y1, z1) = vol.occupied_bbox()
+    return max(0.55 * max(x1 - x0, y1 - y0), 1.2 * z1) / 1000.0
+
+
 def render_command(args) -> Path:
     """Build the volume and the scene from the arguments, render the reference, write EXR + PNG."""
     from .optics import optical_volume
@@ -97,14 +104,20 @@ def render_command(args) -> Path:
     sky = None if args.sky == "none" else Sky(args.sky)
     ground = None if args.ground_albedo < 0 else Ground(albedo=args.ground_albedo,
                                                         height=min(0.0, vol.bbox[0][2]))
-    spec = SceneSpec(camera=Camera.orbit(vol, azimuth=args.camera_azimuth, elevation=args.camera_elevation,
-                                         distance=args.distance, fov=args.fov),
-                     sun=Sun(args.sun_azimuth, args.sun_elevation), sky=sky, ground=ground,
-                     width=width, height=height, seed=args.seed)
+    if args.camera == "orbit":
+        camera = Camera.orbit(vol, azimuth=args.camera_azimuth, elevation=args.camera_elevation,
+                              distance=args.distance, fov=args.fov or 45.0)
+    else:
+        camera = Camera.ground_view(vol, azimuth=args.camera_azimuth, fov=args.fov or 70.0, aspect=width / height,
+                                    distance_km=args.camera_distance_km or default_ground_distance_km(vol),
+                                    height_m=args.camera_height, ground_m=0.0 if ground is None else ground.height)
+    spec = SceneSpec(camera=camera, sun=Sun(args.sun_azimuth, args.sun_elevation, angular_diameter_deg=args.sun_diameter),
+                     sky=sky, ground=ground, width=width, height=height, seed=args.seed)
     out = Path(args.output)
     ckpt = out.with_name(out.name + ".ckpt.npz")
     img = render_reference(spec, vol, spp=args.spp, integrator=args.integrator, checkpoint=ckpt,
-                           resume=ckpt if args.resume else None)
+                           resume=ckpt if args.resume else None, target_rse=args.target_rse,
+                           max_seconds=args.max_seconds, sun_guiding=args.sun_guiding)
     img.save(out)
     png = img.save_png(out.with_suffix(".png"), exposure=args.exposure)
     ckpt.unlink(missing_ok=True)
@@ -130,16 +143,33 @@ def main(argv: list[str] | None = None) -> int:
     render.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
     render.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
     render.add_argument("--scale", action="append", metavar="SPECIES=FACTOR", help="e.g. --scale ice=2")
-    render.add_argument("--sun-azimuth", type=float, default=240.0)
+    render.add_argument("--sun-azimuth", type=float, default=290.0, help="degrees clockwise from north")
     render.add_argument("--sun-elevation", type=float, default=35.0)
-    render.add_argument("--camera-azimuth", type=float, default=200.0)
-    render.add_argument("--camera-elevation", type=float, default=8.0)
-    render.add_argument("--distance", type=float, default=None, help="camera distance (m); default fits the box")
-    render.add_argument("--fov", type=float, default=45.0, help="horizontal field of view (degrees)")
+    render.add_argument("--sun-diameter", type=float, default=0.53,
+                        help="angular diameter of the sun disk (degrees); 0: a point sun")
+    render.add_argument("--camera", default="ground", choices=("ground", "orbit"),
+                        help="ground: a photographer's view from near the ground (Camera.ground_view); "
+                             "orbit: on a sphere around the cloud (Camera.orbit)")
+    render.add_argument("--camera-azimuth", type=float, default=200.0,
+                        help="where the camera stands, seen from the storm (degrees clockwise from north)")
+    render.add_argument("--camera-elevation", type=float, default=8.0, help="orbit camera: elevation (degrees)")
+    render.add_argument("--distance", type=float, default=None,
+                        help="orbit camera: distance (m); default fits the box")
+    render.add_argument("--camera-distance-km", type=float, default=None,
+                        help="ground camera: horizontal distance from the storm's core (km); default from its size")
+    render.add_argument("--camera-height", type=float, default=1500.0, help="ground camera: height above ground (m)")
+    render.add_argument("--fov", type=float, default=None,
+                        help="horizontal field of view (degrees; default 70 ground, 45 orbit)")
     render.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none"))
     render.add_argument("--ground-albedo", type=float, default=0.15, help="negative: no ground")
     render.add_argument("--size", default="320x240", help="WIDTHxHEIGHT")
-    render.add_argument("--spp", type=int, default=64)
+    render.add_argument("--spp", type=int, default=64,
+                        help="samples per pixel (with --target-rse: of the first estimate)")
+    render.add_argument("--target-rse", type=float, default=None,
+                        help="add passes until the mean relative standard error over cloud pixels is this")
+    render.add_argument("--max-seconds", type=float, default=None, help="with --target-rse: time limit")
+    render.add_argument("--sun-guiding", type=float, default=None,
+                        help="probability of sun-guided scattering directions (default: the renderer's)")
     render.add_argument("--seed", type=int, default=0)
     render.add_argument("--integrator", default="majorant", choices=("majorant", "volpath"))
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")

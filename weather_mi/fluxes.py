@@ -65,7 +65,8 @@ def sun_for(mu0: float, irradiance: float = 1.0, azimuth: float = 0.0):
     from .scene import Sun
     if not 0.0 < mu0 <= 1.0:
         raise ValueError(f"mu0 must be in (0, 1], got {mu0}")
-    return Sun(azimuth=azimuth, elevation=math.degrees(math.asin(mu0)), irradiance=irradiance)
+    return Sun(azimuth=azimuth, elevation=math.degrees(math.asin(mu0)), irradiance=irradiance,
+               angular_diameter_deg=0.0)  # plane-parallel solvers (DISORT) have a point sun
 
 
 def _film(width=1, height=1) -> dict:

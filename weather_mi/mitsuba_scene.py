@@ -112,26 +112,54 @@ def ground_dict(spec: SceneSpec, vol_bbox) -> dict:
             "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(spec.ground.albedo)}}}
 
 
-def medium_shape_dict(vol: OpticalVolume, floor_m: float | None = None) -> dict:
-    """The volume's bounding box as a ``cube`` with a null BSDF holding the medium. With a ground at
-    ``floor_m``, the box starts above it by three times Mitsuba's ray offset: coincident or too close
-    faces of the box and the ground make rays skip the ground. The grids keep the full bbox."""
-    import mitsuba as mi
+def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) of the box that holds the medium: the volume's bbox, starting above a ground at
+    ``floor_m`` by three times Mitsuba's ray offset (coincident or too close faces of the box and the
+    ground make rays skip the ground). The grids keep the full bbox."""
     lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
     if floor_m is not None:
         gap = 3.0 * RAY_EPSILON * (1.0 + float(np.max(np.abs(np.r_[lo, hi]))))
         lo[2] = max(lo[2], floor_m + gap)
         if lo[2] >= hi[2]:
             raise ValueError(f"the volume lies entirely below the ground at {floor_m} m")
+    return lo, hi
+
+
+def medium_shape_dict(vol: OpticalVolume, floor_m: float | None = None) -> dict:
+    """The medium's box (:func:`medium_box`) as a ``cube`` with a null BSDF holding the medium."""
+    import mitsuba as mi
+    lo, hi = medium_box(vol, floor_m)
     to_world = mi.ScalarTransform4f().translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist())
     return {"type": "cube", "to_world": to_world, "bsdf": {"type": "null"}, "interior": medium_dict(vol)}
 
 
+def integrator_sun(sun: Sun, guiding: float = 0.0) -> dict:
+    """Properties of ``majorant_volpath`` that make the sun the integrator's own light (a disk with
+    MIS, or a point), sampled at every vertex instead of being one of the scene's emitters."""
+    return {"sun_direction": sun.to_sun.tolist(), "sun_irradiance": list(sun.irradiance),
+            "sun_angular_diameter": float(sun.angular_diameter_deg), "sun_guiding": float(guiding)}
+
+
+def _inside(p, box) -> bool:
+    lo, hi = box
+    return bool(np.all(np.asarray(p) > lo) and np.all(np.asarray(p) < hi))
+
+
 def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
-    """The whole Mitsuba scene: camera, sun, sky, ground, the medium in its box, the integrator."""
+    """The whole Mitsuba scene: camera, sun, sky, ground, the medium in its box, the integrator.
+    The sun is a ``directional`` emitter unless the integrator carries it (``integrator_sun``). A
+    camera inside the medium's box carries the medium (its rays start in it)."""
     ensure_registered()
-    d = {"type": "scene", "integrator": integrator, "sensor": sensor_dict(spec), "sun": sun_dict(spec.sun),
-         "medium_box": medium_shape_dict(vol, None if spec.ground is None else spec.ground.height)}
+    floor = None if spec.ground is None else spec.ground.height
+    box = medium_shape_dict(vol, floor)
+    sensor = sensor_dict(spec)
+    d = {"type": "scene", "integrator": integrator, "sensor": sensor, "medium_box": box}
+    if "sun_direction" not in integrator:
+        d["sun"] = sun_dict(spec.sun)
+    if _inside(spec.camera.origin, medium_box(vol, floor)):
+        d["weather_medium"] = box["interior"]
+        box["interior"] = {"type": "ref", "id": "weather_medium"}
+        sensor["medium"] = {"type": "ref", "id": "weather_medium"}
     if spec.sky is not None:
         d["sky"] = sky_dict(spec.sky, spec.sun)
     if spec.ground is not None:

@@ -21,6 +21,10 @@ from .scene import SceneSpec
 
 INTEGRATORS = ("majorant", "volpath")
 MAX_LANES_PER_PASS = 1 << 22
+MIN_PASSES = 16          # default number of passes (batches) of a render with spp >= 16
+CLOUD_TAU = np.log(2.0)  # cloud pixels: eye-ray transmittance below 1/2
+MAX_TARGET_PASSES = 1 << 14
+DEFAULT_SUN_GUIDING = 0.0  # measured in benchmarks/reference.py (see the README)
 
 
 def _check_inputs(spec: SceneSpec, vol: OpticalVolume, spp: int, normalize, integrator: str, variant):
@@ -55,10 +59,12 @@ def pass_seed(seed: int, i: int) -> int:
 
 
 def _passes(spec: SceneSpec, spp: int, passes: int | None) -> list[int]:
-    """Samples per pixel of each pass: at least 4 passes when spp allows (for the error estimate),
-    and at most MAX_LANES_PER_PASS paths per pass (memory)."""
+    """Samples per pixel of each pass: MIN_PASSES passes (batch means) when spp allows, so that the
+    standard error estimated from their spread is itself stable (its relative error is about
+    1 / sqrt(2 (P - 1)): 18% with 16 passes, 41% with 4), and at most MAX_LANES_PER_PASS paths per pass
+    (memory)."""
     if passes is None:
-        per = max(1, min(spp // 4 if spp >= 4 else 1, MAX_LANES_PER_PASS // (spec.width * spec.height)))
+        per = max(1, min(spp // MIN_PASSES, MAX_LANES_PER_PASS // (spec.width * spec.height)))
         passes = -(-spp // per)
     passes = max(1, min(int(passes), spp))
     base, extra = divmod(spp, passes)
@@ -66,10 +72,12 @@ def _passes(spec: SceneSpec, spp: int, passes: int | None) -> list[int]:
 
 
 def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_depth: int | None = None,
-                    cell: int | None = None) -> dict:
+                    cell: int | None = None, sun=None, sun_guiding: float = 0.0, legacy: bool = False) -> dict:
     """Mitsuba integrator dict: stock ``volpath`` or ``majorant_volpath`` with a majorant grid of
-    ``cell``^3 voxels per coarse cell (None: the plugin's ``DEFAULT_CELL``). ``rr_depth``: depth at which Russian roulette starts (None: the
-    integrators' default, 5; a huge value turns it off)."""
+    ``cell``^3 voxels per coarse cell (None: the plugin's ``DEFAULT_CELL``). ``rr_depth``: depth at which
+    Russian roulette starts (None: the integrators' default, 5; a huge value turns it off). ``sun``: a
+    ``Sun`` that ``majorant_volpath`` samples itself at every vertex (a disk with MIS, or a point), with
+    ``sun_guiding`` (see ``render_reference``); None: the sun is a scene emitter."""
     if integrator == "volpath":
         d = {"type": "volpath", "max_depth": int(max_depth)}
     else:
@@ -81,16 +89,19 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
         d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
              "majorant": mi.TensorXf(majorant_grid(vol.beta_total, cell=int(cell))),
              "to_world": bbox_transform(vol.bbox)}
+        if sun is not None:
+            from .mitsuba_scene import integrator_sun
+            d.update(integrator_sun(sun, sun_guiding))
+        if legacy:  # the estimator before issue 10 (see render_reference)
+            d.update({"rr_mode": "volpath", "phase_channels": "mean", "emitter_nee": 1.0})
     if rr_depth is not None:
         d["rr_depth"] = int(rr_depth)
     return d
 
 
-def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, integrator, max_depth, normalize, variant,
-                 rr_depth=None) -> str:
+def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
     h = hashlib.sha256()
-    h.update(json.dumps([spec.to_dict(), spp_list, integrator, max_depth, normalize, variant, rr_depth],
-                        sort_keys=True, default=str).encode())
+    h.update(json.dumps([spec.to_dict(), spp_list, *options], sort_keys=True, default=str).encode())
     for a in (vol.beta_total, vol.albedo, vol.weights):
         h.update(np.ascontiguousarray(a).tobytes())
     for t in vol.phase_tables:  # the phase functions are part of the scene too
@@ -107,23 +118,103 @@ def _save_checkpoint(path: Path, state: dict) -> None:
     os.replace(tmp, path)
 
 
+def noise_stats(radiance: np.ndarray, stderr: np.ndarray, cloud: np.ndarray) -> dict:
+    """How converged an image is over its cloud pixels (``cloud``: a boolean (H, W) mask), from the
+    channel means of radiance and standard error:
+
+    rse_mean        mean over cloud pixels of se / radiance (``Image.relative_stderr``)
+    rms_se_over_mean  RMS of se over cloud pixels / mean cloud radiance
+    worst_se_over_mean  largest se of a cloud pixel / mean cloud radiance
+    cloud_pixels    number of cloud pixels"""
+    lum = np.asarray(radiance, np.float64).mean(axis=2)
+    se = np.asarray(stderr, np.float64).mean(axis=2)
+    ok = np.asarray(cloud, bool) & (lum > 0) & np.isfinite(se)
+    if not np.any(ok):
+        return {"cloud_pixels": 0, "rse_mean": float("nan"), "rms_se_over_mean": float("nan"),
+                "worst_se_over_mean": float("nan")}
+    m = float(lum[ok].mean())
+    return {"cloud_pixels": int(ok.sum()), "rse_mean": float(np.mean(se[ok] / lum[ok])),
+            "rms_se_over_mean": float(np.sqrt(np.mean(se[ok] ** 2)) / m),
+            "worst_se_over_mean": float(se[ok].max() / m)}
+
+
+def cloud_mask(spec: SceneSpec, vol: OpticalVolume) -> np.ndarray:
+    """Cloud pixels (H, W) of a view: eye-ray optical depth > ln 2 (transmittance below 1/2), as the
+    noise figures of ``render_reference`` count them (deterministic, no rendering)."""
+    import mitsuba as mi
+    from .mitsuba_scene import recentred, sensor_dict
+    from .variant import set_variant
+    set_variant(_current_or_default())
+    spec_k, vol_k, _ = recentred(spec, vol)
+    return eye_optical_depth(mi.load_dict(sensor_dict(spec_k)), vol_k, spec_k) > CLOUD_TAU
+
+
+def eye_optical_depth(sensor, vol_k: OpticalVolume, spec: SceneSpec, steps: int = 512) -> np.ndarray:
+    """Optical depth (H, W) of the medium along each pixel's central camera ray, by the midpoint rule
+    over ``steps`` steps of the ray's segment in the volume's box (deterministic; the scene's own
+    ``sensor``, so the same rays as the render). ``vol_k``: the volume in the sensor's coordinates."""
+    import drjit as dr
+    import mitsuba as mi
+    from .jitarrays import aligned_float
+    h, w = spec.height, spec.width
+    jj, ii = np.meshgrid(np.arange(h), np.arange(w), indexing="ij")
+    pos = mi.Point2f(aligned_float(mi, ((ii + 0.5) / w).ravel()), aligned_float(mi, ((jj + 0.5) / h).ravel()))
+    ray, _ = sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
+    lo, hi = (np.asarray(p, np.float64) for p in vol_k.bbox)
+    ext = hi - lo
+    o = [(ray.o[k] - float(lo[k])) / float(ext[k]) for k in range(3)]
+    d = [ray.d[k] / float(ext[k]) for k in range(3)]
+    t0, t1 = mi.Float(0.0), mi.Float(dr.inf)
+    for k in range(3):
+        inv = dr.rcp(dr.select(dr.abs(d[k]) < 1e-30, 1e-30, d[k]))
+        ta, tb = -o[k] * inv, (1.0 - o[k]) * inv
+        t0, t1 = dr.maximum(t0, dr.minimum(ta, tb)), dr.minimum(t1, dr.maximum(ta, tb))
+    seg = dr.maximum(t1 - t0, 0.0)
+    tex = mi.Texture3f(mi.TensorXf(np.ascontiguousarray(vol_k.beta_total, np.float32)[..., None]),
+                       wrap_mode=dr.WrapMode.Clamp)
+    n_steps = dr.opaque(mi.UInt32, steps)
+
+    def body(i, tau):  # one small symbolic loop: an unrolled march compiles for a minute
+        t = t0 + seg * ((mi.Float(i) + 0.5) / mi.Float(n_steps))
+        tau += tex.eval(mi.Point3f(*(o[k] + d[k] * t for k in range(3))))[0]
+        return i + 1, tau
+
+    _, tau = dr.while_loop(state=(mi.UInt32(0), dr.zeros(mi.Float, h * w)), cond=lambda i, tau: i < n_steps,
+                           body=body, label="eye optical depth")
+    return np.asarray(tau * seg / steps, np.float64).reshape(h, w)
+
+
 def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_depth: int = -1, *,
                      integrator: str = "majorant", passes: int | None = None, normalize: str | None = None,
                      checkpoint=None, resume=None, progress: bool = True, variant: str | None = None,
-                     rr_depth: int | None = None, cell: int | None = None) -> Image:
+                     rr_depth: int | None = None, cell: int | None = None, target_rse: float | None = None,
+                     max_seconds: float | None = None, sun_guiding: float | None = None,
+                     legacy: bool = False) -> Image:
     """Path-trace ``vol`` as seen by ``spec`` (Mitsuba ``volpath`` or our local-majorant tracker).
 
-    spp        : samples per pixel in total, split into passes (``passes``, default >= 4).
+    spp        : samples per pixel in total, split into passes (``passes``, default MIN_PASSES = 16
+                 batches when spp >= 16). With ``target_rse``: the samples of the first estimate; passes of
+                 the same size are then added until the target is met.
     integrator : "majorant" (delta tracking over a coarse majorant grid; default) or "volpath"
-                 (Mitsuba's own, one global majorant: the reference's reference).
+                 (Mitsuba's own, one global majorant: the reference's reference; point sun only).
     normalize  : None (radiance) or "reflectance" (pi L / (mu0 E) per channel).
     rr_depth   : depth at which Russian roulette starts (None: the integrators' default, 5).
     cell       : fine voxels per coarse cell of the majorant grid ("majorant" only; None: the default).
+    target_rse : keep adding passes until the mean relative standard error over cloud pixels (eye-ray
+                 transmittance < 1/2) is at most this, or ``max_seconds`` of rendering have passed.
+    sun_guiding: probability of drawing a scattering direction from the phase function centred on the
+                 sun ("majorant" only; None: DEFAULT_SUN_GUIDING).
+    legacy     : the estimator before issue 10, for benchmarks: the sun one of the scene's emitters
+                 (point sun only), Russian roulette as Mitsuba's volpath, phase sampling by channel mean.
     checkpoint : a .npz path written after every pass; ``resume`` (a path, or True to use
                  ``checkpoint``) continues a render from it; the scene must be identical.
+
+    The metadata records ``noise_stats`` over the cloud pixels (also shown by the progress bar).
     """
     from .variant import set_variant
     _check_inputs(spec, vol, spp, normalize, integrator, variant)
+    sun_guiding = DEFAULT_SUN_GUIDING if sun_guiding is None else sun_guiding
+    _check_sun_options(spec, integrator, target_rse, max_seconds, sun_guiding, legacy)
     set_variant(variant) if variant is not None else set_variant(_current_or_default())
     import mitsuba as mi
     from tqdm.auto import tqdm
@@ -131,47 +222,103 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     from .mitsuba_scene import recentred, scene_dict
 
     spp_list = _passes(spec, int(spp), passes)
-    key = _fingerprint(spec, vol, spp_list, integrator, max_depth, normalize, mi.variant(), rr_depth)  # cell: speed only
+    own_sun = integrator == "majorant" and not legacy
+    options = [integrator, max_depth, normalize, mi.variant(), rr_depth]
+    if own_sun:
+        options.append(["integrator sun", sun_guiding])
+    plan = ["target", spp_list[0]] if target_rse is not None else spp_list
+    key = _fingerprint(spec, vol, plan, *options)  # cell: speed only
     ckpt = Path(checkpoint) if checkpoint is not None else None
     resume_path = ckpt if resume is True else (Path(resume) if resume else None)
     h, w = spec.height, spec.width
     mean = np.zeros((h, w, 3))
     m2 = np.zeros((h, w, 3))
-    done, seconds = 0, 0.0
+    done, seconds, spp_done = 0, 0.0, 0
     if resume_path is not None and resume_path.is_file():
         with np.load(resume_path) as state:
             if str(state["key"]) != key:
                 raise ValueError(f"checkpoint {resume_path} belongs to a different scene, volume or sample plan")
             mean, m2, done, seconds = state["mean"], state["m2"], int(state["done"]), float(state["seconds"])
+            spp_done = int(state["spp_done"]) if "spp_done" in state else sum(spp_list[:done])
         ckpt = ckpt or resume_path
 
     spec_k, vol_k, _ = recentred(spec, vol)  # kernel-side coordinates: bbox centred on the origin
-    scene = mi.load_dict(scene_dict(spec_k, vol_k, integrator_dict(vol_k, integrator, max_depth, rr_depth, cell)))
+    integ = integrator_dict(vol_k, integrator, max_depth, rr_depth, cell,
+                            sun=spec.sun if own_sun else None, sun_guiding=sun_guiding,
+                            legacy=legacy and integrator == "majorant")
+    scene = mi.load_dict(scene_dict(spec_k, vol_k, integ))
+    if mi.variant().startswith("scalar"):  # the ray march is vectorised: every pixel counts there
+        cloud = np.ones((spec.height, spec.width), bool)
+    else:
+        cloud = eye_optical_depth(scene.sensors()[0], vol_k, spec_k) > CLOUD_TAU
     scale = 1.0
     if normalize == "reflectance":
         scale = np.pi / (spec.sun.mu0 * np.asarray(spec.sun.irradiance))
-    bar = tqdm(total=len(spp_list), initial=done, desc="reference", unit="pass", disable=not progress)
-    for i in range(done, len(spp_list)):
+
+    def stats(n):
+        if n < 2:
+            return None
+        return noise_stats(mean, np.sqrt(m2 / (n - 1) / n), cloud)
+
+    def more(i):
+        if target_rse is None:
+            return i < len(spp_list)
+        if i < len(spp_list):
+            return True
+        st = stats(i)
+        if st is not None and st["cloud_pixels"] and st["rse_mean"] <= target_rse:
+            return False
+        return i < MAX_TARGET_PASSES and (max_seconds is None or seconds < max_seconds)
+
+    total = len(spp_list) if target_rse is None else None
+    bar = tqdm(total=total, initial=done, desc="reference", unit="pass", disable=not progress)
+    i = done
+    while more(i):
+        per = spp_list[i] if i < len(spp_list) else spp_list[0]
         t0 = time.perf_counter()
-        img = np.array(mi.render(scene, spp=spp_list[i], seed=pass_seed(spec.seed, i)), dtype=np.float64)
+        img = np.array(mi.render(scene, spp=per, seed=pass_seed(spec.seed, i)), dtype=np.float64)
         img = img[..., :3] * scale
         seconds += time.perf_counter() - t0
         n = i + 1  # Welford update of per-pixel mean and M2 over pass means
         delta = img - mean
         mean += delta / n
         m2 += delta * (img - mean)
+        spp_done += per
+        i = n
         if ckpt is not None:
-            _save_checkpoint(ckpt, {"key": key, "mean": mean, "m2": m2, "done": n, "seconds": seconds})
+            _save_checkpoint(ckpt, {"key": key, "mean": mean, "m2": m2, "done": n, "seconds": seconds,
+                                    "spp_done": spp_done})
         bar.update(1)
+        st = stats(n)
+        if st is not None and progress:
+            bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
     bar.close()
-    n = len(spp_list)
+    n = i
     stderr = np.sqrt(m2 / (n - 1) / n) if n > 1 else np.full_like(mean, np.nan)
-    meta = {"renderer": "reference", "integrator": integrator, "variant": mi.variant(), "spp": int(spp),
+    meta = {"renderer": "reference", "integrator": integrator, "variant": mi.variant(), "spp": int(spp_done),
             "passes": n, "max_depth": int(max_depth), "rr_depth": rr_depth, "seconds": seconds, "normalize": normalize,
             "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
             "source": vol.attrs.get("source"), "time": vol.attrs.get("time"),
-            "phase_mode": vol.phase_mode}
+            "phase_mode": vol.phase_mode, "sun": ("scene emitter" if not own_sun else
+                                                  ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
+            "sun_guiding": sun_guiding if own_sun else None, "target_rse": target_rse,
+            "noise": noise_stats(mean, stderr, cloud) if n > 1 else None}
     return Image(mean.astype(np.float32), stderr.astype(np.float32), meta)
+
+
+def _check_sun_options(spec, integrator, target_rse, max_seconds, sun_guiding, legacy):
+    disk = spec.sun.angular_diameter_deg > 0
+    if disk and (integrator == "volpath" or legacy):
+        what = "integrator='volpath'" if integrator == "volpath" else "legacy=True"
+        raise ValueError(f"{what} renders the sun as a point (Mitsuba's 'directional' emitter): give "
+                         f"Sun(..., angular_diameter_deg=0), or use integrator='majorant' for a sun disk "
+                         f"of {spec.sun.angular_diameter_deg} deg")
+    if target_rse is not None and not (isinstance(target_rse, (int, float)) and 0 < target_rse < 1):
+        raise ValueError(f"target_rse must be a relative standard error in (0, 1), got {target_rse!r}")
+    if max_seconds is not None and not (isinstance(max_seconds, (int, float)) and max_seconds > 0):
+        raise ValueError(f"max_seconds must be a positive number of seconds, got {max_seconds!r}")
+    if not (isinstance(sun_guiding, (int, float)) and 0.0 <= sun_guiding < 1.0):
+        raise ValueError(f"sun_guiding must be a probability in [0, 1), got {sun_guiding!r}")
 
 
 def render_transmittance(spec: SceneSpec, vol: OpticalVolume, spp: int = 32, **kw) -> np.ndarray:
@@ -181,7 +328,7 @@ def render_transmittance(spec: SceneSpec, vol: OpticalVolume, spp: int = 32, **k
     from dataclasses import replace
     from .scene import Sky, Sun
     absorbing = replace(vol, albedo=np.zeros_like(vol.albedo))
-    t_spec = replace(spec, sun=Sun(spec.sun.azimuth, spec.sun.elevation, irradiance=0.0),
+    t_spec = replace(spec, sun=Sun(spec.sun.azimuth, spec.sun.elevation, irradiance=0.0, angular_diameter_deg=0.0),
                      sky=Sky("constant", radiance=1.0), ground=None)
     kw.setdefault("progress", False)
     return render_reference(t_spec, absorbing, spp=spp, **kw).radiance.mean(axis=2)

@@ -26,19 +26,32 @@ def _rgb(value, name: str) -> tuple[float, float, float]:
     return tuple(float(v) for v in arr)
 
 
+SUN_DIAMETER_DEG = 0.53      # the real sun's mean angular diameter
+MAX_SUN_DIAMETER_DEG = 5.0
+
+
 @dataclass(frozen=True)
 class Sun:
-    """The sun: direction by azimuth/elevation (degrees) and irradiance normal to the beam (W/m^2, RGB)."""
+    """The sun: direction of its centre by azimuth/elevation (degrees), irradiance normal to the beam
+    (W/m^2, RGB), and its angular diameter (degrees): a uniform disk of radiance
+    irradiance / (pi sin^2(diameter / 2)), or with ``angular_diameter_deg=0`` a point (directional) sun."""
 
     azimuth: float = 240.0
     elevation: float = 35.0
     irradiance: tuple = (1.0, 1.0, 1.0)
+    angular_diameter_deg: float = SUN_DIAMETER_DEG
 
     def __post_init__(self):
         if not 0.0 < float(self.elevation) <= 90.0:
             raise ValueError(f"Sun elevation must be above the horizon (0 < elevation <= 90 degrees), "
                              f"got {self.elevation}")
         object.__setattr__(self, "irradiance", _rgb(self.irradiance, "Sun irradiance"))
+        d = self.angular_diameter_deg
+        if isinstance(d, bool) or not isinstance(d, (int, float, np.integer, np.floating)) or not math.isfinite(d) \
+                or not 0.0 <= float(d) <= MAX_SUN_DIAMETER_DEG:
+            raise ValueError(f"Sun angular_diameter_deg must be a number in [0, {MAX_SUN_DIAMETER_DEG}] degrees "
+                             f"(0: a point sun; the real sun: {SUN_DIAMETER_DEG}), got {d!r}")
+        object.__setattr__(self, "angular_diameter_deg", float(d))
 
     @property
     def to_sun(self) -> np.ndarray:
@@ -135,6 +148,42 @@ class Camera:
         origin = centre + distance * direction_from_angles(azimuth, elevation)
         up = (0.0, 0.0, 1.0) if abs(elevation) < 89.9 else tuple(-direction_from_angles(azimuth, 0.0))
         return cls(tuple(origin), tuple(centre), up, fov)
+
+    @classmethod
+    def ground_view(cls, vol, distance_km: float = 40.0, height_m: float = 1500.0, azimuth: float = 200.0,
+                    fov: float = 70.0, aspect: float = 4.0 / 3.0, ground_m: float = 0.0,
+                    below_horizon_deg: float = 3.0) -> "Camera":
+        """A photographer's view of a storm: a camera ``height_m`` above the ground (at ``ground_m``),
+        ``distance_km`` horizontally from the storm's core (the column of largest optical depth of an
+        OpticalVolume, else the box centre), standing at ``azimuth`` (degrees clockwise from north, seen
+        from the core), looking at the core with a level horizon ``below_horizon_deg`` above the bottom
+        of the frame. The horizontal field of view ``fov`` is widened if the top of the cloud (or
+        box) would not fit under the top of an image of this ``aspect`` (width / height)."""
+        if not distance_km > 0 or not height_m > 0:
+            raise ValueError(f"ground_view needs a positive distance and height, got {distance_km} km, {height_m} m")
+        if not 0 < fov < 180 or not aspect > 0:
+            raise ValueError(f"ground_view needs 0 < fov < 180 degrees and a positive aspect, got {fov}, {aspect}")
+        box = vol.occupied_bbox() if hasattr(vol, "occupied_bbox") else vol
+        (x0, y0, z0), (x1, y1, z1) = _bbox(box)
+        core = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
+        if hasattr(vol, "beta_total"):
+            (bx0, by0, _), _ = _bbox(vol)
+            dz, dy, dx = vol.spacing
+            column = np.asarray(vol.beta_total, np.float64).sum(axis=0)
+            j, i = np.unravel_index(int(np.argmax(column)), column.shape)
+            core = np.array([bx0 + (i + 0.5) * dx, by0 + (j + 0.5) * dy])
+        d = 1000.0 * float(distance_km)
+        h = float(ground_m) + float(height_m)
+        origin = np.r_[core + d * direction_from_angles(azimuth, 0.0)[:2], h]
+        half_v = math.degrees(math.atan(math.tan(math.radians(fov) / 2) / aspect))
+        top = math.degrees(math.atan2(z1 - h, d))  # elevation of the cloud top above the core
+        if top + below_horizon_deg > 2 * half_v - 1.0:  # widen so that the top fits with 1 deg to spare
+            half_v = min((top + below_horizon_deg + 1.0) / 2, 80.0)
+            fov = 2 * math.degrees(math.atan(math.tan(math.radians(half_v)) * aspect))
+            fov = min(fov, 170.0)
+        pitch = half_v - below_horizon_deg
+        look = direction_from_angles((azimuth + 180.0) % 360.0, pitch)
+        return cls(tuple(origin), tuple(origin + 1000.0 * look), (0.0, 0.0, 1.0), float(fov))
 
     @classmethod
     def orthographic(cls, center, direction=(0.0, 0.0, -1.0), width: float = 1.0, height: float = 1.0,

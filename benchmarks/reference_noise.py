@@ -1,0 +1,182 @@
+"""Noise of the path-traced reference: the estimator before issue 10 ("old": point sun as a scene
+emitter chosen per vertex, Russian roulette as Mitsuba's volpath, phase sampling by channel mean)
+against the current one ("new": the sun as the integrator's own disk of 0.53 deg with MIS, roulette
+that never inflates weights, history-aware channel sampling), in the same process, on the same scenes.
+
+    .venv/bin/python benchmarks/reference_noise.py [--views] [--time-to 0.01] [--bias] [--profile] [--quick]
+
+Scenes: the demo supercell (``wm.synthetic.supercell()``), camera ``Camera.orbit(vol, azimuth=200,
+elevation=8, fov=45)``, sunsky + ground; sun at azimuth/elevation 200/35 (front), 290/35 (side),
+20/20 (back); presets "paper" and "physical". Cloud pixels: eye-ray optical depth > ln 2
+(``reference.eye_optical_depth``, deterministic). Measures (``reference.noise_stats``, channel means):
+
+    rms se/mean    RMS standard error over cloud pixels / mean cloud radiance
+    worst se/mean  largest standard error of a cloud pixel / mean cloud radiance
+    mean RSE       mean over cloud pixels of se / radiance
+
+Sections (all by default):
+--views     the six views at 160 x 120, 64 spp in 16 passes: both estimators, seconds per spp.
+--time-to   time to a mean RSE over cloud pixels, supercell side-lit, 256 x 256: each estimator
+            renders --budget seconds of passes; t = T (RSE(T) / target)^2.
+--bias      point sun, small images, many spp: the mean cloud radiance of both estimators and their
+            difference in combined standard errors (the old estimator's errors are heavy-tailed, so
+            its standard error is itself unreliable).
+--profile   where the time of the new estimator goes, by ablation on the side view: each row changes
+            one thing and gives its seconds per spp against the full estimator in the same run.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import weather_mi as wm  # noqa: E402
+
+VIEWS = {"front": (200.0, 35.0), "side": (290.0, 35.0), "back": (20.0, 20.0)}
+
+
+def spec_for(vol, view, width, height, diameter, seed=0):
+    az, el = VIEWS[view]
+    return wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=200, elevation=8, fov=45),
+                        sun=wm.Sun(az, el, angular_diameter_deg=diameter), width=width, height=height, seed=seed)
+
+
+def render(spec, vol, spp, old, passes=None, **kw):
+    if old:
+        spec = replace(spec, sun=replace(spec.sun, angular_diameter_deg=0.0))
+    img = wm.render_reference(spec, vol, spp=spp, passes=passes, progress=False, legacy=old, **kw)
+    return img
+
+
+def row(label, img):
+    n = img.metadata["noise"]
+    s = img.metadata["seconds"]
+    return (f"{label:28s} {s:8.1f} {s / img.metadata['spp']:8.3f} {n['rms_se_over_mean']:12.3f} "
+            f"{n['worst_se_over_mean']:13.2f} {n['rse_mean']:9.3f}")
+
+
+HEADER = f"{'view / estimator':28s} {'seconds':>8s} {'s/spp':>8s} {'rms se/mean':>12s} {'worst se/mean':>13s} {'mean RSE':>9s}"
+
+
+def views(vols, args):
+    print(f"\n## six views, {args.width} x {args.height}, {args.spp} spp (16 passes)")
+    print(HEADER)
+    ratios = []
+    for preset, vol in vols.items():
+        for view in VIEWS:
+            spec = spec_for(vol, view, args.width, args.height, 0.53)
+            old = render(spec, vol, args.spp, True)
+            new = render(spec, vol, args.spp, False)
+            print(row(f"{preset} {view} old", old))
+            print(row(f"{preset} {view} new", new), flush=True)
+            ratios.append((new.metadata["seconds"] / old.metadata["seconds"]))
+    print(f"time per spp new / old: median {np.median(ratios):.2f}x, range {min(ratios):.2f}-{max(ratios):.2f}x")
+
+
+def time_to(vol, args):
+    size = args.size
+    print(f"\n## time to {100 * args.target:g}% mean RSE over cloud pixels, side-lit with sky, {size} x {size}, "
+          f"{args.budget:.0f} s of passes each")
+    spec = spec_for(vol, "side", size, size, 0.53)
+    out = {}
+    for old in (True, False):
+        render(replace(spec, width=16, height=16), vol, 1, old, passes=1)  # compile outside the timing
+        t1 = render(spec, vol, 1, old, passes=1).metadata["seconds"]
+        per = max(1, int(args.budget / 16 / max(t1, 1e-3)))
+        passes = max(4, int(args.budget / max(per * t1, 1e-3)))
+        img = render(spec, vol, per * passes, old, passes=passes)
+        n, s = img.metadata["noise"], img.metadata["seconds"]
+        t = s * (n["rse_mean"] / args.target) ** 2
+        out[old] = t
+        print(f"{'old' if old else 'new'}: {passes} passes x {per} spp in {s:.0f} s, mean RSE {n['rse_mean']:.4f}, "
+              f"rms se/mean {n['rms_se_over_mean']:.3f}, worst {n['worst_se_over_mean']:.2f} -> t({args.target:g}) "
+              f"= {t / 60:.1f} min", flush=True)
+    print(f"speed-up to {args.target:g} (old / new): {out[True] / out[False]:.2f}x")
+
+
+def bias(vols, args):
+    print(f"\n## unbiased: point sun, 48 x 36, {args.bias_spp} spp, mean cloud radiance +- se")
+    for preset, vol in vols.items():
+        for view in VIEWS:
+            spec = spec_for(vol, view, 48, 36, 0.0, seed=7)
+            cloud = wm.reference.cloud_mask(spec, vol)
+            means = []
+            for old in (True, False):
+                img = render(spec, vol, args.bias_spp, old)
+                lum, se = img.radiance.mean(axis=2), img.stderr.mean(axis=2)
+                means.append((float(lum[cloud].mean()), float(np.sqrt((se[cloud] ** 2).sum()) / cloud.sum())))
+            (mo, so), (mn, sn) = means
+            print(f"{preset:8s} {view:5s} old {mo:.5f} +- {so:.5f}  new {mn:.5f} +- {sn:.5f}  "
+                  f"difference {(mn - mo) / math.hypot(so, sn):+.2f} se", flush=True)
+
+
+def profile(vol, args):
+    print(f"\n## profile of the new estimator, side view, {args.width} x {args.height}, {args.profile_spp} spp")
+    spec = spec_for(vol, "side", args.width, args.height, 0.53)
+    t0 = time.perf_counter()
+    first = render(replace(spec, width=8, height=8, seed=99), vol, 1, False, passes=1)
+    print(f"first render of a process (scene build + kernel compile or disk cache + 8x8 pixels): "
+          f"{time.perf_counter() - t0:.1f} s ({first.metadata['seconds']:.1f} s of it in mi.render)")
+    base = render(spec, vol, args.profile_spp, False)
+    b = base.metadata["seconds"]
+    hg = wm.optical_volume(wm.synthetic.supercell(), species=args.presets[0],
+                           phase_tables=[wm.phase.henyey_greenstein(0.85)] * 5)
+    cases = [
+        ("full estimator", base),
+        ("max_depth 32 (long walks cut)", render(spec, vol, args.profile_spp, False, max_depth=32)),
+        ("max_depth 8", render(spec, vol, args.profile_spp, False, max_depth=8)),
+        ("no sky, no ground (sun only)", render(replace(spec, sky=None, ground=None), vol, args.profile_spp, False)),
+        ("HG phase instead of tables", render(spec, hg, args.profile_spp, False)),
+        ("majorant cell 8 (more null collisions)", render(spec, vol, args.profile_spp, False, cell=8)),
+        ("eye rays only (max_depth 1)", render(spec, vol, args.profile_spp, False, max_depth=1)),
+    ]
+    print(f"{'case':40s} {'seconds':>8s} {'vs full':>8s}")
+    for label, img in cases:
+        s = img.metadata["seconds"]
+        print(f"{label:40s} {s:8.1f} {s / b:8.2f}", flush=True)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--views", action="store_true")
+    ap.add_argument("--time-to", dest="time_to", action="store_true")
+    ap.add_argument("--bias", action="store_true")
+    ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--quick", action="store_true", help="smaller images and budgets")
+    ap.add_argument("--target", type=float, default=0.01)
+    ap.add_argument("--budget", type=float, default=120.0)
+    ap.add_argument("--presets", nargs="+", default=["paper", "physical"])
+    args = ap.parse_args(argv)
+    if not (args.views or args.time_to or args.bias or args.profile):
+        args.views = args.time_to = args.bias = args.profile = True
+    args.width, args.height, args.spp, args.size = (160, 120, 64, 256) if not args.quick else (80, 60, 32, 128)
+    args.bias_spp = 1024 if not args.quick else 256
+    args.profile_spp = 32 if not args.quick else 16
+    if args.quick:
+        args.budget = min(args.budget, 40.0)
+    t0 = time.perf_counter()
+    vols = {p: wm.optical_volume(wm.synthetic.supercell(), species=p) for p in args.presets}
+    for v in vols.values():
+        v.phase_tables  # noqa: B018  (tables built outside the timings)
+    print(f"demo supercell, presets {', '.join(args.presets)}; {__import__("mitsuba").variant()}")
+    first = next(iter(vols.values()))
+    if args.views:
+        views(vols, args)
+    if args.time_to:
+        time_to(first, args)
+    if args.bias:
+        bias(vols, args)
+    if args.profile:
+        profile(first, args)
+    print(f"\ntotal {time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
