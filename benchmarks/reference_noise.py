@@ -37,6 +37,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+import mitsuba as mi  # noqa: E402
 import weather_mi as wm  # noqa: E402
 
 VIEWS = {"front": (200.0, 35.0), "side": (290.0, 35.0), "back": (20.0, 20.0)}
@@ -165,7 +166,7 @@ def main(argv=None):
     vols = {p: wm.optical_volume(wm.synthetic.supercell(), species=p) for p in args.presets}
     for v in vols.values():
         v.phase_tables  # noqa: B018  (tables built outside the timings)
-    print(f"demo supercell, presets {', '.join(args.presets)}; {__import__("mitsuba").variant()}")
+    print(f"demo supercell, presets {', '.join(args.presets)}; {mi.variant()}")
     first = next(iter(vols.values()))
     if args.views:
         views(vols, args)

@@ -163,7 +163,7 @@ def main(argv: list[str] | None = None) -> int:
     render.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none"))
     render.add_argument("--ground-albedo", type=float, default=0.15, help="negative: no ground")
     render.add_argument("--size", default="320x240", help="WIDTHxHEIGHT")
-    render.add_argument("--spp", type=int, default=64,
+    render.add_argument("--spp", type=int, default=48,
                         help="samples per pixel (with --target-rse: of the first estimate)")
     render.add_argument("--target-rse", type=float, default=None,
                         help="add passes until the mean relative standard error over cloud pixels is this")

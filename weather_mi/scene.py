@@ -156,8 +156,8 @@ class Camera:
         """A photographer's view of a storm: a camera ``height_m`` above the ground (at ``ground_m``),
         ``distance_km`` horizontally from the storm's core (the column of largest optical depth of an
         OpticalVolume, else the box centre), standing at ``azimuth`` (degrees clockwise from north, seen
-        from the core), looking at the core with a level horizon ``below_horizon_deg`` above the bottom
-        of the frame. The horizontal field of view ``fov`` is widened if the top of the cloud (or
+        from the core), looking towards the middle of the cloud's box with a level horizon
+        ``below_horizon_deg`` above the bottom of the frame. The horizontal field of view ``fov`` is widened if the top of the cloud (or
         box) would not fit under the top of an image of this ``aspect`` (width / height)."""
         if not distance_km > 0 or not height_m > 0:
             raise ValueError(f"ground_view needs a positive distance and height, got {distance_km} km, {height_m} m")
@@ -182,7 +182,10 @@ class Camera:
             fov = 2 * math.degrees(math.atan(math.tan(math.radians(half_v)) * aspect))
             fov = min(fov, 170.0)
         pitch = half_v - below_horizon_deg
-        look = direction_from_angles((azimuth + 180.0) % 360.0, pitch)
+        # look towards the middle of the cloud (an anvil spreads downwind of the core)
+        mid = np.array([(x0 + x1) / 2, (y0 + y1) / 2]) - origin[:2]
+        heading = math.degrees(math.atan2(mid[0], mid[1])) if np.hypot(*mid) > 0 else (azimuth + 180.0) % 360.0
+        look = direction_from_angles(heading, pitch)
         return cls(tuple(origin), tuple(origin + 1000.0 * look), (0.0, 0.0, 1.0), float(fov))
 
     @classmethod
