@@ -45,8 +45,9 @@ Continuation at a medium vertex, q(d):
   below GUIDE_SEEN) the direction is drawn towards the sun, half uniform in the disk and half from the
   phase function about the sun's direction; q = (1 - eps) q_phase + eps (q_phase,sun + U_disk) / 2.
   The unguided draws have weights p / q <= 1 / (1 - eps), which compound along multiply scattered
-  paths: guiding stops once their product would exceed GUIDE_GROWTH. ``render_reference`` uses
-  eps = 0.1 (measured on the demo supercell: RMS and worst-pixel noise 2-4x lower).
+  paths: guiding stops once their product would exceed GUIDE_GROWTH. Off by default in
+  ``render_reference``: at eps = 0.1 the RMS and worst-pixel noise fell 2-4x on the orbit views of the
+  demo supercell (paper preset) but rose 3-4x on the ground view (physical preset).
 
 Russian roulette (``rr_mode``). "throughput" (default): survival probability min(max T, 1) after
 ``rr_depth``, so a weight never grows: Mitsuba's volpath caps the survival probability at 0.95, which

@@ -24,7 +24,7 @@ MAX_LANES_PER_PASS = 1 << 22
 MIN_PASSES = 16          # default number of passes (batches) of a render with spp >= 16
 CLOUD_TAU = np.log(2.0)  # cloud pixels: eye-ray transmittance below 1/2
 MAX_TARGET_PASSES = 1 << 14
-DEFAULT_SUN_GUIDING = 0.1  # measured: lower RMS and worst-pixel noise on the demo supercell (closing note of issue 10)
+DEFAULT_SUN_GUIDING = 0.0  # guiding measured mixed (closing note of issue 10): off until measured on more views
 
 
 def _check_inputs(spec: SceneSpec, vol: OpticalVolume, spp: int, normalize, integrator: str, variant):
