@@ -117,7 +117,8 @@ def render_command(args) -> Path:
     ckpt = out.with_name(out.name + ".ckpt.npz")
     img = render_reference(spec, vol, spp=args.spp, integrator=args.integrator, checkpoint=ckpt,
                            resume=ckpt if args.resume else None, target_rse=args.target_rse,
-                           max_seconds=args.max_seconds, sun_guiding=args.sun_guiding)
+                           max_seconds=args.max_seconds, sun_guiding=args.sun_guiding,
+                           forward_peak_deg=args.forward_peak, aureole_nee=args.aureole_nee)
     img.save(out)
     png = img.save_png(out.with_suffix(".png"), exposure=args.exposure)
     ckpt.unlink(missing_ok=True)
@@ -170,6 +171,12 @@ def main(argv: list[str] | None = None) -> int:
     render.add_argument("--max-seconds", type=float, default=None, help="with --target-rse: time limit")
     render.add_argument("--sun-guiding", type=float, default=None,
                         help="probability of sun-guided scattering directions (default: the renderer's)")
+    render.add_argument("--forward-peak", type=float, default=None, metavar="DEG",
+                        help="count scattering by less than DEG degrees (the diffraction peaks of rain, snow, "
+                             "graupel) as unscattered light (default: the renderer's, 0.1; 0: off)")
+    render.add_argument("--aureole-nee", type=float, default=None, metavar="P",
+                        help="probability of the aureole estimator (sun light reaching a vertex through one more "
+                             "forward scattering) at each scattering (default: the renderer's, 0: off)")
     render.add_argument("--seed", type=int, default=0)
     render.add_argument("--integrator", default="majorant", choices=("majorant", "volpath"))
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")

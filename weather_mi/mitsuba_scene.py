@@ -133,11 +133,13 @@ def medium_shape_dict(vol: OpticalVolume, floor_m: float | None = None) -> dict:
     return {"type": "cube", "to_world": to_world, "bsdf": {"type": "null"}, "interior": medium_dict(vol)}
 
 
-def integrator_sun(sun: Sun, guiding: float = 0.0) -> dict:
+def integrator_sun(sun: Sun, guiding: float = 0.0, aureole: float = 0.0) -> dict:
     """Properties of ``majorant_volpath`` that make the sun the integrator's own light (a disk with
-    MIS, or a point), sampled at every vertex instead of being one of the scene's emitters."""
+    MIS, or a point), sampled at every vertex instead of being one of the scene's emitters, with sun
+    guiding or aureole next-event estimation (probabilities)."""
     return {"sun_direction": sun.to_sun.tolist(), "sun_irradiance": list(sun.irradiance),
-            "sun_angular_diameter": float(sun.angular_diameter_deg), "sun_guiding": float(guiding)}
+            "sun_angular_diameter": float(sun.angular_diameter_deg), "sun_guiding": float(guiding),
+            "aureole_nee": float(aureole)}
 
 
 def _inside(p, box) -> bool:

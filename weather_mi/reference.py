@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import WeatherDataError
+from .forward_peak import DEFAULT_CONE_DEG, check_cone_deg, delta_scaled
 from .imageio import Image
 from .optics import OpticalVolume
 from .scene import SceneSpec
@@ -24,6 +25,7 @@ MAX_LANES_PER_PASS = 1 << 22
 MIN_PASSES = 16          # default number of passes (batches) of a render with spp >= 16
 CLOUD_TAU = np.log(2.0)  # cloud pixels: eye-ray transmittance below 1/2
 MAX_TARGET_PASSES = 1 << 14
+DEFAULT_AUREOLE_NEE = 0.0  # probability of the aureole estimator (majorant_volpath): 1.8x the time for a 1.5-2x lower RMS noise, off
 DEFAULT_SUN_GUIDING = 0.0  # guiding measured mixed (closing note of issue 10): off until measured on more views
 
 
@@ -72,7 +74,8 @@ def _passes(spec: SceneSpec, spp: int, passes: int | None) -> list[int]:
 
 
 def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_depth: int | None = None,
-                    cell: int | None = None, sun=None, sun_guiding: float = 0.0, legacy: bool = False) -> dict:
+                    cell: int | None = None, sun=None, sun_guiding: float = 0.0, legacy: bool = False,
+                    aureole_nee: float = 0.0) -> dict:
     """Mitsuba integrator dict: stock ``volpath`` or ``majorant_volpath`` with a majorant grid of
     ``cell``^3 voxels per coarse cell (None: the plugin's ``DEFAULT_CELL``). ``rr_depth``: depth at which
     Russian roulette starts (None: the integrators' default, 5; a huge value turns it off). ``sun``: a
@@ -91,7 +94,7 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
              "to_world": bbox_transform(vol.bbox)}
         if sun is not None:
             from .mitsuba_scene import integrator_sun
-            d.update(integrator_sun(sun, sun_guiding))
+            d.update(integrator_sun(sun, sun_guiding, aureole_nee))
         if legacy:  # the estimator before issue 10 (see render_reference)
             d.update({"rr_mode": "volpath", "phase_channels": "mean", "emitter_nee": 1.0})
     if rr_depth is not None:
@@ -189,6 +192,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                      checkpoint=None, resume=None, progress: bool = True, variant: str | None = None,
                      rr_depth: int | None = None, cell: int | None = None, target_rse: float | None = None,
                      max_seconds: float | None = None, sun_guiding: float | None = None,
+                     forward_peak_deg: float | None = None, aureole_nee: float | None = None,
                      legacy: bool = False) -> Image:
     """Path-trace ``vol`` as seen by ``spec`` (Mitsuba ``volpath`` or our local-majorant tracker).
 
@@ -204,6 +208,9 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                  transmittance < 1/2) is at most this, or ``max_seconds`` of rendering have passed.
     sun_guiding: probability of drawing a scattering direction from the phase function centred on the
                  sun ("majorant" only; None: DEFAULT_SUN_GUIDING).
+    forward_peak_deg : scattering by less than this many degrees (the diffraction peaks of rain, snow
+                 and graupel) counted as unscattered light, delta-M scaling (``weather_mi.forward_peak``;
+                 None: DEFAULT_CONE_DEG = 0.1 deg, 0 with ``legacy``; 0: the tables as they are).
     legacy     : the estimator before issue 10, for benchmarks: the sun one of the scene's emitters
                  (point sun only), Russian roulette as Mitsuba's volpath, phase sampling by channel mean.
     checkpoint : a .npz path written after every pass; ``resume`` (a path, or True to use
@@ -214,7 +221,11 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     from .variant import set_variant
     _check_inputs(spec, vol, spp, normalize, integrator, variant)
     sun_guiding = DEFAULT_SUN_GUIDING if sun_guiding is None else sun_guiding
+    if aureole_nee is None:  # the two are exclusive: sun guiding given, no aureole estimator
+        aureole_nee = DEFAULT_AUREOLE_NEE if sun_guiding == 0 and not legacy else 0.0
     _check_sun_options(spec, integrator, target_rse, max_seconds, sun_guiding, legacy)
+    forward_peak_deg = check_cone_deg((0.0 if legacy else DEFAULT_CONE_DEG) if forward_peak_deg is None
+                                      else forward_peak_deg)
     set_variant(variant) if variant is not None else set_variant(_current_or_default())
     import mitsuba as mi
     from tqdm.auto import tqdm
@@ -224,8 +235,10 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     spp_list = _passes(spec, int(spp), passes)
     own_sun = integrator == "majorant" and not legacy
     options = [integrator, max_depth, normalize, mi.variant(), rr_depth]
+    if forward_peak_deg > 0:
+        options.append(["forward peak", forward_peak_deg])
     if own_sun:
-        options.append(["integrator sun", sun_guiding])
+        options.append(["integrator sun", sun_guiding] + ([aureole_nee] if aureole_nee else []))
     plan = ["target", spp_list[0]] if target_rse is not None else spp_list
     key = _fingerprint(spec, vol, plan, *options)  # cell: speed only
     ckpt = Path(checkpoint) if checkpoint is not None else None
@@ -243,10 +256,11 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         ckpt = ckpt or resume_path
 
     spec_k, vol_k, _ = recentred(spec, vol)  # kernel-side coordinates: bbox centred on the origin
-    integ = integrator_dict(vol_k, integrator, max_depth, rr_depth, cell,
-                            sun=spec.sun if own_sun else None, sun_guiding=sun_guiding,
+    vol_render = delta_scaled(vol_k, forward_peak_deg)  # the cloud mask below keeps the full extinction
+    integ = integrator_dict(vol_render, integrator, max_depth, rr_depth, cell,
+                            sun=spec.sun if own_sun else None, sun_guiding=sun_guiding, aureole_nee=aureole_nee,
                             legacy=legacy and integrator == "majorant")
-    scene = mi.load_dict(scene_dict(spec_k, vol_k, integ))
+    scene = mi.load_dict(scene_dict(spec_k, vol_render, integ))
     if mi.variant().startswith("scalar"):  # the ray march is vectorised: every pixel counts there
         cloud = np.ones((spec.height, spec.width), bool)
     else:
@@ -302,6 +316,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
             "phase_mode": vol.phase_mode, "sun": ("scene emitter" if not own_sun else
                                                   ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
             "sun_guiding": sun_guiding if own_sun else None, "target_rse": target_rse,
+            "forward_peak_deg": forward_peak_deg, "aureole_nee": aureole_nee if own_sun else None,
             "noise": noise_stats(mean, stderr, cloud) if n > 1 else None}
     return Image(mean.astype(np.float32), stderr.astype(np.float32), meta)
 
