@@ -54,6 +54,15 @@ def plugin_asymmetry(table) -> float:
     return float(2 * np.pi * np.sum((b - a) * (pa * (2 * a + b) + pb * (a + 2 * b)) / 6.0))
 
 
+def test_disort_takes_a_phase_tables_own_moments():
+    """A tabulated HG phase function's Legendre moments (PhaseTable.legendre) give DISORT the same
+    fluxes and corrected intensities as its own HG moments g^l."""
+    own = fluxes.disort_slab(2.0, 0.99, 0.8, 0.5)
+    tab = fluxes.disort_slab(2.0, 0.99, wm.phase.henyey_greenstein(0.8), 0.5)
+    for key in ("R", "T", "L_nadir", "L_zenith"):
+        assert tab[key] == pytest.approx(own[key], rel=1e-4), key
+
+
 @pytest.mark.parametrize("g", [0.0, 0.75, 0.85])
 def test_hg_table_as_the_plugin_sees_it(g):
     """The renderer's HG table keeps the closed-form mean cosine g (the DISORT runs use g itself)."""

@@ -31,6 +31,9 @@ def main(argv=None):
     ap.add_argument("--size", type=int, default=96)
     ap.add_argument("--fov", type=float, default=8.0, help="horizontal field of view (degrees)")
     ap.add_argument("--tau", type=float, default=0.5, help="vertical optical depth of the layer")
+    ap.add_argument("--forward-peak", type=float, default=0.1,
+                    help="delta-M cone (render_reference's forward_peak_deg; its default, 3 deg, would count the "
+                         "aureole inside 3 deg as the sun's beam): this thin layer converges without it")
     ap.add_argument("-o", "--output", default="out/aureole")
     args = ap.parse_args(argv)
 
@@ -49,7 +52,7 @@ def main(argv=None):
         spec = wm.SceneSpec(camera=cam, sun=wm.Sun(SUN_AZ, SUN_EL, angular_diameter_deg=diameter),
                             sky=wm.Sky("constant", radiance=0.02), ground=wm.Ground(0.1), width=args.size,
                             height=args.size)
-        images[label] = wm.render_reference(spec, vol, spp=args.spp)
+        images[label] = wm.render_reference(spec, vol, spp=args.spp, forward_peak_deg=args.forward_peak)
     # angular distance of every pixel's centre from the sun (small-angle pinhole geometry)
     half = np.tan(np.radians(args.fov) / 2)
     u = (np.arange(args.size) + 0.5) / args.size * 2 - 1

@@ -172,8 +172,8 @@ def main(argv: list[str] | None = None) -> int:
     render.add_argument("--sun-guiding", type=float, default=None,
                         help="probability of sun-guided scattering directions (default: the renderer's)")
     render.add_argument("--forward-peak", type=float, default=None, metavar="DEG",
-                        help="count scattering by less than DEG degrees (the diffraction peaks of rain, snow, "
-                             "graupel) as unscattered light (default: the renderer's, 0.1; 0: off)")
+                        help="count scattering by less than DEG degrees (the forward peaks of the phase "
+                             "functions) as unscattered light, delta-M (default: the renderer's, 3; 0: off)")
     render.add_argument("--aureole-nee", type=float, default=None, metavar="P",
                         help="probability of the aureole estimator (sun light reaching a vertex through one more "
                              "forward scattering) at each scattering (default: the renderer's, 0: off)")

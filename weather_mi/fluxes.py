@@ -123,13 +123,14 @@ def _measure(scene_parts: dict, vol: OpticalVolume, sun, integrator: str, max_de
 def slab_fluxes(tau: float, albedo: float, phase_table, mu0: float, spp: int = 1 << 20, *, passes: int = 16,
                 seed: int = 0, integrator: str = "volpath", max_depth: int = -1, rr_depth: int | None = None,
                 thickness: float = 1.0, aspect: float = 1000.0, transmittance_method: str = "patch",
-                variant: str | None = None) -> dict:
+                variant: str | None = None, forward_peak_deg: float = 0.0) -> dict:
     """Flux reflectance R and total transmittance T of a slab (see the module docstring).
 
     spp     : paths per measurement in total (split over ``passes`` independent passes).
     rr_depth: Russian roulette start depth (None: the integrator's default, as ``render_reference``).
     transmittance_method : "patch" (total T, direct beam included by emitter sampling), "meter"
               (``irradiancemeter``: diffuse T only), or "both" (adds ``T_diffuse`` from the meter).
+    forward_peak_deg : delta-M of the phase table's forward peak within this cone (``forward_peak``).
     Returns dict(R, R_stderr, T, T_stderr[, T_diffuse, T_diffuse_stderr], T_direct_exact).
     """
     from .variant import ensure_registered, set_variant
@@ -140,7 +141,8 @@ def slab_fluxes(tau: float, albedo: float, phase_table, mu0: float, spp: int = 1
         raise ValueError(f"transmittance_method must be 'patch', 'meter' or 'both', got {transmittance_method!r}")
     if spp < passes or passes < 2:
         raise ValueError(f"need passes >= 2 and spp >= passes, got spp={spp}, passes={passes}")
-    vol = slab_volume(tau, albedo, phase_table, thickness, aspect)
+    from .forward_peak import delta_scaled
+    vol = delta_scaled(slab_volume(tau, albedo, phase_table, thickness, aspect), forward_peak_deg)
     sun = sun_for(mu0)
     h = thickness
     norm = 1.0 / (mu0 * float(np.mean(sun.irradiance)))
@@ -161,13 +163,14 @@ def slab_fluxes(tau: float, albedo: float, phase_table, mu0: float, spp: int = 1
 def slab_radiance(tau: float, albedo: float, phase_table, mu0: float, spp: int = 256, *, view: str = "nadir",
                   pixels: int = 16, passes: int = 16, seed: int = 0, integrator: str = "volpath",
                   max_depth: int = -1, rr_depth: int | None = None, thickness: float = 1.0,
-                  aspect: float = 1000.0, variant: str | None = None) -> tuple[float, float]:
+                  aspect: float = 1000.0, variant: str | None = None,
+                  forward_peak_deg: float | None = None) -> tuple[float, float]:
     """Normalised radiance pi L / (mu0 E) of the slab's centre seen by ``render_reference``:
     ``view="nadir"``: reflected, camera above looking straight down; ``"zenith"``: diffuse
     transmitted, camera below looking straight up. ``pixels`` x ``pixels`` image over 1% of H, ``spp``
     per pixel. Returns (mean over the pixels, its standard error).
 
-    ``rr_depth``: Russian roulette start depth, as ``render_reference`` takes it."""
+    ``rr_depth``, ``forward_peak_deg``: as ``render_reference`` takes them."""
     from .reference import render_reference
     from .scene import Camera, SceneSpec
     if view not in ("nadir", "zenith"):
@@ -182,7 +185,8 @@ def slab_radiance(tau: float, albedo: float, phase_table, mu0: float, spp: int =
                                   width=0.01 * h, height=0.01 * h)
     spec = SceneSpec(camera=cam, sun=sun_for(mu0), sky=None, ground=None, width=pixels, height=pixels, seed=seed)
     img = render_reference(spec, vol, spp=spp, max_depth=max_depth, integrator=integrator, passes=passes,
-                           normalize="reflectance", progress=False, variant=variant, rr_depth=rr_depth)
+                           normalize="reflectance", progress=False, variant=variant, rr_depth=rr_depth,
+                           forward_peak_deg=forward_peak_deg)
     rad = img.radiance.astype(np.float64).mean(axis=2)
     se = img.stderr.astype(np.float64).mean(axis=2)  # channels are identical for a grey medium
     return float(rad.mean()), float(np.sqrt(np.sum(se ** 2)) / rad.size)
@@ -190,14 +194,17 @@ def slab_radiance(tau: float, albedo: float, phase_table, mu0: float, spp: int =
 
 # ---------------------------------------------------------------- DISORT
 
-def disort_slab(tau: float, albedo: float, g: float, mu0: float, n_streams: int = 64,
+def disort_slab(tau: float, albedo: float, g, mu0: float, n_streams: int = 64,
                 n_moments: int = 512) -> dict:
     """DISORT (``disortpp``) solution for one homogeneous HG layer over a black surface, sun flux
     F0 = 1 at zenith cosine mu0, no diffuse illumination. Delta-M scaling is applied by the solver
     whenever the moment n_streams is non-zero; intensities get the Nakajima-Tanaka (TMS/IMS)
     correction, which in DisORT++ is only active when BOTH ``intensity_corr_buras`` (the C code's
     ``corint``) and ``intensity_corr_nakajima`` are set (with only the latter nothing happens), using
-    ``n_moments`` HG moments g^l.
+    ``n_moments`` HG moments g^l. ``g`` may instead be a PhaseTable: its own Legendre moments (green
+    channel). Then the fluxes are exact to the solver's accuracy, but the corrected intensities only
+    where the moments converge (a cloud droplet table at 2048: yes; ice or snow: no, they come out
+    negative).
 
     Returns R, T (direct beam included), T_diffuse, T_direct, and the normalised radiances
     pi I / (mu0 F0): ``L_nadir`` (upward, umu = +1, at the top) and ``L_zenith`` (diffuse
@@ -218,7 +225,10 @@ def disort_slab(tau: float, albedo: float, g: float, mu0: float, n_streams: int 
     cfg.allocate()
     cfg.delta_tau = [float(tau)]
     cfg.single_scat_albedo = [float(albedo)]
-    cfg.set_henyey_greenstein(float(g))
+    if hasattr(g, "legendre"):
+        cfg.phase_function_moments = [[float(x) for x in np.asarray(g.legendre(int(n_moments)))[:, 1]]]
+    else:
+        cfg.set_henyey_greenstein(float(g))
     cfg.mu_user = [-1.0, 1.0]
     cfg.tau_user = [0.0, float(tau)]
     cfg.phi_user = [0.0]

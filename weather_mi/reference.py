@@ -210,7 +210,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                  sun ("majorant" only; None: DEFAULT_SUN_GUIDING).
     forward_peak_deg : scattering by less than this many degrees (the diffraction peaks of rain, snow
                  and graupel) counted as unscattered light, delta-M scaling (``weather_mi.forward_peak``;
-                 None: DEFAULT_CONE_DEG = 0.1 deg, 0 with ``legacy``; 0: the tables as they are).
+                 None: DEFAULT_CONE_DEG = 3 deg, 0 with ``legacy``; 0: the tables as they are, which
+                 reads low at practical spp, see ``validation/forward_peak_slabs.py``).
     legacy     : the estimator before issue 10, for benchmarks: the sun one of the scene's emitters
                  (point sun only), Russian roulette as Mitsuba's volpath, phase sampling by channel mean.
     checkpoint : a .npz path written after every pass; ``resume`` (a path, or True to use
