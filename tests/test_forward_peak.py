@@ -39,6 +39,22 @@ def test_peak_share_and_truncated_table_match_the_construction():
     np.testing.assert_allclose(tt.eval(np.deg2rad([0.0, 0.3])), 1 / (4 * np.pi), rtol=3e-3)  # flattened
 
 
+def test_channels_with_different_peaks_keep_no_narrow_residual():
+    """Peak shares 0.3 / 0.35 / 0.4 in R / G / B: 0.3 leaves every channel, and the rest of each
+    channel's peak (0, 0.05, 0.1) is spread evenly over the cone, not left as a narrow spike."""
+    tables = [peaked_table(f) for f in (0.3, 0.35, 0.4)]
+    t = wm.phase.PhaseTable(tables[0].theta, np.stack([tb.values[:, c] for c, tb in enumerate(tables)], axis=1))
+    f = float(peak_excess(t, 0.5).min())
+    assert f == pytest.approx(0.3, rel=3e-3)
+    tt = truncated_table(t, 0.5, f)
+    cone = 2 * np.pi * (1 - np.cos(np.deg2rad(0.5)))
+    inside = tt.eval(np.deg2rad([0.0, 0.25, 0.45]))
+    np.testing.assert_allclose(inside, inside[[0]].repeat(3, axis=0), rtol=1e-6)  # flat in the cone
+    rest = np.array([0.7, 0.65, 0.6]) / (4 * np.pi)  # the isotropic part, per channel
+    expect = (rest + np.maximum(np.array([0.3, 0.35, 0.4]) - f, 0.0) / cone) / (1 - f)
+    np.testing.assert_allclose(inside[0], expect, rtol=5e-3)
+
+
 def test_delta_scaled_volume_follows_delta_m():
     omega = 0.9
     vol = wm.OpticalVolume.from_arrays(np.full((2, 2, 2), 0.01, np.float32), albedo=omega, phase=peaked_table(),

@@ -31,7 +31,7 @@ Mitsuba's own volpath as with majorant_volpath (tests/test_forward_peak.py).
 
 The extinction stays grey (the reference's medium has one sigma_t), so one f per species is taken
 out of every channel: the smallest channel excess. What differs between channels (at most ~2% of
-the scattered light for a 1 mm drop) stays in the table as a small residual peak.
+the scattered light for a 1 mm drop) stays in the table, spread evenly over the cone.
 """
 from __future__ import annotations
 
@@ -63,16 +63,16 @@ def peak_excess(table: PhaseTable, cone_deg: float) -> np.ndarray:
 
 
 def truncated_table(table: PhaseTable, cone_deg: float, fraction: float) -> PhaseTable:
-    """p' = (p - f delta_peak) / (1 - f): inside the cone each channel's values are moved toward
-    p(cone_deg) by the share f / excess_c of their excess (so exactly ``fraction`` of the energy
-    leaves every channel); outside the cone p' = p / (1 - f)."""
+    """p' = (p - f delta_peak) / (1 - f): inside the cone every channel is flat, at p(cone_deg) plus
+    what is left of its excess once ``fraction`` has left it (excess_c - f, spread evenly over the
+    cone: the channels' peaks differ by a few percent, and a narrow residual peak would be as much a
+    rare event as the whole one); outside the cone p' = p / (1 - f)."""
     th0 = np.deg2rad(cone_deg)
     theta = np.union1d(table.theta, [th0])
     p = table.eval(theta)
-    excess = peak_excess(table, cone_deg)
-    k = np.where(excess > 0, fraction / np.maximum(excess, 1e-300), 0.0)  # <= 1 by the choice of fraction
+    residual = np.maximum(peak_excess(table, cone_deg) - fraction, 0.0)  # >= 0 by the choice of fraction
     inside = theta < th0
-    p[inside] = (1 - k) * p[inside] + k * table.eval(th0)
+    p[inside] = table.eval(th0) + residual / (2 * np.pi * (1 - np.cos(th0)))
     return PhaseTable(theta, p / (1 - fraction), table.wavelengths_m, f"{table.name} (peak < {cone_deg:g} deg as unscattered)")
 
 
