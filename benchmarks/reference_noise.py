@@ -1,7 +1,7 @@
 """Noise of the path-traced reference: the estimator before issue 10 ("old": point sun as a scene
 emitter chosen per vertex, Russian roulette as Mitsuba's volpath, phase sampling by channel mean)
 against the current one ("new": the sun as the integrator's own disk of 0.53 deg with MIS, roulette
-that never inflates weights, long walks cut from depth 512, history-aware channel sampling, forward
+that never inflates weights, long walks cut from depth 1024, history-aware channel sampling, forward
 peaks within 3 deg as unscattered light), in the same process, on the same scenes.
 
     .venv/bin/python benchmarks/reference_noise.py [--views] [--time-to 0.01] [--bias] [--profile] [--quick]

@@ -63,11 +63,13 @@ Russian roulette (``rr_mode``). "throughput" (default): survival probability min
 in a storm of albedo ~1 - 1e-6 plays roulette at every event and multiplies the survivors' weights by
 1/0.95 per event; the variance of that estimator is infinite (contributions at depth n do not decay
 like 0.95^n), which made the fireflies of issue 10. Long walks are cut by one survival of 1/2 at each
-depth 2^k >= LONG_WALK_DEPTH = 512 (weights grow like the depth, not exponentially). From 32 on (as
-first tuned on one HG phase, where paths past 1000 events took 64% of the time and 0.2% of the
+depth 2^k >= LONG_WALK_DEPTH = 1024 (weights grow like the depth, not exponentially). From 32 on
+(as first tuned on one HG phase, where paths past 1000 events took 64% of the time and 0.2% of the
 light) the doubled weights made fireflies on the demo storm's ground view: RMS se/mean 0.5-1.9,
 worst pixel 8-50 at 64 spp against 0.29-0.34 and 2-4 from 512 on, at 1.8x the time; with no cut
-at all 0.26-0.29 and 2-4, at 3.6x the time. "volpath": the old rule.
+at all 0.26-0.29 and 2-4, at 3.6x the time. From 1024 rather than 512: on three orbit views, two
+seed pairs, the same efficiency (1 / (RMS^2 time)) and a lighter tail (worst pixel 1.5-2.5 against
+2.1-4.4), at 1.13x the time; 256 and 2048 were less efficient. "volpath": the old rule.
 
 All loops are symbolic (``dr.while_loop``): one kernel per render; new sigma_t / albedo data (through
 ``mi.traverse`` + ``params.update()``), new majorant values or resolutions and new emitter parameters
@@ -119,7 +121,7 @@ DEFAULT_CELL = 2  # fine voxels per coarse majorant cell (measured fastest on th
 SAFETY = 1.0001
 _RR_THRESHOLD = 0.1   # ratio tracking: roulette once max(T) drops below this ...
 _RR_SURVIVE = 0.5     # ... surviving with this probability
-LONG_WALK_DEPTH = 512  # see "Russian roulette" in the module docstring
+LONG_WALK_DEPTH = 1024  # see "Russian roulette" in the module docstring
 DEFAULT_EMITTER_NEE = 0.1  # probability of sampling the scene's emitters (the sky) at a vertex: 1.2x the efficiency of 0.25, 2x that of 0.05 (demo views)
 GUIDE_GROWTH = 2.0    # sun guiding: bound of the product of 1 / (1 - eps) along a path
 GUIDE_SEEN = 0.1      # sun guiding at full strength where the sun's transmittance estimate is >= this

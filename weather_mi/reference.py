@@ -212,6 +212,9 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                  and graupel) counted as unscattered light, delta-M scaling (``weather_mi.forward_peak``;
                  None: DEFAULT_CONE_DEG = 3 deg, 0 with ``legacy``; 0: the tables as they are, which
                  reads low at practical spp, see ``validation/forward_peak_slabs.py``).
+    aureole_nee: probability of the aureole estimator at a scattering vertex ("majorant" only; sun light
+                 through one more, forward, scattering sampled about the sun; None: DEFAULT_AUREOLE_NEE,
+                 0 where sun guiding is asked for: the two are exclusive).
     legacy     : the estimator before issue 10, for benchmarks: the sun one of the scene's emitters
                  (point sun only), Russian roulette as Mitsuba's volpath, phase sampling by channel mean.
     checkpoint : a .npz path written after every pass; ``resume`` (a path, or True to use
