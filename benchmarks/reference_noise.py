@@ -91,8 +91,8 @@ def time_to(vol, args):
     spec = spec_for(vol, "side", size, size, 0.53)
     out = {}
     for old in (True, False):
-        render(replace(spec, width=16, height=16), vol, 1, old, passes=1)  # compile outside the timing
-        t1 = render(spec, vol, 1, old, passes=1).metadata["seconds"]
+        render(spec, vol, 1, old, passes=1)  # compile outside the timing (at this image size: a new
+        t1 = render(spec, vol, 1, old, passes=1).metadata["seconds"]  # size may compile anew)
         per = max(1, int(args.budget / 16 / max(t1, 1e-3)))
         passes = max(4, int(args.budget / max(per * t1, 1e-3)))
         img = render(spec, vol, per * passes, old, passes=passes)
