@@ -29,7 +29,7 @@ a direction uniform in the disk, pdf p_sun = 1 / (2 pi v_max), v_max = 1 - cos r
 float32. A path that leaves the scene inside the disk collects L. Both are weighted by the power
 heuristic against the pdf q with which the vertex continues the path (below); a point sun is NEE
 only. One shadow ray per vertex: towards the scene's emitters (the sky) with probability
-``emitter_nee`` (c, default 0.25), else towards the sun; as techniques their pdfs are c x pdf_emitter
+``emitter_nee`` (c, ``DEFAULT_EMITTER_NEE`` = 0.1), else towards the sun; as techniques their pdfs are c x pdf_emitter
 and (1 - c) x p_sun, in both MIS weights.
 
 Continuation at a medium vertex, q(d):

@@ -122,8 +122,11 @@ def render_command(args) -> Path:
     img.save(out)
     png = img.save_png(out.with_suffix(".png"), exposure=args.exposure)
     ckpt.unlink(missing_ok=True)
-    print(f"wrote {out} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s, "
-          f"mean relative standard error {img.relative_stderr():.3f})")
+    noise = img.metadata.get("noise") or {}
+    cloud = (f", over cloud pixels: mean relative standard error {noise['rse_mean']:.3f}, RMS standard error / "
+             f"mean {noise['rms_se_over_mean']:.3f}, worst {noise['worst_se_over_mean']:.2f}") if noise.get("cloud_pixels") \
+        else f", mean relative standard error {img.relative_stderr():.3f}"
+    print(f"wrote {out} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s{cloud})")
     return out
 
 

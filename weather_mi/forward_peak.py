@@ -79,8 +79,7 @@ def truncated_table(table: PhaseTable, cone_deg: float, fraction: float) -> Phas
 def peak_tables(tables, cone_deg: float):
     """(f (S,), truncated tables): each table's forward-peak share within ``cone_deg`` (the smallest
     channel excess, :func:`peak_excess`) and the table without it (:func:`truncated_table`; the table
-    itself where f = 0). For scattering-order-dependent truncation in ``majorant_volpath``."""
-    cone_deg = check_cone_deg(cone_deg)
+    itself where f = 0)."""
     f = np.array([max(float(np.min(peak_excess(t, cone_deg))), 0.0) for t in tables])
     return f, [truncated_table(t, cone_deg, fs) if fs > 0 else t for t, fs in zip(tables, f)]
 
@@ -93,26 +92,27 @@ def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG) -> Opti
     omega'_c = omega_c (1 - F) / (1 - mean_c(omega) F),  w'_s ~ w_s (1 - f_s), and per-species
     beta_s' = beta_s - f_s w_s mean(omega) sigma_t (they sum to sigma_t'). Returns ``vol`` itself
     when ``cone_deg`` is 0 or no table has a peak there."""
-    cone_deg = check_cone_deg(cone_deg)
-    if cone_deg == 0.0:
+    if check_cone_deg(cone_deg) == 0.0:
         return vol
+    cone_deg = float(cone_deg)
     f, truncated = peak_tables(vol.phase_tables, cone_deg)
     if not np.any(f > 0):
         return vol
-    w = vol.weights.astype(np.float64)  # (S, z, y, x)
-    F = np.tensordot(f, w, axes=1)  # (z, y, x)
-    omega_mean = vol.albedo.mean(axis=-1, dtype=np.float64)
-    removed = omega_mean * F * vol.beta_total  # 1/m: the peaks' scattering, now transmitted
-    beta_total = vol.beta_total - removed
+    # float32 throughout: a WRF grid's (S, z, y, x) arrays are hundreds of MB in float64
+    f32 = f.astype(np.float32)[:, None, None, None]
+    w = vol.weights  # (S, z, y, x)
+    F = np.tensordot(f.astype(np.float32), w, axes=1)  # (z, y, x)
+    omega_mean = vol.albedo.mean(axis=-1)
+    scattering = omega_mean * vol.beta_total  # 1/m
+    beta_ext = np.maximum(vol.beta_ext - f32 * w * scattering[None], 0)  # the peaks' scattering, now transmitted
+    beta_total = np.maximum(vol.beta_total - F * scattering, 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         albedo = np.where((vol.beta_total > 0)[..., None],
                           vol.albedo * ((1 - F) / (1 - omega_mean * F))[..., None], vol.albedo)
-        weights = w * (1 - f)[:, None, None, None]
+        weights = w * (1 - f32)
         total = weights.sum(axis=0)
-        weights = np.where(total > 0, weights / total, 0.0)
-    beta_ext = vol.beta_ext - (f[:, None, None, None] * w * (omega_mean * vol.beta_total)[None])
-    out = OpticalVolume(vol.species, np.maximum(beta_ext, 0).astype(np.float32),
-                        np.maximum(beta_total, 0).astype(np.float32),
+        weights = np.where(total > 0, weights / total, np.float32(0))
+    out = OpticalVolume(vol.species, beta_ext.astype(np.float32), beta_total.astype(np.float32),
                         np.clip(albedo, 0, 1).astype(np.float32), weights.astype(np.float32), vol.bbox,
                         vol.species_set, vol.phase_mode, vol.phase_quality,
                         {**vol.attrs, "forward_peak_deg": cone_deg,
@@ -121,4 +121,4 @@ def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG) -> Opti
     return out
 
 
-__all__ = ["DEFAULT_CONE_DEG", "check_cone_deg", "delta_scaled", "peak_excess", "truncated_table"]
+__all__ = ["DEFAULT_CONE_DEG", "check_cone_deg", "delta_scaled", "peak_excess", "peak_tables", "truncated_table"]
