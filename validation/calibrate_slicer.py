@@ -2,10 +2,11 @@
 beside the paper's Table IV modes.
 
     .venv/bin/python validation/calibrate_slicer.py [-o out/slicer_calibration] [--data ../shared/data]
-        [--size 64x48] [--spp 32] [--iterations 50] [--learning-rate 0.15] [--slices 128]
+        [--size 64x48] [--spp 128] [--target-rse 0.02] [--max-seconds 600] [--iterations 50] [--learning-rate 0.15] [--slices 128]
         [--no-fit] [--noise-floor]
 
-1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them):
+1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them);
+   training views at --spp (their noise is unbiased for the fit), held-out views to --target-rse:
    training: the demo supercell and the demo cumulus (wm.synthetic), front-, side- and back-lit;
    held-out: the real WRF supercell, the WRF Tibetan Plateau file, BOMEX and RICO (from --data),
    front- and side-lit.
@@ -44,21 +45,28 @@ HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") fo
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
 
-def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int) -> Image:
+def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_rse=None,
+              max_seconds=None) -> Image:
+    """The path-traced reference of a view: ``spp`` samples, or with ``target_rse`` passes added until the
+    mean relative standard error over cloud pixels reaches it (or ``max_seconds``); cached as EXR."""
     seed = "" if spec.seed == 0 else f"_seed{spec.seed}"
-    path = out / f"{scene}_{lighting}_{spec.width}x{spec.height}_{spp}spp{seed}_reference.exr"
+    plan = f"{spp}spp" if target_rse is None else f"rse{target_rse:g}"
+    path = out / f"{scene}_{lighting}_{spec.width}x{spec.height}_{plan}{seed}_reference.exr"
     if path.is_file():
         return Image.load(path)
     t = time.perf_counter()
-    ref = wm.render_reference(spec, vol, spp=spp, progress=False)
+    ref = wm.render_reference(spec, vol, spp=spp, progress=False, target_rse=target_rse, max_seconds=max_seconds)
     ref.save(path)
-    print(f"  reference {scene} {lighting}: {time.perf_counter() - t:.0f} s", flush=True)
+    noise = ref.metadata.get("noise") or {}
+    print(f"  reference {scene} {lighting}: {time.perf_counter() - t:.0f} s, {ref.metadata['spp']} spp, "
+          f"cloud RSE {noise.get('rse_mean', float('nan')):.3f}", flush=True)
     return ref
 
 
-def load_views(names, out, cfg, data, spp, second_seed=False):
+def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, max_seconds=None):
     """{(scene, lighting): TrainingView}; with ``second_seed`` also {(scene, lighting): a second,
-    independent reference (seed 1)} for the reference's own noise."""
+    independent reference (seed 1)} for the reference's own noise. ``target_rse``/``max_seconds``: see
+    ``reference``."""
     views, vols, seconds = {}, {}, {}
     for scene, lighting in names:
         if scene not in vols:
@@ -67,11 +75,12 @@ def load_views(names, out, cfg, data, spp, second_seed=False):
             continue
         vol = vols[scene][0]
         spec = view(vol, lighting, cfg)
-        ref = reference(out, scene, lighting, vol, spec, spp)
+        ref = reference(out, scene, lighting, vol, spec, spp, target_rse, max_seconds)
         mask = metrics.cloud_mask(eye_transmittance(vol, spec, 128))
         views[(scene, lighting)] = TrainingView(vol, spec, ref.radiance, mask)
         if second_seed:
-            seconds[(scene, lighting)] = reference(out, scene, lighting, vol, replace(spec, seed=1), spp).radiance
+            seconds[(scene, lighting)] = reference(out, scene, lighting, vol, replace(spec, seed=1), spp, target_rse,
+                                                 max_seconds).radiance
     return (views, seconds) if second_seed else views
 
 
@@ -123,7 +132,12 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--output", default="out/slicer_calibration")
     ap.add_argument("--data", default=str(DEFAULT_DATA))
     ap.add_argument("--size", default="64x48")
-    ap.add_argument("--spp", type=int, default=32)
+    ap.add_argument("--spp", type=int, default=128,
+                    help="samples per pixel of the training references (noise there is unbiased for the fit), "
+                         "and of the first estimate of the held-out ones")
+    ap.add_argument("--target-rse", type=float, default=0.02,
+                    help="held-out references: mean relative standard error over cloud pixels to reach")
+    ap.add_argument("--max-seconds", type=float, default=600.0, help="held-out references: time limit each")
     ap.add_argument("--iterations", type=int, default=50)
     ap.add_argument("--learning-rate", type=float, default=0.15)
     ap.add_argument("--slices", type=int, default=128)
@@ -138,7 +152,8 @@ def main(argv=None) -> int:
     cfg = StudyConfig(width=width, height=height, phase_quality="test")
     train = load_views(TRAIN, out, cfg, args.data, args.spp)
     if args.references_only:
-        load_views(HELD_OUT, out, cfg, args.data, args.spp)
+        load_views(HELD_OUT, out, cfg, args.data, args.spp, target_rse=args.target_rse,
+                   max_seconds=args.max_seconds)
         return 0
     fitted, history, head = None, [], "Shipped defaults only (no fit)."
     if not args.no_fit:
@@ -150,11 +165,13 @@ def main(argv=None) -> int:
                 f"loss {history[0]:.4g} -> {history[-1]:.4g} in {len(history)} iterations.")
         (out / "fitted.json").write_text(json.dumps(fit, indent=1))
         print(head, flush=True)
-    held = load_views(HELD_OUT, out, cfg, args.data, args.spp, second_seed=args.noise_floor)
+    held = load_views(HELD_OUT, out, cfg, args.data, args.spp, second_seed=args.noise_floor,
+                      target_rse=args.target_rse, max_seconds=args.max_seconds)
     held, second = held if args.noise_floor else (held, None)
     rows_t, names_t = evaluate(train, fitted, args.slices)
     rows_h, names_h = evaluate(held, fitted, args.slices, out, second)
-    text = "\n\n".join([f"# Slicer calibration ({width} x {height}, references {args.spp} spp)", head,
+    text = "\n\n".join([f"# Slicer calibration ({width} x {height}; references: training {args.spp} spp, held-out to a "
+                         f"cloud RSE of {args.target_rse:g} or {args.max_seconds:g} s)", head,
                          table(rows_t, names_t, "Training views"), table(rows_h, names_h, "Held-out views")])
     (out / "calibration.md").write_text(text + "\n")
     print(text)
