@@ -6,6 +6,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import weather_mi
+
+weather_mi.set_variant()  # tests call Mitsuba directly; importing weather_mi selects no variant
+
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 WRF_SUPERCELL = SHARED_DATA / "wrf" / "wrfout_quarter_ss_0130.nc"
 WRF_THOMPSON = SHARED_DATA / "wrf" / "wrf_d01_allvars_cropped.nc"

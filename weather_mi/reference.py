@@ -86,8 +86,9 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
     else:
         import mitsuba as mi
         from .plugins.hydrometeor_mixture import bbox_transform
-        from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid, register
-        register()
+        from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid
+        from .variant import ensure_registered
+        ensure_registered()
         cell = DEFAULT_CELL if cell is None else cell
         d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
              "majorant": mi.TensorXf(majorant_grid(vol.beta_total, cell=int(cell))),
