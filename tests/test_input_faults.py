@@ -3,6 +3,7 @@ file, the variable and the expectation, or a warning that says how much was chan
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -64,3 +65,65 @@ def test_no_warning_without_negative_values(tmp_path):
         warnings.simplefilter("error")
         wm.from_arrays({"cloud": np.zeros((2, 3, 4))}, 1.0, (1, 1, 1))
         wm.open_wrf(write_wrfout(tmp_path / "w.nc"))
+
+
+# ---------------------------------------------------------------- LES text files
+
+SHARED_LES = Path(__file__).resolve().parents[2] / "shared" / "data" / "les"
+LES_HEAD = "# a test cloud\n3 2 4\n0.100 0.100\n1.000 1.100 1.200 1.300\n"
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+def test_les_file_cut_mid_line_names_the_line(tmp_path):
+    """Cut inside the last number (17.261 -> 1): the same column count, so only the unfinished last line
+    (no newline, fewer decimals than its column) tells."""
+    path = _write(tmp_path / "cut.txt", LES_HEAD + "0 0 0 0.50000 12.125\n1 1 1 0.30000 1")
+    with pytest.raises(wm.WeatherDataError, match=r"cut\.txt.*line 6.*cut"):
+        wm.open_les(path)
+
+
+def test_les_file_without_final_newline_but_complete_loads(tmp_path):
+    path = _write(tmp_path / "whole.txt", LES_HEAD + "0 0 0 0.50000 12.125\n1 1 1 0.30000 17.261")
+    assert float(wm.open_les(path, rho_air=1.0).q_cloud[1, 1, 1]) == pytest.approx(0.3e-3)
+
+
+def test_les_file_listing_every_voxel_checked_against_the_header(tmp_path):
+    """A file that lists clear voxels too (every voxel, in order) must list nx ny nz of them."""
+    rows = [f"{i} {j} {k} {0.1 if (i + j + k) % 3 == 0 else 0.0:.5f} 10.000"
+            for k in range(4) for j in range(2) for i in range(3)]
+    full = _write(tmp_path / "full.txt", LES_HEAD + "\n".join(rows) + "\n")
+    assert wm.open_les(full, rho_air=1.0).attrs["n_voxels_listed"] == 24
+    cut = _write(tmp_path / "dense_cut.txt", LES_HEAD + "\n".join(rows[:13]) + "\n")
+    with pytest.raises(wm.WeatherDataError, match=r"dense_cut\.txt.*24 voxel lines.*13.*line 17"):
+        wm.open_les(cut)
+
+
+def test_real_les_file_cut_mid_line_is_an_error(tmp_path):
+    """RICO cut at 54% inside the last number of a line (r_eff 17.261 -> 1): an error naming that line."""
+    rico = SHARED_LES / "rico_20m.txt"
+    if not rico.is_file():
+        pytest.skip(f"shared data file {rico} is absent")
+    text = rico.read_text()
+    head = text[:text.index("\n", int(0.54 * len(text))) + 1]
+    line = text[len(head):text.index("\n", len(head))]
+    cut = head + line[:line.rindex(",") + 2]
+    path = _write(tmp_path / "rico_cut.txt", cut)
+    with pytest.raises(wm.WeatherDataError, match=rf"rico_cut\.txt.*line {cut.count(chr(10)) + 1}\b"):
+        wm.open_les(path)
+
+
+def test_les_levels_uniform_within_their_printed_precision_are_kept(tmp_path):
+    """25 m levels printed in km to 3 decimals read as 24-26 m apart: uniform, not regridded."""
+    levels = " ".join(f"{0.5125 + 0.025 * k:.3f}" for k in range(8))
+    assert len({round(float(b) - float(a), 3) for a, b in zip(levels.split(), levels.split()[1:])}) > 1
+    text = f"# rounded levels\n2 1 8\n0.025 0.025\n{levels}\n" + "".join(
+        f"0 0 {k} {0.1 * (k + 1):.3f} 10.0\n" for k in range(8))
+    ds = wm.open_les(_write(tmp_path / "rounded.txt", text), rho_air=1.0)
+    assert "vertical_regrid" not in ds.attrs
+    assert ds.sizes["z"] == 8
+    np.testing.assert_allclose(np.diff(ds.z.values), 25.0, atol=0.2)
+    np.testing.assert_allclose(ds.q_cloud.values[:, 0, 0] * 1e3, 0.1 * np.arange(1, 9), rtol=1e-5)
