@@ -88,3 +88,36 @@ except Exception as exc:
     out = _run(script)
     assert out.returncode == 0, out.stderr[-3000:]
     assert out.stdout.strip() in ("ok", "registered"), out.stdout
+
+
+# ---------------------------------------------------------------- OpticalVolume: complete and read-only
+
+def test_optical_volume_is_complete_and_read_only_once_built():
+    import dataclasses
+
+    import numpy as np
+
+    import weather_mi as wm
+    q = np.zeros((3, 4, 5))
+    q[1, 2, 3] = 1e-3
+    vol = wm.optical_volume(wm.from_arrays({"cloud": q, "ice": q}, 1.0, (100, 100, 100)), phase_quality="test")
+    assert isinstance(vol.phase_tables, tuple) and len(vol.phase_tables) == len(vol.species)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        vol.phase_tables = vol.phase_tables[::-1]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        vol.bbox = ((0, 0, 0), (1, 1, 1))
+    for name in ("beta_ext", "beta_total", "albedo", "weights"):
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(vol, name)[(0,) * getattr(vol, name).ndim] = 1.0
+    # a changed copy is a new, equally complete volume; the arrays given to it stay the caller's
+    albedo = np.full_like(vol.albedo, 0.5)
+    v2 = dataclasses.replace(vol, albedo=albedo)
+    assert v2.phase_tables == vol.phase_tables and albedo.flags.writeable
+    with pytest.raises(wm.WeatherDataError, match="one table per species"):
+        dataclasses.replace(vol, phase_tables=vol.phase_tables[:2])
+
+
+def test_no_module_writes_the_volume_s_private_fields():
+    offenders = [str(p.relative_to(ROOT)) for p in (ROOT / "weather_mi").rglob("*.py")
+                 if re.search(r"\._phase_tables\b|\bvol\w*\.phase_tables\s*=[^=]", p.read_text())]
+    assert offenders == []

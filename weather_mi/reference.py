@@ -108,7 +108,7 @@ def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str
     h.update(json.dumps([spec.to_dict(), spp_list, *options], sort_keys=True, default=str).encode())
     for a in (vol.beta_total, vol.albedo, vol.weights):
         h.update(np.ascontiguousarray(a).tobytes())
-    for t in vol.phase_tables:  # the phase functions are part of the scene too
+    for t in vol.require_phase_tables():  # the phase functions are part of the scene too
         h.update(np.ascontiguousarray(t.theta, np.float64).tobytes())
         h.update(np.ascontiguousarray(t.values, np.float64).tobytes())
     h.update(json.dumps([list(map(float, p)) for p in vol.bbox]).encode())

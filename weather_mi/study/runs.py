@@ -288,7 +288,7 @@ def _single_field_volume(vol, cfg):
             / max(s.scale, 1e-30) * cloud.scale
     weights = np.zeros_like(vol.weights)
     weights[0] = (beta[0] > 0)
-    v = replace(vol, beta_ext=beta, beta_total=beta[0].copy(), weights=weights, _phase_tables=list(vol.phase_tables))
+    v = replace(vol, beta_ext=beta, beta_total=beta[0].copy(), weights=weights)
     assert v.species == SPECIES_NAMES
     return v
 
@@ -296,8 +296,7 @@ def _single_field_volume(vol, cfg):
 def _uniform_phase_volume(vol):
     """Fig. 6 'one phase function for all' for the path tracer: every species scatters with the first
     species' table (cloud droplets), as the slicer's uniform phase mode does."""
-    tables = list(vol.phase_tables)
-    return replace(vol, _phase_tables=[tables[0]] * len(tables))
+    return replace(vol, phase_tables=(vol.phase_tables[0],) * len(vol.phase_tables))
 
 
 def _species_colour_volume(vol):
@@ -312,6 +311,6 @@ def _species_colour_volume(vol):
     has = vol.beta_total > 0
     alb[has] /= vol.beta_total[has][..., None]
     alb[~has] = 1.0
-    return replace(vol, albedo=alb.astype(np.float32), species_set=colours, _phase_tables=list(vol.phase_tables))
+    return replace(vol, albedo=alb.astype(np.float32), species_set=colours)
 
 
