@@ -121,3 +121,45 @@ def test_no_module_writes_the_volume_s_private_fields():
     offenders = [str(p.relative_to(ROOT)) for p in (ROOT / "weather_mi").rglob("*.py")
                  if re.search(r"\._phase_tables\b|\bvol\w*\.phase_tables\s*=[^=]", p.read_text())]
     assert offenders == []
+
+
+# ---------------------------------------------------------------- packaging
+
+def _pyproject() -> dict:
+    return tomllib.loads((ROOT / "pyproject.toml").read_text())
+
+
+def _name(requirement: str) -> str:
+    return re.split(r"[<>=!~\[; ]", requirement, maxsplit=1)[0].lower()
+
+
+def test_dependencies_are_ranges_and_the_exact_pins_live_in_constraints():
+    project = _pyproject()["project"]
+    requirements = project["dependencies"] + [r for extra in project["optional-dependencies"].values() for r in extra]
+    assert not [r for r in requirements if "==" in r], "exact pins belong in constraints.txt"
+    assert all(">=" in r for r in requirements), "every dependency has a tested lower bound"
+    pins = {}
+    for line in (ROOT / "constraints.txt").read_text().splitlines():
+        line = line.split("#", 1)[0].strip()
+        if line:
+            name, version = line.split("==")
+            pins[name.strip().lower()] = version.strip()
+    assert sorted(pins) == sorted(_name(r) for r in requirements)
+    for r in requirements:  # each pin inside its range's lower bound
+        lower = re.search(r">=([\w.]+)", r).group(1)
+        pin = pins[_name(r)]
+        assert [int(x) for x in re.findall(r"\d+", pin)[:3]] >= [int(x) for x in re.findall(r"\d+", lower)[:3]], r
+    setup = (ROOT / "setup.sh").read_text()
+    assert "-c constraints.txt" in setup
+
+
+def test_every_package_and_data_folder_is_declared():
+    """setuptools warns about (and would drop) folders of the package that the configuration omits:
+    weather_mi.phase.data (the shipped phase tables) and weather_mi.study (``weather-mi validate``)."""
+    tool = _pyproject()["tool"]["setuptools"]
+    declared = set(tool["packages"])
+    found = {".".join(p.relative_to(ROOT).parts) for p in (ROOT / "weather_mi").rglob("*")
+             if p.is_dir() and p.name != "__pycache__" and any(f.is_file() for f in p.iterdir())}
+    assert found | {"weather_mi", "weather_mi.plugins"} == declared
+    assert tool["package-dir"]["weather_mi.plugins"] == "plugins"
+    assert tool["package-data"]["weather_mi.phase.data"] == ["*.npz"]
