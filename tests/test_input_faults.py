@@ -127,3 +127,31 @@ def test_les_levels_uniform_within_their_printed_precision_are_kept(tmp_path):
     assert ds.sizes["z"] == 8
     np.testing.assert_allclose(np.diff(ds.z.values), 25.0, atol=0.2)
     np.testing.assert_allclose(ds.q_cloud.values[:, 0, 0] * 1e3, 0.1 * np.arange(1, 9), rtol=1e-5)
+
+
+# ---------------------------------------------------------------- WRF map factors
+
+def test_wrf_map_factors_set_the_horizontal_spacing_and_the_rest_is_warned(tmp_path):
+    """A Mercator grid (Katrina: map factors 1.08-1.12): the true distance between mass points is DX / m.
+    The spacing is DX over the mean map factor; what a uniform grid cannot follow is warned with its size."""
+    m = np.linspace(1.08, 1.12, 4)[None, :, None] * np.ones((1, 4, 5))
+    path = write_wrfout(tmp_path / "w.nc", dx=3000.0, override={"MAPFAC_M": m})
+    with pytest.warns(UserWarning, match=r"w\.nc.*MAPFAC_M.*1\.08.*1\.12.*1\.8%"):
+        hyd = wm.open_wrf(path)
+    dz, dy, dx = wm.hydrometeors.spacing_of(hyd)
+    assert dx == pytest.approx(3000.0 / 1.1, rel=1e-4) and dy == pytest.approx(3000.0 / 1.1, rel=1e-4)
+    assert hyd.attrs["map_factor_mean"] == pytest.approx(1.1, rel=1e-4)
+
+
+def test_wrf_uniform_map_factor_scales_silently(tmp_path):
+    path = write_wrfout(tmp_path / "w.nc", dx=3000.0, override={"MAPFAC_M": np.full((1, 4, 5), 1.25)})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hyd = wm.open_wrf(path)
+    assert wm.hydrometeors.spacing_of(hyd)[2] == pytest.approx(2400.0, rel=1e-4)
+
+
+def test_wrf_bad_map_factors_are_an_error(tmp_path):
+    path = write_wrfout(tmp_path / "w.nc", override={"MAPFAC_M": np.zeros((1, 4, 5))})
+    with pytest.raises(wm.WeatherDataError, match=r"w\.nc.*MAPFAC_M.*positive"):
+        wm.open_wrf(path)

@@ -4,8 +4,8 @@ Steps: select a time (index or timestamp) and an optional horizontal sub-box; he
 z_w = (PH + PHB) / g and of the mass levels as their mean (destaggering); dry-air density
 rho_d = p / (R_d T (1 + 1.608 q_v)) with p = P + PB, T = (T' + 300 K)(p / 1e5)^(R_d/c_p)
 (cross-checked against ALT = 1/rho_d when the file has it); species mass densities rho_d q regridded
-conservatively onto a uniform height grid (weather_mi.io.vertical); the map-projected grid treated as
-Cartesian with DX, DY. Negative mixing ratios are clipped, counted and reported in a warning (count
+conservatively onto a uniform height grid (weather_mi.io.vertical); the horizontal spacing DX, DY over
+the mean map factor (weather_mi.io.map_factors, with a warning where it varies). Negative mixing ratios are clipped, counted and reported in a warning (count
 and minimum per variable); species the scheme does not carry become zeros with a warning that names the
 scheme, while a variable the scheme writes and the file lacks is an error (``schemes.SCHEME_VARS``).
 """
@@ -21,6 +21,7 @@ import xarray as xr
 from ..errors import WeatherDataError
 from ..hydrometeors import from_arrays, warn_clipped
 from . import vertical
+from .map_factors import horizontal_spacing
 from .schemes import MP_SCHEMES, SCHEME_VARS
 
 G = 9.81               # m/s^2, WRF's gravity
@@ -32,6 +33,7 @@ THETA0 = 300.0         # K, WRF's base potential temperature offset of T
 SPECIES_VARS = {"cloud": "QCLOUD", "ice": "QICE", "rain": "QRAIN", "snow": "QSNOW", "graupel": "QGRAUP"}
 RADIUS_VARS = {"cloud": "RE_CLOUD", "ice": "RE_ICE", "snow": "RE_SNOW"}
 REQUIRED = ("P", "PB", "T", "PH", "PHB")
+MAP_FACTOR_VARS = ("MAPFAC_M", "MAPFAC_MX", "MAPFAC_MY")
 
 
 
@@ -204,10 +206,14 @@ def _convert(ds, path, time, x, y, dz, top, bottom) -> xr.Dataset:
 
     dx = float(ds.attrs.get("DX", 1000.0))
     dy = float(ds.attrs.get("DY", dx))
+    factors = {v: _read(ds, v, it, sel, path, shape[1:]) for v in MAP_FACTOR_VARS if v in ds}
+    if "MAPFAC_MX" in factors and "MAPFAC_MY" in factors:
+        factors.pop("MAPFAC_M", None)
+    dx, dy, grid_attrs = horizontal_spacing(path, dx, dy, factors, stacklevel=3)
     i0 = (x.start or 0) if x is not None else 0
     j0 = (y.start or 0) if y is not None else 0
     attrs.update({"n_negative_clipped_native": int(sum(negatives.values())), "dz_native_mean": dz,
-                  "map_proj": int(ds.attrs.get("MAP_PROJ", 0)), "grid": "map projection treated as Cartesian"})
+                  "map_proj": int(ds.attrs.get("MAP_PROJ", 0)), **grid_attrs})
     attrs.update({f"n_negative_clipped_{k}": v for k, v in negatives.items()})
     hyd = from_arrays(q_new, np.maximum(rho_above, 1e-6), (dz, dy, dx),
                       (z_lo + dz / 2, j0 * dy, i0 * dx), r_eff=r_eff, attrs=attrs, source=path)
