@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set up weather-mi in this checkout: Debian's libllvm19 (Dr.Jit's LLVM backend needs LLVM >= 16),
-# a virtualenv in .venv, and the package with its test extras. Idempotent; quick when already done.
+# a virtualenv in .venv, and the package with its test extras at the versions of constraints.txt.
+# Idempotent; quick when already done.
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -19,9 +20,9 @@ if [ ! -x .venv/bin/python ]; then
 fi
 
 stamp=.venv/.weather-mi-installed
-if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
-  echo "[setup] installing weather-mi with test extras"
+if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ] || [ constraints.txt -nt "$stamp" ]; then
+  echo "[setup] installing weather-mi with test extras (versions pinned by constraints.txt)"
   .venv/bin/python -m pip install -q --upgrade pip
-  .venv/bin/python -m pip install -q -e ".[test]"
+  .venv/bin/python -m pip install -q -c constraints.txt -e ".[test]"
   touch "$stamp"
 fi

@@ -57,9 +57,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import mitsuba as mi  # noqa: E402
-import weather_mi as wm  # noqa: E402  (sets the variant, registers the plugins)
+import weather_mi as wm  # noqa: E402
 from weather_mi.plugins.majorant_volpath import DEFAULT_CELL  # noqa: E402
 from weather_mi.scene import default_spec  # noqa: E402
+
+wm.set_variant()  # selects the default variant (registers the plugins with it)
 
 DEFAULT_WRF = Path(__file__).resolve().parents[2] / "shared" / "data" / "wrf" / "wrfout_quarter_ss_0130.nc"
 TARGET_RSE = 0.01

@@ -43,6 +43,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import mitsuba as mi  # noqa: E402
 import weather_mi as wm  # noqa: E402
 
+wm.set_variant()  # selects the default variant (registers the plugins with it)
+
 VIEWS = {"front": (200.0, 35.0), "side": (290.0, 35.0), "back": (20.0, 20.0)}
 
 

@@ -6,6 +6,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import weather_mi
+
+weather_mi.set_variant()  # tests call Mitsuba directly; importing weather_mi selects no variant
+
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 WRF_SUPERCELL = SHARED_DATA / "wrf" / "wrfout_quarter_ss_0130.nc"
 WRF_THOMPSON = SHARED_DATA / "wrf" / "wrf_d01_allvars_cropped.nc"
@@ -40,8 +44,10 @@ def write_wrfout(path: Path, *, nz=6, ny=4, nx=5, times=("2020-01-01_00:00:00",)
     data.update(override or {})
     dims_m = ("Time", "bottom_top", "south_north", "west_east")
     dims_w = ("Time", "bottom_top_stag", "south_north", "west_east")
+    dims_2d = ("Time", "south_north", "west_east")  # MAPFAC_M, HGT, ...
     ds = xr.Dataset({k: ((dims_w if k in ("PH", "PHB") and np.shape(v)[1] == nz + 1 else dims_m)
-                         if np.ndim(v) == 4 else tuple(f"d{i}_{k}" for i in range(np.ndim(v))), np.asarray(v, np.float32))
+                         if np.ndim(v) == 4 else dims_2d if np.ndim(v) == 3 and np.shape(v)[1:] == (ny, nx)
+                         else tuple(f"d{i}_{k}" for i in range(np.ndim(v))), np.asarray(v, np.float32))
                      for k, v in data.items() if k not in drop})
     ds["Times"] = (("Time",), np.array([t.encode() for t in times], dtype="S19"))
     ds.attrs.update({"MP_PHYSICS": np.int32(mp_physics), "DX": np.float32(dx), "DY": np.float32(dx),

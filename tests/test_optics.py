@@ -133,7 +133,8 @@ def test_from_arrays_bad_input():
         wm.from_arrays({"cloud": a}, 1.0, (1, 0, 1))
     neg = a.copy()
     neg[0, 0, 0] = -1e-9
-    hyd = wm.from_arrays({"cloud": neg}, 1.0, (1, 1, 1))
+    with pytest.warns(UserWarning, match="negative"):
+        hyd = wm.from_arrays({"cloud": neg}, 1.0, (1, 1, 1))
     assert hyd.attrs["n_negative_clipped"] == 1 and float(hyd.q_cloud.min()) == 0.0
 
 

@@ -266,8 +266,8 @@ def test_two_species_render_like_their_mixture_table_within_noise(tmp_path):
 def test_medium_dict_from_optical_volume():
     a = np.zeros((3, 4, 5))
     a[1, 2, 3] = 1e-3
-    vol = wm.optical_volume(wm.from_arrays({"cloud": a, "ice": a}, 1.0, (100, 100, 100)))
-    vol.phase_tables = [hg_table(g) for g in (0.85, 0.8, 0.86, 0.75, 0.9)]
+    vol = wm.optical_volume(wm.from_arrays({"cloud": a, "ice": a}, 1.0, (100, 100, 100)),
+                            phase_tables=[hg_table(g) for g in (0.85, 0.8, 0.86, 0.75, 0.9)])
     medium = mi.load_dict(wm.medium_dict(vol))
     assert "HydrometeorMixture" in str(medium.phase_function())
 

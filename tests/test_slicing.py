@@ -92,9 +92,7 @@ def species_volume(ice_only_east=True):
     q_cloud[2:6, 3:9, 1:7] = 1e-3
     q_ice[2:6, 3:9, 9:15] = 1e-4
     hyd = wm.from_arrays({"cloud": q_cloud, "ice": q_ice}, 1.0, (500.0, 500.0, 500.0), origin=(250.0, 250.0, 250.0))
-    vol = wm.optical_volume(hyd, species="physical")
-    vol.phase_tables = [hg_table(g) for g in (0.85, 0.3, 0.85, 0.75, 0.8)]
-    return vol
+    return wm.optical_volume(hyd, species="physical", phase_tables=[hg_table(g) for g in (0.85, 0.3, 0.85, 0.75, 0.8)])
 
 
 def test_translucent_brighter_than_low_albedo_and_species_phase_matters():

@@ -50,3 +50,19 @@ def test_library_reads_no_repository_paths(tmp_path):
 def test_validate_cli_rejects_unknown_config(capsys):
     with pytest.raises(SystemExit):
         main(["validate", "--config", "huge"])
+
+
+def test_skipped_real_scenes_are_said_and_a_missing_data_folder_is_an_error(tmp_path, capsys):
+    """Installed from a wheel, the study reads real data only from --data; skipping is never silent."""
+    from dataclasses import replace
+
+    from weather_mi.study import load_scenes
+    cfg = replace(CONFIGS["tiny"], scenes=("wrf-supercell", "bomex"))
+    with pytest.warns(UserWarning, match=r"skipped the real-data scenes wrf-supercell, bomex: no data folder"):
+        scenes, skipped = load_scenes(cfg)
+    assert scenes == {} and skipped == ["wrf-supercell", "bomex"]
+    with pytest.warns(UserWarning, match=r"absent: .*wrf/wrfout_quarter_ss_0130\.nc"):
+        load_scenes(cfg, tmp_path)
+    assert main(["validate", "-o", str(tmp_path / "out"), "--config", "tiny", "--data", str(tmp_path / "nope")]) == 2
+    assert "no such folder" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

@@ -154,7 +154,8 @@ def test_negative_mixing_ratios_clipped_and_counted(tmp_path):
     q = np.zeros((1, 6, 4, 5))
     q[0, 1, 1, 1] = -1e-7
     q[0, 3, 2, 2] = -2e-8
-    hyd = wm.open_wrf(write_wrfout(tmp_path / "w.nc", override={"QCLOUD": q}))
+    with pytest.warns(UserWarning, match="negative"):
+        hyd = wm.open_wrf(write_wrfout(tmp_path / "w.nc", override={"QCLOUD": q}))
     assert hyd.attrs["n_negative_clipped"] == 2 and float(hyd.q_cloud.min()) >= 0.0
 
 

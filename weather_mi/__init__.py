@@ -12,27 +12,30 @@ from .errors import WeatherDataError
 from .hydrometeors import SPECIES_NAMES, from_arrays, validate
 from .io import open_les, open_wrf
 from .optics import OpticalVolume, optical_volume
-from .variant import ensure_registered, set_variant
+from .variant import ensure_registered, register_lazily, set_variant
 from .medium import medium_dict, phase_dict
 from .scene import Camera, Ground, SceneSpec, Sky, Sun
 from .imageio import Image
 from .reference import render_reference, render_transmittance
 from .slicing import SliceMode, SliceParams, SliceRenderer, render_slices
-from . import cli, imageio, scene
+from . import imageio, scene
 
-ensure_registered()  # Mitsuba plugins usable from dict and XML scenes once weather_mi is imported
+register_lazily()  # the plugins usable from dict and XML scenes in any variant selected, now or later
 
 __version__ = "0.1.0"
 
 __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les",
            "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
            "Camera", "Ground", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "render_transmittance",
-           "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "species", "synthetic", "hydrometeors", "atmosphere", "phase"]
+           "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "species", "synthetic", "hydrometeors",
+           "atmosphere", "phase", "metrics", "reference", "slicing", "io", "imageio", "scene"]
+
+# submodules imported on first use (the phase tables pull in miepython/numba, the metrics FLIP)
+_LAZY_SUBMODULES = ("phase", "metrics", "study", "cli", "detail", "fluxes", "forward_peak", "mitsuba_scene")
 
 
 def __getattr__(name):
-    # submodules imported on first use (the phase tables pull in miepython/numba)
     import importlib
-    if name == "phase":
+    if name in _LAZY_SUBMODULES:
         return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module 'weather_mi' has no attribute {name!r}")

@@ -18,19 +18,37 @@ from .hydrometeors import SPECIES_NAMES, spacing_of
 DEMOS = ("supercell", "cumulus")
 
 
-def load_input(path: str | None, demo: str | None, time=-1):
-    """Hydrometeors from a file (wrfout NetCDF or LES text) or a built-in demo storm."""
+LES_SUFFIXES = (".txt", ".dat", ".csv")
+
+
+def load_input(path: str | None, demo: str | None, time=None):
+    """Hydrometeors from a file (wrfout NetCDF or LES text) or a built-in demo storm. ``time`` (a WRF
+    file's time, default the last) is refused for inputs that have one time only."""
     from . import synthetic
     from .io import open_les, open_wrf
+    check_time_option(path, demo, time)
     if path is None:
         return getattr(synthetic, demo or "supercell")()
     p = Path(path)
-    if p.suffix.lower() in (".txt", ".dat", ".csv"):
+    if p.suffix.lower() in LES_SUFFIXES:
         return open_les(p)
-    return open_wrf(p, time=time)
+    return open_wrf(p, time=-1 if time is None else time)
 
 
-def _parse_time(s: str):
+def check_time_option(path: str | None, demo: str | None, time) -> None:
+    if time is None:
+        return
+    if path is None:
+        raise ValueError(f"--time {time} selects a time of a WRF file; the demo storm {demo or 'supercell'} "
+                         "has one time: leave --time out")
+    if Path(path).suffix.lower() in LES_SUFFIXES:
+        raise ValueError(f"--time {time} selects a time of a WRF file; {path} (an LES text file) has one time: "
+                         "leave --time out")
+
+
+def _parse_time(s: str | None):
+    if s is None:
+        return None
     try:
         return int(s)
     except ValueError:
@@ -93,12 +111,37 @@ def default_ground_distance_km(vol) -> float:
     return max(0.55 * max(x1 - x0, y1 - y0), 1.2 * z1) / 1000.0
 
 
+def output_paths(output) -> tuple[Path, Path, Path]:
+    """(EXR, PNG, checkpoint) of ``-o`` (a .exr or .png name; ValueError for another extension)."""
+    from .output_paths import image_format
+    out = Path(output)
+    image_format(out)
+    exr = out.with_suffix(".exr")
+    return exr, out.with_suffix(".png"), exr.with_name(exr.name + ".ckpt.npz")
+
+
 def render_command(args) -> Path:
-    """Build the volume and the scene from the arguments, render the reference, write EXR + PNG."""
+    """Check the arguments and the outputs, build the volume and the scene, render the reference while
+    holding the outputs' lock, write EXR + PNG."""
+    from .output_paths import OutputLock, check_writable_folder
+    from .scene import check_fov_deg
+    width, height = _parse_size(args.size)
+    if args.fov is not None:
+        check_fov_deg(args.fov)
+    check_time_option(args.file, args.demo, args.time)
+    exr, png, ckpt = output_paths(args.output)
+    check_writable_folder(exr)
+    with OutputLock(exr):
+        if ckpt.is_file() and not args.resume:
+            raise ValueError(f"{ckpt} holds an unfinished render: add --resume to continue it, or delete it to "
+                             "render afresh")
+        return _render(args, width, height, exr, png, ckpt)
+
+
+def _render(args, width, height, out, png_path, ckpt) -> Path:
     from .optics import optical_volume
     from .reference import render_reference
     from .scene import Camera, Ground, SceneSpec, Sky, Sun
-    width, height = _parse_size(args.size)
     hyd = load_input(args.file, args.demo, _parse_time(args.time))
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase)
     sky = None if args.sky == "none" else Sky(args.sky)
@@ -106,21 +149,20 @@ def render_command(args) -> Path:
                                                         height=min(0.0, vol.bbox[0][2]))
     if args.camera == "orbit":
         camera = Camera.orbit(vol, azimuth=args.camera_azimuth, elevation=args.camera_elevation,
-                              distance=args.distance, fov=args.fov or 45.0)
+                              distance=args.distance, fov=45.0 if args.fov is None else args.fov)
     else:
-        camera = Camera.ground_view(vol, azimuth=args.camera_azimuth, fov=args.fov or 70.0, aspect=width / height,
+        camera = Camera.ground_view(vol, azimuth=args.camera_azimuth, fov=70.0 if args.fov is None else args.fov,
+                                    aspect=width / height,
                                     distance_km=args.camera_distance_km or default_ground_distance_km(vol),
                                     height_m=args.camera_height, ground_m=0.0 if ground is None else ground.height)
     spec = SceneSpec(camera=camera, sun=Sun(args.sun_azimuth, args.sun_elevation, angular_diameter_deg=args.sun_diameter),
                      sky=sky, ground=ground, width=width, height=height, seed=args.seed)
-    out = Path(args.output)
-    ckpt = out.with_name(out.name + ".ckpt.npz")
     img = render_reference(spec, vol, spp=args.spp, integrator=args.integrator, checkpoint=ckpt,
                            resume=ckpt if args.resume else None, target_rse=args.target_rse,
                            max_seconds=args.max_seconds, sun_guiding=args.sun_guiding,
                            forward_peak_deg=args.forward_peak, aureole_nee=args.aureole_nee)
     img.save(out)
-    png = img.save_png(out.with_suffix(".png"), exposure=args.exposure)
+    png = img.save_png(png_path, exposure=args.exposure)
     ckpt.unlink(missing_ok=True)
     noise = img.metadata.get("noise") or {}
     cloud = (f", over cloud pixels: mean relative standard error {noise['rse_mean']:.3f}, RMS standard error / "
@@ -134,16 +176,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="weather-mi", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     info = sub.add_parser("info", help="summarise a data file or a demo storm")
-    src = info.add_mutually_exclusive_group(required=True)
-    src.add_argument("file", nargs="?", help="wrfout NetCDF or LES text file")
-    src.add_argument("--demo", choices=DEMOS, help="a built-in demo storm")
-    info.add_argument("--time", default="-1", help="time index or timestamp (WRF)")
+    _add_source(info)
     info.add_argument("--species", default="paper", choices=("paper", "physical"))
     render = sub.add_parser("render", help="path-trace the ground-truth image (EXR + PNG)")
-    src = render.add_mutually_exclusive_group(required=True)
-    src.add_argument("file", nargs="?", help="wrfout NetCDF or LES text file")
-    src.add_argument("--demo", choices=DEMOS, help="a built-in demo storm")
-    render.add_argument("--time", default="-1", help="time index or timestamp (WRF)")
+    _add_source(render)
     render.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
     render.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
     render.add_argument("--scale", action="append", metavar="SPECIES=FACTOR", help="e.g. --scale ice=2")
@@ -184,7 +220,8 @@ def main(argv: list[str] | None = None) -> int:
     render.add_argument("--integrator", default="majorant", choices=("majorant", "volpath"))
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")
     render.add_argument("--resume", action="store_true", help="continue from OUTPUT.ckpt.npz")
-    render.add_argument("-o", "--output", default="weather-mi.exr")
+    render.add_argument("-o", "--output", default="weather-mi.exr",
+                        help="OUT.exr (or OUT.png): writes OUT.exr and OUT.png; OUT.exr.ckpt.npz while rendering")
     val = sub.add_parser("validate", help="the validation study: slicer against path-traced ground truth")
     val.add_argument("-o", "--output", default="validation-report", help="report folder")
     val.add_argument("--quick", action="store_true", help="small images and samples: a few minutes")
@@ -192,6 +229,8 @@ def main(argv: list[str] | None = None) -> int:
     val.add_argument("--data", default=None, help="folder of real model output (wrf/..., les/..., e.g. "
                      "../shared/data); without it only the built-in demo storms are studied")
     args = parser.parse_args(argv)
+    if args.command in ("info", "render") and (args.file is None) == (args.demo is None):
+        sub.choices[args.command].error("give a data FILE or --demo NAME (one of them)")
     try:
         if args.command == "info":
             hyd = load_input(args.file, args.demo, _parse_time(args.time))
@@ -205,7 +244,29 @@ def main(argv: list[str] | None = None) -> int:
     except (WeatherDataError, ValueError) as exc:
         print(f"weather-mi: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"weather-mi: interrupted{_resume_hint(args)}", file=sys.stderr)
+        return 130
     return 0
+
+
+def _add_source(parser) -> None:
+    """FILE or --demo (exclusive, checked after parsing so that an unknown option is named as such)."""
+    parser.add_argument("file", nargs="?", help="wrfout NetCDF or LES text file")
+    parser.add_argument("--demo", choices=DEMOS, help="a built-in demo storm")
+    parser.add_argument("--time", default=None, help="time index or timestamp (WRF files; default the last)")
+
+
+def _resume_hint(args) -> str:
+    if args.command != "render":
+        return ""
+    try:
+        _, _, ckpt = output_paths(args.output)
+    except ValueError:
+        return ""
+    if not ckpt.is_file():
+        return " before the first pass was finished (no checkpoint to resume from)"
+    return f"; the finished passes are in {ckpt}: run the same command with --resume to continue"
 
 
 if __name__ == "__main__":

@@ -116,8 +116,8 @@ def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG) -> Opti
                         np.clip(albedo, 0, 1).astype(np.float32), weights.astype(np.float32), vol.bbox,
                         vol.species_set, vol.phase_mode, vol.phase_quality,
                         {**vol.attrs, "forward_peak_deg": cone_deg,
-                         "forward_peak_fraction": dict(zip(vol.species, f.round(6).tolist()))})
-    out.phase_tables = truncated
+                         "forward_peak_fraction": dict(zip(vol.species, f.round(6).tolist()))},
+                        tuple(truncated))
     return out
 
 

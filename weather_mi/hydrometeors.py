@@ -52,7 +52,8 @@ def from_arrays(q: Mapping[str, np.ndarray], rho_air, spacing, origin=(0.0, 0.0,
     """Hydrometeors from plain arrays.
 
     q        : mixing ratios (kg/kg of dry air) by species name, each shaped (z, y, x); species not
-               given are zero. Small negatives are clipped to 0 and counted (``n_negative_clipped``).
+               given are zero. Negatives are clipped to 0, counted (``n_negative_clipped``) and
+               reported in a warning with their count and minimum.
     rho_air  : dry-air density (kg/m^3): a number, a z-profile (nz,) or a (z, y, x) array.
     spacing  : (dz, dy, dx) in metres, positive.
     origin   : (z0, y0, x0), the centre of the first cell in metres.
@@ -76,17 +77,22 @@ def from_arrays(q: Mapping[str, np.ndarray], rho_air, spacing, origin=(0.0, 0.0,
 
     data_vars = {}
     clipped_total = 0
+    minima = {}
     for name in SPECIES_NAMES:
         var = f"q_{name}"
         if name in q:
             field = _as_field(q[name], shape, source, var)
             n_neg = int(np.count_nonzero(field < 0))
+            if n_neg:
+                minima[var] = (n_neg, float(field.min()))
             np.maximum(field, 0, out=field)
         else:
             field, n_neg = np.zeros(shape, np.float32), 0
         clipped_total += n_neg
         data_vars[var] = (DIMS, field, {"units": "kg kg-1", "long_name": f"{name} mixing ratio (per kg dry air)",
                                         "n_negative_clipped": n_neg})
+    if minima:
+        warn_clipped(source, minima, stacklevel=2)
     rho = _as_field(rho_air, shape, source, "rho_air", allow_profile=True, allow_scalar=True)
     if np.any(rho <= 0):
         raise WeatherDataError(source, "rho_air", "a positive dry-air density (kg/m^3)",
@@ -108,6 +114,15 @@ def from_arrays(q: Mapping[str, np.ndarray], rho_air, spacing, origin=(0.0, 0.0,
     ds = xr.Dataset(data_vars, coords=coords, attrs=all_attrs)
     validate(ds)
     return ds
+
+
+def warn_clipped(source: str, minima: Mapping[str, tuple[int, float]], stacklevel: int = 2) -> None:
+    """Warn that negative mixing ratios were set to 0: per variable, how many and the most negative
+    (``minima``: variable -> (count, minimum in kg/kg))."""
+    import warnings
+    parts = [f"{var}: {n} value{'s' if n != 1 else ''} (minimum {lo:.3g} kg/kg)" for var, (n, lo) in minima.items()]
+    warnings.warn(f"{source}: negative mixing ratios clipped to 0: {'; '.join(parts)}", UserWarning,
+                  stacklevel=stacklevel + 1)
 
 
 def spacing_of(ds: xr.Dataset) -> tuple[float, float, float]:

@@ -1,13 +1,15 @@
 """Images out of either renderer: radiance with its standard error and metadata; EXR for data
-(OpenEXR), PNG for eyes (sRGB transfer function from colour-science)."""
+(OpenEXR), PNG for eyes (sRGB transfer function from colour-science). Files are written under a unique
+temporary name and renamed into place (``output_paths``)."""
 from __future__ import annotations
 
 import json
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from .output_paths import image_format, written_atomically
 
 
 @dataclass
@@ -39,12 +41,17 @@ class Image:
         return float(np.mean(err[ok] / lum[ok])) if np.any(ok) else float("nan")
 
     def save(self, path) -> Path:
-        """Write an EXR: R, G, B radiance, stderr.R/G/B, and the metadata as a JSON header attribute."""
+        """Write the image in the format of the name's extension: ``.exr`` (R, G, B radiance, stderr.R/G/B,
+        and the metadata as a JSON header attribute) or ``.png`` (as :meth:`save_png`); ValueError else."""
+        if image_format(path) == "png":
+            return self.save_png(path)
         return write_exr(path, self.radiance, self.stderr, self.metadata)
 
     def save_png(self, path, exposure: float | None = None) -> Path:
-        """Write a tone-mapped sRGB preview: radiance x exposure, clipped, sRGB-encoded. The default
-        exposure maps the 99.5th percentile of the luminance to 1."""
+        """Write a tone-mapped sRGB preview (a ``.png`` name): radiance x exposure, clipped, sRGB-encoded.
+        The default exposure maps the 99.5th percentile of the luminance to 1."""
+        if image_format(path) != "png":
+            raise ValueError(f"{path}: save_png writes PNG data: expected a name ending in .png")
         return write_png(path, self.radiance, exposure)
 
     @classmethod
@@ -63,10 +70,8 @@ def write_exr(path, radiance: np.ndarray, stderr: np.ndarray | None = None, meta
             channels[f"stderr.{c}"] = np.ascontiguousarray(stderr[..., i], dtype=np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
               "weather_mi": json.dumps(metadata or {}, default=_json_default)}
-    tmp = path.with_name(path.name + ".tmp.exr")
-    with OpenEXR.File(header, channels) as f:
+    with written_atomically(path) as tmp, OpenEXR.File(header, channels) as f:
         f.write(str(tmp))
-    os.replace(tmp, path)
     return path
 
 
@@ -103,7 +108,8 @@ def write_png(path, radiance: np.ndarray, exposure: float | None = None) -> Path
     from PIL import Image as PILImage
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    PILImage.fromarray(to_srgb8(radiance, exposure)).save(path)
+    with written_atomically(path) as tmp:
+        PILImage.fromarray(to_srgb8(radiance, exposure)).save(tmp, format="PNG")
     return path
 
 

@@ -11,7 +11,7 @@ from .variant import ensure_registered
 def phase_arrays(vol: OpticalVolume):
     """(nodes v = 1 - cos (N,), values (S, N, 3), weights (z, y, x, S)) as the plugin takes them."""
     from .plugins.hydrometeor_mixture import prepare_tables
-    nodes, values = prepare_tables(vol.phase_tables)
+    nodes, values = prepare_tables(vol.require_phase_tables())
     weights = np.ascontiguousarray(np.moveaxis(vol.weights, 0, -1), dtype=np.float32)
     return nodes, values, weights
 

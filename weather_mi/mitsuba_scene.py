@@ -24,7 +24,6 @@ def recentred(spec: SceneSpec, vol: OpticalVolume):
     cam = replace(spec.camera, origin=tuple(np.asarray(spec.camera.origin) - c),
                   target=tuple(np.asarray(spec.camera.target) - c))
     vol2 = replace(vol, bbox=(tuple(lo - c), tuple(hi - c)))
-    vol2._phase_tables = vol._phase_tables if vol._phase_tables is not None else vol.phase_tables
     return replace(spec, camera=cam), vol2, c
 
 

@@ -21,13 +21,17 @@ from .hydrometeors import DIMS, SPECIES_NAMES, bbox_of, check_species_name, vali
 from .species import SpeciesSet, preset
 
 
-@dataclass
+@dataclass(frozen=True)
 class OpticalVolume:
     """Everything both renderers consume (DESIGN.md): per-species extinction ``beta_ext`` (S, z, y, x)
     in 1/m, ``beta_total`` (z, y, x) Eq. 6, mixture single-scattering ``albedo`` (z, y, x, 3), Eq. 8
     scattering ``weights`` (S, z, y, x; zero where nothing scatters), world ``bbox``
-    ((x0, y0, z0), (x1, y1, z1)) in metres, and one phase table per species (built on first access
-    from ``phase_mode`` when not given). All grids are float32, indexed [z, y, x]."""
+    ((x0, y0, z0), (x1, y1, z1)) in metres, and ``phase_tables``, one per species (built at construction
+    from ``species_set`` and ``phase_mode`` when not given; None only for raw optics without a phase
+    function). All grids are float32, indexed [z, y, x].
+
+    Complete and read-only once built: the fields cannot be reassigned and the grids are read-only views
+    (the arrays given stay the caller's); ``dataclasses.replace`` makes a changed copy."""
 
     species: tuple[str, ...]
     beta_ext: np.ndarray
@@ -39,7 +43,32 @@ class OpticalVolume:
     phase_mode: str = "per_species"
     phase_quality: str = "default"
     attrs: dict = field(default_factory=dict)
-    _phase_tables: list | None = field(default=None, repr=False)
+    phase_tables: tuple | None = field(default=None, repr=False)
+
+    def __post_init__(self):
+        for name in ("beta_ext", "beta_total", "albedo", "weights"):
+            view = np.asarray(getattr(self, name)).view()
+            view.flags.writeable = False
+            object.__setattr__(self, name, view)
+        tables = self.phase_tables
+        if tables is None and self.species_set is not None:
+            from . import phase
+            tables = phase.for_species(list(self.species_set), mode=self.phase_mode, quality=self.phase_quality)
+        if tables is not None:
+            tables = tuple(tables)
+            if len(tables) != len(self.species):
+                raise WeatherDataError("OpticalVolume", "phase_tables",
+                                       f"one table per species ({len(self.species)})", f"{len(tables)} tables")
+        object.__setattr__(self, "phase_tables", tables)
+        object.__setattr__(self, "attrs", dict(self.attrs))
+
+    def require_phase_tables(self) -> tuple:
+        """The phase tables, or WeatherDataError when this volume was built without any."""
+        if self.phase_tables is None:
+            raise WeatherDataError(str(self.attrs.get("source", "OpticalVolume")), "phase_tables",
+                                   "one phase table per species to render (OpticalVolume.from_arrays(..., phase=...))",
+                                   "none")
+        return self.phase_tables
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -51,23 +80,6 @@ class OpticalVolume:
         (x0, y0, z0), (x1, y1, z1) = self.bbox
         nz, ny, nx = self.shape
         return ((z1 - z0) / nz, (y1 - y0) / ny, (x1 - x0) / nx)
-
-    @property
-    def phase_tables(self) -> list:
-        if self._phase_tables is None:
-            from . import phase
-            if self.species_set is None:
-                raise WeatherDataError("OpticalVolume", "phase_tables", "phase tables or a species set")
-            self._phase_tables = phase.for_species(list(self.species_set), mode=self.phase_mode,
-                                                   quality=self.phase_quality)
-        return self._phase_tables
-
-    @phase_tables.setter
-    def phase_tables(self, tables) -> None:
-        if tables is not None and len(tables) != len(self.species):
-            raise WeatherDataError("OpticalVolume", "phase_tables",
-                                   f"one table per species ({len(self.species)})", f"{len(tables)} tables")
-        self._phase_tables = None if tables is None else list(tables)
 
     def occupied_bbox(self, threshold_per_m: float = 0.0):
         """World box ((x0, y0, z0), (x1, y1, z1)) of the cells whose extinction exceeds the threshold
@@ -113,10 +125,8 @@ class OpticalVolume:
         if not all(h > l for l, h in zip(lo, hi)):
             raise WeatherDataError(src, "bbox", "((x0, y0, z0), (x1, y1, z1)) with x1 > x0, y1 > y0, z1 > z0")
         weights = (beta > 0).astype(np.float32)[None]
-        vol = cls((name,), beta[None], beta, alb, weights, (lo, hi), None, "given", attrs={"source": src})
-        if phase is not None:
-            vol.phase_tables = [phase]
-        return vol
+        return cls((name,), beta[None], beta, alb, weights, (lo, hi), None, "given", attrs={"source": src},
+                   phase_tables=None if phase is None else (phase,))
 
 
 def _radius_field(hyd: xr.Dataset, name: str, default_m: float, use_model: bool):
@@ -184,8 +194,5 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
-    vol = OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
-                        phase_quality, attrs)
-    if phase_tables is not None:
-        vol.phase_tables = phase_tables
-    return vol
+    return OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
+                         phase_quality, attrs, None if phase_tables is None else tuple(phase_tables))

@@ -86,8 +86,9 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
     else:
         import mitsuba as mi
         from .plugins.hydrometeor_mixture import bbox_transform
-        from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid, register
-        register()
+        from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid
+        from .variant import ensure_registered
+        ensure_registered()
         cell = DEFAULT_CELL if cell is None else cell
         d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
              "majorant": mi.TensorXf(majorant_grid(vol.beta_total, cell=int(cell))),
@@ -107,7 +108,7 @@ def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str
     h.update(json.dumps([spec.to_dict(), spp_list, *options], sort_keys=True, default=str).encode())
     for a in (vol.beta_total, vol.albedo, vol.weights):
         h.update(np.ascontiguousarray(a).tobytes())
-    for t in vol.phase_tables:  # the phase functions are part of the scene too
+    for t in vol.require_phase_tables():  # the phase functions are part of the scene too
         h.update(np.ascontiguousarray(t.theta, np.float64).tobytes())
         h.update(np.ascontiguousarray(t.values, np.float64).tobytes())
     h.update(json.dumps([list(map(float, p)) for p in vol.bbox]).encode())
@@ -115,10 +116,37 @@ def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str
 
 
 def _save_checkpoint(path: Path, state: dict) -> None:
+    from .output_paths import written_atomically
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez(tmp, **state)
-    os.replace(tmp, path)
+    with written_atomically(path) as tmp:
+        np.savez(tmp, **state)
+
+
+def _load_checkpoint(path: Path, key: str, spp_list) -> tuple:
+    """(mean, m2, passes done, seconds, spp done) from a checkpoint of this render (``key``); ValueError
+    naming the file when it is unreadable or belongs to another render."""
+    import zipfile
+    try:
+        with np.load(path) as state:
+            stored = str(state["key"])
+            if stored == key:
+                done = int(state["done"])
+                spp_done = int(state["spp_done"]) if "spp_done" in state else sum(spp_list[:done])
+                return state["mean"], state["m2"], done, float(state["seconds"]), spp_done
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        raise ValueError(f"checkpoint {path} cannot be read ({type(exc).__name__}: {exc}); delete it to "
+                         "render afresh (without resume / --resume)") from exc
+    raise ValueError(f"checkpoint {path} belongs to a different scene, volume or sample plan")
+
+
+def _keep_aside(path: Path) -> None:
+    """A checkpoint found where a fresh render will write its own: renamed to <stem>.previous.npz, with a
+    warning (it is never discarded silently)."""
+    import warnings
+    aside = path.with_name(f"{path.name[:-len('.npz')] if path.name.endswith('.npz') else path.name}.previous.npz")
+    os.replace(path, aside)
+    warnings.warn(f"checkpoint {path} exists and resume was not asked for: kept aside as {aside} (pass "
+                  "resume=True to continue a render from a checkpoint)", UserWarning, stacklevel=3)
 
 
 def noise_stats(radiance: np.ndarray, stderr: np.ndarray, cloud: np.ndarray) -> dict:
@@ -252,12 +280,10 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     m2 = np.zeros((h, w, 3))
     done, seconds, spp_done = 0, 0.0, 0
     if resume_path is not None and resume_path.is_file():
-        with np.load(resume_path) as state:
-            if str(state["key"]) != key:
-                raise ValueError(f"checkpoint {resume_path} belongs to a different scene, volume or sample plan")
-            mean, m2, done, seconds = state["mean"], state["m2"], int(state["done"]), float(state["seconds"])
-            spp_done = int(state["spp_done"]) if "spp_done" in state else sum(spp_list[:done])
+        mean, m2, done, seconds, spp_done = _load_checkpoint(resume_path, key, spp_list)
         ckpt = ckpt or resume_path
+    elif resume_path is None and ckpt is not None and ckpt.is_file():
+        _keep_aside(ckpt)
 
     spec_k, vol_k, _ = recentred(spec, vol)  # kernel-side coordinates: bbox centred on the origin
     vol_render = delta_scaled(vol_k, forward_peak_deg)  # the cloud mask below keeps the full extinction

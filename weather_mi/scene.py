@@ -19,6 +19,29 @@ def direction_from_angles(azimuth_deg: float, elevation_deg: float) -> np.ndarra
     return np.array([math.sin(a) * math.cos(e), math.cos(a) * math.cos(e), math.sin(e)])
 
 
+def _positive_int(value, name: str, minimum: int = 1) -> int:
+    """``value`` as an int >= minimum (integers of any type, or integral floats); ValueError otherwise."""
+    ok = not isinstance(value, (bool, np.bool_)) and isinstance(value, (int, float, np.integer, np.floating)) \
+        and math.isfinite(value) and float(value) == int(value) and int(value) >= minimum
+    if not ok:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def _finite(value, name: str) -> float:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def check_fov_deg(fov) -> float:
+    """A perspective camera's horizontal field of view in degrees, 0 < fov < 180; ValueError otherwise."""
+    if not 0.0 < _finite(fov, "Camera fov") < 180.0:
+        raise ValueError(f"Camera fov must be in (0, 180) degrees, got {fov!r}")
+    return float(fov)
+
+
 def _rgb(value, name: str) -> tuple[float, float, float]:
     arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (3,))
     if not np.all(np.isfinite(arr)) or np.any(arr < 0):
@@ -120,8 +143,8 @@ class Camera:
             raise ValueError("Camera up vector must not be parallel to the viewing direction")
         if self.kind not in ("perspective", "orthographic"):
             raise ValueError(f"Camera kind must be 'perspective' or 'orthographic', got {self.kind!r}")
-        if self.kind == "perspective" and not 0 < self.fov < 180:
-            raise ValueError(f"Camera fov must be in (0, 180) degrees, got {self.fov}")
+        if self.kind == "perspective":
+            check_fov_deg(self.fov)
         if self.kind == "orthographic" and not (self.ortho_width > 0 and self.ortho_height > 0):
             raise ValueError("An orthographic camera needs a positive width and height in metres")
         for name, v in (("origin", o), ("target", t), ("up", u)):
@@ -139,6 +162,12 @@ class Camera:
         north, seen from the target) and ``elevation`` above the target, at ``distance`` metres. Given
         an OpticalVolume, it frames the cloud (the box of cells with extinction), else the box; the
         default target is the box centre and the default distance makes the box fit the view."""
+        fov = check_fov_deg(fov)
+        azimuth, elevation = _finite(azimuth, "Camera.orbit azimuth"), _finite(elevation, "Camera.orbit elevation")
+        if not -90.0 <= elevation <= 90.0:
+            raise ValueError(f"Camera.orbit elevation must be in [-90, 90] degrees, got {elevation!r}")
+        if distance is not None and not _finite(distance, "Camera.orbit distance") > 0:
+            raise ValueError(f"Camera.orbit distance must be positive (m), got {distance!r}")
         box = vol_or_bbox.occupied_bbox() if hasattr(vol_or_bbox, "occupied_bbox") else vol_or_bbox
         (x0, y0, z0), (x1, y1, z1) = _bbox(box)
         centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2]) if target is None else np.asarray(target, float)
@@ -220,8 +249,9 @@ class SceneSpec:
     seed: int = 0
 
     def __post_init__(self):
-        if int(self.width) < 1 or int(self.height) < 1:
-            raise ValueError(f"Image size must be positive, got {self.width} x {self.height}")
+        object.__setattr__(self, "width", _positive_int(self.width, "Image size (width, pixels)"))
+        object.__setattr__(self, "height", _positive_int(self.height, "Image size (height, pixels)"))
+        object.__setattr__(self, "seed", _positive_int(self.seed, "SceneSpec seed", minimum=0))
         if self.ground is not None and self.camera.origin[2] <= self.ground.height:
             raise ValueError(f"Camera at z = {self.camera.origin[2]:.1f} m is inside the ground "
                              f"(ground height {self.ground.height:.1f} m)")

@@ -17,9 +17,14 @@ Conversions: LWC is a mass density (g/m^3), so the mixing ratio is q = LWC * 1e-
 with rho_air the 1976 standard atmosphere at each level height unless given; the effective radius
 (um) becomes ``r_eff_<species>`` in metres (0 where there is no liquid); the effective variance, when
 the file has it, is kept as ``v_eff_<species>`` (dimensionless). x = i dx, y = j dy and z = the level
-altitudes, all in metres. Non-uniform levels are interpolated linearly in height onto a uniform grid
+altitudes, all in metres. Levels uniform within their printed precision (25 m levels printed in km to
+3 decimals read 24-26 m apart) are kept, at their mean spacing. Non-uniform levels are interpolated linearly in height onto a uniform grid
 with the smallest level spacing (LWC linearly; r_eff and v_eff LWC-weighted, so they stay within the
 range of the neighbouring cloudy values), and the attribute ``vertical_regrid`` says so.
+
+A file cut short is an error naming the line: a last voxel line without its newline whose last number
+has fewer decimals than the line before (cut inside the number), or a file that lists clear voxels too,
+in order (so every voxel), with fewer lines than nx ny nz.
 """
 from __future__ import annotations
 
@@ -70,7 +75,14 @@ def _looks_like_data(tokens: list[str]) -> bool:
     return 4 <= len(tokens) <= 6 and all(_INT.match(t) for t in tokens[:3]) and _floats(tokens) is not None
 
 
-def _read_lines(path: str) -> list[str]:
+def _decimals(token: str) -> int:
+    """Digits printed after the decimal point (0 for an integer, mantissa digits with an exponent)."""
+    mantissa = token.lower().split("e", 1)[0]
+    return len(mantissa.split(".", 1)[1]) if "." in mantissa else 0
+
+
+def _read_lines(path: str) -> tuple[list[str], bool]:
+    """The file's lines and whether it ends with a newline."""
     if not os.path.exists(path):
         raise WeatherDataError(path, None, "an existing SHDOM/pyshdom LWC text file", "no such file")
     if os.path.isdir(path):
@@ -87,15 +99,17 @@ def _read_lines(path: str) -> list[str]:
     if not any(line.strip() for line in lines):
         raise WeatherDataError(path, None, "an SHDOM/pyshdom LWC text file (comment, nx ny nz, dx dy, levels, voxels)",
                                "an empty file")
-    return lines
+    return lines, text.endswith(("\n", "\r"))
 
 
 def _parse_header(path: str, lines: list[str]):
-    """(comment, (nx, ny, nz), (dx_km, dy_km), levels_km, column names or None, index of first data line)."""
+    """(comment, comments, (nx, ny, nz), (dx_km, dy_km), levels_km, decimals printed in the levels, column
+    names or None, index of first data line)."""
     comments: list[str] = []
     sizes: list[float] = []
     spacing: list[float] = []
     levels: list[float] = []
+    level_decimals = 0
     level_lines: list[int] = []
     stage = "sizes"
     nz_expected = 0
@@ -146,6 +160,7 @@ def _parse_header(path: str, lines: list[str]):
                     stage = "levels"
             else:
                 levels.append(v)
+                level_decimals = max(level_decimals, _decimals(tok))
                 if not level_lines or level_lines[-1] != n:
                     level_lines.append(n)
         n += 1
@@ -185,7 +200,7 @@ def _parse_header(path: str, lines: list[str]):
             n += 1
         break
     comment = comments[0] if comments else ""
-    return comment, comments, tuple(int(s) for s in sizes), tuple(spacing), lev, names, n
+    return comment, comments, tuple(int(s) for s in sizes), tuple(spacing), lev, level_decimals, names, n
 
 
 def _column_map(path: str, names: list[str] | None, ncol: int, line_no) -> dict[str, int]:
@@ -288,6 +303,26 @@ def _check_values(path, data, cols, line_no, lines, sizes):
                                        f"({bad.size} negative value(s))")
 
 
+def _check_complete(path, lines, ends_with_newline, data, cols, line_no, sep, sizes):
+    """Errors for a file cut short (see the module docstring)."""
+    n = data.shape[0]
+    if n > 1 and not ends_with_newline and line_no[n - 1] == len(lines):
+        last, prev = (_data_tokens(lines[line_no[r] - 1], sep)[-1] for r in (n - 1, n - 2))
+        if _decimals(last) < _decimals(prev):
+            raise WeatherDataError(path, f"data line {line_no[n - 1]}",
+                                   f"a complete voxel line (its last number printed like line {line_no[n - 2]}'s "
+                                   f"{prev!r})", f"{last!r} at the end of a file without a final newline: "
+                                   "the file looks cut")
+    nx, ny, nz = sizes
+    if 1 < n < nx * ny * nz and np.any(data[:, cols["lwc"]] == 0):
+        ii, jj, kk = (data[:, cols[c]].astype(np.int64) for c in ("i", "j", "k"))
+        for flat in ((kk * ny + jj) * nx + ii, (ii * ny + jj) * nz + kk):
+            if flat[0] == 0 and np.all(np.diff(flat) == 1):
+                raise WeatherDataError(path, "voxel lines", f"nx ny nz = {nx * ny * nz} voxel lines (the file "
+                                       "lists clear voxels too, in order, so every voxel)",
+                                       f"{n} lines, the last on line {line_no[n - 1]}: the file looks cut")
+
+
 def _rho_profile(path: str, rho_air, z_native: np.ndarray, z_out: np.ndarray) -> tuple[np.ndarray, str]:
     """Air density (kg/m^3) at the output heights z_out (m), and a description for the attributes."""
     nz = z_native.size
@@ -352,14 +387,15 @@ def open_les(path, rho_air=None, *, species: str = "cloud") -> xr.Dataset:
     path = os.fspath(path)
     if species not in LIQUID_SPECIES:
         raise WeatherDataError(path, "species", "'cloud' or 'rain' (LES files hold liquid water)", repr(species))
-    lines = _read_lines(path)
-    comment, comments, (nx, ny, nz), (dx_km, dy_km), lev_km, names, start = _parse_header(path, lines)
+    lines, ends_with_newline = _read_lines(path)
+    comment, comments, (nx, ny, nz), (dx_km, dy_km), lev_km, lev_decimals, names, start = _parse_header(path, lines)
     data, line_no, sep = _parse_data(path, lines, start)
     n_listed = int(data.shape[0])
     if n_listed == 0 and names:
         data = np.zeros((0, len(names)))
     cols = _column_map(path, names, data.shape[1], line_no)
     _check_values(path, data, cols, line_no, lines, (nx, ny, nz))
+    _check_complete(path, lines, ends_with_newline, data, cols, line_no, sep, (nx, ny, nz))
 
     ii, jj, kk = (data[:, cols[c]].astype(np.int64) for c in ("i", "j", "k"))
     flat = (kk * ny + jj) * nx + ii
@@ -402,9 +438,13 @@ def open_les(path, rho_air=None, *, species: str = "cloud") -> xr.Dataset:
         attrs["vertical_grid"] = f"a single level; layer depth taken as the horizontal spacing {dz:g} m"
     else:
         steps = np.diff(z_native)
-        if np.max(np.abs(steps - steps.mean())) <= UNIFORM_RTOL * steps.mean():
-            z_out, dz = z_native, (z_native[-1] - z_native[0]) / (nz - 1)
-            attrs["vertical_grid"] = "uniform levels from the file"
+        printed_m = 1000.0 * 10.0 ** -lev_decimals  # a unit of the last printed digit: each step +- that
+        tol_m = UNIFORM_RTOL * steps.mean() + (printed_m if printed_m <= 0.1 * steps.mean() else 0.0)
+        if np.max(np.abs(steps - steps.mean())) <= tol_m:
+            dz = (z_native[-1] - z_native[0]) / (nz - 1)
+            z_out = z_native[0] + dz * np.arange(nz)
+            attrs["vertical_grid"] = (f"uniform levels from the file, {dz:g} m apart (spacings {steps.min():g} to "
+                                      f"{steps.max():g} m as printed, to {printed_m:g} m)")
         else:
             dz_min = float(steps.min())
             span = z_native[-1] - z_native[0]

@@ -4,9 +4,10 @@ Steps: select a time (index or timestamp) and an optional horizontal sub-box; he
 z_w = (PH + PHB) / g and of the mass levels as their mean (destaggering); dry-air density
 rho_d = p / (R_d T (1 + 1.608 q_v)) with p = P + PB, T = (T' + 300 K)(p / 1e5)^(R_d/c_p)
 (cross-checked against ALT = 1/rho_d when the file has it); species mass densities rho_d q regridded
-conservatively onto a uniform height grid (weather_mi.io.vertical); the map-projected grid treated as
-Cartesian with DX, DY. Negative mixing ratios are clipped and counted; species the scheme does not
-carry become zeros with a warning that names the scheme.
+conservatively onto a uniform height grid (weather_mi.io.vertical); the horizontal spacing DX, DY over
+the mean map factor (weather_mi.io.map_factors, with a warning where it varies). Negative mixing ratios are clipped, counted and reported in a warning (count
+and minimum per variable); species the scheme does not carry become zeros with a warning that names the
+scheme, while a variable the scheme writes and the file lacks is an error (``schemes.SCHEME_VARS``).
 """
 from __future__ import annotations
 
@@ -18,8 +19,10 @@ import numpy as np
 import xarray as xr
 
 from ..errors import WeatherDataError
-from ..hydrometeors import from_arrays
+from ..hydrometeors import from_arrays, warn_clipped
 from . import vertical
+from .map_factors import horizontal_spacing
+from .schemes import MP_SCHEMES, SCHEME_VARS
 
 G = 9.81               # m/s^2, WRF's gravity
 R_D = 287.0            # J/(kg K)
@@ -30,14 +33,8 @@ THETA0 = 300.0         # K, WRF's base potential temperature offset of T
 SPECIES_VARS = {"cloud": "QCLOUD", "ice": "QICE", "rain": "QRAIN", "snow": "QSNOW", "graupel": "QGRAUP"}
 RADIUS_VARS = {"cloud": "RE_CLOUD", "ice": "RE_ICE", "snow": "RE_SNOW"}
 REQUIRED = ("P", "PB", "T", "PH", "PHB")
-MP_SCHEMES = {0: "none", 1: "Kessler", 2: "Purdue Lin", 3: "WSM3", 4: "WSM5", 5: "Ferrier (Eta)",
-              6: "WSM6", 7: "Goddard", 8: "Thompson", 9: "Milbrandt-Yau", 10: "Morrison",
-              11: "CAM 5.1", 13: "SBU-YLin", 14: "WDM5", 16: "WDM6", 17: "NSSL 2-moment",
-              18: "NSSL 2-moment + CCN", 19: "NSSL 1-moment (7 class)", 21: "NSSL 1-moment (6 class)",
-              22: "NSSL 2-moment (no hail)", 24: "WSM7", 26: "WDM7", 28: "Thompson aerosol-aware",
-              30: "HUJI SBM fast", 32: "HUJI SBM full", 38: "Thompson hail-aware", 40: "Morrison+CESM aerosol",
-              50: "P3 1-ice", 51: "P3 1-ice + nc", 52: "P3 2-ice", 53: "P3 1-ice 3-moment", 55: "Jensen ISHMAEL",
-              56: "NTU"}
+MAP_FACTOR_VARS = ("MAPFAC_M", "MAPFAC_MX", "MAPFAC_MY")
+
 
 
 def _time_strings(ds: xr.Dataset) -> list[str]:
@@ -157,7 +154,12 @@ def _convert(ds, path, time, x, y, dz, top, bottom) -> xr.Dataset:
             warnings.warn(f"{path}: dry-air density from P, PB, T, QVAPOR differs from 1/ALT by up to "
                           f"{100 * rel:.2f}%", stacklevel=3)
 
-    fields, lacking, negatives = {}, [], {}
+    written = SCHEME_VARS.get(mp, ())
+    damaged = [v for v in written if v not in ds]
+    if damaged:
+        raise WeatherDataError(path, ", ".join(damaged), f"the mixing ratios that {scheme} microphysics "
+                               f"(MP_PHYSICS={mp}) writes: {', '.join(written)}", "missing from the file")
+    fields, lacking, negatives, minima = {}, [], {}, {}
     for name, var in SPECIES_VARS.items():
         if var not in ds:
             lacking.append(var)
@@ -166,7 +168,11 @@ def _convert(ds, path, time, x, y, dz, top, bottom) -> xr.Dataset:
         if name == "graupel" and "QHAIL" in ds:  # hail is the dense end of the rimed-ice spectrum
             q = q + _read(ds, "QHAIL", it, sel, path, shape)
         negatives[name] = int(np.count_nonzero(q < 0))
+        if negatives[name]:
+            minima[var] = (negatives[name], float(q.min()))
         fields[name] = np.maximum(q, 0.0)
+    if minima:
+        warn_clipped(path, minima, stacklevel=3)
     if not fields:
         raise WeatherDataError(path, "QCLOUD", "at least one hydrometeor mixing ratio (QCLOUD, QRAIN, ...)", "none")
     if lacking:
@@ -200,10 +206,14 @@ def _convert(ds, path, time, x, y, dz, top, bottom) -> xr.Dataset:
 
     dx = float(ds.attrs.get("DX", 1000.0))
     dy = float(ds.attrs.get("DY", dx))
+    factors = {v: _read(ds, v, it, sel, path, shape[1:]) for v in MAP_FACTOR_VARS if v in ds}
+    if "MAPFAC_MX" in factors and "MAPFAC_MY" in factors:
+        factors.pop("MAPFAC_M", None)
+    dx, dy, grid_attrs = horizontal_spacing(path, dx, dy, factors, stacklevel=3)
     i0 = (x.start or 0) if x is not None else 0
     j0 = (y.start or 0) if y is not None else 0
     attrs.update({"n_negative_clipped_native": int(sum(negatives.values())), "dz_native_mean": dz,
-                  "map_proj": int(ds.attrs.get("MAP_PROJ", 0)), "grid": "map projection treated as Cartesian"})
+                  "map_proj": int(ds.attrs.get("MAP_PROJ", 0)), **grid_attrs})
     attrs.update({f"n_negative_clipped_{k}": v for k, v in negatives.items()})
     hyd = from_arrays(q_new, np.maximum(rho_above, 1e-6), (dz, dy, dx),
                       (z_lo + dz / 2, j0 * dy, i0 * dx), r_eff=r_eff, attrs=attrs, source=path)

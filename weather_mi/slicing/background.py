@@ -30,7 +30,7 @@ def _sky_emitter(spec: SceneSpec, cache: dict | None):
 def sky_radiance(spec: SceneSpec, dirs: np.ndarray, cache: dict | None = None) -> np.ndarray:
     """Sky radiance (N, 3) seen along unit directions (N, 3); zero without a sky."""
     dirs = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
-    if spec.sky is None:
+    if spec.sky is None or dirs.shape[0] == 0:  # no pixel sees the sky: Mitsuba cannot evaluate 0 lanes
         return np.zeros_like(dirs)
     if spec.sky.kind == "constant":
         return np.broadcast_to(np.asarray(spec.sky.radiance), dirs.shape).copy()

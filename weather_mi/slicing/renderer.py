@@ -68,7 +68,7 @@ class SliceRenderer:
         self.beta_s = mi.Float(np.ascontiguousarray(beta_s).ravel())  # (z, y, x, S) flattened
         self.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
         self.voxel_m = float(np.mean(vol.spacing))
-        tables = list(vol.phase_tables)
+        tables = list(vol.require_phase_tables())
         if mode.phase == "uniform":
             u = uniform_phase if uniform_phase is not None else tables[0]
             tables = [u] * self.n_species

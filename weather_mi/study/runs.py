@@ -90,6 +90,28 @@ def load_scene(name: str, cfg: StudyConfig, data_dir=None):
     return vol, desc
 
 
+def load_scenes(cfg: StudyConfig, data_dir=None) -> tuple[dict, list[str]]:
+    """({name: (OpticalVolume, description)}, skipped names) of the configuration's scenes. A ``data_dir``
+    that is not a folder is a ValueError; scenes whose data file is absent are skipped with a warning
+    that says why (no ``data_dir`` given, or the missing path)."""
+    import warnings
+    if data_dir is not None and not Path(data_dir).is_dir():
+        raise ValueError(f"--data {data_dir}: expected a folder of real model output (wrf/..., les/...); "
+                         "found no such folder")
+    scenes, skipped = {}, []
+    for name in cfg.scenes:
+        loaded = load_scene(name, cfg, data_dir=data_dir)
+        if loaded is None:
+            skipped.append(name)
+        else:
+            scenes[name] = loaded
+    if skipped:
+        why = ("no data folder given (--data ../shared/data)" if data_dir is None else
+               "absent: " + ", ".join(str(Path(data_dir) / DATA_SCENES[n][0]) for n in skipped))
+        warnings.warn(f"validation: skipped the real-data scenes {', '.join(skipped)}: {why}", UserWarning, stacklevel=3)
+    return scenes, skipped
+
+
 CAMERA_AZIMUTH = 200.0
 
 
@@ -134,19 +156,12 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True, data
     from ..slicing.calibrate import FIT_START, TrainingView, calibrate
     from .report import plot_convergence, plot_history, side_by_side, write_csv, write_report
     cfg = CONFIGS[config] if isinstance(config, str) else config
+    scenes, skipped = load_scenes(cfg, data_dir)
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
-    rows, skipped, timings = [], [], []
+    rows, timings = [], []
     convergence, calib_rows = {}, []
     t_start = time.perf_counter()
-
-    scenes = {}
-    for name in cfg.scenes:
-        loaded = load_scene(name, cfg, data_dir=data_dir)
-        if loaded is None:
-            skipped.append(name)
-            continue
-        scenes[name] = loaded
 
     jobs = [(s, l) for s in scenes for l in cfg.lightings]
     bar = tqdm(jobs, desc="validate", disable=not progress)
@@ -288,7 +303,7 @@ def _single_field_volume(vol, cfg):
             / max(s.scale, 1e-30) * cloud.scale
     weights = np.zeros_like(vol.weights)
     weights[0] = (beta[0] > 0)
-    v = replace(vol, beta_ext=beta, beta_total=beta[0].copy(), weights=weights, _phase_tables=list(vol.phase_tables))
+    v = replace(vol, beta_ext=beta, beta_total=beta[0].copy(), weights=weights)
     assert v.species == SPECIES_NAMES
     return v
 
@@ -296,8 +311,7 @@ def _single_field_volume(vol, cfg):
 def _uniform_phase_volume(vol):
     """Fig. 6 'one phase function for all' for the path tracer: every species scatters with the first
     species' table (cloud droplets), as the slicer's uniform phase mode does."""
-    tables = list(vol.phase_tables)
-    return replace(vol, _phase_tables=[tables[0]] * len(tables))
+    return replace(vol, phase_tables=(vol.phase_tables[0],) * len(vol.phase_tables))
 
 
 def _species_colour_volume(vol):
@@ -312,6 +326,6 @@ def _species_colour_volume(vol):
     has = vol.beta_total > 0
     alb[has] /= vol.beta_total[has][..., None]
     alb[~has] = 1.0
-    return replace(vol, albedo=alb.astype(np.float32), species_set=colours, _phase_tables=list(vol.phase_tables))
+    return replace(vol, albedo=alb.astype(np.float32), species_set=colours)
 
 
