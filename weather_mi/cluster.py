@@ -62,7 +62,7 @@ def local_cluster(n_workers: int, threads_per_worker: int = 1):
     if not isinstance(n_workers, int) or n_workers < 1:
         raise ValueError(f"the number of workers must be a positive integer, got {n_workers!r}")
     cluster = LocalCluster(n_workers=n_workers, threads_per_worker=threads_per_worker, processes=True,
-                           dashboard_address=None)
+                           dashboard_address=":0")
     client = Client(cluster, set_as_default=False)
     client._weather_mi_owns_cluster = cluster
     return client

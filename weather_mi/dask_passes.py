@@ -68,7 +68,8 @@ class RemotePasses:
         self.start, self.planned, self.open_ended = start, planned, open_ended
         self.worker_variant, self.ahead = worker_variant, ahead
         self.summary: dict | None = None
-        self._futures: dict = {}
+        self._futures: dict = {}   # pass index -> future, not yet handed over
+        self._submitted: list = []  # every future of this render, released (cancelled) at the end
         self._client = None
         self._owned = False
 
@@ -84,6 +85,7 @@ class RemotePasses:
             ahead = self.ahead or max(4, 2 * threads)
             token = uuid.uuid4().hex[:12]
             held = client.submit(_hold, self.job, key=f"weather-mi-scene-{token}", pure=False)
+            self._submitted.append(held)
             summary = {"workers": len(variants), "threads": threads, "variants": sorted(set(variants.values())),
                        "passes_by_worker": {}, "bytes_per_pass": 0, "worker_seconds": 0.0}
             self.summary = summary
@@ -97,6 +99,7 @@ class RemotePasses:
                     self._futures[nxt] = client.submit(
                         _render_pass_task, held, nxt, self.per_pass(nxt), pass_seed(self.job.spec.seed, nxt),
                         self.worker_variant, mi.variant(), key=f"weather-mi-pass-{token}-{nxt}", pure=False)
+                    self._submitted.append(self._futures[nxt])
                     nxt += 1
                 while True:  # pass i, in order (later passes render meanwhile and wait on their workers)
                     try:
@@ -130,7 +133,7 @@ class RemotePasses:
         if self._client is None:
             return
         from . import cluster
-        futures, self._futures = list(self._futures.values()), {}
+        futures, self._futures, self._submitted = self._submitted, {}, []
         if futures:
             try:
                 self._client.cancel(futures, force=True)
