@@ -78,6 +78,20 @@ def close(client) -> None:
             cluster.close(timeout=10)
 
 
+@contextlib.contextmanager
+def session(scheduler: str | None = None, workers: int | None = None):
+    """A client for the duration of a command: connected to ``scheduler``, on a new LocalCluster of
+    ``workers`` processes, or None (render in this process); closed at the end."""
+    if scheduler is None and workers is None:
+        yield None
+        return
+    client = connect(scheduler)[0] if scheduler is not None else local_cluster(workers)
+    try:
+        yield client
+    finally:
+        close(client)
+
+
 def check_workers(client, worker_variant=None, client_variant: str | None = None,
                   wait_s: float = WORKER_WAIT_S) -> dict:
     """Check every worker of ``client`` before submitting: weather_mi, Mitsuba and Dr.Jit importable in

@@ -21,13 +21,22 @@ POLL_S = 0.5            # how often the client wakes up while waiting (Ctrl-C, l
 NO_WORKER_LIMIT_S = 120.0  # all workers gone for this long: give up rather than hang
 SCENES_PER_WORKER = 2   # Mitsuba scenes kept per worker process (an animation renders many)
 
-_worker_lock = threading.Lock()   # one render at a time per process: Dr.Jit already uses every core
+worker_lock = threading.Lock()   # one render at a time per process: Dr.Jit already uses every core
 _worker_scenes: dict = {}
 
 
-def _hold(job):
-    """The scene description as a task result (see the module docstring)."""
-    return job
+def _hold(obj):
+    return obj
+
+
+def held(client, obj, key: str):
+    """A future of ``obj`` that workers fetch once each and that survives any worker's death: ``obj``
+    travels in the task graph (the scheduler keeps it and can compute it again), not scattered to
+    workers that may all die. Dask's warning about a large graph is expected here (one volume)."""
+    import warnings
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Sending large graph", category=UserWarning)
+        return client.submit(_hold, obj, key=key, pure=False)
 
 
 def _render_pass_task(job, i: int, spp: int, seed: int, worker_variant, client_variant: str):
@@ -38,7 +47,7 @@ def _render_pass_task(job, i: int, spp: int, seed: int, worker_variant, client_v
     from .reference import render_pass
     from .variant import default_variant, set_variant
     address = get_worker().address
-    with _worker_lock:
+    with worker_lock:
         variant = set_variant(variant_for(address, worker_variant, client_variant, default_variant()))
         t0 = time.perf_counter()
         scene = _worker_scenes.get((job.key, variant))
@@ -84,8 +93,8 @@ class RemotePasses:
             threads = sum(client.nthreads().values()) or 1
             ahead = self.ahead or max(4, 2 * threads)
             token = uuid.uuid4().hex[:12]
-            held = client.submit(_hold, self.job, key=f"weather-mi-scene-{token}", pure=False)
-            self._submitted.append(held)
+            scene = held(client, self.job, f"weather-mi-scene-{token}")
+            self._submitted.append(scene)
             summary = {"workers": len(variants), "threads": threads, "variants": sorted(set(variants.values())),
                        "passes_by_worker": {}, "bytes_per_pass": 0, "worker_seconds": 0.0}
             self.summary = summary
@@ -97,7 +106,7 @@ class RemotePasses:
                 limit = max(self.planned, i + ahead) if self.open_ended else self.planned
                 while nxt < limit:
                     self._futures[nxt] = client.submit(
-                        _render_pass_task, held, nxt, self.per_pass(nxt), pass_seed(self.job.spec.seed, nxt),
+                        _render_pass_task, scene, nxt, self.per_pass(nxt), pass_seed(self.job.spec.seed, nxt),
                         self.worker_variant, mi.variant(), key=f"weather-mi-pass-{token}-{nxt}", pure=False)
                     self._submitted.append(self._futures[nxt])
                     nxt += 1
