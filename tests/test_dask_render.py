@@ -129,6 +129,22 @@ def test_ctrl_c_cancels_the_tasks_and_leaves_a_valid_checkpoint(client, vol, tmp
     assert same(resumed, render(sp, vol, spp=24, passes=24))
 
 
+def test_cli_render_with_a_scheduler_writes_the_in_process_image(client, tmp_path):
+    from weather_mi import cli
+    args = ["render", "--demo", "cumulus", "--size", "16x12", "--spp", "4", "--sky", "constant"]
+    assert cli.main(args + ["-o", str(tmp_path / "local.exr")]) == 0
+    assert cli.main(args + ["--scheduler", client.scheduler.address, "-o", str(tmp_path / "dask.exr")]) == 0
+    local, remote = (wm.Image.load(tmp_path / f"{n}.exr") for n in ("local", "dask"))
+    assert same(local, remote) and remote.metadata["dask"]["workers"] == 2
+
+
+def test_cli_unreachable_scheduler_exits_with_a_message(tmp_path, capsys):
+    from weather_mi import cli
+    rc = cli.main(["render", "--demo", "cumulus", "--size", "16x12", "--spp", "4", "--scheduler", "127.0.0.1:9",
+                   "-o", str(tmp_path / "x.exr")])
+    assert rc == 2 and "no Dask scheduler reachable at tcp://127.0.0.1:9" in capsys.readouterr().err
+
+
 def test_unreachable_scheduler_is_a_clear_error_within_10_s(vol, tmp_path, no_rendering):
     with socket.socket() as s:  # a port nobody listens on
         s.bind(("127.0.0.1", 0))

@@ -52,12 +52,15 @@ def storm_centre_xy(volumes: list[OpticalVolume]) -> tuple[float, float]:
 
 def _slice_frame_task(spec: SceneSpec, vol: OpticalVolume, variant: str, slices: int) -> Image:
     """On a Dask worker: one slicer frame in the client's variant."""
-    from .dask_passes import worker_lock
+    from .dask_passes import on_render_thread
+    return on_render_thread(_slice_frame, spec, vol, variant, slices)
+
+
+def _slice_frame(spec, vol, variant, slices):
     from .slicing import render_slices
     from .variant import set_variant
-    with worker_lock:
-        set_variant(variant)
-        return render_slices(spec, vol, slices=slices)
+    set_variant(variant)
+    return render_slices(spec, vol, slices=slices)
 
 
 def _slicer_frames(specs, volumes, client, slices: int, bar):
