@@ -1,7 +1,8 @@
 """Command line.
 
     weather-mi info FILE | --demo supercell|cumulus
-    weather-mi render FILE | --demo supercell|cumulus [options] -o out.exr
+    weather-mi render FILE | --demo supercell|cumulus [options] [--scheduler ADDR | --workers N] -o out.exr
+    weather-mi animate WRFOUT... [--renderer slices|reference] [options] [--scheduler ADDR | --workers N] -o DIR
     weather-mi validate -o DIR [--quick]
 """
 from __future__ import annotations
@@ -125,7 +126,7 @@ def render_command(args) -> Path:
     holding the outputs' lock, write EXR + PNG."""
     from .output_paths import OutputLock, check_writable_folder
     from .scene import check_fov_deg
-    width, height = _parse_size(args.size)
+    _parse_size(args.size)
     if args.fov is not None:
         check_fov_deg(args.fov)
     check_time_option(args.file, args.demo, args.time)
@@ -135,32 +136,21 @@ def render_command(args) -> Path:
         if ckpt.is_file() and not args.resume:
             raise ValueError(f"{ckpt} holds an unfinished render: add --resume to continue it, or delete it to "
                              "render afresh")
-        return _render(args, width, height, exr, png, ckpt)
+        return _render(args, exr, png, ckpt)
 
 
-def _render(args, width, height, out, png_path, ckpt) -> Path:
+def _render(args, out, png_path, ckpt) -> Path:
     from .optics import optical_volume
     from .reference import render_reference
-    from .scene import Camera, Ground, SceneSpec, Sky, Sun
     hyd = load_input(args.file, args.demo, _parse_time(args.time))
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase)
-    sky = None if args.sky == "none" else Sky(args.sky)
-    ground = None if args.ground_albedo < 0 else Ground(albedo=args.ground_albedo,
-                                                        height=min(0.0, vol.bbox[0][2]))
-    if args.camera == "orbit":
-        camera = Camera.orbit(vol, azimuth=args.camera_azimuth, elevation=args.camera_elevation,
-                              distance=args.distance, fov=45.0 if args.fov is None else args.fov)
-    else:
-        camera = Camera.ground_view(vol, azimuth=args.camera_azimuth, fov=70.0 if args.fov is None else args.fov,
-                                    aspect=width / height,
-                                    distance_km=args.camera_distance_km or default_ground_distance_km(vol),
-                                    height_m=args.camera_height, ground_m=0.0 if ground is None else ground.height)
-    spec = SceneSpec(camera=camera, sun=Sun(args.sun_azimuth, args.sun_elevation, angular_diameter_deg=args.sun_diameter),
-                     sky=sky, ground=ground, width=width, height=height, seed=args.seed)
-    img = render_reference(spec, vol, spp=args.spp, integrator=args.integrator, checkpoint=ckpt,
-                           resume=ckpt if args.resume else None, target_rse=args.target_rse,
-                           max_seconds=args.max_seconds, sun_guiding=args.sun_guiding,
-                           forward_peak_deg=args.forward_peak, aureole_nee=args.aureole_nee)
+    spec = scene_spec(args, vol)
+    from .cluster import session
+    with session(args.scheduler, args.workers) as client:
+        img = render_reference(spec, vol, spp=args.spp, integrator=args.integrator, checkpoint=ckpt,
+                               resume=ckpt if args.resume else None, target_rse=args.target_rse,
+                               max_seconds=args.max_seconds, sun_guiding=args.sun_guiding,
+                               forward_peak_deg=args.forward_peak, aureole_nee=args.aureole_nee, client=client)
     img.save(out)
     png = img.save_png(png_path, exposure=args.exposure)
     ckpt.unlink(missing_ok=True)
@@ -172,6 +162,90 @@ def _render(args, width, height, out, png_path, ckpt) -> Path:
     return out
 
 
+def scene_spec(args, vol):
+    """The SceneSpec of the scene options (camera, sun, sky, ground, size, seed) for ``vol``."""
+    from .scene import Camera, Ground, SceneSpec, Sky, Sun
+    width, height = _parse_size(args.size)
+    sky = None if args.sky == "none" else Sky(args.sky)
+    ground = None if args.ground_albedo < 0 else Ground(albedo=args.ground_albedo,
+                                                        height=min(0.0, vol.bbox[0][2]))
+    if args.camera == "orbit":
+        camera = Camera.orbit(vol, azimuth=args.camera_azimuth, elevation=args.camera_elevation,
+                              distance=args.distance, fov=45.0 if args.fov is None else args.fov)
+    else:
+        camera = Camera.ground_view(vol, azimuth=args.camera_azimuth, fov=70.0 if args.fov is None else args.fov,
+                                    aspect=width / height,
+                                    distance_km=args.camera_distance_km or default_ground_distance_km(vol),
+                                    height_m=args.camera_height, ground_m=0.0 if ground is None else ground.height)
+    return SceneSpec(camera=camera, sun=Sun(args.sun_azimuth, args.sun_elevation, angular_diameter_deg=args.sun_diameter),
+                     sky=sky, ground=ground, width=width, height=height, seed=args.seed)
+
+
+def add_scene_options(p) -> None:
+    """Volume and scene options of ``render`` and ``animate``: species, phase, camera, sun, sky, ground."""
+    p.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
+    p.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
+    p.add_argument("--scale", action="append", metavar="SPECIES=FACTOR", help="e.g. --scale ice=2")
+    p.add_argument("--sun-azimuth", type=float, default=290.0, help="degrees clockwise from north")
+    p.add_argument("--sun-elevation", type=float, default=35.0)
+    p.add_argument("--sun-diameter", type=float, default=0.53,
+                   help="angular diameter of the sun disk (degrees); 0: a point sun")
+    p.add_argument("--camera", default="ground", choices=("ground", "orbit"),
+                   help="ground: a photographer's view from near the ground (Camera.ground_view); "
+                        "orbit: on a sphere around the cloud (Camera.orbit)")
+    p.add_argument("--camera-azimuth", type=float, default=200.0,
+                   help="where the camera stands, seen from the storm (degrees clockwise from north)")
+    p.add_argument("--camera-elevation", type=float, default=8.0, help="orbit camera: elevation (degrees)")
+    p.add_argument("--distance", type=float, default=None,
+                   help="orbit camera: distance (m); default fits the box")
+    p.add_argument("--camera-distance-km", type=float, default=None,
+                   help="ground camera: horizontal distance from the storm's core (km); default from its size")
+    p.add_argument("--camera-height", type=float, default=1500.0, help="ground camera: height above ground (m)")
+    p.add_argument("--fov", type=float, default=None,
+                   help="horizontal field of view (degrees; default 70 ground, 45 orbit)")
+    p.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none"))
+    p.add_argument("--ground-albedo", type=float, default=0.15, help="negative: no ground")
+    p.add_argument("--size", default="320x240", help="WIDTHxHEIGHT")
+
+
+def add_dask_options(p) -> None:
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="ADDR", default=None,
+                       help="render on a Dask cluster: its scheduler's address, e.g. tcp://host:8786")
+    where.add_argument("--workers", type=int, metavar="N", default=None,
+                       help="render on a Dask LocalCluster of N worker processes on this machine")
+
+
+def _parse_times(text: str):
+    """--time of animate: "all", "START:STOP[:STEP]", "I,J,..." (indices or timestamps) or one of them."""
+    if text == "all":
+        return "all"
+    if ":" in text and not any(c.isalpha() or c in "-_" for c in text.lstrip("-")):
+        parts = [int(v) if v.strip() else None for v in text.split(":")]
+        return slice(*parts)
+    return [_parse_time(v.strip()) for v in text.split(",")]
+
+
+def animate_command(args) -> Path:
+    """Every time of the inputs rendered from one camera: EXR frames, an MP4 and a contact sheet."""
+    from .animate import animate
+    from .cluster import session
+    from .io import open_wrf
+    from .io.series import time_steps
+    from .optics import optical_volume
+    hyds = time_steps(open_wrf(args.inputs if len(args.inputs) > 1 else args.inputs[0], time=_parse_times(args.time)))
+    vols = [optical_volume(h, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase) for h in hyds]
+    widest = max(vols, key=lambda v: np.prod(np.subtract(*v.occupied_bbox()[::-1])))  # frame the largest storm
+    spec = scene_spec(args, widest)
+    reference_kw = {"spp": args.spp, "target_rse": args.target_rse, "max_seconds": args.max_seconds}
+    with session(args.scheduler, args.workers) as client:
+        anim = animate(vols, spec, args.output, renderer=args.renderer, labels=[h.attrs["time"] for h in hyds],
+                       orbit_deg=args.orbit, client=client, fps=args.fps, exposure=args.exposure,
+                       slices=args.slices, reference_kw=reference_kw)
+    print(f"wrote {len(anim.frames)} frames in {Path(args.output) / 'frames'}, {anim.mp4} and {anim.contact_sheet}")
+    return anim.mp4
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="weather-mi", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -180,29 +254,7 @@ def main(argv: list[str] | None = None) -> int:
     info.add_argument("--species", default="paper", choices=("paper", "physical"))
     render = sub.add_parser("render", help="path-trace the ground-truth image (EXR + PNG)")
     _add_source(render)
-    render.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
-    render.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
-    render.add_argument("--scale", action="append", metavar="SPECIES=FACTOR", help="e.g. --scale ice=2")
-    render.add_argument("--sun-azimuth", type=float, default=290.0, help="degrees clockwise from north")
-    render.add_argument("--sun-elevation", type=float, default=35.0)
-    render.add_argument("--sun-diameter", type=float, default=0.53,
-                        help="angular diameter of the sun disk (degrees); 0: a point sun")
-    render.add_argument("--camera", default="ground", choices=("ground", "orbit"),
-                        help="ground: a photographer's view from near the ground (Camera.ground_view); "
-                             "orbit: on a sphere around the cloud (Camera.orbit)")
-    render.add_argument("--camera-azimuth", type=float, default=200.0,
-                        help="where the camera stands, seen from the storm (degrees clockwise from north)")
-    render.add_argument("--camera-elevation", type=float, default=8.0, help="orbit camera: elevation (degrees)")
-    render.add_argument("--distance", type=float, default=None,
-                        help="orbit camera: distance (m); default fits the box")
-    render.add_argument("--camera-distance-km", type=float, default=None,
-                        help="ground camera: horizontal distance from the storm's core (km); default from its size")
-    render.add_argument("--camera-height", type=float, default=1500.0, help="ground camera: height above ground (m)")
-    render.add_argument("--fov", type=float, default=None,
-                        help="horizontal field of view (degrees; default 70 ground, 45 orbit)")
-    render.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none"))
-    render.add_argument("--ground-albedo", type=float, default=0.15, help="negative: no ground")
-    render.add_argument("--size", default="320x240", help="WIDTHxHEIGHT")
+    add_scene_options(render)
     render.add_argument("--spp", type=int, default=48,
                         help="samples per pixel (with --target-rse: of the first estimate)")
     render.add_argument("--target-rse", type=float, default=None,
@@ -220,8 +272,25 @@ def main(argv: list[str] | None = None) -> int:
     render.add_argument("--integrator", default="majorant", choices=("majorant", "volpath"))
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")
     render.add_argument("--resume", action="store_true", help="continue from OUTPUT.ckpt.npz")
+    add_dask_options(render)
     render.add_argument("-o", "--output", default="weather-mi.exr",
                         help="OUT.exr (or OUT.png): writes OUT.exr and OUT.png; OUT.exr.ckpt.npz while rendering")
+    anim = sub.add_parser("animate", help="render every time of a storm: EXR frames, an MP4 and a contact sheet")
+    anim.add_argument("inputs", nargs="+", help="wrfout NetCDF file(s); their times in order")
+    anim.add_argument("--time", default="all", help='"all", START:STOP[:STEP] or a comma list of indices or timestamps')
+    anim.add_argument("--renderer", default="slices", choices=("slices", "reference"))
+    add_scene_options(anim)
+    anim.add_argument("--spp", type=int, default=16, help="reference: samples per pixel (with --target-rse: the first estimate)")
+    anim.add_argument("--target-rse", type=float, default=None, help="reference: add passes until this cloud RSE")
+    anim.add_argument("--max-seconds", type=float, default=None, help="reference, with --target-rse: time limit per frame")
+    anim.add_argument("--slices", type=int, default=128, help="slicer: number of slices")
+    anim.add_argument("--orbit", type=float, default=0.0, metavar="DEG",
+                      help="the camera turns this many degrees about the storm from the first frame to the last")
+    anim.add_argument("--fps", type=float, default=4.0, help="frames per second of the MP4")
+    anim.add_argument("--seed", type=int, default=0)
+    anim.add_argument("--exposure", type=float, default=None, help="MP4/contact-sheet exposure (default: automatic, one for all frames)")
+    add_dask_options(anim)
+    anim.add_argument("-o", "--output", default="weather-mi-animation", help="output folder")
     val = sub.add_parser("validate", help="the validation study: slicer against path-traced ground truth")
     val.add_argument("-o", "--output", default="validation-report", help="report folder")
     val.add_argument("--quick", action="store_true", help="small images and samples: a few minutes")
@@ -237,11 +306,13 @@ def main(argv: list[str] | None = None) -> int:
             print(info_text(hyd, args.species))
         elif args.command == "render":
             render_command(args)
+        elif args.command == "animate":
+            animate_command(args)
         elif args.command == "validate":
             from .study import run
             report = run(args.output, args.config or ("quick" if args.quick else "full"), data_dir=args.data)
             print(f"wrote {report}")
-    except (WeatherDataError, ValueError) as exc:
+    except (WeatherDataError, ValueError, ConnectionError, RuntimeError) as exc:
         print(f"weather-mi: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -10,6 +10,7 @@ import hashlib
 import json
 import os
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -101,6 +102,45 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
     if rr_depth is not None:
         d["rr_depth"] = int(rr_depth)
     return d
+
+
+@dataclass(frozen=True)
+class PassScene:
+    """What a pass renders: the scene, the volume and the estimator options of a ``render_reference`` call
+    (``key``: its fingerprint). Built into a Mitsuba scene in the current variant by ``build``, here or in
+    a Dask worker (the same scene, hence the same pass images)."""
+
+    spec: SceneSpec
+    vol: OpticalVolume
+    options: dict
+    key: str
+
+    def build(self):
+        import mitsuba as mi
+        from .mitsuba_scene import recentred, scene_dict
+        o = self.options
+        spec_k, vol_k, _ = recentred(self.spec, self.vol)  # kernel-side coordinates: bbox centred on the origin
+        vol_render = delta_scaled(vol_k, o["forward_peak_deg"])
+        integ = integrator_dict(vol_render, o["integrator"], o["max_depth"], o["rr_depth"], o["cell"],
+                                sun=self.spec.sun if o["own_sun"] else None, sun_guiding=o["sun_guiding"],
+                                aureole_nee=o["aureole_nee"], legacy=o["legacy"] and o["integrator"] == "majorant")
+        return mi.load_dict(scene_dict(spec_k, vol_render, integ))
+
+
+def render_pass(scene, spp: int, seed: int) -> np.ndarray:
+    """One pass of ``spp`` samples per pixel with Mitsuba seed ``seed``: the film's (H, W, C) float32 array."""
+    import mitsuba as mi
+    return np.array(mi.render(scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
+
+
+def _local_passes(scene, seed: int, per_pass, more, start: int):
+    """Passes rendered in this process: (index, image, seconds) while ``more(index)``."""
+    i = start
+    while more(i):
+        t0 = time.perf_counter()
+        raw = render_pass(scene, per_pass(i), pass_seed(seed, i))
+        yield i, raw, time.perf_counter() - t0
+        i += 1
 
 
 def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
@@ -221,7 +261,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                      rr_depth: int | None = None, cell: int | None = None, target_rse: float | None = None,
                      max_seconds: float | None = None, sun_guiding: float | None = None,
                      forward_peak_deg: float | None = None, aureole_nee: float | None = None,
-                     legacy: bool = False) -> Image:
+                     legacy: bool = False, client=None, worker_variant=None) -> Image:
     """Path-trace ``vol`` as seen by ``spec`` (Mitsuba ``volpath`` or our local-majorant tracker).
 
     spp        : samples per pixel in total, split into passes (``passes``, default MIN_PASSES = 16
@@ -247,6 +287,11 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                  (point sun only), Russian roulette as Mitsuba's volpath, phase sampling by channel mean.
     checkpoint : a .npz path written after every pass; ``resume`` (a path, or True to use
                  ``checkpoint``) continues a render from it; the scene must be identical.
+    client     : None (render in this process), a ``dask.distributed.Client`` or a scheduler address
+                 ("tcp://host:8786"): the passes become Dask tasks (``weather_mi.dask_passes``), merged here
+                 in pass order, so the image is bit-identical to the in-process one.
+    worker_variant : with ``client``: the Mitsuba variant of the workers (None: this process's; "auto": each
+                 worker's default, cuda_ad_rgb where it has a GPU; a name; or {worker address: name}).
 
     The metadata records ``noise_stats`` over the cloud pixels (also shown by the progress bar).
     """
@@ -262,7 +307,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     import mitsuba as mi
     from tqdm.auto import tqdm
 
-    from .mitsuba_scene import recentred, scene_dict
+    from .mitsuba_scene import recentred, sensor_dict
 
     spp_list = _passes(spec, int(spp), passes)
     own_sun = integrator == "majorant" and not legacy
@@ -271,6 +316,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         options.append(["forward peak", forward_peak_deg])
     if own_sun:
         options.append(["integrator sun", sun_guiding] + ([aureole_nee] if aureole_nee else []))
+    if client is not None and worker_variant is not None:  # other variants: the same image within noise only
+        options.append(["worker variant", worker_variant])
     plan = ["target", spp_list[0]] if target_rse is not None else spp_list
     key = _fingerprint(spec, vol, plan, *options)  # cell: speed only
     ckpt = Path(checkpoint) if checkpoint is not None else None
@@ -285,16 +332,16 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     elif resume_path is None and ckpt is not None and ckpt.is_file():
         _keep_aside(ckpt)
 
+    job = PassScene(spec, vol, dict(integrator=integrator, max_depth=max_depth, rr_depth=rr_depth, cell=cell,
+                                    own_sun=own_sun, sun_guiding=sun_guiding, aureole_nee=aureole_nee,
+                                    legacy=legacy, forward_peak_deg=forward_peak_deg), key)
     spec_k, vol_k, _ = recentred(spec, vol)  # kernel-side coordinates: bbox centred on the origin
-    vol_render = delta_scaled(vol_k, forward_peak_deg)  # the cloud mask below keeps the full extinction
-    integ = integrator_dict(vol_render, integrator, max_depth, rr_depth, cell,
-                            sun=spec.sun if own_sun else None, sun_guiding=sun_guiding, aureole_nee=aureole_nee,
-                            legacy=legacy and integrator == "majorant")
-    scene = mi.load_dict(scene_dict(spec_k, vol_render, integ))
+    scene = job.build() if client is None else None  # the cloud mask below keeps the full extinction
     if mi.variant().startswith("scalar"):  # the ray march is vectorised: every pixel counts there
         cloud = np.ones((spec.height, spec.width), bool)
     else:
-        cloud = eye_optical_depth(scene.sensors()[0], vol_k, spec_k) > CLOUD_TAU
+        sensor = scene.sensors()[0] if scene is not None else mi.load_dict(sensor_dict(spec_k))
+        cloud = eye_optical_depth(sensor, vol_k, spec_k) > CLOUD_TAU
     scale = 1.0
     if normalize == "reflectance":
         scale = np.pi / (spec.sun.mu0 * np.asarray(spec.sun.irradiance))
@@ -314,29 +361,40 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
             return False
         return i < MAX_TARGET_PASSES and (max_seconds is None or seconds < max_seconds)
 
+    def per_pass(i):
+        return spp_list[i] if i < len(spp_list) else spp_list[0]
+
     total = len(spp_list) if target_rse is None else None
     bar = tqdm(total=total, initial=done, desc="reference", unit="pass", disable=not progress)
+    if client is None:
+        passes_in = _local_passes(scene, spec.seed, per_pass, more, done)
+    else:
+        from .dask_passes import RemotePasses
+        remote = RemotePasses(client, job, per_pass, more, done, len(spp_list), target_rse is not None,
+                              worker_variant=worker_variant)
+        passes_in = iter(remote)
     i = done
-    while more(i):
-        per = spp_list[i] if i < len(spp_list) else spp_list[0]
-        t0 = time.perf_counter()
-        img = np.array(mi.render(scene, spp=per, seed=pass_seed(spec.seed, i)), dtype=np.float64)
-        img = img[..., :3] * scale
-        seconds += time.perf_counter() - t0
-        n = i + 1  # Welford update of per-pixel mean and M2 over pass means
-        delta = img - mean
-        mean += delta / n
-        m2 += delta * (img - mean)
-        spp_done += per
-        i = n
-        if ckpt is not None:
-            _save_checkpoint(ckpt, {"key": key, "mean": mean, "m2": m2, "done": n, "seconds": seconds,
-                                    "spp_done": spp_done})
-        bar.update(1)
-        st = stats(n)
-        if st is not None and progress:
-            bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
-    bar.close()
+    try:
+        for i, raw, dt in passes_in:  # pass i's image, in pass order; dt: its seconds (wall-clock over Dask)
+            per = per_pass(i)
+            img = raw.astype(np.float64)[..., :3] * scale
+            seconds += dt
+            n = i + 1  # Welford update of per-pixel mean and M2 over pass means
+            delta = img - mean
+            mean += delta / n
+            m2 += delta * (img - mean)
+            spp_done += per
+            i = n
+            if ckpt is not None:
+                _save_checkpoint(ckpt, {"key": key, "mean": mean, "m2": m2, "done": n, "seconds": seconds,
+                                        "spp_done": spp_done})
+            bar.update(1)
+            st = stats(n)
+            if st is not None and progress:
+                bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
+    finally:  # over Dask: cancels the passes still queued (target met, Ctrl-C, error); the checkpoint stays valid
+        passes_in.close()
+        bar.close()
     n = i
     stderr = np.sqrt(m2 / (n - 1) / n) if n > 1 else np.full_like(mean, np.nan)
     meta = {"renderer": "reference", "integrator": integrator, "variant": mi.variant(), "spp": int(spp_done),
@@ -348,6 +406,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
             "sun_guiding": sun_guiding if own_sun else None, "target_rse": target_rse,
             "forward_peak_deg": forward_peak_deg, "aureole_nee": aureole_nee if own_sun else None,
             "noise": noise_stats(mean, stderr, cloud) if n > 1 else None}
+    if client is not None:
+        meta["dask"] = remote.summary
     return Image(mean.astype(np.float32), stderr.astype(np.float32), meta)
 
 

@@ -1,5 +1,6 @@
 """Readers that turn model output into the Hydrometeors contract (see weather_mi.hydrometeors)."""
 from .les import open_les
+from .series import time_steps
 from .wrf import open_wrf
 
-__all__ = ["open_les", "open_wrf"]
+__all__ = ["open_les", "open_wrf", "time_steps"]

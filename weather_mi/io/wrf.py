@@ -93,24 +93,34 @@ def dry_air_density(p_pa, theta_k, qv):
     return p_pa / (R_D * t_k * (1.0 + EPS_INV * qv))
 
 
-def open_wrf(path, time=-1, *, x: slice | None = None, y: slice | None = None,
+def open_wrf(path, time=None, *, x: slice | None = None, y: slice | None = None,
              dz: float | None = None, top: float | None = None, bottom: float | None = None) -> xr.Dataset:
     """Read one time of a wrfout file into Hydrometeors on a uniform height grid.
 
-    time   : index (negative counts from the end) or timestamp ("2005-09-21_03:00:00" or ISO).
+    time   : index (negative counts from the end) or timestamp ("2005-09-21_03:00:00" or ISO); or a
+             slice, a list or "all": a time series with a ``time`` dimension (``weather_mi.io.series``).
+             None: the last time of a file. A list of files is always read as a series (``time``
+             counting through all their times in order; None: all of them).
     x, y   : optional slices of mass-point indices (west_east, south_north): a horizontal sub-box.
     dz     : vertical spacing (m); default the native mean layer depth.
     bottom, top : extent of the height grid (m above MSL); default lowest terrain to highest model top.
     """
+    from .series import is_series, open_wrf_series
+    if is_series(path, time):
+        return open_wrf_series(path, "all" if time is None else time, x=x, y=y, dz=dz, top=top, bottom=bottom)
+    time = -1 if time is None else time
     path = os.fspath(path)
     if not Path(path).is_file():
         raise WeatherDataError(path, None, "an existing wrfout NetCDF file", "no such file")
+    with _open(path) as ds:
+        return _convert(ds, path, time, x, y, dz, top, bottom)
+
+
+def _open(path: str) -> xr.Dataset:
     try:
-        ds = xr.open_dataset(path, decode_times=False, mask_and_scale=True, cache=False)
+        return xr.open_dataset(path, decode_times=False, mask_and_scale=True, cache=False)
     except Exception as exc:  # netCDF4/h5py raise many types for non-NetCDF input
         raise WeatherDataError(path, None, "a NetCDF (wrfout) file", f"{type(exc).__name__}: {exc}") from exc
-    with ds:
-        return _convert(ds, path, time, x, y, dz, top, bottom)
 
 
 def _convert(ds, path, time, x, y, dz, top, bottom) -> xr.Dataset:

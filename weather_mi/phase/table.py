@@ -162,6 +162,15 @@ class PhaseTable:
     def __setattr__(self, key, value):
         raise AttributeError("PhaseTable is immutable")
 
+    def __getstate__(self):  # pickling (Dask workers): every slot exactly as it is
+        return {k: getattr(self, k) for k in self.__slots__}
+
+    def __setstate__(self, state):
+        for k, v in state.items():
+            if isinstance(v, np.ndarray):
+                v.setflags(write=False)
+            object.__setattr__(self, k, v)
+
     # ------------------------------------------------------------------ constructors
     @classmethod
     def from_values(cls, theta, values, name: str = "", wavelengths_m=RGB_WAVELENGTHS_M) -> "PhaseTable":

@@ -1,0 +1,118 @@
+"""A time series of wrfout output (several times of a file, or several files) as one Hydrometeors
+Dataset with a leading ``time`` dimension, every time regridded onto the same uniform height grid, so
+that each time becomes an OpticalVolume on the same grid (``time_steps``).
+
+The ``time`` coordinate holds WRF's timestamps as strings (ideal cases start at year 1, outside the
+range of datetime64[ns]); ``time_index`` and ``source`` say where each time came from.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ..errors import WeatherDataError
+
+
+def is_series(path, time) -> bool:
+    """Whether ``open_wrf(path, time)`` asks for several times: several files, or a slice, a list or
+    "all" as ``time``."""
+    several_files = not isinstance(path, (str, os.PathLike))
+    return several_files or isinstance(time, (slice, list, tuple)) or (isinstance(time, str) and time == "all")
+
+
+def _timeline(paths: list[str]) -> list[tuple[str, int, str]]:
+    """(file, index in that file, timestamp) of every time of every file, in the order given."""
+    from .wrf import _open, _time_strings
+    out = []
+    for p in paths:
+        with _open(p) as ds:
+            stamps = _time_strings(ds)
+            n = ds.sizes.get("Time", 1)
+            out += [(p, i, stamps[i] if stamps else str(i)) for i in range(n)]
+    return out
+
+
+def _select(timeline, time, where: str) -> list[tuple[str, int, str]]:
+    from .wrf import _normalise_time
+    n = len(timeline)
+    if isinstance(time, str) and time == "all":
+        return list(timeline)
+    if isinstance(time, slice):
+        chosen = timeline[time]
+    else:
+        chosen = []
+        for t in (time if isinstance(time, (list, tuple)) else [time]):
+            if isinstance(t, (int, np.integer)):
+                if not -n <= int(t) < n:
+                    raise WeatherDataError(where, "Times", f"time indices in [{-n}, {n - 1}]", str(t))
+                chosen.append(timeline[int(t) % n])
+                continue
+            try:
+                want = _normalise_time(t)
+                match = [e for e in timeline if _normalise_time(e[2]) == want]
+            except ValueError as exc:
+                raise WeatherDataError(where, "Times", "timestamps like 2005-09-21_03:00:00", repr(t)) from exc
+            if not match:
+                raise WeatherDataError(where, "Times", f"one of the times {[e[2] for e in timeline]}", repr(str(t)))
+            chosen.append(match[0])
+    if not chosen:
+        raise WeatherDataError(where, "Times", f"at least one of the {n} times selected", repr(time))
+    return chosen
+
+
+def open_wrf_series(paths, time="all", *, x: slice | None = None, y: slice | None = None,
+                    dz: float | None = None, top: float | None = None, bottom: float | None = None) -> xr.Dataset:
+    """Times of one or several wrfout files as Hydrometeors with a ``time`` dimension (see the module).
+
+    time : "all", a slice or a list of indices/timestamps into the times of all files in the order given.
+    The common height grid: ``dz`` default the first time's mean layer depth; ``bottom``/``top`` default
+    the lowest terrain and the highest model top over the selected times."""
+    from .wrf import G, _convert, _open, _read
+    paths = [os.fspath(p) for p in ([paths] if isinstance(paths, (str, os.PathLike)) else paths)]
+    if not paths:
+        raise WeatherDataError("open_wrf", "path", "at least one wrfout file", "an empty list")
+    for p in paths:
+        if not Path(p).is_file():
+            raise WeatherDataError(p, None, "an existing wrfout NetCDF file", "no such file")
+    chosen = _select(_timeline(paths), time, paths[0] if len(paths) == 1 else f"{len(paths)} wrfout files")
+    sel = {k: v for k, v in (("west_east", x), ("south_north", y)) if v is not None}
+    lows, highs, depths = [], [], []
+    for p, it, _ in chosen:  # one grid for all: from the heights of every selected time
+        with _open(p) as ds:
+            z_w = (_read(ds, "PH", it, sel, p) + _read(ds, "PHB", it, sel, p)) / G
+        lows.append(float(np.min(z_w[0])))
+        highs.append(float(np.max(z_w[-1])))
+        depths.append(float(np.mean(z_w[-1] - z_w[0]) / (z_w.shape[0] - 1)))
+    dz = depths[0] if dz is None else dz
+    bottom = min(lows) if bottom is None else bottom
+    top = max(highs) if top is None else top
+    frames = []
+    for p, it, _ in chosen:
+        with _open(p) as ds:
+            frames.append(_convert(ds, p, it, x, y, dz, top, bottom))
+    stamps = [stamp for _, _, stamp in chosen]
+    out = xr.concat(frames, dim="time", combine_attrs="drop_conflicts", coords="minimal", compat="override")
+    out = out.assign_coords(time=("time", stamps), time_index=("time", [it for _, it, _ in chosen]),
+                            source=("time", [p for p, _, _ in chosen]))
+    out.attrs.update({"source": paths[0] if len(paths) == 1 else ", ".join(paths), "times": len(stamps)})
+    return out
+
+
+def time_steps(ds: xr.Dataset) -> list[xr.Dataset]:
+    """The Hydrometeors of every time of a series from ``open_wrf_series`` (or [ds] for one time), each
+    with its own ``time`` and ``source`` attributes."""
+    if "time" not in ds.dims:
+        return [ds]
+    out = []
+    for k in range(ds.sizes["time"]):
+        one = ds.isel(time=k)
+        attrs = dict(ds.attrs, time=str(one["time"].values), time_index=int(one["time_index"].values),
+                     source=str(one["source"].values))
+        attrs.pop("times", None)
+        one = one.drop_vars(["time", "time_index", "source"])
+        one.attrs = attrs
+        out.append(one)
+    return out
