@@ -63,10 +63,11 @@ def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_
     return ref
 
 
-def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, max_seconds=None):
+def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, max_seconds=None, noise=None):
     """{(scene, lighting): TrainingView}; with ``second_seed`` also {(scene, lighting): a second,
     independent reference (seed 1)} for the reference's own noise. ``target_rse``/``max_seconds``: see
-    ``reference``."""
+    ``reference``; ``noise`` (a dict) receives each reference's (spp, mean relative standard error over
+    cloud pixels)."""
     views, vols, seconds = {}, {}, {}
     for scene, lighting in names:
         if scene not in vols:
@@ -76,6 +77,8 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
         vol = vols[scene][0]
         spec = view(vol, lighting, cfg)
         ref = reference(out, scene, lighting, vol, spec, spp, target_rse, max_seconds)
+        if noise is not None:
+            noise[(scene, lighting)] = (ref.metadata["spp"], (ref.metadata.get("noise") or {}).get("rse_mean"))
         mask = metrics.cloud_mask(eye_transmittance(vol, spec, 128))
         views[(scene, lighting)] = TrainingView(vol, spec, ref.radiance, mask)
         if second_seed:
@@ -116,14 +119,18 @@ def evaluate(views, fitted, slices, out=None, second=None):
     return rows, names
 
 
-def table(rows, names, title):
-    head = "| view | " + " | ".join(names) + " |"
-    lines = [f"### {title} (CIEDE2000 / FLIP over cloud pixels)", "", head, "|---|" + "---|" * len(names)]
+def table(rows, names, title, noise):
+    head = "| view | reference spp, cloud RSE | " + " | ".join(names) + " |"
+    lines = [f"### {title} (CIEDE2000 / FLIP over cloud pixels)", "", head, "|---|---|" + "---|" * len(names)]
     for r in rows:
-        lines.append(f"| {r['scene']} {r['lighting']} | " + " | ".join(f"{r[n][0]:.2f} / {r[n][1]:.3f}" for n in names) + " |")
+        spp, rse = noise[(r["scene"], r["lighting"])]
+        lines.append(f"| {r['scene']} {r['lighting']} | {spp}, {rse:.3f} | "
+                     + " | ".join(f"{r[n][0]:.2f} / {r[n][1]:.3f}" for n in names) + " |")
     if rows:
-        med = [np.median([r[n][0] for r in rows]) for n in names]
-        lines.append("| median CIEDE2000 | " + " | ".join(f"{m:.2f}" for m in med) + " |")
+        med = [np.median([r[n][k] for r in rows]) for n in names for k in (0, 1)]
+        lines.append("| median | | " + " | ".join(f"{med[2 * i]:.2f} / {med[2 * i + 1]:.3f}" for i in range(len(names))) + " |")
+        worst = [max(r[n][0] for r in rows) for n in names]
+        lines.append("| worst CIEDE2000 | | " + " | ".join(f"{w:.2f}" for w in worst) + " |")
     return "\n".join(lines)
 
 
@@ -150,7 +157,8 @@ def main(argv=None) -> int:
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     cfg = StudyConfig(width=width, height=height, phase_quality="test")
-    train = load_views(TRAIN, out, cfg, args.data, args.spp)
+    noise = {}
+    train = load_views(TRAIN, out, cfg, args.data, args.spp, noise=noise)
     if args.references_only:
         load_views(HELD_OUT, out, cfg, args.data, args.spp, target_rse=args.target_rse,
                    max_seconds=args.max_seconds)
@@ -166,13 +174,14 @@ def main(argv=None) -> int:
         (out / "fitted.json").write_text(json.dumps(fit, indent=1))
         print(head, flush=True)
     held = load_views(HELD_OUT, out, cfg, args.data, args.spp, second_seed=args.noise_floor,
-                      target_rse=args.target_rse, max_seconds=args.max_seconds)
+                      target_rse=args.target_rse, max_seconds=args.max_seconds, noise=noise)
     held, second = held if args.noise_floor else (held, None)
     rows_t, names_t = evaluate(train, fitted, args.slices)
     rows_h, names_h = evaluate(held, fitted, args.slices, out, second)
     text = "\n\n".join([f"# Slicer calibration ({width} x {height}; references: training {args.spp} spp, held-out to a "
                          f"cloud RSE of {args.target_rse:g} or {args.max_seconds:g} s)", head,
-                         table(rows_t, names_t, "Training views"), table(rows_h, names_h, "Held-out views")])
+                         table(rows_t, names_t, "Training views", noise),
+                         table(rows_h, names_h, "Held-out views", noise)])
     (out / "calibration.md").write_text(text + "\n")
     print(text)
     return 0
