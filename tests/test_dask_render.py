@@ -255,3 +255,18 @@ def _settles(condition, timeout_s=10.0) -> bool:
 
 def test_pass_seeds_do_not_depend_on_the_workers():
     assert [pass_seed(3, i) for i in range(3)] == [3_000_009, 3_000_010, 3_000_011]
+
+
+def test_a_local_cluster_shares_the_cores_among_its_workers():
+    """Each of n worker processes gets cores / n Dr.Jit threads (each pool would otherwise have one per
+    core: n x cores threads on the cores), restarted workers too."""
+    from weather_mi import cluster
+    client = cluster.local_cluster(2)
+    threads = lambda: __import__("drjit").thread_count()  # noqa: E731  (Dr.Jit's functions do not pickle)
+    try:
+        expected = max(1, (os.cpu_count() or 1) // 2)
+        assert sorted(client.run(threads).values()) == [expected, expected]
+        client.restart()
+        assert sorted(client.run(threads).values()) == [expected, expected]
+    finally:
+        cluster.close(client)

@@ -55,9 +55,27 @@ def connect(client_or_address, timeout_s: float = CONNECT_TIMEOUT_S):
     return client, True
 
 
+def _drjit_threads_plugin(threads: int):
+    """A worker plugin that sets Dr.Jit's CPU thread pool of every worker process, restarted ones too."""
+    from distributed import WorkerPlugin
+
+    class DrJitThreads(WorkerPlugin):
+        name = "weather-mi-drjit-threads"
+
+        def setup(self, worker):
+            import drjit as dr
+            dr.set_thread_count(threads)
+
+    return DrJitThreads()
+
+
 def local_cluster(n_workers: int, threads_per_worker: int = 1):
     """A Client on a new LocalCluster of ``n_workers`` worker processes (closing the client closes the
-    cluster). Scripts that call this need ``if __name__ == "__main__":`` (workers are spawned)."""
+    cluster), the machine's cores shared among them: each worker's Dr.Jit pool gets cores / n_workers
+    threads (by default every process's pool has one per core, so n workers would run n x cores threads
+    on the cores). Scripts that call this need ``if __name__ == "__main__":`` (workers are spawned)."""
+    import os
+
     from distributed import Client, LocalCluster
     if not isinstance(n_workers, int) or n_workers < 1:
         raise ValueError(f"the number of workers must be a positive integer, got {n_workers!r}")
@@ -65,6 +83,7 @@ def local_cluster(n_workers: int, threads_per_worker: int = 1):
                            dashboard_address=":0")
     client = Client(cluster, set_as_default=False)
     client._weather_mi_owns_cluster = cluster
+    client.register_plugin(_drjit_threads_plugin(max(1, (os.cpu_count() or 1) // n_workers)))
     return client
 
 
