@@ -94,8 +94,18 @@ def test_animate_the_supercell_series_with_the_slicer_on_two_workers(tmp_path, c
     assert [im.metadata["orbit_deg"] for im in imgs] == [0.0, 10.0, 20.0, 30.0]
     assert all(im.radiance.shape == (24, 32, 3) and np.all(np.isfinite(im.radiance)) for im in imgs)
     assert not np.array_equal(imgs[0].radiance, imgs[-1].radiance)
+    assert all(im.metadata["mode"]["light"] == "multiple" for im in imgs)  # the mode closest to the truth
     _check_movie(out, n=4, w=32, h=24)
     assert "wrote 4 frames" in capsys.readouterr().out
+
+
+def test_animate_refuses_an_unknown_slicer_mode(tmp_path):
+    from weather_mi.animate import animate
+    vol = wm.optical_volume(wm.synthetic.cumulus(shape=(8, 8, 8), spacing_m=(100.0, 100.0, 100.0)))
+    spec = wm.SceneSpec(camera=wm.Camera.orbit(vol), sun=wm.Sun(290, 35), width=8, height=6)
+    with pytest.raises(ValueError, match="slicer mode must be one of"):
+        animate([vol], spec, tmp_path / "x", mode="per-species/fancy", progress=False)
+    assert not (tmp_path / "x").exists()
 
 
 def test_animate_with_the_reference_renderer(tmp_path):

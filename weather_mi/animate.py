@@ -19,6 +19,7 @@ from .optics import OpticalVolume
 from .scene import SceneSpec
 
 RENDERERS = ("slices", "reference")
+DEFAULT_SLICER_MODE = "per-species/multiple"
 
 
 @dataclass
@@ -50,24 +51,24 @@ def storm_centre_xy(volumes: list[OpticalVolume]) -> tuple[float, float]:
     return float((lo[0] + hi[0]) / 2), float((lo[1] + hi[1]) / 2)
 
 
-def _slice_frame_task(spec: SceneSpec, vol: OpticalVolume, variant: str, slices: int) -> Image:
+def _slice_frame_task(spec: SceneSpec, vol: OpticalVolume, variant: str, slices: int, mode: str) -> Image:
     """On a Dask worker: one slicer frame in the client's variant."""
     from .dask_passes import on_render_thread
-    return on_render_thread(_slice_frame, spec, vol, variant, slices)
+    return on_render_thread(_slice_frame, spec, vol, variant, slices, mode)
 
 
-def _slice_frame(spec, vol, variant, slices):
-    from .slicing import render_slices
+def _slice_frame(spec, vol, variant, slices, mode):
+    from .slicing import MODES, render_slices
     from .variant import set_variant
     set_variant(variant)
-    return render_slices(spec, vol, slices=slices)
+    return render_slices(spec, vol, MODES[mode], slices=slices)
 
 
-def _slicer_frames(specs, volumes, client, slices: int, bar):
-    from .slicing import render_slices
+def _slicer_frames(specs, volumes, client, slices: int, mode: str, bar):
+    from .slicing import MODES, render_slices
     if client is None:
         for spec, vol in zip(specs, volumes):
-            yield render_slices(spec, vol, slices=slices)
+            yield render_slices(spec, vol, MODES[mode], slices=slices)
             bar.update(1)
         return
     import mitsuba as mi
@@ -77,7 +78,7 @@ def _slicer_frames(specs, volumes, client, slices: int, bar):
     cluster.check_workers(client, None, mi.variant())
     token = uuid.uuid4().hex[:12]
     data = [held(client, vol, f"weather-mi-volume-{token}-{k}") for k, vol in enumerate(volumes)]
-    futures = [client.submit(_slice_frame_task, spec, vol, mi.variant(), slices, key=f"weather-mi-frame-{token}-{k}",
+    futures = [client.submit(_slice_frame_task, spec, vol, mi.variant(), slices, mode, key=f"weather-mi-frame-{token}-{k}",
                              pure=False) for k, (spec, vol) in enumerate(zip(specs, data))]
     try:
         for f in futures:  # in order; the later frames render meanwhile
@@ -99,14 +100,16 @@ def _reference_frames(specs, volumes, client, frames_dir: Path, reference_kw: di
 
 def animate(volumes: list[OpticalVolume], spec: SceneSpec, out_dir, *, renderer: str = "slices",
             labels: list[str] | None = None, orbit_deg: float = 0.0, client=None, fps: float = 4.0,
-            exposure: float | None = None, slices: int = 128, reference_kw: dict | None = None,
-            progress: bool = True) -> Animation:
+            exposure: float | None = None, slices: int = 128, mode: str = DEFAULT_SLICER_MODE,
+            reference_kw: dict | None = None, progress: bool = True) -> Animation:
     """Render every volume (one per time, same grid) as seen by ``spec`` and write ``out_dir``/frames/
     frame_NNNN.exr, ``out_dir``/animation.mp4 and ``out_dir``/contact_sheet.png.
 
     orbit_deg   : the camera turns about the storm (``storm_centre_xy``) by this many degrees from the first
                   frame to the last (0: fixed).
     client      : None, a dask Client or a scheduler address (see the module docstring).
+    mode        : renderer="slices": one of ``weather_mi.slicing.MODES`` (default the "multiple" light model,
+                  the one closest to the path tracer; the paper's Table IV modes render clouds grey).
     reference_kw: arguments of ``render_reference`` for renderer="reference" (spp, target_rse, ...).
     exposure    : of the MP4 and the sheet (None: automatic, one for the whole series)."""
     from tqdm.auto import tqdm
@@ -117,6 +120,9 @@ def animate(volumes: list[OpticalVolume], spec: SceneSpec, out_dir, *, renderer:
         raise ValueError(f"renderer must be one of {RENDERERS}, got {renderer!r}")
     if not volumes:
         raise ValueError("nothing to animate: no volumes")
+    from .slicing import MODES
+    if mode not in MODES:
+        raise ValueError(f"slicer mode must be one of {list(MODES)}, got {mode!r}")
     labels = list(labels) if labels is not None else [f"t{k}" for k in range(len(volumes))]
     if len(labels) != len(volumes):
         raise ValueError(f"{len(labels)} labels for {len(volumes)} frames")
@@ -130,7 +136,7 @@ def animate(volumes: list[OpticalVolume], spec: SceneSpec, out_dir, *, renderer:
     bar = tqdm(total=n, desc=f"animate ({renderer})", unit="frame", disable=not progress)
     try:
         if renderer == "slices":
-            source = _slicer_frames(specs, volumes, client, slices, bar)
+            source = _slicer_frames(specs, volumes, client, slices, mode, bar)
         else:
             kw = dict(progress=False, **(reference_kw or {}))
             source = _reference_frames(specs, volumes, client, frames_dir, kw, bar)

@@ -241,7 +241,7 @@ def animate_command(args) -> Path:
     with session(args.scheduler, args.workers) as client:
         anim = animate(vols, spec, args.output, renderer=args.renderer, labels=[h.attrs["time"] for h in hyds],
                        orbit_deg=args.orbit, client=client, fps=args.fps, exposure=args.exposure,
-                       slices=args.slices, reference_kw=reference_kw)
+                       slices=args.slices, mode=args.mode, reference_kw=reference_kw)
     print(f"wrote {len(anim.frames)} frames in {Path(args.output) / 'frames'}, {anim.mp4} and {anim.contact_sheet}")
     return anim.mp4
 
@@ -284,6 +284,8 @@ def main(argv: list[str] | None = None) -> int:
     anim.add_argument("--target-rse", type=float, default=None, help="reference: add passes until this cloud RSE")
     anim.add_argument("--max-seconds", type=float, default=None, help="reference, with --target-rse: time limit per frame")
     anim.add_argument("--slices", type=int, default=128, help="slicer: number of slices")
+    anim.add_argument("--mode", default="per-species/multiple", choices=list(_slicer_modes()),
+                      help="slicer: the light/phase mode (Table IV modes or the multiple-scattering model)")
     anim.add_argument("--orbit", type=float, default=0.0, metavar="DEG",
                       help="the camera turns this many degrees about the storm from the first frame to the last")
     anim.add_argument("--fps", type=float, default=4.0, help="frames per second of the MP4")
@@ -319,6 +321,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"weather-mi: interrupted{_resume_hint(args)}", file=sys.stderr)
         return 130
     return 0
+
+
+def _slicer_modes():
+    from .slicing.modes import MODES
+    return MODES
 
 
 def _add_source(parser) -> None:
