@@ -7,7 +7,8 @@ beside the paper's Table IV modes.
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them);
    training views at --spp (their noise is unbiased for the fit), held-out views to --target-rse:
-   training: the demo supercell and the demo cumulus (wm.synthetic), front-, side- and back-lit;
+   training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
+   its condensate x 0.15), front-, side- and back-lit;
    held-out: the real WRF supercell, the WRF Tibetan Plateau file, BOMEX and RICO (from --data),
    front- and side-lit.
 2. Fit the model's parameters with Dr.Jit reverse-mode AD on the training views
@@ -40,7 +41,7 @@ from weather_mi.slicing.calibrate import FIT_START, MULTIPLE_PARAMS, TrainingVie
 from weather_mi.study.report import side_by_side  # noqa: E402
 from weather_mi.study.runs import StudyConfig, eye_transmittance, load_scene, view  # noqa: E402
 
-TRAIN = [(s, l) for s in ("demo-supercell", "demo-cumulus") for l in ("front", "side", "back")]
+TRAIN = [(s, l) for s in ("demo-supercell", "demo-cumulus", "demo-cumulus-thin") for l in ("front", "side", "back")]
 HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") for l in ("front", "side")]
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 

@@ -46,11 +46,11 @@ MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple"
 
 # Defaults of the "multiple" light model: fitted by validation/calibrate_slicer.py (Adam through Dr.Jit
 # reverse-mode AD, weather_mi.slicing.calibrate; 50 iterations from calibrate.FIT_START) on the demo
-# supercell and demo cumulus, front-, side- and back-lit (64 x 48, references of 128 spp with the
-# delta-M forward peak of issue 10); judged on the real WRF supercell, WRF plateau, BOMEX and RICO
-# storms against references of 2-5% cloud RSE (README, "The slicer").
-MULTIPLE_DEFAULTS = {"ms_extinction": 0.1126, "ms_contribution": 0.7117, "ms_eccentricity": 0.0187,
-                     "sky_gain": 0.616, "sky_extinction": 0.0282}
+# supercell, the demo cumulus and the thin demo cumulus, front-, side- and back-lit (64 x 48, references
+# of 128 spp with the delta-M forward peak of issue 10); judged on the real WRF supercell, WRF plateau,
+# BOMEX and RICO storms against references of 2-5% cloud RSE (README, "The slicer").
+MULTIPLE_DEFAULTS = {"ms_extinction": 0.0983, "ms_contribution": 0.6987, "ms_eccentricity": 0.0202,
+                     "sky_gain": 0.6201, "sky_extinction": 0.0258}
 
 
 @dataclass(frozen=True)

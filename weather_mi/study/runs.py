@@ -65,7 +65,8 @@ DATA_SCENES = {
     "bomex": ("les/bomex_50m.txt", "les", "BOMEX trade cumulus (LES, 50 m)"),
     "rico": ("les/rico_20m.txt", "les", "RICO trade cumuli (LES, 20 m)"),
 }
-DEMO_SCENES = ("demo-supercell", "demo-cumulus")
+DEMO_SCENES = ("demo-supercell", "demo-cumulus", "demo-cumulus-thin")
+THIN_FACTOR = 0.15  # demo-cumulus-thin: the demo cumulus with its condensate scaled by this (optically thin)
 
 
 def load_scene(name: str, cfg: StudyConfig, data_dir=None):
@@ -73,6 +74,7 @@ def load_scene(name: str, cfg: StudyConfig, data_dir=None):
     folder laid out like the project's shared data: wrf/..., les/...) is None or lacks it."""
     from .. import synthetic
     from ..io import open_les, open_wrf
+    scale = None
     if name in DATA_SCENES:
         rel, reader, desc = DATA_SCENES[name]
         path = Path(data_dir) / rel if data_dir is not None else None
@@ -81,12 +83,15 @@ def load_scene(name: str, cfg: StudyConfig, data_dir=None):
         hyd = open_wrf(path) if reader == "wrf" else open_les(path)
     elif name == "demo-supercell":
         hyd, desc = synthetic.supercell(), "built-in demo supercell (synthetic, 1 km grid)"
-    elif name == "demo-cumulus":
+    elif name in ("demo-cumulus", "demo-cumulus-thin"):
         hyd = synthetic.cumulus(shape=(40, 48, 48), spacing_m=(100.0, 100.0, 100.0))
         desc = "built-in demo cumulus (synthetic, coarse 100 m grid)"
+        if name == "demo-cumulus-thin":
+            scale = {s: THIN_FACTOR for s in ("cloud", "rain")}
+            desc += f", its cloud water and rain x {THIN_FACTOR} (optically thin)"
     else:
         raise ValueError(f"unknown study scene {name!r}")
-    vol = optical_volume(hyd, species=cfg.species, phase_quality=cfg.phase_quality)
+    vol = optical_volume(hyd, species=cfg.species, phase_quality=cfg.phase_quality, scale=scale)
     return vol, desc
 
 
