@@ -112,25 +112,16 @@ def default_ground_distance_km(vol) -> float:
     return max(0.55 * max(x1 - x0, y1 - y0), 1.2 * z1) / 1000.0
 
 
-def output_paths(output) -> tuple[Path, Path, Path]:
-    """(EXR, PNG, checkpoint) of ``-o`` (a .exr or .png name; ValueError for another extension)."""
-    from .output_paths import image_format
-    out = Path(output)
-    image_format(out)
-    exr = out.with_suffix(".exr")
-    return exr, out.with_suffix(".png"), exr.with_name(exr.name + ".ckpt.npz")
-
-
 def render_command(args) -> Path:
     """Check the arguments and the outputs, build the volume and the scene, render the reference while
     holding the outputs' lock, write EXR + PNG."""
-    from .output_paths import OutputLock, check_writable_folder
+    from .output_paths import OutputLock, check_writable_folder, render_outputs
     from .scene import check_fov_deg
     _parse_size(args.size)
     if args.fov is not None:
         check_fov_deg(args.fov)
     check_time_option(args.file, args.demo, args.time)
-    exr, png, ckpt = output_paths(args.output)
+    exr, png, ckpt = render_outputs(args.output)
     check_writable_folder(exr)
     with OutputLock(exr):
         if ckpt.is_file() and not args.resume:
@@ -338,8 +329,9 @@ def _add_source(parser) -> None:
 def _resume_hint(args) -> str:
     if args.command != "render":
         return ""
+    from .output_paths import render_outputs
     try:
-        _, _, ckpt = output_paths(args.output)
+        _, _, ckpt = render_outputs(args.output)
     except ValueError:
         return ""
     if not ckpt.is_file():

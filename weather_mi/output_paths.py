@@ -21,6 +21,15 @@ def image_format(path) -> str:
     return IMAGE_FORMATS[suffix]
 
 
+def render_outputs(output) -> tuple[Path, Path, Path]:
+    """(EXR, PNG, checkpoint) of a render's ``-o`` (a .exr or .png name; ValueError for another extension):
+    OUT.exr, OUT.png and OUT.exr.ckpt.npz."""
+    out = Path(output)
+    image_format(out)
+    exr = out.with_suffix(".exr")
+    return exr, out.with_suffix(".png"), exr.with_name(exr.name + ".ckpt.npz")
+
+
 def temporary_name(path) -> Path:
     """A unique hidden name beside ``path`` with the same extension (writers of one path never share it)."""
     path = Path(path)
