@@ -132,3 +132,13 @@ def _check_movie(out, n, w, h):
     assert sum(1 for _ in reader) == n
     sheet = Image.open(out / "contact_sheet.png")
     assert sheet.mode == "RGB" and sheet.width >= 2 * w and sheet.height >= h
+
+
+def test_each_file_is_opened_once_for_all_its_times(tmp_path, monkeypatch):
+    from weather_mi.io import wrf
+    a, b = _growing(tmp_path / "a.nc"), _growing(tmp_path / "b.nc", times=["2020-01-01_00:30:00"])
+    opened = []
+    real = wrf._open
+    monkeypatch.setattr(wrf, "_open", lambda p: opened.append(p) or real(p))
+    assert wm.open_wrf([a, b]).sizes["time"] == 4
+    assert sorted(opened) == sorted([str(a), str(b)])

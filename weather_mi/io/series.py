@@ -8,6 +8,7 @@ range of datetime64[ns]); ``time_index`` and ``source`` say where each time came
 from __future__ import annotations
 
 import os
+from contextlib import ExitStack
 from pathlib import Path
 
 import numpy as np
@@ -23,15 +24,16 @@ def is_series(path, time) -> bool:
     return several_files or isinstance(time, (slice, list, tuple)) or (isinstance(time, str) and time == "all")
 
 
-def _timeline(paths: list[str]) -> list[tuple[str, int, str]]:
-    """(file, index in that file, timestamp) of every time of every file, in the order given."""
-    from .wrf import _open, _time_strings
+def _timeline(paths: list[str], opened: dict) -> list[tuple[str, int, str]]:
+    """(file, index in that file, timestamp) of every time of every file, in the order given
+    (``opened``: path -> its open Dataset)."""
+    from .wrf import _time_strings
     out = []
     for p in paths:
-        with _open(p) as ds:
-            stamps = _time_strings(ds)
-            n = ds.sizes.get("Time", 1)
-            out += [(p, i, stamps[i] if stamps else str(i)) for i in range(n)]
+        ds = opened[p]
+        stamps = _time_strings(ds)
+        n = ds.sizes.get("Time", 1)
+        out += [(p, i, stamps[i] if stamps else str(i)) for i in range(n)]
     return out
 
 
@@ -77,22 +79,20 @@ def open_wrf_series(paths, time="all", *, x: slice | None = None, y: slice | Non
     for p in paths:
         if not Path(p).is_file():
             raise WeatherDataError(p, None, "an existing wrfout NetCDF file", "no such file")
-    chosen = _select(_timeline(paths), time, paths[0] if len(paths) == 1 else f"{len(paths)} wrfout files")
     sel = {k: v for k, v in (("west_east", x), ("south_north", y)) if v is not None}
-    lows, highs, depths = [], [], []
-    for p, it, _ in chosen:  # one grid for all: from the heights of every selected time
-        with _open(p) as ds:
-            z_w = (_read(ds, "PH", it, sel, p) + _read(ds, "PHB", it, sel, p)) / G
-        lows.append(float(np.min(z_w[0])))
-        highs.append(float(np.max(z_w[-1])))
-        depths.append(float(np.mean(z_w[-1] - z_w[0]) / (z_w.shape[0] - 1)))
-    dz = depths[0] if dz is None else dz
-    bottom = min(lows) if bottom is None else bottom
-    top = max(highs) if top is None else top
-    frames = []
-    for p, it, _ in chosen:
-        with _open(p) as ds:
-            frames.append(_convert(ds, p, it, x, y, dz, top, bottom))
+    with ExitStack() as stack:  # every file opened once, for all of its times
+        opened = {p: stack.enter_context(_open(p)) for p in dict.fromkeys(paths)}
+        chosen = _select(_timeline(paths, opened), time, paths[0] if len(paths) == 1 else f"{len(paths)} wrfout files")
+        lows, highs = [], []
+        for p, it, _ in chosen:  # one grid for all: from the heights of every selected time
+            z_w = (_read(opened[p], "PH", it, sel, p) + _read(opened[p], "PHB", it, sel, p)) / G
+            lows.append(float(np.min(z_w[0])))
+            highs.append(float(np.max(z_w[-1])))
+            if dz is None:  # the first time's mean layer depth
+                dz = float(np.mean(z_w[-1] - z_w[0]) / (z_w.shape[0] - 1))
+        bottom = min(lows) if bottom is None else bottom
+        top = max(highs) if top is None else top
+        frames = [_convert(opened[p], p, it, x, y, dz, top, bottom) for p, it, _ in chosen]
     stamps = [stamp for _, _, stamp in chosen]
     out = xr.concat(frames, dim="time", combine_attrs="drop_conflicts", coords="minimal", compat="override")
     out = out.assign_coords(time=("time", stamps), time_index=("time", [it for _, it, _ in chosen]),
