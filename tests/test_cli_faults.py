@@ -67,6 +67,26 @@ def test_file_and_demo_together_or_neither_are_refused(tmp_path, capsys, no_rend
         assert "--demo" in capsys.readouterr().err
 
 
+@pytest.fixture
+def no_loading(monkeypatch):
+    """Fail the test if the input is read (the scene options are checked first)."""
+    import weather_mi.io
+    fail = lambda *a, **k: pytest.fail("the input was read despite a bad scene option")  # noqa: E731
+    monkeypatch.setattr(cli, "load_input", fail)
+    monkeypatch.setattr(weather_mi.io, "open_wrf", fail)
+
+
+@pytest.mark.parametrize("option", [["--size", "0x6"], ["--size", "8x-1"], ["--size", "8x6x2"], ["--size", "axb"],
+                                    ["--fov", "0"], ["--fov", "180"]])
+@pytest.mark.parametrize("command", ["render", "animate"])
+def test_bad_size_or_fov_is_refused_before_the_input_is_read(tmp_path, capsys, no_render, no_loading, option, command):
+    source = ["--demo", "cumulus"] if command == "render" else [str(tmp_path / "wrfout.nc")]
+    out = tmp_path / ("a.exr" if command == "render" else "anim")
+    rc = cli.main([command, *source, *option, "-o", str(out)])
+    assert rc == 2 and option[0].lstrip("-") in one_line_error(capsys.readouterr().err)
+    assert not list(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("command", ["render", "info"])
 def test_time_with_a_demo_storm_is_refused(tmp_path, capsys, no_render, command):
     argv = [command, "--demo", "cumulus", "--time", "3"] + (["-o", str(tmp_path / "a.exr")] if command == "render" else [])

@@ -102,7 +102,18 @@ def _parse_size(text: str) -> tuple[int, int]:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError as exc:
         raise WeatherDataError("--size", text, "WIDTHxHEIGHT, e.g. 512x512") from exc
+    if w < 1 or h < 1:
+        raise WeatherDataError("--size", text, "WIDTHxHEIGHT of positive integers, e.g. 512x512")
     return w, h
+
+
+def check_scene_options(args) -> None:
+    """The scene options that can be judged without the input (``--size``, ``--fov``), checked before it
+    is read; ``scene_spec`` builds from them."""
+    from .scene import check_fov_deg
+    _parse_size(args.size)
+    if args.fov is not None:
+        check_fov_deg(args.fov)
 
 
 def default_ground_distance_km(vol) -> float:
@@ -116,10 +127,7 @@ def render_command(args) -> Path:
     """Check the arguments and the outputs, build the volume and the scene, render the reference while
     holding the outputs' lock, write EXR + PNG."""
     from .output_paths import OutputLock, check_writable_folder, render_outputs
-    from .scene import check_fov_deg
-    _parse_size(args.size)
-    if args.fov is not None:
-        check_fov_deg(args.fov)
+    check_scene_options(args)
     check_time_option(args.file, args.demo, args.time)
     exr, png, ckpt = render_outputs(args.output)
     check_writable_folder(exr)
@@ -224,6 +232,7 @@ def animate_command(args) -> Path:
     from .io import open_wrf
     from .io.series import time_steps
     from .optics import optical_volume
+    check_scene_options(args)
     hyds = time_steps(open_wrf(args.inputs if len(args.inputs) > 1 else args.inputs[0], time=_parse_times(args.time)))
     vols = [optical_volume(h, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase) for h in hyds]
     widest = max(vols, key=lambda v: np.prod(np.subtract(*v.occupied_bbox()[::-1])))  # frame the largest storm
