@@ -233,8 +233,9 @@ def animate_command(args) -> Path:
     from .io.series import time_steps
     from .optics import optical_volume
     check_scene_options(args)
+    scale = _parse_scale(args.scale)
     hyds = time_steps(open_wrf(args.inputs if len(args.inputs) > 1 else args.inputs[0], time=_parse_times(args.time)))
-    vols = [optical_volume(h, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase) for h in hyds]
+    vols = [optical_volume(h, species=args.preset, scale=scale, phase=args.phase) for h in hyds]
     widest = max(vols, key=lambda v: np.prod(np.subtract(*v.occupied_bbox()[::-1])))  # frame the largest storm
     spec = scene_spec(args, widest)
     reference_kw = {"spp": args.spp, "target_rse": args.target_rse, "max_seconds": args.max_seconds}
