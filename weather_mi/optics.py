@@ -146,10 +146,10 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
 
     species     : a SpeciesSet or a preset name ("paper", "physical").
     scale       : per-species scaling factors, e.g. {"ice": 2.0} (multiplies that species' mass).
-    phase       : "per_species" (five tables) or "paper" (one water and one ice table), built lazily.
+    phase       : "per_species" (five tables) or "paper" (one water and one ice table), built with the volume.
     model_radii : use the model's effective radii (r_eff_<species>) where present; default True
                   except for the "paper" preset, which reproduces the paper's fixed radii.
-    phase_quality : "default", "high" or "test" (small, fast tables) for the lazily built tables.
+    phase_quality : "default", "high" or "test" (small, fast tables) for the tables built with the volume.
     """
     validate(hyd)
     sp = preset(species) if isinstance(species, str) else species
