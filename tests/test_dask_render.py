@@ -138,6 +138,27 @@ def test_ctrl_c_cancels_the_tasks_and_leaves_a_valid_checkpoint(client, vol, tmp
     assert same(resumed, render(sp, vol, spp=24, passes=24))
 
 
+def test_merged_passes_are_released_on_the_scheduler(client, vol, tmp_path, monkeypatch):
+    """A long render (target_rse: up to thousands of passes) must not keep every pass image in the
+    workers' memory: once merged here, a pass's task is gone from the scheduler."""
+    import weather_mi.reference as reference
+    save, looked = reference._save_checkpoint, []
+
+    def merged_passes_left():
+        return [k for k in _scheduler_tasks(client)
+                if k.startswith("weather-mi-pass-") and int(k.rsplit("-", 1)[1]) < 6]
+
+    def save_then_look(path, state):
+        save(path, state)
+        if int(state["done"]) == 6:
+            _settles(lambda: not merged_passes_left())
+            looked.append(merged_passes_left())
+
+    monkeypatch.setattr(reference, "_save_checkpoint", save_then_look)
+    render(spec(seed=13), vol, client, checkpoint=tmp_path / "run.ckpt.npz")
+    assert looked == [[]]
+
+
 def test_cli_render_with_a_scheduler_writes_the_in_process_image(client, tmp_path):
     from weather_mi import cli
     args = ["render", "--demo", "cumulus", "--size", "16x12", "--spp", "4", "--sky", "constant"]

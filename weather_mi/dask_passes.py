@@ -94,8 +94,8 @@ class RemotePasses:
         self.start, self.planned, self.open_ended = start, planned, open_ended
         self.worker_variant, self.ahead = worker_variant, ahead
         self.summary: dict | None = None
-        self._futures: dict = {}   # pass index -> future, not yet handed over
-        self._submitted: list = []  # every future of this render, released (cancelled) at the end
+        self._futures: dict = {}   # pass index -> future, not yet handed over (handed-over ones are released)
+        self._scene = None         # the future of the scene, released at the end
         self._client = None
         self._owned = False
 
@@ -110,8 +110,7 @@ class RemotePasses:
             threads = sum(client.nthreads().values()) or 1
             ahead = self.ahead or max(4, 2 * threads)
             token = uuid.uuid4().hex[:12]
-            scene = held(client, self.job, f"weather-mi-scene-{token}")
-            self._submitted.append(scene)
+            scene = self._scene = held(client, self.job, f"weather-mi-scene-{token}")
             summary = {"workers": len(variants), "threads": threads, "variants": sorted(set(variants.values())),
                        "passes_by_worker": {}, "bytes_per_pass": 0, "worker_seconds": 0.0}
             self.summary = summary
@@ -125,7 +124,6 @@ class RemotePasses:
                     self._futures[nxt] = client.submit(
                         _render_pass_task, scene, nxt, self.per_pass(nxt), pass_seed(self.job.spec.seed, nxt),
                         self.worker_variant, mi.variant(), key=f"weather-mi-pass-{token}-{nxt}", pure=False)
-                    self._submitted.append(self._futures[nxt])
                     nxt += 1
                 while True:  # pass i, in order (later passes render meanwhile and wait on their workers)
                     try:
@@ -133,7 +131,7 @@ class RemotePasses:
                         break
                     except TimeoutError:
                         idle_since = self._check_alive(idle_since)
-                del self._futures[i]
+                del self._futures[i]  # released: the workers need not keep the image
                 summary["passes_by_worker"][addr] = summary["passes_by_worker"].get(addr, 0) + 1
                 summary["bytes_per_pass"] = int(raw.nbytes)
                 summary["worker_seconds"] += secs
@@ -159,7 +157,8 @@ class RemotePasses:
         if self._client is None:
             return
         from . import cluster
-        futures, self._futures, self._submitted = self._submitted, {}, []
+        futures = list(self._futures.values()) + ([self._scene] if self._scene is not None else [])
+        self._futures, self._scene = {}, None
         if futures:
             try:
                 self._client.cancel(futures, force=True)
