@@ -89,10 +89,10 @@ class RemotePasses:
     """
 
     def __init__(self, client, job, per_pass, more, start: int, planned: int, open_ended: bool,
-                 worker_variant=None, ahead: int | None = None):
+                 worker_variant=None):
         self.client_arg, self.job, self.per_pass, self.more = client, job, per_pass, more
         self.start, self.planned, self.open_ended = start, planned, open_ended
-        self.worker_variant, self.ahead = worker_variant, ahead
+        self.worker_variant = worker_variant
         self.summary: dict | None = None
         self._futures: dict = {}   # pass index -> future, not yet handed over (handed-over ones are released)
         self._scene = None         # the future of the scene, released at the end
@@ -108,7 +108,7 @@ class RemotePasses:
         try:
             variants = cluster.check_workers(client, self.worker_variant, mi.variant())
             threads = sum(client.nthreads().values()) or 1
-            ahead = self.ahead or max(4, 2 * threads)
+            ahead = max(4, 2 * threads)
             token = uuid.uuid4().hex[:12]
             scene = self._scene = held(client, self.job, f"weather-mi-scene-{token}")
             summary = {"workers": len(variants), "threads": threads, "variants": sorted(set(variants.values())),
