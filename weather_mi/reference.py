@@ -307,8 +307,6 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     import mitsuba as mi
     from tqdm.auto import tqdm
 
-    from .mitsuba_scene import recentred, sensor_dict
-
     spp_list = _passes(spec, int(spp), passes)
     own_sun = integrator == "majorant" and not legacy
     options = [integrator, max_depth, normalize, mi.variant(), rr_depth]
@@ -335,13 +333,11 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     job = PassScene(spec, vol, dict(integrator=integrator, max_depth=max_depth, rr_depth=rr_depth, cell=cell,
                                     own_sun=own_sun, sun_guiding=sun_guiding, aureole_nee=aureole_nee,
                                     legacy=legacy, forward_peak_deg=forward_peak_deg), key)
-    spec_k, vol_k, _ = recentred(spec, vol)  # kernel-side coordinates: bbox centred on the origin
-    scene = job.build() if client is None else None  # the cloud mask below keeps the full extinction
+    scene = job.build() if client is None else None
     if mi.variant().startswith("scalar"):  # the ray march is vectorised: every pixel counts there
         cloud = np.ones((spec.height, spec.width), bool)
-    else:
-        sensor = scene.sensors()[0] if scene is not None else mi.load_dict(sensor_dict(spec_k))
-        cloud = eye_optical_depth(sensor, vol_k, spec_k) > CLOUD_TAU
+    else:  # the full extinction (not delta-scaled), the scene's sensor
+        cloud = cloud_mask(spec, vol)
     scale = 1.0
     if normalize == "reflectance":
         scale = np.pi / (spec.sun.mu0 * np.asarray(spec.sun.irradiance))
