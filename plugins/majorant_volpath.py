@@ -469,6 +469,14 @@ class MajorantVolpath:
         mei.medium = dr.select(active, mi.MediumPtr(self._ms.medium), dr.zeros(mi.MediumPtr))
         return mei
 
+    def _scattering_event(self, ray, t, active):
+        """The medium interaction at distance ``t`` along ``ray`` (with sigma_s and sigma_t set) and its
+        single-scattering albedo sigma_s / sigma_t (0 where sigma_t = 0)."""
+        mei = self._make_mei(ray, ray.o + ray.d * t, t, active)
+        sigma_s, _, sigma_t = self._ms.medium.get_scattering_coefficients(mei, active)
+        mei.sigma_s, mei.sigma_t = sigma_s, sigma_t
+        return mei, dr.select(sigma_t > 0.0, sigma_s / dr.select(sigma_t > 0.0, sigma_t, 1.0), 0.0)
+
     # ------------------------------------------------------------ majorant walk
     def _walk(self, ray, t_end, sampler, active, ratio: bool, weight=None):
         """Walk the coarse majorant grid along ``ray`` over [0, t_end] (clipped to the grid's box).
@@ -668,10 +676,7 @@ class MajorantVolpath:
                 active_surface |= active_medium & ~found
 
                 # ---------------- real collision: absorption weight, NEE, phase sampling
-                mei = self._make_mei(ray, ray.o + ray.d * t_coll, t_coll, act_scatter)
-                sigma_s, _, sigma_t = ms.medium.get_scattering_coefficients(mei, act_scatter)
-                mei.sigma_s, mei.sigma_t = sigma_s, sigma_t
-                albedo_w = dr.select(sigma_t > 0.0, sigma_s / dr.select(sigma_t > 0.0, sigma_t, 1.0), 0.0)
+                mei, albedo_w = self._scattering_event(ray, t_coll, act_scatter)
                 depth = dr.select(act_scatter, depth + 1, depth)
                 last_event = dr.select(act_scatter, _as_interaction(mei), last_event)
                 active &= depth < max_depth
@@ -744,7 +749,7 @@ class MajorantVolpath:
                     d = mi.Vector3f(ds.d)
                     shadow = ref.spawn_ray_to(ds.p)
                 if sun_mode != "none":
-                    wo_s = self._sample_sun(sampler.next_2d(act_e)) if sun_mode == "disk" else mi.Vector3f(self.sun_dir)
+                    wo_s = self._sun_direction(sampler, act_e)
                     d = dr.select(pick_em, ds.d, wo_s) if has_emitters else wo_s
                     shadow_sun = ref.spawn_ray(wo_s)
                     shadow = dr.select(pick_em, shadow, shadow_sun) if has_emitters else shadow_sun
@@ -865,6 +870,10 @@ class MajorantVolpath:
         s, c = dr.sincos(dr.two_pi * sample.y)
         return mi.Frame3f(self.sun_dir).to_world(mi.Vector3f(sin_t * c, sin_t * s, 1.0 - v))
 
+    def _sun_direction(self, sampler, active):
+        """The direction of a sun next-event estimate: uniform in the disk, or the point sun's."""
+        return self._sample_sun(sampler.next_2d(active)) if self.sun_mode == "disk" else mi.Vector3f(self.sun_dir)
+
     def _in_sun(self, d):
         """Whether unit direction d lies in the sun's disk: versine |d - s|^2 / 2 <= v_max."""
         return dr.squared_norm(d - self.sun_dir) * 0.5 <= self.sun_vmax
@@ -930,14 +939,8 @@ class MajorantVolpath:
         si = scene.ray_intersect(ray, active)
         found, t, weight = self._walk(ray, dr.minimum(si.t, ray.maxt), sampler, active, ratio=False, weight=weight)
         act_b = active & found
-        mei_b = self._make_mei(ray, ray.o + ray.d * t, t, act_b)
-        sigma_s, _, sigma_t = self._ms.medium.get_scattering_coefficients(mei_b, act_b)
-        mei_b.sigma_s, mei_b.sigma_t = sigma_s, sigma_t
-        albedo = dr.select(sigma_t > 0.0, sigma_s / dr.select(sigma_t > 0.0, sigma_t, 1.0), 0.0)
-        if self.sun_mode == "disk":
-            wo = self._sample_sun(sampler.next_2d(act_b))
-        else:
-            wo = mi.Vector3f(self.sun_dir)
+        mei_b, albedo = self._scattering_event(ray, t, act_b)
+        wo = self._sun_direction(sampler, act_b)
         f_b, _ = phase.eval_pdf(ctx, mei_b, wo, act_b)
         if self.sun_mode == "disk":  # the MIS weight the path's own NEE has at B, times 1 / pdf_sun
             w_b = sun_mis(c_sun * sun_pdf, dr.mean(f_b)) * dr.rcp(sun_pdf)

@@ -1,11 +1,11 @@
-"""Forward peaks counted as unscattered light (delta-M, weather_mi.forward_peak), its scattering-order
-form in majorant_volpath (``truncate_order``), and the aureole estimator (``aureole_nee``).
+"""Forward peaks counted as unscattered light (delta-M, weather_mi.forward_peak) and the aureole
+estimator of majorant_volpath (``aureole_nee``).
 
 Reference numbers: a phase function built as f x (a narrow lobe) + (1 - f) x isotropic, whose peak
 share and truncated table are known in closed form; the delta-M relations sigma_t' = sigma_t (1 -
 omega f), omega' = omega (1 - f) / (1 - omega f) (Wiscombe 1977); and, for the stochastic forms,
-agreement within noise with the deterministic form (truncation) or with the estimator without them
-(the aureole estimator is an MIS partner of the path's own sampling: the estimate must not move).
+agreement within noise with the estimator without them (the aureole estimator is an MIS partner of
+the path's own sampling: the estimate must not move).
 """
 from __future__ import annotations
 

@@ -35,6 +35,8 @@ the scattered light for a 1 mm drop) stays in the table, spread evenly over the 
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .optics import OpticalVolume
@@ -112,13 +114,11 @@ def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG) -> Opti
         weights = w * (1 - f32)
         total = weights.sum(axis=0)
         weights = np.where(total > 0, weights / total, np.float32(0))
-    out = OpticalVolume(vol.species, beta_ext.astype(np.float32), beta_total.astype(np.float32),
-                        np.clip(albedo, 0, 1).astype(np.float32), weights.astype(np.float32), vol.bbox,
-                        vol.species_set, vol.phase_mode, vol.phase_quality,
-                        {**vol.attrs, "forward_peak_deg": cone_deg,
-                         "forward_peak_fraction": dict(zip(vol.species, f.round(6).tolist()))},
-                        tuple(truncated))
-    return out
+    return replace(vol, beta_ext=beta_ext.astype(np.float32), beta_total=beta_total.astype(np.float32),
+                   albedo=np.clip(albedo, 0, 1).astype(np.float32), weights=weights.astype(np.float32),
+                   attrs={**vol.attrs, "forward_peak_deg": cone_deg,
+                          "forward_peak_fraction": dict(zip(vol.species, f.round(6).tolist()))},
+                   phase_tables=tuple(truncated))
 
 
 __all__ = ["DEFAULT_CONE_DEG", "check_cone_deg", "delta_scaled", "peak_excess", "peak_tables", "truncated_table"]
