@@ -128,7 +128,8 @@ def animate(volumes: list[OpticalVolume], spec: SceneSpec, out_dir, *, renderer:
         raise ValueError(f"{len(labels)} labels for {len(volumes)} frames")
     n = len(volumes)
     pivot = storm_centre_xy(volumes)
-    specs = [orbit(spec, pivot, orbit_deg * k / max(n - 1, 1)) for k in range(n)]
+    angles = [orbit_deg * k / max(n - 1, 1) for k in range(n)]
+    specs = [orbit(spec, pivot, a) for a in angles]
     out = Path(out_dir)
     frames_dir = out / "frames"
     frames_dir.mkdir(parents=True, exist_ok=True)
@@ -142,7 +143,7 @@ def animate(volumes: list[OpticalVolume], spec: SceneSpec, out_dir, *, renderer:
             source = _reference_frames(specs, volumes, client, frames_dir, kw, bar)
         images, paths = [], []
         for k, img in enumerate(source):
-            img.metadata.update({"frame": k, "label": labels[k], "orbit_deg": orbit_deg * k / max(n - 1, 1)})
+            img.metadata.update({"frame": k, "label": labels[k], "orbit_deg": angles[k]})
             paths.append(img.save(frames_dir / f"frame_{k:04d}.exr"))
             images.append(img)
     finally:
