@@ -10,7 +10,7 @@ import pytest
 
 import weather_mi as wm
 
-from conftest import write_wrfout
+from conftest import SHARED_DATA, shared_file, write_wrfout
 
 
 # ---------------------------------------------------------------- WRF: the scheme's own species
@@ -69,7 +69,6 @@ def test_no_warning_without_negative_values(tmp_path):
 
 # ---------------------------------------------------------------- LES text files
 
-SHARED_LES = Path(__file__).resolve().parents[2] / "shared" / "data" / "les"
 LES_HEAD = "# a test cloud\n3 2 4\n0.100 0.100\n1.000 1.100 1.200 1.300\n"
 
 
@@ -104,9 +103,7 @@ def test_les_file_listing_every_voxel_checked_against_the_header(tmp_path):
 
 def test_real_les_file_cut_mid_line_is_an_error(tmp_path):
     """RICO cut at 54% inside the last number of a line (r_eff 17.261 -> 1): an error naming that line."""
-    rico = SHARED_LES / "rico_20m.txt"
-    if not rico.is_file():
-        pytest.skip(f"shared data file {rico} is absent")
+    rico = shared_file(SHARED_DATA / "les" / "rico_20m.txt")
     text = rico.read_text()
     head = text[:text.index("\n", int(0.54 * len(text))) + 1]
     line = text[len(head):text.index("\n", len(head))]
