@@ -59,16 +59,14 @@ def scheduler_task_cost_s(client, n: int = 400) -> float:
 
 
 def merge_cost_s(width: int = 1024, height: int = 768, repeats: int = 5) -> float:
-    """Seconds of the client's Welford update of one (H, W, 3) pass (as in render_reference)."""
+    """Seconds of the client's Welford update of one (H, W, 3) pass (render_reference's)."""
+    from weather_mi.reference import welford_update
     rng = np.random.default_rng(0)
     mean, m2 = np.zeros((height, width, 3)), np.zeros((height, width, 3))
     raw = rng.random((height, width, 3), dtype=np.float32)
     t0 = time.perf_counter()
     for n in range(1, repeats + 1):
-        img = raw.astype(np.float64)
-        delta = img - mean
-        mean += delta / n
-        m2 += delta * (img - mean)
+        welford_update(mean, m2, raw.astype(np.float64), n)
     return (time.perf_counter() - t0) / repeats
 
 

@@ -133,6 +133,13 @@ def render_pass(scene, spp: int, seed: int) -> np.ndarray:
     return np.array(mi.render(scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
 
 
+def welford_update(mean: np.ndarray, m2: np.ndarray, img: np.ndarray, n: int) -> None:
+    """Add pass ``n`` (1-based) of image ``img`` to the per-pixel running mean and M2 (in place)."""
+    delta = img - mean
+    mean += delta / n
+    m2 += delta * (img - mean)
+
+
 def _local_passes(scene, seed: int, per_pass, more, start: int):
     """Passes rendered in this process: (index, image, seconds) while ``more(index)``."""
     i = start
@@ -375,10 +382,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
             per = per_pass(i)
             img = raw.astype(np.float64)[..., :3] * scale
             seconds += dt
-            n = i + 1  # Welford update of per-pixel mean and M2 over pass means
-            delta = img - mean
-            mean += delta / n
-            m2 += delta * (img - mean)
+            n = i + 1
+            welford_update(mean, m2, img, n)
             spp_done += per
             i = n
             if ckpt is not None:
