@@ -390,8 +390,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                 _save_checkpoint(ckpt, {"key": key, "mean": mean, "m2": m2, "done": n, "seconds": seconds,
                                         "spp_done": spp_done})
             bar.update(1)
-            st = stats(n)
-            if st is not None and progress:
+            st = stats(n) if progress else None  # noise over the cloud pixels: for the progress bar only
+            if st is not None:
                 bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
     finally:  # over Dask: cancels the passes still queued (target met, Ctrl-C, error); the checkpoint stays valid
         passes_in.close()
