@@ -54,7 +54,7 @@ def _timed(fn):
 
 def scheduler_task_cost_s(client, n: int = 400) -> float:
     """Seconds of scheduler + client per task: n no-op tasks submitted and gathered."""
-    futures, dt = _timed(lambda: client.gather(client.map(lambda i: i, range(n), pure=False)))
+    _, dt = _timed(lambda: client.gather(client.map(lambda i: i, range(n), pure=False)))
     return dt / n
 
 
@@ -109,7 +109,7 @@ def main():
 
     render(1)  # compilation
     _, t_cal = _timed(lambda: render(args.passes))
-    spp = max(args.passes, int(round(args.passes * args.seconds / t_cal / args.passes)) * args.passes)
+    spp = max(1, round(args.seconds / t_cal)) * args.passes  # a multiple of the passes
     print(f"volume: {source}, {vol.shape} voxels; image {w}x{h}; {spp} spp in {args.passes} passes "
           f"(calibration: {args.passes} spp in {t_cal:.1f} s)")
     local, t_local = _timed(lambda: render(spp))
