@@ -229,9 +229,9 @@ def test_workers_without_weather_mi_or_with_another_version_are_named(vol, tmp_p
 
 
 def test_a_worker_killed_mid_render_loses_nothing(client, vol, tmp_path, monkeypatch):
-    """Last in this module: the nanny restarts the killed worker, the other one goes on. The kill happens
-    when the first checkpoint has been written (23 passes to go), from the client's thread, so that it
-    cannot come after a fast render has finished."""
+    """Last of the tests on the shared cluster: the nanny restarts the killed worker, the other one goes
+    on. The kill happens when the first checkpoint has been written (23 passes to go), from the client's
+    thread, so that it cannot come after a fast render has finished."""
     import weather_mi.reference as reference
     sp = spec(seed=12)
     pids = client.run(os.getpid)
@@ -281,7 +281,6 @@ def test_pass_seeds_do_not_depend_on_the_workers():
 def test_a_local_cluster_shares_the_cores_among_its_workers():
     """Each of n worker processes gets cores / n Dr.Jit threads (each pool would otherwise have one per
     core: n x cores threads on the cores), restarted workers too."""
-    from weather_mi import cluster
     client = cluster.local_cluster(2)
     threads = lambda: __import__("drjit").thread_count()  # noqa: E731  (Dr.Jit's functions do not pickle)
     try:
