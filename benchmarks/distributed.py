@@ -96,7 +96,6 @@ def main():
     ap.add_argument("--wrf", default=str(DEFAULT_WRF))
     ap.add_argument("--bandwidth-gbit", type=float, default=10.0, help="network into the client (projection)")
     args = ap.parse_args()
-    import weather_mi as wm
     from weather_mi import cluster
     from weather_mi.reference import render_reference
     from weather_mi.scene import default_spec
@@ -126,7 +125,7 @@ def main():
                 bytes_per_pass = img.metadata["dask"]["bytes_per_pass"]
         finally:
             cluster.close(client)
-    print(f"\n| run | wall s | ratio | overhead | start + warm-up s (once) | bit-identical |\n|---|---|---|---|---|---|")
+    print("\n| run | wall s | ratio | overhead | start + warm-up s (once) | bit-identical |\n|---|---|---|---|---|---|")
     for label, t, start, same in rows:
         print(f"| {label} | {t:.1f} | {t / t_local:.3f} | {100 * (t / t_local - 1):+.1f}% | "
               f"{'-' if start is None else f'{start:.1f}'} | {'yes' if same else 'NO'} |")
