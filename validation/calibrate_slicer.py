@@ -90,7 +90,7 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
 
 def evaluate(views, fitted, slices, out=None, second=None):
     """Rows of CIEDE2000 / FLIP per view and mode (and of a second reference: the noise floor)."""
-    rows = []
+    rows, renderers = [], {}
     candidates = [(name, mode, SliceParams()) for name, mode in MODES.items() if mode.light != "multiple"]
     candidates += [("multiple (defaults)", MODES["per-species/multiple"], SliceParams())]
     if fitted is not None:
@@ -103,11 +103,14 @@ def evaluate(views, fitted, slices, out=None, second=None):
             row["reference, seed 1"] = (m["ciede2000"], m["flip"])
         imgs = {}
         for name, mode, params in candidates:
-            detail = None
-            if mode.detail:
-                from weather_mi.detail import field
-                detail = field(v.vol.shape, seed=0, amplitude=0.5, spacing_m=v.vol.spacing)
-            img = SliceRenderer(v.vol, mode, slices=slices, detail_field=detail).frame(v.spec, params)
+            key = (id(v.vol), mode)  # one renderer per volume and mode: the lightings reuse its kernels
+            if key not in renderers:
+                detail = None
+                if mode.detail:
+                    from weather_mi.detail import field
+                    detail = field(v.vol.shape, seed=0, amplitude=0.5, spacing_m=v.vol.spacing)
+                renderers[key] = SliceRenderer(v.vol, mode, slices=slices, detail_field=detail)
+            img = renderers[key].frame(v.spec, params)
             m = metrics.compare(v.reference, img, mask=v.mask if v.mask.any() else "all")
             row[name] = (m["ciede2000"], m["flip"])
             imgs[name] = img
