@@ -47,6 +47,12 @@ def _time_strings(ds: xr.Dataset) -> list[str]:
     return out
 
 
+def wrf_times(path) -> list[str]:
+    """The timestamps of a wrfout file, in order (their indices where it has no ``Times``)."""
+    with _open(str(path)) as ds:
+        return _time_strings(ds) or [str(i) for i in range(ds.sizes.get("Time", 1))]
+
+
 def _normalise_time(t) -> np.datetime64:
     s = str(t).strip().replace("_", "T")
     return np.datetime64(s, "s")

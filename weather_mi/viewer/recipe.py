@@ -1,0 +1,47 @@
+"""``VolumeRecipe``: where the viewer's storm comes from (a file or a demo, its times, the species table
+and phase mode), small and picklable, so that a background process (the reference render) can build
+the same OpticalVolume as the viewer without receiving hundreds of megabytes of arrays."""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Mapping
+
+from ..cli import LES_SUFFIXES, load_input
+
+
+@dataclass(frozen=True)
+class VolumeRecipe:
+    """path: a wrfout NetCDF or LES text file (None: the demo); demo: "supercell" or "cumulus";
+    time: the WRF time (index or timestamp; None: the last); preset: species table ("physical" or
+    "paper"); phase: "per_species" or "paper"."""
+
+    path: str | None = None
+    demo: str | None = None
+    time: int | str | None = None
+    preset: str = "physical"
+    phase: str = "per_species"
+
+    @property
+    def label(self) -> str:
+        return f"demo {self.demo or 'supercell'}" if self.path is None else Path(self.path).name
+
+    def at(self, time) -> "VolumeRecipe":
+        return replace(self, time=time)
+
+    def hydrometeors(self):
+        """The Hydrometeors Dataset (mixing ratios in kg/kg on a regular grid in metres)."""
+        return load_input(self.path, self.demo, self.time)
+
+    def volume(self, scale: Mapping[str, float] | None = None, hyd=None):
+        """The OpticalVolume (Eq. 1-6, 8) of the (scaled) storm; ``hyd``: its Hydrometeors if already read."""
+        from ..optics import optical_volume
+        hyd = self.hydrometeors() if hyd is None else hyd
+        return optical_volume(hyd, species=self.preset, scale=dict(scale or {}) or None, phase=self.phase)
+
+    def times(self) -> list[str]:
+        """The labels of the input's times (one for a demo or an LES file; every time of a WRF file)."""
+        if self.path is None or Path(self.path).suffix.lower() in LES_SUFFIXES:
+            return [self.label]
+        from ..io.wrf import wrf_times
+        return wrf_times(self.path)
