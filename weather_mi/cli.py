@@ -294,6 +294,17 @@ def main(argv: list[str] | None = None) -> int:
     anim.add_argument("--exposure", type=float, default=None, help="MP4/contact-sheet exposure (default: automatic, one for all frames)")
     add_dask_options(anim)
     anim.add_argument("-o", "--output", default="weather-mi-animation", help="output folder")
+    viewp = sub.add_parser("view", help="explore a storm in the browser: the slicer live, the ground truth one "
+                           "click away")
+    _add_source(viewp)
+    viewp.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
+    viewp.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
+    viewp.add_argument("--port", type=int, default=5006, help="port (0: a free one)")
+    viewp.add_argument("--host", default="127.0.0.1",
+                       help="address to bind (default 127.0.0.1, this machine only; another address is reachable "
+                       "from the network, without authentication)")
+    viewp.add_argument("--no-browser", action="store_true", help="do not open a browser")
+    viewp.add_argument("--size", default="320x240", help="WIDTHxHEIGHT of the rendered view (shown at twice that)")
     val = sub.add_parser("validate", help="the validation study: slicer against path-traced ground truth")
     val.add_argument("-o", "--output", default="validation-report", help="report folder")
     val.add_argument("--quick", action="store_true", help="small images and samples: a few minutes")
@@ -301,7 +312,7 @@ def main(argv: list[str] | None = None) -> int:
     val.add_argument("--data", default=None, help="folder of real model output (wrf/..., les/..., e.g. "
                      "../shared/data); without it only the built-in demo storms are studied")
     args = parser.parse_args(argv)
-    if args.command in ("info", "render") and (args.file is None) == (args.demo is None):
+    if args.command in ("info", "render", "view") and (args.file is None) == (args.demo is None):
         sub.choices[args.command].error("give a data FILE or --demo NAME (one of them)")
     try:
         if args.command == "info":
@@ -311,6 +322,8 @@ def main(argv: list[str] | None = None) -> int:
             render_command(args)
         elif args.command == "animate":
             animate_command(args)
+        elif args.command == "view":
+            view_command(args)
         elif args.command == "validate":
             from .study import run
             report = run(args.output, args.config or ("quick" if args.quick else "full"), data_dir=args.data)
@@ -322,6 +335,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"weather-mi: interrupted{_resume_hint(args)}", file=sys.stderr)
         return 130
     return 0
+
+
+def view_command(args) -> None:
+    from .viewer.recipe import VolumeRecipe
+    from .viewer.serve import serve
+    check_time_option(args.file, args.demo, args.time)
+    recipe = VolumeRecipe(path=args.file, demo=args.demo, preset=args.preset, phase=args.phase)
+    serve(recipe, host=args.host, port=args.port, open_browser=not args.no_browser, time_option=args.time,
+          size=_parse_size(args.size))
 
 
 def _slicer_modes():

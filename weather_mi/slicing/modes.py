@@ -53,6 +53,9 @@ MULTIPLE_DEFAULTS = {"ms_extinction": 0.0983, "ms_contribution": 0.6987, "ms_ecc
                      "sky_gain": 0.6201, "sky_extinction": 0.0258}
 
 
+DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail field, detail.field(amplitude=0.5))
+
+
 @dataclass(frozen=True)
 class SliceParams:
     """Interactive parameters (none of them recompiles a kernel).
@@ -76,6 +79,10 @@ class SliceParams:
                        (1 - ms_eccentricity^i) / (4 pi).
     sky_gain         : "multiple" light: skylight in-scattering, sky_gain x the sky's mean radiance x
     sky_extinction   : exp(-sky_extinction x optical depth towards the zenith).
+    detail           : detail modes with a ``detail_noise`` renderer: the amount of simulated detail per
+                       species (paper section 5.4), the amplitude s of the log-normal multiplier
+                       exp(s n - s^2/2) of its extinction (n: the unit-variance noise; 0: none; species
+                       not named: DEFAULT_DETAIL).
     """
 
     scale: dict = field(default_factory=dict)
@@ -89,6 +96,7 @@ class SliceParams:
     ms_eccentricity: float = MULTIPLE_DEFAULTS["ms_eccentricity"]
     sky_gain: float = MULTIPLE_DEFAULTS["sky_gain"]
     sky_extinction: float = MULTIPLE_DEFAULTS["sky_extinction"]
+    detail: dict = field(default_factory=dict)
 
     def __post_init__(self):
         # values may be Dr.Jit arrays (for differentiation): only plain numbers are range-checked
@@ -111,6 +119,8 @@ class SliceParams:
                 raise ValueError(f"{name} must be >= 0, got {v}")
         if any(v < 0 for v in self.scale.values()):
             raise ValueError("scalings must be >= 0")
+        if any(not 0 <= v <= 3 for v in self.detail.values()):
+            raise ValueError(f"detail amplitudes must be in [0, 3], got {self.detail}")
 
     def updated(self, **kw) -> "SliceParams":
         return replace(self, **kw)

@@ -41,7 +41,7 @@ class SliceRenderer:
 
     def __init__(self, vol: OpticalVolume, mode: SliceMode = SliceMode(), slices: int = 128,
                  light_res: int | None = None, detail_field: np.ndarray | None = None, uniform_phase=None,
-                 differentiable: bool = False):
+                 differentiable: bool = False, detail_noise: np.ndarray | None = None):
         from ..variant import ensure_registered
         ensure_registered()
         import mitsuba as mi
@@ -51,9 +51,12 @@ class SliceRenderer:
             light_res = auto_light_res(self.box, vol.spacing)
         if slices < 2 or light_res < 4:
             raise ValueError(f"need at least 2 slices and a 4 x 4 light buffer, got {slices}, {light_res}")
-        if mode.detail and detail_field is None:
-            raise ValueError("SliceMode(detail=True) needs a detail_field: a (z, y, x) multiplier of the "
-                             "extinction, e.g. from weather_mi.detail")
+        if mode.detail and detail_field is None and detail_noise is None:
+            raise ValueError("SliceMode(detail=True) needs a detail_field (a (z, y, x) multiplier of the "
+                             "extinction, weather_mi.detail.field) or a detail_noise (unit-variance noise, "
+                             "weather_mi.detail.noise, amplitudes per species in SliceParams.detail)")
+        if detail_field is not None and detail_noise is not None:
+            raise ValueError("give a detail_field or a detail_noise, not both")
         self.vol, self.mode = vol, mode
         self.slices, self.light_res = int(slices), int(light_res)
         self.differentiable = differentiable
@@ -65,6 +68,12 @@ class SliceRenderer:
             if detail.shape != self.shape:
                 raise ValueError(f"detail_field must have the volume's shape {self.shape}, got {detail.shape}")
             beta_s = beta_s * detail[..., None]
+        self.detail_noise = None  # unit-variance noise n: species s's extinction x exp(a_s n - a_s^2 / 2)
+        if detail_noise is not None and mode.detail:
+            n = np.asarray(detail_noise, dtype=np.float32)
+            if n.shape != self.shape:
+                raise ValueError(f"detail_noise must have the volume's shape {self.shape}, got {n.shape}")
+            self.detail_noise = mi.Float(np.ascontiguousarray(n).ravel())
         self.beta_s = mi.Float(np.ascontiguousarray(beta_s).ravel())  # (z, y, x, S) flattened
         self.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
         self.voxel_m = float(np.mean(vol.spacing))
@@ -120,7 +129,14 @@ class SliceRenderer:
             fwd = np.array([float(np.mean(t.cone_fraction(theta0))) for t in self.tables])
         return scale, omega, tint, fwd
 
-    def _build_textures(self, scale, omega, fwd):
+    def _detail_amplitudes(self, params: SliceParams) -> list[float]:
+        from .modes import DEFAULT_DETAIL
+        for n in params.detail:
+            if n not in self.vol.species:
+                raise ValueError(f"unknown species {n!r} in detail; expected one of {self.vol.species}")
+        return [float(params.detail.get(n, DEFAULT_DETAIL)) for n in self.vol.species]
+
+    def _build_textures(self, scale, omega, fwd, detail=None):
         """Eye texture [beta_ext, beta_sca per group] and light source [beta_ext, beta_forward] (1/m)."""
         mi = self.mi
         import drjit as dr
@@ -128,8 +144,12 @@ class SliceRenderer:
         vox = dr.arange(mi.UInt32, int(np.prod(self.shape)))
         sc, om, fw = ([_param(mi, v) for v in x] for x in (scale, omega, fwd))
         ext, beta_fwd, sca = mi.Float(0.0), mi.Float(0.0), []
+        noise = None if self.detail_noise is None else dr.gather(mi.Float, self.detail_noise, vox)
+        amp = None if noise is None else [_param(mi, a) for a in detail]
         for s in range(S):
             b = dr.gather(mi.Float, self.beta_s, vox * S + s) * sc[s]
+            if noise is not None:  # the amount of detail per species (paper section 5.4), log-normal, mean one
+                b = b * dr.exp(amp[s] * noise - 0.5 * amp[s] * amp[s])
             ext += b
             sca.append(b * om[s])
             beta_fwd += b * om[s] * fw[s]
@@ -155,7 +175,7 @@ class SliceRenderer:
         import drjit as dr
         t_start = time.perf_counter()
         scale, omega, tint, fwd = self._species_vectors(params)
-        self._build_textures(scale, omega, fwd)
+        self._build_textures(scale, omega, fwd, self._detail_amplitudes(params) if self.detail_noise is not None else None)
         g = slice_geometry(spec.camera.forward, spec.sun.to_sun, self.box, self.slices)
         translucent = self.mode.light == "translucent"
         blur = params.blur_length_m if params.blur_length_m is not None else self.voxel_m

@@ -1,0 +1,107 @@
+"""The viewer's speed as the page sees it (issue 13): frames per second received while a slider or the
+view is dragged, latency from the input event to the new frame decoded on the page, and the time from
+the command to the first frame.
+
+    .venv/bin/python benchmarks/viewer.py [--demo supercell | --input FILE] [--seconds 5] [--rounds 2]
+
+``weather-mi view`` runs in a subprocess on a free port; headless Chromium (Playwright, Debian's
+chromium) drags the sun-azimuth slider's handle and then the view itself with 60 mouse moves per second,
+as a hand does. Latency: the page stamps every input event, the server answers each frame with the
+newest stamp it had seen when the frame's request was made, the page takes the difference when the
+frame is decoded (``weather_mi/viewer/canvas.py``). Baseline, in this process: the slicer alone
+(``FrameLoop.render``) at full and draft quality on the same storm and view; the ratio columns compare
+the page's rate with it. Targets: >= 10 frames/s received at 320x240 while dragging, median latency
+<= 150 ms, first frame <= 10 s after the command (warm caches).
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from weather_mi.viewer.browser import ViewerProcess, browser_page, drag, wait_frames, wait_idle  # noqa: E402
+
+
+def slicer_baseline(recipe, rounds: int = 5) -> dict:
+    """Seconds per frame of the slicer alone, full and draft, for the viewer's first view."""
+    from weather_mi.viewer.frames import FrameLoop
+    from weather_mi.viewer.serve import prepare
+    storm, state = prepare(recipe, progress=lambda *a: None)
+    loop = FrameLoop(storm, publish=lambda f: None)
+    out = {}
+    try:
+        for draft in (False, True):
+            ts = []
+            for k in range(rounds):
+                s = state.updated(sun_azimuth=(state.sun_azimuth + 3 * k) % 360)
+                t0 = time.perf_counter()
+                loop.render(s, draft=draft)
+                ts.append(time.perf_counter() - t0)
+            out["draft" if draft else "full"] = statistics.median(ts)
+    finally:
+        loop.stop()
+    return out
+
+
+def measure_drag(page, target, seconds: float, dx: float) -> dict:
+    """Drag ``target`` back and forth for ``seconds``; frames received and latencies during the drag."""
+    wait_idle(page, 0.8)
+    n0 = page.evaluate("window.wmStats.frames")
+    l0 = page.evaluate("window.wmStats.latencies.length")
+    t0 = time.perf_counter()
+    k = 0
+    while time.perf_counter() - t0 < seconds:
+        drag(page, target, dx if k % 2 == 0 else -dx, 0, steps=60, seconds=1.0)
+        k += 1
+    elapsed = time.perf_counter() - t0
+    n1 = page.evaluate("window.wmStats.frames")
+    lat = page.evaluate(f"window.wmStats.latencies.slice({l0})")
+    return {"fps": (n1 - n0) / elapsed, "latency_ms": statistics.median(lat) if lat else float("nan"),
+            "p90_ms": sorted(lat)[int(0.9 * (len(lat) - 1))] if lat else float("nan"), "n": len(lat)}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    src = ap.add_mutually_exclusive_group()
+    src.add_argument("--demo", default=None, choices=("supercell", "cumulus"))
+    src.add_argument("--input", default=None)
+    ap.add_argument("--seconds", type=float, default=5.0, help="length of each drag measurement")
+    ap.add_argument("--rounds", type=int, default=2)
+    args = ap.parse_args()
+    from weather_mi.viewer.recipe import VolumeRecipe
+    demo = args.demo or (None if args.input else "supercell")
+    recipe = VolumeRecipe(path=args.input, demo=demo)
+    source = ["--demo", demo] if demo else [args.input]
+
+    base = slicer_baseline(recipe)
+    rows = []
+    for r in range(args.rounds):
+        with ViewerProcess(*source) as viewer, browser_page() as page:
+            t_cmd = viewer.t_start
+            page.goto(viewer.url)
+            wait_frames(page, 1, 120)
+            first = time.perf_counter() - t_cmd
+            slider = page.locator(".wm-sun-azimuth .noUi-handle").first
+            view = page.locator("img.wm-frame").first
+            s = measure_drag(page, slider, args.seconds, 120)
+            v = measure_drag(page, view, args.seconds, 200)
+            rows.append((r + 1, first, viewer.seconds_to_serve, s, v))
+
+    print(f"\nviewer: {recipe.label}, view 320x240, default mode; slicer alone in this process: full "
+          f"{1000 * base['full']:.0f} ms ({1 / base['full']:.1f} fps), draft {1000 * base['draft']:.0f} ms "
+          f"({1 / base['draft']:.1f} fps)\n")
+    print("| round | first frame s (serve s) | slider drag fps | ratio to draft | median latency ms | p90 ms "
+          "| view drag fps | ratio to draft | median latency ms | p90 ms |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for r, first, serve, s, v in rows:
+        print(f"| {r} | {first:.1f} ({serve:.1f}) | {s['fps']:.1f} | {s['fps'] * base['draft']:.2f} | "
+              f"{s['latency_ms']:.0f} | {s['p90_ms']:.0f} | {v['fps']:.1f} | {v['fps'] * base['draft']:.2f} | "
+              f"{v['latency_ms']:.0f} | {v['p90_ms']:.0f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,191 @@
+"""The viewer's Python side without a browser: view state, camera gestures, keyframes, the exported
+snippet, per-species detail, the frame loop (newest request wins, drafts then a refine), and the
+command's faults (bad input, port in use) before anything is served."""
+from __future__ import annotations
+
+import math
+import socket
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from weather_mi.slicing import MODES, SliceParams, SliceRenderer
+from weather_mi.viewer.keyframes import between, path
+from weather_mi.viewer.state import ViewCamera, ViewState, python_snippet
+
+
+@pytest.fixture(scope="module")
+def cumulus_storm():
+    from weather_mi.viewer.frames import Storm
+    from weather_mi.viewer.recipe import VolumeRecipe
+    return Storm(VolumeRecipe(demo="cumulus"))
+
+
+def small_state(storm, **kw) -> ViewState:
+    from weather_mi.viewer.app import default_distance_km
+    return ViewState(time=storm.first_time, camera=ViewCamera(distance_km=default_distance_km(storm)),
+                     width=64, height=48, slices=64, **kw)
+
+
+# ---------------------------------------------------------------------- state and gestures
+def test_drag_and_wheel_move_the_camera_as_a_hand_expects():
+    c = ViewCamera(azimuth=200.0, distance_km=40.0, height_m=1500.0)
+    assert c.dragged(10, 0).azimuth == pytest.approx(196.0)        # drag right: walk anticlockwise
+    assert c.dragged(0, 50).height_m > c.height_m > c.dragged(0, -50).height_m
+    assert c.zoomed(-100).distance_km == pytest.approx(40.0 / 1.1)  # wheel up: closer
+    o = ViewCamera(kind="orbit", elevation_deg=20.0)
+    assert o.dragged(0, 1000).elevation_deg == 89.0                 # clamped below the zenith
+    with pytest.raises(ValueError, match="kind"):
+        ViewCamera(kind="fisheye")
+
+
+def test_view_state_checks_before_rendering_and_round_trips():
+    with pytest.raises(ValueError, match="mode"):
+        ViewState(mode="nonsense")
+    with pytest.raises(ValueError, match="albedo"):
+        ViewState(albedo=1.5)
+    with pytest.raises(ValueError, match="detail"):
+        ViewState(detail=(("cloud", 9.0),))
+    s = ViewState().with_scale("ice", 2.0).with_detail("rain", 1.0).updated(camera=ViewCamera(kind="orbit"))
+    assert ViewState.from_dict(s.to_dict()) == s
+    assert s.slice_params().scale == {"ice": 2.0}
+
+
+def test_the_spec_is_the_scene_of_the_camera(cumulus_storm):
+    s = small_state(cumulus_storm)
+    spec = s.spec(cumulus_storm.frame, cumulus_storm.ground_m)
+    assert (spec.width, spec.height) == (64, 48)
+    core = cumulus_storm.frame.beta_total[0]
+    # the ground camera stands distance_km from the densest column, height_m above the ground
+    (x0, y0, _), _ = cumulus_storm.frame.bbox
+    _, dy, dx = cumulus_storm.frame.spacing
+    j, i = np.unravel_index(np.argmax(core), core.shape)
+    horizontal = math.hypot(spec.camera.origin[0] - (x0 + (i + 0.5) * dx), spec.camera.origin[1] - (y0 + (j + 0.5) * dy))
+    assert horizontal == pytest.approx(1000 * s.camera.distance_km, rel=1e-9)
+    assert spec.camera.origin[2] == pytest.approx(cumulus_storm.ground_m + s.camera.height_m)
+
+
+# ---------------------------------------------------------------------- keyframes
+def test_keyframes_turn_the_short_way_and_zoom_geometrically():
+    a = ViewState(camera=ViewCamera(azimuth=350.0, distance_km=10.0), sun_azimuth=10.0, time=0)
+    b = ViewState(camera=ViewCamera(azimuth=30.0, distance_km=40.0), sun_azimuth=350.0, time=3)
+    mid = between(a, b, 0.5)
+    assert mid.camera.azimuth == pytest.approx(10.0)          # through north, not through 190
+    assert mid.sun_azimuth == pytest.approx(0.0) or mid.sun_azimuth == pytest.approx(360.0)
+    assert mid.camera.distance_km == pytest.approx(20.0)      # sqrt(10 x 40)
+    assert between(a, b, 0.0) == a.updated(camera=between(a, b, 0.0).camera)
+    assert between(a, b, 1.0).camera.azimuth == pytest.approx(30.0)
+    frames = path([a, b, a], fps=10, seconds_per_key=1.0)
+    assert len(frames) == 21 and frames[0].camera.azimuth == pytest.approx(350.0) and frames[-1] == a
+    assert [f.time for f in frames[:11]] == [0, 0, 1, 1, 1, 2, 2, 2, 2, 3, 3]
+    with pytest.raises(ValueError, match="two keyframes"):
+        path([a], fps=10)
+
+
+# ---------------------------------------------------------------------- per-species detail
+def test_per_species_detail_is_the_log_normal_multiplier_of_the_noise(cumulus_storm):
+    """SliceParams.detail with a detail_noise renderer equals the slicer with the multiplier
+    exp(a n - a^2/2) computed by numpy (weather_mi.detail.field without its exact-mean rescaling)."""
+    from weather_mi.detail import field
+    vol = cumulus_storm.volume(cumulus_storm.first_time)
+    s = small_state(cumulus_storm, mode="per-species/translucent/detail")
+    spec = s.spec(cumulus_storm.frame, cumulus_storm.ground_m)
+    noise = cumulus_storm.detail_noise()
+    mult = field(vol.shape, seed=0, amplitude=0.8, spacing_m=vol.spacing, exact_mean=False)
+    a = SliceRenderer(vol, MODES["per-species/translucent/detail"], slices=64, detail_field=mult).frame(spec)
+    r = SliceRenderer(vol, MODES["per-species/translucent/detail"], slices=64, detail_noise=noise)
+    b = r.frame(spec, SliceParams(detail={n: 0.8 for n in vol.species}))
+    assert np.allclose(a.radiance, b.radiance, rtol=2e-3, atol=1e-6 * a.radiance.max())
+    none = r.frame(spec, SliceParams(detail={n: 0.0 for n in vol.species}))
+    plain = SliceRenderer(vol, MODES["per-species/translucent"], slices=64).frame(spec)
+    assert np.allclose(none.radiance, plain.radiance, rtol=2e-3, atol=1e-6 * plain.radiance.max())
+    assert not np.allclose(none.radiance, b.radiance, rtol=1e-2)
+    with pytest.raises(ValueError, match="unknown species"):
+        r.frame(spec, SliceParams(detail={"hail": 1.0}))
+
+
+# ---------------------------------------------------------------------- the frame loop
+def test_the_newest_request_wins_drafts_then_a_refine(cumulus_storm):
+    from weather_mi.viewer.frames import DRAFT_DIVISOR, FrameLoop
+    frames, done = [], threading.Event()
+
+    def publish(f):
+        frames.append(f)
+        if not f.draft and f.state.sun_azimuth == 299.0:
+            done.set()
+    loop = FrameLoop(cumulus_storm, publish)
+    try:
+        base = small_state(cumulus_storm)
+        loop.render(base)  # compile first, so that the requests below arrive while frames are cheap
+        for k in range(10):
+            loop.submit(base.updated(sun_azimuth=290.0 + k), seq=k + 1, interactive=True)
+        assert done.wait(60), "no refined frame of the last request"
+    finally:
+        loop.stop()
+    assert not loop.alive
+    assert len(frames) < 10                              # stale requests were dropped unrendered
+    last = frames[-1]
+    assert not last.draft and last.seq == 10 and last.state.sun_azimuth == 299.0
+    assert last.radiance.shape == (48, 64, 3)
+    drafts = [f for f in frames if f.draft]
+    assert drafts and all(f.radiance.shape == (48 // DRAFT_DIVISOR, 64 // DRAFT_DIVISOR, 3) for f in drafts)
+    assert last.url.startswith("data:image/jpeg;base64,")
+
+
+def test_the_exported_snippet_reproduces_the_view(cumulus_storm, tmp_path, monkeypatch):
+    from weather_mi.viewer.frames import FrameLoop
+    from weather_mi.viewer.recipe import VolumeRecipe
+    loop = FrameLoop(cumulus_storm, lambda f: None)
+    try:
+        s = small_state(cumulus_storm, sun_azimuth=250.0, albedo=0.9).with_scale("cloud", 0.5)
+        f = loop.render(s)
+    finally:
+        loop.stop()
+    code = python_snippet(s, VolumeRecipe(demo="cumulus"), f.spec, cumulus_storm.times, exposure=f.exposure)
+    monkeypatch.chdir(tmp_path)
+    ns = {"__name__": "snippet"}  # not __main__: the ground truth is not rendered here
+    exec(compile(code, "weather_mi_view.py", "exec"), ns)
+    assert np.allclose(ns["image"].radiance, f.radiance, rtol=1e-5, atol=1e-7)
+    assert "def ground_truth" in code and "scale={'cloud': 0.5}" in code
+
+
+# ---------------------------------------------------------------------- the command's faults
+def test_a_taken_port_is_said_clearly():
+    from weather_mi.viewer.serve import check_port
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        with pytest.raises(RuntimeError, match=f"cannot serve on 127.0.0.1:{port}.*--port"):
+            check_port("127.0.0.1", port)
+    assert check_port("127.0.0.1", 0) > 0
+
+
+def test_bad_input_exits_2_before_serving(tmp_path, capsys):
+    from weather_mi.cli import main
+    bad = tmp_path / "wrfout_broken.nc"
+    bad.write_text("not a netcdf file")
+    t0 = time.perf_counter()
+    assert main(["view", str(bad), "--no-browser", "--port", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "wrfout_broken.nc" in err and "NetCDF" in err
+    assert main(["view", "--demo", "cumulus", "--time", "3", "--no-browser"]) == 2
+    assert "--time" in capsys.readouterr().err
+    assert time.perf_counter() - t0 < 30
+
+
+def test_time_option_selects_an_index_or_a_timestamp():
+    from weather_mi.viewer.serve import initial_time
+
+    class FakeStorm:
+        times = ["0001-01-01_00:30:00", "0001-01-01_01:00:00", "0001-01-01_01:30:00"]
+        first_time = 2
+    assert initial_time(FakeStorm, None) == 2
+    assert initial_time(FakeStorm, "0") == 0 and initial_time(FakeStorm, "-2") == 1
+    assert initial_time(FakeStorm, "0001-01-01_01:00:00") == 1
+    with pytest.raises(ValueError, match="3 times"):
+        initial_time(FakeStorm, "5")
+    with pytest.raises(ValueError, match="not among"):
+        initial_time(FakeStorm, "0001-01-01_09:00:00")

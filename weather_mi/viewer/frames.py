@@ -1,0 +1,221 @@
+"""``FrameLoop``: the slicer behind the viewer, one background thread per browser session.
+
+Requests are views (``ViewState`` plus the client input number they answer); the newest request wins,
+older ones are dropped unrendered. While the user drags (requests closer together than ``IDLE_S``), a
+request is rendered as a draft (half the pixels per side, ``DRAFT_SLICES`` slices); once the input
+has been idle for ``IDLE_S``, the same view is refined at full quality. Frames go out as JPEG data URLs
+through ``publish(frame)`` (the app hands them to the page on its event loop).
+
+Storms (one OpticalVolume per time of the input) and SliceRenderers (one per time, mode and quality)
+are kept in small LRU caches: scrubbing the time slider back and forth does not rebuild them.
+"""
+from __future__ import annotations
+
+import base64
+import io
+import threading
+import time
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..imageio import auto_exposure, to_srgb8
+from .state import ViewState
+
+DRAFT_SLICES = 32
+DRAFT_DIVISOR = 2
+IDLE_S = 0.25
+JPEG_QUALITY = 88
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A rendered view: the radiance (H, W, 3) and eye transmittance (H, W), the JPEG data URL, whether
+    it is a draft, the client input number it answers, the state it shows and the render's seconds."""
+
+    radiance: np.ndarray
+    transmittance: np.ndarray
+    url: str
+    draft: bool
+    seq: int
+    state: ViewState
+    seconds: float
+    spec: object
+    exposure: float
+    slices: int
+    queued_s: float = 0.0  # from the request to the start of its render
+
+
+class LRU(OrderedDict):
+    def __init__(self, size: int):
+        super().__init__()
+        self.size = size
+
+    def get_or(self, key, make):
+        if key in self:
+            self.move_to_end(key)
+            return self[key]
+        value = make()
+        self[key] = value
+        while len(self) > self.size:
+            self.popitem(last=False)
+        return value
+
+
+def jpeg_url(srgb8: np.ndarray, quality: int = JPEG_QUALITY) -> str:
+    from PIL import Image as PILImage
+    buf = io.BytesIO()
+    PILImage.fromarray(srgb8).save(buf, format="JPEG", quality=quality)
+    return "data:image/jpeg;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+class Storm:
+    """The input's times as OpticalVolumes (LRU), the camera frame, and the detail noise: shared by the
+    sessions of one viewer (read-only after construction; building a volume takes a lock)."""
+
+    def __init__(self, recipe, first_volume=None, hydrometeors=None, cache: int = 4):
+        from .state import VolumeFrame
+        self.recipe = recipe
+        self.times = recipe.times()
+        self._lock = threading.Lock()
+        self._volumes = LRU(cache)
+        self._hyd = LRU(cache)
+        t0 = len(self.times) - 1  # the last time, as the other commands
+        if hydrometeors is not None:
+            self._hyd[t0] = hydrometeors
+        if first_volume is None:
+            first_volume = self.volume(t0)
+        else:
+            self._volumes[t0] = first_volume
+        self.first_time = t0
+        self.frame = VolumeFrame(first_volume)
+        self.ground_m = min(0.0, float(first_volume.bbox[0][2]))
+        self.species = tuple(first_volume.species)
+        self.shape = tuple(first_volume.shape)
+        self._noise = None
+
+    def _recipe_at(self, t: int):
+        return self.recipe if len(self.times) < 2 else self.recipe.at(t)
+
+    def hydrometeors(self, t: int):
+        with self._lock:
+            return self._hyd.get_or(t, lambda: self._recipe_at(t).hydrometeors())
+
+    def volume(self, t: int):
+        hyd = self.hydrometeors(t)
+        with self._lock:
+            return self._volumes.get_or(t, lambda: self._recipe_at(t).volume(hyd=hyd))
+
+    def detail_noise(self) -> np.ndarray:
+        """Unit-variance turbulent noise on the grid (isotropic in metres), built once."""
+        with self._lock:
+            if self._noise is None:
+                from ..detail import noise
+                vol = self._volumes.get(self.first_time) or next(iter(self._volumes.values()))
+                self._noise = noise(vol.shape, vol.spacing, seed=0)
+            return self._noise
+
+
+class FrameLoop:
+    """The render thread of one session. ``submit(state, seq, interactive)`` asks for a view;
+    ``publish(frame)`` is called from the thread with every rendered Frame; ``stop()`` ends it."""
+
+    def __init__(self, storm: Storm, publish, on_error=None, renderers: int = 4):
+        self.storm = storm
+        self.publish = publish
+        self.on_error = on_error or (lambda exc: None)
+        self._renderers = LRU(renderers)
+        self._cond = threading.Condition()
+        self._pending: tuple | None = None
+        self._last_input = 0.0
+        self._stopped = False
+        self._refine: tuple | None = None
+        self.exposure: float | None = None  # the session's automatic exposure, fixed by its first full frame
+        self.last_frame: Frame | None = None
+        self.frames_rendered = 0
+        self._thread = threading.Thread(target=self._run, name="weather-mi frames", daemon=True)
+        self._thread.start()
+
+    # ------------------------------------------------------------------ requests
+    def submit(self, state: ViewState, seq: int = 0, interactive: bool = False) -> None:
+        with self._cond:
+            now = time.perf_counter()
+            draft = interactive or (now - self._last_input) < IDLE_S
+            self._last_input = now
+            self._pending = (state, seq, draft, now)
+            self._cond.notify()
+
+    def stop(self) -> None:
+        with self._cond:
+            self._stopped = True
+            self._cond.notify()
+        if threading.current_thread() is not self._thread:
+            self._thread.join(timeout=10)
+
+    @property
+    def alive(self) -> bool:
+        return self._thread.is_alive()
+
+    # ------------------------------------------------------------------ the thread
+    def _next(self):
+        with self._cond:
+            while not self._stopped:
+                if self._pending is not None:
+                    req, self._pending = self._pending, None
+                    if req[2]:
+                        self._refine = (req[0], req[1], False, None)
+                    else:
+                        self._refine = None
+                    return req
+                if self._refine is not None:
+                    wait = IDLE_S - (time.perf_counter() - self._last_input)
+                    if wait <= 0:
+                        req, self._refine = self._refine, None
+                        return req
+                    self._cond.wait(wait)
+                else:
+                    self._cond.wait()
+            return None
+
+    def _run(self):
+        while True:
+            req = self._next()
+            if req is None:
+                return
+            state, seq, draft, t_submit = req
+            try:
+                frame = self.render(state, seq, draft, t_submit)
+            except Exception as exc:  # a bad parameter must not kill the session's renderer
+                self.on_error(exc)
+                continue
+            self.last_frame = frame
+            self.publish(frame)
+
+    def renderer(self, state: ViewState, draft: bool):
+        from ..slicing import SliceRenderer
+        mode = state.slice_mode()
+
+        def make():
+            vol = self.storm.volume(state.time)
+            noise = self.storm.detail_noise() if mode.detail else None
+            return SliceRenderer(vol, mode, slices=state.slices, detail_noise=noise)
+        r = self._renderers.get_or((state.time, mode), make)
+        r.slices = min(DRAFT_SLICES, state.slices) if draft else state.slices  # per frame: compiles nothing
+        return r
+
+    def render(self, state: ViewState, seq: int = 0, draft: bool = False, t_submit: float | None = None) -> Frame:
+        """Render one view now (in the calling thread)."""
+        t0 = time.perf_counter()
+        queued = 0.0 if t_submit is None else t0 - t_submit
+        r = self.renderer(state, draft)
+        w, h = (state.width // DRAFT_DIVISOR, state.height // DRAFT_DIVISOR) if draft else (state.width, state.height)
+        spec = state.spec(self.storm.frame, self.storm.ground_m, w, h)
+        img = r.frame(spec, state.slice_params())
+        if self.exposure is None:
+            self.exposure = auto_exposure(img.radiance)
+        exposure = self.exposure * 2.0 ** state.exposure_ev
+        url = jpeg_url(to_srgb8(img.radiance, exposure))
+        self.frames_rendered += 1
+        return Frame(img.radiance, r.transmittance.copy(), url, draft, seq, state, time.perf_counter() - t0, spec,
+                     exposure, r.slices, queued)

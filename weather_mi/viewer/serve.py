@@ -1,0 +1,97 @@
+"""``weather-mi view``: check the input and the port, build the storm and warm the slicer's kernels, then
+serve the viewer with Panel (Bokeh's Tornado server) on 127.0.0.1, websocket origins checked.
+
+Everything that can be wrong with the input is found before anything is served (exit code 2 from the
+CLI). Each browser tab gets its own ViewerSession; closing the tab stops its render thread and its
+reference process.
+"""
+from __future__ import annotations
+
+import socket
+import sys
+import time
+
+from .recipe import VolumeRecipe
+
+LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
+
+
+def check_port(host: str, port: int) -> int:
+    """The port to serve on (``port``, or a free one for 0); a clear error if it is taken."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        try:
+            s.bind((host, int(port)))
+        except OSError as exc:
+            raise RuntimeError(f"cannot serve on {host}:{port}: {exc.strerror or exc} (is another viewer running? "
+                               "choose another --port, or --port 0 for a free one)") from exc
+        return s.getsockname()[1]
+
+
+def initial_time(storm, time_option) -> int:
+    """The index of ``--time`` (an index or a timestamp) among the storm's times; default the last."""
+    if time_option is None:
+        return storm.first_time
+    from ..io.wrf import _normalise_time
+    n = len(storm.times)
+    try:
+        k = int(time_option)
+        if not -n <= k < n:
+            raise ValueError(f"--time {k}: the input has {n} times (indices {-n} .. {n - 1})")
+        return k % n
+    except ValueError as exc:
+        if str(exc).startswith("--time"):
+            raise
+    want = _normalise_time(time_option)
+    for k, t in enumerate(storm.times):
+        if _normalise_time(t) == want:
+            return k
+    raise ValueError(f"--time {time_option}: not among the input's times {storm.times}")
+
+
+def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[int, int] = (320, 240)):
+    """The Storm (input read and checked, optics of the starting time) and the first ViewState; one frame
+    rendered at full and at draft quality so that the kernels are compiled before the first tab opens."""
+    from .frames import FrameLoop, Storm
+    from .state import ViewCamera, ViewState
+    from .app import default_distance_km
+    t0 = time.perf_counter()
+    storm = Storm(recipe)
+    state = ViewState(time=initial_time(storm, time_option), camera=ViewCamera(distance_km=default_distance_km(storm)),
+                      width=int(size[0]), height=int(size[1]))
+    loop = FrameLoop(storm, publish=lambda f: None)
+    try:
+        loop.render(state)
+        loop.render(state, draft=True)
+    finally:
+        loop.stop()
+    progress(f"weather-mi view: {recipe.label}, {len(storm.times)} time(s), ready in {time.perf_counter() - t0:.1f} s")
+    return storm, state
+
+
+def serve(recipe: VolumeRecipe, *, host: str = "127.0.0.1", port: int = 5006, open_browser: bool = True,
+          time_option=None, reference_kw: dict | None = None, size: tuple[int, int] = (320, 240)) -> None:
+    """Serve the viewer until Ctrl-C (blocking)."""
+    import panel as pn
+    from .app import ViewerSession
+    if host not in LOCAL_HOSTS:
+        print(f"weather-mi view: warning: serving on {host}, reachable from other machines; the viewer has no "
+              "authentication", file=sys.stderr)
+    port = check_port(host, port)  # before the slow part: a taken port is said at once
+    storm, state = prepare(recipe, time_option, size=size)
+    port = check_port(host, port)
+    origins = [f"{h}:{port}" for h in ("127.0.0.1", "localhost")] + ([f"{host}:{port}"] if host not in LOCAL_HOSTS else [])
+    server = pn.serve({"/": lambda: ViewerSession(storm, state, reference_kw).layout}, port=port, address=host,
+                      websocket_origin=origins, show=False, start=False, title="weather-mi", threaded=False)
+    server.start()
+    url = f"http://{'localhost' if host in LOCAL_HOSTS else host}:{port}/"
+    print(f"weather-mi view: serving {url} (Ctrl-C to stop)", flush=True)
+    if open_browser:
+        import webbrowser
+        webbrowser.open(url)
+    try:
+        server.io_loop.start()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.stop()
