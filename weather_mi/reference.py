@@ -268,7 +268,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                      rr_depth: int | None = None, cell: int | None = None, target_rse: float | None = None,
                      max_seconds: float | None = None, sun_guiding: float | None = None,
                      forward_peak_deg: float | None = None, aureole_nee: float | None = None,
-                     legacy: bool = False, client=None, worker_variant=None) -> Image:
+                     legacy: bool = False, client=None, worker_variant=None, on_pass=None) -> Image:
     """Path-trace ``vol`` as seen by ``spec`` (Mitsuba ``volpath`` or our local-majorant tracker).
 
     spp        : samples per pixel in total, split into passes (``passes``, default MIN_PASSES = 16
@@ -299,6 +299,13 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                  in pass order, so the image is bit-identical to the in-process one.
     worker_variant : with ``client``: the Mitsuba variant of the workers (None: this process's; "auto": each
                  worker's default, cuda_ad_rgb where it has a GPU; a name; or {worker address: name}).
+    on_pass    : None, or a callable invoked after every merged pass (after its checkpoint is written)
+                 with an ``Image`` of the estimate so far: mean radiance and standard error (float32; NaN
+                 while fewer than 2 passes), and the metadata of the final image for the passes so far
+                 (``passes``, ``spp``, ``seconds``, ``noise``: ``noise_stats`` over the cloud pixels or
+                 None while fewer than 2 passes, ``target_rse``, ...). The arrays are the callback's own
+                 copies. An exception it raises propagates out of ``render_reference`` (queued Dask passes
+                 are cancelled and the checkpoint stays valid, as with Ctrl-C): a way to stop a render.
 
     The metadata records ``noise_stats`` over the cloud pixels (also shown by the progress bar).
     """
@@ -367,6 +374,17 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     def per_pass(i):
         return spp_list[i] if i < len(spp_list) else spp_list[0]
 
+    def metadata(n, spp_done, seconds, noise):
+        return {"renderer": "reference", "integrator": integrator, "variant": mi.variant(), "spp": int(spp_done),
+                "passes": n, "max_depth": int(max_depth), "rr_depth": rr_depth, "seconds": seconds,
+                "normalize": normalize, "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
+                "source": vol.attrs.get("source"), "time": vol.attrs.get("time"),
+                "phase_mode": vol.phase_mode, "sun": ("scene emitter" if not own_sun else
+                                                      ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
+                "sun_guiding": sun_guiding if own_sun else None, "target_rse": target_rse,
+                "forward_peak_deg": forward_peak_deg, "aureole_nee": aureole_nee if own_sun else None,
+                "noise": noise}
+
     total = len(spp_list) if target_rse is None else None
     bar = tqdm(total=total, initial=done, desc="reference", unit="pass", disable=not progress)
     if client is None:
@@ -390,23 +408,19 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                 _save_checkpoint(ckpt, {"key": key, "mean": mean, "m2": m2, "done": n, "seconds": seconds,
                                         "spp_done": spp_done})
             bar.update(1)
-            st = stats(n) if progress else None  # noise over the cloud pixels: for the progress bar only
-            if st is not None:
+            # noise over the cloud pixels: for the progress bar and on_pass only
+            st = stats(n) if progress or on_pass is not None else None
+            if progress and st is not None:
                 bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
+            if on_pass is not None:
+                se = np.sqrt(m2 / (n - 1) / n) if n > 1 else np.full_like(mean, np.nan)
+                on_pass(Image(mean.astype(np.float32), se.astype(np.float32), metadata(n, spp_done, seconds, st)))
     finally:  # over Dask: cancels the passes still queued (target met, Ctrl-C, error); the checkpoint stays valid
         passes_in.close()
         bar.close()
     n = i
     stderr = np.sqrt(m2 / (n - 1) / n) if n > 1 else np.full_like(mean, np.nan)
-    meta = {"renderer": "reference", "integrator": integrator, "variant": mi.variant(), "spp": int(spp_done),
-            "passes": n, "max_depth": int(max_depth), "rr_depth": rr_depth, "seconds": seconds, "normalize": normalize,
-            "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
-            "source": vol.attrs.get("source"), "time": vol.attrs.get("time"),
-            "phase_mode": vol.phase_mode, "sun": ("scene emitter" if not own_sun else
-                                                  ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
-            "sun_guiding": sun_guiding if own_sun else None, "target_rse": target_rse,
-            "forward_peak_deg": forward_peak_deg, "aureole_nee": aureole_nee if own_sun else None,
-            "noise": noise_stats(mean, stderr, cloud) if n > 1 else None}
+    meta = metadata(n, spp_done, seconds, noise_stats(mean, stderr, cloud) if n > 1 else None)
     if client is not None:
         meta["dask"] = remote.summary
     return Image(mean.astype(np.float32), stderr.astype(np.float32), meta)
