@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Set up weather-mi in this checkout: Debian's libllvm19 (Dr.Jit's LLVM backend needs LLVM >= 16),
+# Set up weather-mi in this checkout: Debian's libllvm19 (Dr.Jit's LLVM backend needs LLVM >= 16) and
+# chromium (browser tests of the viewer),
 # a virtualenv in .venv, and the package with its test extras at the versions of constraints.txt.
 # Idempotent; quick when already done.
 set -euo pipefail
@@ -11,6 +12,13 @@ if ! ls /usr/lib/x86_64-linux-gnu/libLLVM.so.19* >/dev/null 2>&1 \
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq libllvm19 >/dev/null
+fi
+
+if ! command -v chromium >/dev/null 2>&1; then
+  echo "[setup] installing Debian's chromium (the viewer's browser tests drive it through Playwright)"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium >/dev/null
 fi
 
 PY=${PYTHON:-python3}

@@ -95,7 +95,7 @@ class ViewerSession:
         self.exposure = w.FloatSlider(name="Exposure (EV)", start=-4, end=4, step=0.1, value=s.exposure_ev)
         n_times = len(self.storm.times)
         self.time = w.Player(name="Time", start=0, end=max(n_times - 1, 1), value=s.time, interval=800, loop_policy="loop",
-                             show_value=True, visible=n_times > 1, width=300)
+                             show_value=True, visible=n_times > 1, width=300, css_classes=["wm-time"])
         self.time_label = pn.pane.Markdown(self._time_text(), visible=n_times > 1, margin=(0, 10))
         widgets = [self.mode, self.species_colors, self.slices, self.camera_kind, self.fov, self.sun_azimuth,
                    self.sun_elevation, self.own_albedo, self.albedo, self.cone, self.own_forward, self.forward,

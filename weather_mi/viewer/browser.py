@@ -13,6 +13,7 @@ import sys
 import threading
 import time
 from contextlib import contextmanager
+from pathlib import Path
 
 CHROMIUM_CANDIDATES = ("chromium", "chromium-browser", "google-chrome")
 
@@ -60,12 +61,21 @@ class ViewerProcess:
                 self.url = m.group(1)
 
     def children(self) -> list[int]:
-        """Pids of the viewer's child processes (reference renders)."""
+        """Pids of the viewer's reference processes (multiprocessing's spawned children; not its
+        resource tracker)."""
         try:
             out = subprocess.run(["pgrep", "-P", str(self.proc.pid)], capture_output=True, text=True).stdout
         except FileNotFoundError:
             return []
-        return [int(p) for p in out.split()]
+        pids = []
+        for p in out.split():
+            try:
+                cmd = Path(f"/proc/{p}/cmdline").read_bytes()
+            except OSError:
+                continue
+            if b"spawn_main" in cmd:
+                pids.append(int(p))
+        return pids
 
     def stop(self):
         if self.proc.poll() is None:

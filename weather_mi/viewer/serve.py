@@ -82,7 +82,9 @@ def serve(recipe: VolumeRecipe, *, host: str = "127.0.0.1", port: int = 5006, op
     port = check_port(host, port)
     origins = [f"{h}:{port}" for h in ("127.0.0.1", "localhost")] + ([f"{host}:{port}"] if host not in LOCAL_HOSTS else [])
     server = pn.serve({"/": lambda: ViewerSession(storm, state, reference_kw).layout}, port=port, address=host,
-                      websocket_origin=origins, show=False, start=False, title="weather-mi", threaded=False)
+                      websocket_origin=origins, show=False, start=False, title="weather-mi", threaded=False,
+                      # a closed tab's session (its render thread, its reference process) ends within seconds
+                      check_unused_sessions_milliseconds=1000, unused_session_lifetime_milliseconds=1000)
     server.start()
     url = f"http://{'localhost' if host in LOCAL_HOSTS else host}:{port}/"
     print(f"weather-mi view: serving {url} (Ctrl-C to stop)", flush=True)

@@ -1,0 +1,203 @@
+"""The viewer in a real browser (Debian's chromium through Playwright), as a user drives it:
+``weather-mi view`` in a subprocess on a free port, frames that arrive and are not blank, a slider
+and a drag that change them, the wheel, the path-traced reference with its progress, A/B and the
+difference, metrics, exports (PNG, Python), two tabs that keep their own state, and a closed tab that
+stops its reference process."""
+from __future__ import annotations
+
+import base64
+import io
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from weather_mi.viewer.browser import ViewerProcess, browser_page, chromium_path, drag, frame_src, wait_frames, wait_idle
+
+pytestmark = pytest.mark.skipif(chromium_path() is None, reason="no chromium (./setup.sh installs it)")
+SERIES = Path(__file__).resolve().parents[2] / "shared" / "data" / "wrf" / "wrfout_quarter_ss_series.nc"
+
+
+@pytest.fixture(scope="module")
+def viewer():
+    with ViewerProcess("--demo", "cumulus", "--size", "160x120") as v:
+        yield v
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from playwright.sync_api import sync_playwright
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=chromium_path(), args=["--no-sandbox", "--disable-gpu"])
+        yield b
+        b.close()
+
+
+def open_page(browser, url):
+    page = browser.new_page(viewport={"width": 1300, "height": 950})
+    page.goto(url)
+    wait_frames(page, 1, 90)
+    wait_idle(page, 0.8)
+    return page
+
+
+@pytest.fixture(scope="module")
+def page(browser, viewer):
+    p = open_page(browser, viewer.url)
+    yield p
+    p.close()
+
+
+def decoded(src: str) -> np.ndarray:
+    from PIL import Image
+    return np.asarray(Image.open(io.BytesIO(base64.b64decode(src.split(",", 1)[1]))).convert("RGB"), dtype=np.float64)
+
+
+def snippet(page) -> str:
+    with page.expect_download() as d:
+        page.get_by_role("button", name="Python").click()
+    return Path(d.value.path()).read_text()
+
+
+def camera_origin(code: str) -> np.ndarray:
+    m = re.search(r'"origin": \[([^\]]+)\]', code)
+    return np.array([float(v) for v in m.group(1).split(",")])
+
+
+def status(page) -> str:
+    return page.evaluate("window.wmStats.statuses[window.wmStats.statuses.length - 1]")
+
+
+def test_the_first_frame_arrives_and_is_not_blank(page, viewer, tmp_path):
+    img = decoded(frame_src(page))
+    assert img.shape == (120, 160, 3)
+    assert img.std() > 5 and img.mean() > 20          # sky, ground and cloud, not one colour
+    shot = tmp_path / "viewer.png"
+    page.screenshot(path=str(shot))
+    from PIL import Image
+    screen = np.asarray(Image.open(shot).convert("L"), dtype=np.float64)
+    assert screen.std() > 10
+    assert "(draft)" not in status(page)               # the first frame is refined
+    assert viewer.seconds_to_serve < 120
+
+
+def test_a_slider_changes_the_frame(page):
+    before = frame_src(page)
+    n0 = page.evaluate("window.wmStats.frames")
+    drag(page, page.locator(".wm-sun-azimuth .noUi-handle").first, -80, steps=20, seconds=0.6)
+    wait_idle(page, 1.0)
+    after = frame_src(page)
+    assert after != before and page.evaluate("window.wmStats.frames") > n0
+    assert np.abs(decoded(after) - decoded(before)).mean() > 0.5
+    assert "(draft)" not in status(page)
+    lat = page.evaluate("window.wmStats.latencies")
+    assert lat and all(0 < x < 30000 for x in lat)
+
+
+def test_dragging_the_view_turns_the_camera_and_the_wheel_zooms(page):
+    code0 = snippet(page)
+    before = frame_src(page)
+    drag(page, page.locator("img.wm-frame").first, 60, steps=15, seconds=0.5)
+    wait_idle(page, 1.0)
+    assert frame_src(page) != before
+    code1 = snippet(page)
+    o0, o1 = camera_origin(code0), camera_origin(code1)
+    assert np.linalg.norm(o1[:2] - o0[:2]) > 100.0      # the camera walked around the storm
+    box = page.locator("img.wm-frame").first.bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    page.mouse.wheel(0, -300)                           # towards the storm
+    wait_idle(page, 1.0)
+    o2 = camera_origin(snippet(page))
+    core = np.array([float(v) for v in re.search(r'"target": \[([^\]]+)\]', code1).group(1).split(",")])
+    assert np.linalg.norm(o2[:2] - core[:2]) < np.linalg.norm(o1[:2] - core[:2])
+
+
+def test_the_reference_streams_in_with_ab_difference_and_metrics(page, viewer, tmp_path):
+    page.get_by_role("button", name="Path-trace this view").click()
+    page.get_by_text(re.compile(r"Reference: \d+ passes")).first.wait_for(timeout=90000)
+    page.get_by_text(re.compile(r"CIEDE2000 \d+\.\d+, FLIP \d\.\d+")).first.wait_for(timeout=60000)
+    a = frame_src(page)
+    page.get_by_role("button", name="B: reference").click()
+    page.wait_for_function("window.wmStats.statuses[window.wmStats.statuses.length-1].startsWith('reference:')",
+                           timeout=20000)
+    b = frame_src(page)
+    assert b != a and decoded(b).std() > 5
+    page.screenshot(path=str(tmp_path / "viewer_reference.png"))
+    page.get_by_role("button", name="difference").click()
+    page.wait_for_function(f"document.querySelector('body') && true", timeout=1000)
+    time.sleep(1.0)
+    d = frame_src(page)
+    assert d not in (a, b)
+    # more passes arrive while we look; then cancel: the process goes away
+    text0 = page.get_by_text(re.compile(r"Reference: \d+ passes")).first.inner_text()
+    page.get_by_text(re.compile(r"Reference: \d+ passes")).first.wait_for(timeout=1000)
+    t_end = time.time() + 60
+    while time.time() < t_end and page.get_by_text(re.compile(r"Reference: \d+ passes")).first.inner_text() == text0:
+        time.sleep(0.5)
+    assert page.get_by_text(re.compile(r"Reference: \d+ passes")).first.inner_text() != text0
+    assert viewer.children(), "the reference runs in a child process"
+    page.get_by_role("button", name="Cancel").click()
+    page.get_by_text("Reference: cancelled").wait_for(timeout=10000)
+    t_end = time.time() + 15
+    while viewer.children() and time.time() < t_end:
+        time.sleep(0.2)
+    assert not viewer.children()
+    page.get_by_role("button", name="A: slicer").click()
+
+
+def test_png_export_is_the_view(page):
+    with page.expect_download() as d:
+        page.get_by_role("button", name="PNG").click()
+    from PIL import Image
+    img = np.asarray(Image.open(d.value.path()).convert("RGB"), dtype=np.float64)
+    assert img.shape == (120, 160, 3) and img.std() > 5
+
+
+def test_two_tabs_keep_their_own_view(browser, viewer, page):
+    other = open_page(browser, viewer.url)
+    try:
+        code_other = snippet(other)
+        n_other = other.evaluate("window.wmStats.frames")
+        drag(page, page.locator(".wm-sun-azimuth .noUi-handle").first, 50, steps=10, seconds=0.4)
+        wait_idle(page, 1.0)
+        time.sleep(0.5)
+        assert other.evaluate("window.wmStats.frames") == n_other     # nothing arrived in the other tab
+        assert snippet(other) == code_other                          # its view did not change
+        assert snippet(page) != code_other
+    finally:
+        other.close()
+
+
+def test_closing_a_tab_stops_its_reference(browser, viewer):
+    tab = open_page(browser, viewer.url)
+    tab.get_by_role("button", name="Path-trace this view").click()
+    t_end = time.time() + 30
+    while not viewer.children() and time.time() < t_end:
+        time.sleep(0.2)
+    assert viewer.children()
+    tab.close()
+    t_end = time.time() + 30
+    while viewer.children() and time.time() < t_end:
+        time.sleep(0.3)
+    assert not viewer.children(), "the closed tab's reference process is still running"
+
+
+@pytest.mark.skipif(not SERIES.is_file(), reason="needs ../shared/data (the WRF time series)")
+def test_the_time_slider_plays_a_series(browser):
+    with ViewerProcess(str(SERIES), "--size", "96x72", "--time", "0") as v:
+        tab = open_page(browser, v.url)
+        try:
+            assert tab.get_by_text("time 0: 0001-01-01_00:30:00").count() == 1
+            before = frame_src(tab)
+            n0 = tab.evaluate("window.wmStats.frames")
+            slider = tab.locator(".wm-time input[type=range], .wm-time .noUi-handle").first
+            slider.focus()
+            tab.keyboard.press("ArrowRight")
+            tab.get_by_text("time 1: 0001-01-01_01:00:00").wait_for(timeout=60000)
+            wait_frames(tab, n0 + 1, 60)  # the first frame of a new time reads and builds its storm
+            wait_idle(tab, 1.5)
+            assert frame_src(tab) != before
+        finally:
+            tab.close()
