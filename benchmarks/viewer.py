@@ -5,8 +5,8 @@ the command to the first frame.
     .venv/bin/python benchmarks/viewer.py [--demo supercell | --input FILE] [--seconds 5] [--rounds 2]
 
 ``weather-mi view`` runs in a subprocess on a free port; headless Chromium (Playwright, Debian's
-chromium) drags the sun-azimuth slider's handle and then the view itself with 60 mouse moves per second,
-as a hand does. Latency: the page stamps every input event, the server answers each frame with the
+chromium) drags the sun-azimuth slider and then the view itself: one press, then 60 mouse moves a
+second back and forth for ``--seconds``, as a hand does, then the release. Latency: the page stamps every input event, the server answers each frame with the
 newest stamp it had seen when the frame's request was made, the page takes the difference when the
 frame is decoded (``weather_mi/viewer/canvas.py``). Baseline, in this process: the slicer alone
 (``FrameLoop.render``) at full and draft quality on the same storm and view; the ratio columns compare
@@ -23,7 +23,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from weather_mi.viewer.browser import ViewerProcess, browser_page, drag, wait_frames, wait_idle  # noqa: E402
+from weather_mi.viewer.browser import ViewerProcess, browser_page, wait_frames, wait_idle  # noqa: E402
 
 
 def slicer_baseline(recipe, rounds: int = 5) -> dict:
@@ -48,18 +48,28 @@ def slicer_baseline(recipe, rounds: int = 5) -> dict:
 
 
 def measure_drag(page, target, seconds: float, dx: float) -> dict:
-    """Drag ``target`` back and forth for ``seconds``; frames received and latencies during the drag."""
+    """Press on ``target`` and move back and forth by ``dx`` pixels (60 moves a second) for ``seconds``
+    without releasing: frames received and input-to-frame latencies while it is dragged."""
     wait_idle(page, 0.8)
+    box = target.bounding_box()
+    x0, y0 = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(x0, y0)
+    page.mouse.down()
+    time.sleep(0.3)  # the press itself (a slider jumps to the pointer) is not part of the drag
     n0 = page.evaluate("window.wmStats.frames")
     l0 = page.evaluate("window.wmStats.latencies.length")
     t0 = time.perf_counter()
     k = 0
     while time.perf_counter() - t0 < seconds:
-        drag(page, target, dx if k % 2 == 0 else -dx, 0, steps=60, seconds=1.0)
+        phase = (k % 120) / 60.0            # 0..2: out and back, one second each way
+        x = x0 + dx * (phase if phase <= 1 else 2 - phase) - dx / 2
+        page.mouse.move(x, y0)
         k += 1
+        time.sleep(max(0.0, t0 + k / 60.0 - time.perf_counter()))
     elapsed = time.perf_counter() - t0
     n1 = page.evaluate("window.wmStats.frames")
     lat = page.evaluate(f"window.wmStats.latencies.slice({l0})")
+    page.mouse.up()
     return {"fps": (n1 - n0) / elapsed, "latency_ms": statistics.median(lat) if lat else float("nan"),
             "p90_ms": sorted(lat)[int(0.9 * (len(lat) - 1))] if lat else float("nan"), "n": len(lat)}
 
@@ -85,7 +95,7 @@ def main():
             page.goto(viewer.url)
             wait_frames(page, 1, 120)
             first = time.perf_counter() - t_cmd
-            slider = page.locator(".wm-sun-azimuth .noUi-handle").first
+            slider = page.locator(".wm-sun-azimuth input").first
             view = page.locator("img.wm-frame").first
             s = measure_drag(page, slider, args.seconds, 120)
             v = measure_drag(page, view, args.seconds, 200)

@@ -105,6 +105,7 @@ class SliceRenderer:
             self._sky_geometry = slice_geometry(np.array([0.0, 0.0, -1.0]), np.array([0.0, 0.0, 1.0]), self.box,
                                                 min(SKY_SLICES, self.slices))
         self.views = ViewCache(self.box)
+        self._texture_key = None  # the per-species inputs of the textures last built (plain numbers)
         self.timing = {}
 
     # ------------------------------------------------------------------ per-frame volume data
@@ -175,14 +176,19 @@ class SliceRenderer:
         import drjit as dr
         t_start = time.perf_counter()
         scale, omega, tint, fwd = self._species_vectors(params)
-        self._build_textures(scale, omega, fwd, self._detail_amplitudes(params) if self.detail_noise is not None else None)
+        detail = self._detail_amplitudes(params) if self.detail_noise is not None else None
+        key = _texture_key(scale, omega, fwd, detail)
+        rebuilt = key is None or key != self._texture_key
+        if rebuilt:  # a sun or camera move keeps the volume's textures (and the zenith light volume)
+            self._build_textures(scale, omega, fwd, detail)
+        self._texture_key = key
         g = slice_geometry(spec.camera.forward, spec.sun.to_sun, self.box, self.slices)
         translucent = self.mode.light == "translucent"
         blur = params.blur_length_m if params.blur_length_m is not None else self.voxel_m
         self.light.sweep(g, self.tex_light_src, self.grid_box, translucent,
                          variance_per_metre(params.cone_angle_deg, blur, mi) if translucent else None,
                          variance_per_metre(REFERENCE_CONE_DEG, _number(blur)) if translucent else None)
-        if self.sky_light is not None:
+        if self.sky_light is not None and rebuilt:  # the zenith sweep depends on the extinction only
             self.sky_light.sweep(self._sky_geometry, self.tex_light_src, self.grid_box, False)
         dr.sync_thread()  # kernels run asynchronously: wait before reading the clock
         t_light = time.perf_counter()
@@ -271,3 +277,13 @@ def _interleave(mi, channels):
     for c in range(1, C):
         out = dr.select(ch == c, dr.gather(mi.Float, channels[c], vox), out)
     return out
+
+
+def _texture_key(scale, omega, fwd, detail):
+    """The textures' inputs as a hashable value, or None when any is a Dr.Jit array (a differentiated
+    parameter: always rebuilt)."""
+    import drjit as dr
+    values = [*scale, *omega, *fwd, *(detail or ())]
+    if any(dr.is_array_v(v) for v in values):
+        return None
+    return tuple(float(v) for v in values) + (detail is None,)

@@ -21,6 +21,7 @@ import panel as pn
 from ..imageio import to_srgb8, write_exr, write_png
 from ..slicing.modes import DEFAULT_DETAIL, MODES
 from .canvas import FrameCanvas
+from .controls import LiveSlider
 from .frames import FrameLoop, Storm, jpeg_url
 from .keyframes import path as keyframe_path
 from .state import ViewCamera, ViewState, python_snippet
@@ -29,14 +30,9 @@ SLICE_CHOICES = [16, 32, 48, 64, 96, 128, 192, 256, 384, 512]
 PHYSICAL_FIELDS = ("camera", "sun_azimuth", "sun_elevation", "sun_diameter_deg", "width", "height", "scale", "time",
                    "sky", "ground_albedo")  # what the path tracer sees
 REFERENCE_POLL_MS = 500
-DIFF_MAX_DE = 20.0  # the difference map's colour scale: CIEDE2000 0 .. 20
-
-
-def _log_slider(name: str, value: float = 1.0) -> pn.widgets.FloatSlider:
-    from bokeh.models import CustomJSTickFormatter
-    fmt = CustomJSTickFormatter(code="return '\u00d7' + Math.pow(10, tick).toPrecision(2)")
-    return pn.widgets.FloatSlider(name=name, start=-2.0, end=2.0, step=0.02, value=math.log10(value), format=fmt,
-                                  sizing_mode="stretch_width")
+DIFF_MAX_DE = 20.0
+DISPLAY_SCALE = 2  # the view is shown at twice its rendered size
+WIDGET_DEBOUNCE_MS = 5  # Panel waits this long to merge a widget's changes (its default, 50 ms, is latency)  # the difference map's colour scale: CIEDE2000 0 .. 20
 
 
 class ViewerSession:
@@ -70,29 +66,30 @@ class ViewerSession:
     def _build_widgets(self):
         s = self.state
         w = pn.widgets
-        self.canvas = FrameCanvas(view_width=s.width, view_height=s.height, display_width=2 * s.width,
-                                  display_height=2 * s.height, status="starting the slicer...")
-        self.canvas.on_msg(self._on_canvas_msg)
+        self.canvas = FrameCanvas(view_width=s.width, view_height=s.height, display_width=DISPLAY_SCALE * s.width,
+                                  display_height=DISPLAY_SCALE * s.height, status="starting the slicer...")
+        self.canvas.on_event(self._on_canvas_msg)
         self.mode = w.Select(name="Mode", options=list(MODES), value=s.mode)
         self.species_colors = w.Checkbox(name="Species colours (Fig. 2)", value=s.species_colors)
         self.slices = w.DiscreteSlider(name="Slices", options=SLICE_CHOICES, value=s.slices)
         self.camera_kind = w.RadioButtonGroup(name="Camera", options=["ground", "orbit"], value=s.camera.kind)
-        self.fov = w.FloatSlider(name="Field of view (deg)", start=10, end=120, step=1, value=s.camera.fov)
-        self.sun_azimuth = w.FloatSlider(name="Sun azimuth (deg)", start=0, end=360, step=1, value=s.sun_azimuth,
-                                         css_classes=["wm-sun-azimuth"])
-        self.sun_elevation = w.FloatSlider(name="Sun elevation (deg)", start=-5, end=90, step=0.5,
-                                           value=s.sun_elevation)
-        self.scales = {n: _log_slider(f"{n} scaling") for n in self.storm.species}
-        self.details = {n: w.FloatSlider(name=f"{n} detail", start=0.0, end=2.0, step=0.05, value=DEFAULT_DETAIL)
+        self.fov = LiveSlider(label="Field of view (deg)", start=10, end=120, step=1, value=s.camera.fov, decimals=0)
+        self.sun_azimuth = LiveSlider(label="Sun azimuth (deg)", start=0, end=360, step=1, value=s.sun_azimuth,
+                                      decimals=0, css_classes=["wm-sun-azimuth"])
+        self.sun_elevation = LiveSlider(label="Sun elevation (deg)", start=-5, end=90, step=0.5,
+                                        value=s.sun_elevation, decimals=1)
+        self.scales = {n: LiveSlider(label=f"{n} scaling", start=-2.0, end=2.0, step=0.02, value=0.0, log_display=True)
+                       for n in self.storm.species}
+        self.details = {n: LiveSlider(label=f"{n} detail", start=0.0, end=2.0, step=0.05, value=DEFAULT_DETAIL)
                         for n in self.storm.species}
         self.own_albedo = w.Checkbox(name="One albedo for all species", value=s.albedo is not None)
-        self.albedo = w.FloatSlider(name="Albedo", start=0.0, end=1.0, step=0.005, value=s.albedo or 0.99)
-        self.cone = w.FloatSlider(name="Cone angle (deg)", start=1, end=60, step=0.5, value=s.cone_angle_deg)
+        self.albedo = LiveSlider(label="Albedo", start=0.0, end=1.0, step=0.005, value=s.albedo or 0.99, decimals=3)
+        self.cone = LiveSlider(label="Cone angle (deg)", start=1, end=60, step=0.5, value=s.cone_angle_deg, decimals=1)
         self.own_forward = w.Checkbox(name="One forward fraction", value=s.forward_fraction is not None)
-        self.forward = w.FloatSlider(name="Forward fraction", start=0.0, end=1.0, step=0.01,
-                                     value=s.forward_fraction or 0.9)
-        self.ambient = w.FloatSlider(name="Ambient (Table IV modes)", start=0.0, end=1.0, step=0.01, value=s.ambient)
-        self.exposure = w.FloatSlider(name="Exposure (EV)", start=-4, end=4, step=0.1, value=s.exposure_ev)
+        self.forward = LiveSlider(label="Forward fraction", start=0.0, end=1.0, step=0.01,
+                                  value=s.forward_fraction or 0.9)
+        self.ambient = LiveSlider(label="Ambient (Table IV modes)", start=0.0, end=1.0, step=0.01, value=s.ambient)
+        self.exposure = LiveSlider(label="Exposure (EV)", start=-4, end=4, step=0.1, value=s.exposure_ev, decimals=1)
         n_times = len(self.storm.times)
         self.time = w.Player(name="Time", start=0, end=max(n_times - 1, 1), value=s.time, interval=800, loop_policy="loop",
                              show_value=True, visible=n_times > 1, width=300, css_classes=["wm-time"])
@@ -100,8 +97,13 @@ class ViewerSession:
         widgets = [self.mode, self.species_colors, self.slices, self.camera_kind, self.fov, self.sun_azimuth,
                    self.sun_elevation, self.own_albedo, self.albedo, self.cone, self.own_forward, self.forward,
                    self.ambient, self.exposure, self.time, *self.scales.values(), *self.details.values()]
+        self._updates = self._field_updates()
         for wd in widgets:
             wd.param.watch(self._on_widget, "value")
+            if isinstance(wd, LiveSlider):
+                wd.on_live(lambda v, seq, wd=wd: self._on_live(wd, v, seq))
+            else:
+                wd._debounce = WIDGET_DEBOUNCE_MS
         # reference, A/B, metrics
         self.show = w.RadioButtonGroup(name="Show", options=["A: slicer", "B: reference", "difference"],
                                        value="A: slicer", button_type="default")
@@ -154,23 +156,40 @@ class ViewerSession:
         return f"time {self.state.time}: {self.storm.times[self.state.time]}" if len(self.storm.times) > 1 else ""
 
     # ------------------------------------------------------------------ inputs
-    def _state_from_widgets(self) -> ViewState:
-        s = self.state
-        camera = ViewCamera(**{**s.camera.__dict__, "kind": self.camera_kind.value, "fov": float(self.fov.value)})
-        return s.updated(
-            camera=camera, mode=self.mode.value, species_colors=bool(self.species_colors.value),
-            slices=int(self.slices.value), sun_azimuth=float(self.sun_azimuth.value) % 360.0,
-            sun_elevation=float(self.sun_elevation.value),
-            scale=tuple(sorted((n, round(10.0 ** sl.value, 4)) for n, sl in self.scales.items() if abs(sl.value) > 1e-9)),
-            detail=tuple(sorted((n, float(sl.value)) for n, sl in self.details.items())),
-            albedo=float(self.albedo.value) if self.own_albedo.value else None,
-            cone_angle_deg=float(self.cone.value),
-            forward_fraction=float(self.forward.value) if self.own_forward.value else None,
-            ambient=float(self.ambient.value), exposure_ev=float(self.exposure.value),
-            time=int(min(self.time.value, len(self.storm.times) - 1)))
+    def _field_updates(self) -> dict:
+        """For each widget, how its value changes the ViewState (one widget per event: reading all of them
+        on every slider move costs the event loop more than the change itself)."""
+        def camera(**kw):
+            return lambda v: {"camera": ViewCamera(**{**self.state.camera.__dict__, **{k: f(v) for k, f in kw.items()}})}
+        fields = {
+            self.mode: lambda v: {"mode": v},
+            self.species_colors: lambda v: {"species_colors": bool(v)},
+            self.slices: lambda v: {"slices": int(v)},
+            self.camera_kind: camera(kind=str),
+            self.fov: camera(fov=float),
+            self.sun_azimuth: lambda v: {"sun_azimuth": float(v) % 360.0},
+            self.sun_elevation: lambda v: {"sun_elevation": float(v)},
+            self.own_albedo: lambda v: {"albedo": float(self.albedo.value) if v else None},
+            self.albedo: lambda v: {"albedo": float(v) if self.own_albedo.value else None},
+            self.cone: lambda v: {"cone_angle_deg": float(v)},
+            self.own_forward: lambda v: {"forward_fraction": float(self.forward.value) if v else None},
+            self.forward: lambda v: {"forward_fraction": float(v) if self.own_forward.value else None},
+            self.ambient: lambda v: {"ambient": float(v)},
+            self.exposure: lambda v: {"exposure_ev": float(v)},
+            self.time: lambda v: {"time": int(min(v, len(self.storm.times) - 1))},
+        }
+        for n, sl in self.scales.items():
+            fields[sl] = lambda v, n=n: {"scale": tuple(sorted({**dict(self.state.scale), n: round(10.0 ** v, 4)}.items()))}
+        for n, sl in self.details.items():
+            fields[sl] = lambda v, n=n: {"detail": tuple(sorted({**dict(self.state.detail), n: float(v)}.items()))}
+        return fields
 
     def _on_widget(self, event):
-        self.set_state(self._state_from_widgets(), interactive=True)
+        self.set_state(self.state.updated(**self._updates[event.obj](event.new)), interactive=True)
+
+    def _on_live(self, widget, value, seq):
+        self.last_mark = max(self.last_mark, seq)
+        self.set_state(self.state.updated(**self._updates[widget](value)), interactive=True)
 
     def set_state(self, state: ViewState, interactive: bool = True):
         old, self.state = self.state, state
@@ -178,11 +197,14 @@ class ViewerSession:
         if self.reference is not None or self.ref_image is not None:
             if any(getattr(old, f) != getattr(state, f) for f in PHYSICAL_FIELDS):
                 self.cancel_reference("the view changed: path-trace it again")
-        self.loop.submit(state, self.last_mark, interactive=interactive)
+        # the same view again (a slider released where it was last reported): refine it now
+        self.loop.submit(state, self.last_mark, interactive=interactive and state != old)
 
-    def _on_canvas_msg(self, event):
-        msg = getattr(event, "data", event)  # Panel hands a DataEvent; tests may pass the dict
+    def _on_canvas_msg(self, msg: dict):
         kind = msg.get("type")
+        if kind == "ready":  # the page (re)built the view: send it the newest frame
+            self._refresh_canvas()
+            return
         if kind == "mark":
             self.last_mark = max(self.last_mark, int(msg.get("seq", 0)))
             return
@@ -241,7 +263,9 @@ class ViewerSession:
         if show != "A: slicer" and self.ref_image is not None:
             url = self._reference_url() if show == "B: reference" else self._difference_url()
             status = self._reference_status()
-        self.canvas.param.update(frame=url, frame_seq=f.seq, status=status)
+        self.canvas.push(url, f.seq, status)
+        if not f.draft and show == "A: slicer":  # refined: also the parameter, for a page that re-renders
+            self.canvas.param.update(frame=url, frame_seq=f.seq, status=status)
 
     # ------------------------------------------------------------------ reference
     def start_reference(self):

@@ -12,6 +12,8 @@ from __future__ import annotations
 import param
 from panel.custom import JSComponent
 
+from .controls import QuietEvents
+
 _ESM = r"""
 export function render({ model, el }) {
   const root = document.createElement("div");
@@ -26,9 +28,15 @@ export function render({ model, el }) {
   root.append(img, overlay, hover);
 
   const S = window.wmStats = window.wmStats || {frames: 0, arrivals: [], latencies: [], inputs: {}, seq: 0, statuses: []};
+  // input stamps: at most one per MARK_MS (each costs the server an event); the inputs in between are
+  // not timed, the timed ones are timed exactly
+  const MARK_MS = 45;
   const markInput = () => {
+    const now = performance.now();
+    if (now - (S.lastMark || -1e9) < MARK_MS) return;
+    S.lastMark = now;
     S.seq += 1;
-    S.inputs[S.seq] = performance.now();
+    S.inputs[S.seq] = now;
     model.send_msg({type: "mark", seq: S.seq});
   };
   if (!window.wmMarking) {  // one listener per page: slider drags and key presses are inputs too
@@ -38,32 +46,38 @@ export function render({ model, el }) {
     }
     document.addEventListener("pointermove", (e) => {
       if (!e.buttons) return;
-      if (e.composedPath().some((n) => n.classList && n.classList.contains("wm-frame"))) {
-        S.seq += 1; S.inputs[S.seq] = performance.now();  // the drag message carries it
+      if (e.composedPath().some((n) => n.classList && (n.classList.contains("wm-frame") || n.classList.contains("wm-live")))) {
+        S.seq += 1; S.inputs[S.seq] = performance.now();  // the drag or live message carries it
       } else { markInput(); }
     }, {capture: true, passive: true});
   }
 
-  const show = () => {
-    if (model.frame) { img.src = model.frame; }
+  // the frame on screen: its input stamp and status travel with it (a pushed message, or the parameters)
+  let shown = {seq: model.frame_seq, status: model.status};
+  const size = () => {
     img.style.width = model.display_width + "px";
     img.style.height = model.display_height + "px";
-    overlay.textContent = model.status;
+  };
+  const display = (url, seq, status) => {
+    shown = {seq: seq, status: status};
+    if (url && img.src !== url) { img.src = url; } else { overlay.textContent = status; }
   };
   img.addEventListener("load", () => {
     const now = performance.now();
     S.frames += 1;
     S.arrivals.push(now);
-    S.statuses = S.statuses || [];
-    S.statuses.push(model.status);
-    const t0 = S.inputs[model.frame_seq];
-    if (t0 !== undefined && model.frame_seq > (S.lastAnswered || 0)) {
+    S.statuses.push(shown.status);
+    overlay.textContent = shown.status;
+    const t0 = S.inputs[shown.seq];
+    if (t0 !== undefined && shown.seq > (S.lastAnswered || 0)) {
       S.latencies.push(now - t0);
-      S.lastAnswered = model.frame_seq;
+      S.lastAnswered = shown.seq;
     }
   });
-  model.on("frame", show);
-  model.on("status", show);
+  model.on("msg:custom", (msg) => display(msg.frame, msg.seq, msg.status));
+  model.on("frame", () => display(model.frame, model.frame_seq, model.status));
+  model.on("status", () => { if (!model.frame) overlay.textContent = model.status; });
+  model.on("display_width", size);
   model.on("hover_text", () => { hover.textContent = model.hover_text; hover.style.display = model.hover_text ? "block" : "none"; });
 
   // drag: orbit; wheel: zoom; plain move: hover read-out (pixel coordinates of the rendered view)
@@ -108,7 +122,9 @@ export function render({ model, el }) {
     e.preventDefault();
     model.send_msg({type: "wheel", dy: e.deltaY, seq: S.seq});
   }, {passive: false});
-  show();
+  size();
+  display(model.frame, model.frame_seq, model.status);
+  model.send_msg({type: "ready"});  // the server answers with the newest frame (it may predate this view)
   return root;
 }
 """
@@ -123,9 +139,10 @@ _CSS = """
 """
 
 
-class FrameCanvas(JSComponent):
-    """Frames (data URLs) in, mouse events out (``on_msg``: drag, drag_start, drag_end, wheel, hover,
-    mark)."""
+class FrameCanvas(QuietEvents, JSComponent):
+    """Frames (data URLs) in, mouse events out (``on_event(callback)``: drag, drag_start, drag_end, wheel,
+    hover, mark). ``push(url, seq, status)`` sends a frame as a message (cheap); the ``frame`` parameter
+    holds the last refined one, for a page that (re)renders the view."""
 
     frame = param.String(default="", doc="the current frame as a data URL (JPEG or PNG)")
     frame_seq = param.Integer(default=0, doc="the newest client input sequence number the frame answers")
@@ -138,3 +155,18 @@ class FrameCanvas(JSComponent):
 
     _esm = _ESM
     _stylesheets = [_CSS]
+
+    def __init__(self, **params):
+        super().__init__(**params)
+        self._event_callbacks = []
+
+    def on_event(self, callback) -> None:
+        self._event_callbacks.append(callback)
+
+    def _handle_msg(self, msg) -> None:
+        for cb in self._event_callbacks:
+            cb(msg)
+
+    def push(self, url: str, seq: int, status: str) -> None:
+        """Show a frame now (a custom message, no document patch)."""
+        self._send_msg({"frame": url, "seq": int(seq), "status": status})

@@ -2,8 +2,10 @@
 
 Requests are views (``ViewState`` plus the client input number they answer); the newest request wins,
 older ones are dropped unrendered. While the user drags (requests closer together than ``IDLE_S``), a
-request is rendered as a draft (half the pixels per side, ``DRAFT_SLICES`` slices); once the input
-has been idle for ``IDLE_S``, the same view is refined at full quality. Frames go out as JPEG data URLs
+request is rendered as a draft; once the input has been idle for ``IDLE_S``, the same view is refined at
+full quality. Drafts adapt to the machine: the loop keeps the finest of ``DRAFT_LEVELS`` (pixels per side
+divided by, slices) whose frames take at most ``DRAFT_BUDGET_S``, so that dragging stays above 10 frames
+a second where the cores are shared (with the browser, on a laptop) and sharp where they are not. Frames go out as JPEG data URLs
 through ``publish(frame)`` (the app hands them to the page on its event loop).
 
 Storms (one OpticalVolume per time of the input) and SliceRenderers (one per time, mode and quality)
@@ -23,8 +25,8 @@ import numpy as np
 from ..imageio import auto_exposure, to_srgb8
 from .state import ViewState
 
-DRAFT_SLICES = 32
-DRAFT_DIVISOR = 2
+DRAFT_LEVELS = ((2, 32), (3, 24), (4, 16))  # (divisor of the width and height, slices), finest first
+DRAFT_BUDGET_S = 0.07
 IDLE_S = 0.25
 JPEG_QUALITY = 88
 
@@ -94,6 +96,25 @@ class Storm:
         self.species = tuple(first_volume.species)
         self.shape = tuple(first_volume.shape)
         self._noise = None
+        self._warm = {}                      # renderers warmed up before the first tab, for the first session
+        self._warm_lock = threading.RLock()  # the warm-up itself asks take_warm (same thread)
+
+    def warm_up(self, state: ViewState) -> None:
+        """Build and run the slicer for ``state`` at full and draft quality (kernels compiled, the view's
+        rays cached), keeping the renderer for the first session that asks. Call from any thread."""
+        with self._warm_lock:
+            loop = FrameLoop(self, publish=lambda f: None)
+            try:
+                loop.render(state)
+                loop.render(state, draft=True)
+            finally:
+                loop.stop()
+            self._warm.update(loop._renderers)
+
+    def take_warm(self, key):
+        """A warmed-up renderer for ``key`` (waits for a warm-up in progress), once; else None."""
+        with self._warm_lock:
+            return self._warm.pop(key, None)
 
     def _recipe_at(self, t: int):
         return self.recipe if len(self.times) < 2 else self.recipe.at(t)
@@ -133,6 +154,7 @@ class FrameLoop:
         self._refine: tuple | None = None
         self.exposure: float | None = None  # the session's automatic exposure, fixed by its first full frame
         self.last_frame: Frame | None = None
+        self.draft_level = 0  # index into DRAFT_LEVELS, adapted to the measured draft time
         self.frames_rendered = 0
         self._thread = threading.Thread(target=self._run, name="weather-mi frames", daemon=True)
         self._thread.start()
@@ -190,18 +212,30 @@ class FrameLoop:
                 self.on_error(exc)
                 continue
             self.last_frame = frame
+            if draft:
+                self._adapt(frame.seconds)
             self.publish(frame)
+
+    def _adapt(self, seconds: float) -> None:
+        """Coarser drafts when one took longer than the budget, finer when there is room for the next level."""
+        if seconds > DRAFT_BUDGET_S and self.draft_level < len(DRAFT_LEVELS) - 1:
+            self.draft_level += 1
+        elif seconds < 0.5 * DRAFT_BUDGET_S and self.draft_level > 0:
+            self.draft_level -= 1
 
     def renderer(self, state: ViewState, draft: bool):
         from ..slicing import SliceRenderer
         mode = state.slice_mode()
 
         def make():
+            warm = self.storm.take_warm((state.time, mode))
+            if warm is not None:
+                return warm
             vol = self.storm.volume(state.time)
             noise = self.storm.detail_noise() if mode.detail else None
             return SliceRenderer(vol, mode, slices=state.slices, detail_noise=noise)
         r = self._renderers.get_or((state.time, mode), make)
-        r.slices = min(DRAFT_SLICES, state.slices) if draft else state.slices  # per frame: compiles nothing
+        r.slices = min(DRAFT_LEVELS[self.draft_level][1], state.slices) if draft else state.slices  # compiles nothing
         return r
 
     def render(self, state: ViewState, seq: int = 0, draft: bool = False, t_submit: float | None = None) -> Frame:
@@ -209,7 +243,8 @@ class FrameLoop:
         t0 = time.perf_counter()
         queued = 0.0 if t_submit is None else t0 - t_submit
         r = self.renderer(state, draft)
-        w, h = (state.width // DRAFT_DIVISOR, state.height // DRAFT_DIVISOR) if draft else (state.width, state.height)
+        div = DRAFT_LEVELS[self.draft_level][0] if draft else 1
+        w, h = max(state.width // div, 8), max(state.height // div, 8)
         spec = state.spec(self.storm.frame, self.storm.ground_m, w, h)
         img = r.frame(spec, state.slice_params())
         if self.exposure is None:

@@ -1,5 +1,6 @@
-"""``weather-mi view``: check the input and the port, build the storm and warm the slicer's kernels, then
-serve the viewer with Panel (Bokeh's Tornado server) on 127.0.0.1, websocket origins checked.
+"""``weather-mi view``: check the input and the port, build the storm, then serve the viewer with Panel
+(Bokeh's Tornado server) on 127.0.0.1, websocket origins checked, warming the slicer up (kernels, the
+first view's rays) in the background while the browser loads the page.
 
 Everything that can be wrong with the input is found before anything is served (exit code 2 from the
 CLI). Each browser tab gets its own ViewerSession; closing the tab stops its render thread and its
@@ -49,23 +50,21 @@ def initial_time(storm, time_option) -> int:
     raise ValueError(f"--time {time_option}: not among the input's times {storm.times}")
 
 
-def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[int, int] = (320, 240)):
-    """The Storm (input read and checked, optics of the starting time) and the first ViewState; one frame
-    rendered at full and at draft quality so that the kernels are compiled before the first tab opens."""
-    from .frames import FrameLoop, Storm
+def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[int, int] = (320, 240),
+            warm: bool = True):
+    """The Storm (input read and checked, optics of the starting time) and the first ViewState. With
+    ``warm``, the slicer is warmed up for that view (kernels compiled, rays cached) before returning;
+    ``serve`` warms it in the background instead, while the browser loads the page."""
+    from .frames import Storm
     from .state import ViewCamera, ViewState
     from .app import default_distance_km
     t0 = time.perf_counter()
     storm = Storm(recipe)
     state = ViewState(time=initial_time(storm, time_option), camera=ViewCamera(distance_km=default_distance_km(storm)),
                       width=int(size[0]), height=int(size[1]))
-    loop = FrameLoop(storm, publish=lambda f: None)
-    try:
-        loop.render(state)
-        loop.render(state, draft=True)
-    finally:
-        loop.stop()
-    progress(f"weather-mi view: {recipe.label}, {len(storm.times)} time(s), ready in {time.perf_counter() - t0:.1f} s")
+    if warm:
+        storm.warm_up(state)
+    progress(f"weather-mi view: {recipe.label}, {len(storm.times)} time(s), read in {time.perf_counter() - t0:.1f} s")
     return storm, state
 
 
@@ -78,7 +77,7 @@ def serve(recipe: VolumeRecipe, *, host: str = "127.0.0.1", port: int = 5006, op
         print(f"weather-mi view: warning: serving on {host}, reachable from other machines; the viewer has no "
               "authentication", file=sys.stderr)
     port = check_port(host, port)  # before the slow part: a taken port is said at once
-    storm, state = prepare(recipe, time_option, size=size)
+    storm, state = prepare(recipe, time_option, size=size, warm=False)
     port = check_port(host, port)
     origins = [f"{h}:{port}" for h in ("127.0.0.1", "localhost")] + ([f"{host}:{port}"] if host not in LOCAL_HOSTS else [])
     server = pn.serve({"/": lambda: ViewerSession(storm, state, reference_kw).layout}, port=port, address=host,
@@ -86,6 +85,8 @@ def serve(recipe: VolumeRecipe, *, host: str = "127.0.0.1", port: int = 5006, op
                       # a closed tab's session (its render thread, its reference process) ends within seconds
                       check_unused_sessions_milliseconds=1000, unused_session_lifetime_milliseconds=1000)
     server.start()
+    import threading
+    threading.Thread(target=storm.warm_up, args=(state,), daemon=True, name="weather-mi warm-up").start()
     url = f"http://{'localhost' if host in LOCAL_HOSTS else host}:{port}/"
     print(f"weather-mi view: serving {url} (Ctrl-C to stop)", flush=True)
     if open_browser:
