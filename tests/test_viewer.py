@@ -190,3 +190,28 @@ def test_time_option_selects_an_index_or_a_timestamp():
         initial_time(FakeStorm, "5")
     with pytest.raises(ValueError, match="not among"):
         initial_time(FakeStorm, "0001-01-01_09:00:00")
+
+
+def test_another_host_than_this_machine_is_warned_about():
+    from weather_mi.viewer.serve import host_warning
+    assert host_warning("127.0.0.1") is None and host_warning("localhost") is None
+    assert "reachable from other machines" in host_warning("0.0.0.0")
+
+
+def test_the_notebook_viewer_renders_and_closes():
+    """``wm.view(hyd)`` in a notebook: a Panel object that renders frames without a server."""
+    import panel as pn
+    import weather_mi as wm
+    hyd = wm.synthetic.cumulus()
+    v = wm.view(hyd, size=(48, 36))
+    try:
+        assert isinstance(pn.panel(v).get_root(), object)
+        t_end = time.perf_counter() + 60
+        while not v.session.canvas.frame and time.perf_counter() < t_end:
+            time.sleep(0.05)
+        assert v.session.canvas.frame.startswith("data:image/jpeg;base64,")
+        assert "globals()['hyd']" in v.session.snippet()   # a script that runs where hyd is defined
+        assert v.session.storm.recipe.hydrometeors() is hyd
+    finally:
+        v.close()
+    assert not v.session.loop.alive

@@ -147,12 +147,86 @@ def test_the_reference_streams_in_with_ab_difference_and_metrics(page, viewer, t
     page.get_by_role("button", name="A: slicer").click()
 
 
-def test_png_export_is_the_view(page):
+def test_png_and_exr_export_are_the_view(page):
     with page.expect_download() as d:
         page.get_by_role("button", name="PNG").click()
     from PIL import Image
     img = np.asarray(Image.open(d.value.path()).convert("RGB"), dtype=np.float64)
     assert img.shape == (120, 160, 3) and img.std() > 5
+    with page.expect_download() as d:
+        page.get_by_role("button", name="EXR").click()
+    from weather_mi.imageio import read_exr
+    exr = Path(d.value.path()).with_suffix(".exr")
+    Path(d.value.path()).rename(exr)
+    radiance, _, meta = read_exr(exr)
+    assert radiance.shape == (120, 160, 3) and np.all(np.isfinite(radiance)) and radiance.max() > 0
+    assert meta["renderer"] == "slicing" and meta["viewer_state"]["width"] == 160
+
+
+def test_hover_reads_out_the_species_under_the_cursor(browser, viewer):
+    """Over the cloud: the read-out names the dominant species and mixing ratios in g/kg; over the sky
+    at the top of the frame: nothing. (A fresh tab: its own session, the storm front-lit.)"""
+    page = open_page(browser, viewer.url)
+    try:
+        _hover_checks(page)
+    finally:
+        page.close()
+
+
+def _hover_checks(page):
+    box = page.locator("img.wm-frame").first.bounding_box()
+    src = decoded(frame_src(page))
+    hover = page.locator(".wm-hover").first
+    white = src.min(axis=2)                     # the cloud is white, the sky blue, the ground dark
+    candidates = [(y, x) for y in range(10, 120, 10) for x in range(10, 160, 10) if white[y, x] > 200]
+    assert candidates, "no cloud in the frame"
+    text = ""
+    for y, x in candidates[:12]:
+        for dx in (0.3, 0.6):                   # a hand comes to rest over the cloud
+            page.mouse.move(box["x"] + (x + dx) * box["width"] / 160, box["y"] + (y + 0.5) * box["height"] / 120)
+            time.sleep(0.15)
+        t_end = time.time() + 3
+        while "g/kg" not in text and time.time() < t_end:
+            time.sleep(0.1)
+            text = hover.inner_text()
+        if "g/kg" in text:
+            break
+    assert "dominant:" in text and "q_" in text, text
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + 2)   # the sky at the top
+    t_end = time.time() + 5
+    while hover.is_visible() and time.time() < t_end:
+        time.sleep(0.1)
+    assert not hover.is_visible()
+
+
+def test_a_keyframed_path_becomes_an_mp4(page):
+    page.get_by_role("button", name="Add keyframe").click()
+    drag(page, page.locator("img.wm-frame").first, 40, steps=10, seconds=0.3)
+    wait_idle(page, 0.8)
+    page.get_by_role("button", name="Add keyframe").click()
+    page.get_by_text("Keyframes: 2").wait_for(timeout=5000)
+    page.get_by_role("button", name="Render MP4").click()
+    page.get_by_text(re.compile(r"MP4: \d+ frames ready")).wait_for(timeout=120000)
+    with page.expect_download() as d:
+        page.get_by_role("button", name="MP4", exact=True).click()
+    import imageio_ffmpeg
+    reader = imageio_ffmpeg.read_frames(d.value.path())
+    meta = reader.__next__()
+    n = sum(1 for _ in reader)
+    assert tuple(meta["size"]) == (160, 128) or tuple(meta["size"]) == (160, 120)   # H.264: padded to 16
+    assert n == 25                                                       # 2 s at 12 fps + the last keyframe
+
+
+def test_the_websocket_refuses_another_origin(viewer):
+    """A page from another site cannot drive the viewer (Bokeh's origin check, 403)."""
+    import http.client
+    from urllib.parse import urlparse
+    u = urlparse(viewer.url)
+    conn = http.client.HTTPConnection(u.hostname, u.port, timeout=10)
+    conn.request("GET", "/ws", headers={"Upgrade": "websocket", "Connection": "Upgrade", "Sec-WebSocket-Version": "13",
+                                         "Sec-WebSocket-Key": "dGhlIHNhbXBsZSBub25jZQ==",
+                                         "Origin": "http://evil.example:8080"})
+    assert conn.getresponse().status == 403
 
 
 def test_two_tabs_keep_their_own_view(browser, viewer, page):

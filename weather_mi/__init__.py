@@ -28,10 +28,17 @@ __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open
            "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
            "Camera", "Ground", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "render_transmittance",
            "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "species", "synthetic", "hydrometeors",
-           "atmosphere", "phase", "metrics", "reference", "slicing", "io", "imageio", "scene"]
+           "atmosphere", "phase", "metrics", "reference", "slicing", "io", "imageio", "scene", "view"]
 
 # submodules imported on first use (the phase tables pull in miepython/numba, the metrics FLIP)
 _LAZY_SUBMODULES = ("phase", "metrics", "study", "cli", "detail", "fluxes", "forward_peak", "mitsuba_scene")
+
+
+def view(source, **kw):
+    """Explore a storm interactively in a Jupyter notebook (``weather_mi.viewer.app.view``): ``source`` is a
+    Hydrometeors Dataset, a file or a demo name. ``weather-mi view`` serves the same app in a browser."""
+    from .viewer.app import view as _view
+    return _view(source, **kw)
 
 
 def __getattr__(name):

@@ -69,10 +69,10 @@ class ViewerSession:
         self.canvas = FrameCanvas(view_width=s.width, view_height=s.height, display_width=DISPLAY_SCALE * s.width,
                                   display_height=DISPLAY_SCALE * s.height, status="starting the slicer...")
         self.canvas.on_event(self._on_canvas_msg)
-        self.mode = w.Select(name="Mode", options=list(MODES), value=s.mode)
-        self.species_colors = w.Checkbox(name="Species colours (Fig. 2)", value=s.species_colors)
-        self.slices = w.DiscreteSlider(name="Slices", options=SLICE_CHOICES, value=s.slices)
-        self.camera_kind = w.RadioButtonGroup(name="Camera", options=["ground", "orbit"], value=s.camera.kind)
+        self.mode = w.Select(label="Mode", options=list(MODES), value=s.mode)
+        self.species_colors = w.Checkbox(label="Species colours (Fig. 2)", value=s.species_colors)
+        self.slices = w.DiscreteSlider(label="Slices", options=SLICE_CHOICES, value=s.slices)
+        self.camera_kind = w.RadioButtonGroup(label="Camera", options=["ground", "orbit"], value=s.camera.kind)
         self.fov = LiveSlider(label="Field of view (deg)", start=10, end=120, step=1, value=s.camera.fov, decimals=0)
         self.sun_azimuth = LiveSlider(label="Sun azimuth (deg)", start=0, end=360, step=1, value=s.sun_azimuth,
                                       decimals=0, css_classes=["wm-sun-azimuth"])
@@ -82,16 +82,16 @@ class ViewerSession:
                        for n in self.storm.species}
         self.details = {n: LiveSlider(label=f"{n} detail", start=0.0, end=2.0, step=0.05, value=DEFAULT_DETAIL)
                         for n in self.storm.species}
-        self.own_albedo = w.Checkbox(name="One albedo for all species", value=s.albedo is not None)
+        self.own_albedo = w.Checkbox(label="One albedo for all species", value=s.albedo is not None)
         self.albedo = LiveSlider(label="Albedo", start=0.0, end=1.0, step=0.005, value=s.albedo or 0.99, decimals=3)
         self.cone = LiveSlider(label="Cone angle (deg)", start=1, end=60, step=0.5, value=s.cone_angle_deg, decimals=1)
-        self.own_forward = w.Checkbox(name="One forward fraction", value=s.forward_fraction is not None)
+        self.own_forward = w.Checkbox(label="One forward fraction", value=s.forward_fraction is not None)
         self.forward = LiveSlider(label="Forward fraction", start=0.0, end=1.0, step=0.01,
                                   value=s.forward_fraction or 0.9)
         self.ambient = LiveSlider(label="Ambient (Table IV modes)", start=0.0, end=1.0, step=0.01, value=s.ambient)
         self.exposure = LiveSlider(label="Exposure (EV)", start=-4, end=4, step=0.1, value=s.exposure_ev, decimals=1)
         n_times = len(self.storm.times)
-        self.time = w.Player(name="Time", start=0, end=max(n_times - 1, 1), value=s.time, interval=800, loop_policy="loop",
+        self.time = w.Player(label="Time", start=0, end=max(n_times - 1, 1), value=s.time, interval=800, loop_policy="loop",
                              show_value=True, visible=n_times > 1, width=300, css_classes=["wm-time"])
         self.time_label = pn.pane.Markdown(self._time_text(), visible=n_times > 1, margin=(0, 10))
         widgets = [self.mode, self.species_colors, self.slices, self.camera_kind, self.fov, self.sun_azimuth,
@@ -105,32 +105,32 @@ class ViewerSession:
             else:
                 wd._debounce = WIDGET_DEBOUNCE_MS
         # reference, A/B, metrics
-        self.show = w.RadioButtonGroup(name="Show", options=["A: slicer", "B: reference", "difference"],
-                                       value="A: slicer", button_type="default")
+        self.show = w.RadioButtonGroup(label="Show", options=["A: slicer", "B: reference", "difference"],
+                                       value="A: slicer", color="default")
         self.show.param.watch(lambda e: self._refresh_canvas(), "value")
-        self.trace = w.Button(name="Path-trace this view", button_type="primary")
+        self.trace = w.Button(label="Path-trace this view", color="primary")
         self.trace.on_click(lambda e: self.start_reference())
-        self.cancel = w.Button(name="Cancel", button_type="warning", disabled=True)
+        self.cancel = w.Button(label="Cancel", color="warning", disabled=True)
         self.cancel.on_click(lambda e: self.cancel_reference("cancelled"))
         self.ref_text = pn.pane.Markdown("Reference: none", margin=(0, 10))
         self.metric_text = pn.pane.Markdown("", margin=(0, 10))
         # export
         self.png_download = w.FileDownload(callback=self._png_bytes, filename="weather-mi-view.png", label="PNG",
-                                           button_type="light")
+                                           color="light")
         self.exr_download = w.FileDownload(callback=self._exr_bytes, filename="weather-mi-view.exr", label="EXR",
-                                           button_type="light")
+                                           color="light")
         self.snippet_download = w.FileDownload(callback=self._snippet_bytes, filename="weather_mi_view.py",
-                                               label="Python", button_type="light")
-        self.add_key = w.Button(name="Add keyframe")
+                                               label="Python", color="light")
+        self.add_key = w.Button(label="Add keyframe")
         self.add_key.on_click(lambda e: self.add_keyframe())
-        self.clear_keys = w.Button(name="Clear")
+        self.clear_keys = w.Button(label="Clear")
         self.clear_keys.on_click(lambda e: self._set_keys([]))
-        self.play_path = w.Button(name="Play path")
+        self.play_path = w.Button(label="Play path")
         self.play_path.on_click(lambda e: self.play_keyframes())
-        self.export_mp4 = w.Button(name="Render MP4")
+        self.export_mp4 = w.Button(label="Render MP4")
         self.export_mp4.on_click(lambda e: self.render_mp4())
         self.mp4_download = w.FileDownload(file=None, filename="weather-mi-path.mp4", label="MP4", disabled=True,
-                                           button_type="light")
+                                           color="light")
         self.key_text = pn.pane.Markdown("Keyframes: 0", margin=(0, 10))
 
         sidebar = pn.Column(
@@ -214,7 +214,7 @@ class ViewerSession:
         elif kind == "wheel":
             self.set_state(self.state.updated(camera=self.state.camera.zoomed(msg["dy"])))
         elif kind == "hover":
-            self.canvas.hover_text = self.hover_text(msg["x"], msg["y"])
+            self.canvas.show_hover(self.hover_text(msg["x"], msg["y"]))
 
     def hover_text(self, x: float, y: float) -> str:
         from .pick import first_dense_voxel
@@ -461,14 +461,35 @@ def default_distance_km(storm: Storm) -> float:
     return float(default_ground_distance_km(storm.volume(storm.first_time)))
 
 
-def view(source, *, state: ViewState | None = None, **recipe_kw):
-    """The viewer as a Panel object for a Jupyter notebook: ``source`` is a file path, a demo name
-    ("supercell", "cumulus") or a VolumeRecipe. ``pn.extension()`` must have run in the notebook."""
+class Viewer(pn.viewable.Viewer):
+    """The viewer in a notebook: displays as the app; ``close()`` stops its render thread and reference."""
+
+    def __init__(self, session: ViewerSession, **params):
+        super().__init__(**params)
+        self.session = session
+
+    def __panel__(self):
+        return self.session.layout
+
+    def close(self) -> None:
+        self.session.close()
+
+
+def view(source, *, state: ViewState | None = None, time=None, size: tuple[int, int] = (320, 240),
+         **recipe_kw) -> Viewer:
+    """The viewer for a Jupyter notebook (run ``pn.extension()`` first): ``source`` is a Hydrometeors
+    Dataset, a file path, a demo name ("supercell", "cumulus") or a VolumeRecipe; ``time``: the WRF
+    time to start at; ``recipe_kw``: preset=, phase=."""
+    import xarray as xr
     from .recipe import VolumeRecipe
+    from .serve import prepare
     if isinstance(source, VolumeRecipe):
         recipe = source
+    elif isinstance(source, xr.Dataset):
+        recipe = VolumeRecipe(dataset=source, **recipe_kw)
     elif str(source) in ("supercell", "cumulus"):
         recipe = VolumeRecipe(demo=str(source), **recipe_kw)
     else:
         recipe = VolumeRecipe(path=str(source), **recipe_kw)
-    return ViewerSession(Storm(recipe), state).layout
+    storm, first = prepare(recipe, time, progress=lambda *a: None, size=size, warm=False)
+    return Viewer(ViewerSession(storm, state or first))

@@ -74,11 +74,14 @@ export function render({ model, el }) {
       S.lastAnswered = shown.seq;
     }
   });
-  model.on("msg:custom", (msg) => display(msg.frame, msg.seq, msg.status));
+  const showHover = (text) => { hover.textContent = text; hover.style.display = text ? "block" : "none"; };
+  model.on("msg:custom", (msg) => {
+    if ("hover" in msg) { showHover(msg.hover); return; }
+    display(msg.frame, msg.seq, msg.status);
+  });
   model.on("frame", () => display(model.frame, model.frame_seq, model.status));
   model.on("status", () => { if (!model.frame) overlay.textContent = model.status; });
   model.on("display_width", size);
-  model.on("hover_text", () => { hover.textContent = model.hover_text; hover.style.display = model.hover_text ? "block" : "none"; });
 
   // drag: orbit; wheel: zoom; plain move: hover read-out (pixel coordinates of the rendered view)
   let dragging = false, last = null, pendingHover = null;
@@ -117,7 +120,7 @@ export function render({ model, el }) {
   };
   img.addEventListener("pointerup", end);
   img.addEventListener("pointercancel", end);
-  img.addEventListener("pointerleave", () => { if (!dragging) { model.hover_text = ""; } });
+  img.addEventListener("pointerleave", () => { if (!dragging) showHover(""); });
   img.addEventListener("wheel", (e) => {
     e.preventDefault();
     model.send_msg({type: "wheel", dy: e.deltaY, seq: S.seq});
@@ -147,7 +150,6 @@ class FrameCanvas(QuietEvents, JSComponent):
     frame = param.String(default="", doc="the current frame as a data URL (JPEG or PNG)")
     frame_seq = param.Integer(default=0, doc="the newest client input sequence number the frame answers")
     status = param.String(default="", doc="one line over the frame (mode, timings, reference progress)")
-    hover_text = param.String(default="", doc="hover read-out (species and mixing ratios)")
     view_width = param.Integer(default=320, doc="width of the rendered view in pixels (for hover)")
     view_height = param.Integer(default=240)
     display_width = param.Integer(default=640, doc="on-screen size in CSS pixels")
@@ -166,6 +168,10 @@ class FrameCanvas(QuietEvents, JSComponent):
     def _handle_msg(self, msg) -> None:
         for cb in self._event_callbacks:
             cb(msg)
+
+    def show_hover(self, text: str) -> None:
+        """The hover read-out (empty: hidden)."""
+        self._send_msg({"hover": text})
 
     def push(self, url: str, seq: int, status: str) -> None:
         """Show a frame now (a custom message, no document patch)."""

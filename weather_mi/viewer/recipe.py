@@ -3,7 +3,7 @@ and phase mode), small and picklable, so that a background process (the referenc
 the same OpticalVolume as the viewer without receiving hundreds of megabytes of arrays."""
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Mapping
 
@@ -14,16 +14,20 @@ from ..cli import LES_SUFFIXES, load_input
 class VolumeRecipe:
     """path: a wrfout NetCDF or LES text file (None: the demo); demo: "supercell" or "cumulus";
     time: the WRF time (index or timestamp; None: the last); preset: species table ("physical" or
-    "paper"); phase: "per_species" or "paper"."""
+    "paper"); phase: "per_species" or "paper"; dataset: a Hydrometeors Dataset in memory (a notebook's
+    ``wm.view(hyd)``; it travels to a reference process by pickling)."""
 
     path: str | None = None
     demo: str | None = None
     time: int | str | None = None
     preset: str = "physical"
     phase: str = "per_species"
+    dataset: object = field(default=None, compare=False, repr=False)
 
     @property
     def label(self) -> str:
+        if self.dataset is not None:
+            return str(self.dataset.attrs.get("source", "Hydrometeors in memory"))
         return f"demo {self.demo or 'supercell'}" if self.path is None else Path(self.path).name
 
     def at(self, time) -> "VolumeRecipe":
@@ -31,6 +35,8 @@ class VolumeRecipe:
 
     def hydrometeors(self):
         """The Hydrometeors Dataset (mixing ratios in kg/kg on a regular grid in metres)."""
+        if self.dataset is not None:
+            return self.dataset
         return load_input(self.path, self.demo, self.time)
 
     def volume(self, scale: Mapping[str, float] | None = None, hyd=None):
@@ -41,7 +47,7 @@ class VolumeRecipe:
 
     def times(self) -> list[str]:
         """The labels of the input's times (one for a demo or an LES file; every time of a WRF file)."""
-        if self.path is None or Path(self.path).suffix.lower() in LES_SUFFIXES:
+        if self.path is None or self.dataset is not None or Path(self.path).suffix.lower() in LES_SUFFIXES:
             return [self.label]
         from ..io.wrf import wrf_times
         return wrf_times(self.path)

@@ -17,6 +17,14 @@ from .recipe import VolumeRecipe
 LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
 
 
+def host_warning(host: str) -> str | None:
+    """What to say when the viewer binds an address other machines can reach."""
+    if host in LOCAL_HOSTS:
+        return None
+    return (f"weather-mi view: warning: serving on {host}, reachable from other machines; the viewer has no "
+            "authentication (anyone who can reach the port can use it, and start renders)")
+
+
 def check_port(host: str, port: int) -> int:
     """The port to serve on (``port``, or a free one for 0); a clear error if it is taken."""
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
@@ -73,9 +81,9 @@ def serve(recipe: VolumeRecipe, *, host: str = "127.0.0.1", port: int = 5006, op
     """Serve the viewer until Ctrl-C (blocking)."""
     import panel as pn
     from .app import ViewerSession
-    if host not in LOCAL_HOSTS:
-        print(f"weather-mi view: warning: serving on {host}, reachable from other machines; the viewer has no "
-              "authentication", file=sys.stderr)
+    warning = host_warning(host)
+    if warning:
+        print(warning, file=sys.stderr)
     port = check_port(host, port)  # before the slow part: a taken port is said at once
     storm, state = prepare(recipe, time_option, size=size, warm=False)
     port = check_port(host, port)

@@ -153,7 +153,10 @@ def python_snippet(state: ViewState, recipe, spec: SceneSpec, times: list[str] |
                    exposure: float | None = None) -> str:
     """A script that renders this view with the slicer and the path tracer (``recipe``: a VolumeRecipe;
     ``exposure``: the view's display exposure, None: automatic)."""
-    if recipe.path is None:
+    if getattr(recipe, "dataset", None) is not None:
+        load = ("hyd = globals()['hyd']  # the Hydrometeors Dataset given to wm.view (in memory): run this where "
+                "it is defined")
+    elif recipe.path is None:
         load = f"hyd = wm.synthetic.{recipe.demo or 'supercell'}()"
     elif recipe.path.lower().endswith((".txt", ".dat", ".csv")):
         load = f"hyd = wm.open_les({recipe.path!r})"
