@@ -40,7 +40,8 @@ class ViewerSession:
 
     def __init__(self, storm: Storm, state: ViewState | None = None, reference_kw: dict | None = None):
         self.storm = storm
-        self.reference_kw = dict(reference_kw or {})
+        # the reference uses every core, at the lowest priority: the slicer (and the page) come first
+        self.reference_kw = {"threads": None, "nice": 19, **(reference_kw or {})}
         self.state = state or ViewState(time=storm.first_time,
                                         camera=ViewCamera(distance_km=default_distance_km(storm)))
         self.doc = pn.state.curdoc

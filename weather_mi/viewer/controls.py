@@ -84,6 +84,8 @@ class LiveSlider(QuietEvents, JSComponent):
     _stylesheets = [_CSS]
 
     def __init__(self, **params):
+        params.setdefault("sizing_mode", "stretch_width")
+        params.setdefault("margin", (4, 10))
         super().__init__(**params)
         self._live_callbacks = []
 
