@@ -85,7 +85,8 @@ def test_updates_arrive_progressively_and_end_with_the_in_process_image():
         final = updates[-1]
         assert len(updates) >= 2
         passes = [u.passes for u in updates]
-        assert passes == sorted(set(passes)) and passes[0] >= 1
+        # increasing; the final (done) update may repeat the last pass's count when both were polled
+        assert passes[:-1] == sorted(set(passes[:-1])) and passes[-1] >= passes[-2] and passes[0] >= 1
         assert [u.done for u in updates] == [False] * (len(updates) - 1) + [True]
         assert final.error is None and job.done and not job.running and job.error is None
         assert final.rse_mean <= 0.3 or final.seconds >= 20.0
