@@ -105,6 +105,11 @@ class SliceRenderer:
             self._sky_geometry = slice_geometry(np.array([0.0, 0.0, -1.0]), np.array([0.0, 0.0, 1.0]), self.box,
                                                 min(SKY_SLICES, self.slices))
         self.views = ViewCache(self.box)
+        # the cloud's asymmetry parameter for the ground's transmission: species weighted by their scattering
+        sca = np.array([float(np.sum(vol.beta_ext[si])) * float(np.mean(self.albedo_rgb[si]))
+                        for si in range(self.n_species)])
+        gs = np.array([float(t.g[1]) for t in self.tables])
+        self.g_scattering = float(np.sum(sca * gs) / np.sum(sca)) if np.sum(sca) > 0 else 0.85
         self._texture_key = None  # the per-species inputs of the textures last built (plain numbers)
         self.timing = {}
 
@@ -225,7 +230,8 @@ class SliceRenderer:
         if self.mode.light == "multiple":
             model = LightModel(self.light, self.sky_light, self.mode.octaves, _param(mi, params.ms_extinction),
                                _param(mi, params.ms_contribution), _param(mi, params.ms_eccentricity),
-                               _param(mi, params.sky_extinction))
+                               _param(mi, params.sky_extinction), g=self.g_scattering,
+                               mu0=_param(mi, max(float(spec.sun.to_sun[2]), 1e-3)))
             gain = params.sky_gain
         else:
             model, gain = LightModel(self.light), params.ambient
