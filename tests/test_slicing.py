@@ -263,10 +263,11 @@ def test_view_cache_is_bounded_for_an_orbiting_camera():
 
 def test_multiple_light_model_reduces_to_single_scattering_and_adds_light():
     """With no octave beyond the first and no skylight the "multiple" model is the low-albedo image
-    (single scattering of the direct beam); its octaves and skylight only add light."""
+    (single scattering of the direct beam); its octaves and skylight only add light. (No ground: under
+    the "multiple" model it is lit by the column's diffuse transmission, tests/test_slicing_ground.py.)"""
     vol = blob_volume()
     spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=180, elevation=10, fov=40), sun=wm.Sun(170, 30),
-                        sky=wm.Sky("sunsky"), ground=wm.Ground(0.1, height=0.0), width=32, height=24)
+                        sky=wm.Sky("sunsky"), ground=None, width=32, height=24)
     low = render_slices(spec, vol, SliceMode("per_species", "low_albedo"), slices=48, light_res=32)
     single = render_slices(spec, vol, SliceMode("per_species", "multiple"), slices=48, light_res=32,
                            ms_contribution=0.0, sky_gain=0.0)
