@@ -215,3 +215,19 @@ def test_the_notebook_viewer_renders_and_closes():
     finally:
         v.close()
     assert not v.session.loop.alive
+
+
+def test_the_species_colour_view_paints_the_species(cumulus_storm):
+    """Fig. 2's view: the same storm and view, each species in its Table III colour (not white)."""
+    from weather_mi.viewer.frames import FrameLoop
+    loop = FrameLoop(cumulus_storm, lambda f: None)
+    try:
+        s = small_state(cumulus_storm)
+        plain, painted = loop.render(s), loop.render(s.updated(species_colors=True))
+    finally:
+        loop.stop()
+    assert painted.state.slice_mode().species_colors and not plain.state.slice_mode().species_colors
+    cloud = plain.transmittance < 0.5
+    assert cloud.any()
+    chroma = lambda rgb: (rgb.max(axis=-1) - rgb.min(axis=-1)) / np.maximum(rgb.max(axis=-1), 1e-12)  # noqa: E731
+    assert chroma(painted.radiance[cloud]).mean() > chroma(plain.radiance[cloud]).mean() + 0.05
