@@ -8,7 +8,6 @@ reference; a change of the slicer's approximation knobs keeps it, to compare aga
 """
 from __future__ import annotations
 
-import math
 import tempfile
 import threading
 import time
