@@ -212,6 +212,16 @@ def test_the_notebook_viewer_renders_and_closes():
         assert v.session.canvas.frame.startswith("data:image/jpeg;base64,")
         assert "globals()['hyd']" in v.session.snippet()   # a script that runs where hyd is defined
         assert v.session.storm.recipe.hydrometeors() is hyd
+        # the hover read-out: over the cloud, the mixing ratio of the view (data x scaling)
+        sess = v.session
+        f = sess.loop.render(sess.state)
+        y, x = np.unravel_index(np.argmin(f.transmittance), f.transmittance.shape)
+        plain = sess.hover_text(x + 0.5, y + 0.5)
+        assert "q_cloud" in plain
+        sess.state = sess.state.with_scale("cloud", 2.0)
+        doubled = sess.hover_text(x + 0.5, y + 0.5)
+        q = lambda text: float(text.split("q_cloud: ")[1].split(" g/kg")[0])  # noqa: E731
+        assert q(doubled) == pytest.approx(2 * q(plain), rel=2e-3) and "(x2)" in doubled
     finally:
         v.close()
     assert not v.session.loop.alive

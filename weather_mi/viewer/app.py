@@ -229,7 +229,9 @@ class ViewerSession:
         k, j, i = hit["index"]
         lines = [f"voxel ({i}, {j}, {k}) at {hit['position_m'][2] / 1000:.1f} km, {hit['distance_m'] / 1000:.1f} km away",
                  f"dominant: {hit['dominant']}"]
-        lines += [f"q_{n}: {q * 1000:.3g} g/kg" for n, q in hit["mixing_ratio_kg_per_kg"].items() if q > 0]
+        scale = dict(s.scale)  # the mixing ratios as the view shows them: the data times the scalings
+        lines += [f"q_{n}: {q * scale.get(n, 1.0) * 1000:.3g} g/kg" + (f" (x{scale[n]:.3g})" if scale.get(n, 1.0) != 1.0 else "")
+                  for n, q in hit["mixing_ratio_kg_per_kg"].items() if q > 0]
         return "\n".join(lines)
 
     # ------------------------------------------------------------------ frames
