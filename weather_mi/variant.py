@@ -16,6 +16,8 @@ _callback_installed = False
 # idles while the other finishes the last block; 1024 gives the thread pool enough units to balance.
 # benchmarks/llvm_block_size.py: 17% less time per pass on 2 cores, bit-identical images, the slicer unchanged.
 LLVM_BLOCK_SIZE = 1024
+DRJIT_DEFAULT_BLOCK_SIZE = 16384
+_tuned = False
 
 
 def default_variant() -> str:
@@ -100,8 +102,11 @@ def llvm_block_size() -> int | None:
 def _register_current() -> None:
     import mitsuba as mi
     current = mi.variant()
-    if current.startswith("llvm") and llvm_block_size() == 16384:  # Dr.Jit's default: ours, once
-        tune_llvm()
+    global _tuned
+    if not _tuned and current.startswith("llvm"):  # once per process, and only over Dr.Jit's default
+        if llvm_block_size() == DRJIT_DEFAULT_BLOCK_SIZE:
+            tune_llvm()
+        _tuned = True
     if current not in _registered:
         from .plugins import hydrometeor_mixture, majorant_volpath
         hydrometeor_mixture.register()
