@@ -205,7 +205,8 @@ def test_the_notebook_viewer_renders_and_closes():
     hyd = wm.synthetic.cumulus()
     v = wm.view(hyd, size=(48, 36))
     try:
-        assert isinstance(pn.panel(v).get_root(), object)
+        from bokeh.model import Model
+        assert isinstance(pn.panel(v).get_root(), Model)   # the app builds its Bokeh document
         t_end = time.perf_counter() + 60
         while not v.session.canvas.frame and time.perf_counter() < t_end:
             time.sleep(0.05)

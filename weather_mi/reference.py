@@ -133,6 +133,11 @@ def render_pass(scene, spp: int, seed: int) -> np.ndarray:
     return np.array(mi.render(scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
 
 
+def pass_stderr(m2: np.ndarray, n: int) -> np.ndarray:
+    """Standard error of the mean over ``n`` passes from Welford's M2 (NaN below two passes)."""
+    return np.sqrt(m2 / (n - 1) / n) if n > 1 else np.full_like(m2, np.nan)
+
+
 def welford_update(mean: np.ndarray, m2: np.ndarray, img: np.ndarray, n: int) -> None:
     """Add pass ``n`` (1-based) of image ``img`` to the per-pixel running mean and M2 (in place)."""
     delta = img - mean
@@ -359,7 +364,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     def stats(n):
         if n < 2:
             return None
-        return noise_stats(mean, np.sqrt(m2 / (n - 1) / n), cloud)
+        return noise_stats(mean, pass_stderr(m2, n), cloud)
 
     def more(i):
         if target_rse is None:
@@ -413,13 +418,13 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
             if progress and st is not None:
                 bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
             if on_pass is not None:
-                se = np.sqrt(m2 / (n - 1) / n) if n > 1 else np.full_like(mean, np.nan)
-                on_pass(Image(mean.astype(np.float32), se.astype(np.float32), metadata(n, spp_done, seconds, st)))
+                on_pass(Image(mean.astype(np.float32), pass_stderr(m2, n).astype(np.float32),
+                              metadata(n, spp_done, seconds, st)))
     finally:  # over Dask: cancels the passes still queued (target met, Ctrl-C, error); the checkpoint stays valid
         passes_in.close()
         bar.close()
     n = i
-    stderr = np.sqrt(m2 / (n - 1) / n) if n > 1 else np.full_like(mean, np.nan)
+    stderr = pass_stderr(m2, n)
     meta = metadata(n, spp_done, seconds, noise_stats(mean, stderr, cloud) if n > 1 else None)
     if client is not None:
         meta["dask"] = remote.summary

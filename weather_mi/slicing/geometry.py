@@ -20,27 +20,31 @@ from ..scene import Camera, SceneSpec
 def camera_rays(spec: SceneSpec) -> tuple[np.ndarray, np.ndarray]:
     """Pixel-centre rays (origins, unit directions), each (H, W, 3), row 0 at the top of the picture,
     matching Mitsuba's ``perspective`` (horizontal fov) and ``orthographic`` sensors."""
+    w, h = int(spec.width), int(spec.height)
+    px, py = np.meshgrid(np.arange(w) + 0.5, np.arange(h) + 0.5)
+    return film_rays(spec, px, py)
+
+
+def film_rays(spec: SceneSpec, px, py) -> tuple[np.ndarray, np.ndarray]:
+    """Rays (origins, unit directions; shape of ``px`` + (3,)) through pixel coordinates (px, py) of the
+    picture: x to the right, y down, origin at the top-left corner (pixel centres at half-integers)."""
     cam: Camera = spec.camera
     w, h = int(spec.width), int(spec.height)
     fwd = cam.forward
     left = np.cross(np.asarray(cam.up, float), fwd)
     left /= np.linalg.norm(left)
     up = np.cross(fwd, left)
-    # film coordinates of pixel centres: x to the right, y down; Mitsuba's camera x axis is "left"
-    xs = 1.0 - 2.0 * (np.arange(w) + 0.5) / w            # +1 at the left edge
-    ys = 1.0 - 2.0 * (np.arange(h) + 0.5) / h            # +1 at the top edge
-    gx, gy = np.meshgrid(xs, ys)
+    gx = 1.0 - 2.0 * np.asarray(px, float) / w           # +1 at the left edge (Mitsuba's camera x axis: left)
+    gy = 1.0 - 2.0 * np.asarray(py, float) / h           # +1 at the top edge
     if cam.kind == "orthographic":
-        origins = (np.asarray(cam.origin)[None, None] + gx[..., None] * (cam.ortho_width / 2) * left
+        origins = (np.asarray(cam.origin, float) + gx[..., None] * (cam.ortho_width / 2) * left
                    + gy[..., None] * (cam.ortho_height / 2) * up)
-        dirs = np.broadcast_to(fwd, origins.shape).copy()
-        return origins, dirs
+        return origins, np.broadcast_to(fwd, origins.shape).copy()
     tan_x = math.tan(math.radians(cam.fov) / 2)
     tan_y = tan_x * h / w
-    dirs = fwd[None, None] + gx[..., None] * tan_x * left + gy[..., None] * tan_y * up
+    dirs = fwd + gx[..., None] * tan_x * left + gy[..., None] * tan_y * up
     dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
-    origins = np.broadcast_to(np.asarray(cam.origin, float), dirs.shape).copy()
-    return origins, dirs
+    return np.broadcast_to(np.asarray(cam.origin, float), dirs.shape).copy(), dirs
 
 
 def orthonormal_frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -50,6 +50,7 @@ class ViewerSession:
         self.ref_image = None        # the newest reference estimate (Image) and its state
         self.ref_state = None
         self.metrics = None
+        self._overlay = None         # (key, data URL) of the last B or difference picture
         self.keys: list[ViewState] = []
         self.export_thread = None
         self.closed = False
@@ -263,7 +264,7 @@ class ViewerSession:
                   f"(+{f.queued_s * 1000:.0f} queued), {f.spec.width}x{f.spec.height}, {f.slices} slices")
         url = f.url
         if show != "A: slicer" and self.ref_image is not None:
-            url = self._reference_url() if show == "B: reference" else self._difference_url()
+            url = self._overlay_url(show)
             status = self._reference_status()
         self.canvas.push(url, f.seq, status)
         if not f.draft and show == "A: slicer":  # refined: also the parameter, for a page that re-renders
@@ -337,6 +338,15 @@ class ViewerSession:
 
     def _reference_status(self) -> str:
         return self.ref_text.object.replace("Reference: ", "reference: ")
+
+    def _overlay_url(self, show: str) -> str:
+        """The B or difference picture, encoded once per reference update, metrics frame and exposure (not
+        once per slicer frame: the slicer keeps publishing while the user drags in the B view)."""
+        f = self.loop.last_frame
+        key = (show, id(self.ref_image), id(self.metrics), f.exposure if f else None)
+        if self._overlay is None or self._overlay[0] != key:
+            self._overlay = (key, self._reference_url() if show == "B: reference" else self._difference_url())
+        return self._overlay[1]
 
     def _reference_url(self) -> str:
         f = self.loop.last_frame

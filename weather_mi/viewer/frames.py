@@ -74,27 +74,23 @@ def jpeg_url(srgb8: np.ndarray, quality: int = JPEG_QUALITY) -> str:
 
 class Storm:
     """The input's times as OpticalVolumes (LRU), the camera frame, and the detail noise: shared by the
-    sessions of one viewer (read-only after construction; building a volume takes a lock)."""
+    sessions of one viewer (read-only after construction; building a volume takes a lock). A WRF file with
+    several times is read once, every time on one height grid (``VolumeRecipe.series``)."""
 
-    def __init__(self, recipe, first_volume=None, hydrometeors=None, cache: int = 4):
+    def __init__(self, recipe, cache: int = 4):
         from .state import VolumeFrame
         self.recipe = recipe
         self.times = recipe.times()
         self._lock = threading.Lock()
         self._volumes = LRU(cache)
-        self._hyd = LRU(cache)
+        self._series = recipe.series() if len(self.times) > 1 else None
         t0 = len(self.times) - 1  # the last time, as the other commands
-        if hydrometeors is not None:
-            self._hyd[t0] = hydrometeors
-        if first_volume is None:
-            first_volume = self.volume(t0)
-        else:
-            self._volumes[t0] = first_volume
+        first_volume = self.volume(t0)
         self.first_time = t0
         self.frame = VolumeFrame(first_volume)
         self.ground_m = min(0.0, float(first_volume.bbox[0][2]))
         self.species = tuple(first_volume.species)
-        self.shape = tuple(first_volume.shape)
+        self.shape, self.spacing = tuple(first_volume.shape), tuple(first_volume.spacing)
         self._noise = None
         self._warm = {}                      # renderers warmed up before the first tab, for the first session
         self._warm_lock = threading.RLock()  # the warm-up itself asks take_warm (same thread)
@@ -116,25 +112,19 @@ class Storm:
         with self._warm_lock:
             return self._warm.pop(key, None)
 
-    def _recipe_at(self, t: int):
-        return self.recipe if len(self.times) < 2 else self.recipe.at(t)
-
     def hydrometeors(self, t: int):
-        with self._lock:
-            return self._hyd.get_or(t, lambda: self._recipe_at(t).hydrometeors())
+        return self.recipe.hydrometeors() if self._series is None else self._series[t]
 
     def volume(self, t: int):
-        hyd = self.hydrometeors(t)
         with self._lock:
-            return self._volumes.get_or(t, lambda: self._recipe_at(t).volume(hyd=hyd))
+            return self._volumes.get_or(t, lambda: self.recipe.volume(hyd=self.hydrometeors(t)))
 
     def detail_noise(self) -> np.ndarray:
         """Unit-variance turbulent noise on the grid (isotropic in metres), built once."""
         with self._lock:
             if self._noise is None:
                 from ..detail import noise
-                vol = self._volumes.get(self.first_time) or next(iter(self._volumes.values()))
-                self._noise = noise(vol.shape, vol.spacing, seed=0)
+                self._noise = noise(self.shape, self.spacing, seed=0)
             return self._noise
 
 
@@ -155,6 +145,9 @@ class FrameLoop:
         self.exposure: float | None = None  # the session's automatic exposure, fixed by its first full frame
         self.last_frame: Frame | None = None
         self.draft_level = 0  # index into DRAFT_LEVELS, adapted to the measured draft time
+        # the renderers hold per-frame state (textures, light volume): one render at a time, whichever thread
+        # asks (the loop, the metrics thread, an export, the MP4 path)
+        self._render_lock = threading.Lock()
         self.frames_rendered = 0
         self._thread = threading.Thread(target=self._run, name="weather-mi frames", daemon=True)
         self._thread.start()
@@ -239,7 +232,11 @@ class FrameLoop:
         return r
 
     def render(self, state: ViewState, seq: int = 0, draft: bool = False, t_submit: float | None = None) -> Frame:
-        """Render one view now (in the calling thread)."""
+        """Render one view now (in the calling thread; waits for a render in progress)."""
+        with self._render_lock:
+            return self._render(state, seq, draft, t_submit)
+
+    def _render(self, state: ViewState, seq: int, draft: bool, t_submit: float | None) -> Frame:
         t0 = time.perf_counter()
         queued = 0.0 if t_submit is None else t0 - t_submit
         r = self.renderer(state, draft)

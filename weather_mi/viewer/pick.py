@@ -13,12 +13,11 @@ pictures, and starts at the camera (a camera inside the box sees the cells in fr
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..hydrometeors import SPECIES_NAMES
 from ..scene import SceneSpec
+from ..slicing.geometry import film_rays
 
 
 def default_threshold_per_m(vol) -> float:
@@ -28,22 +27,9 @@ def default_threshold_per_m(vol) -> float:
 
 def pixel_ray(spec: SceneSpec, px: float, py: float) -> tuple[np.ndarray, np.ndarray]:
     """Origin and unit direction (world metres) of the camera ray through pixel coordinates (px, py)
-    (origin top-left; pixel centres at half-integers), as ``camera_rays`` builds them for pixel centres."""
-    cam = spec.camera
-    w, h = int(spec.width), int(spec.height)
-    fwd = cam.forward
-    left = np.cross(np.asarray(cam.up, float), fwd)
-    left /= np.linalg.norm(left)
-    up = np.cross(fwd, left)
-    gx = 1.0 - 2.0 * float(px) / w  # +1 at the left edge (Mitsuba's camera x axis points left)
-    gy = 1.0 - 2.0 * float(py) / h  # +1 at the top edge
-    if cam.kind == "orthographic":
-        o = np.asarray(cam.origin, float) + gx * (cam.ortho_width / 2) * left + gy * (cam.ortho_height / 2) * up
-        return o, fwd.copy()
-    tan_x = math.tan(math.radians(cam.fov) / 2)
-    tan_y = tan_x * h / w
-    d = fwd + gx * tan_x * left + gy * tan_y * up
-    return np.asarray(cam.origin, float), d / np.linalg.norm(d)
+    (origin top-left; pixel centres at half-integers): the renderers' ``film_rays``."""
+    o, d = film_rays(spec, np.float64(px), np.float64(py))
+    return o, d
 
 
 def _cells_along(o: np.ndarray, d: np.ndarray, lo: np.ndarray, cell: np.ndarray, n: np.ndarray, t0: float, t1: float):

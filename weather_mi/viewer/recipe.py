@@ -34,10 +34,24 @@ class VolumeRecipe:
         return replace(self, time=time)
 
     def hydrometeors(self):
-        """The Hydrometeors Dataset (mixing ratios in kg/kg on a regular grid in metres)."""
+        """The Hydrometeors Dataset (mixing ratios in kg/kg on a regular grid in metres). A time index of a
+        WRF file with several times: that time of ``series()``, on the grid the viewer shows."""
         if self.dataset is not None:
             return self.dataset
+        if isinstance(self.time, int) and self._wrf() and len(self.times()) > 1:
+            return self.series()[self.time]
         return load_input(self.path, self.demo, self.time)
+
+    def series(self) -> list:
+        """Every time of a WRF file as Hydrometeors on one height grid (``io.open_wrf(time="all")``, the
+        reader of ``weather-mi animate``), so that the storm's times and their references share a grid."""
+        if not self._wrf():
+            return [self.hydrometeors()]
+        from ..io import open_wrf, time_steps
+        return time_steps(open_wrf(self.path, time="all"))
+
+    def _wrf(self) -> bool:
+        return self.dataset is None and self.path is not None and Path(self.path).suffix.lower() not in LES_SUFFIXES
 
     def volume(self, scale: Mapping[str, float] | None = None, hyd=None):
         """The OpticalVolume (Eq. 1-6, 8) of the (scaled) storm; ``hyd``: its Hydrometeors if already read."""
@@ -47,7 +61,7 @@ class VolumeRecipe:
 
     def times(self) -> list[str]:
         """The labels of the input's times (one for a demo or an LES file; every time of a WRF file)."""
-        if self.path is None or self.dataset is not None or Path(self.path).suffix.lower() in LES_SUFFIXES:
+        if not self._wrf():
             return [self.label]
         from ..io.wrf import wrf_times
         return wrf_times(self.path)

@@ -160,9 +160,10 @@ def python_snippet(state: ViewState, recipe, spec: SceneSpec, times: list[str] |
         load = f"hyd = wm.synthetic.{recipe.demo or 'supercell'}()"
     elif recipe.path.lower().endswith((".txt", ".dat", ".csv")):
         load = f"hyd = wm.open_les({recipe.path!r})"
+    elif times is not None and len(times) > 1:  # every time on one grid, as the viewer reads them
+        load = f"hyd = wm.io.time_steps(wm.open_wrf({recipe.path!r}, time=\"all\"))[{state.time}]  # {times[state.time]}"
     else:
-        t = state.time if times is None or len(times) < 2 else times[state.time]
-        load = f"hyd = wm.open_wrf({recipe.path!r}, time={t!r})"
+        load = f"hyd = wm.open_wrf({recipe.path!r})"
     params = state.slice_params()
     changed = {k: v for k, v in params.__dict__.items() if v != getattr(SliceParams(), k)}
     mode = state.slice_mode()
