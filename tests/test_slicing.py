@@ -270,7 +270,7 @@ def test_multiple_light_model_reduces_to_single_scattering_and_adds_light():
                         sky=wm.Sky("sunsky"), ground=None, width=32, height=24)
     low = render_slices(spec, vol, SliceMode("per_species", "low_albedo"), slices=48, light_res=32)
     single = render_slices(spec, vol, SliceMode("per_species", "multiple"), slices=48, light_res=32,
-                           ms_contribution=0.0, sky_gain=0.0)
+                           forward_peak_deg=0.0, ms_contribution=0.0, diffusion_gain=0.0, sky_gain=0.0)
     np.testing.assert_allclose(single.radiance, low.radiance, rtol=1e-4, atol=1e-7)
     full = render_slices(spec, vol, SliceMode("per_species", "multiple"), slices=48, light_res=32)
     assert np.all(full.radiance >= single.radiance - 1e-7)
@@ -293,3 +293,59 @@ def test_light_outside_the_light_buffer_is_the_unattenuated_sun():
     lobe = np.array([-450.0, 0.0, 2100.0])                       # centre of the blob's tall lobe
     shadow = (lobe - 2400.0 * np.asarray(spec.sun.to_sun))[None]  # below it, its sun ray through the lobe
     assert r.light_at(shadow)[0][0] < 0.1
+
+
+def peaked_table(peak=0.4, width_deg=0.5):
+    """A phase table that is a Gaussian lobe of ``width_deg`` holding ``peak`` of the scattered energy
+    plus an isotropic rest: its forward peak within 3 degrees is ``peak`` by construction."""
+    theta = np.unique(np.r_[np.linspace(0.0, np.radians(5.0), 400), np.linspace(0.0, np.pi, 1500)])
+    lobe = np.exp(-0.5 * (theta / np.radians(width_deg)) ** 2)
+    lobe /= np.trapezoid(lobe * 2 * np.pi * np.sin(theta), theta)
+    return wm.phase.PhaseTable.from_values(theta, peak * lobe + (1 - peak) / (4 * np.pi))
+
+
+def test_the_multiple_model_counts_forward_peaks_as_unscattered_light():
+    """As the path-traced reference does (delta-M, weather_mi.forward_peak): a conservative slab whose
+    phase function puts 40% of its light in a 0.5 degree lobe is seen, and shades, with the optical depth
+    (1 - 0.4) tau; the paper's modes keep the full tau; and a thin slab's single scattering outside the
+    peak is unchanged (omega' p' tau' = omega p tau)."""
+    tau = 1.5
+    beta = np.zeros((8, 8, 8), np.float32)
+    beta[4:] = tau / 1000.0                      # a layer of vertical optical depth tau (see the Beer-Lambert test)
+    vol = wm.OpticalVolume.from_arrays(beta, 1.0, peaked_table(0.4), ((-8e3, -8e3, 0.0), (8e3, 8e3, 2000.0)))
+    sun = wm.Sun(azimuth=60, elevation=50)
+    spec = wm.SceneSpec(camera=down_camera(z=2500.0), sun=sun, sky=None, ground=None, width=8, height=8)
+    multiple = SliceRenderer(vol, SliceMode("per_species", "multiple"), slices=160, light_res=64)
+    multiple.frame(spec)
+    paper = SliceRenderer(vol, SliceMode("per_species", "low_albedo"), slices=160, light_res=64)
+    paper.frame(spec)
+    below = np.array([[0.0, 0.0, 300.0], [500.0, -400.0, 600.0]])
+    np.testing.assert_allclose(multiple.light_at(below)[0], np.exp(-0.6 * tau / sun.mu0), rtol=0.02)
+    np.testing.assert_allclose(paper.light_at(below)[0], np.exp(-tau / sun.mu0), rtol=0.02)
+    # the camera looks down through the whole layer (transmittance of the eye ray)
+    np.testing.assert_allclose(multiple.transmittance, np.exp(-0.6 * tau), rtol=0.02)
+    np.testing.assert_allclose(paper.transmittance, np.exp(-tau), rtol=0.02)
+    thin = wm.OpticalVolume.from_arrays(beta * 0.01, 1.0, peaked_table(0.4), vol.bbox)
+    single = dict(ms_contribution=0.0, diffusion_gain=0.0, sky_gain=0.0)
+    with_peak = render_slices(spec, thin, SliceMode("per_species", "multiple"), slices=128, light_res=32, **single)
+    without = render_slices(spec, thin, SliceMode("per_species", "multiple"), slices=128, light_res=32,
+                            forward_peak_deg=0.0, **single)
+    np.testing.assert_allclose(with_peak.radiance, without.radiance, rtol=0.02)
+    assert with_peak.metadata["forward_peak_deg"] == 3.0 and without.metadata["forward_peak_deg"] == 0.0
+
+
+def test_diffusion_profile_of_a_cloud_column():
+    """eye.diffusion_profile against its closed form (z0 = 2/3 transport depths): 1 at the lit face of a
+    semi-infinite cloud, (1 + z0) / z0 from one transport depth inwards, a straight line down to the
+    shadowed face of a finite column, and vanishing like the transport thickness X for thin columns."""
+    from weather_mi.slicing.eye import DIFFUSION_Z0 as z0, diffusion_profile
+    J = lambda tau, tau_col, scale=0.5: float(diffusion_profile(np, np.float64(tau), np.float64(tau_col), scale))  # noqa: E731
+    assert J(0.0, 1e9) == pytest.approx(1.0, rel=1e-6)
+    assert J(2.0, 1e9) == pytest.approx((1 + z0) / z0, rel=1e-6)
+    assert J(50.0, 1e9) == pytest.approx((1 + z0) / z0, rel=1e-6)
+    X = 10.0                                       # tau_col = 20 at scale 0.5
+    line = [J(t, 20.0) for t in (4.0, 10.0, 16.0)]  # x = 2, 5, 8: beyond x_s = 1, on the straight line
+    assert line[1] - line[0] == pytest.approx(line[2] - line[1], rel=1e-9)
+    assert J(20.0, 20.0) == pytest.approx((1 - np.exp(-X)) * (1 + z0) * z0 / ((X + 2 * z0) * z0), rel=1e-9)
+    for X in (1e-2, 1e-3):
+        assert J(0.0, 2 * X) / X == pytest.approx(1.0 * z0 * (X + z0 - X / 2) / ((X + 2 * z0) * z0), rel=0.02)

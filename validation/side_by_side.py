@@ -12,6 +12,7 @@ demo-supercell, demo-cumulus, and from --data wrf-supercell, wrf-plateau, bomex,
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -19,8 +20,22 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import weather_mi as wm  # noqa: E402
 from weather_mi import metrics, study  # noqa: E402
-from weather_mi.imageio import auto_exposure  # noqa: E402
+from weather_mi.imageio import Image, auto_exposure  # noqa: E402
 from weather_mi.slicing import MODES, SliceRenderer  # noqa: E402
+
+
+def cached_reference(path: Path, spec, spp: int):
+    """The reference saved at ``path`` by an earlier run, if it was rendered for this scene with ``spp``
+    samples (metadata compared), else None: a rerun for other slicer modes does not path-trace again."""
+    if not path.is_file():
+        return None
+    ref = Image.load(path)
+    same = lambda a, b: json.dumps(a, sort_keys=True, default=str) == json.dumps(b, sort_keys=True, default=str)  # noqa: E731
+    if ref.metadata.get("spp") != spp or not same(json.loads(json.dumps(spec.to_dict(), default=str)),
+                                                  ref.metadata.get("scene")):
+        return None
+    print(f"reusing {path} ({spp} spp)")
+    return ref
 
 
 def main(argv=None) -> int:
@@ -50,10 +65,12 @@ def main(argv=None) -> int:
     vol, desc = loaded
     spec = study.view(vol, args.lighting, cfg)
     stem = f"{args.scene}_{args.lighting}"
-    ckpt = out / f"{stem}_reference.ckpt.npz"  # an interrupted run resumes; removed once the render is complete
-    ref = wm.render_reference(spec, vol, spp=args.spp, checkpoint=ckpt, resume=True)
-    ckpt.unlink(missing_ok=True)
-    ref.save(out / f"{stem}_reference.exr")
+    ref = cached_reference(out / f"{stem}_reference.exr", spec, args.spp)
+    if ref is None:
+        ckpt = out / f"{stem}_reference.ckpt.npz"  # an interrupted run resumes; removed once the render is complete
+        ref = wm.render_reference(spec, vol, spp=args.spp, checkpoint=ckpt, resume=True)
+        ckpt.unlink(missing_ok=True)
+        ref.save(out / f"{stem}_reference.exr")
     mask = metrics.cloud_mask(study.eye_transmittance(vol, spec, args.slices))
     exposure = auto_exposure(ref.radiance)
     print(f"{desc}; {args.lighting}-lit; {width} x {height}; reference {args.spp} spp, "

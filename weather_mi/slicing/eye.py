@@ -10,11 +10,19 @@ with (A, B) = (direct, forward-scattered) light for the paper's modes (the direc
 the phase function, the blurred forward light as if diffuse, as in Kniss et al.), and for the
 "multiple" model the scattering octaves of Wrenninge et al. (2013), driven by the optical depth tau
 towards the sun read from the same light volume (direct light D = exp(-tau)):
-    A = D + (1 - D_col) sum_{i>=1} (b c)^i D^(a^i),   B = (1 - D_col) sum_{i>=1} b^i (1 - c^i) D^(a^i)
+    A = D + (1 - D_col) sum_{i>=1} (b c)^i D^(a^i),
+    B = (1 - D_col) sum_{i>=1} b^i (1 - c^i) D^(a^i) + k J(tau, tau_col)
 (octave i: optical depth a^i tau, weight b^i, phase c^i P + (1 - c^i) / (4 pi); octave 0 is single
-scattering; D_col: the sunlight that crosses the whole cloud column along the sun ray, so that thin
-clouds, which scatter light once rather than many times, get little multiple scattering). L_amb is the sky's mean radiance times ``ambient`` (paper modes, unshadowed) or
-``sky_gain`` x exp(-sky_extinction x the optical depth towards the zenith) ("multiple").
+scattering; D_col = exp(-tau_col): the sunlight that crosses the whole cloud column along the sun ray, so
+that thin clouds, which scatter light once rather than many times, get little multiple scattering), plus
+a diffusion term beyond the octaves: k (``diffusion_gain``) times the 1-D diffusion profile J of that
+column (``diffusion_profile``), which, unlike the octaves, is not capped by a geometric sum and does not
+decay exponentially into a thick cloud (in a conservative cloud diffused light falls linearly with depth,
+and it is brighter just inside a sunlit face than at it), while thin clouds get little of it. The medium is
+the one the path tracer renders: phase-function peaks within 3 deg count as unscattered light (delta-M,
+``weather_mi.forward_peak``; ``SliceRenderer(forward_peak_deg=)``). L_amb is the sky's mean radiance times
+``ambient`` (paper modes, unshadowed) or ``sky_gain`` x exp(-sky_extinction x the optical depth towards the
+zenith) ("multiple").
 
 The ground: rho / pi x (E_sun mu0 x sunlight factor + E_sky x occlusion). The paper's modes take A + B
 there too. The "multiple" model takes the total (direct + diffuse) transmission of the cloud column
@@ -44,6 +52,8 @@ class LightModel:
     b: object = None
     c: object = None
     sky_extinction: object = None
+    diffusion_gain: object = 0.0
+    diffusion_scale: object = 0.15
     g: float = 0.85  # the cloud's asymmetry parameter, for the ground's transmission ("multiple")
     mu0: object = 1.0  # the sun's zenith cosine (an opaque Dr.Jit scalar)
 
@@ -75,7 +85,8 @@ class LightModel:
         # the sunlight that the whole cloud column along the sun ray through p intercepts
         column, _ = self.sun.lookup(p, exit_plane=True)
         A = direct * factor(k_d) + (1.0 - column) * A
-        B = (1.0 - column) * B
+        tau_col = -dr.log(dr.maximum(column, 1e-30))
+        B = (1.0 - column) * B + self.diffusion_gain * diffusion_profile(dr, -log_d, tau_col, self.diffusion_scale)
         occ = 1.0
         if self.sky is not None:
             up, _ = self.sky.lookup(p)
@@ -93,6 +104,25 @@ class LightModel:
         direct, _ = self.sun.lookup(p)
         tau_vertical = -dr.log(dr.maximum(direct, 1e-30)) * self.mu0
         return ground_transmission(dr, tau_vertical, self.mu0, self.g), occ
+
+
+def diffusion_profile(dr, tau, tau_col, scale):
+    """Diffuse light inside a conservative cloud column lit along the sun ray (optical depth ``tau`` from
+    the sun's side, ``tau_col`` the whole column's), relative to the lit face of a semi-infinite cloud:
+    1-D diffusion in transport optical depths x = scale x tau (scale ~ 1 - g), X = scale x tau_col,
+    with extrapolated boundaries z0 beyond both faces and the sunlight turned diffuse at x_s = min(1, X/2):
+        J(x) = (1 - exp(-X)) (min(x, x_s) + z0) (X + z0 - max(x, x_s)) / ((X + 2 z0) z0)
+    (the Green's function of the slab; 1 - exp(-X): the part of the beam that the column turns diffuse,
+    so that thin clouds get little), rising from 1 at a thick cloud's lit face to (1 + z0) / z0 at
+    depth and falling linearly to the shadowed face."""
+    x, X = scale * tau, scale * tau_col
+    xs = dr.minimum(1.0, 0.5 * X)
+    near, far = dr.minimum(x, xs), dr.maximum(x, xs)
+    g = (near + DIFFUSION_Z0) * dr.maximum(X + DIFFUSION_Z0 - far, 0.0) / ((X + 2.0 * DIFFUSION_Z0) * DIFFUSION_Z0)
+    return (1.0 - dr.exp(-X)) * g
+
+
+DIFFUSION_Z0 = 2.0 / 3.0  # extrapolation length of the diffusion approximation, transport optical depths
 
 
 def ground_transmission(xp, tau, mu0, g):

@@ -14,7 +14,9 @@ class SliceMode:
     light: "low_albedo" (everything that hits a particle leaves the light), "translucent" (the paper:
     light scattered into a forward cone survives and diffuses sideways) or "multiple" (beyond the
     paper: single scattering plus multiple-scattering octaves driven by the optical depth towards the
-    sun, and skylight shadowed by the optical depth towards the zenith; see light.py and eye.py);
+    sun, a diffusion term of the cloud column along the sun ray, and skylight shadowed by the optical
+    depth towards the zenith, in the medium with its forward peaks as unscattered light; see light.py
+    and eye.py);
     detail: multiply extinction by a turbulent detail field; species_colors: paint each species with
     its Table III colour (Fig. 2); octaves: number of scattering orders of the "multiple" model
     (octave 0 is single scattering)."""
@@ -47,10 +49,12 @@ MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple"
 # Defaults of the "multiple" light model: fitted by validation/calibrate_slicer.py (Adam through Dr.Jit
 # reverse-mode AD, weather_mi.slicing.calibrate; 50 iterations from calibrate.FIT_START) on the demo
 # supercell, the demo cumulus and the thin demo cumulus, front-, side- and back-lit (64 x 48, references
-# of 128 spp with the delta-M forward peak of issue 10); judged on the real WRF supercell, WRF plateau,
-# BOMEX and RICO storms against references of 2-5% cloud RSE (README, "The slicer").
-MULTIPLE_DEFAULTS = {"ms_extinction": 0.0983, "ms_contribution": 0.6987, "ms_eccentricity": 0.0202,
-                     "sky_gain": 0.6201, "sky_extinction": 0.0258}
+# of 128 spp), with the forward peaks within 3 deg as unscattered light in both renderers; judged on the
+# real WRF supercell, WRF plateau, BOMEX and RICO storms against references of 2-5% cloud RSE (README,
+# "The slicer").
+MULTIPLE_DEFAULTS = {"ms_extinction": 0.0544, "ms_contribution": 0.2032, "ms_eccentricity": 0.3203,
+                     "sky_gain": 0.6518, "sky_extinction": 0.0065, "diffusion_gain": 1.2252,
+                     "diffusion_scale": 0.4086}
 
 
 DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail field, detail.field(amplitude=0.5))
@@ -79,6 +83,11 @@ class SliceParams:
                        (1 - ms_eccentricity^i) / (4 pi).
     sky_gain         : "multiple" light: skylight in-scattering, sky_gain x the sky's mean radiance x
     sky_extinction   : exp(-sky_extinction x optical depth towards the zenith).
+    diffusion_gain   : "multiple" light: isotropic in-scattering of diffused sunlight, diffusion_gain x
+                       E_sun / (4 pi) x the 1-D diffusion profile of the cloud column along the sun ray
+                       (eye.diffusion_profile: brightest a transport depth inside, falling linearly
+                       to the shadowed side; little in thin cloud) ...
+    diffusion_scale  : ... in transport optical depths diffusion_scale x tau (~ 1 - g).
     detail           : detail modes with a ``detail_noise`` renderer: the amount of simulated detail per
                        species (paper section 5.4), the amplitude s of the log-normal multiplier
                        exp(s n - s^2/2) of its extinction (n: the unit-variance noise; 0: none; species
@@ -96,6 +105,8 @@ class SliceParams:
     ms_eccentricity: float = MULTIPLE_DEFAULTS["ms_eccentricity"]
     sky_gain: float = MULTIPLE_DEFAULTS["sky_gain"]
     sky_extinction: float = MULTIPLE_DEFAULTS["sky_extinction"]
+    diffusion_gain: float = MULTIPLE_DEFAULTS["diffusion_gain"]
+    diffusion_scale: float = MULTIPLE_DEFAULTS["diffusion_scale"]
     detail: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -109,11 +120,11 @@ class SliceParams:
             raise ValueError(f"albedo must be in [0, 1], got {self.albedo}")
         if number(self.blur_length_m) and not self.blur_length_m >= 0.0:
             raise ValueError(f"blur_length_m must be >= 0, got {self.blur_length_m}")
-        for name in ("ms_extinction", "ms_contribution", "ms_eccentricity"):
+        for name in ("ms_extinction", "ms_contribution", "ms_eccentricity", "diffusion_scale"):
             v = getattr(self, name)
             if number(v) and not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {v}")
-        for name in ("sky_gain", "sky_extinction", "ambient"):
+        for name in ("sky_gain", "sky_extinction", "ambient", "diffusion_gain"):
             v = getattr(self, name)
             if number(v) and v < 0.0:
                 raise ValueError(f"{name} must be >= 0, got {v}")

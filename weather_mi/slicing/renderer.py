@@ -19,6 +19,7 @@ import numpy as np
 
 from ..imageio import Image
 from ..jitarrays import aligned_float
+from ..forward_peak import DEFAULT_CONE_DEG, check_cone_deg, peak_tables
 from ..optics import OpticalVolume
 from ..scene import SceneSpec
 from .background import sky_irradiance_horizontal
@@ -41,7 +42,8 @@ class SliceRenderer:
 
     def __init__(self, vol: OpticalVolume, mode: SliceMode = SliceMode(), slices: int = 128,
                  light_res: int | None = None, detail_field: np.ndarray | None = None, uniform_phase=None,
-                 differentiable: bool = False, detail_noise: np.ndarray | None = None):
+                 differentiable: bool = False, detail_noise: np.ndarray | None = None,
+                 forward_peak_deg: float | None = None):
         from ..variant import ensure_registered
         ensure_registered()
         import mitsuba as mi
@@ -81,6 +83,14 @@ class SliceRenderer:
         if mode.phase == "uniform":
             u = uniform_phase if uniform_phase is not None else tables[0]
             tables = [u] * self.n_species
+        # the forward peaks as unscattered light (delta-M, as the path-traced reference does): the
+        # "multiple" model by default, the paper's modes as published (no truncation)
+        if forward_peak_deg is None:
+            forward_peak_deg = DEFAULT_CONE_DEG if mode.light == "multiple" else 0.0
+        self.forward_peak_deg = check_cone_deg(forward_peak_deg)
+        self.peak_fraction = np.zeros(self.n_species)  # f_s: each species' peak share of its scattering
+        if self.forward_peak_deg > 0:
+            self.peak_fraction, tables = peak_tables(tables, self.forward_peak_deg)
         self.tables = tables
         sp = vol.species_set
         if sp is not None:
@@ -107,7 +117,7 @@ class SliceRenderer:
         self.views = ViewCache(self.box)
         # the cloud's asymmetry parameter for the ground's transmission: species weighted by their scattering
         sca = np.array([float(np.sum(vol.beta_ext[si])) * float(np.mean(self.albedo_rgb[si]))
-                        for si in range(self.n_species)])
+                        for si in range(self.n_species)]) * (1.0 - self.peak_fraction)
         gs = np.array([float(t.g[1]) for t in self.tables])
         self.g_scattering = float(np.sum(sca * gs) / np.sum(sca)) if np.sum(sca) > 0 else 0.85
         self._texture_key = None  # the per-species inputs of the textures last built (plain numbers)
@@ -123,6 +133,13 @@ class SliceRenderer:
                 raise ValueError(f"unknown species {n!r} in scale; expected one of {names}")
         scale = np.array([float(params.scale.get(n, 1.0)) for n in names])
         albedo = self.albedo_rgb if params.albedo is None else np.full((self.n_species, 3), params.albedo)
+        if np.any(self.peak_fraction > 0):
+            # delta-M per species (forward_peak.py): sigma_t' = sigma_t (1 - omega f), omega' = omega (1 - f) /
+            # (1 - omega f); the kept extinction enters as a factor of the species' scaling
+            f = self.peak_fraction
+            kept = 1.0 - albedo.mean(axis=1) * f
+            albedo = albedo * ((1.0 - f) / kept)[:, None]
+            scale = scale * kept
         omega = albedo.mean(axis=1)
         tint = albedo / np.maximum(omega[:, None], 1e-12)
         cone = params.cone_angle_deg
@@ -209,7 +226,8 @@ class SliceRenderer:
         self.timing = {"light_s": t_light - t_start, "eye_s": t_eye - t_light, "total_s": t_eye - t_start}
         plain = lambda v: None if dr.is_array_v(v) else v  # noqa: E731
         meta = {"renderer": "slicing", "mode": self.mode.__dict__, "slices": self.slices,
-                "light_res": self.light_res, "params": {k: plain(v) for k, v in params.__dict__.items()},
+                "light_res": self.light_res, "forward_peak_deg": self.forward_peak_deg,
+                "params": {k: plain(v) for k, v in params.__dict__.items()},
                 "seconds": t_eye - t_start, "back_to_front": g.back_to_front, "scene": spec.to_dict(),
                 "species_preset": self.vol.attrs.get("species_preset"), "source": self.vol.attrs.get("source"),
                 "forward_fraction_per_species": [None if dr.is_array_v(v) else float(v) for v in fwd]}
@@ -230,7 +248,8 @@ class SliceRenderer:
         if self.mode.light == "multiple":
             model = LightModel(self.light, self.sky_light, self.mode.octaves, _param(mi, params.ms_extinction),
                                _param(mi, params.ms_contribution), _param(mi, params.ms_eccentricity),
-                               _param(mi, params.sky_extinction), g=self.g_scattering,
+                               _param(mi, params.sky_extinction), _param(mi, params.diffusion_gain),
+                               _param(mi, params.diffusion_scale), g=self.g_scattering,
                                mu0=_param(mi, max(float(spec.sun.to_sun[2]), 1e-3)))
             gain = params.sky_gain
         else:

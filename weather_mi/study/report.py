@@ -96,8 +96,9 @@ def write_report(cfg, scenes, skipped, rows, timings, convergence, figure_pairs,
                  ["scene", "lighting", "reference s", "spp", "noise floor (RMSE)", "mean cloud radiance"]), ""]
     L += ["## Table IV modes against the reference", "",
           "The paper's four modes and `per-species/multiple`, the light model beyond the paper (single scattering "
-          "plus multiple-scattering octaves driven by the optical depth towards the sun, and skylight shadowed by "
-          "the optical depth towards the zenith) with its shipped defaults. "
+          "plus multiple-scattering octaves driven by the optical depth towards the sun, a diffusion term of the cloud "
+          "column along the sun ray, skylight shadowed by the optical depth towards the zenith, and forward "
+          "peaks within 3 degrees as unscattered light, as in the reference) with its shipped defaults. "
           "`physical-ff`: surviving forward fraction from the phase tables' cone fraction (per species); "
           "`paper-ff-0.9`: the paper's 90%.", "",
           _table(main_rows, ["scene", "lighting", "mode", "setting", "rmse", "rel_mse", "ssim", "ciede2000", "flip",
