@@ -17,9 +17,9 @@ import time
 
 import numpy as np
 
+from ..forward_peak import DEFAULT_CONE_DEG, check_cone_deg, peak_tables
 from ..imageio import Image
 from ..jitarrays import aligned_float
-from ..forward_peak import DEFAULT_CONE_DEG, check_cone_deg, peak_tables
 from ..optics import OpticalVolume
 from ..scene import SceneSpec
 from .background import sky_irradiance_horizontal
