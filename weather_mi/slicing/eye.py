@@ -20,7 +20,10 @@ column (``diffusion_profile``), which, unlike the octaves, is not capped by a ge
 decay exponentially into a thick cloud (in a conservative cloud diffused light falls linearly with depth,
 and it is brighter just inside a sunlit face than at it), while thin clouds get little of it. The medium is
 the one the path tracer renders: phase-function peaks within 3 deg count as unscattered light (delta-M,
-``weather_mi.forward_peak``; ``SliceRenderer(forward_peak_deg=)``). L_amb is the sky's mean radiance times
+``weather_mi.forward_peak``; ``SliceRenderer(forward_peak_deg=)``). The model reads optical depths from the
+light volumes interpolated as depths (``LightVolume.lookup(log_direct=True)``: linear between two planes of a
+homogeneous slab, where the light is not), and takes the diffusion profile, which is linear in depth, at the
+eye-weighted mean position of the eye's segment (``SlabAverage.mean_offset``). L_amb is the sky's mean radiance times
 ``ambient`` (paper modes, unshadowed) or ``sky_gain`` x exp(-sky_extinction x the optical depth towards the
 zenith) ("multiple").
 
@@ -63,10 +66,11 @@ class LightModel:
         decay rates read from the light volume one slice further towards the sun."""
         import drjit as dr
         factor, k_d, k_f = (lambda kappa: 1.0), 0.0, 0.0  # noqa: E731
+        log = self.octaves is not None  # the "multiple" model reads optical depths: interpolated as such
         if slab is None:
-            direct, indirect = self.sun.lookup(p)
+            direct, indirect = self.sun.lookup(p, log_direct=log)
         else:
-            (direct, indirect), (d_prev, i_prev) = self.sun.lookup(p, with_previous=True)
+            (direct, indirect), (d_prev, i_prev) = self.sun.lookup(p, with_previous=True, log_direct=log)
             k_d = _depth_between(dr, direct, d_prev)                   # one slice's depth, direct beam
             k_f = _depth_between(dr, direct + indirect, d_prev + i_prev)  # and all forward light
             factor = slab.factor
@@ -83,13 +87,16 @@ class LightModel:
             B += bi * (1.0 - ci) * t
         # multiple scattering needs a cloud to scatter in: the octaves are weighted by the fraction of
         # the sunlight that the whole cloud column along the sun ray through p intercepts
-        column, _ = self.sun.lookup(p, exit_plane=True)
+        column, _ = self.sun.lookup(p, exit_plane=True, log_direct=True)
         A = direct * factor(k_d) + (1.0 - column) * A
         tau_col = -dr.log(dr.maximum(column, 1e-30))
-        B = (1.0 - column) * B + self.diffusion_gain * diffusion_profile(dr, -log_d, tau_col, self.diffusion_scale)
+        tau = -log_d
+        if slab is not None:  # the profile is linear in tau: its eye-weighted mean over the segment is its value
+            tau = dr.clip(tau + slab.sigma * k_d * slab.mean_offset(), 0.0, tau_col)  # at the mean position
+        B = (1.0 - column) * B + self.diffusion_gain * diffusion_profile(dr, tau, tau_col, self.diffusion_scale)
         occ = 1.0
         if self.sky is not None:
-            up, _ = self.sky.lookup(p)
+            up, _ = self.sky.lookup(p, log_direct=True)
             occ = dr.exp(self.sky_extinction * dr.log(dr.maximum(up, 1e-30)))
         return A, B, occ
 
@@ -101,7 +108,7 @@ class LightModel:
         A, B, occ = self.terms(p)
         if self.octaves is None:
             return A + B, occ
-        direct, _ = self.sun.lookup(p)
+        direct, _ = self.sun.lookup(p, log_direct=True)
         tau_vertical = -dr.log(dr.maximum(direct, 1e-30)) * self.mu0
         return ground_transmission(dr, tau_vertical, self.mu0, self.g), occ
 
@@ -169,6 +176,15 @@ class SlabAverage:
         self.thin = xh < 1e-4
         # log of x exp(-x h) / (1 - exp(-2 x h)), guarded where thin (the factor is then 1)
         self.base = dr.log(dr.maximum(x, 1e-30)) - xh - dr.log(dr.maximum(1.0 - dr.exp(-2.0 * xh), 1e-30))
+
+    def mean_offset(self):
+        """The eye-weighted mean position in the segment, in slice units from the sample: u_bar with
+        weights exp(-x (u + h)) on [-h, h], = 1/x - 2 h exp(-2 x h) / (1 - exp(-2 x h)) - h (0 for a thin
+        segment, -h + 1/x for a thick one: one optical depth past the face the eye enters by)."""
+        dr, x, h = self.dr, self.x, self.h
+        e = dr.exp(-2.0 * x * h)
+        thick = 1.0 / dr.maximum(x, 1e-30) - 2.0 * h * e / dr.maximum(1.0 - e, 1e-30) - h
+        return dr.select(x * h < 1e-3, -x * h * h / 3.0, thick)
 
     def factor(self, kappa):
         dr = self.dr

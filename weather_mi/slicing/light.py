@@ -175,13 +175,17 @@ class LightVolume:
         self.store, self.geometry = store, g
 
     # ------------------------------------------------------------------ the lookup
-    def lookup(self, p, exit_plane: bool = False, with_previous: bool = False):
+    def lookup(self, p, exit_plane: bool = False, with_previous: bool = False, log_direct: bool = False):
         """(direct, indirect) light at world points ``p`` (mi.Point3f) inside a kernel: bilinear in
         the buffer, linear between the two nearest planes; (1, 0) on the light's side of the box and
         outside the buffer's footprint (light rays that miss the box). With ``exit_plane``: the light
         leaving the box on the same light ray (the last plane). With ``with_previous``: also the light
         one slice nearer the light on the same light ray (at p + l x light step), sharing the
-        buffer's interpolation weights: ((direct, indirect), (direct, indirect) nearer the light)."""
+        buffer's interpolation weights: ((direct, indirect), (direct, indirect) nearer the light). With
+        ``log_direct``: the direct light is interpolated as its logarithm (the optical depth towards the
+        light, which is linear inside a homogeneous slab where the light itself is not: between two planes
+        of a dense tower, D falls from 1 to exp(-50), and a linear interpolation of D leaves most of the
+        slab unshadowed and then drops)."""
         mi = self.mi
         import drjit as dr
         g, R = self.geometry, self.res
@@ -200,23 +204,27 @@ class LightVolume:
         k0 = dr.minimum(mi.UInt32(kc), max(g.n_slices - 1, 0))
         fx, fy, fk = x - mi.Float(x0), y - mi.Float(y0), kc - mi.Float(k0)
 
+        def texel(at):
+            v = dr.gather(mi.Array2f, self.store, at)
+            return mi.Array2f(dr.log(dr.maximum(v[0], 1e-30)), v[1]) if log_direct else v
+
         def plane(k):
             base = (k * R + y0) * R + x0
-            a = dr.gather(mi.Array2f, self.store, base)
-            b = dr.gather(mi.Array2f, self.store, base + 1)
-            c = dr.gather(mi.Array2f, self.store, base + R)
-            d = dr.gather(mi.Array2f, self.store, base + R + 1)
+            a, b, c, d = texel(base), texel(base + 1), texel(base + R), texel(base + R + 1)
             return (a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy
 
+        def light(v):
+            return mi.Array2f(dr.exp(v[0]), v[1]) if log_direct else v
+
         here, after = plane(k0), plane(k0 + 1)
-        val = (1.0 - fk) * here + fk * after
+        val = light((1.0 - fk) * here + fk * after)
         unlit = (kf < -0.5) | outside
         out = (dr.select(unlit, 1.0, val[0]), dr.select(unlit, 0.0, val[1]))
         if not with_previous:
             return out
         # one plane nearer the light: planes k0 - 1 and k0 (plane 0 where k0 = 0: the clamp of kf - 1)
         before = plane(dr.select(k0 > 0, k0 - 1, 0))
-        prev = dr.select(k0 > 0, (1.0 - fk) * before + fk * here, here)
+        prev = light(dr.select(k0 > 0, (1.0 - fk) * before + fk * here, here))
         unlit = (kf < 0.5) | outside
         return out, (dr.select(unlit, 1.0, prev[0]), dr.select(unlit, 0.0, prev[1]))
 
