@@ -263,7 +263,8 @@ def test_view_cache_is_bounded_for_an_orbiting_camera():
 
 def test_multiple_light_model_reduces_to_single_scattering_and_adds_light():
     """With no octave beyond the first and no skylight the "multiple" model is the low-albedo image
-    (single scattering of the direct beam); its octaves and skylight only add light. (No ground: under
+    (single scattering of the direct beam; within 10% per pixel and 2% on average, the interpolation between
+    slice planes differing); its octaves and skylight only add light. (No ground: under
     the "multiple" model it is lit by the column's diffuse transmission, tests/test_slicing_ground.py.)"""
     vol = blob_volume()
     spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=180, elevation=10, fov=40), sun=wm.Sun(170, 30),
@@ -271,7 +272,11 @@ def test_multiple_light_model_reduces_to_single_scattering_and_adds_light():
     low = render_slices(spec, vol, SliceMode("per_species", "low_albedo"), slices=48, light_res=32)
     single = render_slices(spec, vol, SliceMode("per_species", "multiple"), slices=48, light_res=32,
                            forward_peak_deg=0.0, ms_contribution=0.0, diffusion_gain=0.0, sky_gain=0.0)
-    np.testing.assert_allclose(single.radiance, low.radiance, rtol=1e-4, atol=1e-7)
+    # the same up to how the light is interpolated between slice planes (the "multiple" model interpolates
+    # optical depths, the paper's modes the light: test_optical_depth_is_interpolated_between_slice_planes)
+    lit = low.radiance.mean(axis=2) > 0.05 * low.radiance.max()
+    np.testing.assert_allclose(single.radiance[lit], low.radiance[lit], rtol=0.1)
+    assert single.radiance[lit].mean() == pytest.approx(low.radiance[lit].mean(), rel=0.02)
     full = render_slices(spec, vol, SliceMode("per_species", "multiple"), slices=48, light_res=32)
     assert np.all(full.radiance >= single.radiance - 1e-7)
     cloud = low.radiance.mean(axis=2) > 0
