@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from weather_mi.viewer.browser import ViewerProcess, chromium_path, drag, frame_src, wait_frames, wait_idle
+from weather_mi.viewer.browser import (ViewerProcess, chromium_path, drag, frame_src, last_status, wait_frames,
+                                       wait_idle)
 
 pytestmark = pytest.mark.skipif(chromium_path() is None, reason="no chromium (./setup.sh installs it)")
 SERIES = Path(__file__).resolve().parents[2] / "shared" / "data" / "wrf" / "wrfout_quarter_ss_series.nc"
@@ -66,8 +67,7 @@ def camera_origin(code: str) -> np.ndarray:
     return np.array([float(v) for v in m.group(1).split(",")])
 
 
-def status(page) -> str:
-    return page.evaluate("window.wmStats.statuses[window.wmStats.statuses.length - 1]")
+status = last_status
 
 
 def test_the_first_frame_arrives_and_is_not_blank(page, viewer, tmp_path):

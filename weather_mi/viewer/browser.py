@@ -115,8 +115,10 @@ def wait_frames(page, n: int = 1, timeout_s: float = 60.0) -> int:
     return page.evaluate("window.wmStats.frames")
 
 
-def wait_idle(page, quiet_s: float = 1.0, timeout_s: float = 30.0) -> int:
-    """Wait until no frame has arrived for ``quiet_s`` (the refine after an input has landed)."""
+def wait_idle(page, quiet_s: float = 1.0, timeout_s: float = 30.0, refined: bool = True) -> int:
+    """Wait until no frame has arrived for ``quiet_s`` and, with ``refined``, the last frame is not a
+    draft (the refine after an input has landed, however long it took: a kernel compiled on first use
+    can take longer than ``quiet_s``)."""
     t_end = time.perf_counter() + timeout_s
     last = page.evaluate("window.wmStats.frames")
     quiet_since = time.perf_counter()
@@ -125,9 +127,14 @@ def wait_idle(page, quiet_s: float = 1.0, timeout_s: float = 30.0) -> int:
         now = page.evaluate("window.wmStats.frames")
         if now != last:
             last, quiet_since = now, time.perf_counter()
-        elif time.perf_counter() - quiet_since >= quiet_s:
+        elif time.perf_counter() - quiet_since >= quiet_s and not (refined and "(draft)" in last_status(page)):
             return now
     return last
+
+
+def last_status(page) -> str:
+    """The status line of the last frame the page received ("" before the first)."""
+    return page.evaluate("(window.wmStats.statuses || []).slice(-1)[0] || ''")
 
 
 def frame_src(page) -> str:
