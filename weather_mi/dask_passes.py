@@ -125,13 +125,19 @@ class RemotePasses:
                         _render_pass_task, scene, nxt, self.per_pass(nxt), pass_seed(self.job.spec.seed, nxt),
                         self.worker_variant, mi.variant(), key=f"weather-mi-pass-{token}-{nxt}", pure=False)
                     nxt += 1
+                future = self._futures[i]
                 while True:  # pass i, in order (later passes render meanwhile and wait on their workers)
                     try:
-                        k, raw, secs, addr = self._futures[i].result(timeout=POLL_S)  # a task error raises here
+                        k, raw, secs, addr = future.result(timeout=POLL_S)  # a task error raises here
                         break
                     except TimeoutError:
                         idle_since = self._check_alive(idle_since)
-                del self._futures[i]  # released: the workers need not keep the image
+                # released: the workers need not keep the image. Explicitly: a result() that timed out leaves
+                # the future in a traceback cycle that only Python's cyclic GC would free, so the pass that
+                # waited longest (the first) could stay on the workers for minutes
+                del self._futures[i]
+                future.release()
+                del future
                 summary["passes_by_worker"][addr] = summary["passes_by_worker"].get(addr, 0) + 1
                 summary["bytes_per_pass"] = int(raw.nbytes)
                 summary["worker_seconds"] += secs
