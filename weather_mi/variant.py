@@ -69,17 +69,24 @@ def _on_variant_change(old: str | None, new: str | None) -> None:
         _register_current()
 
 
+def _core_function(name: str):
+    """A function exported by Dr.Jit's core library (ctypes), or None where this build lacks it."""
+    import ctypes
+    import os
+    import drjit as dr
+    try:
+        return getattr(ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so")), name)
+    except (OSError, AttributeError):
+        return None
+
+
 def tune_llvm(block_size: int = LLVM_BLOCK_SIZE) -> bool:
     """Set Dr.Jit's LLVM block size (lanes per work unit of the CPU thread pool). Dr.Jit exports the
     setting from its core library without a Python binding: called through ctypes, and skipped (False)
     where the symbol is absent (another Dr.Jit build)."""
     import ctypes
-    import os
-    import drjit as dr
-    try:
-        core = ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so"))
-        setter = core._Z23jit_llvm_set_block_sizej
-    except (OSError, AttributeError):
+    setter = _core_function("_Z23jit_llvm_set_block_sizej")
+    if setter is None:
         return False
     setter.argtypes = [ctypes.c_uint32]
     setter(int(block_size))
@@ -89,11 +96,8 @@ def tune_llvm(block_size: int = LLVM_BLOCK_SIZE) -> bool:
 def llvm_block_size() -> int | None:
     """Dr.Jit's current LLVM block size (None where it cannot be read)."""
     import ctypes
-    import os
-    import drjit as dr
-    try:
-        getter = ctypes.CDLL(os.path.join(os.path.dirname(dr.__file__), "libdrjit-core.so"))._Z19jit_llvm_block_sizev
-    except (OSError, AttributeError):
+    getter = _core_function("_Z19jit_llvm_block_sizev")
+    if getter is None:
         return None
     getter.restype = ctypes.c_uint32
     return int(getter())
