@@ -125,6 +125,10 @@ LONG_WALK_DEPTH = 1024  # see "Russian roulette" in the module docstring
 DEFAULT_EMITTER_NEE = 0.1  # probability of sampling the scene's emitters (the sky) at a vertex: 1.2x the efficiency of 0.25, 2x that of 0.05 (demo views)
 GUIDE_GROWTH = 2.0    # sun guiding: bound of the product of 1 / (1 - eps) along a path
 GUIDE_SEEN = 0.1      # sun guiding at full strength where the sun's transmittance estimate is >= this
+DEFAULT_TRACKING_GRID = "texel"  # free flights: "texel" (majorants per texel cell) or "coarse" (the majorant grid)
+DEFAULT_TRANSMITTANCE = "exact"  # shadow rays: "exact" (Simpson per texel cell) or "ratio" (ratio tracking)
+TAU_ZERO = 50.0      # exact transmittance: 0 beyond this optical depth (e^-50 ~ 2e-22)
+MAX_JOBS_PER_LAUNCH = 1 << 22  # persistent lanes: samples per kernel launch (12 bytes of radiance each)
 
 
 def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
@@ -176,7 +180,32 @@ def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: flo
     return (np.maximum(d, 0.0) * float(safety)).astype(np.float32)
 
 
+def empty_space_radius(majorant: np.ndarray) -> np.ndarray:
+    """For each coarse cell, the largest k such that every cell within k cells of it (Chebyshev
+    distance, i.e. the cube of side 2k + 1 centred on it, cells beyond the grid counting as empty) has
+    majorant 0: the DDA may cross that cube in one step (proximity clouds, Cohen & Sheffer 1994).
+    0 for occupied cells and for empty cells next to an occupied one. int32, the shape of ``majorant``."""
+    from scipy.ndimage import distance_transform_cdt
+    occupied = np.asarray(majorant) > 0.0
+    if not occupied.any():
+        return np.full(occupied.shape, max(occupied.shape), np.int32)
+    d = distance_transform_cdt(~occupied, metric="chessboard")  # distance to the nearest occupied cell
+    return np.maximum(d - 1, 0).astype(np.int32)
+
+
 # ---------------------------------------------------------------- Mitsuba helpers
+
+class _Grid:
+    """A grid of majorants for the DDA: cell c (per axis lo <= c < lo + dims) spans [c, c + 1) in the
+    coordinates q = local * scale + shift; ``majorant`` (Float, flattened (Z, Y, X), index c - lo) and
+    ``empty`` (Int32, ``empty_space_radius``) per cell. Sizes and scales are opaque (no recompiles)."""
+
+    def __init__(self, majorant, empty, dims, scale, shift: float, lo: int):
+        self.majorant, self.empty = majorant, empty
+        self.dims = [dr.opaque(mi.Int32, int(v)) for v in dims]
+        self.scale = [dr.opaque(mi.Float, float(v)) for v in scale]
+        self.shift, self.lo = float(shift), int(lo)
+
 
 class _Children:
     """Collects the direct children and values that an object exposes through ``traverse`` (methods
@@ -194,6 +223,66 @@ def _children(obj) -> dict:
     cb = variant_class(_Children, "TraversalCallback")()
     obj.traverse(cb)
     return cb.items
+
+
+_JOB_SAMPLERS: dict = {}
+_PCG_MULT = 0x5851F42D4C957F2D
+
+
+def _splitmix64(x: int) -> int:
+    """SplitMix64 of ``x``: a well-mixed 64-bit key for a pass seed."""
+    z = (x + 0x9E3779B97F4A7C15) & 0xFFFFFFFFFFFFFFFF
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & 0xFFFFFFFFFFFFFFFF
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & 0xFFFFFFFFFFFFFFFF
+    return z ^ (z >> 31)
+
+
+def _seed_pcg(rng, initstate, initseq, active):
+    """PCG32's seeding (``PCG32.seed``: stream ``initseq``, offset ``initstate``) in the lanes ``active``."""
+    inc = (initseq << 1) | 1
+    state = inc + initstate          # state = 0; step; state += initstate
+    state = state * _PCG_MULT + inc  # step
+    rng.state = dr.select(active, state, rng.state)
+    rng.inc = dr.select(active, inc, rng.inc)
+
+
+def _job_sampler_class():
+    """The sampler of the persistent lanes (one per variant): ``next_1d`` / ``next_2d`` from a PCG32 that
+    is re-seeded for every sample (a Mitsuba sampler cannot be re-seeded per lane inside a kernel)."""
+    key = mi.variant()
+    if key not in _JOB_SAMPLERS:
+        class JobSampler:
+            DRJIT_STRUCT = {"rng": mi.PCG32}
+
+            def __init__(self):
+                self.rng = mi.PCG32()
+
+            def next_1d(self, active=True):
+                return self.rng.next_float32(mi.Bool(active))
+
+            def next_2d(self, active=True):
+                a = mi.Bool(active)
+                u = self.rng.next_float32(a)
+                return mi.Point2f(u, self.rng.next_float32(a))
+        _JOB_SAMPLERS[key] = JobSampler
+    return _JOB_SAMPLERS[key]
+
+
+def _default_lanes() -> int:
+    """Lanes of a persistent-lane launch: one LLVM block per worker thread (each thread's first packet
+    then takes samples until none are left), at least 64."""
+    try:
+        from ..variant import llvm_block_size
+        block = llvm_block_size() or 1024
+    except Exception:  # noqa: BLE001 - the block size is only a hint
+        block = 1024
+    return max(64, int(dr.thread_count()) * int(block))
+
+
+def _phase_ctx(sampler):
+    """A phase-function context; the persistent-lane renderer's samplers (``_JobSampler``) are not
+    Mitsuba samplers, and no phase function used here reads the context's sampler."""
+    return mi.PhaseFunctionContext(sampler if isinstance(sampler, mi.Sampler) else None)
 
 
 def _mis_weight(pdf_a, pdf_b):
@@ -223,7 +312,7 @@ class _MediumSetup:
                 if m is not None:
                     media.setdefault(_key(m), m)
         for sensor in scene.sensors():
-            m = sensor.medium() if hasattr(sensor, "medium") else None
+            m = sensor.get_medium() if hasattr(sensor, "get_medium") else None
             if m is not None:
                 media.setdefault(_key(m), m)
         if sensor_medium is not None:
@@ -280,9 +369,16 @@ class MajorantVolpath:
             self.majorant = mi.TensorXf(np.ascontiguousarray(m))
         self._auto_key = None
         self.to_world = props["to_world"] if "to_world" in props else None
+        self.tr_mode = str(props.get("transmittance", DEFAULT_TRANSMITTANCE))
+        if self.tr_mode not in ("exact", "ratio"):
+            raise ValueError(f"{PLUGIN_NAME}: 'transmittance' must be 'exact' or 'ratio', got {self.tr_mode!r}")
+        self.track_mode = str(props.get("tracking_grid", DEFAULT_TRACKING_GRID))
+        if self.track_mode not in ("texel", "coarse"):
+            raise ValueError(f"{PLUGIN_NAME}: 'tracking_grid' must be 'texel' or 'coarse', got {self.track_mode!r}")
+        self._texel = None
         self._init_sun(props)
         # per-render state (medium, transforms, majorant lanes), filled by _setup
-        self._maj = None
+        self._track = self._coarse = None
 
     def _init_sun(self, props):
         """The integrator's own sun (see the module docstring, "The sun"): ``sun_direction`` (towards the
@@ -417,9 +513,37 @@ class MajorantVolpath:
         else:
             cells_per_unit = (nx, ny, nz)
         # opaque: new resolutions / values do not recompile
-        self._res = [dr.opaque(mi.Int32, v) for v in (nx, ny, nz)]
-        self._cpu = [dr.opaque(mi.Float, float(v)) for v in cells_per_unit]
-        self._maj = self.majorant.array
+        maj_key = (self.majorant.array.index, tuple(self.majorant.shape))
+        if maj_key != getattr(self, "_skip_key", None):
+            self._skip = mi.Int32(empty_space_radius(self.majorant.numpy()).ravel())
+            self._skip_key = maj_key
+        self._coarse = _Grid(self.majorant.array, self._skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
+        self._texel = self._texel_grid(vol, ms.scale)
+        self._track = self._texel if (self._texel is not None and self.track_mode == "texel") else self._coarse
+
+    def _texel_grid(self, vol, scale):
+        """The texel-centre grid (None without a sigma_t grid): its cells lie between 2 x 2 x 2 texel
+        centres (cells -1 .. N - 1 per axis, the first and last halves cut by the box), where the trilinear
+        interpolant is one trilinear polynomial; majorant = SAFETY x the maximum of the cell's 8 texels,
+        which is the maximum of the interpolant there (0: it is 0 in the cell)."""
+        if vol is None:
+            return None
+        data = self._volume_data(vol)
+        key = (data.array.index, scale)
+        if key != getattr(self, "_texel_key", None):
+            a = np.asarray(data, np.float64)
+            a = a.max(axis=3) if a.ndim == 4 else a
+            a = np.pad(np.maximum(a, 0.0) * scale, 1, mode="edge")  # clamped borders: cells -1 .. N - 1
+            for axis in range(3):
+                lo = [slice(None)] * 3
+                hi = [slice(None)] * 3
+                lo[axis], hi[axis] = slice(0, -1), slice(1, None)
+                a = np.maximum(a[tuple(lo)], a[tuple(hi)])
+            maj = (a * SAFETY).astype(np.float32)
+            self._texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty_space_radius(maj).ravel()))
+            self._texel_key = key
+        rx, ry, rz = (int(v) for v in vol.resolution())
+        return _Grid(*self._texel_arrays, (rx + 1, ry + 1, rz + 1), (rx, ry, rz), shift=-0.5, lo=-1)
 
     @staticmethod
     def _check_bbox(to_world, vol):
@@ -477,9 +601,85 @@ class MajorantVolpath:
         mei.sigma_s, mei.sigma_t = sigma_s, sigma_t
         return mei, dr.select(sigma_t > 0.0, sigma_s / dr.select(sigma_t > 0.0, sigma_t, 1.0), 0.0)
 
-    # ------------------------------------------------------------ majorant walk
+    # ------------------------------------------------------------ grids and the DDA
+    def _ray_box(self, ray, t_end, active):
+        """The ray in the grid's local (unit-cube) coordinates and its overlap [t_near, t_far] with the
+        cube within [0, t_end]; ``active`` cleared where it misses."""
+        o_l = self._to_local @ ray.o
+        d_l = self._to_local @ mi.Vector3f(ray.d)
+        t_near, t_far = mi.Float(0.0), mi.Float(t_end)
+        for k in range(3):
+            o, d = o_l[k], d_l[k]
+            flat = dr.abs(d) < 1e-30
+            inv = dr.rcp(dr.select(flat, 1.0, d))
+            ta, tb = (0.0 - o) * inv, (1.0 - o) * inv
+            inside = (o >= 0.0) & (o <= 1.0)
+            t_near = dr.select(flat, dr.select(inside, t_near, dr.inf), dr.maximum(t_near, dr.minimum(ta, tb)))
+            t_far = dr.select(flat, dr.select(inside, t_far, -dr.inf), dr.minimum(t_far, dr.maximum(ta, tb)))
+        return o_l, d_l, t_near, t_far, mi.Bool(active) & (t_near < t_far)
+
+    @staticmethod
+    def _locate(grid, q0, dq, t):
+        """DDA state at distance t: per axis the cell (clipped to the grid; on a face, the cell the ray
+        enters) and the distance at which the ray leaves it along that axis."""
+        cells, nexts = [], []
+        for k in range(3):
+            q = q0[k] + dq[k] * t
+            c = mi.Int32(dr.floor(q))
+            c = dr.select((dq[k] < 0.0) & (mi.Float(c) == q), c - 1, c)
+            c = dr.clip(c, grid.lo, grid.lo + grid.dims[k] - 1)
+            boundary = mi.Float(c) + dr.select(dq[k] > 0.0, 1.0, 0.0)
+            inv = dr.rcp(dr.select(dq[k] != 0.0, dq[k], 1.0))
+            nexts.append(dr.select(dq[k] != 0.0, dr.maximum(t + (boundary - q) * inv, t), dr.inf))
+            cells.append(c)
+        return cells, nexts
+
+    @classmethod
+    def _dda_step(cls, grid, q0, dq, t, cells, nexts, jump_k, move):
+        """Advance the DDA of the lanes ``move`` to distance t: to the next cell, or (``jump_k`` >= 1)
+        to where the ray leaves the empty cube of radius jump_k; returns (cells, nexts, outside)."""
+        jump = move & (jump_k > 0)
+        jc, jn = cls._locate(grid, q0, dq, t)
+        tx, ty, tz = nexts
+        ax = [(tx <= ty) & (tx <= tz)]
+        ax.append(~ax[0] & (ty <= tz))
+        ax.append(~ax[0] & ~ax[1])
+        out_cells, out_nexts = [], []
+        outside = mi.Bool(False)
+        for a in range(3):
+            plain = move & ~jump & ax[a]
+            step = dr.select(dq[a] > 0.0, mi.Int32(1), mi.Int32(-1))
+            delta = dr.abs(dr.rcp(dr.select(dq[a] != 0.0, dq[a], 1.0)))
+            c = dr.select(jump, jc[a], dr.select(plain, cells[a] + step, cells[a]))
+            out_cells.append(c)
+            out_nexts.append(dr.select(jump, jn[a], dr.select(plain, nexts[a] + delta, nexts[a])))
+            outside |= (c < grid.lo) | (c >= grid.lo + grid.dims[a])
+        return out_cells, out_nexts, outside
+
+    @staticmethod
+    def _cell_of(grid, cells, active):
+        """(majorant, flat index) of the current cells."""
+        cx, cy, cz = (dr.clip(c - grid.lo, 0, grid.dims[a] - 1) for a, c in enumerate(cells))
+        idx = mi.UInt32((cz * grid.dims[1] + cy) * grid.dims[0] + cx)
+        return dr.gather(mi.Float, grid.majorant, idx, active), idx
+
+    @staticmethod
+    def _cell_end(grid, q0, dq, cells, nexts, idx, empty, active):
+        """Where the ray leaves the current cell or, in empty space, the empty cube of radius k >= 1
+        about it (``empty_space_radius``): (t, k), k = 0 for a plain step."""
+        k = dr.gather(mi.Int32, grid.empty, idx, active & empty)
+        k = dr.select(active & empty, k, 0)
+        t_cell = dr.minimum(nexts[0], dr.minimum(nexts[1], nexts[2]))
+        t_exit = mi.Float(dr.inf)
+        for c_k, o_k, d_k in zip(cells, q0, dq):
+            face = dr.select(d_k > 0.0, mi.Float(c_k + k + 1), mi.Float(c_k - k))
+            t_k = (face - o_k) * dr.rcp(dr.select(d_k != 0.0, d_k, 1.0))
+            t_exit = dr.select(d_k != 0.0, dr.minimum(t_exit, t_k), t_exit)
+        return dr.select(k > 0, dr.maximum(t_exit, t_cell), t_cell), k
+
     def _walk(self, ray, t_end, sampler, active, ratio: bool, weight=None):
-        """Walk the coarse majorant grid along ``ray`` over [0, t_end] (clipped to the grid's box).
+        """Walk a majorant grid (``self._track``: the texel-cell grid, else the coarse one) along ``ray``
+        over [0, t_end] (clipped to the grid's box), crossing empty cubes of cells in one step.
 
         ratio=True: ratio tracking, returns the transmittance estimate (Spectrum).
         ratio=False: delta tracking, returns (found, t, weight): whether and where the first real
@@ -490,41 +690,11 @@ class MajorantVolpath:
         returned weight is w sigma_t / (majorant P) at the real collision times the product of
         w (majorant - sigma_t) / (majorant (1 - P)) over the null collisions (unbiased, and the mean of
         the throughput is preserved)."""
-        nx, ny, nz = self._res
-        cpu = self._cpu
-        maj_arr = self._maj
-        o_l = self._to_local @ ray.o
-        d_l = self._to_local @ mi.Vector3f(ray.d)
-
-        # overlap of the ray with the unit cube (local coordinates)
-        t_near, t_far = mi.Float(0.0), mi.Float(t_end)
-        for k in range(3):
-            o, d = o_l[k], d_l[k]
-            flat = dr.abs(d) < 1e-30
-            inv = dr.rcp(dr.select(flat, 1.0, d))
-            ta, tb = (0.0 - o) * inv, (1.0 - o) * inv
-            inside = (o >= 0.0) & (o <= 1.0)
-            t_near = dr.select(flat, dr.select(inside, t_near, dr.inf), dr.maximum(t_near, dr.minimum(ta, tb)))
-            t_far = dr.select(flat, dr.select(inside, t_far, -dr.inf), dr.minimum(t_far, dr.maximum(ta, tb)))
-        active = mi.Bool(active) & (t_near < t_far)
-        t_max = t_far
-
-        # DDA set-up in coarse-cell index space q = local * cells_per_unit
-        oc = [o_l[k] * cpu[k] for k in range(3)]
-        dc = [d_l[k] * cpu[k] for k in range(3)]
-        res = (nx, ny, nz)
-        cell, t_next, t_delta, step = [], [], [], []
-        for k in range(3):
-            q = oc[k] + dc[k] * t_near
-            c = dr.clip(mi.Int32(dr.floor(q)), 0, res[k] - 1)
-            pos = dc[k] > 0.0
-            neg = dc[k] < 0.0
-            inv = dr.rcp(dr.select(pos | neg, dc[k], 1.0))
-            boundary = mi.Float(c) + dr.select(pos, 1.0, 0.0)
-            cell.append(c)
-            t_next.append(dr.select(pos | neg, t_near + (boundary - q) * inv, dr.inf))
-            t_delta.append(dr.select(pos | neg, dr.abs(inv), dr.inf))
-            step.append(dr.select(pos, mi.Int32(1), mi.Int32(-1)))
+        grid = self._track
+        o_l, d_l, t_near, t_max, active = self._ray_box(ray, t_end, active)
+        q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
+        dq = [d_l[k] * grid.scale[k] for k in range(3)]
+        cells, nexts = self._locate(grid, q0, dq, t_near)
 
         ms = self._ms
         spectral = ms.spectral
@@ -538,12 +708,9 @@ class MajorantVolpath:
             return active
 
         def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
-            idx = mi.UInt32((cz * ny + cy) * nx + cx)
-            maj = dr.gather(mi.Float, maj_arr, idx, active)
-            ax_x = (tx <= ty) & (tx <= tz)
-            ax_y = ~ax_x & (ty <= tz)
-            ax_z = ~ax_x & ~ax_y
-            t_cell = dr.minimum(tx, dr.minimum(ty, tz))
+            cells, nexts = [cx, cy, cz], [tx, ty, tz]
+            maj, idx = self._cell_of(grid, cells, active)
+            t_cell, k = self._cell_end(grid, q0, dq, cells, nexts, idx, maj <= 0.0, active)
             seg_end = dr.minimum(t_cell, t_max)
             u = sampler.next_1d(active)
             dt = dr.select(maj > 0.0, -dr.log(1.0 - u) / maj, dr.inf)
@@ -579,28 +746,77 @@ class MajorantVolpath:
                     found |= stop
             t = dr.select(collide, tc, seg_end)
             adv = active & ~collide
-            cx = dr.select(adv & ax_x, cx + step[0], cx)
-            cy = dr.select(adv & ax_y, cy + step[1], cy)
-            cz = dr.select(adv & ax_z, cz + step[2], cz)
-            tx = dr.select(adv & ax_x, tx + t_delta[0], tx)
-            ty = dr.select(adv & ax_y, ty + t_delta[1], ty)
-            tz = dr.select(adv & ax_z, tz + t_delta[2], tz)
-            outside = (cx < 0) | (cx >= nx) | (cy < 0) | (cy >= ny) | (cz < 0) | (cz >= nz)
+            (cx, cy, cz), (tx, ty, tz), outside = self._dda_step(grid, q0, dq, t, cells, nexts, k, adv)
             leave = adv & ((seg_end >= t_max) | outside)
             active &= ~(stop | leave)
             return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
 
         state = dr.while_loop(
-            state=(sampler, active, mi.Float(t_near), cell[0], cell[1], cell[2],
-                   t_next[0], t_next[1], t_next[2], found, tr),
+            state=(sampler, active, mi.Float(t_near), cells[0], cells[1], cells[2],
+                   nexts[0], nexts[1], nexts[2], found, tr),
             cond=cond, body=body, label="majorant_volpath: DDA " + ("ratio" if ratio else "delta") + " tracking")
         _, _, t, _, _, _, _, _, _, found, tr = state
         if ratio:
             return mi.Spectrum(tr) if not spectral else tr
         return found, t, (tr if spectral else weight)
 
+    # ------------------------------------------------------------ exact transmittance
+    def _exact_walk(self, ray, t_end, active):
+        """exp(-optical depth) of ``ray`` over [0, t_end] (clipped to the grid's box), computed exactly:
+        the trilinear interpolant of sigma_t is one trilinear polynomial in each cell of the texel-centre
+        grid (``self._texel``), so along a ray it is a cubic in t there, which Simpson's rule integrates
+        exactly: tau = sum over the cells crossed of (t1 - t0) / 6 (s(t0) + 4 s(tm) + s(t1)), with s the
+        medium's own ``sigma_t`` lookup. Cells whose texels are all 0 cost no lookups and empty cubes of
+        cells are crossed in one step. Stops with 0 once tau > TAU_ZERO (the rest is below e^-TAU_ZERO).
+        Deterministic: no random numbers, no variance."""
+        grid = self._texel
+        spectral = self._ms.spectral
+        o_l, d_l, t_near, t_max, active = self._ray_box(ray, t_end, active)
+        q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
+        dq = [d_l[k] * grid.scale[k] for k in range(3)]
+        cells, nexts = self._locate(grid, q0, dq, t_near)
+        s0 = self._sigma_t(ray.o + ray.d * t_near, ray, active)
+        tau = dr.zeros(mi.Spectrum) if spectral else mi.Float(0.0)
+
+        def cond(active, t, cx, cy, cz, tx, ty, tz, s0, tau):
+            return active
+
+        def body(active, t, cx, cy, cz, tx, ty, tz, s0, tau):
+            cells, nexts = [cx, cy, cz], [tx, ty, tz]
+            maj, idx = self._cell_of(grid, cells, active)
+            empty = maj <= 0.0
+            t_cell, k = self._cell_end(grid, q0, dq, cells, nexts, idx, empty, active)
+            seg_end = dr.minimum(t_cell, t_max)
+            lookup = active & ~empty
+            s_m = self._sigma_t(ray.o + ray.d * (0.5 * (t + seg_end)), ray, lookup)
+            s_1 = self._sigma_t(ray.o + ray.d * seg_end, ray, lookup)
+            tau = dr.select(lookup, tau + (seg_end - t) * (1.0 / 6.0) * (s0 + 4.0 * s_m + s_1), tau)  # Simpson
+            s0 = dr.select(lookup, s_1, 0.0)  # a cell whose texels are 0 is 0 on its faces
+            t = dr.select(active, seg_end, t)
+            (cx, cy, cz), (tx, ty, tz), outside = self._dda_step(grid, q0, dq, t, cells, nexts, k, active)
+            deep = (dr.min(tau) if spectral else tau) > TAU_ZERO
+            active &= ~((seg_end >= t_max) | outside | deep)
+            return active, t, cx, cy, cz, tx, ty, tz, s0, tau
+
+        state = dr.while_loop(state=(active, mi.Float(t_near), cells[0], cells[1], cells[2], nexts[0], nexts[1],
+                                     nexts[2], s0, tau),
+                              cond=cond, body=body, label="majorant_volpath: exact transmittance")
+        tau = state[-1]
+        return mi.Spectrum(dr.select((dr.min(tau) if spectral else tau) > TAU_ZERO, 0.0, dr.exp(-tau)))
+
     # ------------------------------------------------------------ main entry
     def sample(self, scene, sampler, ray, medium=None, active=True):
+        cond, body, initial = self._path_loop(scene, medium)
+        state = dr.while_loop(state=initial(sampler, mi.Ray3f(ray), medium, mi.Bool(active)), cond=cond, body=body,
+                              label="majorant_volpath")
+        result, valid_ray = state[5], state[13]
+        return result, valid_ray, []
+
+    def _path_loop(self, scene, medium):
+        """The path loop of :meth:`sample`: (cond, body, initial), where ``initial(sampler, ray, medium,
+        active)`` is the loop state of a path starting with ``ray`` in ``medium`` (the sensor's), its
+        element 1 whether the path is alive, 5 its radiance and 13 whether the ray is valid; ``body``
+        advances every alive path by one event (a scattering, a surface or the escape)."""
         self._setup(scene, medium)
         ms = self._ms
         has_medium = ms.medium is not None
@@ -632,12 +848,16 @@ class MajorantVolpath:
                 return _mis_weight(pdf_a, pdf_b)
             return one_strategy[0] if nee else one_strategy[1]
 
-        ray = mi.Ray3f(ray)
-        active = mi.Bool(active)
-        med0 = dr.zeros(mi.MediumPtr)
-        if medium is not None:
-            med0 = dr.select(active, mi.MediumPtr(medium), med0)
-        valid_ray = mi.Bool((not hide) and scene.environment() is not None)
+        has_env = scene.environment() is not None
+
+        def initial(sampler, ray, medium, active):
+            med0 = dr.zeros(mi.MediumPtr)
+            if medium is not None:
+                med0 = dr.select(active, mi.MediumPtr(medium), med0)
+            return (sampler, active, mi.UInt32(0), ray, mi.Spectrum(1.0), mi.Spectrum(0.0),
+                    dr.zeros(mi.SurfaceInteraction3f), med0, mi.Float(1.0), dr.zeros(mi.Interaction3f),
+                    mi.Float(1.0), mi.Bool(True), mi.Bool(active & (not hide)), mi.Bool((not hide) and has_env),
+                    mi.UInt32(0), mi.Float(GUIDE_GROWTH), mi.Float(1.0), mi.Float(1.0))
 
         def cond(sampler, active, *_):
             return active
@@ -721,7 +941,7 @@ class MajorantVolpath:
                 bsdf_val, bsdf_pdf = bsdf.eval_pdf(bsdf_ctx, si, si.to_local(d), act_e_surf)
                 if not has_medium:
                     return bsdf_val, bsdf_pdf
-                ph_val, ph_pdf = phase.eval_pdf(mi.PhaseFunctionContext(sampler), mei, d, act_scatter)
+                ph_val, ph_pdf = phase.eval_pdf(_phase_ctx(sampler), mei, d, act_scatter)
                 ph_pdf = self._continuation_pdf(phase, sampler, mei, d, ph_val, ph_pdf, alpha, eps, act_scatter)
                 return dr.select(act_e_surf, bsdf_val, ph_val), dr.select(act_e_surf, bsdf_pdf, ph_pdf)
 
@@ -792,7 +1012,7 @@ class MajorantVolpath:
             # ---------------- phase function sampling (with sun guiding: from the mixture of the phase
             # function about the path's direction and the phase function about the sun's direction)
             if has_medium:
-                ph_ctx = mi.PhaseFunctionContext(sampler)
+                ph_ctx = _phase_ctx(sampler)
                 if guiding or by_channel:
                     mei_s = mei
                     if guiding:
@@ -853,13 +1073,79 @@ class MajorantVolpath:
                     last_event, last_pdf, needs_isect, specular_chain, valid_ray, last_long, guide_left,
                     last_pdf_sun, aur_w)
 
-        state = (sampler, active, mi.UInt32(0), ray, mi.Spectrum(1.0), mi.Spectrum(0.0),
-                 dr.zeros(mi.SurfaceInteraction3f), med0, mi.Float(1.0), dr.zeros(mi.Interaction3f),
-                 mi.Float(1.0), mi.Bool(True), mi.Bool(active & (not hide)), valid_ray, mi.UInt32(0),
-                 mi.Float(GUIDE_GROWTH), mi.Float(1.0), mi.Float(1.0))
-        state = dr.while_loop(state=state, cond=cond, body=body, label="majorant_volpath")
-        result, valid_ray = state[5], state[13]
-        return result, valid_ray, []
+        return cond, body, initial
+
+    # ------------------------------------------------------------ persistent lanes
+    def render_pass(self, scene, spp: int, seed: int, lanes: int | None = None,
+                    max_jobs: int = MAX_JOBS_PER_LAUNCH) -> np.ndarray:
+        """One pass of ``spp`` samples per pixel of the scene's first sensor, as ``mi.render(scene, spp=spp,
+        seed=seed)`` renders it (box filter: the mean of the samples whose film position falls in the
+        pixel), but with persistent lanes (module docstring, "Persistent lanes"). Returns (H, W, 3)
+        float32. Deterministic: a sample's random numbers depend on (seed, sample) only, each sample's
+        radiance is written to its own slot and the slots are summed in sample order."""
+        sensor = scene.sensors()[0]
+        film = sensor.film()
+        width, height = (int(v) for v in film.crop_size())
+        if any(int(v) != 0 for v in film.crop_offset()):
+            raise ValueError(f"{PLUGIN_NAME}: render_pass needs a film without a crop offset")
+        spp = int(spp)
+        if spp < 1:
+            raise ValueError(f"{PLUGIN_NAME}: spp must be >= 1, got {spp}")
+        n_pix = width * height
+        medium = sensor.get_medium()
+        cond, body, initial = self._path_loop(scene, medium)
+        job_sampler = _job_sampler_class()
+        lanes = int(lanes) if lanes is not None else _default_lanes()
+        layers = max(1, min(spp, int(max_jobs) // n_pix))   # samples per pixel per launch
+        key = _splitmix64(int(seed))
+        state0 = dr.opaque(mi.UInt64, key)
+        stream = dr.opaque(mi.UInt64, (key >> 32) << 32)  # PCG stream = seed bits | sample number
+        size = [dr.opaque(mi.UInt32, v) for v in (width, height)]
+        inv_size = mi.Point2f(dr.opaque(mi.Float, 1.0 / width), dr.opaque(mi.Float, 1.0 / height))
+        acc = np.zeros((n_pix, 3), np.float64)
+        for layer0 in range(0, spp, layers):
+            n_layers = min(layers, spp - layer0)
+            n = n_layers * n_pix
+            n_lanes = max(1, min(lanes, n))
+            counter = dr.zeros(mi.UInt32, 1)
+            slots = dr.zeros(mi.Float, 3 * n)
+            n_jobs, first = dr.opaque(mi.UInt32, n), dr.opaque(mi.UInt32, layer0 * n_pix)
+            sampler = job_sampler()
+            sampler.rng = mi.PCG32(n_lanes)
+            path = initial(sampler, dr.zeros(mi.Ray3f, n_lanes), medium, dr.full(mi.Bool, False, n_lanes))
+            start_state = (dr.full(mi.UInt32, 0xFFFFFFFF, n_lanes), dr.full(mi.Bool, True, n_lanes),
+                           dr.zeros(mi.Spectrum, n_lanes)) + path
+
+            def pcond(job, alive, weight, *path):
+                return alive
+
+            def pbody(job, alive, weight, *path):
+                path = body(*path)
+                done = alive & ~path[1]
+                # the finished sample's radiance into its slot
+                finished = done & (job < n_jobs)
+                value = path[5] * weight
+                for c in range(3):
+                    dr.scatter(slots, value[c], job * 3 + c, finished)
+                # the next sample, from the shared counter
+                nxt = dr.scatter_inc(counter, mi.UInt32(0), done)
+                start = done & (nxt < n_jobs)
+                job = dr.select(done, nxt, job)
+                alive = (alive & path[1]) | start
+                sampler = path[0]
+                _seed_pcg(sampler.rng, state0, stream | mi.UInt64(first + job), start)
+                pixel = job % (size[0] * size[1])
+                pos = mi.Point2f(mi.Float(pixel % size[0]), mi.Float(pixel // size[0])) + sampler.next_2d(start)
+                ray, ray_weight = sensor.sample_ray(sensor.shutter_open(), sampler.next_1d(start), pos * inv_size,
+                                                    mi.Point2f(0.5, 0.5), start)
+                new = initial(sampler, ray, medium, start)
+                path = (sampler,) + tuple(dr.select(start, a, b) for a, b in zip(new[1:], path[1:]))
+                weight = dr.select(start, mi.Spectrum(ray_weight), weight)
+                return (job, alive, weight) + path
+
+            dr.while_loop(state=start_state, cond=pcond, body=pbody, label="majorant_volpath: persistent lanes")
+            acc += slots.numpy().reshape(n_layers, n_pix, 3).astype(np.float64).sum(axis=0)
+        return (acc / spp).reshape(height, width, 3).astype(np.float32)
 
     # ------------------------------------------------------------ the integrator's sun
     def _sample_sun(self, sample):
@@ -899,7 +1185,7 @@ class MajorantVolpath:
             return p if alpha is None else dr.sum(alpha * val)
         out = q(value, pdf)
         if self.guiding > 0.0 and self.sun_mode != "none":
-            val_s, pdf_s = phase.eval_pdf(mi.PhaseFunctionContext(sampler), self._about_sun(mei, mi.Bool(True)), d, active)
+            val_s, pdf_s = phase.eval_pdf(_phase_ctx(sampler), self._about_sun(mei, mi.Bool(True)), d, active)
             guide = q(val_s, pdf_s)
             if self.sun_mode == "disk":  # half of the guided draws are uniform in the disk
                 disk = dr.select(self._in_sun(d), dr.rcp(dr.two_pi * self.sun_vmax), 0.0)
@@ -910,7 +1196,7 @@ class MajorantVolpath:
     def _aureole_pdf(self, phase, sampler, mei, d, active):
         """Density of the aureole estimator's direction at vertex ``mei``: the phase function (channel
         mean) about the sun's direction, with half of it uniform in the disk for a disk sun."""
-        _, g = phase.eval_pdf(mi.PhaseFunctionContext(sampler), self._about_sun(mei, mi.Bool(True)), d, active)
+        _, g = phase.eval_pdf(_phase_ctx(sampler), self._about_sun(mei, mi.Bool(True)), d, active)
         if self.sun_mode == "disk":
             disk = dr.select(self._in_sun(d), dr.rcp(dr.two_pi * self.sun_vmax), 0.0)
             g = 0.5 * (g + disk)
@@ -923,7 +1209,7 @@ class MajorantVolpath:
         itself weights it there. Balance heuristic against the path's own draw (density q, sum over
         channels of alpha_c p_c): this contributes T f_A(d) / (q(d) + eps g(d)) x (NEE at B), and the
         path's own sun NEE at B is weighted q / (q + eps g) (``aur_w``)."""
-        ctx = mi.PhaseFunctionContext(sampler)
+        ctx = _phase_ctx(sampler)
         d, _, _ = phase.sample(ctx, self._about_sun(mei, active), sampler.next_1d(active), sampler.next_2d(active),
                                active)
         if self.sun_mode == "disk":
@@ -964,7 +1250,10 @@ class MajorantVolpath:
             si = scene.ray_intersect(ray, active)
             if has_medium:
                 in_med = active & (medium != None)  # noqa: E711
-                tr_seg = self._walk(ray, dr.minimum(si.t, remaining), sampler, in_med, ratio=True)
+                if self.tr_mode == "exact" and self._texel is not None:
+                    tr_seg = self._exact_walk(ray, dr.minimum(si.t, remaining), in_med)
+                else:
+                    tr_seg = self._walk(ray, dr.minimum(si.t, remaining), sampler, in_med, ratio=True)
                 tr = dr.select(in_med, tr * tr_seg, tr)
             hit = active & si.is_valid()
             bsdf = si.bsdf(ray)

@@ -94,18 +94,18 @@ def test_resumed_distributed_render_computes_only_the_missing_passes(client, vol
     sp = spec(seed=9)
     full = render(sp, vol)
     ckpt = tmp_path / "run.ckpt.npz"
-    import mitsuba as mi
-    real, calls = mi.render, []
+    from weather_mi import reference
+    real, calls = reference.render_pass, []
 
-    def stop_after_3(*args, **kwargs):  # in this process: the first 3 passes, then an interruption
+    def stop_after_3(scene, spp, seed, **kwargs):  # in this process: the first 3 passes, then an interruption
         if len(calls) == 3:
             raise KeyboardInterrupt
-        calls.append(kwargs["seed"])
-        return real(*args, **kwargs)
-    monkeypatch.setattr(mi, "render", stop_after_3)
+        calls.append(seed)
+        return real(scene, spp, seed, **kwargs)
+    monkeypatch.setattr(reference, "render_pass", stop_after_3)
     with pytest.raises(KeyboardInterrupt):
         render(sp, vol, checkpoint=ckpt)
-    monkeypatch.setattr(mi, "render", real)
+    monkeypatch.setattr(reference, "render_pass", real)
     assert int(np.load(ckpt)["done"]) == 3
     resumed = render(sp, vol, client, checkpoint=ckpt, resume=True)
     assert sum(resumed.metadata["dask"]["passes_by_worker"].values()) == 5
@@ -263,7 +263,9 @@ def test_a_worker_killed_mid_render_loses_nothing(client, vol, tmp_path, monkeyp
 @pytest.fixture
 def no_rendering(monkeypatch):
     import mitsuba as mi
+    from weather_mi import reference
     monkeypatch.setattr(mi, "render", lambda *a, **k: pytest.fail("rendered although the setup is invalid"))
+    monkeypatch.setattr(reference, "render_pass", lambda *a, **k: pytest.fail("rendered although the setup is invalid"))
 
 
 def _scheduler_tasks(client) -> list:

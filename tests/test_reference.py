@@ -53,9 +53,10 @@ def vol():
 
 @pytest.fixture
 def no_rendering(monkeypatch):
-    """Fail the test if Mitsuba renders anything."""
+    """Fail the test if a pass is rendered (every pass goes through ``reference.render_pass``)."""
     def forbidden(*args, **kwargs):
-        pytest.fail("mitsuba.render was called although the input is invalid")
+        pytest.fail("a pass was rendered although the input is invalid")
+    monkeypatch.setattr(wm.reference, "render_pass", forbidden)
     monkeypatch.setattr(mi, "render", forbidden)
 
 
@@ -85,14 +86,14 @@ def test_image_layout_and_standard_error_predicts_the_spread_between_seeds(vol):
 def test_estimate_is_the_mean_of_the_passes_with_their_standard_error(vol, monkeypatch):
     """Record what every pass returns: the image is their mean, the error their sample standard
     deviation over sqrt(passes), the passes use distinct seeds and ``spp`` is split over them."""
-    real = mi.render
+    real = wm.reference.render_pass
     passes = []
 
-    def recording(scene, *args, **kwargs):
-        out = real(scene, *args, **kwargs)
-        passes.append((kwargs["seed"], kwargs["spp"], np.array(out, np.float64)[..., :3]))
+    def recording(scene, spp, seed, **kwargs):
+        out = real(scene, spp, seed, **kwargs)
+        passes.append((seed, spp, np.array(out, np.float64)[..., :3]))
         return out
-    monkeypatch.setattr(mi, "render", recording)
+    monkeypatch.setattr(wm.reference, "render_pass", recording)
     img = render(spec(seed=11), vol, spp=22, passes=5)
     seeds, spps, imgs = zip(*passes)
     assert len(set(seeds)) == 5 and sorted(spps, reverse=True) == [5, 5, 4, 4, 4]
@@ -135,26 +136,26 @@ class Interrupted(Exception):
 
 
 def _interrupt_after(monkeypatch, k):
-    """Make mitsuba.render raise at its (k+1)-th call, as if the process were killed during pass k+1."""
-    real = mi.render
+    """Make the (k+1)-th pass raise, as if the process were killed during pass k+1."""
+    real = wm.reference.render_pass
     calls = []
 
-    def render_k(*args, **kwargs):
+    def render_k(scene, spp, seed, **kwargs):
         if len(calls) == k:
             raise Interrupted
-        calls.append(kwargs.get("seed"))
-        return real(*args, **kwargs)
-    monkeypatch.setattr(mi, "render", render_k)
+        calls.append(seed)
+        return real(scene, spp, seed, **kwargs)
+    monkeypatch.setattr(wm.reference, "render_pass", render_k)
     return real
 
 
 def _count_renders(monkeypatch, real):
     calls = []
 
-    def counting(*args, **kwargs):
-        calls.append(kwargs.get("seed"))
-        return real(*args, **kwargs)
-    monkeypatch.setattr(mi, "render", counting)
+    def counting(scene, spp, seed, **kwargs):
+        calls.append(seed)
+        return real(scene, spp, seed, **kwargs)
+    monkeypatch.setattr(wm.reference, "render_pass", counting)
     return calls
 
 
@@ -187,7 +188,7 @@ def test_checkpoint_of_another_scene_is_refused(vol, tmp_path, monkeypatch):
     before = ckpt.read_bytes()
     denser = wm.OpticalVolume.from_arrays(beta_ext=vol.beta_total * 1.01, albedo=0.99,
                                           phase=wm.phase.henyey_greenstein(0.85), bbox=BBOX)
-    monkeypatch.setattr(mi, "render", lambda *a, **k: pytest.fail("rendered despite a foreign checkpoint"))
+    monkeypatch.setattr(wm.reference, "render_pass", lambda *a, **k: pytest.fail("rendered despite a foreign checkpoint"))
     others = [
         (spec(seed=6), denser, {}),                                  # another volume
         (spec(seed=6), cloud_volume(g=0.5), {}),                     # another phase function

@@ -127,9 +127,18 @@ class PassScene:
         return mi.load_dict(scene_dict(spec_k, vol_render, integ))
 
 
-def render_pass(scene, spp: int, seed: int) -> np.ndarray:
-    """One pass of ``spp`` samples per pixel with Mitsuba seed ``seed``: the film's (H, W, C) float32 array."""
+def render_pass(scene, spp: int, seed: int, persistent: bool | None = None) -> np.ndarray:
+    """One pass of ``spp`` samples per pixel with seed ``seed``: the film's (H, W, C) float32 array.
+
+    ``persistent`` (None: wherever it applies): ``majorant_volpath`` on an LLVM variant renders the pass
+    with persistent lanes (its ``render_pass``), otherwise ``mi.render``. Both estimate the same image;
+    their random numbers differ."""
     import mitsuba as mi
+    integrator = scene.integrator()
+    if persistent is None:
+        persistent = mi.variant().startswith("llvm") and hasattr(integrator, "render_pass")
+    if persistent:
+        return integrator.render_pass(scene, int(spp), int(seed))
     return np.array(mi.render(scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
 
 
