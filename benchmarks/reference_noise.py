@@ -30,6 +30,7 @@ Sections (all by default):
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 import time
@@ -54,16 +55,39 @@ def spec_for(vol, view, width, height, diameter, seed=0):
                         sun=wm.Sun(az, el, angular_diameter_deg=diameter), width=width, height=height, seed=seed)
 
 
-def render(spec, vol, spp, old, passes=None, **kw):
-    """``old``: the estimator before issue 10 as it ran then, at Dr.Jit's default LLVM block size (weather-mi
-    now sets ``variant.LLVM_BLOCK_SIZE``, which also speeds the old estimator up by 6-8%)."""
+# the estimator of issue 10 before its sixth session (commit 9cc7700): free flights over the coarse majorant
+# grid, shadow rays by ratio tracking, passes by mi.render
+PREVIOUS = {"DEFAULT_TRACKING_GRID": "coarse", "DEFAULT_TRANSMITTANCE": "ratio", "DEFAULT_PERSISTENT_LANES": False}
+
+
+@contextlib.contextmanager
+def plugin_defaults(values):
+    from weather_mi.plugins import majorant_volpath as mv
+    saved = {k: getattr(mv, k) for k in values}
+    for k, v in values.items():
+        setattr(mv, k, v)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            setattr(mv, k, v)
+
+
+def render(spec, vol, spp, which, passes=None, **kw):
+    """``which``: "old", the estimator before issue 10 as it ran then, at Dr.Jit's default LLVM block size
+    (weather-mi now sets ``variant.LLVM_BLOCK_SIZE``, which also speeds the old estimator up by 6-8%);
+    "prev", the issue-10 estimator before the texel grid, exact transmittance and persistent lanes
+    (``PREVIOUS``); "new" (True / False are read as "old" / "new")."""
     from weather_mi.variant import DRJIT_DEFAULT_BLOCK_SIZE, LLVM_BLOCK_SIZE, tune_llvm
+    which = {True: "old", False: "new"}.get(which, which)
     wm.set_variant()  # selects the variant (and our block size) before the old one is put back
+    old = which == "old"
     if old:
         spec = replace(spec, sun=replace(spec.sun, angular_diameter_deg=0.0))
         tune_llvm(DRJIT_DEFAULT_BLOCK_SIZE)
     try:
-        return wm.render_reference(spec, vol, spp=spp, passes=passes, progress=False, legacy=old, **kw)
+        with plugin_defaults(PREVIOUS if which == "prev" else {}):
+            return wm.render_reference(spec, vol, spp=spp, passes=passes, progress=False, legacy=old, **kw)
     finally:
         tune_llvm(LLVM_BLOCK_SIZE)
 
@@ -81,16 +105,20 @@ HEADER = f"{'view / estimator':28s} {'seconds':>8s} {'s/spp':>8s} {'rms se/mean'
 def views(vols, args):
     print(f"\n## six views, {args.width} x {args.height}, {args.spp} spp (16 passes)")
     print(HEADER)
-    ratios = []
+    ratios, prev_ratios = [], []
     for preset, vol in vols.items():
         for view in VIEWS:
             spec = spec_for(vol, view, args.width, args.height, 0.53)
-            old = render(spec, vol, args.spp, True)
-            new = render(spec, vol, args.spp, False)
-            print(row(f"{preset} {view} old", old))
-            print(row(f"{preset} {view} new", new), flush=True)
-            ratios.append((new.metadata["seconds"] / old.metadata["seconds"]))
-    print(f"time per spp new / old: median {np.median(ratios):.2f}x, range {min(ratios):.2f}-{max(ratios):.2f}x")
+            imgs = {}
+            for which in ("old", "prev", "new"):
+                render(replace(spec, width=8, height=8), vol, 1, which, passes=1)  # kernels compiled outside
+                imgs[which] = render(spec, vol, args.spp, which)
+                print(row(f"{preset} {view} {which}", imgs[which]), flush=True)
+            s = {k: v.metadata["seconds"] for k, v in imgs.items()}
+            ratios.append(s["new"] / s["old"])
+            prev_ratios.append(s["new"] / s["prev"])
+    print(f"time per spp new / old: median {np.median(ratios):.2f}x, range {min(ratios):.2f}-{max(ratios):.2f}x; "
+          f"new / prev: median {np.median(prev_ratios):.2f}x, range {min(prev_ratios):.2f}-{max(prev_ratios):.2f}x")
 
 
 def time_to(vol, args):
@@ -99,19 +127,20 @@ def time_to(vol, args):
           f"{args.budget:.0f} s of passes each")
     spec = spec_for(vol, "side", size, size, 0.53)
     out = {}
-    for old in (True, False):
-        render(spec, vol, 1, old, passes=1)  # compile outside the timing (at this image size: a new
-        t1 = render(spec, vol, 1, old, passes=1).metadata["seconds"]  # size may compile anew)
+    for which in ("old", "prev", "new"):
+        render(spec, vol, 1, which, passes=1)  # compile outside the timing (at this image size: a new
+        t1 = render(spec, vol, 1, which, passes=1).metadata["seconds"]  # size may compile anew)
         per = max(1, int(args.budget / 16 / max(t1, 1e-3)))
         passes = max(4, int(args.budget / max(per * t1, 1e-3)))
-        img = render(spec, vol, per * passes, old, passes=passes)
+        img = render(spec, vol, per * passes, which, passes=passes)
         n, s = img.metadata["noise"], img.metadata["seconds"]
         t = s * (n["rse_mean"] / args.target) ** 2
-        out[old] = t
-        print(f"{'old' if old else 'new'}: {passes} passes x {per} spp in {s:.0f} s, mean RSE {n['rse_mean']:.4f}, "
+        out[which] = t
+        print(f"{which}: {passes} passes x {per} spp in {s:.0f} s, mean RSE {n['rse_mean']:.4f}, "
               f"rms se/mean {n['rms_se_over_mean']:.3f}, worst {n['worst_se_over_mean']:.2f} -> t({args.target:g}) "
               f"= {t / 60:.1f} min", flush=True)
-    print(f"speed-up to {args.target:g} (old / new): {out[True] / out[False]:.2f}x")
+    print(f"speed-up to {args.target:g}: old / new {out['old'] / out['new']:.2f}x, prev / new "
+          f"{out['prev'] / out['new']:.2f}x")
 
 
 def bias(vols, args):

@@ -98,7 +98,8 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
             from .mitsuba_scene import integrator_sun
             d.update(integrator_sun(sun, sun_guiding, aureole_nee))
         if legacy:  # the estimator before issue 10 (see render_reference)
-            d.update({"rr_mode": "volpath", "phase_channels": "mean", "emitter_nee": 1.0})
+            d.update({"rr_mode": "volpath", "phase_channels": "mean", "emitter_nee": 1.0, "tracking_grid": "coarse",
+                      "transmittance": "ratio", "persistent_lanes": False})
     if rr_depth is not None:
         d["rr_depth"] = int(rr_depth)
     return d
@@ -136,7 +137,8 @@ def render_pass(scene, spp: int, seed: int, persistent: bool | None = None) -> n
     import mitsuba as mi
     integrator = scene.integrator()
     if persistent is None:
-        persistent = mi.variant().startswith("llvm") and hasattr(integrator, "render_pass")
+        persistent = (mi.variant().startswith("llvm") and hasattr(integrator, "render_pass")
+                      and getattr(integrator, "persistent", False))
     if persistent:
         return integrator.render_pass(scene, int(spp), int(seed))
     return np.array(mi.render(scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
