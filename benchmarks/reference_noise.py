@@ -160,6 +160,13 @@ def bias(vols, args):
                   f"({(mn - mo) / math.hypot(so, sn):+.2f} se, {100 * (mn / mo - 1):+.1f}%)", flush=True)
 
 
+def toggled(spec, vol, args, **defaults):
+    """The new estimator with plugin defaults changed (``plugin_defaults``), kernels compiled outside."""
+    with plugin_defaults(defaults):
+        render(replace(spec, width=8, height=8), vol, 1, "new", passes=1)
+        return render(spec, vol, args.profile_spp, "new")
+
+
 def profile(vol, args):
     print(f"\n## profile of the new estimator, side view, {args.width} x {args.height}, {args.profile_spp} spp")
     spec = spec_for(vol, "side", args.width, args.height, 0.53)
@@ -167,18 +174,25 @@ def profile(vol, args):
     first = render(replace(spec, width=8, height=8, seed=99), vol, 1, False, passes=1)
     print(f"first render of a process (scene build + kernel compile or disk cache + 8x8 pixels): "
           f"{time.perf_counter() - t0:.1f} s ({first.metadata['seconds']:.1f} s of it in mi.render)")
-    base = render(spec, vol, args.profile_spp, False)
+    render(replace(spec, width=8, height=8), vol, 1, "new", passes=1)
+    base = render(spec, vol, args.profile_spp, "new")
     b = base.metadata["seconds"]
     hg = wm.optical_volume(wm.synthetic.supercell(), species=args.presets[0],
                            phase_tables=[wm.phase.henyey_greenstein(0.85)] * 5)
+    def warm(spec, vol, **kw):  # each case compiles its kernel before its timed render
+        render(replace(spec, width=8, height=8), vol, 1, "new", passes=1, **kw)
+        return render(spec, vol, args.profile_spp, "new", **kw)
+
     cases = [
         ("full estimator", base),
-        ("max_depth 32 (long walks cut)", render(spec, vol, args.profile_spp, False, max_depth=32)),
-        ("max_depth 8", render(spec, vol, args.profile_spp, False, max_depth=8)),
-        ("no sky, no ground (sun only)", render(replace(spec, sky=None, ground=None), vol, args.profile_spp, False)),
-        ("HG phase instead of tables", render(spec, hg, args.profile_spp, False)),
-        ("majorant cell 8 (more null collisions)", render(spec, vol, args.profile_spp, False, cell=8)),
-        ("eye rays only (max_depth 1)", render(spec, vol, args.profile_spp, False, max_depth=1)),
+        ("max_depth 32 (long walks cut)", warm(spec, vol, max_depth=32)),
+        ("max_depth 8", warm(spec, vol, max_depth=8)),
+        ("no sky, no ground (sun only)", warm(replace(spec, sky=None, ground=None), vol)),
+        ("HG phase instead of tables", warm(spec, hg)),
+        ("free flights over the coarse grid (cell 2)", toggled(spec, vol, args, DEFAULT_TRACKING_GRID="coarse")),
+        ("shadow rays by ratio tracking", toggled(spec, vol, args, DEFAULT_TRANSMITTANCE="ratio")),
+        ("passes by mi.render (no persistent lanes)", toggled(spec, vol, args, DEFAULT_PERSISTENT_LANES=False)),
+        ("eye rays only (max_depth 1)", warm(spec, vol, max_depth=1)),
     ]
     print(f"{'case':40s} {'seconds':>8s} {'vs full':>8s}")
     for label, img in cases:

@@ -12,9 +12,10 @@ along the ray with a 3-D DDA (Amanatides & Woo; pbrt-v4's ``DDAMajorantIterator`
   this resolution can have. The coarse grid (``majorant``, ``cell`` fine voxels per cell, dilated by a
   voxel because its cells are not aligned with the texel centres) remains for media without a grid and
   for ``tracking_grid = "coarse"``. Measured on the demo supercell (side view, 80 x 60): per real
-  collision 6.8 tentative collisions over the coarse grid (cell 2; the interpolant's ramp from clear
+  collision 6.4 null collisions over the coarse grid (cell 2; the interpolant's ramp from clear
   air to a core of 0.4 / m spans a 1-km voxel, and the walks live in the first few hundred metres of
-  it), 2.2 over texel cells; the free flights cost 1.3-1.7x less time (``benchmarks/reference_noise.py``).
+  it), 1.3 over texel cells; with the coarse grid a render takes 1.8x the time
+  (``benchmarks/reference_noise.py --profile``).
 * empty space: cells whose majorant is 0 and whose neighbours within k cells are all empty
   (``empty_space_radius``, "proximity clouds", Cohen & Sheffer 1994) are crossed in one step to where
   the ray leaves that cube of cells.
@@ -36,7 +37,7 @@ along the ray with a 3-D DDA (Amanatides & Woo; pbrt-v4's ``DDAMajorantIterator`
   pass launches one LLVM block of lanes per thread, and each lane draws its next sample from a shared
   atomic counter when its path ends (re-seeding its PCG32 from (seed, sample), so the image does not
   depend on which lane ran which sample; each sample's radiance goes to its own slot, summed in sample
-  order: deterministic). 1.35-1.4x less time per pass on the demo views.
+  order: deterministic). Without them (``mi.render``) a render takes 1.7x the time.
 * otherwise the structure and estimators of Mitsuba's ``volpath``: analog absorption (throughput *=
   sigma_s / sigma_t at real collisions), phase-function and BSDF sampling with emitter sampling and MIS
   (power heuristic) for environment emitters, delta emitters (``directional``) by NEE only,
@@ -72,8 +73,10 @@ Continuation at a medium vertex, q(d):
   phase function about the sun's direction; q = (1 - eps) q_phase + eps (q_phase,sun + U_disk) / 2.
   The unguided draws have weights p / q <= 1 / (1 - eps), which compound along multiply scattered
   paths: guiding stops once their product would exceed GUIDE_GROWTH. Off by default in
-  ``render_reference``: at eps = 0.1 the RMS and worst-pixel noise fell 2-4x on the orbit views of the
-  demo supercell (paper preset) but rose 3-4x on the ground view (physical preset).
+  ``render_reference``: an early estimator measured 2-4x less noise on orbit views (paper preset) and
+  3-4x more on the ground view; the present one (delta-M cone, roulette, channels), on the six views of
+  ``benchmarks/reference_noise.py`` at 160 x 120, 32 spp: RMS se/mean 0.34-0.38 at eps = 0.1 and
+  0.40-0.41 at 0.25 against 0.31-0.33 without, on five of six views (the paper back view: equal).
 * optional aureole next-event estimation (``aureole_nee`` eps; exclusive with sun guiding): sun light
   that reaches a vertex A through one more, forward, scattering at B is sampled a second way: at A
   (with probability eps) a direction about the sun (half from A's phase function centred on the sun,
@@ -95,7 +98,9 @@ light) the doubled weights made fireflies on the demo storm's ground view: RMS s
 worst pixel 8-50 at 64 spp against 0.29-0.34 and 2-4 from 512 on, at 1.8x the time; with no cut
 at all 0.26-0.29 and 2-4, at 3.6x the time. From 1024 rather than 512: on three orbit views, two
 seed pairs, the same efficiency (1 / (RMS^2 time)) and a lighter tail (worst pixel 1.5-2.5 against
-2.1-4.4), at 1.13x the time; 256 and 2048 were less efficient. "volpath": the old rule.
+2.1-4.4), at 1.13x the time; 256 and 2048 were less efficient. Re-measured with persistent lanes
+(paper side and front views, 160 x 120, 32 spp): no cut 2.1-2.9x the time, a cut from 4096 1.5-1.8x,
+for 2-7% less RMS noise; from 128-512 less time but 1.2-2x the RMS noise. "volpath": the old rule.
 
 All loops are symbolic (``dr.while_loop``): one kernel per render; new sigma_t / albedo data (through
 ``mi.traverse`` + ``params.update()``), new majorant values or resolutions and new emitter parameters

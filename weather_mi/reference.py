@@ -27,7 +27,7 @@ MIN_PASSES = 16          # default number of passes (batches) of a render with s
 CLOUD_TAU = np.log(2.0)  # cloud pixels: eye-ray transmittance below 1/2
 MAX_TARGET_PASSES = 1 << 14
 DEFAULT_AUREOLE_NEE = 0.0  # probability of the aureole estimator (majorant_volpath): 1.8x the time for a 1.5-2x lower RMS noise, off
-DEFAULT_SUN_GUIDING = 0.0  # guiding measured mixed (closing note of issue 10): off until measured on more views
+DEFAULT_SUN_GUIDING = 0.0  # guiding adds noise on five of the six issue-10 views (plugins/majorant_volpath.py): off
 
 
 def _check_inputs(spec: SceneSpec, vol: OpticalVolume, spp: int, normalize, integrator: str, variant):
