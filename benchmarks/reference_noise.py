@@ -2,7 +2,9 @@
 emitter chosen per vertex, Russian roulette as Mitsuba's volpath, phase sampling by channel mean)
 against the current one ("new": the sun as the integrator's own disk of 0.53 deg with MIS, roulette
 that never inflates weights, long walks cut from depth 1024, history-aware channel sampling, forward
-peaks within 3 deg as unscattered light), in the same process, on the same scenes.
+peaks within 3 deg as unscattered light, free flights over texel cells, exact shadow-ray
+transmittance, persistent lanes) and "prev" (new without the last three), in the same process, on
+the same scenes.
 
     .venv/bin/python benchmarks/reference_noise.py [--views] [--time-to 0.01] [--bias] [--profile] [--quick]
 
@@ -20,9 +22,10 @@ Sections (all by default):
 --time-to   time to a mean RSE over cloud pixels, supercell side-lit, 256 x 256: each estimator
             renders --budget seconds of passes; t = T (RSE(T) / target)^2.
 --bias      point sun, small images, many spp: the mean cloud radiance of the old estimator, of the
-            new one with the full phase tables (forward_peak_deg=0: the same transfer problem) and of
-            the new one as it renders (delta-M, 3 deg), with the differences in combined standard
-            errors (the heavy-tailed estimators' standard errors are themselves unreliable, and with
+            new one with the full phase tables (forward_peak_deg=0: the same transfer problem), of
+            the new one as it renders (delta-M, 3 deg) and of prev (the same problem as new: a check
+            of the texel grid, exact transmittance and persistent lanes), with the differences in
+            combined standard errors (the heavy-tailed estimators' standard errors are themselves unreliable, and with
             the full tables both read low: validation/forward_peak_slabs.py).
 --profile   where the time of the new estimator goes, by ablation on the side view: each row changes
             one thing and gives its seconds per spp against the full estimator in the same run.
@@ -150,14 +153,15 @@ def bias(vols, args):
             spec = spec_for(vol, view, 48, 36, 0.0, seed=7)
             cloud = wm.reference.cloud_mask(spec, vol)
             means = []
-            for old, kw in ((True, {}), (False, {"forward_peak_deg": 0.0}), (False, {})):
-                img = render(spec, vol, args.bias_spp, old, **kw)
+            for which, kw in (("old", {}), ("new", {"forward_peak_deg": 0.0}), ("new", {}), ("prev", {})):
+                img = render(spec, vol, args.bias_spp, which, **kw)
                 lum, se = img.radiance.mean(axis=2), img.stderr.mean(axis=2)
                 means.append((float(lum[cloud].mean()), float(np.sqrt((se[cloud] ** 2).sum()) / cloud.sum())))
-            (mo, so), (mf, sf), (mn, sn) = means
+            (mo, so), (mf, sf), (mn, sn), (mp, sp) = means
             print(f"{preset:8s} {view:5s} old {mo:.5f} +- {so:.5f}  new, full tables {mf:.5f} +- {sf:.5f} "
                   f"({(mf - mo) / math.hypot(so, sf):+.2f} se)  new {mn:.5f} +- {sn:.5f} "
-                  f"({(mn - mo) / math.hypot(so, sn):+.2f} se, {100 * (mn / mo - 1):+.1f}%)", flush=True)
+                  f"({(mn - mo) / math.hypot(so, sn):+.2f} se, {100 * (mn / mo - 1):+.1f}%)  prev {mp:.5f} +- {sp:.5f} "
+                  f"(new - prev {(mn - mp) / math.hypot(sp, sn):+.2f} se)", flush=True)
 
 
 def toggled(spec, vol, args, **defaults):
