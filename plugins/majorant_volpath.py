@@ -303,7 +303,8 @@ def _job_sampler_class():
 
 def _default_lanes() -> int:
     """Lanes of a persistent-lane launch: one LLVM block per worker thread (each thread's first packet
-    then takes samples until none are left), at least 64."""
+    then takes samples until none are left), at least 64. Not critical: 512, 2048, 8192 and 32768 lanes
+    took the same time (0.19-0.20 s per spp, demo side view, 160 x 120, two rounds)."""
     try:
         from ..variant import llvm_block_size
         block = llvm_block_size() or 1024
