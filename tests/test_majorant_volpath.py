@@ -365,3 +365,36 @@ def test_exact_transmittance_is_the_optical_depth_of_the_interpolant():
     expect = np.exp(-tau)
     assert (tau > 1.0).sum() > n // 10 and (tau == 0).sum() > n // 20  # dense, thin and empty paths
     np.testing.assert_allclose(got[0], expect, rtol=2e-3, atol=1e-6)
+
+
+def test_exact_transmittance_with_roulette_is_unbiased():
+    """In a render the exact walk plays Russian roulette each time T falls by another factor 10 below
+    0.01 (weights 1 / EXACT_RR_SURVIVE): per ray, the mean over many draws is the exact transmittance,
+    and the draws are either 0 or the exact value times a power of 1 / EXACT_RR_SURVIVE."""
+    s = blobs()
+    scene = mi.load_dict(scene_dict(s, ours(s)))
+    integ = scene.integrator()
+    integ._setup(scene, None)
+    rng = np.random.default_rng(4)
+
+    def walk(o, d, reps, sampler=None):
+        rep = lambda a: np.repeat(a, reps, axis=0).astype(np.float32)  # noqa: E731
+        oo, dd = rep(o), rep(d)
+        ray = mi.Ray3f(mi.Point3f(*(oo[:, k] for k in range(3))), mi.Vector3f(*(dd[:, k] for k in range(3))))
+        out = np.array(integ._exact_walk(ray, mi.Float(np.full(len(oo), 30.0, np.float32)), mi.Bool(True), sampler))
+        return out[0].reshape(len(o), reps)
+
+    o = np.tile([5.0, 5.0, 2.0], (256, 1))
+    d = rng.normal(size=(256, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    exact = walk(o, d, 1)[:, 0]
+    pick = np.flatnonzero((exact > 1e-6) & (exact < 1e-2))[:4]  # every one rouletted at least once
+    assert len(pick) == 4
+    o, d, exact = o[pick], d[pick], exact[pick]
+    reps = 40_000
+    sampler = mi.load_dict({"type": "independent"})
+    sampler.seed(3, 4 * reps)
+    draws = walk(o, d, reps, sampler)
+    assert 0.0 < (draws > 0).mean() < 0.5  # the roulette did kill most walks
+    mean, se = draws.mean(axis=1), draws.std(axis=1, ddof=1) / np.sqrt(reps)
+    assert np.all(np.abs(mean - exact) < 4 * se + 1e-3 * exact), (mean, exact, se)
