@@ -80,9 +80,8 @@ def render(spec, vol, spp, which, passes=None, **kw):
     """``which``: "old", the estimator before issue 10 as it ran then, at Dr.Jit's default LLVM block size
     (weather-mi now sets ``variant.LLVM_BLOCK_SIZE``, which also speeds the old estimator up by 6-8%);
     "prev", the issue-10 estimator before the texel grid, exact transmittance and persistent lanes
-    (``PREVIOUS``); "new" (True / False are read as "old" / "new")."""
+    (``PREVIOUS``); "new"."""
     from weather_mi.variant import DRJIT_DEFAULT_BLOCK_SIZE, LLVM_BLOCK_SIZE, tune_llvm
-    which = {True: "old", False: "new"}.get(which, which)
     wm.set_variant()  # selects the variant (and our block size) before the old one is put back
     old = which == "old"
     if old:
@@ -175,7 +174,7 @@ def profile(vol, args):
     print(f"\n## profile of the new estimator, side view, {args.width} x {args.height}, {args.profile_spp} spp")
     spec = spec_for(vol, "side", args.width, args.height, 0.53)
     t0 = time.perf_counter()
-    first = render(replace(spec, width=8, height=8, seed=99), vol, 1, False, passes=1)
+    first = render(replace(spec, width=8, height=8, seed=99), vol, 1, "new", passes=1)
     print(f"first render of a process (scene build + kernel compile or disk cache + 8x8 pixels): "
           f"{time.perf_counter() - t0:.1f} s ({first.metadata['seconds']:.1f} s of it in mi.render)")
     render(replace(spec, width=8, height=8), vol, 1, "new", passes=1)

@@ -219,6 +219,23 @@ def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: flo
     return (np.maximum(d, 0.0) * float(safety)).astype(np.float32)
 
 
+def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.ndarray:
+    """Majorants per texel cell: the cells between 2 x 2 x 2 texel centres of a (nz, ny, nx) grid (or
+    (nz, ny, nx, C): the maximum over channels), cells -1 .. N - 1 per axis (array index + 1), the first
+    and last being the half cells between the box's faces and the outer texel centres (where the
+    gridvolume clamps). The trilinear interpolant is one trilinear polynomial in such a cell, so
+    ``safety`` x the maximum of its 8 texels bounds it there, tightly. float32, (nz + 1, ny + 1, nx + 1);
+    negative values count as 0."""
+    a = np.asarray(sigma_t_zyx, np.float64)
+    a = a.max(axis=3) if a.ndim == 4 else a
+    if a.ndim != 3 or min(a.shape) < 1 or not np.all(np.isfinite(a)):
+        raise ValueError(f"texel_majorant_grid: expected a finite (nz, ny, nx) or (nz, ny, nx, C) array, got shape {a.shape}")
+    a = np.pad(np.maximum(a, 0.0), 1, mode="edge")  # clamped borders
+    for axis in range(3):  # the larger of the two texels on either side, per axis
+        a = np.maximum(a[(slice(None),) * axis + (slice(0, -1),)], a[(slice(None),) * axis + (slice(1, None),)])
+    return (a * float(safety)).astype(np.float32)
+
+
 def empty_space_radius(majorant: np.ndarray) -> np.ndarray:
     """For each coarse cell, the largest k such that every cell within k cells of it (Chebyshev
     distance, i.e. the cube of side 2k + 1 centred on it, cells beyond the grid counting as empty) has
@@ -311,12 +328,8 @@ def _default_lanes() -> int:
     """Lanes of a persistent-lane launch: one LLVM block per worker thread (each thread's first packet
     then takes samples until none are left), at least 64. Not critical: 512, 2048, 8192 and 32768 lanes
     took the same time (0.19-0.20 s per spp, demo side view, 160 x 120, two rounds)."""
-    try:
-        from ..variant import llvm_block_size
-        block = llvm_block_size() or 1024
-    except Exception:  # noqa: BLE001 - the block size is only a hint
-        block = 1024
-    return max(64, int(dr.thread_count()) * int(block))
+    from ..variant import llvm_block_size
+    return max(64, int(dr.thread_count()) * int(llvm_block_size() or 1024))
 
 
 def _phase_ctx(sampler):
@@ -572,15 +585,7 @@ class MajorantVolpath:
         data = self._volume_data(vol)
         key = (data.array.index, scale)
         if key != getattr(self, "_texel_key", None):
-            a = np.asarray(data, np.float64)
-            a = a.max(axis=3) if a.ndim == 4 else a
-            a = np.pad(np.maximum(a, 0.0) * scale, 1, mode="edge")  # clamped borders: cells -1 .. N - 1
-            for axis in range(3):
-                lo = [slice(None)] * 3
-                hi = [slice(None)] * 3
-                lo[axis], hi[axis] = slice(0, -1), slice(1, None)
-                a = np.maximum(a[tuple(lo)], a[tuple(hi)])
-            maj = (a * SAFETY).astype(np.float32)
+            maj = texel_majorant_grid(np.asarray(data) * scale)
             self._texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty_space_radius(maj).ravel()))
             self._texel_key = key
         rx, ry, rz = (int(v) for v in vol.resolution())

@@ -155,6 +155,33 @@ def test_majorant_grid_is_conservative(shape, cell):
     assert np.all(value <= maj[k, j, i]), float(np.max(value - maj[k, j, i]))
 
 
+@pytest.mark.parametrize("shape", [(16, 16, 16), (13, 10, 21), (7, 33, 5), (1, 4, 3)])
+def test_texel_majorant_grid_is_conservative_and_tight(shape):
+    """The per-texel-cell majorants bound Mitsuba's interpolant everywhere in the cell (faces and the
+    half cells at the box's faces included), and equal it at the cell's corners: no looser than the
+    maximum of its 8 texels. A grid one texel off (the coarse grid's alignment) fails the bound."""
+    rng = np.random.default_rng(sum(shape))
+    grid = rng.random(shape) ** 6 * rng.choice([0.0, 1.0, 50.0], size=shape, p=[0.6, 0.3, 0.1])
+    maj = mv.texel_majorant_grid(grid)
+    nz, ny, nx = shape
+    assert maj.shape == (nz + 1, ny + 1, nx + 1) and maj.dtype == np.float32
+    n = 200_000
+    p = rng.random((n, 3))
+    res = np.array([nx, ny, nz], np.float64)
+    p[: n // 10] = (np.round(p[: n // 10] * res - 0.5) + 0.5) / res  # texel-centre planes (cell faces)
+    p = np.clip(p, 0.0, 1.0)
+    value = trilinear_mitsuba(grid, p)
+    cell = np.clip(np.floor(p * res - 0.5).astype(int), -1, (res - 1).astype(int)) + 1  # (x, y, z) array index
+    bound = maj[cell[:, 2], cell[:, 1], cell[:, 0]]
+    assert np.all(value <= bound), float(np.max(value - bound))
+    # tight: at a texel centre the interpolant is the texel, the largest of the cell's 8 for some cell
+    padded = np.pad(grid, 1, mode="edge")
+    assert np.isclose(maj.max(), grid.max() * mv.SAFETY, rtol=1e-6)
+    assert np.all(maj >= padded[:-1, :-1, :-1] * (1 - 1e-6))
+    shifted = maj[:, :, np.r_[1:nx + 1, nx]]  # one texel off along x
+    assert nx == 1 or not np.all(value <= shifted[cell[:, 2], cell[:, 1], cell[:, 0]])
+
+
 def test_majorant_grid_tight_and_local():
     const = np.full((12, 20, 9), 0.37, np.float32)
     maj = mv.majorant_grid(const, 8)
