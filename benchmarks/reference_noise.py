@@ -3,8 +3,9 @@ emitter chosen per vertex, Russian roulette as Mitsuba's volpath, phase sampling
 against the current one ("new": the sun as the integrator's own disk of 0.53 deg with MIS, roulette
 that never inflates weights, long walks cut from depth 1024, history-aware channel sampling, forward
 peaks within 3 deg as unscattered light, free flights over texel cells, exact shadow-ray
-transmittance, persistent lanes) and "prev" (new without the last three), in the same process, on
-the same scenes.
+transmittance, persistent lanes, passes rendered together), "prev" (new without the texel grid, the
+exact transmittance and persistent lanes) and "last" (new with one pass per launch, as at the stop
+before ``render_passes``), in the same process, on the same scenes.
 
     .venv/bin/python benchmarks/reference_noise.py [--views] [--time-to 0.01] [--bias] [--profile] [--quick]
 
@@ -18,9 +19,11 @@ elevation=8, fov=45)``, sunsky + ground; sun at azimuth/elevation 200/35 (front)
     mean RSE       mean over cloud pixels of se / radiance
 
 Sections (all by default):
---views     the six views at 160 x 120, 64 spp in 16 passes: both estimators, seconds per spp.
+--views     the six views at 160 x 120, 64 spp in 16 passes: every estimator, seconds per spp.
 --time-to   time to a mean RSE over cloud pixels, supercell side-lit, 256 x 256: each estimator
-            renders --budget seconds of passes; t = T (RSE(T) / target)^2.
+            renders --budget seconds of passes; t = T (RSE(T) / target)^2. Then the new estimator as a
+            render to the target runs (16 planned passes over every pixel, then passes over the cloud
+            pixels only): t = T0 + (passes needed - 16) x the time of such a pass.
 --bias      point sun, small images, many spp: the mean cloud radiance of the old estimator, of the
             new one with the full phase tables (forward_peak_deg=0: the same transfer problem), of
             the new one as it renders (delta-M, 3 deg) and of prev (the same problem as new: a check
@@ -64,23 +67,26 @@ PREVIOUS = {"DEFAULT_TRACKING_GRID": "coarse", "DEFAULT_TRANSMITTANCE": "ratio",
 
 
 @contextlib.contextmanager
-def plugin_defaults(values):
-    from weather_mi.plugins import majorant_volpath as mv
-    saved = {k: getattr(mv, k) for k in values}
+def plugin_defaults(values, module=None):
+    """Module constants (of ``majorant_volpath`` unless ``module`` is given) set to ``values`` for a while."""
+    if module is None:
+        from weather_mi.plugins import majorant_volpath as module
+    saved = {k: getattr(module, k) for k in values}
     for k, v in values.items():
-        setattr(mv, k, v)
+        setattr(module, k, v)
     try:
         yield
     finally:
         for k, v in saved.items():
-            setattr(mv, k, v)
+            setattr(module, k, v)
 
 
 def render(spec, vol, spp, which, passes=None, **kw):
     """``which``: "old", the estimator before issue 10 as it ran then, at Dr.Jit's default LLVM block size
     (weather-mi now sets ``variant.LLVM_BLOCK_SIZE``, which also speeds the old estimator up by 6-8%);
     "prev", the issue-10 estimator before the texel grid, exact transmittance and persistent lanes
-    (``PREVIOUS``); "new"."""
+    (``PREVIOUS``); "last", the new estimator as the last stop rendered (one pass per launch, before
+    ``render_passes``: ``reference.BATCH_SAMPLES`` = 0); "new"."""
     from weather_mi.variant import DRJIT_DEFAULT_BLOCK_SIZE, LLVM_BLOCK_SIZE, tune_llvm
     wm.set_variant()  # selects the variant (and our block size) before the old one is put back
     old = which == "old"
@@ -88,7 +94,8 @@ def render(spec, vol, spp, which, passes=None, **kw):
         spec = replace(spec, sun=replace(spec.sun, angular_diameter_deg=0.0))
         tune_llvm(DRJIT_DEFAULT_BLOCK_SIZE)
     try:
-        with plugin_defaults(PREVIOUS if which == "prev" else {}):
+        with plugin_defaults(PREVIOUS if which == "prev" else {}), \
+                plugin_defaults({"BATCH_SAMPLES": 0} if which == "last" else {}, module=wm.reference):
             return wm.render_reference(spec, vol, spp=spp, passes=passes, progress=False, legacy=old, **kw)
     finally:
         tune_llvm(LLVM_BLOCK_SIZE)
@@ -107,20 +114,24 @@ HEADER = f"{'view / estimator':28s} {'seconds':>8s} {'s/spp':>8s} {'rms se/mean'
 def views(vols, args):
     print(f"\n## six views, {args.width} x {args.height}, {args.spp} spp (16 passes)")
     print(HEADER)
-    ratios, prev_ratios = [], []
+    ratios, prev_ratios, last_ratios, same = [], [], [], []
     for preset, vol in vols.items():
         for view in VIEWS:
             spec = spec_for(vol, view, args.width, args.height, 0.53)
             imgs = {}
-            for which in ("old", "prev", "new"):
+            for which in ("old", "prev", "last", "new"):
                 render(replace(spec, width=8, height=8), vol, 1, which, passes=1)  # kernels compiled outside
                 imgs[which] = render(spec, vol, args.spp, which)
                 print(row(f"{preset} {view} {which}", imgs[which]), flush=True)
             s = {k: v.metadata["seconds"] for k, v in imgs.items()}
             ratios.append(s["new"] / s["old"])
             prev_ratios.append(s["new"] / s["prev"])
+            last_ratios.append(s["new"] / s["last"])
+            same.append(np.array_equal(imgs["new"].radiance, imgs["last"].radiance))
     print(f"time per spp new / old: median {np.median(ratios):.2f}x, range {min(ratios):.2f}-{max(ratios):.2f}x; "
-          f"new / prev: median {np.median(prev_ratios):.2f}x, range {min(prev_ratios):.2f}-{max(prev_ratios):.2f}x")
+          f"new / prev: median {np.median(prev_ratios):.2f}x, range {min(prev_ratios):.2f}-{max(prev_ratios):.2f}x; "
+          f"new / last: median {np.median(last_ratios):.2f}x, range {min(last_ratios):.2f}-{max(last_ratios):.2f}x "
+          f"(images bit-identical to last's: {sum(same)} of {len(same)})")
 
 
 def time_to(vol, args):
@@ -129,9 +140,11 @@ def time_to(vol, args):
           f"{args.budget:.0f} s of passes each")
     spec = spec_for(vol, "side", size, size, 0.53)
     out = {}
-    for which in ("old", "prev", "new"):
-        render(spec, vol, 1, which, passes=1)  # compile outside the timing (at this image size: a new
-        t1 = render(spec, vol, 1, which, passes=1).metadata["seconds"]  # size may compile anew)
+    for which in ("old", "prev", "last", "new"):
+        render(spec, vol, 1, which, passes=1)  # compile outside the timing (at this image size: a new size
+        # may compile anew); seconds per spp from 4-spp passes: a 1-spp pass took 0.35 or 2.7 s, as a walk of
+        # ~1e6 events (the long-walk roulette's tail) started early in it or late
+        t1 = min(render(spec, vol, 4, which, passes=1).metadata["seconds"] for _ in range(2)) / 4
         per = max(1, int(args.budget / 16 / max(t1, 1e-3)))
         passes = max(4, int(args.budget / max(per * t1, 1e-3)))
         img = render(spec, vol, per * passes, which, passes=passes)
@@ -142,7 +155,26 @@ def time_to(vol, args):
               f"rms se/mean {n['rms_se_over_mean']:.3f}, worst {n['worst_se_over_mean']:.2f} -> t({args.target:g}) "
               f"= {t / 60:.1f} min", flush=True)
     print(f"speed-up to {args.target:g}: old / new {out['old'] / out['new']:.2f}x, prev / new "
-          f"{out['prev'] / out['new']:.2f}x")
+          f"{out['prev'] / out['new']:.2f}x, last / new {out['last'] / out['new']:.2f}x")
+    # the new estimator as a render to the target runs (render_reference(target_rse=...)): 16 planned passes
+    # over every pixel, then passes over the cloud pixels only. Time to the target: the planned passes'
+    # time T0 plus the further passes needed at their own cost (the variance per pass is that of a planned one)
+    render(spec, vol, 1, "new", passes=1, target_rse=0.5)  # compiles the kernel of passes over some pixels
+    per = max(1, int(args.budget / 64 / max(t1, 1e-3)))
+    marks = []
+    img = render(spec, vol, 16 * per, "new", passes=16, target_rse=args.target, max_seconds=args.budget,
+                 on_pass=lambda im: marks.append(im.metadata["seconds"]))
+    n_done, s = img.metadata["passes"], img.metadata["seconds"]
+    t0, nz = marks[15], img.metadata["noise"]
+    tau = (s - t0) / max(n_done - 16, 1)
+    n_need = n_done * (nz["rse_mean"] / args.target) ** 2
+    t = t0 + max(n_need - 16, 0.0) * tau
+    out["new, cloud passes"] = t
+    print(f"new, cloud passes: 16 passes x {per} spp over every pixel in {t0:.0f} s, then {n_done - 16} over the "
+          f"cloud pixels ({tau:.2f} s each, {tau / (t0 / 16):.2f}x a planned one); mean RSE "
+          f"{nz['rse_mean']:.4f} -> t({args.target:g}) = {t / 60:.1f} min; old / new, cloud passes "
+          f"{out['old'] / t:.2f}x, prev / it {out['prev'] / t:.2f}x, last / it "
+          f"{out['last'] / t:.2f}x, new / it {out['new'] / t:.2f}x", flush=True)
 
 
 def bias(vols, args):

@@ -40,7 +40,10 @@ along the ray with a 3-D DDA (Amanatides & Woo; pbrt-v4's ``DDAMajorantIterator`
   pass launches one LLVM block of lanes per thread, and each lane draws its next sample from a shared
   atomic counter when its path ends (re-seeding its PCG32 from (seed, sample), so the image does not
   depend on which lane ran which sample; each sample's radiance goes to its own slot, summed in sample
-  order: deterministic). Without them (``mi.render``) a render takes 1.7x the time.
+  order: deterministic). Without them (``mi.render``) a render takes 1.7x the time. A launch still
+  ends when its longest path ends, so ``render_passes`` renders several passes in one launch (a pass
+  over a few pixels, as a render to a target adds them, took 1.8x the time per sample alone), and
+  ``pixels`` restricts a pass to some pixels (each with the values it has in the pass over all).
 * otherwise the structure and estimators of Mitsuba's ``volpath``: analog absorption (throughput *=
   sigma_s / sigma_t at real collisions), phase-function and BSDF sampling with emitter sampling and MIS
   (power heuristic) for environment emitters, delta emitters (``directional``) by NEE only,
@@ -1170,39 +1173,71 @@ class MajorantVolpath:
 
     # ------------------------------------------------------------ persistent lanes
     def render_pass(self, scene, spp: int, seed: int, lanes: int | None = None,
-                    max_jobs: int = MAX_JOBS_PER_LAUNCH) -> np.ndarray:
+                    max_jobs: int = MAX_JOBS_PER_LAUNCH, pixels=None) -> np.ndarray:
         """One pass of ``spp`` samples per pixel of the scene's first sensor, as ``mi.render(scene, spp=spp,
         seed=seed)`` renders it (box filter: the mean of the samples whose film position falls in the
-        pixel), but with persistent lanes (module docstring, "Persistent lanes"). Returns (H, W, 3)
-        float32. Deterministic: a sample's random numbers depend on (seed, sample) only, each sample's
-        radiance is written to its own slot and the slots are summed in sample order."""
+        pixel), but with persistent lanes (module docstring, "Persistent lanes"): ``render_passes`` of
+        one pass."""
+        return self.render_passes(scene, [(spp, seed)], lanes, max_jobs, pixels)[0]
+
+    def render_passes(self, scene, passes, lanes: int | None = None, max_jobs: int = MAX_JOBS_PER_LAUNCH,
+                      pixels=None) -> list:
+        """Passes ``[(spp, seed), ...]`` rendered together, in launches of up to ``max_jobs`` samples: a
+        launch ends when its longest path ends, and path lengths are heavy-tailed (the longest of a pass
+        of the demo's side view runs ~0.2 s after the others: a 4-spp pass over 128 x 128 pixels took 1.5x
+        the time per spp of a 16-spp one), so small passes rendered one by one pay that tail each time.
+        Returns one (H, W, 3) float32 image per pass, each as ``render_pass`` renders it alone.
+
+        Deterministic: a sample's random numbers depend on (its pass's seed, its number in the pass) only,
+        each sample's radiance is written to its own slot and a pass's slots are summed layer by layer
+        in order. ``pixels`` (flat indices, row-major; None: all): only these pixels are rendered, the
+        others are 0; a sample is numbered by its layer and pixel in the whole film, so they get the
+        values of the pass over all."""
         sensor = scene.sensors()[0]
         film = sensor.film()
         width, height = (int(v) for v in film.crop_size())
         if any(int(v) != 0 for v in film.crop_offset()):
             raise ValueError(f"{PLUGIN_NAME}: render_pass needs a film without a crop offset")
-        spp = int(spp)
-        if spp < 1:
-            raise ValueError(f"{PLUGIN_NAME}: spp must be >= 1, got {spp}")
-        n_pix = width * height
+        spps = [int(spp) for spp, _ in passes]
+        if not spps or min(spps) < 1:
+            raise ValueError(f"{PLUGIN_NAME}: every pass needs spp >= 1, got {spps}")
+        n_all = width * height
+        if pixels is None:
+            pix_list = None
+            n_pix = n_all
+        else:
+            pix = np.unique(np.asarray(pixels, np.int64).ravel())
+            if pix.size == 0 or pix[0] < 0 or pix[-1] >= n_all:
+                raise ValueError(f"{PLUGIN_NAME}: pixels must be flat indices in [0, {n_all}), got {pix.size} "
+                                 f"indices in [{pix.min() if pix.size else 0}, {pix.max() if pix.size else 0}]")
+            pix_list = mi.UInt32(pix.astype(np.uint32))
+            n_pix = int(pix.size)
+        # per layer (one sample of every pixel) of all passes in order: its pass, its number in the pass,
+        # and the pass's PCG32 state and stream (seed bits | sample number)
+        layer_pass = np.repeat(np.arange(len(spps)), spps)
+        layer_index = np.concatenate([np.arange(n) for n in spps]).astype(np.uint32)
+        keys = np.array([_splitmix64(int(seed)) for _, seed in passes], np.uint64)[layer_pass]
+        layer_state = mi.UInt64(keys)
+        layer_stream = mi.UInt64((keys >> np.uint64(32)) << np.uint64(32))
+        layer_number = mi.UInt32(layer_index)
         medium = sensor.get_medium()
         cond, body, initial = self._path_loop(scene, medium)
         job_sampler = _job_sampler_class()
         lanes = int(lanes) if lanes is not None else _default_lanes()
-        layers = max(1, min(spp, int(max_jobs) // n_pix))   # samples per pixel per launch
-        key = _splitmix64(int(seed))
-        state0 = dr.opaque(mi.UInt64, key)
-        stream = dr.opaque(mi.UInt64, (key >> 32) << 32)  # PCG stream = seed bits | sample number
+        total = len(layer_pass)
+        layers = max(1, min(total, int(max_jobs) // n_pix))   # layers per launch
         size = [dr.opaque(mi.UInt32, v) for v in (width, height)]
+        n_sel = dr.opaque(mi.UInt32, n_pix)
+        n_all_op = dr.opaque(mi.UInt32, n_all)
         inv_size = mi.Point2f(dr.opaque(mi.Float, 1.0 / width), dr.opaque(mi.Float, 1.0 / height))
-        acc = np.zeros((n_pix, 3), np.float64)
-        for layer0 in range(0, spp, layers):
-            n_layers = min(layers, spp - layer0)
+        acc = np.zeros((len(spps), n_pix, 3), np.float64)
+        for layer0 in range(0, total, layers):
+            n_layers = min(layers, total - layer0)
             n = n_layers * n_pix
             n_lanes = max(1, min(lanes, n))
             counter = dr.zeros(mi.UInt32, 1)
             slots = dr.zeros(mi.Float, 3 * n)
-            n_jobs, first = dr.opaque(mi.UInt32, n), dr.opaque(mi.UInt32, layer0 * n_pix)
+            n_jobs, first = dr.opaque(mi.UInt32, n), dr.opaque(mi.UInt32, layer0)
             sampler = job_sampler()
             sampler.rng = mi.PCG32(n_lanes)
             path = initial(sampler, dr.zeros(mi.Ray3f, n_lanes), medium, dr.full(mi.Bool, False, n_lanes))
@@ -1226,8 +1261,14 @@ class MajorantVolpath:
                 job = dr.select(done, nxt, job)
                 alive = (alive & path[1]) | start
                 sampler = path[0]
-                _seed_pcg(sampler.rng, state0, stream | mi.UInt64(first + job), start)
-                pixel = job % (size[0] * size[1])
+                # the sample's number in its pass: its layer there x all pixels + its pixel (a pass over
+                # some pixels gives them the values of the pass over all)
+                k = job % n_sel
+                layer = first + job // n_sel
+                pixel = k if pix_list is None else dr.gather(mi.UInt32, pix_list, k, start)
+                number = dr.gather(mi.UInt32, layer_number, layer, start) * n_all_op + pixel
+                _seed_pcg(sampler.rng, dr.gather(mi.UInt64, layer_state, layer, start),
+                          dr.gather(mi.UInt64, layer_stream, layer, start) | mi.UInt64(number), start)
                 pos = mi.Point2f(mi.Float(pixel % size[0]), mi.Float(pixel // size[0])) + sampler.next_2d(start)
                 ray, ray_weight = sensor.sample_ray(sensor.shutter_open(), sampler.next_1d(start), pos * inv_size,
                                                     mi.Point2f(0.5, 0.5), start)
@@ -1237,8 +1278,18 @@ class MajorantVolpath:
                 return (job, alive, weight) + path
 
             dr.while_loop(state=start_state, cond=pcond, body=pbody, label="majorant_volpath: persistent lanes")
-            acc += slots.numpy().reshape(n_layers, n_pix, 3).astype(np.float64).sum(axis=0)
-        return (acc / spp).reshape(height, width, 3).astype(np.float32)
+            values = slots.numpy().reshape(n_layers, n_pix, 3)
+            for j in range(n_layers):  # layer by layer, in order: the sums do not depend on the launches
+                acc[layer_pass[layer0 + j]] += values[j]
+        images = []
+        for a, spp in zip(acc, spps):
+            out = np.zeros((n_all, 3), np.float64)
+            if pix_list is None:
+                out[:] = a / spp
+            else:
+                out[pix] = a / spp
+            images.append(out.reshape(height, width, 3).astype(np.float32))
+        return images
 
     # ------------------------------------------------------------ the integrator's sun
     def _sample_sun(self, sample):

@@ -96,6 +96,7 @@ def test_resumed_distributed_render_computes_only_the_missing_passes(client, vol
     ckpt = tmp_path / "run.ckpt.npz"
     from weather_mi import reference
     real, calls = reference.render_pass, []
+    monkeypatch.setattr(reference, "BATCH_SAMPLES", 0)  # local passes one by one, through render_pass
 
     def stop_after_3(scene, spp, seed, **kwargs):  # in this process: the first 3 passes, then an interruption
         if len(calls) == 3:
@@ -265,7 +266,8 @@ def no_rendering(monkeypatch):
     import mitsuba as mi
     from weather_mi import reference
     monkeypatch.setattr(mi, "render", lambda *a, **k: pytest.fail("rendered although the setup is invalid"))
-    monkeypatch.setattr(reference, "render_pass", lambda *a, **k: pytest.fail("rendered although the setup is invalid"))
+    for name in ("render_pass", "render_passes"):
+        monkeypatch.setattr(reference, name, lambda *a, **k: pytest.fail("rendered although the setup is invalid"))
 
 
 def _scheduler_tasks(client) -> list:

@@ -53,11 +53,18 @@ def vol():
 
 @pytest.fixture
 def no_rendering(monkeypatch):
-    """Fail the test if a pass is rendered (every pass goes through ``reference.render_pass``)."""
+    """Fail the test if a pass is rendered (every pass goes through ``reference.render_pass`` or
+    ``reference.render_passes``)."""
     def forbidden(*args, **kwargs):
         pytest.fail("a pass was rendered although the input is invalid")
     monkeypatch.setattr(wm.reference, "render_pass", forbidden)
+    monkeypatch.setattr(wm.reference, "render_passes", forbidden)
     monkeypatch.setattr(mi, "render", forbidden)
+
+
+def one_pass_per_launch(monkeypatch):
+    """Local passes one at a time, each through ``reference.render_pass`` (which tests intercept)."""
+    monkeypatch.setattr(wm.reference, "BATCH_SAMPLES", 0)
 
 
 # ---------------------------------------------------------------- passes and standard error
@@ -86,6 +93,7 @@ def test_image_layout_and_standard_error_predicts_the_spread_between_seeds(vol):
 def test_estimate_is_the_mean_of_the_passes_with_their_standard_error(vol, monkeypatch):
     """Record what every pass returns: the image is their mean, the error their sample standard
     deviation over sqrt(passes), the passes use distinct seeds and ``spp`` is split over them."""
+    one_pass_per_launch(monkeypatch)
     real = wm.reference.render_pass
     passes = []
 
@@ -137,6 +145,7 @@ class Interrupted(Exception):
 
 def _interrupt_after(monkeypatch, k):
     """Make the (k+1)-th pass raise, as if the process were killed during pass k+1."""
+    one_pass_per_launch(monkeypatch)
     real = wm.reference.render_pass
     calls = []
 
@@ -182,13 +191,101 @@ def test_interrupted_render_resumes_bit_for_bit(vol, tmp_path, monkeypatch):
     assert calls == [] and np.array_equal(again.radiance, full.radiance)
 
 
+# wider than the cube: its middle columns and rows see the cloud, the rest the sky beside and above it
+WIDE_VIEW = wm.Camera.orthographic(center=(500.0, -1000.0, 1500.0), direction=(0.0, 1.0, 0.0), width=2000, height=1500)
+
+
+def _recording(monkeypatch):
+    """Record (scene, pixels asked for, image) of every pass."""
+    one_pass_per_launch(monkeypatch)
+    real = wm.reference.render_pass
+    passes = []
+
+    def recording(scene, spp, seed, **kwargs):
+        out = real(scene, spp, seed, **kwargs)
+        passes.append((scene, kwargs.get("pixels"), np.array(out, np.float64)[..., :3]))
+        return out
+    monkeypatch.setattr(wm.reference, "render_pass", recording)
+    return real, passes
+
+
+def test_render_to_a_target_adds_passes_over_the_cloud_pixels_only(vol, monkeypatch):
+    """Past the planned passes a render to a target renders its cloud pixels only: there the estimate
+    is the mean over every pass, elsewhere over the planned ones, each with its own standard error;
+    a pass over some pixels gives them the values of the pass over all."""
+    sp = spec(seed=2, camera=WIDE_VIEW)
+    cloud = wm.reference.cloud_mask(sp, vol)
+    assert 0.2 < cloud.mean() < 0.8
+    monkeypatch.setattr(wm.reference, "MAX_TARGET_PASSES", 7)  # an unreachable target: 4 planned + 3 more
+    real, passes = _recording(monkeypatch)
+    img = render(sp, vol, spp=8, passes=4, target_rse=1e-6)
+    scenes, pixels, imgs = zip(*passes)
+    assert len(passes) == 7 and pixels[:4] == (None,) * 4
+    for p in pixels[4:]:
+        assert np.array_equal(p, np.flatnonzero(cloud.ravel()))
+    imgs = np.stack(imgs)
+    assert np.all(imgs[4:][:, ~cloud] == 0.0)  # the other pixels were not rendered
+    np.testing.assert_allclose(img.radiance[cloud], imgs[:, cloud].mean(axis=0), rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(img.stderr[cloud], imgs[:, cloud].std(axis=0, ddof=1) / np.sqrt(7), rtol=1e-4, atol=1e-12)
+    np.testing.assert_allclose(img.radiance[~cloud], imgs[:4, ~cloud].mean(axis=0), rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(img.stderr[~cloud], imgs[:4, ~cloud].std(axis=0, ddof=1) / 2, rtol=1e-4, atol=1e-12)
+    m = img.metadata
+    assert (m["passes"], m["spp"], m["spp_background"]) == (7, 14, 8)
+    # the cloud pixels of a pass over them = those of the pass over every pixel (same seed)
+    some = np.flatnonzero(cloud.ravel())[::3]
+    whole = real(scenes[0], 2, 1234)
+    part = real(scenes[0], 2, 1234, pixels=some)
+    assert np.array_equal(part.reshape(-1, part.shape[-1])[some], whole.reshape(-1, whole.shape[-1])[some])
+    assert np.all(np.delete(part.reshape(-1, part.shape[-1]), some, axis=0) == 0.0)
+    with pytest.raises(ValueError, match="pixels"):
+        real(scenes[0], 2, 1234, pixels=[W * H])
+
+
+def test_render_to_a_target_resumes_bit_for_bit(vol, tmp_path, monkeypatch):
+    """Interrupted among the passes over the cloud pixels, a render to a target resumes to the same image."""
+    sp = spec(seed=8, camera=WIDE_VIEW)
+    monkeypatch.setattr(wm.reference, "MAX_TARGET_PASSES", 6)
+    full = render(sp, vol, spp=8, passes=4, target_rse=1e-6)
+    ckpt = tmp_path / "t.npz"
+    real = _interrupt_after(monkeypatch, 5)
+    with pytest.raises(Interrupted):
+        render(sp, vol, spp=8, passes=4, target_rse=1e-6, checkpoint=ckpt)
+    calls = _count_renders(monkeypatch, real)
+    resumed = render(sp, vol, spp=8, passes=4, target_rse=1e-6, checkpoint=ckpt, resume=True)
+    assert len(calls) == 1
+    assert np.array_equal(resumed.radiance, full.radiance) and np.array_equal(resumed.stderr, full.stderr, equal_nan=True)
+    assert resumed.metadata["spp_background"] == 8 and resumed.metadata["spp"] == 12
+
+
+def test_passes_rendered_together_equal_passes_rendered_one_by_one(vol, monkeypatch):
+    """Local passes are rendered in shared launches (``render_passes``): the image is bit-identical to
+    the one rendered a pass per launch, for planned passes and a render to a target alike."""
+    sp = spec(seed=4, camera=WIDE_VIEW)
+    monkeypatch.setattr(wm.reference, "MAX_TARGET_PASSES", 9)
+    real, launches = wm.reference.render_passes, []
+
+    def counting(scene, passes, **kwargs):
+        launches.append(len(passes))
+        return real(scene, passes, **kwargs)
+    monkeypatch.setattr(wm.reference, "render_passes", counting)
+    together = [render(sp, vol, spp=24, passes=6), render(sp, vol, spp=8, passes=4, target_rse=1e-6)]
+    assert launches == [6, 4, 5]  # the planned passes in one launch, then the passes over the cloud pixels
+    monkeypatch.setattr(wm.reference, "BATCH_SAMPLES", 0)
+    launches.clear()
+    alone = [render(sp, vol, spp=24, passes=6), render(sp, vol, spp=8, passes=4, target_rse=1e-6)]
+    assert launches == [1] * 15
+    for a, b in zip(together, alone):
+        assert np.array_equal(a.radiance, b.radiance) and np.array_equal(a.stderr, b.stderr)
+
+
 def test_checkpoint_of_another_scene_is_refused(vol, tmp_path, monkeypatch):
     ckpt = tmp_path / "a.npz"
     render(spec(seed=6), vol, spp=8, passes=2, checkpoint=ckpt)
     before = ckpt.read_bytes()
     denser = wm.OpticalVolume.from_arrays(beta_ext=vol.beta_total * 1.01, albedo=0.99,
                                           phase=wm.phase.henyey_greenstein(0.85), bbox=BBOX)
-    monkeypatch.setattr(wm.reference, "render_pass", lambda *a, **k: pytest.fail("rendered despite a foreign checkpoint"))
+    for name in ("render_pass", "render_passes"):
+        monkeypatch.setattr(wm.reference, name, lambda *a, **k: pytest.fail("rendered despite a foreign checkpoint"))
     others = [
         (spec(seed=6), denser, {}),                                  # another volume
         (spec(seed=6), cloud_volume(g=0.5), {}),                     # another phase function

@@ -105,7 +105,8 @@ def test_bad_sun_diameters_are_refused(diameter):
 
 
 def test_a_disk_sun_needs_the_majorant_integrator(monkeypatch):
-    monkeypatch.setattr(wm.reference, "render_pass", lambda *a, **k: pytest.fail("rendered"))
+    for name in ("render_pass", "render_passes"):
+        monkeypatch.setattr(wm.reference, name, lambda *a, **k: pytest.fail("rendered"))
     spec = wm.SceneSpec(camera=DOWN, sun=wm.Sun(200.0, 40.0), width=4, height=4)
     with pytest.raises(ValueError, match="angular_diameter_deg=0"):
         wm.render_reference(spec, slab(), spp=4, integrator="volpath", progress=False)

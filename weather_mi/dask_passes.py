@@ -58,11 +58,11 @@ def _render_pass_task(job, i: int, spp: int, seed: int, worker_variant, client_v
     from .variant import default_variant
     address = get_worker().address
     variant = variant_for(address, worker_variant, client_variant, default_variant())
-    raw, seconds = on_render_thread(_render_pass, job, variant, spp, seed)
+    raw, seconds = on_render_thread(_render_pass, job, variant, spp, seed, job.pixels_of(i))
     return i, raw, seconds, address
 
 
-def _render_pass(job, variant: str, spp: int, seed: int):
+def _render_pass(job, variant: str, spp: int, seed: int, pixels=None):
     from .reference import render_pass
     from .variant import set_variant
     set_variant(variant)
@@ -72,7 +72,7 @@ def _render_pass(job, variant: str, spp: int, seed: int):
         while len(_worker_scenes) >= SCENES_PER_WORKER:
             _worker_scenes.pop(next(iter(_worker_scenes)))
         scene = _worker_scenes[(job.key, variant)] = job.build()
-    raw = np.ascontiguousarray(render_pass(scene, spp, seed)[..., :3])
+    raw = np.ascontiguousarray(render_pass(scene, spp, seed, pixels=pixels)[..., :3])
     return raw, time.perf_counter() - t0
 
 

@@ -3,6 +3,9 @@ standard error, checkpoints after every pass and resume.
 
 The estimate is the mean of P independent passes (consecutive seeds, k samples per pixel each); its
 standard error is the sample standard deviation of the pass means over sqrt(P) (Welford updates).
+A render to a target (``target_rse``) adds passes over its cloud pixels only, so there P is larger
+than elsewhere. Passes rendered in this process share launches (``render_passes``); each keeps its
+own seed and values, so the image does not depend on how they were grouped (nor on Dask).
 """
 from __future__ import annotations
 
@@ -26,6 +29,8 @@ MAX_LANES_PER_PASS = 1 << 22
 MIN_PASSES = 16          # default number of passes (batches) of a render with spp >= 16
 CLOUD_TAU = np.log(2.0)  # cloud pixels: eye-ray transmittance below 1/2
 MAX_TARGET_PASSES = 1 << 14
+BATCH_SAMPLES = 1 << 20  # passes rendered together up to this many samples (render_passes; 0: one by one) ...
+MAX_BATCH_PASSES = 16    # ... and this many passes
 DEFAULT_AUREOLE_NEE = 0.0  # probability of the aureole estimator (majorant_volpath): 1.8x the time for a 1.5-2x lower RMS noise, off
 DEFAULT_SUN_GUIDING = 0.0  # guiding adds noise on five of the six issue-10 views (plugins/majorant_volpath.py): off
 
@@ -116,6 +121,14 @@ class PassScene:
     options: dict
     key: str
 
+    def pixels_of(self, i: int):
+        """The pixels (flat indices) pass ``i`` renders: None (all) for the planned passes, the cloud
+        pixels for the passes a render to a target adds (``options["target_pixels"]``)."""
+        pixels = self.options.get("target_pixels")
+        if pixels is None:
+            return None
+        return None if i < self.options["planned"] else pixels
+
     def build(self):
         import mitsuba as mi
         from .mitsuba_scene import recentred, scene_dict
@@ -128,42 +141,94 @@ class PassScene:
         return mi.load_dict(scene_dict(spec_k, vol_render, integ))
 
 
-def render_pass(scene, spp: int, seed: int, persistent: bool | None = None) -> np.ndarray:
+def render_pass(scene, spp: int, seed: int, persistent: bool | None = None, pixels=None) -> np.ndarray:
     """One pass of ``spp`` samples per pixel with seed ``seed``: the film's (H, W, C) float32 array.
 
     ``persistent`` (None: wherever it applies): ``majorant_volpath`` on an LLVM variant renders the pass
     with persistent lanes (its ``render_pass``), otherwise ``mi.render``. Both estimate the same image;
-    their random numbers differ."""
+    their random numbers differ. ``pixels`` (flat indices, row-major): with persistent lanes only these
+    pixels are rendered (the others are 0), with the values they have in the pass over every pixel;
+    ``mi.render`` renders every pixel anyway."""
     import mitsuba as mi
     integrator = scene.integrator()
     if persistent is None:
         persistent = (mi.variant().startswith("llvm") and hasattr(integrator, "render_pass")
                       and getattr(integrator, "persistent", False))
     if persistent:
-        return integrator.render_pass(scene, int(spp), int(seed))
+        return integrator.render_pass(scene, int(spp), int(seed), pixels=pixels)
     return np.array(mi.render(scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
 
 
-def pass_stderr(m2: np.ndarray, n: int) -> np.ndarray:
-    """Standard error of the mean over ``n`` passes from Welford's M2 (NaN below two passes)."""
-    return np.sqrt(m2 / (n - 1) / n) if n > 1 else np.full_like(m2, np.nan)
+def render_passes(scene, passes, persistent: bool | None = None, pixels=None) -> list:
+    """Several passes ``[(spp, seed), ...]``: as ``render_pass`` renders each, but with persistent lanes
+    in shared launches (``majorant_volpath.render_passes``: one tail of long paths per launch instead
+    of one per pass)."""
+    import mitsuba as mi
+    if len(passes) == 1:
+        return [render_pass(scene, *passes[0], persistent=persistent, pixels=pixels)]
+    integrator = scene.integrator()
+    if persistent is None:
+        persistent = (mi.variant().startswith("llvm") and hasattr(integrator, "render_passes")
+                      and getattr(integrator, "persistent", False))
+    if persistent:
+        return integrator.render_passes(scene, [(int(spp), int(seed)) for spp, seed in passes], pixels=pixels)
+    return [render_pass(scene, spp, seed, persistent=False, pixels=pixels) for spp, seed in passes]
 
 
-def welford_update(mean: np.ndarray, m2: np.ndarray, img: np.ndarray, n: int) -> None:
-    """Add pass ``n`` (1-based) of image ``img`` to the per-pixel running mean and M2 (in place)."""
+def pass_stderr(m2: np.ndarray, n) -> np.ndarray:
+    """Standard error of the mean over ``n`` passes from Welford's M2 (NaN below two passes); ``n`` a
+    number or per-pixel counts that broadcast against ``m2``."""
+    n = np.asarray(n, np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(n > 1, np.sqrt(m2 / np.maximum(n - 1, 1) / n), np.nan)
+
+
+def welford_update(mean: np.ndarray, m2: np.ndarray, img: np.ndarray, n: int, where=None) -> None:
+    """Add pass ``n`` (1-based) of image ``img`` to the per-pixel running mean and M2 (in place); with
+    ``where`` (a boolean (H, W) mask) only to those pixels, for which it is their pass ``n``."""
+    if where is not None:
+        sub_mean, sub_m2 = mean[where], m2[where]
+        welford_update(sub_mean, sub_m2, img[where], n)
+        mean[where], m2[where] = sub_mean, sub_m2
+        return
     delta = img - mean
     mean += delta / n
     m2 += delta * (img - mean)
 
 
-def _local_passes(scene, seed: int, per_pass, more, start: int):
-    """Passes rendered in this process: (index, image, seconds) while ``more(index)``."""
+def pass_counts(n: int, planned: int, target: np.ndarray | None) -> np.ndarray:
+    """(H, W, 1) passes per pixel after ``n`` passes of a render whose passes past the ``planned`` ones
+    cover only the ``target`` pixels (render to a target: its cloud pixels), or (1, 1, 1) of n."""
+    if target is None or n <= planned:
+        return np.full((1, 1, 1), n)
+    return np.where(target, n, planned)[..., None]
+
+
+def _local_passes(scene, seed: int, per_pass, more, start: int, pixels_of=lambda i: None,
+                  n_pixels: int = 1, planned: int | None = None, limit: int | None = None):
+    """Passes rendered in this process: (index, image, seconds) while ``more(index)``; pass i renders
+    the pixels ``pixels_of(i)`` (None: all ``n_pixels``). Consecutive passes over the same pixels are
+    rendered together (``render_passes``), up to BATCH_SAMPLES samples, MAX_BATCH_PASSES passes, the end of
+    the ``planned`` ones and ``limit`` (no pass from there on is wanted); ``more`` is asked for each pass after the previous one was handed over, so the passes handed
+    over do not depend on the batches (a render to a target may render up to a batch it then drops).
+    A pass's seconds: its batch's over its size."""
     i = start
     while more(i):
+        pix = pixels_of(i)
+        per_sample = max(1, n_pixels if pix is None else len(pix))
+        batch = [i]
+        while (len(batch) < MAX_BATCH_PASSES and sum(per_pass(j) for j in batch) * per_sample < BATCH_SAMPLES
+               and (planned is None or (batch[-1] + 1 < planned) == (i < planned))
+               and (limit is None or batch[-1] + 1 < limit)):
+            batch.append(batch[-1] + 1)
         t0 = time.perf_counter()
-        raw = render_pass(scene, per_pass(i), pass_seed(seed, i))
-        yield i, raw, time.perf_counter() - t0
-        i += 1
+        images = render_passes(scene, [(per_pass(j), pass_seed(seed, j)) for j in batch], pixels=pix)
+        dt = (time.perf_counter() - t0) / len(batch)
+        for j, raw in zip(batch, images):
+            if j > i and not more(j):
+                return
+            yield j, raw, dt
+        i = batch[-1] + 1
 
 
 def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
@@ -296,7 +361,11 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     rr_depth   : depth at which Russian roulette starts (None: the integrators' default, 5).
     cell       : fine voxels per coarse cell of the majorant grid ("majorant" only; None: the default).
     target_rse : keep adding passes until the mean relative standard error over cloud pixels (eye-ray
-                 transmittance < 1/2) is at most this, or ``max_seconds`` of rendering have passed.
+                 transmittance < 1/2) is at most this, or ``max_seconds`` of rendering have passed. The
+                 added passes render the cloud pixels only (with persistent lanes; ``mi.render`` renders
+                 every pixel and the others' values are dropped): the other pixels keep the planned passes
+                 (metadata ``spp_background``). On the side-lit supercell at 256 x 256 its 6% of cloud
+                 pixels take 60% of a full pass's time.
     sun_guiding: probability of drawing a scattering direction from the phase function centred on the
                  sun ("majorant" only; None: DEFAULT_SUN_GUIDING).
     forward_peak_deg : scattering by less than this many degrees (the diffraction peaks of rain, snow
@@ -346,7 +415,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         options.append(["integrator sun", sun_guiding] + ([aureole_nee] if aureole_nee else []))
     if client is not None and worker_variant is not None:  # other variants: the same image within noise only
         options.append(["worker variant", worker_variant])
-    plan = ["target", spp_list[0]] if target_rse is not None else spp_list
+    plan = ["target", spp_list[0], "cloud passes"] if target_rse is not None else spp_list
     key = _fingerprint(spec, vol, plan, *options)  # cell: speed only
     ckpt = Path(checkpoint) if checkpoint is not None else None
     resume_path = ckpt if resume is True else (Path(resume) if resume else None)
@@ -360,14 +429,19 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     elif resume_path is None and ckpt is not None and ckpt.is_file():
         _keep_aside(ckpt)
 
-    job = PassScene(spec, vol, dict(integrator=integrator, max_depth=max_depth, rr_depth=rr_depth, cell=cell,
-                                    own_sun=own_sun, sun_guiding=sun_guiding, aureole_nee=aureole_nee,
-                                    legacy=legacy, forward_peak_deg=forward_peak_deg), key)
-    scene = job.build() if client is None else None
     if mi.variant().startswith("scalar"):  # the ray march is vectorised: every pixel counts there
         cloud = np.ones((spec.height, spec.width), bool)
     else:  # the full extinction (not delta-scaled), the scene's sensor
         cloud = cloud_mask(spec, vol)
+    planned = len(spp_list)
+    # render to a target: the passes past the planned ones cover the cloud pixels only
+    target = cloud if target_rse is not None else None
+    job = PassScene(spec, vol, dict(integrator=integrator, max_depth=max_depth, rr_depth=rr_depth, cell=cell,
+                                    own_sun=own_sun, sun_guiding=sun_guiding, aureole_nee=aureole_nee,
+                                    legacy=legacy, forward_peak_deg=forward_peak_deg,
+                                    target_pixels=None if target is None else np.flatnonzero(target.ravel()),
+                                    planned=planned), key)
+    scene = job.build() if client is None else None
     scale = 1.0
     if normalize == "reflectance":
         scale = np.pi / (spec.sun.mu0 * np.asarray(spec.sun.irradiance))
@@ -375,13 +449,15 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     def stats(n):
         if n < 2:
             return None
-        return noise_stats(mean, pass_stderr(m2, n), cloud)
+        return noise_stats(mean, pass_stderr(m2, pass_counts(n, planned, target)), cloud)
 
     def more(i):
         if target_rse is None:
             return i < len(spp_list)
-        if i < len(spp_list):
+        if i < planned:
             return True
+        if not cloud.any():  # no cloud pixel in view: nothing to converge
+            return False
         st = stats(i)
         if st is not None and st["cloud_pixels"] and st["rse_mean"] <= target_rse:
             return False
@@ -391,7 +467,9 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         return spp_list[i] if i < len(spp_list) else spp_list[0]
 
     def metadata(n, spp_done, seconds, noise):
+        background = sum(spp_list[:min(n, planned)]) if target is not None else spp_done
         return {"renderer": "reference", "integrator": integrator, "variant": mi.variant(), "spp": int(spp_done),
+                "spp_background": int(background),
                 "passes": n, "max_depth": int(max_depth), "rr_depth": rr_depth, "seconds": seconds,
                 "normalize": normalize, "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
                 "source": vol.attrs.get("source"), "time": vol.attrs.get("time"),
@@ -404,7 +482,9 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     total = len(spp_list) if target_rse is None else None
     bar = tqdm(total=total, initial=done, desc="reference", unit="pass", disable=not progress)
     if client is None:
-        passes_in = _local_passes(scene, spec.seed, per_pass, more, done)
+        passes_in = _local_passes(scene, spec.seed, per_pass, more, done, job.pixels_of,
+                                  n_pixels=spec.width * spec.height, planned=planned,
+                                  limit=planned if target_rse is None else MAX_TARGET_PASSES)
     else:
         from .dask_passes import RemotePasses
         remote = RemotePasses(client, job, per_pass, more, done, len(spp_list), target_rse is not None,
@@ -417,7 +497,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
             img = raw.astype(np.float64)[..., :3] * scale
             seconds += dt
             n = i + 1
-            welford_update(mean, m2, img, n)
+            welford_update(mean, m2, img, n, where=None if i < planned else target)
             spp_done += per
             i = n
             if ckpt is not None:
@@ -429,13 +509,13 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
             if progress and st is not None:
                 bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
             if on_pass is not None:
-                on_pass(Image(mean.astype(np.float32), pass_stderr(m2, n).astype(np.float32),
+                on_pass(Image(mean.astype(np.float32), pass_stderr(m2, pass_counts(n, planned, target)).astype(np.float32),
                               metadata(n, spp_done, seconds, st)))
     finally:  # over Dask: cancels the passes still queued (target met, Ctrl-C, error); the checkpoint stays valid
         passes_in.close()
         bar.close()
     n = i
-    stderr = pass_stderr(m2, n)
+    stderr = pass_stderr(m2, pass_counts(n, planned, target))
     meta = metadata(n, spp_done, seconds, noise_stats(mean, stderr, cloud) if n > 1 else None)
     if client is not None:
         meta["dask"] = remote.summary
