@@ -51,6 +51,7 @@ import mitsuba as mi  # noqa: E402
 import weather_mi as wm  # noqa: E402
 
 wm.set_variant()  # selects the default variant (registers the plugins with it)
+CPU_WIDTH = wm.variant.llvm_vector_width() or wm.variant.PATH_TRACING_VECTOR_WIDTH  # Dr.Jit's default: the CPU's
 
 VIEWS = {"front": (200.0, 35.0), "side": (290.0, 35.0), "back": (20.0, 20.0)}
 
@@ -86,7 +87,8 @@ def render(spec, vol, spp, which, passes=None, **kw):
     (weather-mi now sets ``variant.LLVM_BLOCK_SIZE``, which also speeds the old estimator up by 6-8%);
     "prev", the issue-10 estimator before the texel grid, exact transmittance and persistent lanes
     (``PREVIOUS``); "last", the new estimator as the last stop rendered (one pass per launch, before
-    ``render_passes``: ``reference.BATCH_SAMPLES`` = 0); "new"."""
+    ``render_passes``: ``reference.BATCH_SAMPLES`` = 0); "new". All but "new" at the CPU's SIMD width
+    (before ``variant.PATH_TRACING_VECTOR_WIDTH``)."""
     from weather_mi.variant import DRJIT_DEFAULT_BLOCK_SIZE, LLVM_BLOCK_SIZE, tune_llvm
     wm.set_variant()  # selects the variant (and our block size) before the old one is put back
     old = which == "old"
@@ -95,7 +97,8 @@ def render(spec, vol, spp, which, passes=None, **kw):
         tune_llvm(DRJIT_DEFAULT_BLOCK_SIZE)
     try:
         with plugin_defaults(PREVIOUS if which == "prev" else {}), \
-                plugin_defaults({"BATCH_SAMPLES": 0} if which == "last" else {}, module=wm.reference):
+                plugin_defaults({"BATCH_SAMPLES": 0} if which == "last" else {}, module=wm.reference), \
+                plugin_defaults({"PATH_TRACING_VECTOR_WIDTH": CPU_WIDTH} if which != "new" else {}, module=wm.variant):
             return wm.render_reference(spec, vol, spp=spp, passes=passes, progress=False, legacy=old, **kw)
     finally:
         tune_llvm(LLVM_BLOCK_SIZE)
@@ -195,9 +198,10 @@ def bias(vols, args):
                   f"(new - prev {(mn - mp) / math.hypot(sp, sn):+.2f} se)", flush=True)
 
 
-def toggled(spec, vol, args, **defaults):
-    """The new estimator with plugin defaults changed (``plugin_defaults``), kernels compiled outside."""
-    with plugin_defaults(defaults):
+def toggled(spec, vol, args, module=None, **defaults):
+    """The new estimator with plugin (or ``module``) defaults changed (``plugin_defaults``), kernels compiled
+    outside."""
+    with plugin_defaults(defaults, module=module):
         render(replace(spec, width=8, height=8), vol, 1, "new", passes=1)
         return render(spec, vol, args.profile_spp, "new")
 
@@ -227,6 +231,9 @@ def profile(vol, args):
         ("free flights over the coarse grid (cell 2)", toggled(spec, vol, args, DEFAULT_TRACKING_GRID="coarse")),
         ("shadow rays by ratio tracking", toggled(spec, vol, args, DEFAULT_TRANSMITTANCE="ratio")),
         ("passes by mi.render (no persistent lanes)", toggled(spec, vol, args, DEFAULT_PERSISTENT_LANES=False)),
+        ("one pass per launch", toggled(spec, vol, args, module=wm.reference, BATCH_SAMPLES=0)),
+        (f"SIMD width {CPU_WIDTH} (the CPU's) instead of {wm.variant.PATH_TRACING_VECTOR_WIDTH}",
+         toggled(spec, vol, args, module=wm.variant, PATH_TRACING_VECTOR_WIDTH=CPU_WIDTH)),
         ("eye rays only (max_depth 1)", warm(spec, vol, max_depth=1)),
     ]
     print(f"{'case':40s} {'seconds':>8s} {'vs full':>8s}")

@@ -278,6 +278,32 @@ def test_passes_rendered_together_equal_passes_rendered_one_by_one(vol, monkeypa
         assert np.array_equal(a.radiance, b.radiance) and np.array_equal(a.stderr, b.stderr)
 
 
+def test_passes_run_at_the_path_tracing_simd_width_and_the_width_is_put_back(vol, monkeypatch):
+    """Passes are rendered with packets of PATH_TRACING_VECTOR_WIDTH lanes (the scene built there too:
+    Embree's packets follow the width) and the CPU's width is back afterwards; an image at the CPU's
+    width estimates the same radiance."""
+    from weather_mi import variant
+    if not mi.variant().startswith("llvm") or variant.llvm_vector_width() is None:
+        pytest.skip("an LLVM variant with Dr.Jit's target setters")
+    before = variant.llvm_vector_width()
+    one_pass_per_launch(monkeypatch)
+    real, widths = wm.reference.render_pass, []
+
+    def spying(scene, spp, seed, **kwargs):
+        widths.append(variant.llvm_vector_width())
+        return real(scene, spp, seed, **kwargs)
+    monkeypatch.setattr(wm.reference, "render_pass", spying)
+    narrow = render(spec(seed=12), vol, spp=256, passes=8)
+    assert set(widths) == {variant.PATH_TRACING_VECTOR_WIDTH} and variant.llvm_vector_width() == before
+    widths.clear()
+    monkeypatch.setattr(variant, "PATH_TRACING_VECTOR_WIDTH", before)
+    wide = render(spec(seed=12), vol, spp=256, passes=8)
+    assert set(widths) == {before}
+    diff = float(narrow.radiance.mean() - wide.radiance.mean())
+    se = float(np.sqrt((narrow.stderr ** 2 + wide.stderr ** 2).sum()) / narrow.stderr.size)
+    assert abs(diff) < 4 * se, f"{diff} vs se {se}"
+
+
 def test_checkpoint_of_another_scene_is_refused(vol, tmp_path, monkeypatch):
     ckpt = tmp_path / "a.npz"
     render(spec(seed=6), vol, spp=8, passes=2, checkpoint=ckpt)

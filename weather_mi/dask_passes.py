@@ -64,15 +64,16 @@ def _render_pass_task(job, i: int, spp: int, seed: int, worker_variant, client_v
 
 def _render_pass(job, variant: str, spp: int, seed: int, pixels=None):
     from .reference import render_pass
-    from .variant import set_variant
+    from .variant import path_tracing_width, set_variant
     set_variant(variant)
     t0 = time.perf_counter()
-    scene = _worker_scenes.get((job.key, variant))
-    if scene is None:
-        while len(_worker_scenes) >= SCENES_PER_WORKER:
-            _worker_scenes.pop(next(iter(_worker_scenes)))
-        scene = _worker_scenes[(job.key, variant)] = job.build()
-    raw = np.ascontiguousarray(render_pass(scene, spp, seed, pixels=pixels)[..., :3])
+    with path_tracing_width():  # as in one process: the scene built and rendered at the path tracer's width
+        scene = _worker_scenes.get((job.key, variant))
+        if scene is None:
+            while len(_worker_scenes) >= SCENES_PER_WORKER:
+                _worker_scenes.pop(next(iter(_worker_scenes)))
+            scene = _worker_scenes[(job.key, variant)] = job.build()
+        raw = np.ascontiguousarray(render_pass(scene, spp, seed, pixels=pixels)[..., :3])
     return raw, time.perf_counter() - t0
 
 

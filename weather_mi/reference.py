@@ -403,123 +403,129 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     forward_peak_deg = check_cone_deg((0.0 if legacy else DEFAULT_CONE_DEG) if forward_peak_deg is None
                                       else forward_peak_deg)
     set_variant(variant) if variant is not None else set_variant(_current_or_default())
-    import mitsuba as mi
-    from tqdm.auto import tqdm
 
-    spp_list = _passes(spec, int(spp), passes)
-    own_sun = integrator == "majorant" and not legacy
-    options = [integrator, max_depth, normalize, mi.variant(), rr_depth]
-    if forward_peak_deg > 0:
-        options.append(["forward peak", forward_peak_deg])
-    if own_sun:
-        options.append(["integrator sun", sun_guiding] + ([aureole_nee] if aureole_nee else []))
-    if client is not None and worker_variant is not None:  # other variants: the same image within noise only
-        options.append(["worker variant", worker_variant])
-    plan = ["target", spp_list[0], "cloud passes"] if target_rse is not None else spp_list
-    key = _fingerprint(spec, vol, plan, *options)  # cell: speed only
-    ckpt = Path(checkpoint) if checkpoint is not None else None
-    resume_path = ckpt if resume is True else (Path(resume) if resume else None)
-    h, w = spec.height, spec.width
-    mean = np.zeros((h, w, 3))
-    m2 = np.zeros((h, w, 3))
-    done, seconds, spp_done = 0, 0.0, 0
-    if resume_path is not None and resume_path.is_file():
-        mean, m2, done, seconds, spp_done = _load_checkpoint(resume_path, key, spp_list)
-        ckpt = ckpt or resume_path
-    elif resume_path is None and ckpt is not None and ckpt.is_file():
-        _keep_aside(ckpt)
+    def _passes_to_image():
+        import mitsuba as mi
+        from tqdm.auto import tqdm
 
-    if mi.variant().startswith("scalar"):  # the ray march is vectorised: every pixel counts there
-        cloud = np.ones((spec.height, spec.width), bool)
-    else:  # the full extinction (not delta-scaled), the scene's sensor
-        cloud = cloud_mask(spec, vol)
-    planned = len(spp_list)
-    # render to a target: the passes past the planned ones cover the cloud pixels only
-    target = cloud if target_rse is not None else None
-    job = PassScene(spec, vol, dict(integrator=integrator, max_depth=max_depth, rr_depth=rr_depth, cell=cell,
-                                    own_sun=own_sun, sun_guiding=sun_guiding, aureole_nee=aureole_nee,
-                                    legacy=legacy, forward_peak_deg=forward_peak_deg,
-                                    target_pixels=None if target is None else np.flatnonzero(target.ravel()),
-                                    planned=planned), key)
-    scene = job.build() if client is None else None
-    scale = 1.0
-    if normalize == "reflectance":
-        scale = np.pi / (spec.sun.mu0 * np.asarray(spec.sun.irradiance))
+        spp_list = _passes(spec, int(spp), passes)
+        own_sun = integrator == "majorant" and not legacy
+        options = [integrator, max_depth, normalize, mi.variant(), rr_depth]
+        if forward_peak_deg > 0:
+            options.append(["forward peak", forward_peak_deg])
+        if own_sun:
+            options.append(["integrator sun", sun_guiding] + ([aureole_nee] if aureole_nee else []))
+        if client is not None and worker_variant is not None:  # other variants: the same image within noise only
+            options.append(["worker variant", worker_variant])
+        plan = ["target", spp_list[0], "cloud passes"] if target_rse is not None else spp_list
+        key = _fingerprint(spec, vol, plan, *options)  # cell: speed only
+        ckpt = Path(checkpoint) if checkpoint is not None else None
+        resume_path = ckpt if resume is True else (Path(resume) if resume else None)
+        h, w = spec.height, spec.width
+        mean = np.zeros((h, w, 3))
+        m2 = np.zeros((h, w, 3))
+        done, seconds, spp_done = 0, 0.0, 0
+        if resume_path is not None and resume_path.is_file():
+            mean, m2, done, seconds, spp_done = _load_checkpoint(resume_path, key, spp_list)
+            ckpt = ckpt or resume_path
+        elif resume_path is None and ckpt is not None and ckpt.is_file():
+            _keep_aside(ckpt)
 
-    def stats(n):
-        if n < 2:
-            return None
-        return noise_stats(mean, pass_stderr(m2, pass_counts(n, planned, target)), cloud)
+        if mi.variant().startswith("scalar"):  # the ray march is vectorised: every pixel counts there
+            cloud = np.ones((spec.height, spec.width), bool)
+        else:  # the full extinction (not delta-scaled), the scene's sensor
+            cloud = cloud_mask(spec, vol)
+        planned = len(spp_list)
+        # render to a target: the passes past the planned ones cover the cloud pixels only
+        target = cloud if target_rse is not None else None
+        job = PassScene(spec, vol, dict(integrator=integrator, max_depth=max_depth, rr_depth=rr_depth, cell=cell,
+                                        own_sun=own_sun, sun_guiding=sun_guiding, aureole_nee=aureole_nee,
+                                        legacy=legacy, forward_peak_deg=forward_peak_deg,
+                                        target_pixels=None if target is None else np.flatnonzero(target.ravel()),
+                                        planned=planned), key)
+        scene = job.build() if client is None else None
+        scale = 1.0
+        if normalize == "reflectance":
+            scale = np.pi / (spec.sun.mu0 * np.asarray(spec.sun.irradiance))
 
-    def more(i):
-        if target_rse is None:
-            return i < len(spp_list)
-        if i < planned:
-            return True
-        if not cloud.any():  # no cloud pixel in view: nothing to converge
-            return False
-        st = stats(i)
-        if st is not None and st["cloud_pixels"] and st["rse_mean"] <= target_rse:
-            return False
-        return i < MAX_TARGET_PASSES and (max_seconds is None or seconds < max_seconds)
+        def stats(n):
+            if n < 2:
+                return None
+            return noise_stats(mean, pass_stderr(m2, pass_counts(n, planned, target)), cloud)
 
-    def per_pass(i):
-        return spp_list[i] if i < len(spp_list) else spp_list[0]
+        def more(i):
+            if target_rse is None:
+                return i < len(spp_list)
+            if i < planned:
+                return True
+            if not cloud.any():  # no cloud pixel in view: nothing to converge
+                return False
+            st = stats(i)
+            if st is not None and st["cloud_pixels"] and st["rse_mean"] <= target_rse:
+                return False
+            return i < MAX_TARGET_PASSES and (max_seconds is None or seconds < max_seconds)
 
-    def metadata(n, spp_done, seconds, noise):
-        background = sum(spp_list[:min(n, planned)]) if target is not None else spp_done
-        return {"renderer": "reference", "integrator": integrator, "variant": mi.variant(), "spp": int(spp_done),
-                "spp_background": int(background),
-                "passes": n, "max_depth": int(max_depth), "rr_depth": rr_depth, "seconds": seconds,
-                "normalize": normalize, "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
-                "source": vol.attrs.get("source"), "time": vol.attrs.get("time"),
-                "phase_mode": vol.phase_mode, "sun": ("scene emitter" if not own_sun else
-                                                      ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
-                "sun_guiding": sun_guiding if own_sun else None, "target_rse": target_rse,
-                "forward_peak_deg": forward_peak_deg, "aureole_nee": aureole_nee if own_sun else None,
-                "noise": noise}
+        def per_pass(i):
+            return spp_list[i] if i < len(spp_list) else spp_list[0]
 
-    total = len(spp_list) if target_rse is None else None
-    bar = tqdm(total=total, initial=done, desc="reference", unit="pass", disable=not progress)
-    if client is None:
-        passes_in = _local_passes(scene, spec.seed, per_pass, more, done, job.pixels_of,
-                                  n_pixels=spec.width * spec.height, planned=planned,
-                                  limit=planned if target_rse is None else MAX_TARGET_PASSES)
-    else:
-        from .dask_passes import RemotePasses
-        remote = RemotePasses(client, job, per_pass, more, done, len(spp_list), target_rse is not None,
-                              worker_variant=worker_variant)
-        passes_in = iter(remote)
-    i = done
-    try:
-        for i, raw, dt in passes_in:  # pass i's image, in pass order; dt: its seconds (wall-clock over Dask)
-            per = per_pass(i)
-            img = raw.astype(np.float64)[..., :3] * scale
-            seconds += dt
-            n = i + 1
-            welford_update(mean, m2, img, n, where=None if i < planned else target)
-            spp_done += per
-            i = n
-            if ckpt is not None:
-                _save_checkpoint(ckpt, {"key": key, "mean": mean, "m2": m2, "done": n, "seconds": seconds,
-                                        "spp_done": spp_done})
-            bar.update(1)
-            # noise over the cloud pixels: for the progress bar and on_pass only
-            st = stats(n) if progress or on_pass is not None else None
-            if progress and st is not None:
-                bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
-            if on_pass is not None:
-                on_pass(Image(mean.astype(np.float32), pass_stderr(m2, pass_counts(n, planned, target)).astype(np.float32),
-                              metadata(n, spp_done, seconds, st)))
-    finally:  # over Dask: cancels the passes still queued (target met, Ctrl-C, error); the checkpoint stays valid
-        passes_in.close()
-        bar.close()
-    n = i
-    stderr = pass_stderr(m2, pass_counts(n, planned, target))
-    meta = metadata(n, spp_done, seconds, noise_stats(mean, stderr, cloud) if n > 1 else None)
-    if client is not None:
-        meta["dask"] = remote.summary
-    return Image(mean.astype(np.float32), stderr.astype(np.float32), meta)
+        def metadata(n, spp_done, seconds, noise):
+            background = sum(spp_list[:min(n, planned)]) if target is not None else spp_done
+            return {"renderer": "reference", "integrator": integrator, "variant": mi.variant(), "spp": int(spp_done),
+                    "spp_background": int(background),
+                    "passes": n, "max_depth": int(max_depth), "rr_depth": rr_depth, "seconds": seconds,
+                    "normalize": normalize, "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
+                    "source": vol.attrs.get("source"), "time": vol.attrs.get("time"),
+                    "phase_mode": vol.phase_mode, "sun": ("scene emitter" if not own_sun else
+                                                          ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
+                    "sun_guiding": sun_guiding if own_sun else None, "target_rse": target_rse,
+                    "forward_peak_deg": forward_peak_deg, "aureole_nee": aureole_nee if own_sun else None,
+                    "noise": noise}
+
+        total = len(spp_list) if target_rse is None else None
+        bar = tqdm(total=total, initial=done, desc="reference", unit="pass", disable=not progress)
+        if client is None:
+            passes_in = _local_passes(scene, spec.seed, per_pass, more, done, job.pixels_of,
+                                      n_pixels=spec.width * spec.height, planned=planned,
+                                      limit=planned if target_rse is None else MAX_TARGET_PASSES)
+        else:
+            from .dask_passes import RemotePasses
+            remote = RemotePasses(client, job, per_pass, more, done, len(spp_list), target_rse is not None,
+                                  worker_variant=worker_variant)
+            passes_in = iter(remote)
+        i = done
+        try:
+            for i, raw, dt in passes_in:  # pass i's image, in pass order; dt: its seconds (wall-clock over Dask)
+                per = per_pass(i)
+                img = raw.astype(np.float64)[..., :3] * scale
+                seconds += dt
+                n = i + 1
+                welford_update(mean, m2, img, n, where=None if i < planned else target)
+                spp_done += per
+                i = n
+                if ckpt is not None:
+                    _save_checkpoint(ckpt, {"key": key, "mean": mean, "m2": m2, "done": n, "seconds": seconds,
+                                            "spp_done": spp_done})
+                bar.update(1)
+                # noise over the cloud pixels: for the progress bar and on_pass only
+                st = stats(n) if progress or on_pass is not None else None
+                if progress and st is not None:
+                    bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
+                if on_pass is not None:
+                    on_pass(Image(mean.astype(np.float32), pass_stderr(m2, pass_counts(n, planned, target)).astype(np.float32),
+                                  metadata(n, spp_done, seconds, st)))
+        finally:  # over Dask: cancels the passes still queued (target met, Ctrl-C, error); the checkpoint stays valid
+            passes_in.close()
+            bar.close()
+        n = i
+        stderr = pass_stderr(m2, pass_counts(n, planned, target))
+        meta = metadata(n, spp_done, seconds, noise_stats(mean, stderr, cloud) if n > 1 else None)
+        if client is not None:
+            meta["dask"] = remote.summary
+        return Image(mean.astype(np.float32), stderr.astype(np.float32), meta)
+    from .variant import path_tracing_width
+    with path_tracing_width():  # the scene is built and its passes rendered at the path tracer's SIMD width
+        return _passes_to_image()
+
 
 
 def _check_sun_options(spec, integrator, target_rse, max_seconds, sun_guiding, legacy):

@@ -1,5 +1,6 @@
 """The chosen Mitsuba variant: the only global state of weather-mi, and plugin registration; with an
-LLVM variant, Dr.Jit's CPU work split (:func:`tune_llvm`).
+LLVM variant, Dr.Jit's CPU work split (:func:`tune_llvm`) and the SIMD width of path tracing
+(:func:`path_tracing_width`).
 
 ``import weather_mi`` calls :func:`register_lazily`: the plugins (``hydrometeor_mixture``,
 ``majorant_volpath``) are registered with the variant already selected, if any, and with every variant
@@ -7,6 +8,8 @@ selected later (a Mitsuba variant callback); importing selects no variant. Funct
 :func:`ensure_registered`, which selects the default variant when none is.
 """
 from __future__ import annotations
+
+import contextlib
 
 VARIANTS_RGB = ("llvm_ad_rgb", "scalar_rgb", "cuda_ad_rgb")
 _registered: set[str] = set()
@@ -17,6 +20,12 @@ _callback_installed = False
 # benchmarks/llvm_block_size.py: 17% less time per pass on 2 cores, bit-identical images, the slicer unchanged.
 LLVM_BLOCK_SIZE = 1024
 DRJIT_DEFAULT_BLOCK_SIZE = 16384
+# Lanes per SIMD packet while path tracing (``path_tracing_width``; Dr.Jit's default is the CPU's width, 8
+# with AVX2). A packet loops until its slowest lane is done, and paths in cloud diverge at every loop (free
+# flights, shadow walks and path lengths all heavy-tailed: 24% of the lanes of a packet of 8 busy in the
+# inner walks), so 4 lanes waste less: 1.4x faster on the demo side view (benchmarks/reference_noise.py).
+# The slicer's coherent kernels keep the CPU's width.
+PATH_TRACING_VECTOR_WIDTH = 4
 _tuned = False
 
 
@@ -91,6 +100,48 @@ def tune_llvm(block_size: int = LLVM_BLOCK_SIZE) -> bool:
     setter.argtypes = [ctypes.c_uint32]
     setter(int(block_size))
     return True
+
+
+def llvm_vector_width() -> int | None:
+    """Lanes per SIMD packet of Dr.Jit's LLVM backend (8 with AVX2; None where it cannot be read)."""
+    import ctypes
+    getter = _core_function("_Z21jit_llvm_vector_widthv")
+    if getter is None:
+        return None
+    getter.restype = ctypes.c_uint32
+    return int(getter())
+
+
+def set_llvm_vector_width(width: int) -> bool:
+    """Make Dr.Jit's LLVM backend compile kernels for SIMD packets of ``width`` lanes (keeping its target
+    CPU and features; Embree takes 4, 8 or 16). Kernels are cached per width, so switching back and forth
+    compiles each once. Through ctypes; False (nothing changed) where this Dr.Jit build lacks the symbols."""
+    import ctypes
+    cpu_of, features_of = _core_function("_Z19jit_llvm_target_cpuv"), _core_function("_Z24jit_llvm_target_featuresv")
+    setter = _core_function("_Z19jit_llvm_set_targetPKcS0_j")
+    if cpu_of is None or features_of is None or setter is None:
+        return False
+    cpu_of.restype = features_of.restype = ctypes.c_char_p   # copies: set_target frees the originals
+    cpu, features = cpu_of(), features_of()
+    if not cpu:  # the LLVM backend is not initialised
+        return False
+    setter.argtypes = [ctypes.c_char_p, ctypes.c_char_p, ctypes.c_uint32]
+    setter(cpu, features, int(width))
+    return True
+
+
+@contextlib.contextmanager
+def path_tracing_width():
+    """Within: an LLVM variant compiles for packets of PATH_TRACING_VECTOR_WIDTH lanes (the previous width
+    after). Build the Mitsuba scene inside too: its Embree acceleration is made for the width of the day."""
+    import mitsuba as mi
+    before = llvm_vector_width() if (mi.variant() or "").startswith("llvm") else None
+    changed = before is not None and before != PATH_TRACING_VECTOR_WIDTH and set_llvm_vector_width(PATH_TRACING_VECTOR_WIDTH)
+    try:
+        yield
+    finally:
+        if changed:
+            set_llvm_vector_width(before)
 
 
 def llvm_block_size() -> int | None:
