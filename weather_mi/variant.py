@@ -102,14 +102,19 @@ def tune_llvm(block_size: int = LLVM_BLOCK_SIZE) -> bool:
     return True
 
 
-def llvm_vector_width() -> int | None:
-    """Lanes per SIMD packet of Dr.Jit's LLVM backend (8 with AVX2; None where it cannot be read)."""
+def _core_uint(name: str) -> int | None:
+    """The unsigned int returned by the argument-less core function ``name`` (None where it is absent)."""
     import ctypes
-    getter = _core_function("_Z21jit_llvm_vector_widthv")
+    getter = _core_function(name)
     if getter is None:
         return None
     getter.restype = ctypes.c_uint32
     return int(getter())
+
+
+def llvm_vector_width() -> int | None:
+    """Lanes per SIMD packet of Dr.Jit's LLVM backend (8 with AVX2; None where it cannot be read)."""
+    return _core_uint("_Z21jit_llvm_vector_widthv")
 
 
 def set_llvm_vector_width(width: int) -> bool:
@@ -146,12 +151,7 @@ def path_tracing_width():
 
 def llvm_block_size() -> int | None:
     """Dr.Jit's current LLVM block size (None where it cannot be read)."""
-    import ctypes
-    getter = _core_function("_Z19jit_llvm_block_sizev")
-    if getter is None:
-        return None
-    getter.restype = ctypes.c_uint32
-    return int(getter())
+    return _core_uint("_Z19jit_llvm_block_sizev")
 
 
 def _register_current() -> None:
