@@ -157,7 +157,9 @@ def _render(args, out, png_path, ckpt) -> Path:
     cloud = (f", over cloud pixels: mean relative standard error {noise['rse_mean']:.3f}, RMS standard error / "
              f"mean {noise['rms_se_over_mean']:.3f}, worst {noise['worst_se_over_mean']:.2f}") if noise.get("cloud_pixels") \
         else f", mean relative standard error {img.relative_stderr():.3f}"
-    print(f"wrote {out} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s{cloud})")
+    spp, background = img.metadata["spp"], img.metadata.get("spp_background", img.metadata["spp"])
+    spp_text = f"{spp} spp" if background == spp else f"{spp} spp on cloud pixels, {background} elsewhere"
+    print(f"wrote {out} and {png} ({spp_text}, {img.metadata['seconds']:.1f} s{cloud})")
     return out
 
 
