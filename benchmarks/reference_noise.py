@@ -142,12 +142,12 @@ def time_to(vol, args):
     print(f"\n## time to {100 * args.target:g}% mean RSE over cloud pixels, side-lit with sky, {size} x {size}, "
           f"{args.budget:.0f} s of passes each")
     spec = spec_for(vol, "side", size, size, 0.53)
-    out = {}
+    out, t1_of = {}, {}
     for which in ("old", "prev", "last", "new"):
         render(spec, vol, 1, which, passes=1)  # compile outside the timing (at this image size: a new size
         # may compile anew); seconds per spp from 4-spp passes: a 1-spp pass took 0.35 or 2.7 s, as a walk of
         # ~1e6 events (the long-walk roulette's tail) started early in it or late
-        t1 = min(render(spec, vol, 4, which, passes=1).metadata["seconds"] for _ in range(2)) / 4
+        t1 = t1_of[which] = min(render(spec, vol, 4, which, passes=1).metadata["seconds"] for _ in range(2)) / 4
         per = max(1, int(args.budget / 16 / max(t1, 1e-3)))
         passes = max(4, int(args.budget / max(per * t1, 1e-3)))
         img = render(spec, vol, per * passes, which, passes=passes)
@@ -163,7 +163,7 @@ def time_to(vol, args):
     # over every pixel, then passes over the cloud pixels only. Time to the target: the planned passes'
     # time T0 plus the further passes needed at their own cost (the variance per pass is that of a planned one)
     render(spec, vol, 1, "new", passes=1, target_rse=0.5)  # compiles the kernel of passes over some pixels
-    per = max(1, int(args.budget / 64 / max(t1, 1e-3)))
+    per = max(1, int(args.budget / 64 / max(t1_of["new"], 1e-3)))  # planned passes: a quarter of the budget
     marks = []
     img = render(spec, vol, 16 * per, "new", passes=16, target_rse=args.target, max_seconds=args.budget,
                  on_pass=lambda im: marks.append(im.metadata["seconds"]))

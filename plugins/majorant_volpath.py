@@ -1183,9 +1183,10 @@ class MajorantVolpath:
     def render_passes(self, scene, passes, lanes: int | None = None, max_jobs: int = MAX_JOBS_PER_LAUNCH,
                       pixels=None) -> list:
         """Passes ``[(spp, seed), ...]`` rendered together, in launches of up to ``max_jobs`` samples: a
-        launch ends when its longest path ends, and path lengths are heavy-tailed (the longest of a pass
-        of the demo's side view runs ~0.2 s after the others: a 4-spp pass over 128 x 128 pixels took 1.5x
-        the time per spp of a 16-spp one), so small passes rendered one by one pay that tail each time.
+        launch ends when its longest path ends, and path lengths are heavy-tailed (a walk of ~1e6 events
+        made one 1-spp pass of the demo's side view at 256 x 256 take 0.35 s or 2.7 s), so passes rendered
+        one by one pay that tail each time (16 passes of 2 spp, 160 x 120: 1.16x the time,
+        ``benchmarks/reference_noise.py --profile``).
         Returns one (H, W, 3) float32 image per pass, each as ``render_pass`` renders it alone.
 
         Deterministic: a sample's random numbers depend on (its pass's seed, its number in the pass) only,
@@ -1213,13 +1214,10 @@ class MajorantVolpath:
             pix_list = mi.UInt32(pix.astype(np.uint32))
             n_pix = int(pix.size)
         # per layer (one sample of every pixel) of all passes in order: its pass, its number in the pass,
-        # and the pass's PCG32 state and stream (seed bits | sample number)
+        # and the pass's key (the PCG32 state; its high bits | the sample's number make the stream)
         layer_pass = np.repeat(np.arange(len(spps)), spps)
-        layer_index = np.concatenate([np.arange(n) for n in spps]).astype(np.uint32)
-        keys = np.array([_splitmix64(int(seed)) for _, seed in passes], np.uint64)[layer_pass]
-        layer_state = mi.UInt64(keys)
-        layer_stream = mi.UInt64((keys >> np.uint64(32)) << np.uint64(32))
-        layer_number = mi.UInt32(layer_index)
+        layer_number = mi.UInt32(np.concatenate([np.arange(n) for n in spps]).astype(np.uint32))
+        layer_key = mi.UInt64(np.array([_splitmix64(int(seed)) for _, seed in passes], np.uint64)[layer_pass])
         medium = sensor.get_medium()
         cond, body, initial = self._path_loop(scene, medium)
         job_sampler = _job_sampler_class()
@@ -1267,8 +1265,8 @@ class MajorantVolpath:
                 layer = first + job // n_sel
                 pixel = k if pix_list is None else dr.gather(mi.UInt32, pix_list, k, start)
                 number = dr.gather(mi.UInt32, layer_number, layer, start) * n_all_op + pixel
-                _seed_pcg(sampler.rng, dr.gather(mi.UInt64, layer_state, layer, start),
-                          dr.gather(mi.UInt64, layer_stream, layer, start) | mi.UInt64(number), start)
+                key = dr.gather(mi.UInt64, layer_key, layer, start)
+                _seed_pcg(sampler.rng, key, ((key >> 32) << 32) | mi.UInt64(number), start)
                 pos = mi.Point2f(mi.Float(pixel % size[0]), mi.Float(pixel // size[0])) + sampler.next_2d(start)
                 ray, ray_weight = sensor.sample_ray(sensor.shutter_open(), sampler.next_1d(start), pos * inv_size,
                                                     mi.Point2f(0.5, 0.5), start)
@@ -1283,12 +1281,9 @@ class MajorantVolpath:
                 acc[layer_pass[layer0 + j]] += values[j]
         images = []
         for a, spp in zip(acc, spps):
-            out = np.zeros((n_all, 3), np.float64)
-            if pix_list is None:
-                out[:] = a / spp
-            else:
-                out[pix] = a / spp
-            images.append(out.reshape(height, width, 3).astype(np.float32))
+            out = np.zeros((n_all, 3), np.float32)
+            out[slice(None) if pix_list is None else pix] = a / spp
+            images.append(out.reshape(height, width, 3))
         return images
 
     # ------------------------------------------------------------ the integrator's sun

@@ -357,6 +357,20 @@ def test_medium_scale_and_default_to_world():
 # ---------------------------------------------------------------- exact transmittance
 
 
+def optical_depth_numpy(s, o, d, t_end, steps=8_000):
+    """Optical depth of the rays o + t d, t in [0, t_end], through the trilinear interpolant of ``s`` on
+    the box [LO, HI] (``trilinear_numpy``), by the midpoint rule over ``steps`` steps: independent of
+    the plugin."""
+    tau = np.zeros(len(o))
+    for chunk in np.array_split(np.arange(len(o)), max(1, len(o) // 200)):
+        t = (np.arange(steps) + 0.5)[None, :] / steps * t_end[chunk, None]
+        p = o[chunk, None, :] + t[..., None] * d[chunk, None, :]
+        unit = (p - LO) / (HI - LO)
+        inside = np.all((unit >= 0.0) & (unit <= 1.0), axis=-1)
+        tau[chunk] = (trilinear_numpy(s, unit) * inside).sum(axis=1) * t_end[chunk] / steps
+    return tau
+
+
 def test_exact_transmittance_is_the_optical_depth_of_the_interpolant():
     """Shadow-ray transmittance by Simpson's rule per texel cell (``_exact_walk``) against an
     independent fine midpoint integral of the trilinear interpolant (``trilinear_numpy``) along random
@@ -381,14 +395,7 @@ def test_exact_transmittance_is_the_optical_depth_of_the_interpolant():
     got = got.reshape(-1, n) if got.shape[0] != n else got.T
     assert np.array_equal(got, np.array(integ._exact_walk(ray, mi.Float(t_end.astype(np.float32)),
                                                           mi.Bool(True))).reshape(got.shape))
-    steps = 8_000
-    tau = np.zeros(n)
-    for chunk in np.array_split(np.arange(n), 10):
-        t = (np.arange(steps) + 0.5)[None, :] / steps * t_end[chunk, None]
-        p = o[chunk, None, :] + t[..., None] * d[chunk, None, :]
-        unit = (p - LO) / (HI - LO)
-        inside = np.all((unit >= 0.0) & (unit <= 1.0), axis=-1)
-        tau[chunk] = (trilinear_numpy(s, unit) * inside).sum(axis=1) * t_end[chunk] / steps
+    tau = optical_depth_numpy(s, o, d, t_end)
     expect = np.exp(-tau)
     assert (tau > 1.0).sum() > n // 10 and (tau == 0).sum() > n // 20  # dense, thin and empty paths
     np.testing.assert_allclose(got[0], expect, rtol=2e-3, atol=1e-6)
@@ -414,7 +421,7 @@ def test_exact_transmittance_with_roulette_is_unbiased():
     o = np.tile([5.0, 5.0, 2.0], (256, 1))
     d = rng.normal(size=(256, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    exact = walk(o, d, 1)[:, 0]
+    exact = np.exp(-optical_depth_numpy(s, o, d, np.full(len(o), 30.0)))  # independent of the plugin
     pick = np.flatnonzero((exact > 1e-6) & (exact < 1e-2))[:4]  # every one rouletted at least once
     assert len(pick) == 4
     o, d, exact = o[pick], d[pick], exact[pick]
@@ -424,4 +431,4 @@ def test_exact_transmittance_with_roulette_is_unbiased():
     draws = walk(o, d, reps, sampler)
     assert 0.0 < (draws > 0).mean() < 0.5  # the roulette did kill most walks
     mean, se = draws.mean(axis=1), draws.std(axis=1, ddof=1) / np.sqrt(reps)
-    assert np.all(np.abs(mean - exact) < 4 * se + 1e-3 * exact), (mean, exact, se)
+    assert np.all(np.abs(mean - exact) < 4 * se + 3e-3 * exact), (mean, exact, se)

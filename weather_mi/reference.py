@@ -141,6 +141,17 @@ class PassScene:
         return mi.load_dict(scene_dict(spec_k, vol_render, integ))
 
 
+def _persistent(scene, persistent: bool | None) -> bool:
+    """Whether passes of ``scene`` run with persistent lanes: as asked, or (None) wherever they apply:
+    ``majorant_volpath`` on an LLVM variant, unless its ``persistent_lanes`` is false."""
+    import mitsuba as mi
+    if persistent is not None:
+        return persistent
+    integrator = scene.integrator()
+    return (mi.variant().startswith("llvm") and hasattr(integrator, "render_passes")
+            and getattr(integrator, "persistent", False))
+
+
 def render_pass(scene, spp: int, seed: int, persistent: bool | None = None, pixels=None) -> np.ndarray:
     """One pass of ``spp`` samples per pixel with seed ``seed``: the film's (H, W, C) float32 array.
 
@@ -150,29 +161,19 @@ def render_pass(scene, spp: int, seed: int, persistent: bool | None = None, pixe
     pixels are rendered (the others are 0), with the values they have in the pass over every pixel;
     ``mi.render`` renders every pixel anyway."""
     import mitsuba as mi
-    integrator = scene.integrator()
-    if persistent is None:
-        persistent = (mi.variant().startswith("llvm") and hasattr(integrator, "render_pass")
-                      and getattr(integrator, "persistent", False))
-    if persistent:
-        return integrator.render_pass(scene, int(spp), int(seed), pixels=pixels)
+    if _persistent(scene, persistent):
+        return scene.integrator().render_pass(scene, int(spp), int(seed), pixels=pixels)
     return np.array(mi.render(scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
 
 
 def render_passes(scene, passes, persistent: bool | None = None, pixels=None) -> list:
-    """Several passes ``[(spp, seed), ...]``: as ``render_pass`` renders each, but with persistent lanes
-    in shared launches (``majorant_volpath.render_passes``: one tail of long paths per launch instead
-    of one per pass)."""
-    import mitsuba as mi
-    if len(passes) == 1:
-        return [render_pass(scene, *passes[0], persistent=persistent, pixels=pixels)]
-    integrator = scene.integrator()
-    if persistent is None:
-        persistent = (mi.variant().startswith("llvm") and hasattr(integrator, "render_passes")
-                      and getattr(integrator, "persistent", False))
-    if persistent:
-        return integrator.render_passes(scene, [(int(spp), int(seed)) for spp, seed in passes], pixels=pixels)
-    return [render_pass(scene, spp, seed, persistent=False, pixels=pixels) for spp, seed in passes]
+    """Several passes ``[(spp, seed), ...]``: as ``render_pass`` renders each (one pass: through it), but
+    with persistent lanes in shared launches (``majorant_volpath.render_passes``: one tail of long paths
+    per launch instead of one per pass)."""
+    if len(passes) > 1 and _persistent(scene, persistent):
+        return scene.integrator().render_passes(scene, [(int(spp), int(seed)) for spp, seed in passes],
+                                                pixels=pixels)
+    return [render_pass(scene, spp, seed, persistent=persistent, pixels=pixels) for spp, seed in passes]
 
 
 def pass_stderr(m2: np.ndarray, n) -> np.ndarray:
@@ -216,11 +217,12 @@ def _local_passes(scene, seed: int, per_pass, more, start: int, pixels_of=lambda
     while more(i):
         pix = pixels_of(i)
         per_sample = max(1, n_pixels if pix is None else len(pix))
-        batch = [i]
-        while (len(batch) < MAX_BATCH_PASSES and sum(per_pass(j) for j in batch) * per_sample < BATCH_SAMPLES
+        batch, samples = [i], per_pass(i) * per_sample
+        while (len(batch) < MAX_BATCH_PASSES and samples < BATCH_SAMPLES
                and (planned is None or (batch[-1] + 1 < planned) == (i < planned))
                and (limit is None or batch[-1] + 1 < limit)):
             batch.append(batch[-1] + 1)
+            samples += per_pass(batch[-1]) * per_sample
         t0 = time.perf_counter()
         images = render_passes(scene, [(per_pass(j), pass_seed(seed, j)) for j in batch], pixels=pix)
         dt = (time.perf_counter() - t0) / len(batch)
@@ -404,7 +406,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                                       else forward_peak_deg)
     set_variant(variant) if variant is not None else set_variant(_current_or_default())
 
-    def _passes_to_image():
+    from .variant import path_tracing_width
+    with path_tracing_width():  # the scene is built and its passes rendered at the path tracer's SIMD width
         import mitsuba as mi
         from tqdm.auto import tqdm
 
@@ -522,9 +525,6 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         if client is not None:
             meta["dask"] = remote.summary
         return Image(mean.astype(np.float32), stderr.astype(np.float32), meta)
-    from .variant import path_tracing_width
-    with path_tracing_width():  # the scene is built and its passes rendered at the path tracer's SIMD width
-        return _passes_to_image()
 
 
 
