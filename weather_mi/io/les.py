@@ -17,8 +17,11 @@ Conversions: LWC is a mass density (g/m^3), so the mixing ratio is q = LWC * 1e-
 with rho_air the 1976 standard atmosphere at each level height unless given; the effective radius
 (um) becomes ``r_eff_<species>`` in metres (0 where there is no liquid); the effective variance, when
 the file has it, is kept as ``v_eff_<species>`` (dimensionless). x = i dx, y = j dy and z = the level
-altitudes, all in metres. Levels uniform within their printed precision (25 m levels printed in km to
-3 decimals read 24-26 m apart) are kept, at their mean spacing. Non-uniform levels are interpolated linearly in height onto a uniform grid
+altitudes, all in metres. Levels uniform within their printed precision are kept, at their mean spacing:
+uniform when every level lies within half a unit of the last printed digit (the finest among the levels,
+read from the file's text) of one straight line a + b k, plus float rounding (25 m levels printed in km to
+3 decimals read 24-26 m apart and are kept; the half unit counts only when it is under a tenth of the mean
+spacing). Non-uniform levels are interpolated linearly in height onto a uniform grid
 with the smallest level spacing (LWC linearly; r_eff and v_eff LWC-weighted, so they stay within the
 range of the neighbouring cloudy values), and the attribute ``vertical_regrid`` says so.
 
@@ -40,7 +43,7 @@ from ..errors import WeatherDataError
 from ..hydrometeors import DIMS, from_arrays
 
 LIQUID_SPECIES = ("cloud", "rain")
-UNIFORM_RTOL = 1e-4          # relative tolerance on level spacings for "uniform"
+UNIFORM_RTOL = 1e-4          # levels' distance from a straight line allowed for float rounding, of the mean spacing
 _SPLIT = re.compile(r"[,;\s]+")
 _INT = re.compile(r"^[+-]?\d+$")
 # column-name aliases -> canonical column
@@ -81,6 +84,37 @@ def _decimals(token: str) -> int:
     return len(mantissa.split(".", 1)[1]) if "." in mantissa else 0
 
 
+def _last_digit_unit(token: str) -> float:
+    """One unit of the last digit printed in a number: 0.001 for '0.438', 1 for '12', 1e-5 for '4.38e-3'."""
+    mantissa, _, exponent = token.lower().partition("e")
+    try:
+        shift = int(exponent) if exponent else 0
+    except ValueError:
+        shift = 0
+    return 10.0 ** (shift - _decimals(mantissa))
+
+
+def _line_misfit(z: np.ndarray) -> float:
+    """The largest distance of the levels z_k from the straight line a + b k that makes it smallest
+    (the minimax fit; same unit as z). The spread max_k - min_k of z_k - b k is convex in the slope b
+    and smallest between the smallest and the largest step, so a ternary search over b finds it."""
+    k = np.arange(z.size, dtype=np.float64)
+    steps = np.diff(z)
+    lo, hi = float(steps.min()), float(steps.max())
+
+    def spread(b: float) -> float:
+        r = z - b * k
+        return float(r.max() - r.min())
+
+    for _ in range(100):  # (2/3)^100 of the slope interval: far below float rounding
+        m1, m2 = lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0
+        if spread(m1) <= spread(m2):
+            hi = m2
+        else:
+            lo = m1
+    return 0.5 * spread(0.5 * (lo + hi))
+
+
 def _read_lines(path: str) -> tuple[list[str], bool]:
     """The file's lines and whether it ends with a newline."""
     if not os.path.exists(path):
@@ -103,13 +137,13 @@ def _read_lines(path: str) -> tuple[list[str], bool]:
 
 
 def _parse_header(path: str, lines: list[str]):
-    """(comment, comments, (nx, ny, nz), (dx_km, dy_km), levels_km, decimals printed in the levels, column
-    names or None, index of first data line)."""
+    """(comment, comments, (nx, ny, nz), (dx_km, dy_km), levels_km, one unit of the finest last digit
+    printed in the levels (km), column names or None, index of first data line)."""
     comments: list[str] = []
     sizes: list[float] = []
     spacing: list[float] = []
     levels: list[float] = []
-    level_decimals = 0
+    level_unit = np.inf
     level_lines: list[int] = []
     stage = "sizes"
     nz_expected = 0
@@ -160,7 +194,7 @@ def _parse_header(path: str, lines: list[str]):
                     stage = "levels"
             else:
                 levels.append(v)
-                level_decimals = max(level_decimals, _decimals(tok))
+                level_unit = min(level_unit, _last_digit_unit(tok))
                 if not level_lines or level_lines[-1] != n:
                     level_lines.append(n)
         n += 1
@@ -200,7 +234,7 @@ def _parse_header(path: str, lines: list[str]):
             n += 1
         break
     comment = comments[0] if comments else ""
-    return comment, comments, tuple(int(s) for s in sizes), tuple(spacing), lev, level_decimals, names, n
+    return comment, comments, tuple(int(s) for s in sizes), tuple(spacing), lev, level_unit, names, n
 
 
 def _column_map(path: str, names: list[str] | None, ncol: int, line_no) -> dict[str, int]:
@@ -388,7 +422,7 @@ def open_les(path, rho_air=None, *, species: str = "cloud") -> xr.Dataset:
     if species not in LIQUID_SPECIES:
         raise WeatherDataError(path, "species", "'cloud' or 'rain' (LES files hold liquid water)", repr(species))
     lines, ends_with_newline = _read_lines(path)
-    comment, comments, (nx, ny, nz), (dx_km, dy_km), lev_km, lev_decimals, names, start = _parse_header(path, lines)
+    comment, comments, (nx, ny, nz), (dx_km, dy_km), lev_km, lev_unit_km, names, start = _parse_header(path, lines)
     data, line_no, sep = _parse_data(path, lines, start)
     n_listed = int(data.shape[0])
     if n_listed == 0 and names:
@@ -438,13 +472,15 @@ def open_les(path, rho_air=None, *, species: str = "cloud") -> xr.Dataset:
         attrs["vertical_grid"] = f"a single level; layer depth taken as the horizontal spacing {dz:g} m"
     else:
         steps = np.diff(z_native)
-        printed_m = 1000.0 * 10.0 ** -lev_decimals  # a unit of the last printed digit: each step +- that
-        tol_m = UNIFORM_RTOL * steps.mean() + (printed_m if printed_m <= 0.1 * steps.mean() else 0.0)
-        if np.max(np.abs(steps - steps.mean())) <= tol_m:
+        printed_m = 1000.0 * lev_unit_km  # one unit of the last printed digit: each level +- half that
+        misfit = _line_misfit(z_native)
+        tol_m = UNIFORM_RTOL * steps.mean() + (0.5 * printed_m if printed_m <= 0.1 * steps.mean() else 0.0)
+        if misfit <= tol_m:
             dz = (z_native[-1] - z_native[0]) / (nz - 1)
             z_out = z_native[0] + dz * np.arange(nz)
             attrs["vertical_grid"] = (f"uniform levels from the file, {dz:g} m apart (spacings {steps.min():g} to "
-                                      f"{steps.max():g} m as printed, to {printed_m:g} m)")
+                                      f"{steps.max():g} m as printed, to {printed_m:g} m; within {misfit:.3g} m "
+                                      "of a straight line)")
         else:
             dz_min = float(steps.min())
             span = z_native[-1] - z_native[0]
