@@ -252,6 +252,51 @@ def test_non_uniform_levels_interpolated(tmp_path):
     np.testing.assert_allclose(ds.rho_air.values[:, 0, 0], standard_density(ds.z.values), rtol=1e-6)
 
 
+# 16 levels 25 m apart from 437.5 m, printed in km to 3 decimals: 24-26 m apart as printed (a held-out file)
+ROUNDED_LEVELS = ("0.438 0.463 0.487 0.512 0.537 0.562 0.588 0.613 0.637 0.662 0.688 0.713 0.738 0.762 "
+                  "0.788 0.812")
+
+
+def _column_file(tmp_path, name, levels):
+    """A 1 x 1 column with the given level line and LWC 0.1 (k + 1) g/m^3 in every level."""
+    n = len(levels.split())
+    text = f"# {name}\n1 1 {n}\n0.025 0.025\n{levels}\n" + "".join(
+        f"0 0 {k} {0.1 * (k + 1):.3f} 10.0\n" for k in range(n))
+    return write_les(tmp_path / f"{name}.txt", text)
+
+
+def test_levels_uniform_to_their_printed_precision_are_kept(tmp_path):
+    """Every level within half a unit of the last printed digit (0.5 m) of a straight line: uniform, kept
+    (the spacings differ from their mean by up to 1.07 m, more than a whole printed unit)."""
+    steps = np.diff([float(t) for t in ROUNDED_LEVELS.split()])
+    assert round(steps.min(), 3) == 0.024 and round(steps.max(), 3) == 0.026
+    for name, levels in (("rounded", ROUNDED_LEVELS),
+                         ("rounded_exponent", " ".join(f"{float(t):.2e}" for t in ROUNDED_LEVELS.split()))):
+        ds = open_les(_column_file(tmp_path, name, levels), rho_air=1.0)
+        assert "vertical_regrid" not in ds.attrs, name
+        assert ds.sizes["z"] == 16
+        # kept at the mean spacing from the first to the last level: within a printed unit of each level
+        np.testing.assert_allclose(ds.z.values, [float(t) * 1000.0 for t in ROUNDED_LEVELS.split()], atol=1.0)
+        np.testing.assert_allclose(np.diff(ds.z.values), 374.0 / 15, rtol=1e-9)
+        lwc = ds.q_cloud.values[:, 0, 0] * 1e3
+        np.testing.assert_allclose(lwc, 0.1 * np.arange(1, 17), rtol=1e-6)   # the peak LWC unchanged
+        assert "within" in ds.attrs["vertical_grid"] and "straight line" in ds.attrs["vertical_grid"]
+
+
+def test_levels_beyond_their_printed_precision_are_regridded(tmp_path):
+    """Non-uniform levels printed to 3 decimals are still regridded: a stretched grid (25 m growing by 1 m
+    a level), one level 2 m off an otherwise uniform 25 m grid, and the rounded levels above printed with a
+    4th decimal (0.4380: precise to 0.05 m, so 0.52 m off any straight line)."""
+    stretched = " ".join(f"{0.4 + (25 * k + k * (k - 1) / 2) / 1000:.3f}" for k in range(16))
+    bumped = " ".join(f"{0.4 + 0.025 * k + (0.002 if k == 7 else 0.0):.3f}" for k in range(16))
+    four = " ".join(f"{t}0" for t in ROUNDED_LEVELS.split())
+    for name, levels in (("stretched", stretched), ("bumped", bumped), ("four_decimals", four)):
+        ds = open_les(_column_file(tmp_path, name, levels), rho_air=1.0)
+        assert "vertical_regrid" in ds.attrs, name
+        assert ds.attrs["n_levels_native"] == 16
+        assert ds.sizes["z"] > 16
+
+
 GOOD_HEAD = "# bad-input case\n3 2 4\n0.1 0.1\n1.0 1.1 1.2 1.3\n"
 BAD = [
     ("header_text", "# x\n3 two 4\n0.1 0.1\n1.0 1.1 1.2 1.3\n", ["header line 2", "nx ny nz"]),

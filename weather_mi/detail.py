@@ -138,16 +138,33 @@ def noise(shape: Sequence[int], spacing_m: Sequence[float] = (1.0, 1.0, 1.0), ba
           octaves: int = 4, persistence: float = 0.5, seed=0) -> np.ndarray:
     """Tileable fractal noise on a grid: float32, zero mean and unit variance over the grid.
 
-    shape             : grid shape, e.g. (nz, ny, nx) (any number of axes).
-    spacing_m         : grid spacing per axis in metres (or in cells: (1, 1, 1)).
-    base_wavelength_m : wavelength (same unit as spacing) of the lowest, strongest octave, i.e. base
-                        frequency 1 / base_wavelength_m; default :func:`default_wavelength`.
-    octaves           : number of octaves, each at twice the frequency of the previous.
-    persistence       : amplitude ratio of successive octaves.
-    seed              : anything ``numpy.random.default_rng`` accepts (an int, a tuple of ints).
+    Periodic along every axis: ``np.roll`` of the field is a seamless tile of it.
 
-    Periodic along every axis: ``np.roll`` of the field is a seamless tile of it. Raises ValueError
-    when no octave fits the grid (base wavelength below two cells, or a one-cell grid).
+    Parameters
+    ----------
+    shape : sequence of int
+        Grid shape, e.g. (nz, ny, nx) (any number of axes).
+    spacing_m : sequence of float, default (1.0, 1.0, 1.0)
+        Grid spacing per axis in metres (or in cells: (1, 1, 1)).
+    base_wavelength_m : float, optional
+        Wavelength (same unit as spacing) of the lowest, strongest octave, i.e. base frequency
+        1 / base_wavelength_m; default :func:`default_wavelength`.
+    octaves : int, default 4
+        Number of octaves, each at twice the frequency of the previous.
+    persistence : float, default 0.5
+        Amplitude ratio of successive octaves.
+    seed : int or tuple of int, default 0
+        Anything ``numpy.random.default_rng`` accepts.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32 array of ``shape``.
+
+    Raises
+    ------
+    ValueError
+        When no octave fits the grid (base wavelength below two cells, or a one-cell grid).
     """
     shape, spacing, wavelength, octaves, persistence = _check_params(shape, spacing_m, base_wavelength_m,
                                                                      octaves, persistence)
@@ -185,10 +202,36 @@ def field(shape: Sequence[int], seed=0, amplitude: float = 0.5, *, spacing_m: Se
           mean_preserving: bool = True, exact_mean: bool = True) -> np.ndarray:
     """A mean-one float32 multiplier of shape ``shape`` (z, y, x), for the slicer's ``detail_field=``.
 
-    ``exp(s n - s^2/2)`` (or ``max(0, 1 + s n)`` with ``mean_preserving=False``) of :func:`noise`;
-    with ``exact_mean`` (default) it is divided by its grid mean, so that the mean extinction, and so
-    the overall optical depth of a uniform volume, is unchanged exactly rather than in expectation.
-    ``spacing_m`` defaults to cells; pass ``hydrometeors.spacing_of(hyd)`` for noise isotropic in metres.
+    ``exp(s n - s^2/2)`` (or ``max(0, 1 + s n)`` with ``mean_preserving=False``) of :func:`noise`.
+
+    Parameters
+    ----------
+    shape : sequence of int
+        (nz, ny, nx).
+    seed : int or tuple of int, default 0
+        Seed of the noise (:func:`noise`).
+    amplitude : float, default 0.5
+        The amplitude s >= 0 (0: all ones).
+    spacing_m : sequence of float, default (1.0, 1.0, 1.0)
+        Grid spacing (m); defaults to cells: pass ``hydrometeors.spacing_of(hyd)`` for noise isotropic
+        in metres.
+    base_wavelength_m, octaves, persistence
+        As in :func:`noise`.
+    mean_preserving : bool, default True
+        ``exp(s n - s^2/2)`` (mean 1 in expectation) if True, else ``max(0, 1 + s n)``.
+    exact_mean : bool, default True
+        Divide by the grid mean, so that the mean extinction, and so the overall optical depth of a
+        uniform volume, is unchanged exactly rather than in expectation.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32 multiplier of ``shape``.
+
+    Raises
+    ------
+    ValueError
+        For a negative or non-finite amplitude, or noise that does not fit the grid.
     """
     amplitude = float(amplitude)
     if not (np.isfinite(amplitude) and amplitude >= 0):
@@ -235,22 +278,39 @@ def add_detail(hyd: xr.Dataset, amplitude: float | Mapping[str, float] = DEFAULT
                correlated: bool = True, exact_total: bool = False) -> tuple[xr.Dataset, dict[str, float]]:
     """Hydrometeors with simulated turbulent detail, and a report of the change of total water.
 
-    hyd               : a Hydrometeors dataset (validated).
-    amplitude         : ``s`` for all species, or by species name (species not named: 0, unchanged).
-                        Default :data:`DEFAULT_AMPLITUDE`.
-    base_wavelength_m : wavelength (m) of the lowest octave, one for all species or by species
-                        (species not named, or None: :func:`default_wavelength` of the grid).
-    octaves, persistence, seed : as in :func:`noise` (the noise is isotropic in metres on the grid).
-    mean_preserving   : multiply by ``exp(s n - s^2/2)`` (mean 1 in expectation) if True, else by
-                        ``max(0, 1 + s n)``.
-    correlated        : all species use the same random phases (same eddies) if True; independent
-                        noise per species (seeds ``(seed, i)``) if False.
-    exact_total       : rescale each modified species so that its total water is unchanged exactly.
+    Parameters
+    ----------
+    hyd : xarray.Dataset
+        A Hydrometeors dataset (validated).
+    amplitude : float or mapping of str to float, default DEFAULT_AMPLITUDE
+        ``s`` for all species, or by species name (species not named: 0, unchanged).
+    base_wavelength_m : float or mapping of str to float, optional
+        Wavelength (m) of the lowest octave, one for all species or by species (species not named, or
+        None: :func:`default_wavelength` of the grid).
+    octaves, persistence, seed
+        As in :func:`noise` (the noise is isotropic in metres on the grid).
+    mean_preserving : bool, default True
+        Multiply by ``exp(s n - s^2/2)`` (mean 1 in expectation) if True, else by ``max(0, 1 + s n)``.
+    correlated : bool, default True
+        All species use the same random phases (same eddies) if True; independent noise per species
+        (seeds ``(seed, i)``) if False.
+    exact_total : bool, default False
+        Rescale each modified species so that its total water is unchanged exactly.
 
-    Returns ``(new_hyd, report)``: ``new_hyd`` is a new validated dataset (input untouched; attribute
-    ``detail`` holds the settings as JSON); ``report[name]`` for each species and ``report["total"]``
-    is the relative change (after - before) / before of the total water sum(rho_air q dV) (0.0 for an
-    absent species).
+    Returns
+    -------
+    new_hyd : xarray.Dataset
+        A new validated dataset (input untouched; attribute ``detail`` holds the settings as JSON).
+    report : dict of str to float
+        For each species and ``"total"``: the relative change (after - before) / before of the total
+        water sum(rho_air q dV) (0.0 for an absent species).
+
+    Raises
+    ------
+    ValueError
+        For a negative or non-finite amplitude, or noise that does not fit the grid.
+    WeatherDataError
+        For invalid hydrometeors or an unknown species name.
     """
     validate(hyd)
     shape = tuple(int(hyd.sizes[d]) for d in DIMS)

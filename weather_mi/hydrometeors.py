@@ -51,13 +51,36 @@ def from_arrays(q: Mapping[str, np.ndarray], rho_air, spacing, origin=(0.0, 0.0,
                 source: str = "arrays") -> xr.Dataset:
     """Hydrometeors from plain arrays.
 
-    q        : mixing ratios (kg/kg of dry air) by species name, each shaped (z, y, x); species not
-               given are zero. Negatives are clipped to 0, counted (``n_negative_clipped``) and
-               reported in a warning with their count and minimum.
-    rho_air  : dry-air density (kg/m^3): a number, a z-profile (nz,) or a (z, y, x) array.
-    spacing  : (dz, dy, dx) in metres, positive.
-    origin   : (z0, y0, x0), the centre of the first cell in metres.
-    r_eff    : optional effective radii (m) by species, (z, y, x), 0 where unknown.
+    Parameters
+    ----------
+    q : mapping of str to array_like
+        Mixing ratios (kg/kg of dry air) by species name, each shaped (z, y, x); species not given are
+        zero. Negatives are clipped to 0, counted (``n_negative_clipped``) and reported in a warning
+        with their count and minimum.
+    rho_air : float or array_like
+        Dry-air density (kg/m^3): a number, a z-profile (nz,) or a (z, y, x) array.
+    spacing : tuple of 3 float
+        (dz, dy, dx) in metres, positive.
+    origin : tuple of 3 float, default (0.0, 0.0, 0.0)
+        (z0, y0, x0), the centre of the first cell in metres.
+    r_eff : mapping of str to array_like, optional
+        Effective radii (m) by species, (z, y, x), 0 where unknown.
+    attrs : mapping, optional
+        Dataset attributes added to ``source`` and ``n_negative_clipped``.
+    source : str, default "arrays"
+        Names the input in attributes and error messages.
+
+    Returns
+    -------
+    xarray.Dataset
+        Hydrometeors: ``q_<species>`` (kg/kg) for every species, ``rho_air`` (kg/m^3) and the
+        ``r_eff_<species>`` given (m), float32 on (z, y, x) cell centres in metres.
+
+    Raises
+    ------
+    WeatherDataError
+        For an unknown species, a shape that is not (z, y, x), non-finite values, a non-positive
+        spacing or density, or negative radii.
     """
     if not q:
         raise WeatherDataError(source, "q", "at least one species mixing ratio")

@@ -23,15 +23,37 @@ from .species import SpeciesSet, preset
 
 @dataclass(frozen=True)
 class OpticalVolume:
-    """Everything both renderers consume (DESIGN.md): per-species extinction ``beta_ext`` (S, z, y, x)
-    in 1/m, ``beta_total`` (z, y, x) Eq. 6, mixture single-scattering ``albedo`` (z, y, x, 3), Eq. 8
-    scattering ``weights`` (S, z, y, x; zero where nothing scatters), world ``bbox``
-    ((x0, y0, z0), (x1, y1, z1)) in metres, and ``phase_tables``, one per species (built at construction
-    from ``species_set`` and ``phase_mode`` when not given; None only for raw optics without a phase
-    function). All grids are float32, indexed [z, y, x].
+    """Everything both renderers consume (DESIGN.md). All grids are float32, indexed [z, y, x].
 
     Complete and read-only once built: the fields cannot be reassigned and the grids are read-only views
-    (the arrays given stay the caller's); ``dataclasses.replace`` makes a changed copy."""
+    (the arrays given stay the caller's); ``dataclasses.replace`` makes a changed copy.
+
+    Attributes
+    ----------
+    species : tuple of str
+        Species names, in the order of the first axis of ``beta_ext`` and ``weights``.
+    beta_ext : numpy.ndarray
+        Per-species extinction (S, z, y, x) in 1/m (Eq. 4).
+    beta_total : numpy.ndarray
+        Total extinction (z, y, x) in 1/m (Eq. 6).
+    albedo : numpy.ndarray
+        Mixture single-scattering albedo (z, y, x, 3) (Eq. 5).
+    weights : numpy.ndarray
+        Eq. 8 scattering weights (S, z, y, x); zero where nothing scatters.
+    bbox : tuple of 2 tuple of 3 float
+        World box ((x0, y0, z0), (x1, y1, z1)) in metres.
+    species_set : SpeciesSet or None
+        The species the optics came from (None for raw optics).
+    phase_mode : str
+        "per_species", "paper" or "given".
+    phase_quality : str
+        "default", "high" or "test": the quality of the tables built at construction.
+    attrs : dict
+        Attributes (those of the hydrometeors, plus ``species_preset`` and ``model_radii``).
+    phase_tables : tuple or None
+        One phase table per species, built at construction from ``species_set`` and ``phase_mode``
+        when not given; None only for raw optics without a phase function.
+    """
 
     species: tuple[str, ...]
     beta_ext: np.ndarray
@@ -103,8 +125,31 @@ class OpticalVolume:
     @classmethod
     def from_arrays(cls, beta_ext, albedo=1.0, phase=None, bbox=((0, 0, 0), (1, 1, 1)),
                     name: str = "medium") -> "OpticalVolume":
-        """Raw optics: a (z, y, x) extinction grid (1/m), an albedo (number, (z, y, x) or (z, y, x, 3)),
-        one phase table and a bounding box ((x0, y0, z0), (x1, y1, z1)) in metres."""
+        """Raw optics: one medium with given extinction, albedo and phase function.
+
+        Parameters
+        ----------
+        beta_ext : array_like
+            (z, y, x) extinction grid (1/m), finite and >= 0.
+        albedo : float or array_like, default 1.0
+            Single-scattering albedo in [0, 1]: a number, (z, y, x) or (z, y, x, 3).
+        phase : phase table, optional
+            The one phase table of the medium (None: optics without a phase function, not renderable).
+        bbox : tuple of 2 tuple of 3 float, default ((0, 0, 0), (1, 1, 1))
+            Bounding box ((x0, y0, z0), (x1, y1, z1)) in metres.
+        name : str, default "medium"
+            The one species name.
+
+        Returns
+        -------
+        OpticalVolume
+
+        Raises
+        ------
+        WeatherDataError
+            For a grid that is not 3-D, negative or non-finite values, an albedo of the wrong shape or
+            outside [0, 1], or an empty box.
+        """
         src = "OpticalVolume.from_arrays"
         beta = np.ascontiguousarray(beta_ext, dtype=np.float32)
         if beta.ndim != 3:
@@ -144,12 +189,33 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    phase_quality: str = "default") -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
-    species     : a SpeciesSet or a preset name ("paper", "physical").
-    scale       : per-species scaling factors, e.g. {"ice": 2.0} (multiplies that species' mass).
-    phase       : "per_species" (five tables) or "paper" (one water and one ice table), built with the volume.
-    model_radii : use the model's effective radii (r_eff_<species>) where present; default True
-                  except for the "paper" preset, which reproduces the paper's fixed radii.
-    phase_quality : "default", "high" or "test" (small, fast tables) for the tables built with the volume.
+    Parameters
+    ----------
+    hyd : xarray.Dataset
+        Hydrometeors (:mod:`weather_mi.hydrometeors`).
+    species : SpeciesSet or str, default "paper"
+        A SpeciesSet or a preset name ("paper", "physical").
+    scale : mapping of str to float, optional
+        Per-species scaling factors, e.g. {"ice": 2.0} (multiplies that species' mass).
+    phase : {"per_species", "paper"}, default "per_species"
+        "per_species" (five tables) or "paper" (one water and one ice table), built with the volume.
+    phase_tables : sequence, optional
+        One phase table per species, used instead of building them.
+    model_radii : bool, optional
+        Use the model's effective radii (``r_eff_<species>``, m) where present; default True except for
+        the "paper" preset, which reproduces the paper's fixed radii.
+    phase_quality : {"default", "high", "test"}, default "default"
+        Quality of the tables built with the volume ("test": small, fast tables).
+
+    Returns
+    -------
+    OpticalVolume
+        Extinction (1/m), albedo and Eq. 8 weights on the hydrometeors' grid, with its world box (m).
+
+    Raises
+    ------
+    WeatherDataError
+        For invalid hydrometeors, an unknown species in ``scale`` or an unknown ``phase``.
     """
     validate(hyd)
     sp = preset(species) if isinstance(species, str) else species

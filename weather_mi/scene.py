@@ -55,9 +55,25 @@ MAX_SUN_DIAMETER_DEG = 5.0
 
 @dataclass(frozen=True)
 class Sun:
-    """The sun: direction of its centre by azimuth/elevation (degrees), irradiance normal to the beam
-    (W/m^2, RGB), and its angular diameter (degrees): a uniform disk of radiance
-    irradiance / (pi sin^2(diameter / 2)), or with ``angular_diameter_deg=0`` a point (directional) sun."""
+    """The sun: a uniform disk of radiance irradiance / (pi sin^2(diameter / 2)), or with
+    ``angular_diameter_deg=0`` a point (directional) sun.
+
+    Parameters
+    ----------
+    azimuth : float, default 240.0
+        Direction of the sun's centre, degrees clockwise from north.
+    elevation : float, default 35.0
+        Degrees above the horizon, 0 < elevation <= 90.
+    irradiance : float or tuple of 3 float, default (1.0, 1.0, 1.0)
+        Irradiance normal to the beam (W/m^2, RGB), >= 0.
+    angular_diameter_deg : float, default SUN_DIAMETER_DEG (0.53)
+        Angular diameter (degrees) in [0, MAX_SUN_DIAMETER_DEG (5)]; 0 for a point sun.
+
+    Raises
+    ------
+    ValueError
+        For a sun at or below the horizon, a negative irradiance or a diameter out of range.
+    """
 
     azimuth: float = 240.0
     elevation: float = 35.0
@@ -89,8 +105,25 @@ class Sun:
 
 @dataclass(frozen=True)
 class Sky:
-    """Diffuse skylight: ``"sunsky"`` (Hosek-Wilkie, oriented by the Sun and scaled so that its sun
-    would give this scene's sun irradiance) or ``"constant"`` with a radiance (W/m^2/sr, RGB)."""
+    """Diffuse skylight.
+
+    Parameters
+    ----------
+    kind : {"sunsky", "constant"}, default "sunsky"
+        "sunsky": Hosek-Wilkie (Mitsuba's ``sunsky``), oriented by the Sun and scaled so that its sun
+        would give this scene's sun irradiance; "constant": a uniform ``radiance``.
+    radiance : float or tuple of 3 float, default (0.05, 0.07, 0.1)
+        The constant sky's radiance (W/m^2/sr, RGB), >= 0.
+    turbidity : float, default 3.0
+        Atmospheric turbidity of the sunsky model, in [1, 10].
+    ground_albedo : float, default 0.3
+        Ground albedo of the sunsky model (it brightens the sky near the horizon).
+
+    Raises
+    ------
+    ValueError
+        For an unknown kind, a negative radiance or a turbidity out of range.
+    """
 
     kind: str = "sunsky"
     radiance: tuple = (0.05, 0.07, 0.1)
@@ -107,7 +140,20 @@ class Sky:
 
 @dataclass(frozen=True)
 class Ground:
-    """A flat Lambertian ground at ``height`` metres (above MSL) with an RGB albedo."""
+    """A flat Lambertian ground.
+
+    Parameters
+    ----------
+    albedo : float or tuple of 3 float, default (0.15, 0.15, 0.15)
+        RGB albedo in [0, 1].
+    height : float, default 0.0
+        Height of the ground in metres (above MSL).
+
+    Raises
+    ------
+    ValueError
+        For an albedo outside [0, 1].
+    """
 
     albedo: tuple = (0.15, 0.15, 0.15)
     height: float = 0.0
@@ -121,8 +167,33 @@ class Ground:
 
 @dataclass(frozen=True)
 class Camera:
-    """A pinhole camera (``origin`` looking at ``target``, horizontal ``fov`` in degrees) or an
-    orthographic one (``kind="orthographic"``, ``ortho_width`` x ``ortho_height`` metres)."""
+    """A pinhole camera (``origin`` looking at ``target``) or an orthographic one.
+
+    Parameters
+    ----------
+    origin : tuple of 3 float
+        Position (m, world frame: x east, y north, z up).
+    target : tuple of 3 float
+        A point the camera looks at (m), not the origin.
+    up : tuple of 3 float, default (0.0, 0.0, 1.0)
+        Up direction of the image, not parallel to the viewing direction.
+    fov : float, default 45.0
+        Horizontal field of view (degrees) of a perspective camera, 0 < fov < 180.
+    kind : {"perspective", "orthographic"}, default "perspective"
+        Pinhole or orthographic projection.
+    ortho_width, ortho_height : float, default 0.0
+        The orthographic film's size in metres (positive for ``kind="orthographic"``).
+
+    Raises
+    ------
+    ValueError
+        For non-finite positions, a target at the origin, an up vector along the view, an unknown kind,
+        a field of view out of range or an orthographic film without a size.
+
+    See Also
+    --------
+    Camera.orbit, Camera.ground_view, Camera.orthographic : cameras framing a volume.
+    """
 
     origin: tuple
     target: tuple
@@ -158,10 +229,35 @@ class Camera:
     @classmethod
     def orbit(cls, vol_or_bbox, azimuth: float = 200.0, elevation: float = 8.0, distance: float | None = None,
               fov: float = 45.0, target=None) -> "Camera":
-        """A camera on a sphere around the volume: it stands at ``azimuth`` (degrees clockwise from
-        north, seen from the target) and ``elevation`` above the target, at ``distance`` metres. Given
-        an OpticalVolume, it frames the cloud (the box of cells with extinction), else the box; the
-        default target is the box centre and the default distance makes the box fit the view."""
+        """A camera on a sphere around the volume.
+
+        Given an OpticalVolume, it frames the cloud (the box of cells with extinction), else the box.
+
+        Parameters
+        ----------
+        vol_or_bbox : OpticalVolume or tuple of 2 tuple of 3 float
+            The volume, or a box ((x0, y0, z0), (x1, y1, z1)) in metres.
+        azimuth : float, default 200.0
+            Where the camera stands, degrees clockwise from north, seen from the target.
+        elevation : float, default 8.0
+            Degrees above the target, in [-90, 90].
+        distance : float, optional
+            From the target in metres (positive); default: the box fits the view.
+        fov : float, default 45.0
+            Horizontal field of view (degrees), 0 < fov < 180.
+        target : tuple of 3 float, optional
+            The point looked at (m); default the box centre.
+
+        Returns
+        -------
+        Camera
+            A perspective camera.
+
+        Raises
+        ------
+        ValueError
+            For a field of view, elevation or distance out of range.
+        """
         fov = check_fov_deg(fov)
         azimuth, elevation = _finite(azimuth, "Camera.orbit azimuth"), _finite(elevation, "Camera.orbit elevation")
         if not -90.0 <= elevation <= 90.0:
@@ -182,12 +278,40 @@ class Camera:
     def ground_view(cls, vol, distance_km: float = 40.0, height_m: float = 1500.0, azimuth: float = 200.0,
                     fov: float = 70.0, aspect: float = 4.0 / 3.0, ground_m: float = 0.0,
                     below_horizon_deg: float = 3.0) -> "Camera":
-        """A photographer's view of a storm: a camera ``height_m`` above the ground (at ``ground_m``),
-        ``distance_km`` horizontally from the storm's core (the column of largest optical depth of an
-        OpticalVolume, else the box centre), standing at ``azimuth`` (degrees clockwise from north, seen
-        from the core), looking towards the middle of the cloud's box with a level horizon
-        ``below_horizon_deg`` above the bottom of the frame. The horizontal field of view ``fov`` is widened if the top of the cloud (or
-        box) would not fit under the top of an image of this ``aspect`` (width / height)."""
+        """A photographer's view of a storm, looking towards the middle of the cloud's box with a level
+        horizon.
+
+        Parameters
+        ----------
+        vol : OpticalVolume or tuple of 2 tuple of 3 float
+            The volume (its core is the column of largest optical depth), or a box
+            ((x0, y0, z0), (x1, y1, z1)) in metres (its core is the box centre).
+        distance_km : float, default 40.0
+            Horizontal distance (km) from the storm's core, positive.
+        height_m : float, default 1500.0
+            Height of the camera above the ground (m), positive.
+        azimuth : float, default 200.0
+            Where the camera stands, degrees clockwise from north, seen from the core.
+        fov : float, default 70.0
+            Horizontal field of view (degrees), 0 < fov < 180; widened if the top of the cloud (or box)
+            would not fit under the top of an image of this ``aspect``.
+        aspect : float, default 4/3
+            Width / height of the image, positive.
+        ground_m : float, default 0.0
+            Height of the ground (m).
+        below_horizon_deg : float, default 3.0
+            The horizon this many degrees above the bottom of the frame.
+
+        Returns
+        -------
+        Camera
+            A perspective camera.
+
+        Raises
+        ------
+        ValueError
+            For a non-positive distance, height or aspect, or a field of view out of range.
+        """
         if not distance_km > 0 or not height_m > 0:
             raise ValueError(f"ground_view needs a positive distance and height, got {distance_km} km, {height_m} m")
         if not 0 < fov < 180 or not aspect > 0:
@@ -220,8 +344,25 @@ class Camera:
     @classmethod
     def orthographic(cls, center, direction=(0.0, 0.0, -1.0), width: float = 1.0, height: float = 1.0,
                      up=None) -> "Camera":
-        """An orthographic camera looking along ``direction`` through ``center``; the film covers
-        ``width`` x ``height`` metres. Looking straight down, the top of the image is north."""
+        """An orthographic camera looking along ``direction`` through ``center``.
+
+        Parameters
+        ----------
+        center : tuple of 3 float
+            A point on the view axis (m).
+        direction : tuple of 3 float, default (0.0, 0.0, -1.0)
+            Viewing direction (normalised here); the default looks straight down.
+        width, height : float, default 1.0
+            The film's size in metres.
+        up : tuple of 3 float, optional
+            Up direction of the image; default north when looking (nearly) straight down, else z up, so
+            that looking straight down the top of the image is north.
+
+        Returns
+        -------
+        Camera
+            An orthographic camera.
+        """
         c = np.asarray(center, dtype=np.float64)
         d = np.asarray(direction, dtype=np.float64)
         d = d / np.linalg.norm(d)
@@ -238,7 +379,28 @@ def _bbox(vol_or_bbox):
 
 @dataclass(frozen=True)
 class SceneSpec:
-    """Everything about a picture except the medium: drives both renderers identically."""
+    """Everything about a picture except the medium: drives both renderers identically.
+
+    Parameters
+    ----------
+    camera : Camera
+        The view.
+    sun : Sun, default Sun()
+        The sun.
+    sky : Sky or None, default Sky()
+        Diffuse skylight; None for none.
+    ground : Ground or None, default Ground()
+        The ground; None for none. The camera must be above it.
+    width, height : int, default 300
+        Image size in pixels, >= 1.
+    seed : int, default 0
+        Seed of the renderers' random numbers, >= 0.
+
+    Raises
+    ------
+    ValueError
+        For an image size or seed that is not a valid integer, or a camera inside the ground.
+    """
 
     camera: Camera
     sun: Sun = field(default_factory=Sun)

@@ -166,8 +166,30 @@ PRESETS = ("paper", "physical")
 
 def preset(name: str = "paper", overrides: Mapping[str, Mapping] | None = None, *,
            scale: Mapping[str, float] | None = None, albedo: float | None = None) -> SpeciesSet:
-    """The species table of a preset ("paper" or "physical"), optionally with per-species field
-    overrides, per-species scalings (the paper's interactive "scalings") and one albedo for all."""
+    """The species table of a preset, optionally with per-species field overrides, per-species scalings
+    (the paper's interactive "scalings") and one albedo for all.
+
+    Parameters
+    ----------
+    name : {"paper", "physical"}, default "paper"
+        "paper": the radii of the paper's Table II; "physical": typical effective radii.
+    overrides : mapping of str to mapping, optional
+        Fields replaced per species, e.g. ``{"ice": {"radius_m": 30e-6}}`` (fields of :class:`Species`).
+    scale : mapping of str to float, optional
+        Scaling factor (>= 0) of each species' extinction, e.g. ``{"snow": 2.0}``.
+    albedo : float, optional
+        One single-scattering albedo in [0, 1] for every species and channel (``overrides`` win).
+
+    Returns
+    -------
+    SpeciesSet
+        The five species in the canonical order (cloud, ice, rain, snow, graupel).
+
+    Raises
+    ------
+    WeatherDataError
+        For an unknown preset, species or field, or an invalid value.
+    """
     if name not in PRESETS:
         raise WeatherDataError("species.preset", "name", f"one of {PRESETS}", repr(name))
     sp = _make(name)

@@ -178,21 +178,8 @@ def _turret(S, N, Z, s0, n0, z_base, z_top, radius, n_edge, tilt=0.0):
     return np.where(Z >= z_base, inside, 0.0)
 
 
-def supercell(shape=(40, 96, 96), spacing_m=(500.0, 1000.0, 1000.0), seed=0,
-              shear_azimuth_deg=60.0) -> xr.Dataset:
-    """A procedural mature supercell (see the module docstring for the physics of every part).
-
-    shape             : (nz, ny, nx); the default 40 x 96 x 96 with the default spacing covers
-                        96 km x 96 km x 20 km.
-    spacing_m         : (dz, dy, dx) in metres.
-    seed              : seeds the noise that roughens every edge and amplitude (same seed, same arrays).
-    shear_azimuth_deg : direction the deep-layer shear vector points (degrees clockwise from north),
-                        i.e. where the anvil spreads; the storm is placed upshear of the domain
-                        centre so the anvil stays inside a ~100 km domain.
-    """
-    source = "synthetic.supercell"
-    (nz, ny, nx), spacing, (z, y, x) = _grid(shape, spacing_m, source)
-    dz, dy, dx = spacing
+def _shear_azimuth(source, shear_azimuth_deg) -> float:
+    """The shear azimuth in radians, checked."""
     try:
         az = np.deg2rad(float(shear_azimuth_deg))
     except (TypeError, ValueError) as exc:
@@ -200,24 +187,35 @@ def supercell(shape=(40, 96, 96), spacing_m=(500.0, 1000.0, 1000.0), seed=0,
                                repr(shear_azimuth_deg)) from exc
     if not np.isfinite(az):
         raise WeatherDataError(source, "shear_azimuth_deg", "a finite number", repr(shear_azimuth_deg))
-    rng = np.random.default_rng(seed)
-    shp3, shp2 = (nz, ny, nx), (ny, nx)
-    n_edge = _noise(rng, shp3, spacing, 2.0 * KM, 30.0 * KM)       # shape of edges
-    n_amp = _noise(rng, shp3, spacing, 1.5 * KM, 12.0 * KM)        # amplitude texture
-    n_top = _noise(rng, shp2, spacing[1:], 3.0 * KM, 30.0 * KM)    # anvil top height
-    n_bot = _noise(rng, shp2, spacing[1:], 3.0 * KM, 30.0 * KM)    # anvil base height
-    n_foot = _noise(rng, shp2, spacing[1:], 4.0 * KM, 40.0 * KM)   # anvil outline
+    return az
 
+
+def _sc_noise(rng, shp3, spacing) -> dict:
+    """The supercell's noise fields, drawn in this order from rng (edges, amplitude, anvil top, base, outline)."""
+    shp2 = shp3[1:]
+    return {"edge": _noise(rng, shp3, spacing, 2.0 * KM, 30.0 * KM),        # shape of edges
+            "amp": _noise(rng, shp3, spacing, 1.5 * KM, 12.0 * KM),         # amplitude texture
+            "top": _noise(rng, shp2, spacing[1:], 3.0 * KM, 30.0 * KM),     # anvil top height
+            "bot": _noise(rng, shp2, spacing[1:], 3.0 * KM, 30.0 * KM),     # anvil base height
+            "foot": _noise(rng, shp2, spacing[1:], 4.0 * KM, 40.0 * KM)}    # anvil outline
+
+
+def _sc_frame(x, y, z, domain_m, az):
+    """The shear frame (m): S downshear and N left of the shear vector from the updraft base axis, each
+    (1, ny, nx), Z (nz, 1, 1), and the updraft base (x_up, y_up)."""
     ue, un = np.sin(az), np.cos(az)                                # downshear unit vector (east, north)
-    x_up = nx * dx / 2 - _SC_STORM_OFFSET * ue                     # updraft base axis
-    y_up = ny * dy / 2 - _SC_STORM_OFFSET * un
+    x_up = domain_m[0] / 2 - _SC_STORM_OFFSET * ue                 # updraft base axis
+    y_up = domain_m[1] / 2 - _SC_STORM_OFFSET * un
     X = x[None, :] - x_up
     Y = y[:, None] - y_up
     S = (X * ue + Y * un)[None]                                    # (1, ny, nx): downshear distance
     N = (-X * un + Y * ue)[None]                                   # left of the shear vector
-    Z = z[:, None, None]
+    return S, N, z[:, None, None], x_up, y_up
 
-    # --- updraft tower: cloud water, tilted downshear, flat base, -40 C cut-off
+
+def _sc_cloud_water(S, N, Z, n_edge, mod):
+    """Cloud water of the updraft tower (tilted downshear, flat base, -40 C cut-off) and of the flanking
+    line, and the tower's axis: (q_cloud, s_axis, r_axis, r_tower), distances in metres."""
     s_axis = _SC_TILT * np.maximum(Z - _SC_CLOUD_BASE, 0.0)
     r_axis = np.sqrt((S - s_axis) ** 2 + N ** 2)
     r_tower = 4.5 * KM + 1.5 * KM * np.clip((Z - _SC_CLOUD_BASE) / (9.0 * KM), 0.0, 1.0)
@@ -229,17 +227,18 @@ def supercell(shape=(40, 96, 96), spacing_m=(500.0, 1000.0, 1000.0), seed=0,
     h = Z - _SC_CLOUD_BASE
     base = np.clip(h / 300.0 + 0.5, 0.0, 1.0)                      # flat base within one cell
     profile = _adiabatic_shape(h, _SC_QC_PEAK_Z - _SC_CLOUD_BASE, 1.5)
-    mod = _modulation(n_amp, 0.2, 0.5, 1.25)
     q_cloud = _SC_QC * profile * tower * warm * base * mod
-
-    # --- flanking line: turrets stepping down upshear and to the right of the updraft
+    # flanking line: turrets stepping down upshear and to the right of the updraft
     fdir = np.array([-np.cos(np.pi / 4), -np.sin(np.pi / 4)])
     for dist, top, rad in ((9.0 * KM, 8.5 * KM, 2.8 * KM), (15.0 * KM, 6.5 * KM, 2.3 * KM),
                            (21.0 * KM, 4.5 * KM, 1.8 * KM)):
         t = _turret(S, N, Z, dist * fdir[0], dist * fdir[1], _SC_CLOUD_BASE, top, rad, n_edge, tilt=0.15)
         q_cloud = np.maximum(q_cloud, 0.85 * _SC_QC * profile * t * warm * mod)
+    return q_cloud, s_axis, r_axis, r_tower
 
-    # --- glaciated upper updraft and overshooting top: ice and snow
+
+def _sc_column_ice_snow(Z, r_axis, r_tower, n_edge, mod):
+    """Ice and snow (kg/kg) of the glaciated upper updraft and the overshooting top."""
     dome = np.clip((_SC_OVERSHOOT_TOP - Z) / (_SC_OVERSHOOT_TOP - _SC_OVERSHOOT_BASE), 0.0, 1.0)
     r_col = np.where(Z <= _SC_OVERSHOOT_BASE, r_tower, r_tower * np.sqrt(dome))  # paraboloid dome
     rho_c = r_axis / np.maximum(r_col, 1.0) * _modulation(n_edge, 0.2, 0.4, 2.0)
@@ -247,22 +246,26 @@ def supercell(shape=(40, 96, 96), spacing_m=(500.0, 1000.0, 1000.0), seed=0,
     q_ice = _SC_QI * _smoothstep(Z, 7.0 * KM, 10.5 * KM) * column * mod
     q_snow = (_SC_QS * _smoothstep(Z, 6.0 * KM, 9.5 * KM)
               * (1.0 - 0.6 * _smoothstep(Z, _SC_OVERSHOOT_BASE, _SC_OVERSHOOT_TOP)) * column * mod)
+    return q_ice, q_snow
 
-    # --- anvil: spreads downshear from the updraft summit
+
+def _sc_anvil(S, N, Z, noise, mod):
+    """Ice and snow (kg/kg) of the anvil spreading downshear from the updraft summit, snow including the
+    fall streaks below its base near the storm."""
     s_rel = S[0] - _SC_TILT * (12.0 * KM - _SC_CLOUD_BASE)           # (ny, nx)
     t_down = np.clip(s_rel / _SC_ANVIL_DOWN, 0.0, 1.0)
     w0, w1 = _SC_ANVIL_HALF_WIDTH
     half_width = w0 + (w1 - w0) * t_down ** 0.7
     length = np.where(s_rel < 0.0, _SC_ANVIL_UP, _SC_ANVIL_DOWN)
     rho_h = (np.sqrt((N[0] / half_width) ** 2 + np.abs(s_rel / length) ** 2.5)
-             * _modulation(n_foot, 0.15, 0.75, 1.3))
+             * _modulation(noise["foot"], 0.15, 0.75, 1.3))
     foot = np.sqrt(np.clip(1.0 - rho_h ** 2, 0.0, 1.0))
-    z_top = _SC_ANVIL_TOP - 1.3 * KM * t_down + 250.0 * n_top
-    z_bot = _SC_ANVIL_BASE + 1.7 * KM * t_down + 400.0 * n_bot
+    z_top = _SC_ANVIL_TOP - 1.3 * KM * t_down + 250.0 * noise["top"]
+    z_bot = _SC_ANVIL_BASE + 1.7 * KM * t_down + 400.0 * noise["bot"]
     depth = np.maximum(z_top - z_bot, 0.0)
     top_e = z_top - 0.3 * (1.0 - foot) * depth                     # thins at its edges, mostly from below
     bot_e = z_bot + 0.7 * (1.0 - foot) * depth
-    zeta = (Z - bot_e) / np.maximum(top_e - bot_e, 1.0) + 0.06 * n_edge
+    zeta = (Z - bot_e) / np.maximum(top_e - bot_e, 1.0) + 0.06 * noise["edge"]
     inside = np.clip(zeta, 0.0, 1.0) * (top_e > bot_e)
     layer = np.sqrt(np.sin(np.pi * inside))                         # sharp top and base
     s_plus = np.maximum(s_rel, 0.0)
@@ -274,19 +277,22 @@ def supercell(shape=(40, 96, 96), spacing_m=(500.0, 1000.0, 1000.0), seed=0,
     # fall streaks of snow below the anvil base near the storm
     below = np.maximum(bot_e - Z, 0.0)
     streak = (0.35 * snow_amp * np.exp(-below / 900.0) * np.exp(-s_plus / (15.0 * KM))
-              * (Z < bot_e) * (foot > 0) * _modulation(n_amp, 0.6, 0.0, 2.0))
-    q_ice = np.maximum(q_ice, anvil_ice)
-    q_snow = np.maximum(q_snow, np.maximum(anvil_snow, streak))
+              * (Z < bot_e) * (foot > 0) * _modulation(noise["amp"], 0.6, 0.0, 2.0))
+    return anvil_ice, np.maximum(anvil_snow, streak)
 
-    # --- graupel core: downshear flank of the updraft, 2-9 km, melting below ~4 km
+
+def _sc_graupel(S, N, Z, s_axis, n_edge, mod):
+    """Graupel (kg/kg) of the core on the downshear flank of the updraft, 2-9 km, melting below ~4 km."""
     s_g = s_axis + 3.0 * KM
     r_g = np.sqrt((S - s_g) ** 2 + (N - 1.0 * KM) ** 2) / (4.5 * KM) * _modulation(n_edge, 0.2, 0.4, 2.0)
     zg = 6.0 * KM
     vert_g = (np.exp(-((Z - zg) / np.where(Z >= zg, 2.0 * KM, 1.6 * KM)) ** 2)
               * _smoothstep(Z, 1.5 * KM, 3.8 * KM))
-    q_graupel = _SC_QG * vert_g * np.clip(1.0 - r_g ** 2, 0.0, 1.0) * mod
+    return _SC_QG * vert_g * np.clip(1.0 - r_g ** 2, 0.0, 1.0) * mod
 
-    # --- rain: forward-flank shaft beside the precipitation-free updraft base, and stratiform rain
+
+def _sc_rain(S, N, Z, r_axis, n_edge, mod):
+    """Rain (kg/kg): the forward-flank shaft beside the precipitation-free updraft base, and stratiform rain."""
     r_r = (np.sqrt(((S - 6.5 * KM) / (6.0 * KM)) ** 2 + ((N - 1.5 * KM) / (4.5 * KM)) ** 2)
            * _modulation(n_edge, 0.2, 0.4, 2.0))
     vert_r = (np.where(Z < 2.5 * KM, 0.7 + 0.3 * Z / (2.5 * KM), 1.0)      # evaporation below 2.5 km
@@ -296,7 +302,56 @@ def supercell(shape=(40, 96, 96), spacing_m=(500.0, 1000.0, 1000.0), seed=0,
     r_s = (np.sqrt(((S - 18.0 * KM) / (14.0 * KM)) ** 2 + ((N - 3.0 * KM) / (7.0 * KM)) ** 2)
            * _modulation(n_edge, 0.25, 0.4, 2.0))
     vert_s = 1.0 - _smoothstep(Z, 3.8 * KM, 5.0 * KM)
-    q_rain = np.maximum(q_rain, _SC_QR_STRATIFORM * vert_s * np.clip(1.0 - r_s ** 2, 0.0, 1.0) * mod)
+    return np.maximum(q_rain, _SC_QR_STRATIFORM * vert_s * np.clip(1.0 - r_s ** 2, 0.0, 1.0) * mod)
+
+
+def supercell(shape=(40, 96, 96), spacing_m=(500.0, 1000.0, 1000.0), seed=0,
+              shear_azimuth_deg=60.0) -> xr.Dataset:
+    """A procedural mature supercell (see the module docstring for the physics of every part).
+
+    Parameters
+    ----------
+    shape : tuple of 3 int, default (40, 96, 96)
+        (nz, ny, nx), each >= 2; with the default spacing the default covers 96 km x 96 km x 20 km.
+    spacing_m : tuple of 3 float, default (500.0, 1000.0, 1000.0)
+        (dz, dy, dx) in metres.
+    seed : int, default 0
+        Seeds the noise that roughens every edge and amplitude (same seed, same arrays).
+    shear_azimuth_deg : float, default 60.0
+        Direction the deep-layer shear vector points (degrees clockwise from north), i.e. where the
+        anvil spreads; the storm is placed upshear of the domain centre so the anvil stays inside a
+        ~100 km domain.
+
+    Returns
+    -------
+    xarray.Dataset
+        Hydrometeors (:func:`weather_mi.hydrometeors.from_arrays`): cloud, ice, rain, snow and graupel
+        mixing ratios (kg/kg) on cell centres from (dz/2, dy/2, dx/2) (m), ``rho_air`` the 1976
+        standard atmosphere (kg/m^3); attributes ``seed``, ``shear_azimuth_deg`` and the updraft base
+        ``updraft_x_m``, ``updraft_y_m`` (m).
+
+    Raises
+    ------
+    WeatherDataError
+        For a bad shape, spacing or shear azimuth.
+    """
+    source = "synthetic.supercell"
+    (nz, ny, nx), spacing, (z, y, x) = _grid(shape, spacing_m, source)
+    dz, dy, dx = spacing
+    az = _shear_azimuth(source, shear_azimuth_deg)
+    shp3 = (nz, ny, nx)
+    noise = _sc_noise(np.random.default_rng(seed), shp3, spacing)
+    S, N, Z, x_up, y_up = _sc_frame(x, y, z, (nx * dx, ny * dy), az)
+    n_edge = noise["edge"]
+    mod = _modulation(noise["amp"], 0.2, 0.5, 1.25)
+
+    q_cloud, s_axis, r_axis, r_tower = _sc_cloud_water(S, N, Z, n_edge, mod)
+    q_ice, q_snow = _sc_column_ice_snow(Z, r_axis, r_tower, n_edge, mod)
+    anvil_ice, anvil_snow = _sc_anvil(S, N, Z, noise, mod)
+    q_ice = np.maximum(q_ice, anvil_ice)
+    q_snow = np.maximum(q_snow, anvil_snow)
+    q_graupel = _sc_graupel(S, N, Z, s_axis, n_edge, mod)
+    q_rain = _sc_rain(S, N, Z, r_axis, n_edge, mod)
 
     q = {"cloud": q_cloud, "ice": q_ice, "rain": q_rain, "snow": q_snow, "graupel": q_graupel}
     q = {k: np.broadcast_to(v, shp3) for k, v in q.items()}
@@ -349,10 +404,28 @@ def _cumulus_blobs(rng, xc, yc):
 def cumulus(shape=(110, 128, 128), spacing_m=(50.0, 50.0, 50.0), seed=0, rain=True) -> xr.Dataset:
     """A procedural cumulus congestus with cauliflower turrets (see the module docstring).
 
-    shape     : (nz, ny, nx); the default 110 x 128 x 128 at 50 m covers 6.4 km x 6.4 km x 5.5 km.
-    spacing_m : (dz, dy, dx) in metres.
-    seed      : places the turrets and seeds the edge noise (same seed, same arrays).
-    rain      : include light rain (drizzle) from the lower cloud core to the ground.
+    Parameters
+    ----------
+    shape : tuple of 3 int, default (110, 128, 128)
+        (nz, ny, nx), each >= 2; the default at 50 m covers 6.4 km x 6.4 km x 5.5 km.
+    spacing_m : tuple of 3 float, default (50.0, 50.0, 50.0)
+        (dz, dy, dx) in metres.
+    seed : int, default 0
+        Places the turrets and seeds the edge noise (same seed, same arrays).
+    rain : bool, default True
+        Include light rain (drizzle) from the lower cloud core to the ground.
+
+    Returns
+    -------
+    xarray.Dataset
+        Hydrometeors (:func:`weather_mi.hydrometeors.from_arrays`): cloud (and rain) mixing ratios
+        (kg/kg) on cell centres from (dz/2, dy/2, dx/2) (m), ``rho_air`` the 1976 standard atmosphere
+        (kg/m^3); a warm cloud, no ice, snow or graupel.
+
+    Raises
+    ------
+    WeatherDataError
+        For a bad shape or spacing.
     """
     source = "synthetic.cumulus"
     (nz, ny, nx), spacing, (z, y, x) = _grid(shape, spacing_m, source)

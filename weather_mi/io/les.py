@@ -17,8 +17,11 @@ Conversions: LWC is a mass density (g/m^3), so the mixing ratio is q = LWC * 1e-
 with rho_air the 1976 standard atmosphere at each level height unless given; the effective radius
 (um) becomes ``r_eff_<species>`` in metres (0 where there is no liquid); the effective variance, when
 the file has it, is kept as ``v_eff_<species>`` (dimensionless). x = i dx, y = j dy and z = the level
-altitudes, all in metres. Levels uniform within their printed precision (25 m levels printed in km to
-3 decimals read 24-26 m apart) are kept, at their mean spacing. Non-uniform levels are interpolated linearly in height onto a uniform grid
+altitudes, all in metres. Levels uniform within their printed precision are kept, at their mean spacing:
+uniform when every level lies within half a unit of the last printed digit (the finest among the levels,
+read from the file's text) of one straight line a + b k, plus float rounding (25 m levels printed in km to
+3 decimals read 24-26 m apart and are kept; the half unit counts only when it is under a tenth of the mean
+spacing). Non-uniform levels are interpolated linearly in height onto a uniform grid
 with the smallest level spacing (LWC linearly; r_eff and v_eff LWC-weighted, so they stay within the
 range of the neighbouring cloudy values), and the attribute ``vertical_regrid`` says so.
 
@@ -31,6 +34,7 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 import xarray as xr
@@ -40,7 +44,7 @@ from ..errors import WeatherDataError
 from ..hydrometeors import DIMS, from_arrays
 
 LIQUID_SPECIES = ("cloud", "rain")
-UNIFORM_RTOL = 1e-4          # relative tolerance on level spacings for "uniform"
+UNIFORM_RTOL = 1e-4          # levels' distance from a straight line allowed for float rounding, of the mean spacing
 _SPLIT = re.compile(r"[,;\s]+")
 _INT = re.compile(r"^[+-]?\d+$")
 # column-name aliases -> canonical column
@@ -81,6 +85,37 @@ def _decimals(token: str) -> int:
     return len(mantissa.split(".", 1)[1]) if "." in mantissa else 0
 
 
+def _last_digit_unit(token: str) -> float:
+    """One unit of the last digit printed in a number: 0.001 for '0.438', 1 for '12', 1e-5 for '4.38e-3'."""
+    mantissa, _, exponent = token.lower().partition("e")
+    try:
+        shift = int(exponent) if exponent else 0
+    except ValueError:
+        shift = 0
+    return 10.0 ** (shift - _decimals(mantissa))
+
+
+def _line_misfit(z: np.ndarray) -> float:
+    """The largest distance of the levels z_k from the straight line a + b k that makes it smallest
+    (the minimax fit; same unit as z). The spread max_k - min_k of z_k - b k is convex in the slope b
+    and smallest between the smallest and the largest step, so a ternary search over b finds it."""
+    k = np.arange(z.size, dtype=np.float64)
+    steps = np.diff(z)
+    lo, hi = float(steps.min()), float(steps.max())
+
+    def spread(b: float) -> float:
+        r = z - b * k
+        return float(r.max() - r.min())
+
+    for _ in range(100):  # (2/3)^100 of the slope interval: far below float rounding
+        m1, m2 = lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0
+        if spread(m1) <= spread(m2):
+            hi = m2
+        else:
+            lo = m1
+    return 0.5 * spread(0.5 * (lo + hi))
+
+
 def _read_lines(path: str) -> tuple[list[str], bool]:
     """The file's lines and whether it ends with a newline."""
     if not os.path.exists(path):
@@ -102,83 +137,98 @@ def _read_lines(path: str) -> tuple[list[str], bool]:
     return lines, text.endswith(("\n", "\r"))
 
 
-def _parse_header(path: str, lines: list[str]):
-    """(comment, comments, (nx, ny, nz), (dx_km, dy_km), levels_km, decimals printed in the levels, column
-    names or None, index of first data line)."""
-    comments: list[str] = []
-    sizes: list[float] = []
-    spacing: list[float] = []
-    levels: list[float] = []
-    level_decimals = 0
-    level_lines: list[int] = []
-    stage = "sizes"
-    nz_expected = 0
-    n = 0
-    seen_numbers = False
-    while n < len(lines):
-        line = lines[n]
-        stripped = line.strip()
-        if not stripped:
-            n += 1
-            continue
-        if stripped.startswith("#"):
-            if not seen_numbers:
-                comments.append(stripped.lstrip("#").strip())
-            n += 1
-            continue
-        toks = _tokens(line)
-        if not toks:  # only a trailing comment
-            n += 1
-            continue
-        vals = _floats(toks)
-        if stage == "sizes" and vals is None and not seen_numbers and not comments:
-            comments.append(stripped)  # a first line of free text without '#' is the comment line
-            n += 1
-            continue
-        if stage == "levels" and (vals is None or (len(toks) != nz_expected - len(levels)
-                                                   and _looks_like_data(toks))):
-            break  # column names or voxel data before all levels were read: reported below
-        if vals is None:
-            what = {"sizes": "three positive integers nx ny nz",
-                    "spacing": "two positive numbers dx dy (km)"}[stage]
-            raise WeatherDataError(path, f"header line {n + 1}", what, _show(line))
-        seen_numbers = True
+@dataclass
+class _Header:
+    """The header as it is read: the comment lines, then a stream of numbers (3 sizes, 2 spacings, nz levels)."""
+
+    comments: list[str] = field(default_factory=list)
+    sizes: list[float] = field(default_factory=list)
+    spacing: list[float] = field(default_factory=list)
+    levels: list[float] = field(default_factory=list)
+    level_unit: float = np.inf           # one unit of the finest last digit printed in the levels (km)
+    level_lines: list[int] = field(default_factory=list)   # 0-based lines holding levels
+    stage: str = "sizes"                 # the numbers read next: "sizes", "spacing" or "levels"
+    nz_expected: int = 0
+    seen_numbers: bool = False
+
+    def take(self, path: str, n: int, line: str, toks: list[str], vals: list[float]) -> None:
+        """Add the numbers of header line n (0-based) to the sizes, spacings or levels, in that order."""
+        self.seen_numbers = True
         for tok, v in zip(toks, vals):
-            if stage == "sizes":
+            if self.stage == "sizes":
                 if not (np.isfinite(v) and v == int(v) and v >= 1):
                     raise WeatherDataError(path, f"header line {n + 1}", "three positive integers nx ny nz",
                                            f"{tok!r} in {_show(line)}")
-                sizes.append(v)
-                if len(sizes) == 3:
-                    stage, nz_expected = "spacing", int(v)
-            elif stage == "spacing":
+                self.sizes.append(v)
+                if len(self.sizes) == 3:
+                    self.stage, self.nz_expected = "spacing", int(v)
+            elif self.stage == "spacing":
                 if not (np.isfinite(v) and v > 0):
                     raise WeatherDataError(path, f"header line {n + 1}", "two positive numbers dx dy (km)",
                                            f"{tok!r} in {_show(line)}")
-                spacing.append(v)
-                if len(spacing) == 2:
-                    stage = "levels"
+                self.spacing.append(v)
+                if len(self.spacing) == 2:
+                    self.stage = "levels"
             else:
-                levels.append(v)
-                level_decimals = max(level_decimals, _decimals(tok))
-                if not level_lines or level_lines[-1] != n:
-                    level_lines.append(n)
+                self.levels.append(v)
+                self.level_unit = min(self.level_unit, _last_digit_unit(tok))
+                if not self.level_lines or self.level_lines[-1] != n:
+                    self.level_lines.append(n)
+
+    def complete(self) -> bool:
+        return self.stage == "levels" and len(self.levels) >= self.nz_expected
+
+
+def _read_header_numbers(path: str, lines: list[str]) -> tuple[_Header, int]:
+    """The comment lines and the header numbers, and the 0-based index of the line after the last level
+    (or of the line that stopped the levels: column names or voxel data)."""
+    h = _Header()
+    n = 0
+    while n < len(lines):
+        line = lines[n]
+        stripped = line.strip()
         n += 1
-        if stage == "levels" and len(levels) >= nz_expected:
+        if not stripped:
+            continue
+        if stripped.startswith("#"):
+            if not h.seen_numbers:
+                h.comments.append(stripped.lstrip("#").strip())
+            continue
+        toks = _tokens(line)
+        if not toks:  # only a trailing comment
+            continue
+        vals = _floats(toks)
+        if h.stage == "sizes" and vals is None and not h.seen_numbers and not h.comments:
+            h.comments.append(stripped)  # a first line of free text without '#' is the comment line
+            continue
+        if h.stage == "levels" and (vals is None or (len(toks) != h.nz_expected - len(h.levels)
+                                                     and _looks_like_data(toks))):
+            return h, n - 1  # column names or voxel data before all levels were read: reported later
+        if vals is None:
+            what = {"sizes": "three positive integers nx ny nz",
+                    "spacing": "two positive numbers dx dy (km)"}[h.stage]
+            raise WeatherDataError(path, f"header line {n}", what, _show(line))
+        h.take(path, n - 1, line, toks, vals)
+        if h.complete():
             break
-    nz = int(sizes[2]) if len(sizes) == 3 else None
-    if stage == "sizes":
+    return h, n
+
+
+def _checked_levels(path: str, h: _Header, n: int) -> np.ndarray:
+    """The level altitudes (km) once the header is known to be whole: nz of them, finite, increasing."""
+    if h.stage == "sizes":
         raise WeatherDataError(path, "header (nx ny nz)", "three positive integers nx ny nz after the comment line",
-                               f"{len(sizes)} number(s) before the end of the file")
-    if stage == "spacing":
+                               f"{len(h.sizes)} number(s) before the end of the file")
+    if h.stage == "spacing":
         raise WeatherDataError(path, "header (dx dy)", "two positive numbers dx dy (km) after nx ny nz",
-                               f"{len(spacing)} number(s) before the end of the file")
-    where = ("" if not level_lines else f"line {level_lines[0] + 1}" if len(level_lines) == 1 else
-             f"lines {level_lines[0] + 1}-{level_lines[-1] + 1}")
-    if len(levels) != nz:
+                               f"{len(h.spacing)} number(s) before the end of the file")
+    nz, lines_ = int(h.sizes[2]), h.level_lines
+    where = ("" if not lines_ else f"line {lines_[0] + 1}" if len(lines_) == 1 else
+             f"lines {lines_[0] + 1}-{lines_[-1] + 1}")
+    if len(h.levels) != nz:
         raise WeatherDataError(path, "levels", f"nz = {nz} level altitudes (km) after dx dy",
-                               f"{len(levels)} on {where}" if levels else f"none before line {n + 1}")
-    lev = np.asarray(levels, dtype=np.float64)
+                               f"{len(h.levels)} on {where}" if h.levels else f"none before line {n + 1}")
+    lev = np.asarray(h.levels, dtype=np.float64)
     if not np.all(np.isfinite(lev)):
         raise WeatherDataError(path, "levels", "finite level altitudes (km)", f"non-finite values on {where}")
     if nz > 1 and not np.all(np.diff(lev) > 0):
@@ -186,9 +236,12 @@ def _parse_header(path: str, lines: list[str]):
         raise WeatherDataError(path, "levels", "strictly increasing level altitudes (km)",
                                f"level {bad + 1} = {lev[bad]:g} km then level {bad + 2} = {lev[bad + 1]:g} km "
                                f"on {where}")
+    return lev
 
-    # optional column-name line, then the data block
-    names = None
+
+def _column_names(lines: list[str], n: int) -> tuple[list[str] | None, int]:
+    """The optional column-name line at or after line n (lower-cased names, or None), and the index of the
+    first line of the data block."""
     while n < len(lines):
         stripped = lines[n].strip()
         if not stripped or stripped.startswith("#"):
@@ -196,11 +249,19 @@ def _parse_header(path: str, lines: list[str]):
             continue
         toks = _tokens(lines[n])
         if toks and _floats(toks) is None and all(re.match(r"^[A-Za-z_][\w\[\]\(\)/^-]*$", t) for t in toks):
-            names = [t.lower() for t in toks]
-            n += 1
+            return [t.lower() for t in toks], n + 1
         break
-    comment = comments[0] if comments else ""
-    return comment, comments, tuple(int(s) for s in sizes), tuple(spacing), lev, level_decimals, names, n
+    return None, n
+
+
+def _parse_header(path: str, lines: list[str]):
+    """(comment, comments, (nx, ny, nz), (dx_km, dy_km), levels_km, one unit of the finest last digit
+    printed in the levels (km), column names or None, index of first data line)."""
+    h, n = _read_header_numbers(path, lines)
+    lev = _checked_levels(path, h, n)
+    names, start = _column_names(lines, n)
+    comment = h.comments[0] if h.comments else ""
+    return comment, h.comments, tuple(int(s) for s in h.sizes), tuple(h.spacing), lev, h.level_unit, names, start
 
 
 def _column_map(path: str, names: list[str] | None, ncol: int, line_no) -> dict[str, int]:
@@ -371,35 +432,13 @@ def _interp_z(field: np.ndarray, z_native: np.ndarray, z_out: np.ndarray) -> np.
     return (1.0 - w) * field[lo] + w * field[lo + 1]
 
 
-def open_les(path, rho_air=None, *, species: str = "cloud") -> xr.Dataset:
-    """Hydrometeors from an SHDOM/pyshdom LWC text file (LES liquid water).
-
-    path    : the text file (space- or comma-separated; see the module docstring for the format).
-    rho_air : air density (kg/m^3) to turn LWC (g/m^3) into a mixing ratio q = LWC 1e-3 / rho_air:
-              None (the 1976 standard atmosphere at each level height), a number, a profile of
-              length nz (at the file's levels) or a callable of height in metres.
-    species : "cloud" (default) or "rain": the hydrometeor that receives the liquid.
-
-    Returns a Dataset following weather_mi.hydrometeors (x = i dx, y = j dy, z = level altitudes in
-    metres), with ``r_eff_<species>`` (m) and, when the file has it, ``v_eff_<species>``.
-    Raises WeatherDataError naming the file, the field and the expectation for bad input.
-    """
-    path = os.fspath(path)
-    if species not in LIQUID_SPECIES:
-        raise WeatherDataError(path, "species", "'cloud' or 'rain' (LES files hold liquid water)", repr(species))
-    lines, ends_with_newline = _read_lines(path)
-    comment, comments, (nx, ny, nz), (dx_km, dy_km), lev_km, lev_decimals, names, start = _parse_header(path, lines)
-    data, line_no, sep = _parse_data(path, lines, start)
-    n_listed = int(data.shape[0])
-    if n_listed == 0 and names:
-        data = np.zeros((0, len(names)))
-    cols = _column_map(path, names, data.shape[1], line_no)
-    _check_values(path, data, cols, line_no, lines, (nx, ny, nz))
-    _check_complete(path, lines, ends_with_newline, data, cols, line_no, sep, (nx, ny, nz))
-
+def _voxel_fields(path, data, cols, line_no, sizes):
+    """LWC (g/m^3) and the r_eff (um) / v_eff fields on the (nz, ny, nx) grid of the file's levels, from the
+    voxel rows; r_eff and v_eff are 0 where there is no liquid. A voxel listed twice is an error."""
+    nx, ny, nz = sizes
     ii, jj, kk = (data[:, cols[c]].astype(np.int64) for c in ("i", "j", "k"))
     flat = (kk * ny + jj) * nx + ii
-    if n_listed > 1:
+    if data.shape[0] > 1:
         order = np.argsort(flat, kind="stable")
         dup = np.flatnonzero(flat[order][1:] == flat[order][:-1])
         if dup.size:
@@ -407,23 +446,76 @@ def open_les(path, rho_air=None, *, species: str = "cloud") -> xr.Dataset:
             raise WeatherDataError(path, "i,j,k", "each voxel listed at most once",
                                    f"voxel (i, j, k) = ({ii[a]}, {jj[a]}, {kk[a]}) on lines {line_no[a]} and "
                                    f"{line_no[b]} ({dup.size} duplicate line(s))")
-
     shape = (nz, ny, nx)
     lwc = np.zeros(shape)
     lwc.flat[flat] = data[:, cols["lwc"]]
-    cloudy = lwc > 0
     extra = {}
     for name in ("reff", "veff"):
         if name in cols:
             f = np.zeros(shape)
             f.flat[flat] = data[:, cols[name]]
-            f[~cloudy] = 0.0
+            f[lwc <= 0] = 0.0
             extra[name] = f
+    return lwc, extra
 
-    z_native = lev_km * 1000.0
-    dx, dy = dx_km * 1000.0, dy_km * 1000.0
+
+def _uniform_levels(z_native: np.ndarray, lev_unit_km: float, attrs: dict):
+    """(z_out, dz) in metres when the levels are uniform within their printed precision (see the module
+    docstring), else None; says so in attrs["vertical_grid"]."""
+    nz = z_native.size
+    steps = np.diff(z_native)
+    printed_m = 1000.0 * lev_unit_km  # one unit of the last printed digit: each level +- half that
+    misfit = _line_misfit(z_native)
+    tol_m = UNIFORM_RTOL * steps.mean() + (0.5 * printed_m if printed_m <= 0.1 * steps.mean() else 0.0)
+    if misfit > tol_m:
+        return None
+    dz = (z_native[-1] - z_native[0]) / (nz - 1)
+    attrs["vertical_grid"] = (f"uniform levels from the file, {dz:g} m apart (spacings {steps.min():g} to "
+                              f"{steps.max():g} m as printed, to {printed_m:g} m; within {misfit:.3g} m "
+                              "of a straight line)")
+    return z_native[0] + dz * np.arange(nz), dz
+
+
+def _regrid_levels(z_native: np.ndarray, lwc: np.ndarray, extra: dict, attrs: dict):
+    """(z_out, dz, lwc, extra) on uniform levels at the smallest native spacing, fitted to the column: LWC
+    interpolated linearly in height, r_eff and v_eff LWC-weighted; says so in the attributes."""
+    steps = np.diff(z_native)
+    dz_min = float(steps.min())
+    span = z_native[-1] - z_native[0]
+    n_out = int(np.ceil(span / dz_min - 1e-6)) + 1
+    z_out = z_native[0] + (span / (n_out - 1)) * np.arange(n_out)
+    z_out[-1] = z_native[-1]
+    dz = span / (n_out - 1)
+    weighted = {k: _interp_z(v * lwc, z_native, z_out) for k, v in extra.items()}
+    lwc = _interp_z(lwc, z_native, z_out)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        extra = {k: np.where(lwc > 0, w / np.where(lwc > 0, lwc, 1.0), 0.0) for k, w in weighted.items()}
+    attrs["vertical_regrid"] = (
+        f"levels not uniform (spacings {steps.min():g} to {steps.max():g} m): LWC interpolated linearly "
+        f"in height onto {n_out} uniform levels {dz:g} m apart (the smallest spacing, fitted to the "
+        f"column); r_eff and v_eff interpolated LWC-weighted")
+    attrs["vertical_grid"] = "regridded to uniform levels"
+    attrs["n_levels_native"] = int(z_native.size)
+    return z_out, dz, lwc, extra
+
+
+def _vertical_grid(z_native, lev_unit_km, dx, dy, lwc, extra, attrs):
+    """(z_out, dz, lwc, extra): the file's levels when uniform (or single), else the regridded column."""
+    if z_native.size == 1:
+        dz = min(dx, dy)
+        attrs["vertical_grid"] = f"a single level; layer depth taken as the horizontal spacing {dz:g} m"
+        return z_native, dz, lwc, extra
+    uniform = _uniform_levels(z_native, lev_unit_km, attrs)
+    if uniform is not None:
+        return (*uniform, lwc, extra)
+    return _regrid_levels(z_native, lwc, extra, attrs)
+
+
+def _file_attrs(path, comment, comments, names, sep, sizes, n_listed, lwc, species, dx, dy) -> dict:
+    """The Dataset attributes that describe the file and its voxels."""
+    nx, ny, nz = sizes
     attrs = {"source": path, "model": "LES", "format": "SHDOM/pyshdom particle properties (LWC)",
-             "comment": comment, "n_voxels_listed": n_listed, "n_cloudy_voxels": int(np.count_nonzero(cloudy)),
+             "comment": comment, "n_voxels_listed": n_listed, "n_cloudy_voxels": int(np.count_nonzero(lwc > 0)),
              "n_voxels_grid": int(nx * ny * nz), "species": species,
              "max_lwc_g_m3": float(lwc.max()) if lwc.size else 0.0,
              "separator": "comma" if sep == "," else ("semicolon" if sep == ";" else "whitespace"),
@@ -432,36 +524,53 @@ def open_les(path, rho_air=None, *, species: str = "cloud") -> xr.Dataset:
         attrs["comments"] = "\n".join(comments)
     if names:
         attrs["columns"] = ",".join(names)
+    return attrs
 
-    if nz == 1:
-        z_out, dz = z_native, min(dx, dy)
-        attrs["vertical_grid"] = f"a single level; layer depth taken as the horizontal spacing {dz:g} m"
-    else:
-        steps = np.diff(z_native)
-        printed_m = 1000.0 * 10.0 ** -lev_decimals  # a unit of the last printed digit: each step +- that
-        tol_m = UNIFORM_RTOL * steps.mean() + (printed_m if printed_m <= 0.1 * steps.mean() else 0.0)
-        if np.max(np.abs(steps - steps.mean())) <= tol_m:
-            dz = (z_native[-1] - z_native[0]) / (nz - 1)
-            z_out = z_native[0] + dz * np.arange(nz)
-            attrs["vertical_grid"] = (f"uniform levels from the file, {dz:g} m apart (spacings {steps.min():g} to "
-                                      f"{steps.max():g} m as printed, to {printed_m:g} m)")
-        else:
-            dz_min = float(steps.min())
-            span = z_native[-1] - z_native[0]
-            n_out = int(np.ceil(span / dz_min - 1e-6)) + 1
-            z_out = z_native[0] + (span / (n_out - 1)) * np.arange(n_out)
-            z_out[-1] = z_native[-1]
-            dz = span / (n_out - 1)
-            weighted = {k: _interp_z(v * lwc, z_native, z_out) for k, v in extra.items()}
-            lwc = _interp_z(lwc, z_native, z_out)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                extra = {k: np.where(lwc > 0, w / np.where(lwc > 0, lwc, 1.0), 0.0) for k, w in weighted.items()}
-            attrs["vertical_regrid"] = (
-                f"levels not uniform (spacings {steps.min():g} to {steps.max():g} m): LWC interpolated linearly "
-                f"in height onto {n_out} uniform levels {dz:g} m apart (the smallest spacing, fitted to the "
-                f"column); r_eff and v_eff interpolated LWC-weighted")
-            attrs["vertical_grid"] = "regridded to uniform levels"
-            attrs["n_levels_native"] = int(nz)
+
+def open_les(path, rho_air=None, *, species: str = "cloud") -> xr.Dataset:
+    """Open an SHDOM/pyshdom LWC text file (LES liquid water) as Hydrometeors.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The text file, space- or comma-separated (see the module docstring for the format).
+    rho_air : None, float, array_like or callable, optional
+        Air density (kg/m^3) that turns LWC (g/m^3) into a mixing ratio q = LWC 1e-3 / rho_air (kg/kg):
+        None (default) for the 1976 standard atmosphere at each level height, a number, a profile of
+        length nz (at the file's levels) or a callable of height in metres.
+    species : {"cloud", "rain"}, default "cloud"
+        The hydrometeor that receives the liquid.
+
+    Returns
+    -------
+    xarray.Dataset
+        Hydrometeors following :mod:`weather_mi.hydrometeors`: x = i dx, y = j dy, z = the level
+        altitudes, in metres; ``r_eff_<species>`` (m) and, when the file has it, ``v_eff_<species>``
+        (dimensionless). Levels that are not uniform are regridded (attribute ``vertical_regrid``).
+
+    Raises
+    ------
+    WeatherDataError
+        For bad input, naming the file, the field and the expectation.
+    """
+    path = os.fspath(path)
+    if species not in LIQUID_SPECIES:
+        raise WeatherDataError(path, "species", "'cloud' or 'rain' (LES files hold liquid water)", repr(species))
+    lines, ends_with_newline = _read_lines(path)
+    comment, comments, sizes, (dx_km, dy_km), lev_km, lev_unit_km, names, start = _parse_header(path, lines)
+    data, line_no, sep = _parse_data(path, lines, start)
+    n_listed = int(data.shape[0])
+    if n_listed == 0 and names:
+        data = np.zeros((0, len(names)))
+    cols = _column_map(path, names, data.shape[1], line_no)
+    _check_values(path, data, cols, line_no, lines, sizes)
+    _check_complete(path, lines, ends_with_newline, data, cols, line_no, sep, sizes)
+    lwc, extra = _voxel_fields(path, data, cols, line_no, sizes)
+
+    z_native = lev_km * 1000.0
+    dx, dy = dx_km * 1000.0, dy_km * 1000.0
+    attrs = _file_attrs(path, comment, comments, names, sep, sizes, n_listed, lwc, species, dx, dy)
+    z_out, dz, lwc, extra = _vertical_grid(z_native, lev_unit_km, dx, dy, lwc, extra, attrs)
     attrs["dz"] = float(dz)
 
     rho, how = _rho_profile(path, rho_air, z_native, z_out)

@@ -9,15 +9,47 @@ from .renderer import SliceRenderer
 def render_slices(spec, vol, mode: SliceMode = SliceMode(), slices: int = 128, light_res: int | None = None,
                   params: SliceParams | None = None, detail_field=None, uniform_phase=None,
                   forward_peak_deg: float | None = None, **param_kw):
-    """Render ``vol`` as seen by ``spec`` with half-angle slicing; returns an Image in the same units,
-    framing and conventions as ``render_reference``. ``mode``: one of ``MODES`` (the paper's Table IV
-    and ``SliceMode(light="multiple")``); ``light_res``: light-buffer texels per side (None: automatic);
-    ``forward_peak_deg``: phase-function peaks within this angle count as unscattered light (delta-M, as
-    in the reference; None: 3 deg for the "multiple" model, 0 for the paper's modes).
-    Interactive parameters go in ``params`` (or as keywords: scale=, albedo=, cone_angle_deg=,
-    forward_fraction=, ambient=, blur_length_m=, ms_extinction=, ms_contribution=, ms_eccentricity=,
-    sky_gain=, sky_extinction=). For many frames, keep a SliceRenderer and call its ``frame`` method
-    (nothing recompiles between frames)."""
+    """Render ``vol`` as seen by ``spec`` with half-angle slicing.
+
+    For many frames, keep a :class:`SliceRenderer` and call its ``frame`` method (nothing recompiles
+    between frames).
+
+    Parameters
+    ----------
+    spec : SceneSpec
+        Camera, sun, sky, ground and image size.
+    vol : OpticalVolume
+        The medium (with phase tables).
+    mode : SliceMode, default SliceMode()
+        One of ``MODES`` (the paper's Table IV and ``SliceMode(light="multiple")``).
+    slices : int, default 128
+        Number of slice planes, >= 2.
+    light_res : int, optional
+        Light-buffer texels per side, >= 4 (None: automatic, ``light.auto_light_res``).
+    params : SliceParams, optional
+        Interactive parameters; default ``SliceParams(**param_kw)``.
+    detail_field : numpy.ndarray, optional
+        (z, y, x) multiplier of the extinction for ``mode.detail`` (:func:`weather_mi.detail.field`).
+    uniform_phase : phase table, optional
+        The one phase function of ``phase="uniform"`` modes (default the first species' table).
+    forward_peak_deg : float, optional
+        Phase-function peaks within this angle (degrees) count as unscattered light (delta-M, as in the
+        reference); None: 3 deg for the "multiple" model, 0 for the paper's modes.
+    **param_kw
+        Fields of :class:`SliceParams` when ``params`` is not given: scale=, albedo=, cone_angle_deg=,
+        forward_fraction=, ambient=, blur_length_m=, ms_extinction=, ms_contribution=,
+        ms_eccentricity=, sky_gain=, sky_extinction=, ...
+
+    Returns
+    -------
+    Image
+        Radiance (W/m^2/sr, RGB) in the same units, framing and conventions as ``render_reference``.
+
+    Raises
+    ------
+    ValueError
+        For too few slices, a too small light buffer or bad detail inputs.
+    """
     params = params or SliceParams(**param_kw)
     renderer = SliceRenderer(vol, mode, slices, light_res, detail_field=detail_field, uniform_phase=uniform_phase,
                              forward_peak_deg=forward_peak_deg)

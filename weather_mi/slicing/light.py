@@ -72,16 +72,60 @@ class LightVolume:
     # ------------------------------------------------------------------ the light pass
     def sweep(self, g: SliceGeometry, source, grid_box, translucent: bool, variance_per_m=None,
               reference_variance_per_m: float | None = None):
-        """Carry the light through the slices of ``g``. ``source``: a Texture3f of (extinction,
-        forward-scattering coefficient) in 1/m over ``grid_box``; ``variance_per_m``: the sideways
-        diffusion of forward-scattered light (m^2 per metre; a Dr.Jit Float or number);
-        ``reference_variance_per_m`` (a number, default ``variance_per_m``): sets how many slabs run
-        between two blur steps (BLUR_STEP_VARIANCE at this spread). Keeping it independent of the
-        interactive parameters keeps the image a smooth function of them (finite differences and
-        reverse-mode gradients agree)."""
+        """Carry the light through the slices of ``g``.
+
+        Parameters
+        ----------
+        g : SliceGeometry
+            The slice planes and the light direction.
+        source : mi.Texture3f
+            (extinction, forward-scattering coefficient) in 1/m over ``grid_box``.
+        grid_box : tuple of 2 array_like
+            (lo, hi) world corners (m) of the texture.
+        translucent : bool
+            Forward-scattered light is carried (and spread sideways) too.
+        variance_per_m : drjit Float or float, optional
+            The sideways diffusion of forward-scattered light (m^2 per metre of light path).
+        reference_variance_per_m : float, optional
+            Sets how many slabs run between two blur steps (BLUR_STEP_VARIANCE at this spread); default
+            ``variance_per_m``. Keeping it independent of the interactive parameters keeps the image a
+            smooth function of them (finite differences and reverse-mode gradients agree).
+        """
         mi = self.mi
         import drjit as dr
         R, N = self.res, g.n_slices
+        rays = self._light_rays(g, grid_box)
+        dl = dr.opaque(mi.Float, g.light_step_m)
+        store = dr.zeros(mi.Float, (N + 1) * R * R * 2)
+        lane = dr.arange(mi.UInt32, R * R)
+        through_slab = _slab_step(mi, source, rays, dl, store, lane, dr.opaque(mi.UInt32, R * R), translucent)
+
+        D = dr.full(mi.Float, 1.0, R * R)
+        I = dr.zeros(mi.Float, R * R)
+        chunk = N
+        if translucent:
+            chunk, var, du, dv = self._blur_plan(g, variance_per_m, reference_variance_per_m, dl)
+        starts = list(range(0, N, chunk))
+        for j, k0 in enumerate(starts):
+            k1 = min(k0 + chunk, N)
+            if translucent and j > 0:
+                n_prev = dr.opaque(mi.Float, float(k0 - starts[j - 1]))
+                I = _blur(mi, dr, I, R, blur_weights(dr, var * n_prev * dr.opaque(mi.Float, 1.0 / du ** 2)),
+                          blur_weights(dr, var * n_prev * dr.opaque(mi.Float, 1.0 / dv ** 2)))
+            D, I = self._through_slabs(through_slab, D, I, k0, k1, lane, store)
+        at = (lane + dr.opaque(mi.UInt32, N * R * R)) * 2
+        dr.scatter(store, D, at)
+        dr.scatter(store, I, at + 1)
+        dr.eval(store)
+        self.store, self.geometry = store, g
+
+    def _light_rays(self, g: SliceGeometry, grid_box):
+        """One light ray per buffer texel: (q0, qs, kin, kout), its point on plane 0 and its step to the
+        next plane in texture coordinates of ``grid_box``, and where it is inside the slicing box, in
+        slice units: k in [kin, kout]."""
+        mi = self.mi
+        import drjit as dr
+        R = self.res
         s, l = g.axis, g.to_light
         su = (np.arange(R) + 0.5) / R
         uu, vv = np.meshgrid(g.u_range[0] + su * (g.u_range[1] - g.u_range[0]),
@@ -93,86 +137,55 @@ class LightVolume:
         glo, ghi = (np.asarray(p, dtype=np.float64) for p in grid_box)
         span = ghi - glo
         q0, qs = (p0 - glo) / span, step / span
-        # where each light ray is inside the slicing box, in slice units: k in [k_in, k_out]
         k_in, k_out = ray_box(p0, np.broadcast_to(step, p0.shape), (self.lo, self.hi), clamp_start=False)
         F = lambda a: aligned_float(mi, a)  # noqa: E731
         q0 = mi.Point3f(F(q0[:, 0]), F(q0[:, 1]), F(q0[:, 2]))
         qs = mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in qs))
-        kin, kout = F(k_in), F(k_out)
-        dl = dr.opaque(mi.Float, g.light_step_m)
+        return q0, qs, F(k_in), F(k_out)
 
-        store = dr.zeros(mi.Float, (N + 1) * R * R * 2)
-        lane = dr.arange(mi.UInt32, R * R)
-        plane = dr.opaque(mi.UInt32, R * R)
+    def _blur_plan(self, g: SliceGeometry, variance_per_m, reference_variance_per_m, dl):
+        """(slabs per chunk, variance per slab (m^2), texel sizes du, dv (m)) of the operator splitting.
 
-        def through_slab(k, D, I):
-            """Carry (D, I) through slab k in two halves, [k - 1/2, k] and [k, k + 1/2] clipped to the
-            box (slice units); store the light at plane k."""
-            kf = mi.Float(k)
-            a, m, b = (dr.clip(kf + h, kin, kout) for h in (-0.5, 0.0, 0.5))
-            ext, fwd = source.eval(q0 + (0.5 * (a + b)) * qs)  # the clipped slab's middle
-            ext = dr.maximum(ext, 0.0)
-            t1, t2 = dr.exp(-ext * dl * (m - a)), dr.exp(-ext * dl * (b - m))
-            D_mid = D * t1
-            if translucent:
-                keep = dr.maximum(ext - dr.maximum(fwd, 0.0), 0.0)  # extinction of all forward light
-                f1, f2 = dr.exp(-keep * dl * (m - a)), dr.exp(-keep * dl * (b - m))
-                I_mid = (D + I) * f1 - D_mid
-            else:
-                I_mid = I
-            at = (lane + k * plane) * 2
-            dr.scatter(store, D_mid, at)
-            dr.scatter(store, I_mid, at + 1)
-            if translucent:
-                return D_mid * t2, (D_mid + I_mid) * f2 - D_mid * t2
-            return D_mid * t2, I_mid
+        Slabs run in chunks (one kernel each: light rays are independent within a chunk), and the
+        sideways diffusion of the chunk's path is applied at the start of the next one; a chunk spans the
+        light path over which the reference spread accumulates BLUR_STEP_VARIANCE, so its length in
+        metres, and the image, converge as slices increase."""
+        mi = self.mi
+        import drjit as dr
+        R = self.res
+        du = (g.u_range[1] - g.u_range[0]) / R
+        dv = (g.v_range[1] - g.v_range[0]) / R
+        var = _param(mi, variance_per_m) * dl                 # m^2 per slab
+        ref = float(dr.detach(_param(mi, variance_per_m))[0]) if reference_variance_per_m is None \
+            else float(reference_variance_per_m)
+        per_slab = ref * g.light_step_m / min(du, dv) ** 2   # texels^2 per slab at the reference
+        chunk = int(np.clip(BLUR_STEP_VARIANCE / max(per_slab, 1e-12), 1, g.n_slices))
+        return chunk, var, du, dv
 
-        D = dr.full(mi.Float, 1.0, R * R)
-        I = dr.zeros(mi.Float, R * R)
-        chunk = N
-        if translucent:
-            # operator splitting: slabs run in chunks (one kernel each: light rays are independent
-            # within a chunk), and the sideways diffusion of the chunk's path is applied at the start of
-            # the next one; a chunk spans the light path over which the reference spread accumulates
-            # BLUR_STEP_VARIANCE, so its length in metres, and the image, converge as slices increase
-            du = (g.u_range[1] - g.u_range[0]) / R
-            dv = (g.v_range[1] - g.v_range[0]) / R
-            var = _param(mi, variance_per_m) * dl                 # m^2 per slab
-            ref = float(dr.detach(_param(mi, variance_per_m))[0]) if reference_variance_per_m is None \
-                else float(reference_variance_per_m)
-            per_slab = ref * g.light_step_m / min(du, dv) ** 2   # texels^2 per slab at the reference
-            chunk = int(np.clip(BLUR_STEP_VARIANCE / max(per_slab, 1e-12), 1, N))
-        starts = list(range(0, N, chunk))
-        for j, k0 in enumerate(starts):
-            k1 = min(k0 + chunk, N)
-            if translucent and j > 0:
-                n_prev = dr.opaque(mi.Float, float(k0 - starts[j - 1]))
-                I = _blur(mi, dr, I, R, blur_weights(dr, var * n_prev * dr.opaque(mi.Float, 1.0 / du ** 2)),
-                          blur_weights(dr, var * n_prev * dr.opaque(mi.Float, 1.0 / dv ** 2)))
-            if self.differentiable:
-                for k in range(k0, k1):
-                    D, I = through_slab(dr.opaque(mi.UInt32, k), D, I)
-                    dr.eval(D, I, store)  # AD keeps its graph across evaluations
-                    # identity gathers: their adjoints are scatters, so the reverse pass stores the
-                    # adjoints of D and I at every slice instead of rebuilding the whole chain of later
-                    # slices in each kernel (O(N^2) operations, minutes of LLVM time at 96 slices)
-                    D = dr.gather(mi.Float, D, lane)
-                    I = dr.gather(mi.Float, I, lane)
-            else:
-                stop = dr.opaque(mi.UInt32, k1)
+    def _through_slabs(self, through_slab, D, I, k0: int, k1: int, lane, store):
+        """Carry (D, I) through slabs k0 .. k1 - 1: one loop kernel, or slab by slab when differentiable."""
+        mi = self.mi
+        import drjit as dr
+        if self.differentiable:
+            for k in range(k0, k1):
+                D, I = through_slab(dr.opaque(mi.UInt32, k), D, I)
+                dr.eval(D, I, store)  # AD keeps its graph across evaluations
+                # identity gathers: their adjoints are scatters, so the reverse pass stores the
+                # adjoints of D and I at every slice instead of rebuilding the whole chain of later
+                # slices in each kernel (O(N^2) operations, minutes of LLVM time at 96 slices)
+                D = dr.gather(mi.Float, D, lane)
+                I = dr.gather(mi.Float, I, lane)
+            return D, I
+        stop = dr.opaque(mi.UInt32, k1)
 
-                def body(k, D, I):
-                    D, I = through_slab(k, D, I)
-                    return k + 1, D, I
+        def body(k, D, I):
+            D, I = through_slab(k, D, I)
+            return k + 1, D, I
 
-                _, D, I = dr.while_loop((dr.zeros(mi.UInt32, R * R) + dr.opaque(mi.UInt32, k0), D, I),
-                                        lambda k, D, I: k < stop, body)
-                dr.eval(D, I, store)
-        at = (lane + dr.opaque(mi.UInt32, N * R * R)) * 2
-        dr.scatter(store, D, at)
-        dr.scatter(store, I, at + 1)
-        dr.eval(store)
-        self.store, self.geometry = store, g
+        _, D, I = dr.while_loop((dr.zeros(mi.UInt32, self.res * self.res) + dr.opaque(mi.UInt32, k0), D, I),
+                                lambda k, D, I: k < stop, body)
+        dr.eval(D, I, store)
+        return D, I
 
     # ------------------------------------------------------------------ the lookup
     def lookup(self, p, exit_plane: bool = False, with_previous: bool = False, log_direct: bool = False):
@@ -234,6 +247,38 @@ class LightVolume:
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         direct, indirect = self.lookup(mi.Point3f(*(aligned_float(mi, p[:, i]) for i in range(3))))
         return np.asarray(direct, dtype=np.float64), np.asarray(indirect, dtype=np.float64)
+
+
+def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool):
+    """The step of the light pass through one slab k: (k, D, I) -> (D, I) after the slab, storing the
+    light at plane k (``store[(lane + k plane) 2 + (0, 1)]``). ``rays``: (q0, qs, kin, kout) of
+    ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab."""
+    import drjit as dr
+    q0, qs, kin, kout = rays
+
+    def through_slab(k, D, I):
+        """Carry (D, I) through slab k in two halves, [k - 1/2, k] and [k, k + 1/2] clipped to the
+        box (slice units); store the light at plane k."""
+        kf = mi.Float(k)
+        a, m, b = (dr.clip(kf + h, kin, kout) for h in (-0.5, 0.0, 0.5))
+        ext, fwd = source.eval(q0 + (0.5 * (a + b)) * qs)  # the clipped slab's middle
+        ext = dr.maximum(ext, 0.0)
+        t1, t2 = dr.exp(-ext * dl * (m - a)), dr.exp(-ext * dl * (b - m))
+        D_mid = D * t1
+        if translucent:
+            keep = dr.maximum(ext - dr.maximum(fwd, 0.0), 0.0)  # extinction of all forward light
+            f1, f2 = dr.exp(-keep * dl * (m - a)), dr.exp(-keep * dl * (b - m))
+            I_mid = (D + I) * f1 - D_mid
+        else:
+            I_mid = I
+        at = (lane + k * plane) * 2
+        dr.scatter(store, D_mid, at)
+        dr.scatter(store, I_mid, at + 1)
+        if translucent:
+            return D_mid * t2, (D_mid + I_mid) * f2 - D_mid * t2
+        return D_mid * t2, I_mid
+
+    return through_slab
 
 
 def _param(mi, value):

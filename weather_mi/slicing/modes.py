@@ -10,16 +10,31 @@ LIGHT_MODES = ("low_albedo", "translucent", "multiple")
 
 @dataclass(frozen=True)
 class SliceMode:
-    """phase: "uniform" (one phase function for all species) or "per_species" (Eq. 8 mixture);
-    light: "low_albedo" (everything that hits a particle leaves the light), "translucent" (the paper:
-    light scattered into a forward cone survives and diffuses sideways) or "multiple" (beyond the
-    paper: single scattering plus multiple-scattering octaves driven by the optical depth towards the
-    sun, a diffusion term of the cloud column along the sun ray, and skylight shadowed by the optical
-    depth towards the zenith, in the medium with its forward peaks as unscattered light; see light.py
-    and eye.py);
-    detail: multiply extinction by a turbulent detail field; species_colors: paint each species with
-    its Table III colour (Fig. 2); octaves: number of scattering orders of the "multiple" model
-    (octave 0 is single scattering)."""
+    """A mode of the slicer: its phase functions, light model and colouring.
+
+    Parameters
+    ----------
+    phase : {"uniform", "per_species"}, default "per_species"
+        "uniform": one phase function for all species; "per_species": the Eq. 8 mixture.
+    light : {"low_albedo", "translucent", "multiple"}, default "translucent"
+        "low_albedo": everything that hits a particle leaves the light; "translucent" (the paper):
+        light scattered into a forward cone survives and diffuses sideways; "multiple" (beyond the
+        paper): single scattering plus multiple-scattering octaves driven by the optical depth towards
+        the sun, a diffusion term of the cloud column along the sun ray, and skylight shadowed by the
+        optical depth towards the zenith, in the medium with its forward peaks as unscattered light
+        (see light.py and eye.py).
+    detail : bool, default False
+        Multiply extinction by a turbulent detail field.
+    species_colors : bool, default False
+        Paint each species with its Table III colour (Fig. 2).
+    octaves : int, default 4
+        Number of scattering orders of the "multiple" model, 1..8 (octave 0 is single scattering).
+
+    Raises
+    ------
+    ValueError
+        For an unknown phase or light mode, or octaves out of range.
+    """
 
     phase: str = "per_species"
     light: str = "translucent"
@@ -64,34 +79,56 @@ DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail fi
 class SliceParams:
     """Interactive parameters (none of them recompiles a kernel).
 
-    scale            : per-species multipliers of the mixing ratios (the paper's "scalings").
-    albedo           : None (the species' albedos) or one single-scattering albedo for all.
-    cone_angle_deg   : half-angle of the forward cone whose scattered light keeps propagating.
-    forward_fraction : None (from the phase tables: the fraction of scattered energy within the
-                       cone, per species) or a number for all species (the paper's 0.9).
-    ambient          : Table IV modes: fraction of the sky's mean radiance added as unshadowed,
-                       isotropic in-scattering (0: none, as in the paper).
-    blur_length_m    : translucent light: the forward-scattered light spreads sideways like a
-                       diffusion whose variance grows by tan^2(cone) x blur_length_m per metre
-                       travelled; None: the grid's mean voxel size, which reproduces the paper's blur
-                       of dl tan(cone) per slice at one slice per voxel (the paper's setting), and,
-                       unlike a blur per slice, does not change with the slice count.
-    ms_extinction    : "multiple" light (Wrenninge et al. 2013): octave i sees the optical depth
-                       towards the sun scaled by ms_extinction^i ...
-    ms_contribution  : ... contributes ms_contribution^i ...
-    ms_eccentricity  : ... with the phase function blended towards isotropic, ms_eccentricity^i p +
-                       (1 - ms_eccentricity^i) / (4 pi).
-    sky_gain         : "multiple" light: skylight in-scattering, sky_gain x the sky's mean radiance x
-    sky_extinction   : exp(-sky_extinction x optical depth towards the zenith).
-    diffusion_gain   : "multiple" light: isotropic in-scattering of diffused sunlight, diffusion_gain x
-                       E_sun / (4 pi) x the 1-D diffusion profile of the cloud column along the sun ray
-                       (eye.diffusion_profile: brightest a transport depth inside, falling linearly
-                       to the shadowed side; little in thin cloud) ...
-    diffusion_scale  : ... in transport optical depths diffusion_scale x tau (~ 1 - g).
-    detail           : detail modes with a ``detail_noise`` renderer: the amount of simulated detail per
-                       species (paper section 5.4), the amplitude s of the log-normal multiplier
-                       exp(s n - s^2/2) of its extinction (n: the unit-variance noise; 0: none; species
-                       not named: DEFAULT_DETAIL).
+    Values may be Dr.Jit arrays (for differentiation); only plain numbers are range-checked.
+
+    Parameters
+    ----------
+    scale : dict of str to float, default {}
+        Per-species multipliers (>= 0) of the mixing ratios (the paper's "scalings").
+    albedo : float, optional
+        None (the species' albedos) or one single-scattering albedo in [0, 1] for all.
+    cone_angle_deg : float, default 10.0
+        Half-angle (degrees, in (0, 90)) of the forward cone whose scattered light keeps propagating.
+    forward_fraction : float, optional
+        None (from the phase tables: the fraction of scattered energy within the cone, per species) or
+        a number in [0, 1] for all species (the paper's 0.9).
+    ambient : float, default 0.0
+        Table IV modes: fraction of the sky's mean radiance added as unshadowed, isotropic
+        in-scattering (0: none, as in the paper).
+    blur_length_m : float, optional
+        Translucent light: the forward-scattered light spreads sideways like a diffusion whose variance
+        grows by tan^2(cone) x blur_length_m (m) per metre travelled; None: the grid's mean voxel size,
+        which reproduces the paper's blur of dl tan(cone) per slice at one slice per voxel (the paper's
+        setting), and, unlike a blur per slice, does not change with the slice count.
+    ms_extinction : float, default MULTIPLE_DEFAULTS["ms_extinction"]
+        "multiple" light (Wrenninge et al. 2013), in [0, 1]: octave i sees the optical depth towards
+        the sun scaled by ms_extinction^i.
+    ms_contribution : float, default MULTIPLE_DEFAULTS["ms_contribution"]
+        In [0, 1]: octave i contributes ms_contribution^i.
+    ms_eccentricity : float, default MULTIPLE_DEFAULTS["ms_eccentricity"]
+        In [0, 1]: octave i's phase function is blended towards isotropic,
+        ms_eccentricity^i p + (1 - ms_eccentricity^i) / (4 pi).
+    sky_gain : float, default MULTIPLE_DEFAULTS["sky_gain"]
+        "multiple" light, >= 0: skylight in-scattering, sky_gain x the sky's mean radiance x
+        exp(-sky_extinction x optical depth towards the zenith).
+    sky_extinction : float, default MULTIPLE_DEFAULTS["sky_extinction"]
+        >= 0: the skylight's optical-depth factor above.
+    diffusion_gain : float, default MULTIPLE_DEFAULTS["diffusion_gain"]
+        "multiple" light, >= 0: isotropic in-scattering of diffused sunlight, diffusion_gain x
+        E_sun / (4 pi) x the 1-D diffusion profile of the cloud column along the sun ray
+        (eye.diffusion_profile: brightest a transport depth inside, falling linearly to the shadowed
+        side; little in thin cloud).
+    diffusion_scale : float, default MULTIPLE_DEFAULTS["diffusion_scale"]
+        In [0, 1]: the profile is in transport optical depths diffusion_scale x tau (~ 1 - g).
+    detail : dict of str to float, default {}
+        Detail modes with a ``detail_noise`` renderer: the amount of simulated detail per species
+        (paper section 5.4), the amplitude s in [0, 3] of the log-normal multiplier exp(s n - s^2/2) of
+        its extinction (n: the unit-variance noise; 0: none; species not named: DEFAULT_DETAIL).
+
+    Raises
+    ------
+    ValueError
+        For a plain number out of its range.
     """
 
     scale: dict = field(default_factory=dict)
@@ -134,4 +171,5 @@ class SliceParams:
             raise ValueError(f"detail amplitudes must be in [0, 3], got {self.detail}")
 
     def updated(self, **kw) -> "SliceParams":
+        """A copy with the given fields replaced."""
         return replace(self, **kw)

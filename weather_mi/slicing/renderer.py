@@ -35,10 +35,41 @@ SKY_SLICES, SKY_RES = 48, 48  # the zenith light volume of the "multiple" model 
 
 
 class SliceRenderer:
-    """An interactive half-angle slicing renderer bound to one OpticalVolume. ``light_res``: texels per
-    side of the light buffer (None: ``light.auto_light_res``, 128 for most storms).
+    """An interactive half-angle slicing renderer bound to one OpticalVolume.
 
-    ``frame(spec, params)`` renders; textures, kernels and the last few views' rays are reused."""
+    ``frame(spec, params)`` renders; textures, kernels and the last few views' rays are reused.
+
+    Parameters
+    ----------
+    vol : OpticalVolume
+        The medium (with phase tables).
+    mode : SliceMode, default SliceMode()
+        Phase functions, light model and colouring.
+    slices : int, default 128
+        Number of slice planes, >= 2.
+    light_res : int, optional
+        Texels per side of the light buffer, >= 4 (None: ``light.auto_light_res``, 128 for most storms).
+    detail_field : numpy.ndarray, optional
+        (z, y, x) multiplier of the extinction (:func:`weather_mi.detail.field`), used with
+        ``mode.detail``.
+    uniform_phase : phase table, optional
+        The one phase function of ``phase="uniform"`` modes (default the first species' table).
+    differentiable : bool, default False
+        Build the frame so that Dr.Jit can differentiate it (``frame(..., return_arrays=True)``).
+    detail_noise : numpy.ndarray, optional
+        (z, y, x) unit-variance noise (:func:`weather_mi.detail.noise`) for ``mode.detail``: species s's
+        extinction is multiplied by exp(a_s n - a_s^2 / 2), a_s from ``SliceParams.detail``. Not with
+        ``detail_field``.
+    forward_peak_deg : float, optional
+        Phase-function peaks within this angle (degrees) count as unscattered light (delta-M); None:
+        3 deg for the "multiple" model, 0 for the paper's modes.
+
+    Raises
+    ------
+    ValueError
+        For too few slices, a too small light buffer, a detail mode without its field or noise (or with
+        both), or a detail array of the wrong shape.
+    """
 
     def __init__(self, vol: OpticalVolume, mode: SliceMode = SliceMode(), slices: int = 128,
                  light_res: int | None = None, detail_field: np.ndarray | None = None, uniform_phase=None,
@@ -192,8 +223,23 @@ class SliceRenderer:
         return self.light.light_at(points)
 
     def frame(self, spec: SceneSpec, params: SliceParams = SliceParams(), return_arrays: bool = False):
-        """Render one frame. Returns an Image (or the Dr.Jit (radiance, transmittance) when
-        ``return_arrays``, for differentiation)."""
+        """Render one frame.
+
+        Parameters
+        ----------
+        spec : SceneSpec
+            Camera, sun, sky, ground and image size.
+        params : SliceParams, default SliceParams()
+            Interactive parameters; changing them recompiles nothing.
+        return_arrays : bool, default False
+            Return the Dr.Jit (radiance, transmittance) arrays instead of an Image, for differentiation.
+
+        Returns
+        -------
+        Image or tuple
+            An Image of radiance (W/m^2/sr, RGB) with the frame's metadata; or, with ``return_arrays``,
+            the Dr.Jit (radiance, transmittance).
+        """
         mi = self.mi
         import drjit as dr
         t_start = time.perf_counter()
