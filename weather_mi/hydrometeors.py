@@ -1,4 +1,4 @@
-"""The Hydrometeors data contract (DESIGN.md): an xarray.Dataset on a regular (z, y, x) grid in metres.
+"""The Hydrometeors data contract (docs/design.md): an xarray.Dataset on a regular (z, y, x) grid in metres.
 
 Data variables ``q_cloud, q_ice, q_rain, q_snow, q_graupel`` (kg per kg of dry air, never negative),
 ``rho_air`` (dry-air density, kg/m^3) and optional ``r_eff_<species>`` (effective radius, m; 0 where

@@ -23,7 +23,7 @@ from .species import SpeciesSet, preset
 
 @dataclass(frozen=True)
 class OpticalVolume:
-    """Everything both renderers consume (DESIGN.md). All grids are float32, indexed [z, y, x].
+    """Everything both renderers consume (docs/design.md). All grids are float32, indexed [z, y, x].
 
     Complete and read-only once built: the fields cannot be reassigned and the grids are read-only views
     (the arrays given stay the caller's); ``dataclasses.replace`` makes a changed copy.

@@ -1,6 +1,6 @@
 """The scene description shared by both renderers: camera, sun, sky, ground, image size, seed.
 
-Conventions (DESIGN.md): world frame x east, y north, z up, metres. Directions are given by azimuth
+Conventions (docs/design.md): world frame x east, y north, z up, metres. Directions are given by azimuth
 (degrees clockwise from north) and elevation (degrees above the horizon). The sun is an irradiance
 (W/m^2 per RGB channel) on a plane normal to its beam; images are radiance in the same units per sr.
 Perspective field of view is horizontal (degrees).

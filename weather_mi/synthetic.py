@@ -1,4 +1,4 @@
-"""Procedural demo storms: the built-in default input of every command (DESIGN.md).
+"""Procedural demo storms: the built-in default input of every command (docs/design.md).
 
 Two deterministic storms built from smooth analytic shapes plus seeded multi-scale noise, returned as
 Hydrometeors (:func:`weather_mi.hydrometeors.from_arrays`): mixing ratios in kg per kg of dry air on
