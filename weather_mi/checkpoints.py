@@ -1,10 +1,11 @@
 """Checkpoints of a reference render: the running estimate after every pass in a ``.npz``, keyed by the
 render's fingerprint (scene, volume, phase tables, sample plan, estimator options), so that a resumed
 render continues only the render that wrote it. A checkpoint is written under a temporary name and
-renamed into place: a failed write leaves the previous pass's checkpoint whole.
+renamed into place: a failed write (a full disk) leaves the previous pass's checkpoint whole.
 """
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
@@ -12,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import OutputWriteError
 from .optics import OpticalVolume
 from .output_paths import written_atomically
 from .scene import SceneSpec
@@ -32,11 +34,26 @@ def fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
 
 
 def save_checkpoint(path: Path, state: dict) -> None:
-    """Write ``state`` (key, mean, m2, done, seconds, spp_done) to ``path`` atomically."""
+    """Write ``state`` (key, mean, m2, done, seconds, spp_done) to ``path`` atomically.
+
+    Raises
+    ------
+    OutputWriteError
+        When it cannot be written (a full disk): it names the checkpoint and says that the one of the
+        previous pass, if any, is kept whole at ``path`` (a render resumes from it).
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with written_atomically(path) as tmp:
-        np.savez(tmp, **state)
+    try:
+        with written_atomically(path, "checkpoint") as tmp:
+            np.savez(tmp, **state)
+    except OutputWriteError as exc:
+        done = int(state.get("done", 0))
+        exc.advice = "the render stopped"
+        if path.is_file() and done > 1:
+            kept = "its first pass" if done == 2 else f"its first {done - 1} passes"
+            when = "there is space" if exc.errno in (errno.ENOSPC, errno.EDQUOT) else "it can be written"
+            exc.advice += f"; the checkpoint keeps {kept}, whole, to resume from once {when}"
+        raise
 
 
 def load_checkpoint(path: Path, key: str, spp_list) -> tuple:

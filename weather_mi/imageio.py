@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .output_paths import image_format, written_atomically
+from .output_paths import image_format, write_error, written_atomically
 
 
 @dataclass
@@ -42,7 +42,8 @@ class Image:
 
     def save(self, path) -> Path:
         """Write the image in the format of the name's extension: ``.exr`` (R, G, B radiance, stderr.R/G/B,
-        and the metadata as a JSON header attribute) or ``.png`` (as :meth:`save_png`); ValueError else."""
+        and the metadata as a JSON header attribute) or ``.png`` (as :meth:`save_png`); ValueError else,
+        ``OutputWriteError`` naming the file when it cannot be written."""
         if image_format(path) == "png":
             return self.save_png(path)
         return write_exr(path, self.radiance, self.stderr, self.metadata)
@@ -61,17 +62,22 @@ class Image:
 
 
 def write_exr(path, radiance: np.ndarray, stderr: np.ndarray | None = None, metadata: dict | None = None) -> Path:
+    """Write an EXR (ZIP-compressed float32 scanlines): R, G, B (radiance), stderr.R/G/B when given,
+    ``metadata`` as the JSON header attribute ``weather_mi``; ``OutputWriteError`` naming the file when it
+    cannot be written (a full disk)."""
     import OpenEXR
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     channels = {c: np.ascontiguousarray(radiance[..., i], dtype=np.float32) for i, c in enumerate("RGB")}
     if stderr is not None:
         for i, c in enumerate("RGB"):
             channels[f"stderr.{c}"] = np.ascontiguousarray(stderr[..., i], dtype=np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
               "weather_mi": json.dumps(metadata or {}, default=_json_default)}
-    with written_atomically(path) as tmp, OpenEXR.File(header, channels) as f:
-        f.write(str(tmp))
+    with written_atomically(path, "EXR image") as tmp, OpenEXR.File(header, channels) as f:
+        try:
+            f.write(str(tmp))
+        except RuntimeError as exc:  # OpenEXR's I/O errors ("... No space left on device.")
+            raise write_error(path, "EXR image", exc, tmp) from exc
     return path
 
 
@@ -105,10 +111,11 @@ def to_srgb8(radiance: np.ndarray, exposure: float | None = None) -> np.ndarray:
 
 
 def write_png(path, radiance: np.ndarray, exposure: float | None = None) -> Path:
+    """Write the sRGB preview (:func:`to_srgb8`) of ``radiance`` as an 8-bit RGB PNG; ``OutputWriteError``
+    naming the file when it cannot be written (a full disk)."""
     from PIL import Image as PILImage
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with written_atomically(path) as tmp:
+    with written_atomically(path, "PNG image") as tmp:
         PILImage.fromarray(to_srgb8(radiance, exposure)).save(tmp, format="PNG")
     return path
 

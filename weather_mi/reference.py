@@ -119,6 +119,12 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         Radiance (or reflectance) and standard error, (H, W, 3) float32; the metadata records the render
         and ``noise_stats`` over the cloud pixels (eye-ray transmittance < 1/2; also shown by the
         progress bar).
+
+    Raises
+    ------
+    OutputWriteError
+        When the checkpoint cannot be written (a full disk): the checkpoint of the previous pass is kept
+        whole, and resuming from it continues the render.
     """
     from .variant import path_tracing_width, set_variant
     _check_inputs(spec, vol, spp, normalize, integrator, variant)
