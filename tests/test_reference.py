@@ -353,7 +353,8 @@ def test_exr_channels_values_and_metadata_round_trip(vol, tmp_path):
     with OpenEXR.File(str(path), separate_channels=True) as f:
         ch = f.channels()
         header = dict(f.header())  # a copy: OpenEXR.File empties its header dict when closed
-        assert {"R", "G", "B", "stderr.R", "stderr.G", "stderr.B"} <= set(ch)
+        assert {"R", "G", "B", "stderr.R", "stderr.G", "stderr.B", "transmittance.Y"} <= set(ch)
+        np.testing.assert_array_equal(np.asarray(ch["transmittance.Y"].pixels), img.transmittance)
         for i, c in enumerate("RGB"):
             px = np.asarray(ch[c].pixels)
             assert px.shape == (H, W) and px.dtype == np.float32
@@ -366,6 +367,7 @@ def test_exr_channels_values_and_metadata_round_trip(vol, tmp_path):
     back = wm.Image.load(path)
     np.testing.assert_array_equal(back.radiance, img.radiance)
     np.testing.assert_array_equal(back.stderr, img.stderr)
+    np.testing.assert_array_equal(back.transmittance, img.transmittance)
     assert back.metadata["seconds"] == img.metadata["seconds"]
 
 

@@ -116,9 +116,10 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     Returns
     -------
     Image
-        Radiance (or reflectance) and standard error, (H, W, 3) float32; the metadata records the render
-        and ``noise_stats`` over the cloud pixels (eye-ray transmittance < 1/2; also shown by the
-        progress bar).
+        Radiance (or reflectance) and standard error, (H, W, 3) float32; ``transmittance``: the (H, W)
+        eye-ray transmittance of the volume (None on scalar variants), whose pixels below 1/2 are the
+        cloud pixels; the metadata records the render and ``noise_stats`` over the cloud pixels (also
+        shown by the progress bar).
 
     Raises
     ------
@@ -134,7 +135,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
     set_variant(variant if variant is not None else current_or_default_variant())
     with path_tracing_width():  # the scene is built and its passes rendered at the path tracer's SIMD width
         spp_list = plan_passes(spec, int(spp), passes)
-        cloud = _cloud_pixels(spec, vol)
+        cloud, transmittance = _cloud_pixels(spec, vol)
         # render to a target: the passes past the planned ones cover the cloud pixels only
         target = cloud if target_rse is not None else None
         options = PassOptions(integrator=integrator, max_depth=max_depth, rr_depth=rr_depth, cell=cell,
@@ -144,8 +145,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                               target_pixels=None if target is None else np.flatnonzero(target.ravel()))
         key = _render_key(spec, vol, spp_list, options, normalize, target_rse,
                           worker_variant if client is not None else None)
-        run = _Run(PassScene(spec, vol, options, key), spp_list, cloud, normalize, target_rse, max_seconds,
-                   _scale(spec, normalize), mean=np.zeros((spec.height, spec.width, 3)),
+        run = _Run(PassScene(spec, vol, options, key), spp_list, cloud, transmittance, normalize, target_rse,
+                   max_seconds, _scale(spec, normalize), mean=np.zeros((spec.height, spec.width, 3)),
                    m2=np.zeros((spec.height, spec.width, 3)))
         _open_checkpoint(run, checkpoint, resume)
         remote = _merge_passes(run, client, worker_variant, progress, on_pass)
@@ -165,6 +166,7 @@ class _Run:
     job: PassScene
     spp_list: list
     cloud: np.ndarray
+    transmittance: np.ndarray | None
     normalize: str | None
     target_rse: float | None
     max_seconds: float | None
@@ -227,7 +229,9 @@ class _Run:
 
     def image(self, n: int, noise: dict | None) -> Image:
         """The estimate after ``n`` passes as an ``Image`` (its own arrays) with its metadata."""
-        return Image(self.mean.astype(np.float32), self.stderr(n).astype(np.float32), self.metadata(n, noise))
+        transmittance = None if self.transmittance is None else self.transmittance.copy()
+        return Image(self.mean.astype(np.float32), self.stderr(n).astype(np.float32), self.metadata(n, noise),
+                     transmittance)
 
     def metadata(self, n: int, noise: dict | None) -> dict:
         import mitsuba as mi
@@ -257,13 +261,14 @@ def _estimator_defaults(spec, integrator, target_rse, max_seconds, sun_guiding, 
     return sun_guiding, aureole_nee, forward_peak_deg
 
 
-def _cloud_pixels(spec: SceneSpec, vol: OpticalVolume) -> np.ndarray:
-    """Cloud pixels (H, W) of the view: eye-ray optical depth of the full extinction (not delta-scaled)
-    along the scene's sensor rays above ln 2; every pixel on a scalar variant."""
+def _cloud_pixels(spec: SceneSpec, vol: OpticalVolume):
+    """(cloud pixels (H, W) bool, eye-ray transmittance (H, W) float32 or None) of the view: the full
+    extinction (not delta-scaled) along the scene's sensor rays; every pixel on a scalar variant."""
     import mitsuba as mi
     if mi.variant().startswith("scalar"):  # the ray march is vectorised: every pixel counts there
-        return np.ones((spec.height, spec.width), bool)
-    return view_optical_depth(spec, vol) > CLOUD_TAU
+        return np.ones((spec.height, spec.width), bool), None
+    tau = view_optical_depth(spec, vol)
+    return tau > CLOUD_TAU, np.exp(-tau).astype(np.float32)
 
 
 def _render_key(spec, vol, spp_list, o: PassOptions, normalize, target_rse, worker_variant) -> str:
