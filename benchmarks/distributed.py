@@ -60,7 +60,7 @@ def scheduler_task_cost_s(client, n: int = 400) -> float:
 
 def merge_cost_s(width: int = 1024, height: int = 768, repeats: int = 5) -> float:
     """Seconds of the client's Welford update of one (H, W, 3) pass (render_reference's)."""
-    from weather_mi.reference import welford_update
+    from weather_mi.estimates import welford_update
     rng = np.random.default_rng(0)
     mean, m2 = np.zeros((height, width, 3)), np.zeros((height, width, 3))
     raw = rng.random((height, width, 3), dtype=np.float32)

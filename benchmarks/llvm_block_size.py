@@ -31,7 +31,8 @@ def main():
     ap.add_argument("--rounds", type=int, default=2)
     args = ap.parse_args()
     import weather_mi as wm
-    import weather_mi.reference as R
+    import weather_mi.passes as P
+    from weather_mi.forward_peak import DEFAULT_CONE_DEG
     from weather_mi.variant import LLVM_BLOCK_SIZE, llvm_block_size, tune_llvm
     w, h = (int(v) for v in args.size.split("x"))
     vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
@@ -39,12 +40,13 @@ def main():
     wm.set_variant("llvm_ad_rgb")
     scenes = {}
     for name, legacy in (("issue 10", False), ("legacy", True)):
-        job = R.PassScene(spec, vol, dict(integrator="majorant", max_depth=-1, rr_depth=None, cell=None,
-                                          own_sun=not legacy, sun_guiding=R.DEFAULT_SUN_GUIDING,
-                                          aureole_nee=0.0 if legacy else R.DEFAULT_AUREOLE_NEE, legacy=legacy,
-                                          forward_peak_deg=0.0 if legacy else R.DEFAULT_CONE_DEG), name)
+        job = P.PassScene(spec, vol, P.PassOptions(integrator="majorant", max_depth=-1, rr_depth=None, cell=None,
+                                                   own_sun=not legacy, sun_guiding=P.DEFAULT_SUN_GUIDING,
+                                                   aureole_nee=0.0 if legacy else P.DEFAULT_AUREOLE_NEE, legacy=legacy,
+                                                   forward_peak_deg=0.0 if legacy else DEFAULT_CONE_DEG, planned=1),
+                          name)
         scenes[name] = job.build()
-        R.render_pass(scenes[name], args.spp, 1)  # compile
+        P.render_pass(scenes[name], args.spp, 1)  # compile
     sizes = [16384, 4096, LLVM_BLOCK_SIZE, 256]
     sizes = sorted(set(sizes), reverse=True)
     times = {(n, b): [] for n in scenes for b in sizes}
@@ -54,7 +56,7 @@ def main():
             tune_llvm(b)
             for n, scene in scenes.items():
                 t0 = time.perf_counter()
-                imgs = [R.render_pass(scene, args.spp, 100 + i) for i in range(args.passes)]
+                imgs = [P.render_pass(scene, args.spp, 100 + i) for i in range(args.passes)]
                 times[(n, b)].append((time.perf_counter() - t0) / (args.spp * args.passes))
                 images.setdefault((n, b), imgs)
     tune_llvm(LLVM_BLOCK_SIZE)

@@ -12,7 +12,7 @@ before ``render_passes``), in the same process, on the same scenes.
 Scenes: the demo supercell (``wm.synthetic.supercell()``), camera ``Camera.orbit(vol, azimuth=200,
 elevation=8, fov=45)``, sunsky + ground; sun at azimuth/elevation 200/35 (front), 290/35 (side),
 20/20 (back); presets "paper" and "physical". Cloud pixels: eye-ray optical depth > ln 2
-(``reference.eye_optical_depth``, deterministic). Measures (``reference.noise_stats``, channel means):
+(``estimates.eye_optical_depth``, deterministic). Measures (``estimates.noise_stats``, channel means):
 
     rms se/mean    RMS standard error over cloud pixels / mean cloud radiance
     worst se/mean  largest standard error of a cloud pixel / mean cloud radiance
@@ -87,7 +87,7 @@ def render(spec, vol, spp, which, passes=None, **kw):
     (weather-mi now sets ``variant.LLVM_BLOCK_SIZE``, which also speeds the old estimator up by 6-8%);
     "prev", the issue-10 estimator before the texel grid, exact transmittance and persistent lanes
     (``PREVIOUS``); "last", the new estimator as the last stop rendered (one pass per launch, before
-    ``render_passes``: ``reference.BATCH_SAMPLES`` = 0); "new". All but "new" at the CPU's SIMD width
+    ``render_passes``: ``passes.BATCH_SAMPLES`` = 0); "new". All but "new" at the CPU's SIMD width
     (before ``variant.PATH_TRACING_VECTOR_WIDTH``)."""
     from weather_mi.variant import DRJIT_DEFAULT_BLOCK_SIZE, LLVM_BLOCK_SIZE, tune_llvm
     wm.set_variant()  # selects the variant (and our block size) before the old one is put back
@@ -97,7 +97,7 @@ def render(spec, vol, spp, which, passes=None, **kw):
         tune_llvm(DRJIT_DEFAULT_BLOCK_SIZE)
     try:
         with plugin_defaults(PREVIOUS if which == "prev" else {}), \
-                plugin_defaults({"BATCH_SAMPLES": 0} if which == "last" else {}, module=wm.reference), \
+                plugin_defaults({"BATCH_SAMPLES": 0} if which == "last" else {}, module=wm.passes), \
                 plugin_defaults({"PATH_TRACING_VECTOR_WIDTH": CPU_WIDTH} if which != "new" else {}, module=wm.variant):
             return wm.render_reference(spec, vol, spp=spp, passes=passes, progress=False, legacy=old, **kw)
     finally:
@@ -185,7 +185,7 @@ def bias(vols, args):
     for preset, vol in vols.items():
         for view in VIEWS:
             spec = spec_for(vol, view, 48, 36, 0.0, seed=7)
-            cloud = wm.reference.cloud_mask(spec, vol)
+            cloud = wm.estimates.cloud_mask(spec, vol)
             means = []
             for which, kw in (("old", {}), ("new", {"forward_peak_deg": 0.0}), ("new", {}), ("prev", {})):
                 img = render(spec, vol, args.bias_spp, which, **kw)
@@ -231,7 +231,7 @@ def profile(vol, args):
         ("free flights over the coarse grid (cell 2)", toggled(spec, vol, args, DEFAULT_TRACKING_GRID="coarse")),
         ("shadow rays by ratio tracking", toggled(spec, vol, args, DEFAULT_TRANSMITTANCE="ratio")),
         ("passes by mi.render (no persistent lanes)", toggled(spec, vol, args, DEFAULT_PERSISTENT_LANES=False)),
-        ("one pass per launch", toggled(spec, vol, args, module=wm.reference, BATCH_SAMPLES=0)),
+        ("one pass per launch", toggled(spec, vol, args, module=wm.passes, BATCH_SAMPLES=0)),
         (f"SIMD width {CPU_WIDTH} (the CPU's) instead of {wm.variant.PATH_TRACING_VECTOR_WIDTH}",
          toggled(spec, vol, args, module=wm.variant, PATH_TRACING_VECTOR_WIDTH=CPU_WIDTH)),
         ("eye rays only (max_depth 1)", warm(spec, vol, max_depth=1)),

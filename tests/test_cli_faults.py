@@ -1,10 +1,12 @@
 """The command line and the output files under faults (issue 14): bad options and outputs refused before
 anything is rendered, with one line that says what is wrong; checkpoints never lost nor silently
-discarded; two renders never mix their outputs; Ctrl-C says how to resume."""
+discarded; two renders never mix their outputs; Ctrl-C and a full disk say how to resume."""
 from __future__ import annotations
 
+import errno
 import os
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -220,3 +222,112 @@ def test_ctrl_c_says_where_the_checkpoint_is_and_how_to_resume(tmp_path, capsys,
     assert rc == 130
     assert "interrupted" in line and "a.exr.ckpt.npz" in line and "--resume" in line
     assert not (tmp_path / "a.exr.lock").exists()
+
+
+# ---------------------------------------------------------------- a full disk
+
+ENOSPC = os.strerror(errno.ENOSPC)  # "No space left on device"
+
+
+def error_line(err: str) -> str:
+    """The one error line of a real render's stderr (its progress bar is there too), no traceback."""
+    lines = [line for line in err.replace("\r", "\n").splitlines() if line.startswith("weather-mi:")]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    return lines[0]
+
+
+def disk_full_at_checkpoint(monkeypatch, k):
+    """The disk fills up while the (k+1)-th checkpoint is written (``np.savez``, the checkpoint's write): a
+    few bytes of it, then ENOSPC, as the system reports a full disk."""
+    real, calls = np.savez, []
+
+    def savez(file, *args, **kwds):
+        if len(calls) == k:
+            Path(file).write_bytes(b"PK\x03\x04 the first bytes of a checkpoint")
+            raise OSError(errno.ENOSPC, ENOSPC)
+        calls.append(file)
+        return real(file, *args, **kwds)
+    monkeypatch.setattr(np, "savez", savez)
+    return real
+
+
+def test_full_disk_mid_render_names_the_checkpoint_keeps_it_and_resumes_bit_for_bit(tmp_path, capsys, monkeypatch):
+    """4 passes; the disk is full when the third checkpoint is written: exit 2 with one line naming the
+    checkpoint and --resume, no traceback; the checkpoint of the first two passes is whole, no temporary
+    file is left, and --resume finishes the render with the image of an uninterrupted one."""
+    whole = tmp_path / "whole.exr"
+    assert run(["--spp", "4", "-o", str(whole)], capsys)[0] == 0
+    out, ckpt = tmp_path / "a.exr", tmp_path / "a.exr.ckpt.npz"
+    real = disk_full_at_checkpoint(monkeypatch, 2)
+    rc, _, err = run(["--spp", "4", "-o", str(out)], capsys)
+    line = error_line(err)
+    assert rc == 2 and f"could not write the checkpoint {ckpt}: {ENOSPC}" in line
+    assert "the checkpoint keeps its first 2 passes, whole" in line and "--resume" in line
+    assert int(np.load(ckpt)["done"]) == 2
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.exr.ckpt.npz", "whole.exr", "whole.png"]
+    monkeypatch.setattr(np, "savez", real)  # space freed
+    rc, _, err = run(["--spp", "4", "--resume", "-o", str(out)], capsys)
+    assert rc == 0, err
+    a, b = Image.load(out), Image.load(whole)
+    assert np.array_equal(a.radiance, b.radiance) and np.array_equal(a.stderr, b.stderr)
+    assert a.metadata["passes"] == 4 and not ckpt.exists()
+
+
+@pytest.mark.parametrize("which", ["EXR", "PNG"])
+def test_full_disk_when_the_image_is_written_names_it_and_resumes_without_rendering(tmp_path, capsys, monkeypatch,
+                                                                                      which):
+    """The render is finished and the EXR (OpenEXR's RuntimeError) or the PNG (PIL's OSError) cannot be
+    written: the message names that file (not its temporary name) and the checkpoint; --resume writes
+    the images without rendering a pass."""
+    import OpenEXR
+    from PIL import Image as PILImage
+    out, ckpt = tmp_path / "a.exr", tmp_path / "a.exr.ckpt.npz"
+    target = out if which == "EXR" else tmp_path / "a.png"
+
+    def exr_full(self, name):
+        raise RuntimeError(f'Failed to write pixel data to image file "{name}". {ENOSPC}.')
+
+    def png_full(self, fp, *args, **kwargs):
+        raise OSError(errno.ENOSPC, ENOSPC)
+    if which == "EXR":
+        monkeypatch.setattr(OpenEXR.File, "write", exr_full)
+    else:
+        monkeypatch.setattr(PILImage.Image, "save", png_full)
+    rc, _, err = run(["--spp", "4", "-o", str(out)], capsys)
+    line = error_line(err)
+    assert rc == 2 and f"could not write the {which} image {target}: {ENOSPC}" in line
+    assert ".tmp" not in line and str(ckpt) in line and "--resume" in line
+    assert int(np.load(ckpt)["done"]) == 4
+    assert not [p for p in tmp_path.iterdir() if ".tmp" in p.name]
+    monkeypatch.undo()
+    for name in ("render_pass", "render_passes"):
+        monkeypatch.setattr(wm.passes, name, lambda *a, **k: pytest.fail("rendered although every pass is done"))
+    rc, _, err = run(["--spp", "4", "--resume", "-o", str(out)], capsys)
+    assert rc == 0, err
+    assert out.exists() and (tmp_path / "a.png").exists() and not ckpt.exists()
+
+
+def test_full_disk_api_raises_output_write_error_and_the_checkpoint_resumes(tmp_path, monkeypatch):
+    """The library's error: an OSError (errno ENOSPC) naming the checkpoint; a first pass that cannot be
+    saved leaves no checkpoint; a later one leaves the previous pass's, from which resume=True continues."""
+    from weather_mi.errors import OutputWriteError
+    beta = np.full((4, 4, 4), 1e-3, np.float32)
+    vol = wm.OpticalVolume.from_arrays(beta, 0.9, wm.phase.henyey_greenstein(0.8), ((0, 0, 0), (1000, 1000, 1000)))
+    spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, elevation=10), sun=wm.Sun(200, 40, angular_diameter_deg=0),
+                        sky=wm.Sky("constant"), ground=None, width=4, height=3)
+    ckpt = tmp_path / "r.ckpt.npz"
+    real = disk_full_at_checkpoint(monkeypatch, 0)
+    with pytest.raises(OutputWriteError) as exc:
+        wm.render_reference(spec, vol, spp=3, progress=False, checkpoint=ckpt)
+    assert isinstance(exc.value, OSError) and exc.value.errno == errno.ENOSPC and exc.value.filename == str(ckpt)
+    assert str(exc.value) == f"could not write the checkpoint {ckpt}: {ENOSPC}; the render stopped"
+    assert not list(tmp_path.iterdir())
+    monkeypatch.setattr(np, "savez", real)
+    disk_full_at_checkpoint(monkeypatch, 1)
+    with pytest.raises(OutputWriteError, match="the checkpoint keeps its first pass, whole, to resume from once there"):
+        wm.render_reference(spec, vol, spp=3, progress=False, checkpoint=ckpt)
+    assert int(np.load(ckpt)["done"]) == 1 and [p.name for p in tmp_path.iterdir()] == [ckpt.name]
+    monkeypatch.setattr(np, "savez", real)
+    resumed = wm.render_reference(spec, vol, spp=3, progress=False, checkpoint=ckpt, resume=True)
+    whole = wm.render_reference(spec, vol, spp=3, progress=False)
+    assert np.array_equal(resumed.radiance, whole.radiance) and np.array_equal(resumed.stderr, whole.stderr)

@@ -20,7 +20,7 @@ import pytest
 
 import weather_mi as wm
 from weather_mi import cluster
-from weather_mi.reference import pass_seed
+from weather_mi.passes import pass_seed
 
 from test_reference import cloud_volume, spec
 
@@ -31,13 +31,13 @@ SLOW_PASSES = f"""
 import time
 
 def dask_setup(worker):
-    import weather_mi.reference as ref
-    real = ref.render_pass
+    import weather_mi.passes as passes
+    real = passes.render_pass
 
     def slow(*args, **kwargs):
         time.sleep({PASS_DELAY_S})
         return real(*args, **kwargs)
-    ref.render_pass = slow
+    passes.render_pass = slow
 """
 
 
@@ -77,7 +77,7 @@ def test_passes_on_two_workers_give_the_in_process_image_bit_for_bit(client, vol
     assert same(local, remote)
     d = remote.metadata["dask"]
     assert d["workers"] == 2 and sum(d["passes_by_worker"].values()) == 8
-    assert d["variants"] == [wm.reference._current_or_default()]
+    assert d["variants"] == [wm.passes.current_or_default_variant()]
     assert remote.metadata["passes"] == 8 and remote.metadata["spp"] == 16
 
 
@@ -94,19 +94,19 @@ def test_resumed_distributed_render_computes_only_the_missing_passes(client, vol
     sp = spec(seed=9)
     full = render(sp, vol)
     ckpt = tmp_path / "run.ckpt.npz"
-    from weather_mi import reference
-    real, calls = reference.render_pass, []
-    monkeypatch.setattr(reference, "BATCH_SAMPLES", 0)  # local passes one by one, through render_pass
+    from weather_mi import passes
+    real, calls = passes.render_pass, []
+    monkeypatch.setattr(passes, "BATCH_SAMPLES", 0)  # local passes one by one, through render_pass
 
     def stop_after_3(scene, spp, seed, **kwargs):  # in this process: the first 3 passes, then an interruption
         if len(calls) == 3:
             raise KeyboardInterrupt
         calls.append(seed)
         return real(scene, spp, seed, **kwargs)
-    monkeypatch.setattr(reference, "render_pass", stop_after_3)
+    monkeypatch.setattr(passes, "render_pass", stop_after_3)
     with pytest.raises(KeyboardInterrupt):
         render(sp, vol, checkpoint=ckpt)
-    monkeypatch.setattr(reference, "render_pass", real)
+    monkeypatch.setattr(passes, "render_pass", real)
     assert int(np.load(ckpt)["done"]) == 3
     resumed = render(sp, vol, client, checkpoint=ckpt, resume=True)
     assert sum(resumed.metadata["dask"]["passes_by_worker"].values()) == 5
@@ -116,10 +116,10 @@ def test_resumed_distributed_render_computes_only_the_missing_passes(client, vol
 def test_ctrl_c_cancels_the_tasks_and_leaves_a_valid_checkpoint(client, vol, tmp_path, monkeypatch):
     """Ctrl-C arrives in the client's main thread just after the second checkpoint was written (raised from
     there, so that the test does not race a fast render on a loaded machine)."""
-    import weather_mi.reference as reference
+    import weather_mi.checkpoints as checkpoints
     sp = spec(seed=10)
     ckpt = tmp_path / "run.ckpt.npz"
-    save, calls = reference._save_checkpoint, []
+    save, calls = checkpoints.save_checkpoint, []
 
     def save_then_interrupt(path, state):
         save(path, state)
@@ -127,10 +127,10 @@ def test_ctrl_c_cancels_the_tasks_and_leaves_a_valid_checkpoint(client, vol, tmp
         if len(calls) == 2:
             raise KeyboardInterrupt
 
-    monkeypatch.setattr(reference, "_save_checkpoint", save_then_interrupt)
+    monkeypatch.setattr(checkpoints, "save_checkpoint", save_then_interrupt)
     with pytest.raises(KeyboardInterrupt):
         render(sp, vol, client, spp=24, passes=24, checkpoint=ckpt)
-    monkeypatch.setattr(reference, "_save_checkpoint", save)
+    monkeypatch.setattr(checkpoints, "save_checkpoint", save)
     done = int(np.load(ckpt)["done"])
     assert done == 2
     assert _settles(lambda: not _scheduler_tasks(client)), f"tasks left on the scheduler: {_scheduler_tasks(client)}"
@@ -142,8 +142,8 @@ def test_ctrl_c_cancels_the_tasks_and_leaves_a_valid_checkpoint(client, vol, tmp
 def test_merged_passes_are_released_on_the_scheduler(client, vol, tmp_path, monkeypatch):
     """A long render (target_rse: up to thousands of passes) must not keep every pass image in the
     workers' memory: once merged here, a pass's task is gone from the scheduler."""
-    import weather_mi.reference as reference
-    save, looked = reference._save_checkpoint, []
+    import weather_mi.checkpoints as checkpoints
+    save, looked = checkpoints.save_checkpoint, []
 
     def merged_passes_left():
         return [k for k in _scheduler_tasks(client)
@@ -156,7 +156,7 @@ def test_merged_passes_are_released_on_the_scheduler(client, vol, tmp_path, monk
             # worker confirms the data is gone: seconds on a loaded machine (the old code kept them all to the end)
             looked.append(merged_passes_left())
 
-    monkeypatch.setattr(reference, "_save_checkpoint", save_then_look)
+    monkeypatch.setattr(checkpoints, "save_checkpoint", save_then_look)
     import gc
     gc.disable()  # released without Python's cyclic GC (which ran only sometimes: a flaky test, a lingering pass)
     try:
@@ -239,11 +239,11 @@ def test_a_worker_killed_mid_render_loses_nothing(client, vol, tmp_path, monkeyp
     """Last of the tests on the shared cluster: the nanny restarts the killed worker, the other one goes
     on. The kill happens when the first checkpoint has been written (23 passes to go), from the client's
     thread, so that it cannot come after a fast render has finished."""
-    import weather_mi.reference as reference
+    import weather_mi.checkpoints as checkpoints
     sp = spec(seed=12)
     pids = client.run(os.getpid)
     ckpt = tmp_path / "run.ckpt.npz"
-    killed, save = [], reference._save_checkpoint
+    killed, save = [], checkpoints.save_checkpoint
 
     def save_then_kill_a_busy_worker(path, state):
         save(path, state)
@@ -252,9 +252,9 @@ def test_a_worker_killed_mid_render_loses_nothing(client, vol, tmp_path, monkeyp
             os.kill(pids[busy[0] if busy else next(iter(pids))], signal.SIGKILL)
             killed.append(int(state["done"]))
 
-    monkeypatch.setattr(reference, "_save_checkpoint", save_then_kill_a_busy_worker)
+    monkeypatch.setattr(checkpoints, "save_checkpoint", save_then_kill_a_busy_worker)
     remote = render(sp, vol, client, spp=24, passes=24, checkpoint=ckpt)
-    monkeypatch.setattr(reference, "_save_checkpoint", save)
+    monkeypatch.setattr(checkpoints, "save_checkpoint", save)
     assert killed == [1] and remote.metadata["passes"] == 24
     assert same(remote, render(sp, vol, spp=24, passes=24))
 
@@ -264,10 +264,10 @@ def test_a_worker_killed_mid_render_loses_nothing(client, vol, tmp_path, monkeyp
 @pytest.fixture
 def no_rendering(monkeypatch):
     import mitsuba as mi
-    from weather_mi import reference
+    from weather_mi import passes
     monkeypatch.setattr(mi, "render", lambda *a, **k: pytest.fail("rendered although the setup is invalid"))
     for name in ("render_pass", "render_passes"):
-        monkeypatch.setattr(reference, name, lambda *a, **k: pytest.fail("rendered although the setup is invalid"))
+        monkeypatch.setattr(passes, name, lambda *a, **k: pytest.fail("rendered although the setup is invalid"))
 
 
 def _scheduler_tasks(client) -> list:

@@ -90,6 +90,40 @@ def test_cloud_mask_without_transmittance_raises():
         metrics.compare(ref, ref[:8])
 
 
+def test_cloud_mask_of_a_reference_comes_with_it_also_through_its_exr(tmp_path):
+    """``render_reference`` keeps its eye-ray transmittance with the image (``Image.transmittance``, an EXR
+    layer): ``compare(ref, img, mask="cloud")`` needs no transmittance argument, before and after an EXR
+    round trip, and at threshold 1/2 it measures the cloud pixels of the reference's noise figures."""
+    import weather_mi as wm
+    from test_reference import WIDE_VIEW, cloud_volume, spec
+    vol, sp = cloud_volume(), spec(seed=3, camera=WIDE_VIEW)
+    ref = wm.render_reference(sp, vol, spp=4, passes=2, progress=False)
+    t = ref.transmittance
+    assert t.shape == ref.shape and t.dtype == np.float32 and np.all((t > 0) & (t <= 1))
+    cloud = wm.estimates.cloud_mask(sp, vol)
+    assert np.array_equal(t < 0.5, cloud) and 0.2 < cloud.mean() < 0.8
+    assert ref.metadata["noise"]["cloud_pixels"] == int(np.count_nonzero(cloud & (ref.radiance.mean(axis=2) > 0)))
+    approx = ref.radiance * np.float32(1.1)
+    m = metrics.compare(ref, approx, mask="cloud")
+    assert m["n_pixels"] == int(np.count_nonzero(t < 0.99)) < t.size
+    assert metrics.compare(ref, approx, mask="cloud", threshold=0.5)["n_pixels"] == int(cloud.sum())
+    assert m == metrics.compare(ref, approx, mask="cloud", transmittance=t)
+    back = Image.load(ref.save(tmp_path / "ref.exr"))
+    np.testing.assert_array_equal(back.transmittance, t)
+    assert metrics.compare(back, approx, mask="cloud") == m
+    assert metrics.noise_floor(back, mask="cloud") == metrics.noise_floor(ref, mask="cloud")
+    # a transmittance put in the metadata (the study's, the slicer's) still comes first
+    other = np.ones(ref.shape)
+    other[:, :3] = 0.0
+    back.metadata["transmittance"] = other.tolist()
+    assert metrics.compare(back, approx, mask="cloud")["n_pixels"] == 3 * ref.shape[0]
+    # an image without one (the slicer's, an older EXR) still needs the argument
+    with pytest.raises(ValueError, match="transmittance"):
+        metrics.compare(Image(ref.radiance, ref.stderr, {}), approx, mask="cloud")
+    with pytest.raises(ValueError, match=r"transmittance must be \(H, W\)"):
+        Image(ref.radiance, transmittance=np.ones(3))
+
+
 def test_ssim_decreases_with_added_noise():
     ref = _smooth_image()
     rng = np.random.default_rng(1)

@@ -13,7 +13,7 @@ import pytest
 import mitsuba as mi
 
 import weather_mi as wm
-from weather_mi.reference import integrator_dict
+from weather_mi.mitsuba_scene import integrator_dict
 from weather_mi.mitsuba_scene import recentred, scene_dict
 
 BBOX = ((0.0, 0.0, 1000.0), (1000.0, 1000.0, 1400.0))
@@ -106,7 +106,7 @@ def test_bad_sun_diameters_are_refused(diameter):
 
 def test_a_disk_sun_needs_the_majorant_integrator(monkeypatch):
     for name in ("render_pass", "render_passes"):
-        monkeypatch.setattr(wm.reference, name, lambda *a, **k: pytest.fail("rendered"))
+        monkeypatch.setattr(wm.passes, name, lambda *a, **k: pytest.fail("rendered"))
     spec = wm.SceneSpec(camera=DOWN, sun=wm.Sun(200.0, 40.0), width=4, height=4)
     with pytest.raises(ValueError, match="angular_diameter_deg=0"):
         wm.render_reference(spec, slab(), spp=4, integrator="volpath", progress=False)

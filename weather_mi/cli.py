@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import WeatherDataError
+from .errors import OutputWriteError, WeatherDataError
 from .hydrometeors import SPECIES_NAMES, spacing_of
 
 DEMOS = ("supercell", "cumulus")
@@ -330,6 +330,9 @@ def main(argv: list[str] | None = None) -> int:
             from .study import run
             report = run(args.output, args.config or ("quick" if args.quick else "full"), data_dir=args.data)
             print(f"wrote {report}")
+    except OutputWriteError as exc:  # a full disk: the file named, the checkpoint kept, how to resume
+        print(f"weather-mi: error: {exc}{_resume_hint(args)}", file=sys.stderr)
+        return 2
     except (WeatherDataError, ValueError, ConnectionError, RuntimeError) as exc:
         print(f"weather-mi: error: {exc}", file=sys.stderr)
         return 2

@@ -16,6 +16,8 @@ import uuid
 
 import numpy as np
 
+from . import passes
+
 POLL_S = 0.5            # how often the client wakes up while waiting (Ctrl-C, lost workers)
 NO_WORKER_LIMIT_S = 120.0  # all workers gone for this long: give up rather than hang
 SCENES_PER_WORKER = 2   # Mitsuba scenes kept per worker process (an animation renders many)
@@ -63,7 +65,6 @@ def _render_pass_task(job, i: int, spp: int, seed: int, worker_variant, client_v
 
 
 def _render_pass(job, variant: str, spp: int, seed: int, pixels=None):
-    from .reference import render_pass
     from .variant import path_tracing_width, set_variant
     set_variant(variant)
     t0 = time.perf_counter()
@@ -73,7 +74,7 @@ def _render_pass(job, variant: str, spp: int, seed: int, pixels=None):
             while len(_worker_scenes) >= SCENES_PER_WORKER:
                 _worker_scenes.pop(next(iter(_worker_scenes)))
             scene = _worker_scenes[(job.key, variant)] = job.build()
-        raw = np.ascontiguousarray(render_pass(scene, spp, seed, pixels=pixels)[..., :3])
+        raw = np.ascontiguousarray(passes.render_pass(scene, spp, seed, pixels=pixels)[..., :3])
     return raw, time.perf_counter() - t0
 
 
@@ -103,7 +104,6 @@ class RemotePasses:
     def __iter__(self):
         import mitsuba as mi
         from . import cluster
-        from .reference import pass_seed
         self._client, self._owned = cluster.connect(self.client_arg)
         client = self._client
         try:
@@ -123,7 +123,7 @@ class RemotePasses:
                 limit = max(self.planned, i + ahead) if self.open_ended else self.planned
                 while nxt < limit:
                     self._futures[nxt] = client.submit(
-                        _render_pass_task, scene, nxt, self.per_pass(nxt), pass_seed(self.job.spec.seed, nxt),
+                        _render_pass_task, scene, nxt, self.per_pass(nxt), passes.pass_seed(self.job.spec.seed, nxt),
                         self.worker_variant, mi.variant(), key=f"weather-mi-pass-{token}-{nxt}", pure=False)
                     nxt += 1
                 future = self._futures[i]

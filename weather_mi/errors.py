@@ -1,4 +1,5 @@
-"""The one exception a user sees for bad input, with the file, the variable and the expectation named."""
+"""The exceptions a user sees: bad input (the file, the variable and the expectation named) and an output
+that could not be written (the file named, with what was kept)."""
 from __future__ import annotations
 
 
@@ -17,3 +18,20 @@ class WeatherDataError(ValueError):
         if found:
             msg += f"; found {found}"
         super().__init__(msg)
+
+
+class OutputWriteError(OSError):
+    """An output file that could not be written (a full disk, a quota, a lost mount): names the file and
+    what it is (``what``: "checkpoint", "EXR image", ...), the system's reason and, in ``advice``, what
+    was kept and how to go on. ``errno`` is the cause's (``errno.ENOSPC`` for a full disk)."""
+
+    def __init__(self, path, what: str, errno: int | None, reason: str, advice: str = ""):
+        super().__init__(errno, reason, str(path))
+        self.path, self.what, self.reason, self.advice = str(path), what, reason, advice
+
+    def __str__(self) -> str:
+        advice = f"; {self.advice}" if self.advice else ""
+        return f"could not write the {self.what} {self.path}: {self.reason}{advice}"
+
+    def __reduce__(self):
+        return type(self), (self.path, self.what, self.errno, self.reason, self.advice)

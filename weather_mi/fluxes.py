@@ -105,8 +105,8 @@ def _measure(scene_parts: dict, vol: OpticalVolume, sun, integrator: str, max_de
     """Mean and standard error (over passes) of the 1-pixel sensor's channel-mean value."""
     import mitsuba as mi
 
-    from .mitsuba_scene import medium_shape_dict, sun_dict
-    from .reference import integrator_dict, pass_seed
+    from .mitsuba_scene import integrator_dict, medium_shape_dict, sun_dict
+    from .passes import pass_seed
     d = {"type": "scene", "integrator": integrator_dict(vol, integrator, max_depth, rr_depth),
          "sun": sun_dict(sun), "slab": medium_shape_dict(vol)}
     d.update(scene_parts)

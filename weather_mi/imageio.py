@@ -1,6 +1,7 @@
-"""Images out of either renderer: radiance with its standard error and metadata; EXR for data
-(OpenEXR), PNG for eyes (sRGB transfer function from colour-science). Files are written under a unique
-temporary name and renamed into place (``output_paths``)."""
+"""Images out of either renderer: radiance with its standard error, metadata and (a reference's) eye-ray
+transmittance; EXR for data (OpenEXR: R, G, B, stderr.R/G/B, transmittance.Y and the metadata as JSON),
+PNG for eyes (sRGB transfer function from colour-science). Files are written under a unique temporary
+name and renamed into place (``output_paths``)."""
 from __future__ import annotations
 
 import json
@@ -9,17 +10,35 @@ from pathlib import Path
 
 import numpy as np
 
-from .output_paths import image_format, written_atomically
+from .output_paths import image_format, write_error, written_atomically
+
+TRANSMITTANCE_CHANNEL = "transmittance.Y"  # the EXR layer of Image.transmittance
 
 
 @dataclass
 class Image:
-    """``radiance`` and ``stderr`` are (H, W, 3) float32 arrays (row 0 at the top of the picture), in
-    W/m^2/sr per RGB channel (or reflectance pi L / (mu0 E) when ``metadata['normalize']`` says so)."""
+    """A rendered image with its standard error, metadata and, for a reference, its eye-ray transmittance.
+
+    Attributes
+    ----------
+    radiance : ndarray, (H, W, 3) float32
+        Radiance per RGB channel in W/m^2/sr, row 0 at the top of the picture (or reflectance
+        pi L / (mu0 E) when ``metadata['normalize']`` says so).
+    stderr : ndarray, (H, W, 3) float32
+        Standard error of ``radiance``, same units (NaN where unknown).
+    metadata : dict
+        What made the image (JSON-serialisable; the EXR header keeps it).
+    transmittance : ndarray, (H, W) float32, or None
+        Transmittance of the medium along each pixel's central eye ray (``render_reference``: exp of
+        minus the optical depth of the full extinction), the fraction of the background seen through the
+        cloud: its cloud pixels are those below 1/2. ``metrics.compare(..., mask="cloud")`` uses it.
+        None where unknown (the slicer's images, a scalar variant's reference).
+    """
 
     radiance: np.ndarray
     stderr: np.ndarray | None = None
     metadata: dict = field(default_factory=dict)
+    transmittance: np.ndarray | None = None
 
     def __post_init__(self):
         self.radiance = np.ascontiguousarray(self.radiance, dtype=np.float32)
@@ -28,6 +47,11 @@ class Image:
         if self.stderr is None:
             self.stderr = np.full_like(self.radiance, np.nan)
         self.stderr = np.ascontiguousarray(self.stderr, dtype=np.float32)
+        if self.transmittance is not None:
+            self.transmittance = np.ascontiguousarray(self.transmittance, dtype=np.float32)
+            if self.transmittance.shape != self.radiance.shape[:2]:
+                raise ValueError(f"Image transmittance must be (H, W) = {self.radiance.shape[:2]}, got "
+                                 f"{self.transmittance.shape}")
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -42,10 +66,11 @@ class Image:
 
     def save(self, path) -> Path:
         """Write the image in the format of the name's extension: ``.exr`` (R, G, B radiance, stderr.R/G/B,
-        and the metadata as a JSON header attribute) or ``.png`` (as :meth:`save_png`); ValueError else."""
+        transmittance.Y when known, and the metadata as a JSON header attribute) or ``.png`` (as
+        :meth:`save_png`); ValueError else, ``OutputWriteError`` naming the file when it cannot be written."""
         if image_format(path) == "png":
             return self.save_png(path)
-        return write_exr(path, self.radiance, self.stderr, self.metadata)
+        return write_exr(path, self.radiance, self.stderr, self.metadata, transmittance=self.transmittance)
 
     def save_png(self, path, exposure: float | None = None) -> Path:
         """Write a tone-mapped sRGB preview (a ``.png`` name): radiance x exposure, clipped, sRGB-encoded.
@@ -56,27 +81,41 @@ class Image:
 
     @classmethod
     def load(cls, path) -> "Image":
-        radiance, stderr, metadata = read_exr(path)
-        return cls(radiance, stderr, metadata)
+        """The image an EXR written by :meth:`save` holds (radiance, stderr, metadata, transmittance)."""
+        radiance, stderr, metadata, transmittance = read_exr_layers(path)
+        return cls(radiance, stderr, metadata, transmittance)
 
 
-def write_exr(path, radiance: np.ndarray, stderr: np.ndarray | None = None, metadata: dict | None = None) -> Path:
+def write_exr(path, radiance: np.ndarray, stderr: np.ndarray | None = None, metadata: dict | None = None,
+              transmittance: np.ndarray | None = None) -> Path:
+    """Write an EXR (ZIP-compressed float32 scanlines): R, G, B (radiance), stderr.R/G/B when given,
+    transmittance.Y ((H, W)) when given, ``metadata`` as the JSON header attribute ``weather_mi``;
+    ``OutputWriteError`` naming the file when it cannot be written (a full disk)."""
     import OpenEXR
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     channels = {c: np.ascontiguousarray(radiance[..., i], dtype=np.float32) for i, c in enumerate("RGB")}
     if stderr is not None:
         for i, c in enumerate("RGB"):
             channels[f"stderr.{c}"] = np.ascontiguousarray(stderr[..., i], dtype=np.float32)
+    if transmittance is not None:
+        channels[TRANSMITTANCE_CHANNEL] = np.ascontiguousarray(transmittance, dtype=np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
               "weather_mi": json.dumps(metadata or {}, default=_json_default)}
-    with written_atomically(path) as tmp, OpenEXR.File(header, channels) as f:
-        f.write(str(tmp))
+    with written_atomically(path, "EXR image") as tmp, OpenEXR.File(header, channels) as f:
+        try:
+            f.write(str(tmp))
+        except RuntimeError as exc:  # OpenEXR's I/O errors ("... No space left on device.")
+            raise write_error(path, "EXR image", exc, tmp) from exc
     return path
 
 
 def read_exr(path):
     """(radiance, stderr or None, metadata) from an EXR written by :func:`write_exr` (or any RGB EXR)."""
+    return read_exr_layers(path)[:3]
+
+
+def read_exr_layers(path):
+    """(radiance, stderr or None, metadata, transmittance or None) from an EXR written by :func:`write_exr`."""
     import OpenEXR
     with OpenEXR.File(str(path), separate_channels=True) as f:
         ch = f.channels()
@@ -86,7 +125,10 @@ def read_exr(path):
         stderr = None
         if all(f"stderr.{c}" in ch for c in "RGB"):
             stderr = np.stack([np.asarray(ch[f"stderr.{c}"].pixels, np.float32) for c in "RGB"], axis=-1)
-    return radiance, stderr, metadata
+        transmittance = None
+        if TRANSMITTANCE_CHANNEL in ch:
+            transmittance = np.array(ch[TRANSMITTANCE_CHANNEL].pixels, np.float32)
+    return radiance, stderr, metadata, transmittance
 
 
 def auto_exposure(radiance: np.ndarray, percentile: float = 99.5) -> float:
@@ -105,10 +147,11 @@ def to_srgb8(radiance: np.ndarray, exposure: float | None = None) -> np.ndarray:
 
 
 def write_png(path, radiance: np.ndarray, exposure: float | None = None) -> Path:
+    """Write the sRGB preview (:func:`to_srgb8`) of ``radiance`` as an 8-bit RGB PNG; ``OutputWriteError``
+    naming the file when it cannot be written (a full disk)."""
     from PIL import Image as PILImage
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with written_atomically(path) as tmp:
+    with written_atomically(path, "PNG image") as tmp:
         PILImage.fromarray(to_srgb8(radiance, exposure)).save(tmp, format="PNG")
     return path
 

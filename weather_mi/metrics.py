@@ -26,7 +26,8 @@ Definitions (all in :func:`compare`):
   reference's own Monte Carlo noise accounts for (NaN when the reference carries no standard error).
 
 Masks: ``"all"``, ``"cloud"`` (pixels whose transmittance, the fraction of the background seen
-through the cloud, is below ``threshold``) or a boolean (H, W) array.
+through the cloud, is below ``threshold``: the one given, else the reference's, see :func:`compare`)
+or a boolean (H, W) array.
 """
 from __future__ import annotations
 
@@ -112,6 +113,22 @@ def cloud_mask(transmittance: np.ndarray, threshold: float = 0.99) -> np.ndarray
     return t < float(threshold)
 
 
+def _own_transmittance(ref):
+    """The transmittance a reference Image carries: ``metadata["transmittance"]`` where one was put there,
+    else its own eye-ray transmittance (``Image.transmittance``: ``render_reference`` keeps it, an EXR
+    round trip too); ValueError without either."""
+    meta = ref.metadata if isinstance(ref, Image) else {}
+    if meta.get("transmittance") is not None:
+        return meta["transmittance"]
+    own = getattr(ref, "transmittance", None)
+    if own is None:
+        raise ValueError("mask='cloud' needs the per-pixel transmittance: pass transmittance= (an (H, W) "
+                         "array, e.g. SliceRenderer.transmittance), or give a reference Image that carries it "
+                         "(render_reference's images do, except on scalar variants: Image.transmittance, or "
+                         "metadata['transmittance'])")
+    return own
+
+
 def _resolve_mask(mask, shape, ref, transmittance, threshold) -> np.ndarray:
     if isinstance(mask, str):
         if mask == "all":
@@ -119,12 +136,7 @@ def _resolve_mask(mask, shape, ref, transmittance, threshold) -> np.ndarray:
         if mask != "cloud":
             raise ValueError(f"mask must be 'all', 'cloud' or a boolean (H, W) array, got {mask!r}")
         if transmittance is None:
-            meta = ref.metadata if isinstance(ref, Image) else {}
-            if meta.get("transmittance") is None:
-                raise ValueError("mask='cloud' needs the per-pixel transmittance: pass transmittance= (an (H, W) "
-                                 "array, e.g. SliceRenderer.transmittance) or give the reference Image a "
-                                 "metadata['transmittance']")
-            transmittance = meta["transmittance"]
+            transmittance = _own_transmittance(ref)
         t = np.asarray(transmittance, dtype=np.float64)
         if t.shape != tuple(shape):
             raise ValueError(f"transmittance must have the image shape {tuple(shape)}, got {t.shape}")
@@ -153,16 +165,33 @@ def noise_floor(ref, *, mask="all", transmittance=None, threshold: float = 0.99)
 
 def compare(ref, approx, *, exposure: float | None = None, mask="all", transmittance=None,
             threshold: float = 0.99, error_map=None) -> dict:
-    """Metrics of ``approx`` against ``ref`` (each an Image or an (H, W, 3) radiance array).
+    """Metrics of ``approx`` against ``ref``.
 
-    exposure      : display exposure for SSIM, CIEDE2000 and FLIP, applied to both images;
-                    default ``auto_exposure(ref)``.
-    mask          : "all", "cloud" (transmittance < threshold) or a boolean (H, W) array.
-    transmittance : (H, W) for mask="cloud"; default ``ref.metadata["transmittance"]``.
-    error_map     : a path: write a PNG with both display images and the CIEDE2000 and FLIP maps.
+    Parameters
+    ----------
+    ref, approx : Image or ndarray
+        Each an Image or an (H, W, 3) radiance array (W/m^2/sr, or any one unit for both).
+    exposure : float, optional
+        Display exposure (1 / radiance unit) for SSIM, CIEDE2000 and FLIP, applied to both images;
+        default ``auto_exposure(ref)``.
+    mask : {"all", "cloud"} or ndarray of bool
+        The pixels measured: all, the cloud pixels (transmittance < ``threshold``) or an (H, W) mask.
+    transmittance : ndarray, optional
+        (H, W) transmittance (fraction of the background seen through the cloud) for mask="cloud";
+        default ``ref.metadata["transmittance"]``, else the reference's own eye-ray transmittance
+        (``ref.transmittance``, which images of ``render_reference`` and their EXR files carry; their
+        noise figures count the pixels below 1/2 as cloud: ``threshold=0.5`` gives those pixels).
+    threshold : float
+        Transmittance below which a pixel is a cloud pixel (mask="cloud").
+    error_map : path, optional
+        Write a PNG with both display images and the CIEDE2000 and FLIP maps.
 
-    Returns a dict of floats: rmse, rel_mse, ssim, ciede2000, flip, noise_floor, exposure, and
-    ``n_pixels`` (int, pixels in the mask). See the module docstring for the definitions.
+    Returns
+    -------
+    dict
+        Floats rmse (radiance unit), rel_mse, ssim, ciede2000, flip, noise_floor (radiance unit),
+        exposure, and ``n_pixels`` (int, pixels in the mask). See the module docstring for the
+        definitions.
     """
     r = _radiance(ref, "ref")
     a = _radiance(approx, "approx")

@@ -3,11 +3,14 @@ for writing before any work, unique temporary names renamed into place, and a lo
 render off a path (and its checkpoint) while the first holds it."""
 from __future__ import annotations
 
+import errno
 import os
 import tempfile
 import uuid
 from contextlib import contextmanager
 from pathlib import Path
+
+from .errors import OutputWriteError
 
 IMAGE_FORMATS = {".exr": "exr", ".png": "png"}
 
@@ -37,16 +40,36 @@ def temporary_name(path) -> Path:
 
 
 @contextmanager
-def written_atomically(path):
-    """``with written_atomically(path) as tmp:`` write ``tmp`` (a unique name beside ``path``); on success
-    it is renamed onto ``path`` (atomic on one file system), on failure removed."""
+def written_atomically(path, what: str = "file"):
+    """``with written_atomically(path) as tmp:`` write ``tmp`` (a unique name beside ``path``, its folder
+    created if needed); on success it is renamed onto ``path`` (atomic on one file system), on failure
+    removed, so that a file already at ``path`` (a checkpoint of earlier passes) is never truncated. An
+    ``OSError`` (a full disk) comes out as ``OutputWriteError`` naming ``path`` as the ``what``."""
+    path = Path(path)
     tmp = temporary_name(path)
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         yield tmp
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError) and not isinstance(exc, OutputWriteError):
+            raise write_error(path, what, exc) from exc
         raise
+
+
+def write_error(path, what: str, exc: BaseException, tmp=None) -> OutputWriteError:
+    """``OutputWriteError`` for ``exc`` raised while writing ``path``: an ``OSError``'s errno and reason, or
+    the system error a library's message names (OpenEXR raises RuntimeError "... No space left on
+    device."), with the temporary name ``tmp`` replaced by ``path``."""
+    if isinstance(exc, OSError) and exc.errno is not None:
+        return OutputWriteError(path, what, exc.errno, exc.strerror or str(exc))
+    text = str(exc) if tmp is None else str(exc).replace(str(tmp), str(path))
+    named = [code for code in errno.errorcode if os.strerror(code) in text]
+    if named:
+        code = max(named, key=lambda c: len(os.strerror(c)))
+        return OutputWriteError(path, what, code, os.strerror(code))
+    return OutputWriteError(path, what, None, text or type(exc).__name__)
 
 
 def check_writable_folder(path) -> Path:

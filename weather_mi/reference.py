@@ -1,38 +1,345 @@
-"""Ground truth: path-traced rendering of an OpticalVolume in Mitsuba 3, in passes, with a per-pixel
-standard error, checkpoints after every pass and resume.
+"""Ground truth: ``render_reference`` path-traces an OpticalVolume in Mitsuba 3, in passes, with a
+per-pixel standard error, a checkpoint after every pass and resume.
 
 The estimate is the mean of P independent passes (consecutive seeds, k samples per pixel each); its
 standard error is the sample standard deviation of the pass means over sqrt(P) (Welford updates).
 A render to a target (``target_rse``) adds passes over its cloud pixels only, so there P is larger
-than elsewhere. Passes rendered in this process share launches (``render_passes``); each keeps its
-own seed and values, so the image does not depend on how they were grouped (nor on Dask).
+than elsewhere. Passes rendered in this process share launches (``passes.render_passes``); each keeps
+its own seed and values, so the image does not depend on how they were grouped (nor on Dask).
+
+The steps live beside it: the passes and the scene they render in ``passes``, the running estimate and
+the cloud pixels in ``estimates``, checkpoints in ``checkpoints``, Dask in ``dask_passes``.
 """
 from __future__ import annotations
 
-import hashlib
-import json
-import os
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from . import checkpoints
+from .dask_passes import RemotePasses
 from .errors import WeatherDataError
-from .forward_peak import DEFAULT_CONE_DEG, check_cone_deg, delta_scaled
+from .estimates import CLOUD_TAU, noise_stats, pass_counts, pass_stderr, view_optical_depth, welford_update
+from .estimates import cloud_mask  # noqa: F401  (re-exported: wm.reference.cloud_mask, the README's name)
+from .forward_peak import DEFAULT_CONE_DEG, check_cone_deg
 from .imageio import Image
 from .optics import OpticalVolume
+from .passes import (DEFAULT_AUREOLE_NEE, DEFAULT_SUN_GUIDING, PassOptions, PassScene, current_or_default_variant,
+                     local_passes, plan_passes)
 from .scene import SceneSpec
 
 INTEGRATORS = ("majorant", "volpath")
-MAX_LANES_PER_PASS = 1 << 22
-MIN_PASSES = 16          # default number of passes (batches) of a render with spp >= 16
-CLOUD_TAU = np.log(2.0)  # cloud pixels: eye-ray transmittance below 1/2
 MAX_TARGET_PASSES = 1 << 14
-BATCH_SAMPLES = 1 << 20  # passes rendered together up to this many samples (render_passes; 0: one by one) ...
-MAX_BATCH_PASSES = 16    # ... and this many passes
-DEFAULT_AUREOLE_NEE = 0.0  # probability of the aureole estimator (majorant_volpath): 1.8x the time for a 1.5-2x lower RMS noise, off
-DEFAULT_SUN_GUIDING = 0.0  # guiding adds noise on five of the six issue-10 views (plugins/majorant_volpath.py): off
+
+
+def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_depth: int = -1, *,
+                     integrator: str = "majorant", passes: int | None = None, normalize: str | None = None,
+                     checkpoint=None, resume=None, progress: bool = True, variant: str | None = None,
+                     rr_depth: int | None = None, cell: int | None = None, target_rse: float | None = None,
+                     max_seconds: float | None = None, sun_guiding: float | None = None,
+                     forward_peak_deg: float | None = None, aureole_nee: float | None = None,
+                     legacy: bool = False, client=None, worker_variant=None, on_pass=None) -> Image:
+    """Path-trace ``vol`` as seen by ``spec`` (Mitsuba ``volpath`` or our local-majorant tracker).
+
+    Parameters
+    ----------
+    spec : SceneSpec
+        Camera, sun, sky, ground, image size (pixels) and seed.
+    vol : OpticalVolume
+        Extinction (1/m), albedo and phase functions on the grid, its bbox in m.
+    spp : int
+        Samples per pixel in total, split into passes (``passes``, default ``passes.MIN_PASSES`` = 16
+        batches when spp >= 16). With ``target_rse``: the samples of the first estimate; passes of the
+        same size are then added until the target is met.
+    max_depth : int
+        Longest path in scattering events (-1: unbounded).
+    integrator : {"majorant", "volpath"}
+        "majorant" (delta tracking over a coarse majorant grid; default) or "volpath" (Mitsuba's own,
+        one global majorant: the reference's reference; point sun only).
+    passes : int, optional
+        Number of passes (batches) the ``spp`` samples are split into.
+    normalize : {None, "reflectance"}
+        None (radiance, W/m^2/sr) or "reflectance" (pi L / (mu0 E) per channel).
+    checkpoint : path, optional
+        A .npz written after every pass (a file already there is kept aside, unless resumed from).
+    resume : path or True, optional
+        Continue a render from this checkpoint (True: ``checkpoint``); the scene must be identical.
+    progress : bool
+        Show a progress bar (with the noise over the cloud pixels).
+    variant : str, optional
+        Mitsuba variant (None: the one selected, or the default).
+    rr_depth : int, optional
+        Depth at which Russian roulette starts (None: the integrators' default, 5).
+    cell : int, optional
+        Fine voxels per coarse cell of the majorant grid ("majorant" only; None: the default).
+    target_rse : float, optional
+        Keep adding passes until the mean relative standard error over cloud pixels (eye-ray
+        transmittance < 1/2) is at most this, or ``max_seconds`` of rendering have passed. The added
+        passes render the cloud pixels only (with persistent lanes; ``mi.render`` renders every pixel
+        and the others' values are dropped): the other pixels keep the planned passes (metadata
+        ``spp_background``). On the side-lit supercell at 256 x 256 its 6% of cloud pixels take 60% of
+        a full pass's time.
+    max_seconds : float, optional
+        With ``target_rse``: the time limit of the rendering, in s.
+    sun_guiding : float, optional
+        Probability of drawing a scattering direction from the phase function centred on the sun
+        ("majorant" only; None: ``passes.DEFAULT_SUN_GUIDING``).
+    forward_peak_deg : float, optional
+        Scattering by less than this many degrees (the diffraction peaks of rain, snow and graupel)
+        counted as unscattered light, delta-M scaling (``weather_mi.forward_peak``; None:
+        DEFAULT_CONE_DEG = 3 deg, 0 with ``legacy``; 0: the tables as they are, which reads low at
+        practical spp, see ``validation/forward_peak_slabs.py``).
+    aureole_nee : float, optional
+        Probability of the aureole estimator at a scattering vertex ("majorant" only; sun light through
+        one more, forward, scattering sampled about the sun; None: ``passes.DEFAULT_AUREOLE_NEE``, 0
+        where sun guiding is asked for: the two are exclusive).
+    legacy : bool
+        The estimator before issue 10, for benchmarks: the sun one of the scene's emitters (point sun
+        only), Russian roulette as Mitsuba's volpath, phase sampling by channel mean.
+    client : Client or str, optional
+        None (render in this process), a ``dask.distributed.Client`` or a scheduler address
+        ("tcp://host:8786"): the passes become Dask tasks (``weather_mi.dask_passes``), merged here in
+        pass order, so the image is bit-identical to the in-process one.
+    worker_variant : str or dict, optional
+        With ``client``: the Mitsuba variant of the workers (None: this process's; "auto": each
+        worker's default, cuda_ad_rgb where it has a GPU; a name; or {worker address: name}).
+    on_pass : callable, optional
+        Invoked after every merged pass (after its checkpoint is written) with an ``Image`` of the
+        estimate so far: mean radiance and standard error (float32; NaN while fewer than 2 passes), and
+        the metadata of the final image for the passes so far (``passes``, ``spp``, ``seconds``,
+        ``noise``: ``noise_stats`` over the cloud pixels or None while fewer than 2 passes,
+        ``target_rse``, ...). The arrays are the callback's own copies. An exception it raises
+        propagates out of ``render_reference`` (queued Dask passes are cancelled and the checkpoint
+        stays valid, as with Ctrl-C): a way to stop a render.
+
+    Returns
+    -------
+    Image
+        Radiance (or reflectance) and standard error, (H, W, 3) float32; ``transmittance``: the (H, W)
+        eye-ray transmittance of the volume (None on scalar variants), whose pixels below 1/2 are the
+        cloud pixels; the metadata records the render and ``noise_stats`` over the cloud pixels (also
+        shown by the progress bar).
+
+    Raises
+    ------
+    OutputWriteError
+        When the checkpoint cannot be written (a full disk): the checkpoint of the previous pass is kept
+        whole, and resuming from it continues the render.
+    """
+    from .variant import path_tracing_width, set_variant
+    _check_inputs(spec, vol, spp, normalize, integrator, variant)
+    sun_guiding, aureole_nee, forward_peak_deg = _estimator_defaults(spec, integrator, target_rse, max_seconds,
+                                                                     sun_guiding, aureole_nee, forward_peak_deg,
+                                                                     legacy)
+    set_variant(variant if variant is not None else current_or_default_variant())
+    with path_tracing_width():  # the scene is built and its passes rendered at the path tracer's SIMD width
+        spp_list = plan_passes(spec, int(spp), passes)
+        cloud, transmittance = _cloud_pixels(spec, vol)
+        # render to a target: the passes past the planned ones cover the cloud pixels only
+        target = cloud if target_rse is not None else None
+        options = PassOptions(integrator=integrator, max_depth=max_depth, rr_depth=rr_depth, cell=cell,
+                              own_sun=integrator == "majorant" and not legacy, sun_guiding=sun_guiding,
+                              aureole_nee=aureole_nee, legacy=legacy, forward_peak_deg=forward_peak_deg,
+                              planned=len(spp_list),
+                              target_pixels=None if target is None else np.flatnonzero(target.ravel()))
+        key = _render_key(spec, vol, spp_list, options, normalize, target_rse,
+                          worker_variant if client is not None else None)
+        run = _Run(PassScene(spec, vol, options, key), spp_list, cloud, transmittance, normalize, target_rse,
+                   max_seconds, _scale(spec, normalize), mean=np.zeros((spec.height, spec.width, 3)),
+                   m2=np.zeros((spec.height, spec.width, 3)))
+        _open_checkpoint(run, checkpoint, resume)
+        remote = _merge_passes(run, client, worker_variant, progress, on_pass)
+        image = run.image(run.done, run.stats(run.done))
+        if remote is not None:
+            image.metadata["dask"] = remote.summary
+        return image
+
+
+@dataclass
+class _Run:
+    """One ``render_reference`` call under way: what its passes render (``job``), their samples per pixel
+    (``spp_list``: the planned ones), its cloud pixels and where it checkpoints; the estimate so far: the
+    per-pixel mean and Welford M2 (float64, (H, W, 3)) of the passes merged, their number, their seconds
+    and samples per pixel."""
+
+    job: PassScene
+    spp_list: list
+    cloud: np.ndarray
+    transmittance: np.ndarray | None
+    normalize: str | None
+    target_rse: float | None
+    max_seconds: float | None
+    scale: object           # 1.0, or the (3,) reflectance factors pi / (mu0 E)
+    mean: np.ndarray
+    m2: np.ndarray
+    ckpt: Path | None = None
+    done: int = 0
+    seconds: float = 0.0
+    spp_done: int = 0
+
+    @property
+    def planned(self) -> int:
+        return self.job.options.planned
+
+    @property
+    def target(self) -> np.ndarray | None:
+        """The pixels the passes past the planned ones render (a render to a target), or None."""
+        return self.cloud if self.target_rse is not None else None
+
+    def per_pass(self, i: int) -> int:
+        return self.spp_list[i] if i < len(self.spp_list) else self.spp_list[0]
+
+    def stderr(self, n: int) -> np.ndarray:
+        return pass_stderr(self.m2, pass_counts(n, self.planned, self.target))
+
+    def stats(self, n: int) -> dict | None:
+        """``noise_stats`` over the cloud pixels after ``n`` passes (None below two)."""
+        if n < 2:
+            return None
+        return noise_stats(self.mean, self.stderr(n), self.cloud)
+
+    def more(self, i: int) -> bool:
+        """Whether pass ``i`` is wanted: every planned one; past them (a render to a target) until the
+        target is met, MAX_TARGET_PASSES or ``max_seconds``."""
+        if self.target_rse is None:
+            return i < len(self.spp_list)
+        if i < self.planned:
+            return True
+        if not self.cloud.any():  # no cloud pixel in view: nothing to converge
+            return False
+        st = self.stats(i)
+        if st is not None and st["cloud_pixels"] and st["rse_mean"] <= self.target_rse:
+            return False
+        return i < MAX_TARGET_PASSES and (self.max_seconds is None or self.seconds < self.max_seconds)
+
+    def merge(self, i: int, raw: np.ndarray, dt: float) -> int:
+        """Add pass ``i``'s image ``raw`` (its seconds ``dt``) to the estimate and checkpoint it; the
+        number of passes merged."""
+        img = raw.astype(np.float64)[..., :3] * self.scale
+        self.seconds += dt
+        n = i + 1
+        welford_update(self.mean, self.m2, img, n, where=None if i < self.planned else self.target)
+        self.spp_done += self.per_pass(i)
+        self.done = n
+        if self.ckpt is not None:
+            checkpoints.save_checkpoint(self.ckpt, {"key": self.job.key, "mean": self.mean, "m2": self.m2, "done": n,
+                                                    "seconds": self.seconds, "spp_done": self.spp_done})
+        return n
+
+    def image(self, n: int, noise: dict | None) -> Image:
+        """The estimate after ``n`` passes as an ``Image`` (its own arrays) with its metadata."""
+        transmittance = None if self.transmittance is None else self.transmittance.copy()
+        return Image(self.mean.astype(np.float32), self.stderr(n).astype(np.float32), self.metadata(n, noise),
+                     transmittance)
+
+    def metadata(self, n: int, noise: dict | None) -> dict:
+        import mitsuba as mi
+        o, spec, vol = self.job.options, self.job.spec, self.job.vol
+        background = sum(self.spp_list[:min(n, self.planned)]) if self.target is not None else self.spp_done
+        return {"renderer": "reference", "integrator": o.integrator, "variant": mi.variant(),
+                "spp": int(self.spp_done), "spp_background": int(background),
+                "passes": n, "max_depth": int(o.max_depth), "rr_depth": o.rr_depth, "seconds": self.seconds,
+                "normalize": self.normalize, "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
+                "source": vol.attrs.get("source"), "time": vol.attrs.get("time"),
+                "phase_mode": vol.phase_mode, "sun": ("scene emitter" if not o.own_sun else
+                                                      ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
+                "sun_guiding": o.sun_guiding if o.own_sun else None, "target_rse": self.target_rse,
+                "forward_peak_deg": o.forward_peak_deg, "aureole_nee": o.aureole_nee if o.own_sun else None,
+                "noise": noise}
+
+
+def _estimator_defaults(spec, integrator, target_rse, max_seconds, sun_guiding, aureole_nee, forward_peak_deg,
+                        legacy):
+    """(sun_guiding, aureole_nee, forward_peak_deg) with their defaults, checked with the sun options."""
+    sun_guiding = DEFAULT_SUN_GUIDING if sun_guiding is None else sun_guiding
+    if aureole_nee is None:  # the two are exclusive: sun guiding given, no aureole estimator
+        aureole_nee = DEFAULT_AUREOLE_NEE if sun_guiding == 0 and not legacy else 0.0
+    _check_sun_options(spec, integrator, target_rse, max_seconds, sun_guiding, legacy)
+    forward_peak_deg = check_cone_deg((0.0 if legacy else DEFAULT_CONE_DEG) if forward_peak_deg is None
+                                      else forward_peak_deg)
+    return sun_guiding, aureole_nee, forward_peak_deg
+
+
+def _cloud_pixels(spec: SceneSpec, vol: OpticalVolume):
+    """(cloud pixels (H, W) bool, eye-ray transmittance (H, W) float32 or None) of the view: the full
+    extinction (not delta-scaled) along the scene's sensor rays; every pixel on a scalar variant."""
+    import mitsuba as mi
+    if mi.variant().startswith("scalar"):  # the ray march is vectorised: every pixel counts there
+        return np.ones((spec.height, spec.width), bool), None
+    tau = view_optical_depth(spec, vol)
+    return tau > CLOUD_TAU, np.exp(-tau).astype(np.float32)
+
+
+def _render_key(spec, vol, spp_list, o: PassOptions, normalize, target_rse, worker_variant) -> str:
+    """The fingerprint of a render (``checkpoints.fingerprint``): what its images depend on."""
+    import mitsuba as mi
+    options = [o.integrator, o.max_depth, normalize, mi.variant(), o.rr_depth]
+    if o.forward_peak_deg > 0:
+        options.append(["forward peak", o.forward_peak_deg])
+    if o.own_sun:
+        options.append(["integrator sun", o.sun_guiding] + ([o.aureole_nee] if o.aureole_nee else []))
+    if worker_variant is not None:  # other variants: the same image within noise only
+        options.append(["worker variant", worker_variant])
+    plan = ["target", spp_list[0], "cloud passes"] if target_rse is not None else spp_list
+    return checkpoints.fingerprint(spec, vol, plan, *options)  # cell: speed only
+
+
+def _scale(spec: SceneSpec, normalize):
+    """Factor of the radiance: 1, or pi / (mu0 E) per channel (reflectance)."""
+    if normalize == "reflectance":
+        return np.pi / (spec.sun.mu0 * np.asarray(spec.sun.irradiance))
+    return 1.0
+
+
+def _open_checkpoint(run: _Run, checkpoint, resume) -> None:
+    """Where ``run`` checkpoints, and its estimate so far from the checkpoint it resumes (``resume``: a
+    path or True); a checkpoint where a fresh render writes is kept aside."""
+    ckpt = Path(checkpoint) if checkpoint is not None else None
+    resume_path = ckpt if resume is True else (Path(resume) if resume else None)
+    if resume_path is not None and resume_path.is_file():
+        run.mean, run.m2, run.done, run.seconds, run.spp_done = checkpoints.load_checkpoint(
+            resume_path, run.job.key, run.spp_list)
+        ckpt = ckpt or resume_path
+    elif resume_path is None and ckpt is not None and ckpt.is_file():
+        checkpoints.keep_aside(ckpt)
+    run.ckpt = ckpt
+
+
+def _pass_source(run: _Run, client, worker_variant):
+    """(iterator of (pass index, image, seconds) in pass order, the ``RemotePasses`` or None): the passes
+    still wanted, rendered in this process or by Dask workers."""
+    job = run.job
+    if client is None:
+        limit = run.planned if run.target_rse is None else MAX_TARGET_PASSES
+        return local_passes(job.build(), job.spec.seed, run.per_pass, run.more, run.done, job.pixels_of,
+                            n_pixels=job.spec.width * job.spec.height, planned=run.planned, limit=limit), None
+    remote = RemotePasses(client, job, run.per_pass, run.more, run.done, len(run.spp_list), run.target_rse is not None,
+                          worker_variant=worker_variant)
+    return iter(remote), remote
+
+
+def _merge_passes(run: _Run, client, worker_variant, progress: bool, on_pass):
+    """Merge the passes still wanted into ``run`` in pass order (a checkpoint after each, ``on_pass``, the
+    progress bar); the ``RemotePasses`` (its summary) or None."""
+    from tqdm.auto import tqdm
+    passes_in, remote = _pass_source(run, client, worker_variant)
+    bar = tqdm(total=len(run.spp_list) if run.target_rse is None else None, initial=run.done, desc="reference",
+               unit="pass", disable=not progress)
+    try:
+        for i, raw, dt in passes_in:  # pass i's image, in pass order; dt: its seconds (wall-clock over Dask)
+            n = run.merge(i, raw, dt)
+            bar.update(1)
+            # noise over the cloud pixels: for the progress bar and on_pass only
+            st = run.stats(n) if progress or on_pass is not None else None
+            if progress and st is not None:
+                bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
+            if on_pass is not None:
+                on_pass(run.image(n, st))
+    finally:  # over Dask: cancels the passes still queued (target met, Ctrl-C, error); the checkpoint stays valid
+        passes_in.close()
+        bar.close()
+    return remote
 
 
 def _check_inputs(spec: SceneSpec, vol: OpticalVolume, spp: int, normalize, integrator: str, variant):
@@ -61,473 +368,6 @@ def _check_inputs(spec: SceneSpec, vol: OpticalVolume, spp: int, normalize, inte
         raise WeatherDataError(src, "beta_total", "extinction >= 0 (1/m)")
 
 
-def pass_seed(seed: int, i: int) -> int:
-    """Mitsuba seed of pass ``i`` of a render with scene seed ``seed`` (distinct per pass and seed)."""
-    return (int(seed) * 1_000_003 + int(i)) % (1 << 32)
-
-
-def _passes(spec: SceneSpec, spp: int, passes: int | None) -> list[int]:
-    """Samples per pixel of each pass: MIN_PASSES passes (batch means) when spp allows, so that the
-    standard error estimated from their spread is itself stable (its relative error is about
-    1 / sqrt(2 (P - 1)): 18% with 16 passes, 41% with 4), and at most MAX_LANES_PER_PASS paths per pass
-    (memory)."""
-    if passes is None:
-        per = max(1, min(spp // MIN_PASSES, MAX_LANES_PER_PASS // (spec.width * spec.height)))
-        passes = -(-spp // per)
-    passes = max(1, min(int(passes), spp))
-    base, extra = divmod(spp, passes)
-    return [base + (1 if i < extra else 0) for i in range(passes)]
-
-
-def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_depth: int | None = None,
-                    cell: int | None = None, sun=None, sun_guiding: float = 0.0, legacy: bool = False,
-                    aureole_nee: float = 0.0) -> dict:
-    """Mitsuba integrator dict: stock ``volpath`` or ``majorant_volpath`` with a majorant grid of
-    ``cell``^3 voxels per coarse cell (None: the plugin's ``DEFAULT_CELL``). ``rr_depth``: depth at which
-    Russian roulette starts (None: the integrators' default, 5; a huge value turns it off). ``sun``: a
-    ``Sun`` that ``majorant_volpath`` samples itself at every vertex (a disk with MIS, or a point), with
-    ``sun_guiding`` (see ``render_reference``); None: the sun is a scene emitter."""
-    if integrator == "volpath":
-        d = {"type": "volpath", "max_depth": int(max_depth)}
-    else:
-        import mitsuba as mi
-        from .plugins.hydrometeor_mixture import bbox_transform
-        from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid
-        from .variant import ensure_registered
-        ensure_registered()
-        cell = DEFAULT_CELL if cell is None else cell
-        d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
-             "majorant": mi.TensorXf(majorant_grid(vol.beta_total, cell=int(cell))),
-             "to_world": bbox_transform(vol.bbox)}
-        if sun is not None:
-            from .mitsuba_scene import integrator_sun
-            d.update(integrator_sun(sun, sun_guiding, aureole_nee))
-        if legacy:  # the estimator before issue 10 (see render_reference)
-            d.update({"rr_mode": "volpath", "phase_channels": "mean", "emitter_nee": 1.0, "tracking_grid": "coarse",
-                      "transmittance": "ratio", "persistent_lanes": False})
-    if rr_depth is not None:
-        d["rr_depth"] = int(rr_depth)
-    return d
-
-
-@dataclass(frozen=True)
-class PassScene:
-    """What a pass renders: the scene, the volume and the estimator options of a ``render_reference`` call
-    (``key``: its fingerprint). Built into a Mitsuba scene in the current variant by ``build``, here or in
-    a Dask worker (the same scene, hence the same pass images)."""
-
-    spec: SceneSpec
-    vol: OpticalVolume
-    options: dict
-    key: str
-
-    def pixels_of(self, i: int):
-        """The pixels (flat indices) pass ``i`` renders: None (all) for the planned passes, the cloud
-        pixels for the passes a render to a target adds (``options["target_pixels"]``)."""
-        pixels = self.options.get("target_pixels")
-        if pixels is None:
-            return None
-        return None if i < self.options["planned"] else pixels
-
-    def build(self):
-        import mitsuba as mi
-        from .mitsuba_scene import recentred, scene_dict
-        o = self.options
-        spec_k, vol_k, _ = recentred(self.spec, self.vol)  # kernel-side coordinates: bbox centred on the origin
-        vol_render = delta_scaled(vol_k, o["forward_peak_deg"])
-        integ = integrator_dict(vol_render, o["integrator"], o["max_depth"], o["rr_depth"], o["cell"],
-                                sun=self.spec.sun if o["own_sun"] else None, sun_guiding=o["sun_guiding"],
-                                aureole_nee=o["aureole_nee"], legacy=o["legacy"] and o["integrator"] == "majorant")
-        return mi.load_dict(scene_dict(spec_k, vol_render, integ))
-
-
-def _persistent(scene, persistent: bool | None) -> bool:
-    """Whether passes of ``scene`` run with persistent lanes: as asked, or (None) wherever they apply:
-    ``majorant_volpath`` on an LLVM variant, unless its ``persistent_lanes`` is false."""
-    import mitsuba as mi
-    if persistent is not None:
-        return persistent
-    integrator = scene.integrator()
-    return (mi.variant().startswith("llvm") and hasattr(integrator, "render_passes")
-            and getattr(integrator, "persistent", False))
-
-
-def render_pass(scene, spp: int, seed: int, persistent: bool | None = None, pixels=None) -> np.ndarray:
-    """One pass of ``spp`` samples per pixel with seed ``seed``: the film's (H, W, C) float32 array.
-
-    ``persistent`` (None: wherever it applies): ``majorant_volpath`` on an LLVM variant renders the pass
-    with persistent lanes (its ``render_pass``), otherwise ``mi.render``. Both estimate the same image;
-    their random numbers differ. ``pixels`` (flat indices, row-major): with persistent lanes only these
-    pixels are rendered (the others are 0), with the values they have in the pass over every pixel;
-    ``mi.render`` renders every pixel anyway."""
-    import mitsuba as mi
-    if _persistent(scene, persistent):
-        return scene.integrator().render_pass(scene, int(spp), int(seed), pixels=pixels)
-    return np.array(mi.render(scene, spp=int(spp), seed=int(seed)), dtype=np.float32)
-
-
-def render_passes(scene, passes, persistent: bool | None = None, pixels=None) -> list:
-    """Several passes ``[(spp, seed), ...]``: as ``render_pass`` renders each (one pass: through it), but
-    with persistent lanes in shared launches (``majorant_volpath.render_passes``: one tail of long paths
-    per launch instead of one per pass)."""
-    if len(passes) > 1 and _persistent(scene, persistent):
-        return scene.integrator().render_passes(scene, [(int(spp), int(seed)) for spp, seed in passes],
-                                                pixels=pixels)
-    return [render_pass(scene, spp, seed, persistent=persistent, pixels=pixels) for spp, seed in passes]
-
-
-def pass_stderr(m2: np.ndarray, n) -> np.ndarray:
-    """Standard error of the mean over ``n`` passes from Welford's M2 (NaN below two passes); ``n`` a
-    number or per-pixel counts that broadcast against ``m2``."""
-    n = np.asarray(n, np.float64)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(n > 1, np.sqrt(m2 / np.maximum(n - 1, 1) / n), np.nan)
-
-
-def welford_update(mean: np.ndarray, m2: np.ndarray, img: np.ndarray, n: int, where=None) -> None:
-    """Add pass ``n`` (1-based) of image ``img`` to the per-pixel running mean and M2 (in place); with
-    ``where`` (a boolean (H, W) mask) only to those pixels, for which it is their pass ``n``."""
-    if where is not None:
-        sub_mean, sub_m2 = mean[where], m2[where]
-        welford_update(sub_mean, sub_m2, img[where], n)
-        mean[where], m2[where] = sub_mean, sub_m2
-        return
-    delta = img - mean
-    mean += delta / n
-    m2 += delta * (img - mean)
-
-
-def pass_counts(n: int, planned: int, target: np.ndarray | None) -> np.ndarray:
-    """(H, W, 1) passes per pixel after ``n`` passes of a render whose passes past the ``planned`` ones
-    cover only the ``target`` pixels (render to a target: its cloud pixels), or (1, 1, 1) of n."""
-    if target is None or n <= planned:
-        return np.full((1, 1, 1), n)
-    return np.where(target, n, planned)[..., None]
-
-
-def _local_passes(scene, seed: int, per_pass, more, start: int, pixels_of=lambda i: None,
-                  n_pixels: int = 1, planned: int | None = None, limit: int | None = None):
-    """Passes rendered in this process: (index, image, seconds) while ``more(index)``; pass i renders
-    the pixels ``pixels_of(i)`` (None: all ``n_pixels``). Consecutive passes over the same pixels are
-    rendered together (``render_passes``), up to BATCH_SAMPLES samples, MAX_BATCH_PASSES passes, the end of
-    the ``planned`` ones and ``limit`` (no pass from there on is wanted); ``more`` is asked for each pass after the previous one was handed over, so the passes handed
-    over do not depend on the batches (a render to a target may render up to a batch it then drops).
-    A pass's seconds: its batch's over its size."""
-    i = start
-    while more(i):
-        pix = pixels_of(i)
-        per_sample = max(1, n_pixels if pix is None else len(pix))
-        batch, samples = [i], per_pass(i) * per_sample
-        while (len(batch) < MAX_BATCH_PASSES and samples < BATCH_SAMPLES
-               and (planned is None or (batch[-1] + 1 < planned) == (i < planned))
-               and (limit is None or batch[-1] + 1 < limit)):
-            batch.append(batch[-1] + 1)
-            samples += per_pass(batch[-1]) * per_sample
-        t0 = time.perf_counter()
-        images = render_passes(scene, [(per_pass(j), pass_seed(seed, j)) for j in batch], pixels=pix)
-        dt = (time.perf_counter() - t0) / len(batch)
-        for j, raw in zip(batch, images):
-            if j > i and not more(j):
-                return
-            yield j, raw, dt
-        i = batch[-1] + 1
-
-
-def _fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
-    h = hashlib.sha256()
-    h.update(json.dumps([spec.to_dict(), spp_list, *options], sort_keys=True, default=str).encode())
-    for a in (vol.beta_total, vol.albedo, vol.weights):
-        h.update(np.ascontiguousarray(a).tobytes())
-    for t in vol.require_phase_tables():  # the phase functions are part of the scene too
-        h.update(np.ascontiguousarray(t.theta, np.float64).tobytes())
-        h.update(np.ascontiguousarray(t.values, np.float64).tobytes())
-    h.update(json.dumps([list(map(float, p)) for p in vol.bbox]).encode())
-    return h.hexdigest()
-
-
-def _save_checkpoint(path: Path, state: dict) -> None:
-    from .output_paths import written_atomically
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with written_atomically(path) as tmp:
-        np.savez(tmp, **state)
-
-
-def _load_checkpoint(path: Path, key: str, spp_list) -> tuple:
-    """(mean, m2, passes done, seconds, spp done) from a checkpoint of this render (``key``); ValueError
-    naming the file when it is unreadable or belongs to another render."""
-    import zipfile
-    try:
-        with np.load(path) as state:
-            stored = str(state["key"])
-            if stored == key:
-                done = int(state["done"])
-                spp_done = int(state["spp_done"]) if "spp_done" in state else sum(spp_list[:done])
-                return state["mean"], state["m2"], done, float(state["seconds"]), spp_done
-    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
-        raise ValueError(f"checkpoint {path} cannot be read ({type(exc).__name__}: {exc}); delete it to "
-                         "render afresh (without resume / --resume)") from exc
-    raise ValueError(f"checkpoint {path} belongs to a different scene, volume or sample plan")
-
-
-def _keep_aside(path: Path) -> None:
-    """A checkpoint found where a fresh render will write its own: renamed to <stem>.previous.npz, with a
-    warning (it is never discarded silently)."""
-    import warnings
-    aside = path.with_name(f"{path.name[:-len('.npz')] if path.name.endswith('.npz') else path.name}.previous.npz")
-    os.replace(path, aside)
-    warnings.warn(f"checkpoint {path} exists and resume was not asked for: kept aside as {aside} (pass "
-                  "resume=True to continue a render from a checkpoint)", UserWarning, stacklevel=3)
-
-
-def noise_stats(radiance: np.ndarray, stderr: np.ndarray, cloud: np.ndarray) -> dict:
-    """How converged an image is over its cloud pixels (``cloud``: a boolean (H, W) mask), from the
-    channel means of radiance and standard error:
-
-    rse_mean        mean over cloud pixels of se / radiance (``Image.relative_stderr``)
-    rms_se_over_mean  RMS of se over cloud pixels / mean cloud radiance
-    worst_se_over_mean  largest se of a cloud pixel / mean cloud radiance
-    cloud_pixels    number of cloud pixels"""
-    lum = np.asarray(radiance, np.float64).mean(axis=2)
-    se = np.asarray(stderr, np.float64).mean(axis=2)
-    ok = np.asarray(cloud, bool) & (lum > 0) & np.isfinite(se)
-    if not np.any(ok):
-        return {"cloud_pixels": 0, "rse_mean": float("nan"), "rms_se_over_mean": float("nan"),
-                "worst_se_over_mean": float("nan")}
-    m = float(lum[ok].mean())
-    return {"cloud_pixels": int(ok.sum()), "rse_mean": float(np.mean(se[ok] / lum[ok])),
-            "rms_se_over_mean": float(np.sqrt(np.mean(se[ok] ** 2)) / m),
-            "worst_se_over_mean": float(se[ok].max() / m)}
-
-
-def cloud_mask(spec: SceneSpec, vol: OpticalVolume) -> np.ndarray:
-    """Cloud pixels (H, W) of a view: eye-ray optical depth > ln 2 (transmittance below 1/2), as the
-    noise figures of ``render_reference`` count them (deterministic, no rendering)."""
-    import mitsuba as mi
-    from .mitsuba_scene import recentred, sensor_dict
-    from .variant import set_variant
-    set_variant(_current_or_default())
-    spec_k, vol_k, _ = recentred(spec, vol)
-    return eye_optical_depth(mi.load_dict(sensor_dict(spec_k)), vol_k, spec_k) > CLOUD_TAU
-
-
-def eye_optical_depth(sensor, vol_k: OpticalVolume, spec: SceneSpec, steps: int = 512) -> np.ndarray:
-    """Optical depth (H, W) of the medium along each pixel's central camera ray, by the midpoint rule
-    over ``steps`` steps of the ray's segment in the volume's box (deterministic; the scene's own
-    ``sensor``, so the same rays as the render). ``vol_k``: the volume in the sensor's coordinates."""
-    import drjit as dr
-    import mitsuba as mi
-    from .jitarrays import aligned_float
-    h, w = spec.height, spec.width
-    jj, ii = np.meshgrid(np.arange(h), np.arange(w), indexing="ij")
-    pos = mi.Point2f(aligned_float(mi, ((ii + 0.5) / w).ravel()), aligned_float(mi, ((jj + 0.5) / h).ravel()))
-    ray, _ = sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
-    lo, hi = (np.asarray(p, np.float64) for p in vol_k.bbox)
-    ext = hi - lo
-    o = [(ray.o[k] - float(lo[k])) / float(ext[k]) for k in range(3)]
-    d = [ray.d[k] / float(ext[k]) for k in range(3)]
-    t0, t1 = mi.Float(0.0), mi.Float(dr.inf)
-    for k in range(3):
-        inv = dr.rcp(dr.select(dr.abs(d[k]) < 1e-30, 1e-30, d[k]))
-        ta, tb = -o[k] * inv, (1.0 - o[k]) * inv
-        t0, t1 = dr.maximum(t0, dr.minimum(ta, tb)), dr.minimum(t1, dr.maximum(ta, tb))
-    seg = dr.maximum(t1 - t0, 0.0)
-    tex = mi.Texture3f(mi.TensorXf(np.ascontiguousarray(vol_k.beta_total, np.float32)[..., None]),
-                       wrap_mode=dr.WrapMode.Clamp)
-    n_steps = dr.opaque(mi.UInt32, steps)
-
-    def body(i, tau):  # one small symbolic loop: an unrolled march compiles for a minute
-        t = t0 + seg * ((mi.Float(i) + 0.5) / mi.Float(n_steps))
-        tau += tex.eval(mi.Point3f(*(o[k] + d[k] * t for k in range(3))))[0]
-        return i + 1, tau
-
-    _, tau = dr.while_loop(state=(mi.UInt32(0), dr.zeros(mi.Float, h * w)), cond=lambda i, tau: i < n_steps,
-                           body=body, label="eye optical depth")
-    return np.asarray(tau * seg / steps, np.float64).reshape(h, w)
-
-
-def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_depth: int = -1, *,
-                     integrator: str = "majorant", passes: int | None = None, normalize: str | None = None,
-                     checkpoint=None, resume=None, progress: bool = True, variant: str | None = None,
-                     rr_depth: int | None = None, cell: int | None = None, target_rse: float | None = None,
-                     max_seconds: float | None = None, sun_guiding: float | None = None,
-                     forward_peak_deg: float | None = None, aureole_nee: float | None = None,
-                     legacy: bool = False, client=None, worker_variant=None, on_pass=None) -> Image:
-    """Path-trace ``vol`` as seen by ``spec`` (Mitsuba ``volpath`` or our local-majorant tracker).
-
-    spp        : samples per pixel in total, split into passes (``passes``, default MIN_PASSES = 16
-                 batches when spp >= 16). With ``target_rse``: the samples of the first estimate; passes of
-                 the same size are then added until the target is met.
-    integrator : "majorant" (delta tracking over a coarse majorant grid; default) or "volpath"
-                 (Mitsuba's own, one global majorant: the reference's reference; point sun only).
-    normalize  : None (radiance) or "reflectance" (pi L / (mu0 E) per channel).
-    rr_depth   : depth at which Russian roulette starts (None: the integrators' default, 5).
-    cell       : fine voxels per coarse cell of the majorant grid ("majorant" only; None: the default).
-    target_rse : keep adding passes until the mean relative standard error over cloud pixels (eye-ray
-                 transmittance < 1/2) is at most this, or ``max_seconds`` of rendering have passed. The
-                 added passes render the cloud pixels only (with persistent lanes; ``mi.render`` renders
-                 every pixel and the others' values are dropped): the other pixels keep the planned passes
-                 (metadata ``spp_background``). On the side-lit supercell at 256 x 256 its 6% of cloud
-                 pixels take 60% of a full pass's time.
-    sun_guiding: probability of drawing a scattering direction from the phase function centred on the
-                 sun ("majorant" only; None: DEFAULT_SUN_GUIDING).
-    forward_peak_deg : scattering by less than this many degrees (the diffraction peaks of rain, snow
-                 and graupel) counted as unscattered light, delta-M scaling (``weather_mi.forward_peak``;
-                 None: DEFAULT_CONE_DEG = 3 deg, 0 with ``legacy``; 0: the tables as they are, which
-                 reads low at practical spp, see ``validation/forward_peak_slabs.py``).
-    aureole_nee: probability of the aureole estimator at a scattering vertex ("majorant" only; sun light
-                 through one more, forward, scattering sampled about the sun; None: DEFAULT_AUREOLE_NEE,
-                 0 where sun guiding is asked for: the two are exclusive).
-    legacy     : the estimator before issue 10, for benchmarks: the sun one of the scene's emitters
-                 (point sun only), Russian roulette as Mitsuba's volpath, phase sampling by channel mean.
-    checkpoint : a .npz path written after every pass; ``resume`` (a path, or True to use
-                 ``checkpoint``) continues a render from it; the scene must be identical.
-    client     : None (render in this process), a ``dask.distributed.Client`` or a scheduler address
-                 ("tcp://host:8786"): the passes become Dask tasks (``weather_mi.dask_passes``), merged here
-                 in pass order, so the image is bit-identical to the in-process one.
-    worker_variant : with ``client``: the Mitsuba variant of the workers (None: this process's; "auto": each
-                 worker's default, cuda_ad_rgb where it has a GPU; a name; or {worker address: name}).
-    on_pass    : None, or a callable invoked after every merged pass (after its checkpoint is written)
-                 with an ``Image`` of the estimate so far: mean radiance and standard error (float32; NaN
-                 while fewer than 2 passes), and the metadata of the final image for the passes so far
-                 (``passes``, ``spp``, ``seconds``, ``noise``: ``noise_stats`` over the cloud pixels or
-                 None while fewer than 2 passes, ``target_rse``, ...). The arrays are the callback's own
-                 copies. An exception it raises propagates out of ``render_reference`` (queued Dask passes
-                 are cancelled and the checkpoint stays valid, as with Ctrl-C): a way to stop a render.
-
-    The metadata records ``noise_stats`` over the cloud pixels (also shown by the progress bar).
-    """
-    from .variant import set_variant
-    _check_inputs(spec, vol, spp, normalize, integrator, variant)
-    sun_guiding = DEFAULT_SUN_GUIDING if sun_guiding is None else sun_guiding
-    if aureole_nee is None:  # the two are exclusive: sun guiding given, no aureole estimator
-        aureole_nee = DEFAULT_AUREOLE_NEE if sun_guiding == 0 and not legacy else 0.0
-    _check_sun_options(spec, integrator, target_rse, max_seconds, sun_guiding, legacy)
-    forward_peak_deg = check_cone_deg((0.0 if legacy else DEFAULT_CONE_DEG) if forward_peak_deg is None
-                                      else forward_peak_deg)
-    set_variant(variant) if variant is not None else set_variant(_current_or_default())
-
-    from .variant import path_tracing_width
-    with path_tracing_width():  # the scene is built and its passes rendered at the path tracer's SIMD width
-        import mitsuba as mi
-        from tqdm.auto import tqdm
-
-        spp_list = _passes(spec, int(spp), passes)
-        own_sun = integrator == "majorant" and not legacy
-        options = [integrator, max_depth, normalize, mi.variant(), rr_depth]
-        if forward_peak_deg > 0:
-            options.append(["forward peak", forward_peak_deg])
-        if own_sun:
-            options.append(["integrator sun", sun_guiding] + ([aureole_nee] if aureole_nee else []))
-        if client is not None and worker_variant is not None:  # other variants: the same image within noise only
-            options.append(["worker variant", worker_variant])
-        plan = ["target", spp_list[0], "cloud passes"] if target_rse is not None else spp_list
-        key = _fingerprint(spec, vol, plan, *options)  # cell: speed only
-        ckpt = Path(checkpoint) if checkpoint is not None else None
-        resume_path = ckpt if resume is True else (Path(resume) if resume else None)
-        h, w = spec.height, spec.width
-        mean = np.zeros((h, w, 3))
-        m2 = np.zeros((h, w, 3))
-        done, seconds, spp_done = 0, 0.0, 0
-        if resume_path is not None and resume_path.is_file():
-            mean, m2, done, seconds, spp_done = _load_checkpoint(resume_path, key, spp_list)
-            ckpt = ckpt or resume_path
-        elif resume_path is None and ckpt is not None and ckpt.is_file():
-            _keep_aside(ckpt)
-
-        if mi.variant().startswith("scalar"):  # the ray march is vectorised: every pixel counts there
-            cloud = np.ones((spec.height, spec.width), bool)
-        else:  # the full extinction (not delta-scaled), the scene's sensor
-            cloud = cloud_mask(spec, vol)
-        planned = len(spp_list)
-        # render to a target: the passes past the planned ones cover the cloud pixels only
-        target = cloud if target_rse is not None else None
-        job = PassScene(spec, vol, dict(integrator=integrator, max_depth=max_depth, rr_depth=rr_depth, cell=cell,
-                                        own_sun=own_sun, sun_guiding=sun_guiding, aureole_nee=aureole_nee,
-                                        legacy=legacy, forward_peak_deg=forward_peak_deg,
-                                        target_pixels=None if target is None else np.flatnonzero(target.ravel()),
-                                        planned=planned), key)
-        scene = job.build() if client is None else None
-        scale = 1.0
-        if normalize == "reflectance":
-            scale = np.pi / (spec.sun.mu0 * np.asarray(spec.sun.irradiance))
-
-        def stats(n):
-            if n < 2:
-                return None
-            return noise_stats(mean, pass_stderr(m2, pass_counts(n, planned, target)), cloud)
-
-        def more(i):
-            if target_rse is None:
-                return i < len(spp_list)
-            if i < planned:
-                return True
-            if not cloud.any():  # no cloud pixel in view: nothing to converge
-                return False
-            st = stats(i)
-            if st is not None and st["cloud_pixels"] and st["rse_mean"] <= target_rse:
-                return False
-            return i < MAX_TARGET_PASSES and (max_seconds is None or seconds < max_seconds)
-
-        def per_pass(i):
-            return spp_list[i] if i < len(spp_list) else spp_list[0]
-
-        def metadata(n, spp_done, seconds, noise):
-            background = sum(spp_list[:min(n, planned)]) if target is not None else spp_done
-            return {"renderer": "reference", "integrator": integrator, "variant": mi.variant(), "spp": int(spp_done),
-                    "spp_background": int(background),
-                    "passes": n, "max_depth": int(max_depth), "rr_depth": rr_depth, "seconds": seconds,
-                    "normalize": normalize, "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
-                    "source": vol.attrs.get("source"), "time": vol.attrs.get("time"),
-                    "phase_mode": vol.phase_mode, "sun": ("scene emitter" if not own_sun else
-                                                          ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
-                    "sun_guiding": sun_guiding if own_sun else None, "target_rse": target_rse,
-                    "forward_peak_deg": forward_peak_deg, "aureole_nee": aureole_nee if own_sun else None,
-                    "noise": noise}
-
-        total = len(spp_list) if target_rse is None else None
-        bar = tqdm(total=total, initial=done, desc="reference", unit="pass", disable=not progress)
-        if client is None:
-            passes_in = _local_passes(scene, spec.seed, per_pass, more, done, job.pixels_of,
-                                      n_pixels=spec.width * spec.height, planned=planned,
-                                      limit=planned if target_rse is None else MAX_TARGET_PASSES)
-        else:
-            from .dask_passes import RemotePasses
-            remote = RemotePasses(client, job, per_pass, more, done, len(spp_list), target_rse is not None,
-                                  worker_variant=worker_variant)
-            passes_in = iter(remote)
-        i = done
-        try:
-            for i, raw, dt in passes_in:  # pass i's image, in pass order; dt: its seconds (wall-clock over Dask)
-                per = per_pass(i)
-                img = raw.astype(np.float64)[..., :3] * scale
-                seconds += dt
-                n = i + 1
-                welford_update(mean, m2, img, n, where=None if i < planned else target)
-                spp_done += per
-                i = n
-                if ckpt is not None:
-                    _save_checkpoint(ckpt, {"key": key, "mean": mean, "m2": m2, "done": n, "seconds": seconds,
-                                            "spp_done": spp_done})
-                bar.update(1)
-                # noise over the cloud pixels: for the progress bar and on_pass only
-                st = stats(n) if progress or on_pass is not None else None
-                if progress and st is not None:
-                    bar.set_postfix_str(f"cloud RSE {st['rse_mean']:.3f} worst se/mean {st['worst_se_over_mean']:.2f}")
-                if on_pass is not None:
-                    on_pass(Image(mean.astype(np.float32), pass_stderr(m2, pass_counts(n, planned, target)).astype(np.float32),
-                                  metadata(n, spp_done, seconds, st)))
-        finally:  # over Dask: cancels the passes still queued (target met, Ctrl-C, error); the checkpoint stays valid
-            passes_in.close()
-            bar.close()
-        n = i
-        stderr = pass_stderr(m2, pass_counts(n, planned, target))
-        meta = metadata(n, spp_done, seconds, noise_stats(mean, stderr, cloud) if n > 1 else None)
-        if client is not None:
-            meta["dask"] = remote.summary
-        return Image(mean.astype(np.float32), stderr.astype(np.float32), meta)
-
-
-
 def _check_sun_options(spec, integrator, target_rse, max_seconds, sun_guiding, legacy):
     disk = spec.sun.angular_diameter_deg > 0
     if disk and (integrator == "volpath" or legacy):
@@ -554,9 +394,3 @@ def render_transmittance(spec: SceneSpec, vol: OpticalVolume, spp: int = 32, **k
                      sky=Sky("constant", radiance=1.0), ground=None)
     kw.setdefault("progress", False)
     return render_reference(t_spec, absorbing, spp=spp, **kw).radiance.mean(axis=2)
-
-
-def _current_or_default() -> str:
-    import mitsuba as mi
-    from .variant import default_variant
-    return mi.variant() or default_variant()
