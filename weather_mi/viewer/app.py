@@ -469,7 +469,7 @@ class ViewerSession:
 
 
 def default_distance_km(storm: Storm) -> float:
-    from ..cli import default_ground_distance_km
+    from ..framing import default_ground_distance_km
     return float(default_ground_distance_km(storm.volume(storm.first_time)))
 
 

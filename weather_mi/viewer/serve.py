@@ -38,24 +38,12 @@ def check_port(host: str, port: int) -> int:
 
 
 def initial_time(storm, time_option) -> int:
-    """The index of ``--time`` (an index or a timestamp) among the storm's times; default the last."""
+    """The index of ``--time`` (an index or a timestamp, ``weather_mi.io.times``) among the storm's times;
+    default the last."""
     if time_option is None:
         return storm.first_time
-    from ..io.wrf import _normalise_time
-    n = len(storm.times)
-    try:
-        k = int(time_option)
-        if not -n <= k < n:
-            raise ValueError(f"--time {k}: the input has {n} times (indices {-n} .. {n - 1})")
-        return k % n
-    except ValueError as exc:
-        if str(exc).startswith("--time"):
-            raise
-    want = _normalise_time(time_option)
-    for k, t in enumerate(storm.times):
-        if _normalise_time(t) == want:
-            return k
-    raise ValueError(f"--time {time_option}: not among the input's times {storm.times}")
+    from ..io.times import parse_time, select_times
+    return select_times(list(storm.times), parse_time(time_option), "--time")[0]
 
 
 def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[int, int] = (320, 240),
