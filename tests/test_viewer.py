@@ -24,7 +24,7 @@ def cumulus_storm():
 
 
 def small_state(storm, **kw) -> ViewState:
-    from weather_mi.viewer.app import default_distance_km
+    from weather_mi.viewer.session import default_distance_km
     return ViewState(time=storm.first_time, camera=ViewCamera(distance_km=default_distance_km(storm)),
                      width=64, height=48, slices=64, **kw)
 

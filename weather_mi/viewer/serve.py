@@ -53,7 +53,7 @@ def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[
     ``serve`` warms it in the background instead, while the browser loads the page."""
     from .frames import Storm
     from .state import ViewCamera, ViewState
-    from .app import default_distance_km
+    from .session import default_distance_km
     t0 = time.perf_counter()
     storm = Storm(recipe)
     state = ViewState(time=initial_time(storm, time_option), camera=ViewCamera(distance_km=default_distance_km(storm)),
@@ -68,7 +68,7 @@ def serve(recipe: VolumeRecipe, *, host: str = "127.0.0.1", port: int = 5006, op
           time_option=None, reference_kw: dict | None = None, size: tuple[int, int] = (320, 240)) -> None:
     """Serve the viewer until Ctrl-C (blocking)."""
     import panel as pn
-    from .app import ViewerSession
+    from .session import ViewerSession
     warning = host_warning(host)
     if warning:
         print(warning, file=sys.stderr)
