@@ -11,40 +11,10 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from .errors import WeatherDataError
-from .hydrometeors import SPECIES_NAMES, spacing_of
-from .io.times import parse_time
+from .io.times import parse_time, parse_times
 from .sources import DEMOS, check_time, open_source
-
-def info_text(hyd, species: str = "paper") -> str:
-    """Dimensions, spacing, per-species max/mean mixing ratio, max extinction, densest column's tau."""
-    from .optics import optical_volume
-    vol = optical_volume(hyd, species=species)
-    dz, dy, dx = spacing_of(hyd)
-    nz, ny, nx = vol.shape
-    (x0, y0, z0), (x1, y1, z1) = vol.bbox
-    lines = [f"source      : {hyd.attrs.get('source', '?')}",
-             f"time        : {hyd.attrs.get('time', '-')}    microphysics: {hyd.attrs.get('microphysics', '-')}",
-             f"grid (z,y,x): {nz} x {ny} x {nx}    spacing dz, dy, dx = {dz:.1f}, {dy:.1f}, {dx:.1f} m",
-             f"extent      : x {x0 / 1e3:.2f}..{x1 / 1e3:.2f} km, y {y0 / 1e3:.2f}..{y1 / 1e3:.2f} km, "
-             f"z {z0 / 1e3:.2f}..{z1 / 1e3:.2f} km",
-             f"species preset: {species}",
-             f"{'species':<9}{'max q (g/kg)':>14}{'mean q (g/kg)':>15}{'max beta (1/km)':>17}"]
-    for i, name in enumerate(SPECIES_NAMES):
-        q = hyd[f"q_{name}"].values
-        lines.append(f"{name:<9}{1e3 * float(q.max()):>14.4g}{1e3 * float(q.mean()):>15.4g}"
-                     f"{1e3 * float(vol.beta_ext[i].max()):>17.4g}")
-    tau = vol.optical_depth_z()
-    j, i = np.unravel_index(int(np.argmax(tau)), tau.shape)
-    lines.append(f"max extinction: {1e3 * float(vol.beta_total.max()):.4g} 1/km")
-    lines.append(f"vertical optical depth through the densest column (x={float(hyd.x[i]) / 1e3:.1f} km, "
-                 f"y={float(hyd.y[j]) / 1e3:.1f} km): {float(tau[j, i]):.4g}")
-    if hyd.attrs.get("n_negative_clipped"):
-        lines.append(f"negative mixing ratios clipped: {hyd.attrs['n_negative_clipped']}")
-    return "\n".join(lines)
-
+from .summary import info_text
 
 def _parse_scale(items: list[str]) -> dict[str, float]:
     out = {}
@@ -159,16 +129,6 @@ def add_dask_options(p) -> None:
                        help="render on a Dask LocalCluster of N worker processes on this machine")
 
 
-def _parse_times(text: str):
-    """--time of animate: "all", "START:STOP[:STEP]", "I,J,..." (indices or timestamps) or one of them."""
-    if text == "all":
-        return "all"
-    if ":" in text and not any(c.isalpha() or c in "-_" for c in text.lstrip("-")):
-        parts = [int(v) if v.strip() else None for v in text.split(":")]
-        return slice(*parts)
-    return [parse_time(v.strip()) for v in text.split(",")]
-
-
 def animate_command(args) -> Path:
     """Every time of the inputs rendered from one camera: EXR frames, an MP4 and a contact sheet."""
     from .animate import animate
@@ -178,7 +138,7 @@ def animate_command(args) -> Path:
     from .sources import open_times
     check_scene_options(args)
     scale = _parse_scale(args.scale)
-    hyds = open_times(args.inputs, time=_parse_times(args.time))
+    hyds = open_times(args.inputs, time=parse_times(args.time))
     vols = [optical_volume(h, species=args.preset, scale=scale, phase=args.phase) for h in hyds]
     spec = scene_spec(args, largest(vols))  # frame the largest storm
     reference_kw = {"spp": args.spp, "target_rse": args.target_rse, "max_seconds": args.max_seconds}

@@ -21,6 +21,17 @@ def parse_time(text: str | None):
         return text
 
 
+def parse_times(text: str):
+    """A time-series text as a selection for ``select_times``: "all", "START:STOP[:STEP]" (a slice),
+    "I,J,..." or one of them (a list of indices and timestamps), as ``weather-mi animate --time`` takes it."""
+    if text == "all":
+        return "all"
+    if ":" in text and not any(c.isalpha() or c in "-_" for c in text.lstrip("-")):
+        parts = [int(v) if v.strip() else None for v in text.split(":")]
+        return slice(*parts)
+    return [parse_time(v.strip()) for v in text.split(",")]
+
+
 def is_several(time) -> bool:
     """Whether ``time`` selects several times: "all", a slice, a list or a tuple."""
     return isinstance(time, (slice, list, tuple)) or (isinstance(time, str) and time == "all")
