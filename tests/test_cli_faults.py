@@ -73,8 +73,10 @@ def test_file_and_demo_together_or_neither_are_refused(tmp_path, capsys, no_rend
 def no_loading(monkeypatch):
     """Fail the test if the input is read (the scene options are checked first)."""
     import weather_mi.io
+    import weather_mi.sources
     fail = lambda *a, **k: pytest.fail("the input was read despite a bad scene option")  # noqa: E731
-    monkeypatch.setattr(cli, "load_input", fail)
+    monkeypatch.setattr(cli, "open_source", fail)
+    monkeypatch.setattr(weather_mi.sources, "open_times", fail)
     monkeypatch.setattr(weather_mi.io, "open_wrf", fail)
 
 

@@ -135,10 +135,10 @@ def _check_movie(out, n, w, h):
 
 
 def test_each_file_is_opened_once_for_all_its_times(tmp_path, monkeypatch):
-    from weather_mi.io import wrf
+    from weather_mi.io import wrfout
     a, b = _growing(tmp_path / "a.nc"), _growing(tmp_path / "b.nc", times=["2020-01-01_00:30:00"])
     opened = []
-    real = wrf._open
-    monkeypatch.setattr(wrf, "_open", lambda p: opened.append(p) or real(p))
+    real = wrfout.open_dataset
+    monkeypatch.setattr(wrfout, "open_dataset", lambda p: opened.append(p) or real(p))
     assert wm.open_wrf([a, b]).sizes["time"] == 4
     assert sorted(opened) == sorted([str(a), str(b)])

@@ -11,78 +11,10 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from .errors import OutputWriteError, WeatherDataError
-from .hydrometeors import SPECIES_NAMES, spacing_of
-
-DEMOS = ("supercell", "cumulus")
-
-
-LES_SUFFIXES = (".txt", ".dat", ".csv")
-
-
-def load_input(path: str | None, demo: str | None, time=None):
-    """Hydrometeors from a file (wrfout NetCDF or LES text) or a built-in demo storm. ``time`` (a WRF
-    file's time, default the last) is refused for inputs that have one time only."""
-    from . import synthetic
-    from .io import open_les, open_wrf
-    check_time_option(path, demo, time)
-    if path is None:
-        return getattr(synthetic, demo or "supercell")()
-    p = Path(path)
-    if p.suffix.lower() in LES_SUFFIXES:
-        return open_les(p)
-    return open_wrf(p, time=-1 if time is None else time)
-
-
-def check_time_option(path: str | None, demo: str | None, time) -> None:
-    if time is None:
-        return
-    if path is None:
-        raise ValueError(f"--time {time} selects a time of a WRF file; the demo storm {demo or 'supercell'} "
-                         "has one time: leave --time out")
-    if Path(path).suffix.lower() in LES_SUFFIXES:
-        raise ValueError(f"--time {time} selects a time of a WRF file; {path} (an LES text file) has one time: "
-                         "leave --time out")
-
-
-def _parse_time(s: str | None):
-    if s is None:
-        return None
-    try:
-        return int(s)
-    except ValueError:
-        return s
-
-
-def info_text(hyd, species: str = "paper") -> str:
-    """Dimensions, spacing, per-species max/mean mixing ratio, max extinction, densest column's tau."""
-    from .optics import optical_volume
-    vol = optical_volume(hyd, species=species)
-    dz, dy, dx = spacing_of(hyd)
-    nz, ny, nx = vol.shape
-    (x0, y0, z0), (x1, y1, z1) = vol.bbox
-    lines = [f"source      : {hyd.attrs.get('source', '?')}",
-             f"time        : {hyd.attrs.get('time', '-')}    microphysics: {hyd.attrs.get('microphysics', '-')}",
-             f"grid (z,y,x): {nz} x {ny} x {nx}    spacing dz, dy, dx = {dz:.1f}, {dy:.1f}, {dx:.1f} m",
-             f"extent      : x {x0 / 1e3:.2f}..{x1 / 1e3:.2f} km, y {y0 / 1e3:.2f}..{y1 / 1e3:.2f} km, "
-             f"z {z0 / 1e3:.2f}..{z1 / 1e3:.2f} km",
-             f"species preset: {species}",
-             f"{'species':<9}{'max q (g/kg)':>14}{'mean q (g/kg)':>15}{'max beta (1/km)':>17}"]
-    for i, name in enumerate(SPECIES_NAMES):
-        q = hyd[f"q_{name}"].values
-        lines.append(f"{name:<9}{1e3 * float(q.max()):>14.4g}{1e3 * float(q.mean()):>15.4g}"
-                     f"{1e3 * float(vol.beta_ext[i].max()):>17.4g}")
-    tau = vol.optical_depth_z()
-    j, i = np.unravel_index(int(np.argmax(tau)), tau.shape)
-    lines.append(f"max extinction: {1e3 * float(vol.beta_total.max()):.4g} 1/km")
-    lines.append(f"vertical optical depth through the densest column (x={float(hyd.x[i]) / 1e3:.1f} km, "
-                 f"y={float(hyd.y[j]) / 1e3:.1f} km): {float(tau[j, i]):.4g}")
-    if hyd.attrs.get("n_negative_clipped"):
-        lines.append(f"negative mixing ratios clipped: {hyd.attrs['n_negative_clipped']}")
-    return "\n".join(lines)
-
+from .io.times import parse_time, parse_times
+from .sources import DEMOS, check_time, open_source
+from .summary import info_text
 
 def _parse_scale(items: list[str]) -> dict[str, float]:
     out = {}
@@ -116,19 +48,12 @@ def check_scene_options(args) -> None:
         check_fov_deg(args.fov)
 
 
-def default_ground_distance_km(vol) -> float:
-    """How far a photographer stands from a storm: 0.55 x the cloud's horizontal extent, and at least
-    1.2 x the height of its top (40 km for the demo supercell, 5.6 km for the demo cumulus)."""
-    (x0, y0, _), (x1, y1, z1) = vol.occupied_bbox()
-    return max(0.55 * max(x1 - x0, y1 - y0), 1.2 * z1) / 1000.0
-
-
 def render_command(args) -> Path:
     """Check the arguments and the outputs, build the volume and the scene, render the reference while
     holding the outputs' lock, write EXR + PNG."""
     from .output_paths import OutputLock, check_writable_folder, render_outputs
     check_scene_options(args)
-    check_time_option(args.file, args.demo, args.time)
+    check_time(args.file, args.demo, args.time)
     exr, png, ckpt = render_outputs(args.output)
     check_writable_folder(exr)
     with OutputLock(exr):
@@ -141,7 +66,7 @@ def render_command(args) -> Path:
 def _render(args, out, png_path, ckpt) -> Path:
     from .optics import optical_volume
     from .reference import render_reference
-    hyd = load_input(args.file, args.demo, _parse_time(args.time))
+    hyd = open_source(args.file, args.demo, parse_time(args.time))
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase)
     spec = scene_spec(args, vol)
     from .cluster import session
@@ -165,21 +90,8 @@ def _render(args, out, png_path, ckpt) -> Path:
 
 def scene_spec(args, vol):
     """The SceneSpec of the scene options (camera, sun, sky, ground, size, seed) for ``vol``."""
-    from .scene import Camera, Ground, SceneSpec, Sky, Sun
-    width, height = _parse_size(args.size)
-    sky = None if args.sky == "none" else Sky(args.sky)
-    ground = None if args.ground_albedo < 0 else Ground(albedo=args.ground_albedo,
-                                                        height=min(0.0, vol.bbox[0][2]))
-    if args.camera == "orbit":
-        camera = Camera.orbit(vol, azimuth=args.camera_azimuth, elevation=args.camera_elevation,
-                              distance=args.distance, fov=45.0 if args.fov is None else args.fov)
-    else:
-        camera = Camera.ground_view(vol, azimuth=args.camera_azimuth, fov=70.0 if args.fov is None else args.fov,
-                                    aspect=width / height,
-                                    distance_km=args.camera_distance_km or default_ground_distance_km(vol),
-                                    height_m=args.camera_height, ground_m=0.0 if ground is None else ground.height)
-    return SceneSpec(camera=camera, sun=Sun(args.sun_azimuth, args.sun_elevation, angular_diameter_deg=args.sun_diameter),
-                     sky=sky, ground=ground, width=width, height=height, seed=args.seed)
+    from .framing import SCENE_OPTIONS, scene_spec
+    return scene_spec(vol, _parse_size(args.size), **{k: getattr(args, k) for k in SCENE_OPTIONS})
 
 
 def add_scene_options(p) -> None:
@@ -217,29 +129,18 @@ def add_dask_options(p) -> None:
                        help="render on a Dask LocalCluster of N worker processes on this machine")
 
 
-def _parse_times(text: str):
-    """--time of animate: "all", "START:STOP[:STEP]", "I,J,..." (indices or timestamps) or one of them."""
-    if text == "all":
-        return "all"
-    if ":" in text and not any(c.isalpha() or c in "-_" for c in text.lstrip("-")):
-        parts = [int(v) if v.strip() else None for v in text.split(":")]
-        return slice(*parts)
-    return [_parse_time(v.strip()) for v in text.split(",")]
-
-
 def animate_command(args) -> Path:
     """Every time of the inputs rendered from one camera: EXR frames, an MP4 and a contact sheet."""
     from .animate import animate
     from .cluster import session
-    from .io import open_wrf
-    from .io.series import time_steps
+    from .framing import largest
     from .optics import optical_volume
+    from .sources import open_times
     check_scene_options(args)
     scale = _parse_scale(args.scale)
-    hyds = time_steps(open_wrf(args.inputs if len(args.inputs) > 1 else args.inputs[0], time=_parse_times(args.time)))
+    hyds = open_times(args.inputs, time=parse_times(args.time))
     vols = [optical_volume(h, species=args.preset, scale=scale, phase=args.phase) for h in hyds]
-    widest = max(vols, key=lambda v: np.prod(np.subtract(*v.occupied_bbox()[::-1])))  # frame the largest storm
-    spec = scene_spec(args, widest)
+    spec = scene_spec(args, largest(vols))  # frame the largest storm
     reference_kw = {"spp": args.spp, "target_rse": args.target_rse, "max_seconds": args.max_seconds}
     with session(args.scheduler, args.workers) as client:
         anim = animate(vols, spec, args.output, renderer=args.renderer, labels=[h.attrs["time"] for h in hyds],
@@ -249,12 +150,22 @@ def animate_command(args) -> Path:
     return anim.mp4
 
 
-def main(argv: list[str] | None = None) -> int:
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of every command (``info``, ``render``, ``animate``, ``view``, ``validate``)."""
     parser = argparse.ArgumentParser(prog="weather-mi", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     info = sub.add_parser("info", help="summarise a data file or a demo storm")
     _add_source(info)
     info.add_argument("--species", default="paper", choices=("paper", "physical"))
+    _add_render_parser(sub)
+    _add_animate_parser(sub)
+    _add_view_parser(sub)
+    _add_validate_parser(sub)
+    parser.commands = sub.choices  # command -> its parser (for an error in the command's own usage)
+    return parser
+
+
+def _add_render_parser(sub) -> None:
     render = sub.add_parser("render", help="path-trace the ground-truth image (EXR + PNG)")
     _add_source(render)
     add_scene_options(render)
@@ -278,6 +189,9 @@ def main(argv: list[str] | None = None) -> int:
     add_dask_options(render)
     render.add_argument("-o", "--output", default="weather-mi.exr",
                         help="OUT.exr (or OUT.png): writes OUT.exr and OUT.png; OUT.exr.ckpt.npz while rendering")
+
+
+def _add_animate_parser(sub) -> None:
     anim = sub.add_parser("animate", help="render every time of a storm: EXR frames, an MP4 and a contact sheet")
     anim.add_argument("inputs", nargs="+", help="wrfout NetCDF file(s); their times in order")
     anim.add_argument("--time", default="all", help='"all", START:STOP[:STEP] or a comma list of indices or timestamps')
@@ -296,6 +210,9 @@ def main(argv: list[str] | None = None) -> int:
     anim.add_argument("--exposure", type=float, default=None, help="MP4/contact-sheet exposure (default: automatic, one for all frames)")
     add_dask_options(anim)
     anim.add_argument("-o", "--output", default="weather-mi-animation", help="output folder")
+
+
+def _add_view_parser(sub) -> None:
     viewp = sub.add_parser("view", help="explore a storm in the browser: the slicer live, the ground truth one "
                            "click away")
     _add_source(viewp)
@@ -307,29 +224,47 @@ def main(argv: list[str] | None = None) -> int:
                        "from the network, without authentication)")
     viewp.add_argument("--no-browser", action="store_true", help="do not open a browser")
     viewp.add_argument("--size", default="320x240", help="WIDTHxHEIGHT of the rendered view (shown at twice that)")
+
+
+def _add_validate_parser(sub) -> None:
     val = sub.add_parser("validate", help="the validation study: slicer against path-traced ground truth")
     val.add_argument("-o", "--output", default="validation-report", help="report folder")
     val.add_argument("--quick", action="store_true", help="small images and samples: a few minutes")
     val.add_argument("--config", choices=("full", "quick", "tiny"), default=None)
     val.add_argument("--data", default=None, help="folder of real model output (wrf/..., les/..., e.g. "
                      "../shared/data); without it only the built-in demo storms are studied")
+
+
+def info_command(args) -> None:
+    print(info_text(open_source(args.file, args.demo, parse_time(args.time)), args.species))
+
+
+def view_command(args) -> None:
+    from .viewer.recipe import VolumeRecipe
+    from .viewer.serve import serve
+    check_time(args.file, args.demo, args.time)
+    recipe = VolumeRecipe(path=args.file, demo=args.demo, preset=args.preset, phase=args.phase)
+    serve(recipe, host=args.host, port=args.port, open_browser=not args.no_browser, time_option=args.time,
+          size=_parse_size(args.size))
+
+
+def validate_command(args) -> None:
+    from .study import run
+    report = run(args.output, args.config or ("quick" if args.quick else "full"), data_dir=args.data)
+    print(f"wrote {report}")
+
+
+COMMANDS = {"info": info_command, "render": render_command, "animate": animate_command, "view": view_command,
+            "validate": validate_command}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
     args = parser.parse_args(argv)
     if args.command in ("info", "render", "view") and (args.file is None) == (args.demo is None):
-        sub.choices[args.command].error("give a data FILE or --demo NAME (one of them)")
+        parser.commands[args.command].error("give a data FILE or --demo NAME (one of them)")
     try:
-        if args.command == "info":
-            hyd = load_input(args.file, args.demo, _parse_time(args.time))
-            print(info_text(hyd, args.species))
-        elif args.command == "render":
-            render_command(args)
-        elif args.command == "animate":
-            animate_command(args)
-        elif args.command == "view":
-            view_command(args)
-        elif args.command == "validate":
-            from .study import run
-            report = run(args.output, args.config or ("quick" if args.quick else "full"), data_dir=args.data)
-            print(f"wrote {report}")
+        COMMANDS[args.command](args)
     except OutputWriteError as exc:  # a full disk: the file named, the checkpoint kept, how to resume
         print(f"weather-mi: error: {exc}{_resume_hint(args)}", file=sys.stderr)
         return 2
@@ -340,15 +275,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"weather-mi: interrupted{_resume_hint(args)}", file=sys.stderr)
         return 130
     return 0
-
-
-def view_command(args) -> None:
-    from .viewer.recipe import VolumeRecipe
-    from .viewer.serve import serve
-    check_time_option(args.file, args.demo, args.time)
-    recipe = VolumeRecipe(path=args.file, demo=args.demo, preset=args.preset, phase=args.phase)
-    serve(recipe, host=args.host, port=args.port, open_browser=not args.no_browser, time_option=args.time,
-          size=_parse_size(args.size))
 
 
 def _slicer_modes():

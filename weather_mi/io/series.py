@@ -15,54 +15,21 @@ import numpy as np
 import xarray as xr
 
 from ..errors import WeatherDataError
+from . import wrfout
+from .times import select_times, time_strings
 
 
-def is_series(path, time) -> bool:
-    """Whether ``open_wrf(path, time)`` asks for several times: several files, or a slice, a list or
-    "all" as ``time``."""
-    several_files = not isinstance(path, (str, os.PathLike))
-    return several_files or isinstance(time, (slice, list, tuple)) or (isinstance(time, str) and time == "all")
-
-
-def _timeline(paths: list[str], opened: dict) -> list[tuple[str, int, str]]:
+def _timeline(paths: list[str], opened: dict) -> tuple[list[tuple[str, int, str]], bool]:
     """(file, index in that file, timestamp) of every time of every file, in the order given
-    (``opened``: path -> its open Dataset)."""
-    from .wrf import _time_strings
-    out = []
+    (``opened``: path -> its open Dataset), and whether every file has timestamps."""
+    out, stamped = [], True
     for p in paths:
         ds = opened[p]
-        stamps = _time_strings(ds)
+        stamps = time_strings(ds)
+        stamped = stamped and bool(stamps)
         n = ds.sizes.get("Time", 1)
         out += [(p, i, stamps[i] if stamps else str(i)) for i in range(n)]
-    return out
-
-
-def _select(timeline, time, where: str) -> list[tuple[str, int, str]]:
-    from .wrf import _normalise_time
-    n = len(timeline)
-    if isinstance(time, str) and time == "all":
-        return list(timeline)
-    if isinstance(time, slice):
-        chosen = timeline[time]
-    else:
-        chosen = []
-        for t in (time if isinstance(time, (list, tuple)) else [time]):
-            if isinstance(t, (int, np.integer)):
-                if not -n <= int(t) < n:
-                    raise WeatherDataError(where, "Times", f"time indices in [{-n}, {n - 1}]", str(t))
-                chosen.append(timeline[int(t) % n])
-                continue
-            try:
-                want = _normalise_time(t)
-                match = [e for e in timeline if _normalise_time(e[2]) == want]
-            except ValueError as exc:
-                raise WeatherDataError(where, "Times", "timestamps like 2005-09-21_03:00:00", repr(t)) from exc
-            if not match:
-                raise WeatherDataError(where, "Times", f"one of the times {[e[2] for e in timeline]}", repr(str(t)))
-            chosen.append(match[0])
-    if not chosen:
-        raise WeatherDataError(where, "Times", f"at least one of the {n} times selected", repr(time))
-    return chosen
+    return out, stamped
 
 
 def open_wrf_series(paths, time="all", *, x: slice | None = None, y: slice | None = None,
@@ -72,7 +39,6 @@ def open_wrf_series(paths, time="all", *, x: slice | None = None, y: slice | Non
     time : "all", a slice or a list of indices/timestamps into the times of all files in the order given.
     The common height grid: ``dz`` default the first time's mean layer depth; ``bottom``/``top`` default
     the lowest terrain and the highest model top over the selected times."""
-    from .wrf import G, _convert, _open, _read
     paths = [os.fspath(p) for p in ([paths] if isinstance(paths, (str, os.PathLike)) else paths)]
     if not paths:
         raise WeatherDataError("open_wrf", "path", "at least one wrfout file", "an empty list")
@@ -81,18 +47,20 @@ def open_wrf_series(paths, time="all", *, x: slice | None = None, y: slice | Non
             raise WeatherDataError(p, None, "an existing wrfout NetCDF file", "no such file")
     sel = {k: v for k, v in (("west_east", x), ("south_north", y)) if v is not None}
     with ExitStack() as stack:  # every file opened once, for all of its times
-        opened = {p: stack.enter_context(_open(p)) for p in dict.fromkeys(paths)}
-        chosen = _select(_timeline(paths, opened), time, paths[0] if len(paths) == 1 else f"{len(paths)} wrfout files")
+        opened = {p: stack.enter_context(wrfout.open_dataset(p)) for p in dict.fromkeys(paths)}
+        timeline, stamped = _timeline(paths, opened)
+        where = paths[0] if len(paths) == 1 else f"{len(paths)} wrfout files"
+        chosen = [timeline[k] for k in select_times([e[2] for e in timeline], time, where, stamped=stamped)]
         lows, highs = [], []
         for p, it, _ in chosen:  # one grid for all: from the heights of every selected time
-            z_w = (_read(opened[p], "PH", it, sel, p) + _read(opened[p], "PHB", it, sel, p)) / G
+            z_w = wrfout.w_level_heights(opened[p], it, sel, p)
             lows.append(float(np.min(z_w[0])))
             highs.append(float(np.max(z_w[-1])))
             if dz is None:  # the first time's mean layer depth
                 dz = float(np.mean(z_w[-1] - z_w[0]) / (z_w.shape[0] - 1))
         bottom = min(lows) if bottom is None else bottom
         top = max(highs) if top is None else top
-        frames = [_convert(opened[p], p, it, x, y, dz, top, bottom) for p, it, _ in chosen]
+        frames = [wrfout.convert(opened[p], p, it, stamp, x, y, dz, top, bottom) for p, it, stamp in chosen]
     stamps = [stamp for _, _, stamp in chosen]
     out = xr.concat(frames, dim="time", combine_attrs="drop_conflicts", coords="minimal", compat="override")
     out = out.assign_coords(time=("time", stamps), time_index=("time", [it for _, it, _ in chosen]),

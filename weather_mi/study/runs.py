@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import metrics
+from .. import metrics, sources
 from ..imageio import auto_exposure
 from ..optics import optical_volume
 from ..scene import Camera, Ground, SceneSpec, Sky, Sun
@@ -58,37 +58,40 @@ CONFIGS = {
 
 # ---------------------------------------------------------------- scenes and views
 
-# real model output: scene name -> (path under the data folder, reader, description)
+# real model output: scene name -> (path under the data folder, description); ``weather_mi.sources``
+# opens it (a WRF or LES file by its suffix)
 DATA_SCENES = {
-    "wrf-supercell": ("wrf/wrfout_quarter_ss_0130.nc", "wrf", "real WRF supercell (em_quarter_ss, WSM6, 1 km, 01:30)"),
-    "wrf-plateau": ("wrf/wrf_d01_allvars_cropped.nc", "wrf", "real WRF, Tibetan Plateau (Thompson, 30 km, last time)"),
-    "bomex": ("les/bomex_50m.txt", "les", "BOMEX trade cumulus (LES, 50 m)"),
-    "rico": ("les/rico_20m.txt", "les", "RICO trade cumuli (LES, 20 m)"),
+    "wrf-supercell": ("wrf/wrfout_quarter_ss_0130.nc", "real WRF supercell (em_quarter_ss, WSM6, 1 km, 01:30)"),
+    "wrf-plateau": ("wrf/wrf_d01_allvars_cropped.nc", "real WRF, Tibetan Plateau (Thompson, 30 km, last time)"),
+    "bomex": ("les/bomex_50m.txt", "BOMEX trade cumulus (LES, 50 m)"),
+    "rico": ("les/rico_20m.txt", "RICO trade cumuli (LES, 20 m)"),
 }
-DEMO_SCENES = ("demo-supercell", "demo-cumulus", "demo-cumulus-thin")
 THIN_FACTOR = 0.15  # demo-cumulus-thin: the demo cumulus with its condensate scaled by this (optically thin)
+_COARSE_CUMULUS = {"shape": (40, 48, 48), "spacing_m": (100.0, 100.0, 100.0)}
+# the demo storms: scene name -> (demo, its grid, scalings of the species, description)
+DEMO_STORMS = {
+    "demo-supercell": ("supercell", {}, None, "built-in demo supercell (synthetic, 1 km grid)"),
+    "demo-cumulus": ("cumulus", _COARSE_CUMULUS, None, "built-in demo cumulus (synthetic, coarse 100 m grid)"),
+    "demo-cumulus-thin": ("cumulus", _COARSE_CUMULUS, {s: THIN_FACTOR for s in ("cloud", "rain")},
+                          "built-in demo cumulus (synthetic, coarse 100 m grid), its cloud water and rain "
+                          f"x {THIN_FACTOR} (optically thin)"),
+}
+DEMO_SCENES = tuple(DEMO_STORMS)
 
 
 def load_scene(name: str, cfg: StudyConfig, data_dir=None):
     """(OpticalVolume, description), or None when the scene needs a data file and ``data_dir`` (a
     folder laid out like the project's shared data: wrf/..., les/...) is None or lacks it."""
-    from .. import synthetic
-    from ..io import open_les, open_wrf
     scale = None
     if name in DATA_SCENES:
-        rel, reader, desc = DATA_SCENES[name]
+        rel, desc = DATA_SCENES[name]
         path = Path(data_dir) / rel if data_dir is not None else None
         if path is None or not path.is_file():
             return None
-        hyd = open_wrf(path) if reader == "wrf" else open_les(path)
-    elif name == "demo-supercell":
-        hyd, desc = synthetic.supercell(), "built-in demo supercell (synthetic, 1 km grid)"
-    elif name in ("demo-cumulus", "demo-cumulus-thin"):
-        hyd = synthetic.cumulus(shape=(40, 48, 48), spacing_m=(100.0, 100.0, 100.0))
-        desc = "built-in demo cumulus (synthetic, coarse 100 m grid)"
-        if name == "demo-cumulus-thin":
-            scale = {s: THIN_FACTOR for s in ("cloud", "rain")}
-            desc += f", its cloud water and rain x {THIN_FACTOR} (optically thin)"
+        hyd = sources.open_source(path)
+    elif name in DEMO_STORMS:
+        demo, grid, scale, desc = DEMO_STORMS[name]
+        hyd = sources.open_demo(demo, **grid)
     else:
         raise ValueError(f"unknown study scene {name!r}")
     vol = optical_volume(hyd, species=cfg.species, phase_quality=cfg.phase_quality, scale=scale)
@@ -158,14 +161,13 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True, data
     from tqdm.auto import tqdm
 
     from ..reference import render_reference
-    from ..slicing.calibrate import FIT_START, TrainingView, calibrate
-    from .report import plot_convergence, plot_history, side_by_side, write_csv, write_report
+    from .report import plot_convergence, side_by_side, write_csv, write_report
     cfg = CONFIGS[config] if isinstance(config, str) else config
     scenes, skipped = load_scenes(cfg, data_dir)
     out = Path(outdir)
     out.mkdir(parents=True, exist_ok=True)
     rows, timings = [], []
-    convergence, calib_rows = {}, []
+    convergence = {}
     t_start = time.perf_counter()
 
     jobs = [(s, l) for s in scenes for l in cfg.lightings]
@@ -226,9 +228,23 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True, data
 
     figure_pairs = paper_figure_pairs(scenes, cfg, out, progress)
 
-    # calibration of the "multiple" light model: trained on the demo storms' views, judged on the
-    # others (with only one storm: trained on its first lighting, judged on the rest)
-    fitted, history = SliceParams(), []
+    fitted, history, calib_rows = _calibration(refs, scenes, cfg, out, progress)
+
+    write_csv(out / "metrics.csv", rows, METRIC_KEYS)
+    plot_convergence(out, convergence)
+    report = write_report(cfg, scenes, skipped, rows, timings, convergence, figure_pairs, fitted, history,
+                          calib_rows, time.perf_counter() - t_start)
+    (out / "report.md").write_text(report)
+    return out / "report.md"
+
+
+def _calibration(refs, scenes, cfg: StudyConfig, out: Path, progress: bool):
+    """(fitted SliceParams, loss history, rows) of the calibration of the "multiple" light model: trained
+    on the demo storms' views, judged on the others (with only one storm: trained on its first lighting,
+    judged on the rest); ``refs``: (scene, lighting) -> (spec, reference, cloud mask)."""
+    from ..slicing.calibrate import FIT_START, TrainingView, calibrate
+    from .report import plot_history
+    fitted, history, calib_rows = SliceParams(), [], []
     if refs:
         train = [k for k in refs if k[0] in DEMO_SCENES]
         if not train or len(train) == len(refs):
@@ -246,13 +262,7 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True, data
                 calib_rows.append({"scene": key[0], "lighting": key[1], "set": "train" if key in train else "held-out",
                                    "params": label, **{k: m[k] for k in ("rmse", "rel_mse", "ciede2000", "flip")}})
         plot_history(out / "calibration_loss.png", history)
-
-    write_csv(out / "metrics.csv", rows, METRIC_KEYS)
-    plot_convergence(out, convergence)
-    report = write_report(cfg, scenes, skipped, rows, timings, convergence, figure_pairs, fitted, history,
-                          calib_rows, time.perf_counter() - t_start)
-    (out / "report.md").write_text(report)
-    return out / "report.md"
+    return fitted, history, calib_rows
 
 
 def paper_figure_pairs(scenes, cfg: StudyConfig, out: Path, progress: bool) -> list[dict]:

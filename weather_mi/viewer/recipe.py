@@ -7,7 +7,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Mapping
 
-from ..cli import LES_SUFFIXES, load_input
+from .. import sources
 
 
 @dataclass(frozen=True)
@@ -40,18 +40,17 @@ class VolumeRecipe:
             return self.dataset
         if isinstance(self.time, int) and self._wrf() and len(self.times()) > 1:
             return self.series()[self.time]
-        return load_input(self.path, self.demo, self.time)
+        return sources.open_source(self.path, self.demo, self.time)
 
     def series(self) -> list:
         """Every time of a WRF file as Hydrometeors on one height grid (``io.open_wrf(time="all")``, the
         reader of ``weather-mi animate``), so that the storm's times and their references share a grid."""
         if not self._wrf():
             return [self.hydrometeors()]
-        from ..io import open_wrf, time_steps
-        return time_steps(open_wrf(self.path, time="all"))
+        return sources.open_times(self.path, time="all")
 
     def _wrf(self) -> bool:
-        return self.dataset is None and self.path is not None and Path(self.path).suffix.lower() not in LES_SUFFIXES
+        return sources.kind(self.path, self.demo, self.dataset) == "wrf"
 
     def volume(self, scale: Mapping[str, float] | None = None, hyd=None):
         """The OpticalVolume (Eq. 1-6, 8) of the (scaled) storm; ``hyd``: its Hydrometeors if already read."""
@@ -61,7 +60,4 @@ class VolumeRecipe:
 
     def times(self) -> list[str]:
         """The labels of the input's times (one for a demo or an LES file; every time of a WRF file)."""
-        if not self._wrf():
-            return [self.label]
-        from ..io.wrf import wrf_times
-        return wrf_times(self.path)
+        return sources.time_labels(self.path, self.demo, self.dataset) or [self.label]

@@ -38,24 +38,12 @@ def check_port(host: str, port: int) -> int:
 
 
 def initial_time(storm, time_option) -> int:
-    """The index of ``--time`` (an index or a timestamp) among the storm's times; default the last."""
+    """The index of ``--time`` (an index or a timestamp, ``weather_mi.io.times``) among the storm's times;
+    default the last."""
     if time_option is None:
         return storm.first_time
-    from ..io.wrf import _normalise_time
-    n = len(storm.times)
-    try:
-        k = int(time_option)
-        if not -n <= k < n:
-            raise ValueError(f"--time {k}: the input has {n} times (indices {-n} .. {n - 1})")
-        return k % n
-    except ValueError as exc:
-        if str(exc).startswith("--time"):
-            raise
-    want = _normalise_time(time_option)
-    for k, t in enumerate(storm.times):
-        if _normalise_time(t) == want:
-            return k
-    raise ValueError(f"--time {time_option}: not among the input's times {storm.times}")
+    from ..io.times import parse_time, select_times
+    return select_times(list(storm.times), parse_time(time_option), "--time")[0]
 
 
 def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[int, int] = (320, 240),
@@ -65,7 +53,7 @@ def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[
     ``serve`` warms it in the background instead, while the browser loads the page."""
     from .frames import Storm
     from .state import ViewCamera, ViewState
-    from .app import default_distance_km
+    from .session import default_distance_km
     t0 = time.perf_counter()
     storm = Storm(recipe)
     state = ViewState(time=initial_time(storm, time_option), camera=ViewCamera(distance_km=default_distance_km(storm)),
@@ -80,7 +68,7 @@ def serve(recipe: VolumeRecipe, *, host: str = "127.0.0.1", port: int = 5006, op
           time_option=None, reference_kw: dict | None = None, size: tuple[int, int] = (320, 240)) -> None:
     """Serve the viewer until Ctrl-C (blocking)."""
     import panel as pn
-    from .app import ViewerSession
+    from .session import ViewerSession
     warning = host_warning(host)
     if warning:
         print(warning, file=sys.stderr)

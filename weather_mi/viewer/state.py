@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from ..scene import Camera, Ground, SceneSpec, Sky, Sun
+from ..sources import kind
 from ..slicing.modes import MODES, SliceMode, SliceParams
 
 DEFAULT_MODE = "per-species/multiple"  # the calibrated light model beyond the paper (issue 12)
@@ -158,7 +159,7 @@ def python_snippet(state: ViewState, recipe, spec: SceneSpec, times: list[str] |
                 "it is defined")
     elif recipe.path is None:
         load = f"hyd = wm.synthetic.{recipe.demo or 'supercell'}()"
-    elif recipe.path.lower().endswith((".txt", ".dat", ".csv")):
+    elif kind(recipe.path) == "les":
         load = f"hyd = wm.open_les({recipe.path!r})"
     elif times is not None and len(times) > 1:  # every time on one grid, as the viewer reads them
         load = f"hyd = wm.io.time_steps(wm.open_wrf({recipe.path!r}, time=\"all\"))[{state.time}]  # {times[state.time]}"

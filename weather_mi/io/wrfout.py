@@ -1,0 +1,221 @@
+"""One time of an open wrfout Dataset -> Hydrometeors (see weather_mi.hydrometeors for the contract):
+the conversion both ``open_wrf`` (one time) and ``open_wrf_series`` (several, on one grid) are made of.
+
+Steps: an optional horizontal sub-box; heights of the w-levels z_w = (PH + PHB) / g and of the mass
+levels as their mean (destaggering); dry-air density rho_d = p / (R_d T (1 + 1.608 q_v)) with
+p = P + PB, T = (T' + 300 K)(p / 1e5)^(R_d/c_p) (cross-checked against ALT = 1/rho_d when the file has
+it); species mass densities rho_d q regridded conservatively onto a uniform height grid
+(weather_mi.io.vertical); the horizontal spacing DX, DY over the mean map factor
+(weather_mi.io.map_factors, with a warning where it varies). Negative mixing ratios are clipped, counted
+and reported in a warning (count and minimum per variable); species the scheme does not carry become
+zeros with a warning that names the scheme, while a variable the scheme writes and the file lacks is an
+error (``schemes.SCHEME_VARS``).
+
+Warnings are raised with ``stacklevel`` counted from ``convert``'s caller's caller (the user's call of
+``open_wrf``), one more per helper below ``convert``.
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import xarray as xr
+
+from ..errors import WeatherDataError
+from ..hydrometeors import from_arrays, warn_clipped
+from . import vertical
+from .map_factors import horizontal_spacing
+from .schemes import MP_SCHEMES, SCHEME_VARS
+
+G = 9.81               # m/s^2, WRF's gravity
+R_D = 287.0            # J/(kg K)
+RD_OVER_CP = 0.2857
+EPS_INV = 1.608        # R_v / R_d: virtual-temperature factor for the vapour mixing ratio
+THETA0 = 300.0         # K, WRF's base potential temperature offset of T
+
+SPECIES_VARS = {"cloud": "QCLOUD", "ice": "QICE", "rain": "QRAIN", "snow": "QSNOW", "graupel": "QGRAUP"}
+RADIUS_VARS = {"cloud": "RE_CLOUD", "ice": "RE_ICE", "snow": "RE_SNOW"}
+REQUIRED = ("P", "PB", "T", "PH", "PHB")
+MAP_FACTOR_VARS = ("MAPFAC_M", "MAPFAC_MX", "MAPFAC_MY")
+
+
+def open_dataset(path: str) -> xr.Dataset:
+    """The wrfout NetCDF file at ``path``, lazily (a WeatherDataError naming it where it is no NetCDF)."""
+    try:
+        return xr.open_dataset(path, decode_times=False, mask_and_scale=True, cache=False)
+    except Exception as exc:  # netCDF4/h5py raise many types for non-NetCDF input
+        raise WeatherDataError(path, None, "a NetCDF (wrfout) file", f"{type(exc).__name__}: {exc}") from exc
+
+
+def read(ds, name, it, sel, path, shape=None) -> np.ndarray:
+    """Variable ``name`` at time index ``it`` on the sub-box ``sel`` as float64, checked for ``shape``
+    and for finite values."""
+    da = ds[name]
+    if "Time" in da.dims:
+        da = da.isel(Time=it)
+    da = da.isel({k: v for k, v in sel.items() if k in da.dims})
+    a = np.asarray(da.values, dtype=np.float64)
+    if shape is not None and a.shape != shape:
+        raise WeatherDataError(path, name, f"shape {shape} (bottom_top, south_north, west_east)", f"shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        n = int(a.size - np.count_nonzero(np.isfinite(a)))
+        raise WeatherDataError(path, name, "finite values", f"{n} NaN or infinite values")
+    return a
+
+
+def w_level_heights(ds, it, sel, path) -> np.ndarray:
+    """Heights of the w-levels z_w = (PH + PHB) / g (m above MSL), (bottom_top_stag, south_north, west_east)."""
+    return (read(ds, "PH", it, sel, path) + read(ds, "PHB", it, sel, path)) / G
+
+
+def dry_air_density(p_pa, theta_k, qv):
+    """rho_d = p / (R_d T (1 + 1.608 q_v)), T = theta (p / 1e5)^(R_d/c_p) (kg/m^3)."""
+    t_k = theta_k * (p_pa / 1.0e5) ** RD_OVER_CP
+    return p_pa / (R_D * t_k * (1.0 + EPS_INV * qv))
+
+
+def check_required(ds, path) -> None:
+    """A WeatherDataError naming the variables of ``REQUIRED`` that ``ds`` lacks."""
+    missing = [v for v in REQUIRED if v not in ds]
+    if missing:
+        raise WeatherDataError(path, ", ".join(missing), f"the wrfout variables {', '.join(REQUIRED)}", "missing")
+
+
+def convert(ds, path, it: int, stamp: str, x, y, dz, top, bottom) -> xr.Dataset:
+    """Hydrometeors of time index ``it`` (timestamp ``stamp``) of the open wrfout ``ds`` (see the module).
+
+    x, y : slices of mass-point indices (west_east, south_north) or None. dz : vertical spacing (m), None:
+    the native mean layer depth. bottom, top : the height grid's extent (m above MSL), None: lowest terrain
+    to highest model top."""
+    check_required(ds, path)
+    sel = _sub_box(path, x, y)
+    mp = int(ds.attrs.get("MP_PHYSICS", -1))
+    scheme = MP_SCHEMES.get(mp, f"MP_PHYSICS={mp}" if mp >= 0 else "unknown scheme")
+    attrs = {"source": path, "model": str(ds.attrs.get("TITLE", "WRF")).strip(), "time": stamp,
+             "time_index": it, "microphysics": scheme, "mp_physics": mp}
+    shape, z_w, rho = _air(ds, path, it, sel, attrs)
+    fields, negatives = _species(ds, path, it, sel, shape, scheme, mp, attrs)
+    dz, z_lo, edges = _height_grid(path, z_w, shape, dz, top, bottom)
+    q_new, r_eff, rho_above = _regrid(ds, path, it, sel, shape, z_w, rho, fields, edges)
+    dx, dy, grid_attrs = _spacing(ds, path, it, sel, shape)
+    i0 = (x.start or 0) if x is not None else 0
+    j0 = (y.start or 0) if y is not None else 0
+    attrs.update({"n_negative_clipped_native": int(sum(negatives.values())), "dz_native_mean": dz,
+                  "map_proj": int(ds.attrs.get("MAP_PROJ", 0)), **grid_attrs})
+    attrs.update({f"n_negative_clipped_{k}": v for k, v in negatives.items()})
+    hyd = from_arrays(q_new, np.maximum(rho_above, 1e-6), (dz, dy, dx),
+                      (z_lo + dz / 2, j0 * dy, i0 * dx), r_eff=r_eff, attrs=attrs, source=path)
+    hyd.attrs["n_negative_clipped"] = int(sum(negatives.values()))
+    return hyd
+
+
+def _sub_box(path, x, y) -> dict:
+    sel = {}
+    for dim, s in (("west_east", x), ("south_north", y)):
+        if s is not None:
+            if not isinstance(s, slice):
+                raise WeatherDataError(path, dim, "a slice of mass-point indices", repr(s))
+            sel[dim] = s
+    return sel
+
+
+def _air(ds, path, it, sel, attrs):
+    """(shape of the mass grid, z_w (m), dry-air density (kg/m^3) on the mass points); ``attrs`` gets the
+    ALT cross-check."""
+    p = read(ds, "P", it, sel, path) + read(ds, "PB", it, sel, path)
+    shape = p.shape
+    if len(shape) != 3 or min(shape) < 1:
+        raise WeatherDataError(path, "P", "a (bottom_top, south_north, west_east) field", f"shape {shape}")
+    theta = read(ds, "T", it, sel, path, shape) + THETA0
+    z_w = w_level_heights(ds, it, sel, path)
+    if z_w.shape != (shape[0] + 1,) + shape[1:]:
+        raise WeatherDataError(path, "PH", f"shape {(shape[0] + 1,) + shape[1:]} on bottom_top_stag", f"shape {z_w.shape}")
+    if not np.all(np.diff(z_w, axis=0) > 0):
+        raise WeatherDataError(path, "PH+PHB", "geopotential heights increasing upward in every column")
+    if "QVAPOR" in ds:
+        qv = np.maximum(read(ds, "QVAPOR", it, sel, path, shape), 0.0)
+    else:
+        warnings.warn(f"{path}: no QVAPOR; dry-air density computed without the vapour correction", stacklevel=4)
+        qv = np.zeros(shape)
+    rho = dry_air_density(p, theta, qv)
+    if "ALT" in ds:
+        alt = read(ds, "ALT", it, sel, path, shape)
+        rel = float(np.max(np.abs(rho * alt - 1.0)))
+        attrs["alt_max_rel_diff"] = rel
+        if rel > 0.01:
+            warnings.warn(f"{path}: dry-air density from P, PB, T, QVAPOR differs from 1/ALT by up to "
+                          f"{100 * rel:.2f}%", stacklevel=4)
+    return shape, z_w, rho
+
+
+def _species(ds, path, it, sel, shape, scheme, mp, attrs):
+    """({species: mixing ratio (kg/kg) clipped at 0}, {species: count of negatives clipped})."""
+    written = SCHEME_VARS.get(mp, ())
+    damaged = [v for v in written if v not in ds]
+    if damaged:
+        raise WeatherDataError(path, ", ".join(damaged), f"the mixing ratios that {scheme} microphysics "
+                               f"(MP_PHYSICS={mp}) writes: {', '.join(written)}", "missing from the file")
+    fields, lacking, negatives, minima = {}, [], {}, {}
+    for name, var in SPECIES_VARS.items():
+        if var not in ds:
+            lacking.append(var)
+            continue
+        q = read(ds, var, it, sel, path, shape)
+        if name == "graupel" and "QHAIL" in ds:  # hail is the dense end of the rimed-ice spectrum
+            q = q + read(ds, "QHAIL", it, sel, path, shape)
+        negatives[name] = int(np.count_nonzero(q < 0))
+        if negatives[name]:
+            minima[var] = (negatives[name], float(q.min()))
+        fields[name] = np.maximum(q, 0.0)
+    if minima:
+        warn_clipped(path, minima, stacklevel=4)
+    if not fields:
+        raise WeatherDataError(path, "QCLOUD", "at least one hydrometeor mixing ratio (QCLOUD, QRAIN, ...)", "none")
+    if lacking:
+        warnings.warn(f"{path}: microphysics scheme {scheme} does not provide {', '.join(lacking)}; "
+                      "those species are zero", stacklevel=4)
+        attrs["species_missing"] = ", ".join(lacking)
+    return fields, negatives
+
+
+def _height_grid(path, z_w, shape, dz, top, bottom):
+    """(dz (m), the grid's bottom (m above MSL), its nz + 1 cell edges (m))."""
+    dz = float(dz) if dz is not None else float(np.mean(z_w[-1] - z_w[0]) / shape[0])
+    z_lo = float(np.min(z_w[0])) if bottom is None else float(bottom)
+    z_hi = float(np.max(z_w[-1])) if top is None else float(top)
+    if not (dz > 0 and z_hi > z_lo):
+        raise WeatherDataError(path, "dz/top", "dz > 0 and top above bottom", f"dz={dz}, bottom={z_lo}, top={z_hi}")
+    nz = max(int(np.ceil((z_hi - z_lo) / dz - 1e-6)), 1)
+    return dz, z_lo, z_lo + dz * np.arange(nz + 1)
+
+
+def _regrid(ds, path, it, sel, shape, z_w, rho, fields, edges):
+    """The species' mixing ratios (mass conserved), their effective radii (mass-weighted) and the dry-air
+    density of each cell's part above ground, on the uniform height grid ``edges``."""
+    z_mass = 0.5 * (z_w[1:] + z_w[:-1])  # destagger
+    frac = vertical.above_ground_fraction(z_w, edges)
+    rho_cell = vertical.cell_averages(z_mass, z_w, rho, edges)
+    rho_above = np.where(frac > 0, rho_cell / np.maximum(frac, 1e-12), rho[0][None])  # air in the cell's open part
+    q_new = {}
+    for name, q in fields.items():
+        mass = vertical.cell_averages(z_mass, z_w, rho * q, edges)  # kg/m^3 of this species, conserved
+        q_new[name] = np.maximum(mass, 0.0) / rho_above
+    r_eff = {}
+    for name, var in RADIUS_VARS.items():
+        if var in ds:
+            r = np.maximum(read(ds, var, it, sel, path, shape), 0.0)
+            if name in fields:  # mass-weighted cell average of the radius
+                num = vertical.cell_averages(z_mass, z_w, rho * fields[name] * r, edges)
+                den = vertical.cell_averages(z_mass, z_w, rho * fields[name], edges)
+                r_eff[name] = np.divide(num, den, out=np.zeros_like(num), where=den > 0)
+    return q_new, r_eff, rho_above
+
+
+def _spacing(ds, path, it, sel, shape):
+    """(dx, dy (m), attrs) of the horizontal grid: DX, DY over the mean map factor."""
+    dx = float(ds.attrs.get("DX", 1000.0))
+    dy = float(ds.attrs.get("DY", dx))
+    factors = {v: read(ds, v, it, sel, path, shape[1:]) for v in MAP_FACTOR_VARS if v in ds}
+    if "MAPFAC_MX" in factors and "MAPFAC_MY" in factors:
+        factors.pop("MAPFAC_M", None)
+    return horizontal_spacing(path, dx, dy, factors, stacklevel=4)

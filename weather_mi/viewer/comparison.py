@@ -1,0 +1,156 @@
+"""``ReferencePanel``: the ground truth of one tab: "Path-trace this view" starts a ReferenceJob (a
+low-priority process), polled twice a second; each estimate gives the B view, the difference map
+(CIEDE2000, 0 .. ``DIFF_MAX_DE``) and the metrics of the slicer's full-quality frame against it
+(computed on a metrics thread). A change of anything the path tracer sees (``PHYSICAL_FIELDS``) cancels
+the reference; a change of the slicer's approximation knobs keeps it, to compare against.
+"""
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import panel as pn
+
+from ..imageio import to_srgb8
+from .frames import jpeg_url
+from .state import ViewState
+
+PHYSICAL_FIELDS = ("camera", "sun_azimuth", "sun_elevation", "sun_diameter_deg", "width", "height", "scale", "time",
+                   "sky", "ground_albedo")  # what the path tracer sees
+DIFF_MAX_DE = 20.0  # the difference map's colour scale: CIEDE2000 0 .. 20
+SHOW_CHOICES = ["A: slicer", "B: reference", "difference"]
+
+
+class ReferencePanel:
+    """The reference job, the A/B/difference toggle and the metrics of one ViewerSession (``session``:
+    its state, storm, frame loop, event loop and canvas)."""
+
+    def __init__(self, session, reference_kw: dict):
+        self.session = session
+        self.reference_kw = reference_kw
+        self.job = None              # ReferenceJob
+        self.image = None            # the newest reference estimate (Image) and its state
+        self.state = None
+        self.metrics = None
+        self._overlay = None         # (key, data URL) of the last B or difference picture
+        self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="weather-mi metrics")
+        w = pn.widgets
+        self.show = w.RadioButtonGroup(label="Show", options=SHOW_CHOICES, value="A: slicer", color="default")
+        self.show.param.watch(lambda e: session.refresh_canvas(), "value")
+        self.trace = w.Button(label="Path-trace this view", color="primary")
+        self.trace.on_click(lambda e: self.start())
+        self.cancel_button = w.Button(label="Cancel", color="warning", disabled=True)
+        self.cancel_button.on_click(lambda e: self.cancel("cancelled"))
+        self.ref_text = pn.pane.Markdown("Reference: none", margin=(0, 10))
+        self.metric_text = pn.pane.Markdown("", margin=(0, 10))
+
+    @property
+    def showing_reference(self) -> bool:
+        """Whether the view shows B or the difference, and there is a reference to show."""
+        return self.show.value != "A: slicer" and self.image is not None
+
+    def view_changed(self, old: ViewState, new: ViewState) -> None:
+        """Cancel the reference where the path tracer would see another scene."""
+        if self.job is not None or self.image is not None:
+            if any(getattr(old, f) != getattr(new, f) for f in PHYSICAL_FIELDS):
+                self.cancel("the view changed: path-trace it again")
+
+    def start(self):
+        from .reference_job import ReferenceJob
+        self.cancel(None)
+        s, storm = self.session.state, self.session.storm
+        spec = s.spec(storm.frame, storm.ground_m)
+        recipe = storm.recipe if len(storm.times) < 2 else storm.recipe.at(s.time)
+        self.job = ReferenceJob(recipe, spec, dict(s.scale) or None, **self.reference_kw)
+        self.job.start()
+        self.state, self.image, self.metrics = s, None, None
+        self.ref_text.object = "Reference: starting (a background process at low priority)..."
+        self.metric_text.object = ""
+        self.cancel_button.disabled = False
+
+    def cancel(self, why: str | None):
+        job, self.job = self.job, None
+        if job is not None:
+            job.cancel()
+        self.cancel_button.disabled = True
+        if why is not None:
+            self.image, self.state, self.metrics = None, None, None
+            self.ref_text.object = f"Reference: {why}"
+            self.metric_text.object = ""
+            if self.show.value != "A: slicer":
+                self.session.refresh_canvas()
+
+    def poll(self):
+        job = self.job
+        if job is None:
+            return
+        upd = job.poll()
+        if upd is None:
+            return
+        if upd.error:
+            self.ref_text.object = f"Reference failed: {upd.error}"
+            self.cancel(None)
+            return
+        self.image = upd.image
+        rse = "n/a" if upd.rse_mean is None else f"{upd.rse_mean:.3f}"
+        self.ref_text.object = (f"Reference: {upd.passes} passes, {upd.spp} spp, {upd.seconds:.0f} s, "
+                                f"cloud RSE {rse}{' (done)' if upd.done else ''}")
+        if upd.done:
+            self.job = None
+            self.cancel_button.disabled = True
+        self._executor.submit(self._update_metrics, upd.image, self.session.state)
+
+    def _update_metrics(self, ref_img, state):
+        """Metrics of the slicer's full-quality frame of this view against the reference (metrics thread)."""
+        from ..metrics import compare
+        loop = self.session.loop
+        try:
+            f = loop.last_frame
+            if f is None or f.draft or f.state != state:
+                f = loop.render(state)  # this thread: the session's render thread stays free
+            m = compare(ref_img, f.radiance, mask="cloud", transmittance=f.transmittance, exposure=f.exposure)
+            self.metrics = (m, f)
+            text = (f"**A vs B** over {m['n_pixels']} cloud pixels: CIEDE2000 {m['ciede2000']:.2f}, "
+                    f"FLIP {m['flip']:.3f}, reference noise floor {m['noise_floor']:.3g}")
+        except Exception as exc:
+            text = f"metrics failed: {exc}"
+        self.session.on_loop(lambda: self._show_metrics(text))
+
+    def _show_metrics(self, text):
+        self.metric_text.object = text
+        if self.show.value != "A: slicer":
+            self.session.refresh_canvas()
+
+    def status(self) -> str:
+        return self.ref_text.object.replace("Reference: ", "reference: ")
+
+    def overlay_url(self) -> str:
+        """The B or difference picture, encoded once per reference update, metrics frame and exposure (not
+        once per slicer frame: the slicer keeps publishing while the user drags in the B view)."""
+        show = self.show.value
+        f = self.session.loop.last_frame
+        key = (show, id(self.image), id(self.metrics), f.exposure if f else None)
+        if self._overlay is None or self._overlay[0] != key:
+            self._overlay = (key, self._reference_url() if show == "B: reference" else self._difference_url())
+        return self._overlay[1]
+
+    def _reference_url(self) -> str:
+        f = self.session.loop.last_frame
+        return jpeg_url(to_srgb8(self.image.radiance, f.exposure if f else None))
+
+    def _difference_url(self) -> str:
+        from matplotlib import colormaps
+        from ..metrics import ciede2000_map, display_lab, display_srgb
+        f = self.session.loop.last_frame
+        full = self.metrics[1] if self.metrics else f
+        if full is None or full.radiance.shape != self.image.radiance.shape:
+            return self._reference_url()
+        lab_r = display_lab(display_srgb(self.image.radiance, full.exposure))
+        lab_a = display_lab(display_srgb(full.radiance, full.exposure))
+        de = np.clip(ciede2000_map(lab_r, lab_a) / DIFF_MAX_DE, 0, 1)
+        rgb = (colormaps["magma"](de)[..., :3] * 255).astype(np.uint8)
+        return jpeg_url(rgb)
+
+    def close(self):
+        self.cancel(None)
+        self._executor.shutdown(wait=False, cancel_futures=True)
