@@ -2,6 +2,7 @@
 
     import weather_mi as wm
     hyd = wm.open_wrf("wrfout_d01_....nc", time=-1)      # Hydrometeors (xarray.Dataset)
+    hyd = wm.open_source("cloud.txt")                      # any input: WRF, LES, a demo (demo="cumulus")
     hyd = wm.synthetic.supercell()
     vol = wm.optical_volume(hyd, species=wm.species.preset("paper"), scale={"ice": 2.0})
 """
@@ -11,6 +12,7 @@ from . import atmosphere, hydrometeors, species, synthetic
 from .errors import WeatherDataError
 from .hydrometeors import SPECIES_NAMES, from_arrays, validate
 from .io import open_les, open_wrf
+from .sources import open_source, open_times
 from .optics import OpticalVolume, optical_volume
 from .variant import ensure_registered, register_lazily, set_variant
 from .medium import medium_dict, phase_dict
@@ -24,14 +26,16 @@ register_lazily()  # the plugins usable from dict and XML scenes in any variant 
 
 __version__ = "0.1.0"
 
-__all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les",
+__all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les", "open_source",
+           "open_times", "sources",
            "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
            "Camera", "Ground", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "render_transmittance",
            "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "species", "synthetic", "hydrometeors",
            "atmosphere", "phase", "metrics", "reference", "slicing", "io", "imageio", "scene", "view"]
 
 # submodules imported on first use (the phase tables pull in miepython/numba, the metrics FLIP)
-_LAZY_SUBMODULES = ("phase", "metrics", "study", "cli", "detail", "fluxes", "forward_peak", "mitsuba_scene")
+_LAZY_SUBMODULES = ("phase", "metrics", "study", "cli", "detail", "fluxes", "forward_peak", "mitsuba_scene",
+                    "framing", "summary", "animate", "dask_passes", "cluster")
 
 
 def view(source, **kw):
