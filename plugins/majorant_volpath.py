@@ -152,11 +152,11 @@ import drjit as dr
 import mitsuba as mi
 
 from ..scene import MAX_SUN_DIAMETER_DEG
+from .dda import Grid, cell_end, cell_interpolant, cell_of, dda_step, locate, ray_box
+from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401
 from .variant_class import variant_class
 
 PLUGIN_NAME = "majorant_volpath"
-DEFAULT_CELL = 2  # fine voxels per coarse majorant cell (measured fastest on the storms; see the docstring)
-SAFETY = 1.0001
 _RR_THRESHOLD = 0.1   # ratio tracking: roulette once max(T) drops below this ...
 _RR_SURVIVE = 0.5     # ... surviving with this probability
 LONG_WALK_DEPTH = 1024  # see "Russian roulette" in the module docstring
@@ -185,86 +185,7 @@ def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
     return float(2.0 * np.sin(r / 2.0) ** 2), e / (np.pi * np.sin(r) ** 2)
 
 
-# ---------------------------------------------------------------- numpy side
-
-def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: float = SAFETY) -> np.ndarray:
-    """Conservative majorants of the trilinear interpolant of ``sigma_t_zyx`` on a coarse grid.
-
-    ``sigma_t_zyx`` is (nz, ny, nx) (or (nz, ny, nx, C): the maximum over channels is used), indexed
-    like a Mitsuba ``gridvolume`` (texel centres at (i + 0.5) / N, clamped at the borders). Returns a
-    float32 array (ceil(nz/cell), ceil(ny/cell), ceil(nx/cell)): the majorant of coarse cell (K, J, I)
-    is ``safety`` x the maximum of the fine voxels [K*cell - 1, (K+1)*cell] x ... (the cell's own
-    voxels dilated by one voxel on each side, clipped to the grid): exactly the voxels whose values
-    enter the interpolant somewhere inside the cell. Negative values count as 0.
-    """
-    a = np.asarray(sigma_t_zyx)
-    if a.ndim == 4:
-        a = a.max(axis=3)
-    if a.ndim != 3 or min(a.shape) < 1:
-        raise ValueError(f"majorant_grid: expected a (nz, ny, nx) or (nz, ny, nx, C) array, got shape {a.shape}")
-    cell = int(cell)
-    if cell < 1:
-        raise ValueError(f"majorant_grid: cell must be >= 1, got {cell}")
-    a = np.asarray(a, np.float64)
-    if not np.all(np.isfinite(a)):
-        raise ValueError("majorant_grid: sigma_t contains non-finite values")
-    d = a
-    for axis in range(3):  # 3-tap running maximum per axis == dilation by one voxel (edge clamped)
-        lo = [slice(None)] * 3
-        hi = [slice(None)] * 3
-        lo[axis], hi[axis] = slice(0, -1), slice(1, None)
-        e = d.copy()
-        e[tuple(hi)] = np.maximum(e[tuple(hi)], d[tuple(lo)])
-        e[tuple(lo)] = np.maximum(e[tuple(lo)], d[tuple(hi)])
-        d = e
-    for axis in range(3):  # block maxima, partial last blocks included
-        d = np.maximum.reduceat(d, np.arange(0, d.shape[axis], cell), axis=axis)
-    return (np.maximum(d, 0.0) * float(safety)).astype(np.float32)
-
-
-def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.ndarray:
-    """Majorants per texel cell: the cells between 2 x 2 x 2 texel centres of a (nz, ny, nx) grid (or
-    (nz, ny, nx, C): the maximum over channels), cells -1 .. N - 1 per axis (array index + 1), the first
-    and last being the half cells between the box's faces and the outer texel centres (where the
-    gridvolume clamps). The trilinear interpolant is one trilinear polynomial in such a cell, so
-    ``safety`` x the maximum of its 8 texels bounds it there, tightly. float32, (nz + 1, ny + 1, nx + 1);
-    negative values count as 0."""
-    a = np.asarray(sigma_t_zyx, np.float64)
-    a = a.max(axis=3) if a.ndim == 4 else a
-    if a.ndim != 3 or min(a.shape) < 1 or not np.all(np.isfinite(a)):
-        raise ValueError(f"texel_majorant_grid: expected a finite (nz, ny, nx) or (nz, ny, nx, C) array, got shape {a.shape}")
-    a = np.pad(np.maximum(a, 0.0), 1, mode="edge")  # clamped borders
-    for axis in range(3):  # the larger of the two texels on either side, per axis
-        a = np.maximum(a[(slice(None),) * axis + (slice(0, -1),)], a[(slice(None),) * axis + (slice(1, None),)])
-    return (a * float(safety)).astype(np.float32)
-
-
-def empty_space_radius(majorant: np.ndarray) -> np.ndarray:
-    """For each coarse cell, the largest k such that every cell within k cells of it (Chebyshev
-    distance, i.e. the cube of side 2k + 1 centred on it, cells beyond the grid counting as empty) has
-    majorant 0: the DDA may cross that cube in one step (proximity clouds, Cohen & Sheffer 1994).
-    0 for occupied cells and for empty cells next to an occupied one. int32, the shape of ``majorant``."""
-    from scipy.ndimage import distance_transform_cdt
-    occupied = np.asarray(majorant) > 0.0
-    if not occupied.any():
-        return np.full(occupied.shape, max(occupied.shape), np.int32)
-    d = distance_transform_cdt(~occupied, metric="chessboard")  # distance to the nearest occupied cell
-    return np.maximum(d - 1, 0).astype(np.int32)
-
-
 # ---------------------------------------------------------------- Mitsuba helpers
-
-class _Grid:
-    """A grid of majorants for the DDA: cell c (per axis lo <= c < lo + dims) spans [c, c + 1) in the
-    coordinates q = local * scale + shift; ``majorant`` (Float, flattened (Z, Y, X), index c - lo) and
-    ``empty`` (Int32, ``empty_space_radius``) per cell. Sizes and scales are opaque (no recompiles)."""
-
-    def __init__(self, majorant, empty, dims, scale, shift: float, lo: int):
-        self.majorant, self.empty = majorant, empty
-        self.dims = [dr.opaque(mi.Int32, int(v)) for v in dims]
-        self.scale = [dr.opaque(mi.Float, float(v)) for v in scale]
-        self.shift, self.lo = float(shift), int(lo)
-
 
 class _Children:
     """Collects the direct children and values that an object exposes through ``traverse`` (methods
@@ -331,7 +252,7 @@ def _default_lanes() -> int:
     """Lanes of a persistent-lane launch: one LLVM block per worker thread (each thread's first packet
     then takes samples until none are left), at least 64. Not critical: 512, 2048, 8192 and 32768 lanes
     took the same time (0.19-0.20 s per spp, demo side view, 160 x 120, two rounds)."""
-    from ..variant import llvm_block_size
+    from ..jit_settings import llvm_block_size
     return max(64, int(dr.thread_count()) * int(llvm_block_size() or 1024))
 
 
@@ -574,7 +495,7 @@ class MajorantVolpath:
         if maj_key != getattr(self, "_skip_key", None):
             self._skip = mi.Int32(empty_space_radius(self.majorant.numpy()).ravel())
             self._skip_key = maj_key
-        self._coarse = _Grid(self.majorant.array, self._skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
+        self._coarse = Grid(self.majorant.array, self._skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
         self._texel = self._texel_grid(vol, ms.scale)
         self._track = self._texel if (self._texel is not None and self.track_mode == "texel") else self._coarse
 
@@ -593,7 +514,7 @@ class MajorantVolpath:
             self._texel_key = key
         rx, ry, rz = (int(v) for v in vol.resolution())
         self._texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
-        return _Grid(*self._texel_arrays, (rx + 1, ry + 1, rz + 1), (rx, ry, rz), shift=-0.5, lo=-1)
+        return Grid(*self._texel_arrays, (rx + 1, ry + 1, rz + 1), (rx, ry, rz), shift=-0.5, lo=-1)
 
     @staticmethod
     def _check_bbox(to_world, vol):
@@ -651,82 +572,6 @@ class MajorantVolpath:
         mei.sigma_s, mei.sigma_t = sigma_s, sigma_t
         return mei, dr.select(sigma_t > 0.0, sigma_s / dr.select(sigma_t > 0.0, sigma_t, 1.0), 0.0)
 
-    # ------------------------------------------------------------ grids and the DDA
-    def _ray_box(self, ray, t_end, active):
-        """The ray in the grid's local (unit-cube) coordinates and its overlap [t_near, t_far] with the
-        cube within [0, t_end]; ``active`` cleared where it misses."""
-        o_l = self._to_local @ ray.o
-        d_l = self._to_local @ mi.Vector3f(ray.d)
-        t_near, t_far = mi.Float(0.0), mi.Float(t_end)
-        for k in range(3):
-            o, d = o_l[k], d_l[k]
-            flat = dr.abs(d) < 1e-30
-            inv = dr.rcp(dr.select(flat, 1.0, d))
-            ta, tb = (0.0 - o) * inv, (1.0 - o) * inv
-            inside = (o >= 0.0) & (o <= 1.0)
-            t_near = dr.select(flat, dr.select(inside, t_near, dr.inf), dr.maximum(t_near, dr.minimum(ta, tb)))
-            t_far = dr.select(flat, dr.select(inside, t_far, -dr.inf), dr.minimum(t_far, dr.maximum(ta, tb)))
-        return o_l, d_l, t_near, t_far, mi.Bool(active) & (t_near < t_far)
-
-    @staticmethod
-    def _locate(grid, q0, dq, t):
-        """DDA state at distance t: per axis the cell (clipped to the grid; on a face, the cell the ray
-        enters) and the distance at which the ray leaves it along that axis."""
-        cells, nexts = [], []
-        for k in range(3):
-            q = q0[k] + dq[k] * t
-            c = mi.Int32(dr.floor(q))
-            c = dr.select((dq[k] < 0.0) & (mi.Float(c) == q), c - 1, c)
-            c = dr.clip(c, grid.lo, grid.lo + grid.dims[k] - 1)
-            boundary = mi.Float(c) + dr.select(dq[k] > 0.0, 1.0, 0.0)
-            inv = dr.rcp(dr.select(dq[k] != 0.0, dq[k], 1.0))
-            nexts.append(dr.select(dq[k] != 0.0, dr.maximum(t + (boundary - q) * inv, t), dr.inf))
-            cells.append(c)
-        return cells, nexts
-
-    @classmethod
-    def _dda_step(cls, grid, q0, dq, t, cells, nexts, jump_k, move):
-        """Advance the DDA of the lanes ``move`` to distance t: to the next cell, or (``jump_k`` >= 1)
-        to where the ray leaves the empty cube of radius jump_k; returns (cells, nexts, outside)."""
-        jump = move & (jump_k > 0)
-        jc, jn = cls._locate(grid, q0, dq, t)
-        tx, ty, tz = nexts
-        ax = [(tx <= ty) & (tx <= tz)]
-        ax.append(~ax[0] & (ty <= tz))
-        ax.append(~ax[0] & ~ax[1])
-        out_cells, out_nexts = [], []
-        outside = mi.Bool(False)
-        for a in range(3):
-            plain = move & ~jump & ax[a]
-            step = dr.select(dq[a] > 0.0, mi.Int32(1), mi.Int32(-1))
-            delta = dr.abs(dr.rcp(dr.select(dq[a] != 0.0, dq[a], 1.0)))
-            c = dr.select(jump, jc[a], dr.select(plain, cells[a] + step, cells[a]))
-            out_cells.append(c)
-            out_nexts.append(dr.select(jump, jn[a], dr.select(plain, nexts[a] + delta, nexts[a])))
-            outside |= (c < grid.lo) | (c >= grid.lo + grid.dims[a])
-        return out_cells, out_nexts, outside
-
-    @staticmethod
-    def _cell_of(grid, cells, active):
-        """(majorant, flat index) of the current cells."""
-        cx, cy, cz = (dr.clip(c - grid.lo, 0, grid.dims[a] - 1) for a, c in enumerate(cells))
-        idx = mi.UInt32((cz * grid.dims[1] + cy) * grid.dims[0] + cx)
-        return dr.gather(mi.Float, grid.majorant, idx, active), idx
-
-    @staticmethod
-    def _cell_end(grid, q0, dq, cells, nexts, idx, empty, active):
-        """Where the ray leaves the current cell or, in empty space, the empty cube of radius k >= 1
-        about it (``empty_space_radius``): (t, k), k = 0 for a plain step."""
-        k = dr.gather(mi.Int32, grid.empty, idx, active & empty)
-        k = dr.select(active & empty, k, 0)
-        t_cell = dr.minimum(nexts[0], dr.minimum(nexts[1], nexts[2]))
-        t_exit = mi.Float(dr.inf)
-        for c_k, o_k, d_k in zip(cells, q0, dq):
-            face = dr.select(d_k > 0.0, mi.Float(c_k + k + 1), mi.Float(c_k - k))
-            t_k = (face - o_k) * dr.rcp(dr.select(d_k != 0.0, d_k, 1.0))
-            t_exit = dr.select(d_k != 0.0, dr.minimum(t_exit, t_k), t_exit)
-        return dr.select(k > 0, dr.maximum(t_exit, t_cell), t_cell), k
-
     def _walk(self, ray, t_end, sampler, active, ratio: bool, weight=None):
         """Walk a majorant grid (``self._track``: the texel-cell grid, else the coarse one) along ``ray``
         over [0, t_end] (clipped to the grid's box), crossing empty cubes of cells in one step.
@@ -742,10 +587,10 @@ class MajorantVolpath:
         the throughput is preserved)."""
         grid = self._track
         texels = self._texel_data if (grid is self._texel and not self._ms.spectral) else None
-        o_l, d_l, t_near, t_max, active = self._ray_box(ray, t_end, active)
+        o_l, d_l, t_near, t_max, active = ray_box(self._to_local, ray, t_end, active)
         q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
         dq = [d_l[k] * grid.scale[k] for k in range(3)]
-        cells, nexts = self._locate(grid, q0, dq, t_near)
+        cells, nexts = locate(grid, q0, dq, t_near)
 
         ms = self._ms
         spectral = ms.spectral
@@ -760,8 +605,8 @@ class MajorantVolpath:
 
         def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
             cells, nexts = [cx, cy, cz], [tx, ty, tz]
-            maj, idx = self._cell_of(grid, cells, active)
-            t_cell, k = self._cell_end(grid, q0, dq, cells, nexts, idx, maj <= 0.0, active)
+            maj, idx = cell_of(grid, cells, active)
+            t_cell, k = cell_end(grid, q0, dq, cells, nexts, idx, maj <= 0.0, active)
             seg_end = dr.minimum(t_cell, t_max)
             u = sampler.next_1d(active)
             dt = dr.select(maj > 0.0, -dr.log(1.0 - u) / maj, dr.inf)
@@ -770,7 +615,7 @@ class MajorantVolpath:
             if texels is None:
                 s_t = self._sigma_t(ray.o + ray.d * tc, ray, collide)
             else:  # in a texel cell: the interpolant of its 8 texels
-                s_t = self._cell_interpolant(texels, grid, q0, dq, cells, (tc,), collide)[0]
+                s_t = cell_interpolant(texels, grid, q0, dq, cells, (tc,), collide)[0]
             if ratio:
                 inv_maj = dr.rcp(dr.select(collide, maj, 1.0))
                 tr = dr.select(collide, tr * dr.clip(1.0 - s_t * inv_maj, 0.0, 1.0), tr)
@@ -799,7 +644,7 @@ class MajorantVolpath:
                     found |= stop
             t = dr.select(collide, tc, seg_end)
             adv = active & ~collide
-            (cx, cy, cz), (tx, ty, tz), outside = self._dda_step(grid, q0, dq, t, cells, nexts, k, adv)
+            (cx, cy, cz), (tx, ty, tz), outside = dda_step(grid, q0, dq, t, cells, nexts, k, adv)
             leave = adv & ((seg_end >= t_max) | outside)
             active &= ~(stop | leave)
             return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
@@ -826,10 +671,10 @@ class MajorantVolpath:
         grid = self._texel
         spectral = self._ms.spectral
         texels = None if spectral else self._texel_data
-        o_l, d_l, t_near, t_max, active = self._ray_box(ray, t_end, active)
+        o_l, d_l, t_near, t_max, active = ray_box(self._to_local, ray, t_end, active)
         q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
         dq = [d_l[k] * grid.scale[k] for k in range(3)]
-        cells, nexts = self._locate(grid, q0, dq, t_near)
+        cells, nexts = locate(grid, q0, dq, t_near)
         s0 = self._sigma_t(ray.o + ray.d * t_near, ray, active)
         tau = dr.zeros(mi.Spectrum) if spectral else mi.Float(0.0)
 
@@ -840,20 +685,20 @@ class MajorantVolpath:
 
         def body(sampler, active, t, cx, cy, cz, tx, ty, tz, s0, tau, w, next_rr):
             cells, nexts = [cx, cy, cz], [tx, ty, tz]
-            maj, idx = self._cell_of(grid, cells, active)
+            maj, idx = cell_of(grid, cells, active)
             empty = maj <= 0.0
-            t_cell, k = self._cell_end(grid, q0, dq, cells, nexts, idx, empty, active)
+            t_cell, k = cell_end(grid, q0, dq, cells, nexts, idx, empty, active)
             seg_end = dr.minimum(t_cell, t_max)
             lookup = active & ~empty
             if texels is None:
                 s_m = self._sigma_t(ray.o + ray.d * (0.5 * (t + seg_end)), ray, lookup)
                 s_1 = self._sigma_t(ray.o + ray.d * seg_end, ray, lookup)
             else:  # the cell's 8 texels once, the interpolant at both points from them
-                s_m, s_1 = self._cell_interpolant(texels, grid, q0, dq, cells, (0.5 * (t + seg_end), seg_end), lookup)
+                s_m, s_1 = cell_interpolant(texels, grid, q0, dq, cells, (0.5 * (t + seg_end), seg_end), lookup)
             tau = dr.select(lookup, tau + (seg_end - t) * (1.0 / 6.0) * (s0 + 4.0 * s_m + s_1), tau)  # Simpson
             s0 = dr.select(lookup, s_1, 0.0)  # a cell whose texels are 0 is 0 on its faces
             t = dr.select(active, seg_end, t)
-            (cx, cy, cz), (tx, ty, tz), outside = self._dda_step(grid, q0, dq, t, cells, nexts, k, active)
+            (cx, cy, cz), (tx, ty, tz), outside = dda_step(grid, q0, dq, t, cells, nexts, k, active)
             tau_min = dr.min(tau) if spectral else tau
             if rr:  # Russian roulette each time T falls by another EXACT_RR_STEP (weights w)
                 low = active & (tau_min > next_rr)
@@ -875,30 +720,6 @@ class MajorantVolpath:
         if rr:
             return mi.Spectrum(w * dr.exp(-tau))
         return mi.Spectrum(dr.select((dr.min(tau) if spectral else tau) > TAU_ZERO, 0.0, dr.exp(-tau)))
-
-    @staticmethod
-    def _cell_interpolant(texels, grid, q0, dq, cells, ts, active):
-        """sigma_t at distances ``ts`` along the ray, all in the texel cell ``cells``: the trilinear
-        interpolant of its 8 texels (gathered once; indices clamped as the gridvolume clamps them),
-        times the medium's scale. ``texels`` = (data, scale); grey extinction."""
-        data, scale = texels
-        n = [d - 1 for d in grid.dims]  # texels per axis
-        lo = [dr.clip(c, 0, m - 1) for c, m in zip(cells, n)]
-        hi = [dr.clip(c + 1, 0, m - 1) for c, m in zip(cells, n)]
-        v = {}
-        for iz, z in enumerate((lo[2], hi[2])):
-            for iy, y in enumerate((lo[1], hi[1])):
-                for ix, x in enumerate((lo[0], hi[0])):
-                    v[iz, iy, ix] = dr.gather(mi.Float, data, mi.UInt32((z * n[1] + y) * n[0] + x), active)
-        out = []
-        for t in ts:
-            f = [q0[k] + dq[k] * t - mi.Float(cells[k]) for k in range(3)]
-            x00 = dr.lerp(v[0, 0, 0], v[0, 0, 1], f[0])
-            x01 = dr.lerp(v[0, 1, 0], v[0, 1, 1], f[0])
-            x10 = dr.lerp(v[1, 0, 0], v[1, 0, 1], f[0])
-            x11 = dr.lerp(v[1, 1, 0], v[1, 1, 1], f[0])
-            out.append(dr.lerp(dr.lerp(x00, x01, f[1]), dr.lerp(x10, x11, f[1]), f[2]) * scale)
-        return out
 
     # ------------------------------------------------------------ main entry
     def sample(self, scene, sampler, ray, medium=None, active=True):
