@@ -153,6 +153,7 @@ import mitsuba as mi
 
 from ..scene import MAX_SUN_DIAMETER_DEG
 from .dda import Grid, cell_end, cell_interpolant, cell_of, dda_step, locate, ray_box
+from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
 from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401
 from .variant_class import variant_class
 
@@ -170,7 +171,6 @@ EXACT_RR_TAU = 4.6    # exact transmittance in a render: Russian roulette once T
 EXACT_RR_STEP = 2.3   # ... and again each time it falls by another factor e^2.3 = 10 ...
 EXACT_RR_SURVIVE = 0.3  # ... surviving with this probability (1: no roulette, stop at TAU_ZERO)
 TAU_ZERO = 50.0      # exact transmittance: 0 beyond this optical depth (e^-50 ~ 2e-22)
-MAX_JOBS_PER_LAUNCH = 1 << 22  # persistent lanes: samples per kernel launch (12 bytes of radiance each)
 
 
 def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
@@ -203,57 +203,6 @@ def _children(obj) -> dict:
     cb = variant_class(_Children, "TraversalCallback")()
     obj.traverse(cb)
     return cb.items
-
-
-_JOB_SAMPLERS: dict = {}
-_PCG_MULT = 0x5851F42D4C957F2D
-
-
-def _splitmix64(x: int) -> int:
-    """SplitMix64 of ``x``: a well-mixed 64-bit key for a pass seed."""
-    z = (x + 0x9E3779B97F4A7C15) & 0xFFFFFFFFFFFFFFFF
-    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & 0xFFFFFFFFFFFFFFFF
-    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & 0xFFFFFFFFFFFFFFFF
-    return z ^ (z >> 31)
-
-
-def _seed_pcg(rng, initstate, initseq, active):
-    """PCG32's seeding (``PCG32.seed``: stream ``initseq``, offset ``initstate``) in the lanes ``active``."""
-    inc = (initseq << 1) | 1
-    state = inc + initstate          # state = 0; step; state += initstate
-    state = state * _PCG_MULT + inc  # step
-    rng.state = dr.select(active, state, rng.state)
-    rng.inc = dr.select(active, inc, rng.inc)
-
-
-def _job_sampler_class():
-    """The sampler of the persistent lanes (one per variant): ``next_1d`` / ``next_2d`` from a PCG32 that
-    is re-seeded for every sample (a Mitsuba sampler cannot be re-seeded per lane inside a kernel)."""
-    key = mi.variant()
-    if key not in _JOB_SAMPLERS:
-        class JobSampler:
-            DRJIT_STRUCT = {"rng": mi.PCG32}
-
-            def __init__(self):
-                self.rng = mi.PCG32()
-
-            def next_1d(self, active=True):
-                return self.rng.next_float32(mi.Bool(active))
-
-            def next_2d(self, active=True):
-                a = mi.Bool(active)
-                u = self.rng.next_float32(a)
-                return mi.Point2f(u, self.rng.next_float32(a))
-        _JOB_SAMPLERS[key] = JobSampler
-    return _JOB_SAMPLERS[key]
-
-
-def _default_lanes() -> int:
-    """Lanes of a persistent-lane launch: one LLVM block per worker thread (each thread's first packet
-    then takes samples until none are left), at least 64. Not critical: 512, 2048, 8192 and 32768 lanes
-    took the same time (0.19-0.20 s per spp, demo side view, 160 x 120, two rounds)."""
-    from ..jit_settings import llvm_block_size
-    return max(64, int(dr.thread_count()) * int(llvm_block_size() or 1024))
 
 
 def _phase_ctx(sampler):
@@ -1003,109 +952,8 @@ class MajorantVolpath:
 
     def render_passes(self, scene, passes, lanes: int | None = None, max_jobs: int = MAX_JOBS_PER_LAUNCH,
                       pixels=None) -> list:
-        """Passes ``[(spp, seed), ...]`` rendered together, in launches of up to ``max_jobs`` samples: a
-        launch ends when its longest path ends, and path lengths are heavy-tailed (a walk of ~1e6 events
-        made one 1-spp pass of the demo's side view at 256 x 256 take 0.35 s or 2.7 s), so passes rendered
-        one by one pay that tail each time (16 passes of 2 spp, 160 x 120: 1.16x the time,
-        ``benchmarks/reference_noise.py --profile``).
-        Returns one (H, W, 3) float32 image per pass, each as ``render_pass`` renders it alone.
-
-        Deterministic: a sample's random numbers depend on (its pass's seed, its number in the pass) only,
-        each sample's radiance is written to its own slot and a pass's slots are summed layer by layer
-        in order. ``pixels`` (flat indices, row-major; None: all): only these pixels are rendered, the
-        others are 0; a sample is numbered by its layer and pixel in the whole film, so they get the
-        values of the pass over all."""
-        sensor = scene.sensors()[0]
-        film = sensor.film()
-        width, height = (int(v) for v in film.crop_size())
-        if any(int(v) != 0 for v in film.crop_offset()):
-            raise ValueError(f"{PLUGIN_NAME}: render_pass needs a film without a crop offset")
-        spps = [int(spp) for spp, _ in passes]
-        if not spps or min(spps) < 1:
-            raise ValueError(f"{PLUGIN_NAME}: every pass needs spp >= 1, got {spps}")
-        n_all = width * height
-        if pixels is None:
-            pix_list = None
-            n_pix = n_all
-        else:
-            pix = np.unique(np.asarray(pixels, np.int64).ravel())
-            if pix.size == 0 or pix[0] < 0 or pix[-1] >= n_all:
-                raise ValueError(f"{PLUGIN_NAME}: pixels must be flat indices in [0, {n_all}), got {pix.size} "
-                                 f"indices in [{pix.min() if pix.size else 0}, {pix.max() if pix.size else 0}]")
-            pix_list = mi.UInt32(pix.astype(np.uint32))
-            n_pix = int(pix.size)
-        # per layer (one sample of every pixel) of all passes in order: its pass, its number in the pass,
-        # and the pass's key (the PCG32 state; its high bits | the sample's number make the stream)
-        layer_pass = np.repeat(np.arange(len(spps)), spps)
-        layer_number = mi.UInt32(np.concatenate([np.arange(n) for n in spps]).astype(np.uint32))
-        layer_key = mi.UInt64(np.array([_splitmix64(int(seed)) for _, seed in passes], np.uint64)[layer_pass])
-        medium = sensor.get_medium()
-        cond, body, initial = self._path_loop(scene, medium)
-        job_sampler = _job_sampler_class()
-        lanes = int(lanes) if lanes is not None else _default_lanes()
-        total = len(layer_pass)
-        layers = max(1, min(total, int(max_jobs) // n_pix))   # layers per launch
-        size = [dr.opaque(mi.UInt32, v) for v in (width, height)]
-        n_sel = dr.opaque(mi.UInt32, n_pix)
-        n_all_op = dr.opaque(mi.UInt32, n_all)
-        inv_size = mi.Point2f(dr.opaque(mi.Float, 1.0 / width), dr.opaque(mi.Float, 1.0 / height))
-        acc = np.zeros((len(spps), n_pix, 3), np.float64)
-        for layer0 in range(0, total, layers):
-            n_layers = min(layers, total - layer0)
-            n = n_layers * n_pix
-            n_lanes = max(1, min(lanes, n))
-            counter = dr.zeros(mi.UInt32, 1)
-            slots = dr.zeros(mi.Float, 3 * n)
-            n_jobs, first = dr.opaque(mi.UInt32, n), dr.opaque(mi.UInt32, layer0)
-            sampler = job_sampler()
-            sampler.rng = mi.PCG32(n_lanes)
-            path = initial(sampler, dr.zeros(mi.Ray3f, n_lanes), medium, dr.full(mi.Bool, False, n_lanes))
-            start_state = (dr.full(mi.UInt32, 0xFFFFFFFF, n_lanes), dr.full(mi.Bool, True, n_lanes),
-                           dr.zeros(mi.Spectrum, n_lanes)) + path
-
-            def pcond(job, alive, weight, *path):
-                return alive
-
-            def pbody(job, alive, weight, *path):
-                path = body(*path)
-                done = alive & ~path[1]
-                # the finished sample's radiance into its slot
-                finished = done & (job < n_jobs)
-                value = path[5] * weight
-                for c in range(3):
-                    dr.scatter(slots, value[c], job * 3 + c, finished)
-                # the next sample, from the shared counter
-                nxt = dr.scatter_inc(counter, mi.UInt32(0), done)
-                start = done & (nxt < n_jobs)
-                job = dr.select(done, nxt, job)
-                alive = (alive & path[1]) | start
-                sampler = path[0]
-                # the sample's number in its pass: its layer there x all pixels + its pixel (a pass over
-                # some pixels gives them the values of the pass over all)
-                k = job % n_sel
-                layer = first + job // n_sel
-                pixel = k if pix_list is None else dr.gather(mi.UInt32, pix_list, k, start)
-                number = dr.gather(mi.UInt32, layer_number, layer, start) * n_all_op + pixel
-                key = dr.gather(mi.UInt64, layer_key, layer, start)
-                _seed_pcg(sampler.rng, key, ((key >> 32) << 32) | mi.UInt64(number), start)
-                pos = mi.Point2f(mi.Float(pixel % size[0]), mi.Float(pixel // size[0])) + sampler.next_2d(start)
-                ray, ray_weight = sensor.sample_ray(sensor.shutter_open(), sampler.next_1d(start), pos * inv_size,
-                                                    mi.Point2f(0.5, 0.5), start)
-                new = initial(sampler, ray, medium, start)
-                path = (sampler,) + tuple(dr.select(start, a, b) for a, b in zip(new[1:], path[1:]))
-                weight = dr.select(start, mi.Spectrum(ray_weight), weight)
-                return (job, alive, weight) + path
-
-            dr.while_loop(state=start_state, cond=pcond, body=pbody, label="majorant_volpath: persistent lanes")
-            values = slots.numpy().reshape(n_layers, n_pix, 3)
-            for j in range(n_layers):  # layer by layer, in order: the sums do not depend on the launches
-                acc[layer_pass[layer0 + j]] += values[j]
-        images = []
-        for a, spp in zip(acc, spps):
-            out = np.zeros((n_all, 3), np.float32)
-            out[slice(None) if pix_list is None else pix] = a / spp
-            images.append(out.reshape(height, width, 3))
-        return images
+        """Passes ``[(spp, seed), ...]`` rendered together with persistent lanes: :func:`.lanes.render_passes`."""
+        return render_passes(self, scene, passes, lanes, max_jobs, pixels, PLUGIN_NAME)
 
     # ------------------------------------------------------------ the integrator's sun
     def _sample_sun(self, sample):
