@@ -152,14 +152,15 @@ import drjit as dr
 import mitsuba as mi
 
 from ..scene import MAX_SUN_DIAMETER_DEG
-from .dda import Grid, cell_end, cell_interpolant, cell_of, dda_step, locate, ray_box
+from .dda import Grid
 from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
+from .medium_setup import MediumSetup, Tracking, check_bbox, phase_ctx, scattering_event, volume_data
 from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401
+from . import sun
+from .trackers import delta_tracking, exact_transmittance, ratio_tracking
 from .variant_class import variant_class
 
 PLUGIN_NAME = "majorant_volpath"
-_RR_THRESHOLD = 0.1   # ratio tracking: roulette once max(T) drops below this ...
-_RR_SURVIVE = 0.5     # ... surviving with this probability
 LONG_WALK_DEPTH = 1024  # see "Russian roulette" in the module docstring
 DEFAULT_EMITTER_NEE = 0.1  # probability of sampling the scene's emitters (the sky) at a vertex: 1.2x the efficiency of 0.25, 2x that of 0.05 (demo views)
 GUIDE_GROWTH = 2.0    # sun guiding: bound of the product of 1 / (1 - eps) along a path
@@ -167,49 +168,9 @@ GUIDE_SEEN = 0.1      # sun guiding at full strength where the sun's transmittan
 DEFAULT_TRACKING_GRID = "texel"  # free flights: "texel" (majorants per texel cell) or "coarse" (the majorant grid)
 DEFAULT_PERSISTENT_LANES = True  # reference.render_pass renders LLVM passes with render_pass (persistent lanes)
 DEFAULT_TRANSMITTANCE = "exact"  # shadow rays: "exact" (Simpson per texel cell) or "ratio" (ratio tracking)
-EXACT_RR_TAU = 4.6    # exact transmittance in a render: Russian roulette once T < e^-4.6 = 0.01 ...
-EXACT_RR_STEP = 2.3   # ... and again each time it falls by another factor e^2.3 = 10 ...
-EXACT_RR_SURVIVE = 0.3  # ... surviving with this probability (1: no roulette, stop at TAU_ZERO)
-TAU_ZERO = 50.0      # exact transmittance: 0 beyond this optical depth (e^-50 ~ 2e-22)
-
-
-def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
-    """(v_max, radiance) of a uniform sun disk of angular ``diameter_deg`` whose irradiance on a plane
-    normal to its centre is ``irradiance`` (RGB): v_max = 1 - cos(radius) (computed as 2 sin^2(r/2):
-    float32 cannot hold 1 - cos of a quarter degree), radiance = E / (pi sin^2 r), because the disk
-    gives  integral_cap L cos(theta) d omega = pi sin^2(r) L  on that plane. (0, E) for a point sun."""
-    e = np.asarray(irradiance, np.float64)
-    r = np.radians(float(diameter_deg)) / 2.0
-    if r <= 0.0:
-        return 0.0, e
-    return float(2.0 * np.sin(r / 2.0) ** 2), e / (np.pi * np.sin(r) ** 2)
 
 
 # ---------------------------------------------------------------- Mitsuba helpers
-
-class _Children:
-    """Collects the direct children and values that an object exposes through ``traverse`` (methods
-    of a ``mi.TraversalCallback``, see ``variant_class``)."""
-
-    def __init__(self):
-        mi.TraversalCallback.__init__(self)
-        self.items = {}
-
-    def put(self, name, value, flags, cpptype=None):
-        self.items[name] = (value, cpptype)
-
-
-def _children(obj) -> dict:
-    cb = variant_class(_Children, "TraversalCallback")()
-    obj.traverse(cb)
-    return cb.items
-
-
-def _phase_ctx(sampler):
-    """A phase-function context; the persistent-lane renderer's samplers (``_JobSampler``) are not
-    Mitsuba samplers, and no phase function used here reads the context's sampler."""
-    return mi.PhaseFunctionContext(sampler if isinstance(sampler, mi.Sampler) else None)
-
 
 def _mis_weight(pdf_a, pdf_b):
     a2 = dr.square(pdf_a)
@@ -222,42 +183,6 @@ def _as_interaction(x):
     it = dr.zeros(mi.Interaction3f)
     it.t, it.time, it.wavelengths, it.p, it.n = x.t, x.time, x.wavelengths, x.p, x.n
     return it
-
-
-def _key(obj):
-    return obj.ptr if hasattr(obj, "ptr") else id(obj)
-
-
-class _MediumSetup:
-    """Everything the traced walk needs about the scene's one medium (built at each render)."""
-
-    def __init__(self, integrator: "MajorantVolpath", scene, sensor_medium):
-        media = {}
-        for shape in scene.shapes():
-            for m in (shape.interior_medium(), shape.exterior_medium()):
-                if m is not None:
-                    media.setdefault(_key(m), m)
-        for sensor in scene.sensors():
-            m = sensor.get_medium() if hasattr(sensor, "get_medium") else None
-            if m is not None:
-                media.setdefault(_key(m), m)
-        if sensor_medium is not None:
-            media.setdefault(_key(sensor_medium), sensor_medium)
-        if len(media) > 1:
-            raise RuntimeError(f"{PLUGIN_NAME}: the scene references {len(media)} different media; "
-                               "this integrator handles exactly one (put all the data into one grid)")
-        self.medium = next(iter(media.values())) if media else None
-        self.volume = None
-        self.scale = 1.0
-        self.spectral = False
-        if self.medium is None:
-            return
-        self.spectral = bool(self.medium.has_spectral_extinction())
-        ch = _children(self.medium)
-        if "sigma_t" in ch and isinstance(ch["sigma_t"][0], mi.Volume) and "scale" in ch:
-            self.volume = ch["sigma_t"][0]
-            value, cpptype = ch["scale"]
-            self.scale = float(mi.get_property(value, cpptype, self.medium)) if cpptype is not None else float(value)
 
 
 # ---------------------------------------------------------------- integrator
@@ -302,10 +227,12 @@ class MajorantVolpath:
         if self.track_mode not in ("texel", "coarse"):
             raise ValueError(f"{PLUGIN_NAME}: 'tracking_grid' must be 'texel' or 'coarse', got {self.track_mode!r}")
         self.persistent = bool(props.get("persistent_lanes", DEFAULT_PERSISTENT_LANES))
-        self._texel, self._texel_data = None, None
         self._init_sun(props)
-        # per-render state (medium, transforms, majorant lanes), filled by _setup
-        self._track = self._coarse = None
+        # per-render state, filled by _setup: the scene's medium, the trackers' grids and frame, and the
+        # caches of the grids built from the medium's data (keys: the data's index and scale)
+        self._ms = self._tk = None
+        self._skip = self._skip_key = None
+        self._texel_arrays = self._texel_key = None
 
     def _init_sun(self, props):
         """The integrator's own sun (see the module docstring, "The sun"): ``sun_direction`` (towards the
@@ -358,7 +285,7 @@ class MajorantVolpath:
         if not self.emitter_nee < 1.0:
             raise ValueError(f"{PLUGIN_NAME}: with the integrator's sun, 'emitter_nee' must be below 1 (the rest "
                              f"of the shadow rays go to the sun), got {self.emitter_nee}")
-        vmax, radiance = sun_disk(diameter, e)
+        vmax, radiance = sun.sun_disk(diameter, e)
         # opaque: a new sun position, size or irradiance reuses the kernel
         self.sun_dir = mi.Vector3f(*(float(v) for v in d))
         self.sun_vmax = mi.Float(vmax)                       # versine of the disk's radius
@@ -392,8 +319,9 @@ class MajorantVolpath:
 
     # ------------------------------------------------------------ per-render setup
     def _setup(self, scene, sensor_medium):
-        ms = _MediumSetup(self, scene, sensor_medium)
+        ms = MediumSetup(scene, sensor_medium)
         self._ms = ms
+        self._tk = Tracking(ms)
         if ms.medium is None:
             return
         vol = ms.volume
@@ -408,14 +336,13 @@ class MajorantVolpath:
         else:
             raise RuntimeError(f"{PLUGIN_NAME}: 'to_world' is required when the medium has no sigma_t grid")
         if vol is not None:
-            self._check_bbox(to_world, vol)
-        to_local = np.linalg.inv(to_world)
-        self._to_local = mi.Transform4f(mi.ScalarTransform4f(to_local.astype(np.float32).tolist()))
+            check_bbox(to_world, vol)
+        to_local = mi.Transform4f(mi.ScalarTransform4f(np.linalg.inv(to_world).astype(np.float32).tolist()))
 
         if self.auto_majorant:
             if vol is None:
                 raise RuntimeError(f"{PLUGIN_NAME}: no 'majorant' given and the medium has no sigma_t grid")
-            data = self._volume_data(vol)
+            data = volume_data(vol)
             key = (data.array.index, ms.scale, self.cell)
             if key != self._auto_key:
                 self.majorant = mi.TensorXf(majorant_grid(np.asarray(data) * ms.scale, self.cell))
@@ -441,12 +368,13 @@ class MajorantVolpath:
             cells_per_unit = (nx, ny, nz)
         # opaque: new resolutions / values do not recompile
         maj_key = (self.majorant.array.index, tuple(self.majorant.shape))
-        if maj_key != getattr(self, "_skip_key", None):
+        if maj_key != self._skip_key:
             self._skip = mi.Int32(empty_space_radius(self.majorant.numpy()).ravel())
             self._skip_key = maj_key
-        self._coarse = Grid(self.majorant.array, self._skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
-        self._texel = self._texel_grid(vol, ms.scale)
-        self._track = self._texel if (self._texel is not None and self.track_mode == "texel") else self._coarse
+        coarse = Grid(self.majorant.array, self._skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
+        texel, texel_data = self._texel_grid(vol, ms.scale)
+        track = texel if (texel is not None and self.track_mode == "texel") else coarse
+        self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data)
 
     def _texel_grid(self, vol, scale):
         """The texel-centre grid (None without a sigma_t grid): its cells lie between 2 x 2 x 2 texel
@@ -454,221 +382,16 @@ class MajorantVolpath:
         interpolant is one trilinear polynomial; majorant = SAFETY x the maximum of the cell's 8 texels,
         which is the maximum of the interpolant there (0: it is 0 in the cell)."""
         if vol is None:
-            return None
-        data = self._volume_data(vol)
+            return None, None
+        data = volume_data(vol)
         key = (data.array.index, scale)
-        if key != getattr(self, "_texel_key", None):
+        if key != self._texel_key:
             maj = texel_majorant_grid(np.asarray(data) * scale)
             self._texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty_space_radius(maj).ravel()))
             self._texel_key = key
         rx, ry, rz = (int(v) for v in vol.resolution())
-        self._texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
-        return Grid(*self._texel_arrays, (rx + 1, ry + 1, rz + 1), (rx, ry, rz), shift=-0.5, lo=-1)
-
-    @staticmethod
-    def _check_bbox(to_world, vol):
-        """The majorant grid must sit on the sigma_t grid: compare the image of the unit cube with
-        the volume's bounding box (a mismatch would silently make the majorants non-conservative)."""
-        corners = np.array([[x, y, z, 1.0] for x in (0, 1) for y in (0, 1) for z in (0, 1)]) @ to_world.T
-        lo, hi = corners[:, :3].min(axis=0), corners[:, :3].max(axis=0)
-        bb = vol.bbox()
-        vlo = np.array([bb.min.x, bb.min.y, bb.min.z], np.float64)
-        vhi = np.array([bb.max.x, bb.max.y, bb.max.z], np.float64)
-        tol = 1e-4 * max(float(np.max(vhi - vlo)), 1e-30)
-        if np.any(np.abs(lo - vlo) > tol) or np.any(np.abs(hi - vhi) > tol):
-            raise RuntimeError(f"{PLUGIN_NAME}: 'to_world' maps the unit cube onto {lo.tolist()} - {hi.tolist()}, "
-                               f"but the medium's sigma_t grid covers {vlo.tolist()} - {vhi.tolist()}")
-
-    @staticmethod
-    def _volume_data(vol):
-        for name, (value, cpptype) in _children(vol).items():
-            if name == "data":
-                return mi.get_property(value, cpptype, vol) if cpptype is not None else value
-        raise RuntimeError(f"{PLUGIN_NAME}: cannot read the sigma_t grid data")
-
-    # ------------------------------------------------------------ medium lookups
-    def _sigma_t(self, p, ray, active):
-        """sigma_t at world point p (Spectrum if spectral extinction, else Float)."""
-        ms = self._ms
-        if ms.volume is not None:
-            it = dr.zeros(mi.Interaction3f)
-            it.p = p
-            it.time = ray.time
-            it.wavelengths = ray.wavelengths
-            if ms.spectral:
-                return ms.volume.eval(it, active) * ms.scale
-            return ms.volume.eval_1(it, active) * ms.scale
-        mei = self._make_mei(ray, p, mi.Float(0.0), active)
-        sigma_t = ms.medium.get_scattering_coefficients(mei, active)[2]
-        return sigma_t if ms.spectral else sigma_t[0]
-
-    def _make_mei(self, ray, p, t, active):
-        mei = dr.zeros(mi.MediumInteraction3f)
-        mei.t = dr.select(active, t, dr.inf)
-        mei.p = p
-        mei.wi = -ray.d
-        mei.sh_frame = mi.Frame3f(mei.wi)
-        mei.time = ray.time
-        mei.wavelengths = ray.wavelengths
-        mei.medium = dr.select(active, mi.MediumPtr(self._ms.medium), dr.zeros(mi.MediumPtr))
-        return mei
-
-    def _scattering_event(self, ray, t, active):
-        """The medium interaction at distance ``t`` along ``ray`` (with sigma_s and sigma_t set) and its
-        single-scattering albedo sigma_s / sigma_t (0 where sigma_t = 0)."""
-        mei = self._make_mei(ray, ray.o + ray.d * t, t, active)
-        sigma_s, _, sigma_t = self._ms.medium.get_scattering_coefficients(mei, active)
-        mei.sigma_s, mei.sigma_t = sigma_s, sigma_t
-        return mei, dr.select(sigma_t > 0.0, sigma_s / dr.select(sigma_t > 0.0, sigma_t, 1.0), 0.0)
-
-    def _walk(self, ray, t_end, sampler, active, ratio: bool, weight=None):
-        """Walk a majorant grid (``self._track``: the texel-cell grid, else the coarse one) along ``ray``
-        over [0, t_end] (clipped to the grid's box), crossing empty cubes of cells in one step.
-
-        ratio=True: ratio tracking, returns the transmittance estimate (Spectrum).
-        ratio=False: delta tracking, returns (found, t, weight): whether and where the first real
-        collision is. With grey extinction the collision is real with probability sigma_t / majorant
-        and ``weight`` is returned unchanged. With spectral extinction (history-aware spectral
-        tracking, Kutz et al. 2017) the real-collision probability is
-        P = mean(w sigma_t) / (majorant mean(w)) for the path throughput w = ``weight``, and the
-        returned weight is w sigma_t / (majorant P) at the real collision times the product of
-        w (majorant - sigma_t) / (majorant (1 - P)) over the null collisions (unbiased, and the mean of
-        the throughput is preserved)."""
-        grid = self._track
-        texels = self._texel_data if (grid is self._texel and not self._ms.spectral) else None
-        o_l, d_l, t_near, t_max, active = ray_box(self._to_local, ray, t_end, active)
-        q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
-        dq = [d_l[k] * grid.scale[k] for k in range(3)]
-        cells, nexts = locate(grid, q0, dq, t_near)
-
-        ms = self._ms
-        spectral = ms.spectral
-        found = mi.Bool(False)
-        if ratio:
-            tr = mi.Spectrum(1.0) if spectral else mi.Float(1.0)
-        else:  # delta tracking: the path weight (only changed with spectral extinction)
-            tr = mi.Spectrum(weight) if spectral else mi.Float(1.0)
-
-        def cond(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
-            return active
-
-        def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
-            cells, nexts = [cx, cy, cz], [tx, ty, tz]
-            maj, idx = cell_of(grid, cells, active)
-            t_cell, k = cell_end(grid, q0, dq, cells, nexts, idx, maj <= 0.0, active)
-            seg_end = dr.minimum(t_cell, t_max)
-            u = sampler.next_1d(active)
-            dt = dr.select(maj > 0.0, -dr.log(1.0 - u) / maj, dr.inf)
-            tc = t + dt
-            collide = active & (tc < seg_end)
-            if texels is None:
-                s_t = self._sigma_t(ray.o + ray.d * tc, ray, collide)
-            else:  # in a texel cell: the interpolant of its 8 texels
-                s_t = cell_interpolant(texels, grid, q0, dq, cells, (tc,), collide)[0]
-            if ratio:
-                inv_maj = dr.rcp(dr.select(collide, maj, 1.0))
-                tr = dr.select(collide, tr * dr.clip(1.0 - s_t * inv_maj, 0.0, 1.0), tr)
-                low = collide & ((dr.max(tr) if spectral else tr) < _RR_THRESHOLD)
-                xi = sampler.next_1d(low)
-                tr = dr.select(low, dr.select(xi < _RR_SURVIVE, tr * (1.0 / _RR_SURVIVE), 0.0), tr)
-                stop = collide & (dr.all(tr <= 0.0) if spectral else (tr <= 0.0))
-            else:
-                xi = sampler.next_1d(collide)
-                if spectral:
-                    s_n = dr.maximum(maj - s_t, 0.0)
-                    a_t = dr.mean(tr * s_t)
-                    a_n = dr.mean(tr * s_n)
-                    a = a_t + a_n
-                    p_t = dr.select(a > 0.0, a_t / dr.select(a > 0.0, a, 1.0), 0.0)
-                    stop = collide & (xi < p_t)
-                    null = collide & ~stop
-                    w_t = s_t / dr.maximum(maj * p_t, 1e-30)
-                    w_n = s_n / dr.maximum(maj * (1.0 - p_t), 1e-30)
-                    tr = dr.select(stop, tr * w_t, dr.select(null, tr * w_n, tr))
-                    dead = collide & (a <= 0.0)
-                    stop |= dead
-                    found |= stop & ~dead
-                else:
-                    stop = collide & (xi * maj < s_t)
-                    found |= stop
-            t = dr.select(collide, tc, seg_end)
-            adv = active & ~collide
-            (cx, cy, cz), (tx, ty, tz), outside = dda_step(grid, q0, dq, t, cells, nexts, k, adv)
-            leave = adv & ((seg_end >= t_max) | outside)
-            active &= ~(stop | leave)
-            return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
-
-        state = dr.while_loop(
-            state=(sampler, active, mi.Float(t_near), cells[0], cells[1], cells[2],
-                   nexts[0], nexts[1], nexts[2], found, tr),
-            cond=cond, body=body, label="majorant_volpath: DDA " + ("ratio" if ratio else "delta") + " tracking")
-        _, _, t, _, _, _, _, _, _, found, tr = state
-        if ratio:
-            return mi.Spectrum(tr) if not spectral else tr
-        return found, t, (tr if spectral else weight)
-
-    # ------------------------------------------------------------ exact transmittance
-    def _exact_walk(self, ray, t_end, active, sampler=None):
-        """exp(-optical depth) of ``ray`` over [0, t_end] (clipped to the grid's box), computed exactly:
-        the trilinear interpolant of sigma_t is one trilinear polynomial in each cell of the texel-centre
-        grid (``self._texel``), so along a ray it is a cubic in t there, which Simpson's rule integrates
-        exactly: tau = sum over the cells crossed of (t1 - t0) / 6 (s(t0) + 4 s(tm) + s(t1)), with s the
-        medium's own ``sigma_t`` lookup. Cells whose texels are all 0 cost no lookups and empty cubes of
-        cells are crossed in one step. Without ``sampler``: deterministic, 0 once tau > TAU_ZERO (the
-        rest is below e^-TAU_ZERO). With it: Russian roulette once tau passes EXACT_RR_TAU and after
-        every further EXACT_RR_STEP (survival EXACT_RR_SURVIVE, weight its inverse): unbiased, no cut."""
-        grid = self._texel
-        spectral = self._ms.spectral
-        texels = None if spectral else self._texel_data
-        o_l, d_l, t_near, t_max, active = ray_box(self._to_local, ray, t_end, active)
-        q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
-        dq = [d_l[k] * grid.scale[k] for k in range(3)]
-        cells, nexts = locate(grid, q0, dq, t_near)
-        s0 = self._sigma_t(ray.o + ray.d * t_near, ray, active)
-        tau = dr.zeros(mi.Spectrum) if spectral else mi.Float(0.0)
-
-        rr = sampler is not None and EXACT_RR_SURVIVE < 1.0
-
-        def cond(sampler, active, t, cx, cy, cz, tx, ty, tz, s0, tau, w, next_rr):
-            return active
-
-        def body(sampler, active, t, cx, cy, cz, tx, ty, tz, s0, tau, w, next_rr):
-            cells, nexts = [cx, cy, cz], [tx, ty, tz]
-            maj, idx = cell_of(grid, cells, active)
-            empty = maj <= 0.0
-            t_cell, k = cell_end(grid, q0, dq, cells, nexts, idx, empty, active)
-            seg_end = dr.minimum(t_cell, t_max)
-            lookup = active & ~empty
-            if texels is None:
-                s_m = self._sigma_t(ray.o + ray.d * (0.5 * (t + seg_end)), ray, lookup)
-                s_1 = self._sigma_t(ray.o + ray.d * seg_end, ray, lookup)
-            else:  # the cell's 8 texels once, the interpolant at both points from them
-                s_m, s_1 = cell_interpolant(texels, grid, q0, dq, cells, (0.5 * (t + seg_end), seg_end), lookup)
-            tau = dr.select(lookup, tau + (seg_end - t) * (1.0 / 6.0) * (s0 + 4.0 * s_m + s_1), tau)  # Simpson
-            s0 = dr.select(lookup, s_1, 0.0)  # a cell whose texels are 0 is 0 on its faces
-            t = dr.select(active, seg_end, t)
-            (cx, cy, cz), (tx, ty, tz), outside = dda_step(grid, q0, dq, t, cells, nexts, k, active)
-            tau_min = dr.min(tau) if spectral else tau
-            if rr:  # Russian roulette each time T falls by another EXACT_RR_STEP (weights w)
-                low = active & (tau_min > next_rr)
-                survive = sampler.next_1d(low) < EXACT_RR_SURVIVE
-                w = dr.select(low, w * (1.0 / EXACT_RR_SURVIVE), w)
-                next_rr = dr.select(low, next_rr + EXACT_RR_STEP, next_rr)
-                w = dr.select(low & ~survive, 0.0, w)
-                active &= ~(low & ~survive)
-                deep = mi.Bool(False)
-            else:
-                deep = tau_min > TAU_ZERO
-            active &= ~((seg_end >= t_max) | outside | deep)
-            return sampler, active, t, cx, cy, cz, tx, ty, tz, s0, tau, w, next_rr
-
-        state = dr.while_loop(state=(sampler if rr else None, active, mi.Float(t_near), cells[0], cells[1], cells[2],
-                                     nexts[0], nexts[1], nexts[2], s0, tau, mi.Float(1.0), mi.Float(EXACT_RR_TAU)),
-                              cond=cond, body=body, label="majorant_volpath: exact transmittance")
-        tau, w = state[-3], state[-2]
-        if rr:
-            return mi.Spectrum(w * dr.exp(-tau))
-        return mi.Spectrum(dr.select((dr.min(tau) if spectral else tau) > TAU_ZERO, 0.0, dr.exp(-tau)))
+        texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
+        return Grid(*self._texel_arrays, (rx + 1, ry + 1, rz + 1), (rx, ry, rz), shift=-0.5, lo=-1), texel_data
 
     # ------------------------------------------------------------ main entry
     def sample(self, scene, sampler, ray, medium=None, active=True):
@@ -755,14 +478,13 @@ class MajorantVolpath:
                 active_medium = active & (medium != None)  # noqa: E711
                 active_surface = active & ~active_medium
                 t_end = dr.minimum(si.t, ray.maxt)
-                found, t_coll, w_walk = self._walk(ray, t_end, sampler, active_medium, ratio=False,
-                                                   weight=throughput)
+                found, t_coll, w_walk = delta_tracking(self._tk, ray, t_end, sampler, active_medium, throughput)
                 throughput = dr.select(active_medium, w_walk, throughput)
                 act_scatter = active_medium & found
                 active_surface |= active_medium & ~found
 
                 # ---------------- real collision: absorption weight, NEE, phase sampling
-                mei, albedo_w = self._scattering_event(ray, t_coll, act_scatter)
+                mei, albedo_w = scattering_event(ms, ray, t_coll, act_scatter)
                 depth = dr.select(act_scatter, depth + 1, depth)
                 last_event = dr.select(act_scatter, _as_interaction(mei), last_event)
                 active &= depth < max_depth
@@ -783,7 +505,7 @@ class MajorantVolpath:
             w_hit = dr.select(count_direct, 1.0, _mis_weight(last_pdf, c_sky * em_pdf))
             result = dr.select(active_e, result + throughput * w_hit * emitted, result)
             if sun_mode == "disk":  # a ray that leaves the scene inside the sun's disk sees the sun
-                in_sun = active_surface & ~si.is_valid() & self._in_sun(ray.d)
+                in_sun = active_surface & ~si.is_valid() & sun.in_disk(self, ray.d)
                 if hide:
                     in_sun &= depth != 0
                 w_hit = dr.select(count_direct, 1.0, sun_mis(last_pdf_sun, c_sun * sun_pdf, nee=False))
@@ -807,8 +529,8 @@ class MajorantVolpath:
                 bsdf_val, bsdf_pdf = bsdf.eval_pdf(bsdf_ctx, si, si.to_local(d), act_e_surf)
                 if not has_medium:
                     return bsdf_val, bsdf_pdf
-                ph_val, ph_pdf = phase.eval_pdf(_phase_ctx(sampler), mei, d, act_scatter)
-                ph_pdf = self._continuation_pdf(phase, sampler, mei, d, ph_val, ph_pdf, alpha, eps, act_scatter)
+                ph_val, ph_pdf = phase.eval_pdf(phase_ctx(sampler), mei, d, act_scatter)
+                ph_pdf = sun.continuation_pdf(self, phase, sampler, mei, d, ph_val, ph_pdf, alpha, eps, act_scatter)
                 return dr.select(act_e_surf, bsdf_val, ph_val), dr.select(act_e_surf, bsdf_pdf, ph_pdf)
 
             # history-aware channel sampling (module docstring): the phase function's colour channels
@@ -835,7 +557,7 @@ class MajorantVolpath:
                     d = mi.Vector3f(ds.d)
                     shadow = ref.spawn_ray_to(ds.p)
                 if sun_mode != "none":
-                    wo_s = self._sun_direction(sampler, act_e)
+                    wo_s = sun.sun_direction(self, sampler, act_e)
                     d = dr.select(pick_em, ds.d, wo_s) if has_emitters else wo_s
                     shadow_sun = ref.spawn_ray(wo_s)
                     shadow = dr.select(pick_em, shadow, shadow_sun) if has_emitters else shadow_sun
@@ -872,13 +594,13 @@ class MajorantVolpath:
                 act_x = act_scatter & (depth + 1 < max_depth)
                 act_x &= sampler.next_1d(act_x) < self.aureole_p
                 eps_a = dr.select(act_scatter & (depth + 1 < max_depth), self.aureole_p, 0.0)
-                result = self._aureole_nee(scene, sampler, phase, mei, medium, throughput, alpha, eps_a,
+                result = sun.aureole_nee(self, self._tk, self._transmittance, scene, sampler, phase, mei, medium, throughput, alpha, eps_a,
                                            act_x, result, sun_mis, c_sun, sun_pdf)
 
             # ---------------- phase function sampling (with sun guiding: from the mixture of the phase
             # function about the path's direction and the phase function about the sun's direction)
             if has_medium:
-                ph_ctx = _phase_ctx(sampler)
+                ph_ctx = phase_ctx(sampler)
                 if guiding or by_channel:
                     mei_s = mei
                     if guiding:
@@ -886,7 +608,7 @@ class MajorantVolpath:
                         toward_sun = act_scatter & (u_g < eps)
                         # half the guided draws uniform in the disk, half from the phase function about it
                         in_disk = toward_sun & (u_g < 0.5 * eps) if sun_mode == "disk" else mi.Bool(False)
-                        mei_s = self._about_sun(mei, toward_sun)
+                        mei_s = sun.about_sun(self, mei, toward_sun)
                     if by_channel:
                         u = sampler.next_1d(act_scatter)
                         channel = mi.UInt32(dr.select(u >= alpha[0], 1, 0) + dr.select(u >= alpha[0] + alpha[1], 1, 0))
@@ -897,9 +619,9 @@ class MajorantVolpath:
                         wo, _, _ = phase.sample(ph_ctx, mei_s, sampler.next_1d(act_scatter),
                                                 sampler.next_2d(act_scatter), act_scatter)
                     if guiding:  # the values are needed about the path's own direction
-                        wo = dr.select(in_disk, self._sample_sun(sampler.next_2d(act_scatter)), wo)
+                        wo = dr.select(in_disk, sun.sample_disk(self, sampler.next_2d(act_scatter)), wo)
                         ph_val, ph_pdf = phase.eval_pdf(ph_ctx, mei, wo, act_scatter)
-                    ph_pdf = self._continuation_pdf(phase, sampler, mei, wo, ph_val, ph_pdf, alpha, eps, act_scatter)
+                    ph_pdf = sun.continuation_pdf(self, phase, sampler, mei, wo, ph_val, ph_pdf, alpha, eps, act_scatter)
                     ph_w = ph_val * dr.select(ph_pdf > 0.0, dr.rcp(ph_pdf), 0.0)
                 else:
                     wo, ph_w, ph_pdf = phase.sample(ph_ctx, mei, sampler.next_1d(act_scatter),
@@ -907,7 +629,7 @@ class MajorantVolpath:
                     ph_val = ph_w * ph_pdf
                 act_scatter &= ph_pdf > 0.0
                 if aureole:  # the sun-NEE weight at the next vertex
-                    aur_w = dr.select(act_scatter, ph_pdf * dr.rcp(ph_pdf + eps_a * self._aureole_pdf(
+                    aur_w = dr.select(act_scatter, ph_pdf * dr.rcp(ph_pdf + eps_a * sun.aureole_pdf(self, 
                         phase, sampler, mei, wo, act_scatter)), aur_w)
                 last_pdf_sun = dr.select(act_scatter, sun_pdf_of(ph_val, ph_pdf), last_pdf_sun)
                 throughput = dr.select(act_scatter, throughput * ph_w, throughput)
@@ -955,94 +677,6 @@ class MajorantVolpath:
         """Passes ``[(spp, seed), ...]`` rendered together with persistent lanes: :func:`.lanes.render_passes`."""
         return render_passes(self, scene, passes, lanes, max_jobs, pixels, PLUGIN_NAME)
 
-    # ------------------------------------------------------------ the integrator's sun
-    def _sample_sun(self, sample):
-        """A direction uniform in the sun's disk (a cap of versine v_max about ``sun_dir``), built from
-        the versine so that float32 keeps its angle (pdf 1 / (2 pi v_max))."""
-        v = sample.x * self.sun_vmax
-        sin_t = dr.safe_sqrt(v * (2.0 - v))
-        s, c = dr.sincos(dr.two_pi * sample.y)
-        return mi.Frame3f(self.sun_dir).to_world(mi.Vector3f(sin_t * c, sin_t * s, 1.0 - v))
-
-    def _sun_direction(self, sampler, active):
-        """The direction of a sun next-event estimate: uniform in the disk, or the point sun's."""
-        return self._sample_sun(sampler.next_2d(active)) if self.sun_mode == "disk" else mi.Vector3f(self.sun_dir)
-
-    def _in_sun(self, d):
-        """Whether unit direction d lies in the sun's disk: versine |d - s|^2 / 2 <= v_max."""
-        return dr.squared_norm(d - self.sun_dir) * 0.5 <= self.sun_vmax
-
-    def _about_sun(self, mei, toward_sun):
-        """``mei`` whose incident direction is replaced, where ``toward_sun``, by the one for which the
-        phase function's forward direction is the sun's direction (wi = -sun_dir)."""
-        m = mi.MediumInteraction3f(mei)
-        m.wi = dr.select(toward_sun, -mi.Vector3f(self.sun_dir), mei.wi)
-        m.sh_frame = mi.Frame3f(m.wi)
-        return m
-
-    def _continuation_pdf(self, phase, sampler, mei, d, value, pdf, alpha, eps, active):
-        """pdf with which a medium vertex continues the path in direction d, given the phase function's
-        per-channel ``value`` and its own ``pdf`` there:
-        * history-aware channels (``alpha`` not None): sum_c alpha_c p_c(d), channel c drawn with
-          probability alpha_c and d from its density;
-        * sun guiding (detector-directional importance sampling, Buras & Mayer 2011): d drawn about the
-          path's direction with probability 1 - eps and towards the sun with probability eps (eps per
-          vertex, see ``sample``), half of these uniform in the sun's disk U and half from the phase
-          function about the sun: (1 - eps) q(d | wi) + eps (q(d | -sun) + U(d)) / 2."""
-        def q(val, p):
-            return p if alpha is None else dr.sum(alpha * val)
-        out = q(value, pdf)
-        if self.guiding > 0.0 and self.sun_mode != "none":
-            val_s, pdf_s = phase.eval_pdf(_phase_ctx(sampler), self._about_sun(mei, mi.Bool(True)), d, active)
-            guide = q(val_s, pdf_s)
-            if self.sun_mode == "disk":  # half of the guided draws are uniform in the disk
-                disk = dr.select(self._in_sun(d), dr.rcp(dr.two_pi * self.sun_vmax), 0.0)
-                guide = 0.5 * (guide + disk)
-            out = (1.0 - eps) * out + eps * guide
-        return out
-
-    def _aureole_pdf(self, phase, sampler, mei, d, active):
-        """Density of the aureole estimator's direction at vertex ``mei``: the phase function (channel
-        mean) about the sun's direction, with half of it uniform in the disk for a disk sun."""
-        _, g = phase.eval_pdf(_phase_ctx(sampler), self._about_sun(mei, mi.Bool(True)), d, active)
-        if self.sun_mode == "disk":
-            disk = dr.select(self._in_sun(d), dr.rcp(dr.two_pi * self.sun_vmax), 0.0)
-            g = 0.5 * (g + disk)
-        return g
-
-    def _aureole_nee(self, scene, sampler, phase, mei, medium, throughput, alpha, eps, active, result,
-                     sun_mis, c_sun, sun_pdf):
-        """The aureole estimator at medium vertex A (``mei``): direction d about the sun (density g,
-        :meth:`_aureole_pdf`), free flight to B, sun next-event estimation at B weighted as the path
-        itself weights it there. Balance heuristic against the path's own draw (density q, sum over
-        channels of alpha_c p_c): this contributes T f_A(d) / (q(d) + eps g(d)) x (NEE at B), and the
-        path's own sun NEE at B is weighted q / (q + eps g) (``aur_w``)."""
-        ctx = _phase_ctx(sampler)
-        d, _, _ = phase.sample(ctx, self._about_sun(mei, active), sampler.next_1d(active), sampler.next_2d(active),
-                               active)
-        if self.sun_mode == "disk":
-            u = sampler.next_1d(active)
-            d = dr.select(u < 0.5, self._sample_sun(sampler.next_2d(active)), d)
-        f_a, p_a = phase.eval_pdf(ctx, mei, d, active)
-        q = p_a if alpha is None else dr.sum(alpha * f_a)
-        g = self._aureole_pdf(phase, sampler, mei, d, active)
-        denom = q + eps * g
-        active &= denom > 0.0
-        weight = throughput * f_a * dr.rcp(dr.select(active, denom, 1.0))
-        ray = mei.spawn_ray(d)
-        si = scene.ray_intersect(ray, active)
-        found, t, weight = self._walk(ray, dr.minimum(si.t, ray.maxt), sampler, active, ratio=False, weight=weight)
-        act_b = active & found
-        mei_b, albedo = self._scattering_event(ray, t, act_b)
-        wo = self._sun_direction(sampler, act_b)
-        f_b, _ = phase.eval_pdf(ctx, mei_b, wo, act_b)
-        if self.sun_mode == "disk":  # the MIS weight the path's own NEE has at B, times 1 / pdf_sun
-            w_b = sun_mis(c_sun * sun_pdf, dr.mean(f_b)) * dr.rcp(sun_pdf)
-        else:
-            w_b = mi.Float(1.0)
-        tr = self._transmittance(scene, sampler, mei_b.spawn_ray(wo), medium, act_b)
-        return dr.select(act_b, result + weight * albedo * f_b * w_b * tr * mi.Spectrum(self.sun_value), result)
-
     def _transmittance(self, scene, sampler, ray, medium, active):
         """Transmittance along a shadow ray (its maxt is the distance to the emitter sample)."""
         max_dist = mi.Float(ray.maxt)
@@ -1058,10 +692,10 @@ class MajorantVolpath:
             si = scene.ray_intersect(ray, active)
             if has_medium:
                 in_med = active & (medium != None)  # noqa: E711
-                if self.tr_mode == "exact" and self._texel is not None:
-                    tr_seg = self._exact_walk(ray, dr.minimum(si.t, remaining), in_med, sampler)
+                if self.tr_mode == "exact" and self._tk.texel is not None:
+                    tr_seg = exact_transmittance(self._tk, ray, dr.minimum(si.t, remaining), in_med, sampler)
                 else:
-                    tr_seg = self._walk(ray, dr.minimum(si.t, remaining), sampler, in_med, ratio=True)
+                    tr_seg = ratio_tracking(self._tk, ray, dr.minimum(si.t, remaining), sampler, in_med)
                 tr = dr.select(in_med, tr * tr_seg, tr)
             hit = active & si.is_valid()
             bsdf = si.bsdf(ray)
