@@ -89,8 +89,7 @@ class _Launch:
     sample's number make the stream) and its sample number in the pass."""
 
     def __init__(self, sensor, medium, path_loop, width, height, pix_list, n_pix, layer_number, layer_key):
-        self.sensor, self.medium = sensor, medium
-        self.cond, self.body, self.initial = path_loop
+        self.sensor, self.medium, self.loop = sensor, medium, path_loop
         self.pix_list, self.layer_number, self.layer_key = pix_list, layer_number, layer_key
         self.size = [dr.opaque(mi.UInt32, v) for v in (width, height)]
         self.n_sel = dr.opaque(mi.UInt32, n_pix)
@@ -99,33 +98,32 @@ class _Launch:
 
     def run(self, job_sampler, n_lanes: int, n: int, layer0: int) -> np.ndarray:
         """Samples [0, n) of the layers from ``layer0`` on, with ``n_lanes`` lanes: their radiance, (n, 3)."""
-        sensor, medium, body, initial = self.sensor, self.medium, self.body, self.initial
+        sensor, medium, loop = self.sensor, self.medium, self.loop
         counter = dr.zeros(mi.UInt32, 1)
         slots = dr.zeros(mi.Float, 3 * n)
         n_jobs, first = dr.opaque(mi.UInt32, n), dr.opaque(mi.UInt32, layer0)
         sampler = job_sampler()
         sampler.rng = mi.PCG32(n_lanes)
-        path = initial(sampler, dr.zeros(mi.Ray3f, n_lanes), medium, dr.full(mi.Bool, False, n_lanes))
+        path = loop.initial(dr.zeros(mi.Ray3f, n_lanes), medium, dr.full(mi.Bool, False, n_lanes))
         start_state = (dr.full(mi.UInt32, 0xFFFFFFFF, n_lanes), dr.full(mi.Bool, True, n_lanes),
-                       dr.zeros(mi.Spectrum, n_lanes)) + path
+                       dr.zeros(mi.Spectrum, n_lanes), sampler, path)
 
-        def pcond(job, alive, weight, *path):
+        def pcond(job, alive, weight, sampler, path):
             return alive
 
-        def pbody(job, alive, weight, *path):
-            path = body(*path)
-            done = alive & ~path[1]
+        def pbody(job, alive, weight, sampler, path):
+            sampler, path = loop.body(sampler, path)
+            done = alive & ~path.active
             # the finished sample's radiance into its slot
             finished = done & (job < n_jobs)
-            value = path[5] * weight
+            value = path.result * weight
             for c in range(3):
                 dr.scatter(slots, value[c], job * 3 + c, finished)
             # the next sample, from the shared counter
             nxt = dr.scatter_inc(counter, mi.UInt32(0), done)
             start = done & (nxt < n_jobs)
             job = dr.select(done, nxt, job)
-            alive = (alive & path[1]) | start
-            sampler = path[0]
+            alive = (alive & path.active) | start
             # the sample's number in its pass: its layer there x all pixels + its pixel (a pass over
             # some pixels gives them the values of the pass over all)
             k = job % self.n_sel
@@ -137,10 +135,11 @@ class _Launch:
             pos = mi.Point2f(mi.Float(pixel % self.size[0]), mi.Float(pixel // self.size[0])) + sampler.next_2d(start)
             ray, ray_weight = sensor.sample_ray(sensor.shutter_open(), sampler.next_1d(start), pos * self.inv_size,
                                                 mi.Point2f(0.5, 0.5), start)
-            new = initial(sampler, ray, medium, start)
-            path = (sampler,) + tuple(dr.select(start, a, b) for a, b in zip(new[1:], path[1:]))
+            new = loop.initial(ray, medium, start)
+            for name in type(path).DRJIT_STRUCT:  # the new samples' paths in the lanes that start one
+                setattr(path, name, dr.select(start, getattr(new, name), getattr(path, name)))
             weight = dr.select(start, mi.Spectrum(ray_weight), weight)
-            return (job, alive, weight) + path
+            return job, alive, weight, sampler, path
 
         dr.while_loop(state=start_state, cond=pcond, body=pbody, label="majorant_volpath: persistent lanes")
         return slots.numpy().reshape(n, 3)
@@ -153,7 +152,9 @@ def render_passes(integrator, scene, passes, lanes: int | None = None, max_jobs:
     Parameters
     ----------
     integrator
-        An integrator with ``_path_loop(scene, medium) -> (cond, body, initial)`` (``majorant_volpath``).
+        An integrator with ``_path_loop(scene, medium)``: an object with ``initial(ray, medium, active)``
+        (the path state, its ``active`` and ``result`` fields read here) and ``body(sampler, state)``
+        (``majorant_volpath``).
     scene : mi.Scene
         Rendered through its first sensor (box filter: a pixel is the mean of the samples whose film
         position falls in it, as ``mi.render`` renders it).

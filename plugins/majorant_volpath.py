@@ -146,6 +146,8 @@ taken to tile the unit cube uniformly.
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 import drjit as dr
@@ -154,10 +156,10 @@ import mitsuba as mi
 from ..scene import MAX_SUN_DIAMETER_DEG
 from .dda import Grid
 from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
-from .medium_setup import MediumSetup, Tracking, check_bbox, phase_ctx, scattering_event, volume_data
+from .medium_setup import GridCache, MediumSetup, Tracking, phase_ctx, scattering_event, unit_cube_to_world, volume_data
 from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401
 from . import sun
-from .trackers import delta_tracking, exact_transmittance, ratio_tracking
+from .trackers import delta_tracking, shadow_transmittance
 from .variant_class import variant_class
 
 PLUGIN_NAME = "majorant_volpath"
@@ -231,8 +233,7 @@ class MajorantVolpath:
         # per-render state, filled by _setup: the scene's medium, the trackers' grids and frame, and the
         # caches of the grids built from the medium's data (keys: the data's index and scale)
         self._ms = self._tk = None
-        self._skip = self._skip_key = None
-        self._texel_arrays = self._texel_key = None
+        self._grids = GridCache()
 
     def _init_sun(self, props):
         """The integrator's own sun (see the module docstring, "The sun"): ``sun_direction`` (towards the
@@ -319,26 +320,15 @@ class MajorantVolpath:
 
     # ------------------------------------------------------------ per-render setup
     def _setup(self, scene, sensor_medium):
+        """Find the scene's medium and build (or reuse) the trackers' grids: ``self._ms``, ``self._tk``."""
         ms = MediumSetup(scene, sensor_medium)
         self._ms = ms
         self._tk = Tracking(ms)
         if ms.medium is None:
             return
         vol = ms.volume
-        if self.to_world is not None:
-            to_world = np.array(self.to_world.matrix, dtype=np.float64).reshape(4, 4)
-        elif vol is not None:
-            bb = vol.bbox()
-            lo = np.array([bb.min.x, bb.min.y, bb.min.z], np.float64)
-            hi = np.array([bb.max.x, bb.max.y, bb.max.z], np.float64)
-            to_world = np.diag(np.r_[hi - lo, 1.0])
-            to_world[:3, 3] = lo
-        else:
-            raise RuntimeError(f"{PLUGIN_NAME}: 'to_world' is required when the medium has no sigma_t grid")
-        if vol is not None:
-            check_bbox(to_world, vol)
+        to_world = unit_cube_to_world(self.to_world, vol)
         to_local = mi.Transform4f(mi.ScalarTransform4f(np.linalg.inv(to_world).astype(np.float32).tolist()))
-
         if self.auto_majorant:
             if vol is None:
                 raise RuntimeError(f"{PLUGIN_NAME}: no 'majorant' given and the medium has no sigma_t grid")
@@ -347,321 +337,21 @@ class MajorantVolpath:
             if key != self._auto_key:
                 self.majorant = mi.TensorXf(majorant_grid(np.asarray(data) * ms.scale, self.cell))
                 self._auto_key = key
-
-        nz, ny, nx = (int(s) for s in self.majorant.shape[:3])
-        if vol is not None:
-            rx, ry, rz = (int(v) for v in vol.resolution())
-            expect = tuple(-(-n // self.cell) for n in (rz, ry, rx))
-            if expect != (nz, ny, nx):
-                raise RuntimeError(
-                    f"{PLUGIN_NAME}: majorant grid {(nz, ny, nx)} does not match the sigma_t grid {(rz, ry, rx)} "
-                    f"with cell = {self.cell} (expected {expect}); rebuild it with majorant_grid(..., cell)")
-            cells_per_unit = (rx / self.cell, ry / self.cell, rz / self.cell)
-            # cheap staleness guard: the grid must bound the medium's maximum
-            vmax = float(vol.max()) * ms.scale
-            mmax = float(np.max(self.majorant.numpy()))
-            if vmax > mmax * (1.0 + 1e-5) + 1e-30:
-                raise RuntimeError(
-                    f"{PLUGIN_NAME}: the majorant grid (max {mmax:g}) is below the medium's maximum sigma_t "
-                    f"({vmax:g} = grid max x scale): it is stale; rebuild it from the current data")
-        else:
-            cells_per_unit = (nx, ny, nz)
-        # opaque: new resolutions / values do not recompile
-        maj_key = (self.majorant.array.index, tuple(self.majorant.shape))
-        if maj_key != self._skip_key:
-            self._skip = mi.Int32(empty_space_radius(self.majorant.numpy()).ravel())
-            self._skip_key = maj_key
-        coarse = Grid(self.majorant.array, self._skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
-        texel, texel_data = self._texel_grid(vol, ms.scale)
+        coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
+        texel, texel_data = self._grids.texel(vol, ms.scale)
         track = texel if (texel is not None and self.track_mode == "texel") else coarse
         self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data)
 
-    def _texel_grid(self, vol, scale):
-        """The texel-centre grid (None without a sigma_t grid): its cells lie between 2 x 2 x 2 texel
-        centres (cells -1 .. N - 1 per axis, the first and last halves cut by the box), where the trilinear
-        interpolant is one trilinear polynomial; majorant = SAFETY x the maximum of the cell's 8 texels,
-        which is the maximum of the interpolant there (0: it is 0 in the cell)."""
-        if vol is None:
-            return None, None
-        data = volume_data(vol)
-        key = (data.array.index, scale)
-        if key != self._texel_key:
-            maj = texel_majorant_grid(np.asarray(data) * scale)
-            self._texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty_space_radius(maj).ravel()))
-            self._texel_key = key
-        rx, ry, rz = (int(v) for v in vol.resolution())
-        texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
-        return Grid(*self._texel_arrays, (rx + 1, ry + 1, rz + 1), (rx, ry, rz), shift=-0.5, lo=-1), texel_data
-
     # ------------------------------------------------------------ main entry
     def sample(self, scene, sampler, ray, medium=None, active=True):
-        cond, body, initial = self._path_loop(scene, medium)
-        state = dr.while_loop(state=initial(sampler, mi.Ray3f(ray), medium, mi.Bool(active)), cond=cond, body=body,
-                              label="majorant_volpath")
-        result, valid_ray = state[5], state[13]
-        return result, valid_ray, []
+        loop = self._path_loop(scene, medium)
+        _, path = dr.while_loop(state=(sampler, loop.initial(mi.Ray3f(ray), medium, mi.Bool(active))),
+                                cond=loop.cond, body=loop.body, label="majorant_volpath")
+        return path.result, path.valid_ray, []
 
-    def _path_loop(self, scene, medium):
-        """The path loop of :meth:`sample`: (cond, body, initial), where ``initial(sampler, ray, medium,
-        active)`` is the loop state of a path starting with ``ray`` in ``medium`` (the sensor's), its
-        element 1 whether the path is alive, 5 its radiance and 13 whether the ray is valid; ``body``
-        advances every alive path by one event (a scattering, a surface or the escape)."""
-        self._setup(scene, medium)
-        ms = self._ms
-        has_medium = ms.medium is not None
-        max_depth = self.max_depth
-        rr_depth = self.rr_depth
-        hide = self.hide_emitters_
-        phase = ms.medium.phase_function() if has_medium else None
-        bsdf_ctx = mi.BSDFContext()
-        has_emitters = len(scene.emitters()) > 0
-        sun_mode = self.sun_mode
-        guiding = has_medium and sun_mode != "none" and self.guiding > 0.0
-        aureole = has_medium and sun_mode != "none" and self.aureole > 0.0
-        by_channel = has_medium and self.channels == "history" and hasattr(phase, "sample_channel")
-        rr_cap = 0.95 if self.rr_mode == "volpath" else 1.0
-        c_em = self.emitter_nee
-        c_sky = c_em if sun_mode != "none" else 1.0             # share of shadow rays towards the scene's emitters
-        c_sun = (1.0 - c_em) if has_emitters else 1.0         # ... towards the integrator's sun
-        sun_pdf = dr.rcp(dr.two_pi * self.sun_vmax) if sun_mode == "disk" else None
-        one_strategy = {"nee": (1.0, 0.0), "phase": (0.0, 1.0)}.get(self.sun_sampling)
-
-        def sun_pdf_of(val, pdf):
-            # the continuation pdf in the sun's MIS: with aureole NEE the channel mean of the phase
-            # value (the mixture's own pdf; a function of the vertex and the two directions only, so
-            # that the aureole estimator can weight its vertex B exactly as the path does)
-            return dr.mean(val) if aureole else pdf
-
-        def sun_mis(pdf_a, pdf_b, nee=True):  # weight of the sun-sampling or of the continuation strategy
-            if one_strategy is None:
-                return _mis_weight(pdf_a, pdf_b)
-            return one_strategy[0] if nee else one_strategy[1]
-
-        has_env = scene.environment() is not None
-
-        def initial(sampler, ray, medium, active):
-            med0 = dr.zeros(mi.MediumPtr)
-            if medium is not None:
-                med0 = dr.select(active, mi.MediumPtr(medium), med0)
-            return (sampler, active, mi.UInt32(0), ray, mi.Spectrum(1.0), mi.Spectrum(0.0),
-                    dr.zeros(mi.SurfaceInteraction3f), med0, mi.Float(1.0), dr.zeros(mi.Interaction3f),
-                    mi.Float(1.0), mi.Bool(True), mi.Bool(active & (not hide)), mi.Bool((not hide) and has_env),
-                    mi.UInt32(0), mi.Float(GUIDE_GROWTH), mi.Float(1.0), mi.Float(1.0))
-
-        def cond(sampler, active, *_):
-            return active
-
-        def body(sampler, active, depth, ray, throughput, result, si, medium, eta,
-                 last_event, last_pdf, needs_isect, specular_chain, valid_ray, last_long, guide_left,
-                 last_pdf_sun, aur_w):
-            # ---------------- Russian roulette and depth limit
-            active &= dr.any(throughput != 0.0)
-            q = dr.minimum(dr.max(throughput) * dr.square(eta), rr_cap)
-            if rr_cap == 1.0:  # long walks: survive 1/2 at depths 2^k >= LONG_WALK_DEPTH (weight ~ depth)
-                long_walk = (depth >= LONG_WALK_DEPTH) & ((depth & (depth - 1)) == 0) & (depth != last_long)
-                last_long = dr.select(long_walk, depth, last_long)
-                q = dr.select(long_walk, q * 0.5, q)
-            perform_rr = (depth > rr_depth) & (q < 1.0)
-            active &= (sampler.next_1d(active) < q) | ~perform_rr
-            throughput = dr.select(perform_rr, throughput * dr.rcp(q), throughput)
-            active &= depth < max_depth
-
-            # ---------------- next surface
-            isect = active & needs_isect
-            si = dr.select(isect, scene.ray_intersect(ray, isect), si)
-            needs_isect &= ~active
-
-            act_scatter = mi.Bool(False)
-            active_surface = mi.Bool(active)
-            mei = dr.zeros(mi.MediumInteraction3f)
-            if has_medium:
-                active_medium = active & (medium != None)  # noqa: E711
-                active_surface = active & ~active_medium
-                t_end = dr.minimum(si.t, ray.maxt)
-                found, t_coll, w_walk = delta_tracking(self._tk, ray, t_end, sampler, active_medium, throughput)
-                throughput = dr.select(active_medium, w_walk, throughput)
-                act_scatter = active_medium & found
-                active_surface |= active_medium & ~found
-
-                # ---------------- real collision: absorption weight, NEE, phase sampling
-                mei, albedo_w = scattering_event(ms, ray, t_coll, act_scatter)
-                depth = dr.select(act_scatter, depth + 1, depth)
-                last_event = dr.select(act_scatter, _as_interaction(mei), last_event)
-                active &= depth < max_depth
-                act_scatter &= active
-                throughput = dr.select(act_scatter, throughput * albedo_w, throughput)
-                valid_ray |= act_scatter
-                specular_chain &= ~act_scatter
-
-            # ---------------- emitters hit by the ray (environment; area emitters)
-            count_direct = (depth == 0) | specular_chain
-            emitter = si.emitter(scene)
-            active_e = active_surface & (emitter != None)  # noqa: E711
-            if hide:
-                active_e &= depth != 0
-            ds_hit = mi.DirectionSample3f(scene, si, last_event)
-            em_pdf = scene.pdf_emitter_direction(last_event, ds_hit, active_e & ~count_direct)
-            emitted = emitter.eval(si, active_e)
-            w_hit = dr.select(count_direct, 1.0, _mis_weight(last_pdf, c_sky * em_pdf))
-            result = dr.select(active_e, result + throughput * w_hit * emitted, result)
-            if sun_mode == "disk":  # a ray that leaves the scene inside the sun's disk sees the sun
-                in_sun = active_surface & ~si.is_valid() & sun.in_disk(self, ray.d)
-                if hide:
-                    in_sun &= depth != 0
-                w_hit = dr.select(count_direct, 1.0, sun_mis(last_pdf_sun, c_sun * sun_pdf, nee=False))
-                result = dr.select(in_sun, result + throughput * w_hit * mi.Spectrum(self.sun_value), result)
-
-            active_surface &= si.is_valid()
-            bsdf = si.bsdf(ray)
-
-            # ---------------- emitter sampling (phase or BSDF) with MIS
-            act_e_surf = active_surface & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth) & (depth + 1 < max_depth)
-            act_e = act_e_surf | act_scatter
-            ref = dr.zeros(mi.Interaction3f)
-            ref = dr.select(act_scatter, _as_interaction(mei), ref)
-            ref = dr.select(act_e_surf, _as_interaction(si), ref)
-            # (at a medium boundary the shadow ray starts in the medium on the emitter's side)
-            eps = mi.Float(0.0)  # probability of a sun-guided continuation at this vertex
-
-            def f_eval(d):
-                """Phase function or BSDF value toward d, and the pdf with which this vertex continues
-                the path in direction d (phase: with sun guiding, the mixture of both samplers)."""
-                bsdf_val, bsdf_pdf = bsdf.eval_pdf(bsdf_ctx, si, si.to_local(d), act_e_surf)
-                if not has_medium:
-                    return bsdf_val, bsdf_pdf
-                ph_val, ph_pdf = phase.eval_pdf(phase_ctx(sampler), mei, d, act_scatter)
-                ph_pdf = sun.continuation_pdf(self, phase, sampler, mei, d, ph_val, ph_pdf, alpha, eps, act_scatter)
-                return dr.select(act_e_surf, bsdf_val, ph_val), dr.select(act_e_surf, bsdf_pdf, ph_pdf)
-
-            # history-aware channel sampling (module docstring): the phase function's colour channels
-            # are drawn in proportion alpha to the path's throughput
-            alpha = None
-            if by_channel:
-                t_sum = dr.sum(throughput)
-                alpha = throughput * dr.select(t_sum > 0.0, dr.rcp(t_sum), 0.0)
-
-            # ---------------- next-event estimation: one shadow ray per vertex, towards the integrator's
-            # sun with probability 1 - c and towards one of the scene's emitters (the sky) with
-            # probability c; as MIS techniques their pdfs are (1 - c) p_sun and c p_emitter
-            if has_emitters or sun_mode != "none":
-                if not has_emitters:
-                    pick_em = mi.Bool(False)
-                elif sun_mode == "none":
-                    pick_em = mi.Bool(True)
-                else:
-                    pick_em = sampler.next_1d(act_e) < c_em
-                em_val, ds = dr.zeros(mi.Spectrum), dr.zeros(mi.DirectionSample3f)
-                if has_emitters:
-                    ds, em_val = scene.sample_emitter_direction(ref, sampler.next_2d(act_e), False, act_e & pick_em)
-                    em_val = dr.select(ds.pdf != 0.0, em_val, 0.0)
-                    d = mi.Vector3f(ds.d)
-                    shadow = ref.spawn_ray_to(ds.p)
-                if sun_mode != "none":
-                    wo_s = sun.sun_direction(self, sampler, act_e)
-                    d = dr.select(pick_em, ds.d, wo_s) if has_emitters else wo_s
-                    shadow_sun = ref.spawn_ray(wo_s)
-                    shadow = dr.select(pick_em, shadow, shadow_sun) if has_emitters else shadow_sun
-                # (at a medium boundary the shadow ray starts in the medium on the emitter's side)
-                shadow_med = dr.select(act_e_surf & si.is_medium_transition(), si.target_medium(d), medium)
-                tr = self._transmittance(scene, sampler, shadow, shadow_med, act_e)
-                if guiding and sun_mode != "none":
-                    # guide only where the sun is seen (elsewhere p / q > 1 would only inflate weights) and
-                    # while the product of the unguided draws' weights <= 1 / (1 - eps) stays below
-                    # GUIDE_GROWTH; set before f_eval, so both MIS weights see the same continuation pdf
-                    eps = dr.select(pick_em, 0.0, self.guide_p * dr.minimum(dr.max(tr) * (1.0 / GUIDE_SEEN), 1.0))
-                    eps = dr.select(act_scatter & ((1.0 - eps) * guide_left >= 1.0), eps, 0.0)
-                    guide_left = dr.select(act_scatter, guide_left * (1.0 - eps), guide_left)
-                f_val, f_pdf = f_eval(d)
-                w = mi.Float(0.0)
-                if has_emitters:
-                    w_em = _mis_weight(c_sky * ds.pdf, dr.select(ds.delta, 0.0, f_pdf)) * (1.0 / c_sky)
-                    w = dr.select(pick_em, w_em, w)
-                if sun_mode != "none":
-                    if sun_mode == "disk":  # L / pdf_sun x MIS weight against continuing the path
-                        w_s = sun_mis(c_sun * sun_pdf, sun_pdf_of(f_val, f_pdf)) * dr.rcp(c_sun * sun_pdf)
-                    else:                   # delta: irradiance, no MIS
-                        w_s = mi.Float(1.0 / c_sun)
-                    if aureole:  # MIS against the previous vertex's aureole estimator
-                        w_s = dr.select(act_scatter, w_s * aur_w, w_s)
-                    w = dr.select(pick_em, w, w_s)
-                    em_val = dr.select(pick_em, em_val, mi.Spectrum(self.sun_value))
-                result = dr.select(act_e, result + throughput * f_val * w * tr * em_val, result)
-
-            # ---------------- aureole next-event estimation (module docstring): a second way to the
-            # chain A -> B -> sun, its direction at A drawn about the sun
-            eps_a = mi.Float(0.0)
-            if aureole:
-                act_x = act_scatter & (depth + 1 < max_depth)
-                act_x &= sampler.next_1d(act_x) < self.aureole_p
-                eps_a = dr.select(act_scatter & (depth + 1 < max_depth), self.aureole_p, 0.0)
-                result = sun.aureole_nee(self, self._tk, self._transmittance, scene, sampler, phase, mei, medium, throughput, alpha, eps_a,
-                                           act_x, result, sun_mis, c_sun, sun_pdf)
-
-            # ---------------- phase function sampling (with sun guiding: from the mixture of the phase
-            # function about the path's direction and the phase function about the sun's direction)
-            if has_medium:
-                ph_ctx = phase_ctx(sampler)
-                if guiding or by_channel:
-                    mei_s = mei
-                    if guiding:
-                        u_g = sampler.next_1d(act_scatter)
-                        toward_sun = act_scatter & (u_g < eps)
-                        # half the guided draws uniform in the disk, half from the phase function about it
-                        in_disk = toward_sun & (u_g < 0.5 * eps) if sun_mode == "disk" else mi.Bool(False)
-                        mei_s = sun.about_sun(self, mei, toward_sun)
-                    if by_channel:
-                        u = sampler.next_1d(act_scatter)
-                        channel = mi.UInt32(dr.select(u >= alpha[0], 1, 0) + dr.select(u >= alpha[0] + alpha[1], 1, 0))
-                        wo, ph_val = phase.sample_channel(ph_ctx, mei_s, channel, sampler.next_1d(act_scatter),
-                                                          sampler.next_2d(act_scatter), act_scatter)
-                        ph_pdf = None  # the channel mixture's pdf follows from the values
-                    else:
-                        wo, _, _ = phase.sample(ph_ctx, mei_s, sampler.next_1d(act_scatter),
-                                                sampler.next_2d(act_scatter), act_scatter)
-                    if guiding:  # the values are needed about the path's own direction
-                        wo = dr.select(in_disk, sun.sample_disk(self, sampler.next_2d(act_scatter)), wo)
-                        ph_val, ph_pdf = phase.eval_pdf(ph_ctx, mei, wo, act_scatter)
-                    ph_pdf = sun.continuation_pdf(self, phase, sampler, mei, wo, ph_val, ph_pdf, alpha, eps, act_scatter)
-                    ph_w = ph_val * dr.select(ph_pdf > 0.0, dr.rcp(ph_pdf), 0.0)
-                else:
-                    wo, ph_w, ph_pdf = phase.sample(ph_ctx, mei, sampler.next_1d(act_scatter),
-                                                    sampler.next_2d(act_scatter), act_scatter)
-                    ph_val = ph_w * ph_pdf
-                act_scatter &= ph_pdf > 0.0
-                if aureole:  # the sun-NEE weight at the next vertex
-                    aur_w = dr.select(act_scatter, ph_pdf * dr.rcp(ph_pdf + eps_a * sun.aureole_pdf(self, 
-                        phase, sampler, mei, wo, act_scatter)), aur_w)
-                last_pdf_sun = dr.select(act_scatter, sun_pdf_of(ph_val, ph_pdf), last_pdf_sun)
-                throughput = dr.select(act_scatter, throughput * ph_w, throughput)
-                ray = dr.select(act_scatter, mei.spawn_ray(wo), ray)
-                needs_isect |= act_scatter
-                last_pdf = dr.select(act_scatter, ph_pdf, last_pdf)
-
-            # ---------------- BSDF sampling (null BSDFs: pass through)
-            bs, bsdf_w = bsdf.sample(bsdf_ctx, si, sampler.next_1d(active_surface),
-                                     sampler.next_2d(active_surface), active_surface)
-            active_surface &= bs.pdf > 0.0
-            throughput = dr.select(active_surface, throughput * bsdf_w, throughput)
-            eta = dr.select(active_surface, eta * bs.eta, eta)
-            ray = dr.select(active_surface, si.spawn_ray(si.to_world(bs.wo)), ray)
-            needs_isect |= active_surface
-            non_null = active_surface & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)
-            depth = dr.select(non_null, depth + 1, depth)
-            last_event = dr.select(non_null, _as_interaction(si), last_event)
-            last_pdf = dr.select(non_null, bs.pdf, last_pdf)
-            last_pdf_sun = dr.select(non_null, bs.pdf, last_pdf_sun)
-            aur_w = dr.select(non_null, 1.0, aur_w)
-            valid_ray |= non_null
-            specular_chain |= non_null & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-            specular_chain &= ~(active_surface & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Smooth))
-            trans = active_surface & si.is_medium_transition()
-            medium = dr.select(trans, si.target_medium(ray.d), medium)
-            active &= active_surface | act_scatter
-            return (sampler, active, depth, ray, throughput, result, si, medium, eta,
-                    last_event, last_pdf, needs_isect, specular_chain, valid_ray, last_long, guide_left,
-                    last_pdf_sun, aur_w)
-
-        return cond, body, initial
+    def _path_loop(self, scene, medium) -> "PathLoop":
+        """The path loop over ``scene`` (after the per-render setup), its paths starting in ``medium``."""
+        return PathLoop(self, scene, medium)
 
     # ------------------------------------------------------------ persistent lanes
     def render_pass(self, scene, spp: int, seed: int, lanes: int | None = None,
@@ -677,40 +367,351 @@ class MajorantVolpath:
         """Passes ``[(spp, seed), ...]`` rendered together with persistent lanes: :func:`.lanes.render_passes`."""
         return render_passes(self, scene, passes, lanes, max_jobs, pixels, PLUGIN_NAME)
 
-    def _transmittance(self, scene, sampler, ray, medium, active):
-        """Transmittance along a shadow ray (its maxt is the distance to the emitter sample)."""
-        max_dist = mi.Float(ray.maxt)
-        has_medium = self._ms.medium is not None
 
-        def cond(sampler, active, ray, total, medium, tr):
-            return active
+# ---------------------------------------------------------------- the path loop
 
-        def body(sampler, active, ray, total, medium, tr):
-            remaining = max_dist - total
-            ray.maxt = remaining
-            active &= remaining > 0.0
-            si = scene.ray_intersect(ray, active)
-            if has_medium:
-                in_med = active & (medium != None)  # noqa: E711
-                if self.tr_mode == "exact" and self._tk.texel is not None:
-                    tr_seg = exact_transmittance(self._tk, ray, dr.minimum(si.t, remaining), in_med, sampler)
-                else:
-                    tr_seg = ratio_tracking(self._tk, ray, dr.minimum(si.t, remaining), sampler, in_med)
-                tr = dr.select(in_med, tr * tr_seg, tr)
-            hit = active & si.is_valid()
-            bsdf = si.bsdf(ray)
-            tr = dr.select(hit, tr * bsdf.eval_null_transmission(si, hit), tr)
-            total = dr.select(hit, total + si.t, total)
-            ray = dr.select(hit, si.spawn_ray(ray.d), ray)
-            trans = hit & si.is_medium_transition()
-            medium = dr.select(trans, si.target_medium(ray.d), medium)
-            active &= hit & dr.any(tr != 0.0)
-            return sampler, active, ray, total, medium, tr
+_STATE_CLASSES: dict = {}
 
-        _, _, _, _, _, tr = dr.while_loop(
-            state=(sampler, mi.Bool(active), mi.Ray3f(ray), mi.Float(0.0), mi.MediumPtr(medium), mi.Spectrum(1.0)),
-            cond=cond, body=body, label="majorant_volpath: shadow ray")
-        return dr.select(active, tr, 0.0)
+
+def path_state_class() -> type:
+    """The loop state of a path (a ``DRJIT_STRUCT``, one class per variant).
+
+    Fields: ``active`` (the path is alive), ``depth`` (scattering and non-null surface events so far),
+    ``ray`` (the current ray), ``throughput`` and ``result`` (the path weight and the radiance collected),
+    ``si`` (the next surface along ``ray``), ``medium`` (the medium ``ray`` travels in), ``eta`` (relative
+    IOR product, for roulette), ``last_event`` (the previous vertex) and ``last_pdf`` (its continuation
+    pdf, for MIS of emitters hit), ``needs_isect`` (``si`` is stale), ``specular_chain`` (only delta
+    events so far: emitters hit count in full), ``valid_ray`` (the sample hit something), ``last_long``
+    (the depth of the last long-walk cut), ``guide_left`` (sun guiding's remaining weight budget),
+    ``last_pdf_sun`` (the previous vertex's continuation pdf in the sun's MIS) and ``aur_w`` (the
+    aureole estimator's MIS weight of the next sun NEE).
+    """
+    key = mi.variant()
+    if key not in _STATE_CLASSES:
+        class PathState:
+            DRJIT_STRUCT = {
+                "active": mi.Bool, "depth": mi.UInt32, "ray": mi.Ray3f, "throughput": mi.Spectrum,
+                "result": mi.Spectrum, "si": mi.SurfaceInteraction3f, "medium": mi.MediumPtr, "eta": mi.Float,
+                "last_event": mi.Interaction3f, "last_pdf": mi.Float, "needs_isect": mi.Bool,
+                "specular_chain": mi.Bool, "valid_ray": mi.Bool, "last_long": mi.UInt32, "guide_left": mi.Float,
+                "last_pdf_sun": mi.Float, "aur_w": mi.Float}
+
+            def __init__(self, **fields):
+                for name, value in fields.items():
+                    setattr(self, name, value)
+        PathState.__doc__ = path_state_class.__doc__
+        _STATE_CLASSES[key] = PathState
+    return _STATE_CLASSES[key]
+
+
+class _Vertex:
+    """What the stages of one loop iteration pass on (not loop state): ``act_scatter`` (a real
+    collision), ``active_surface`` (a surface interaction), ``mei``, ``bsdf``, ``act_e_surf`` / ``act_e``
+    (emitter sampling at a surface / at any vertex), ``ref`` (the vertex), ``alpha`` (channel
+    probabilities), ``eps`` / ``eps_a`` (probabilities of a sun-guided draw and of the aureole estimator)."""
+
+
+class PathLoop:
+    """The path loop of ``majorant_volpath`` over one scene: :meth:`initial` is the :func:`path_state_class`
+    state of paths starting with a ray, :meth:`body` advances every alive path by one event (a scattering,
+    a surface or the escape) in stages: :meth:`roulette`, :meth:`free_flight`, :meth:`emitters_hit`,
+    :meth:`vertex`, :meth:`nee`, :meth:`aureole_nee`, :meth:`sample_phase`, :meth:`sample_bsdf`.
+    Structure and estimators: the module docstring."""
+
+    def __init__(self, integ, scene, medium):
+        integ._setup(scene, medium)
+        ms = integ._ms
+        self.integ, self.scene, self.ms, self.tk = integ, scene, ms, integ._tk
+        self.State = path_state_class()
+        self.has_medium = has_medium = ms.medium is not None
+        self.max_depth, self.rr_depth, self.hide = integ.max_depth, integ.rr_depth, integ.hide_emitters_
+        self.phase = phase = ms.medium.phase_function() if has_medium else None
+        self.bsdf_ctx = mi.BSDFContext()
+        self.has_emitters = has_emitters = len(scene.emitters()) > 0
+        self.sun_mode = sun_mode = integ.sun_mode
+        self.guiding = has_medium and sun_mode != "none" and integ.guiding > 0.0
+        self.aureole = has_medium and sun_mode != "none" and integ.aureole > 0.0
+        self.by_channel = has_medium and integ.channels == "history" and hasattr(phase, "sample_channel")
+        self.rr_cap = 0.95 if integ.rr_mode == "volpath" else 1.0
+        self.c_em = c_em = integ.emitter_nee
+        self.c_sky = c_em if sun_mode != "none" else 1.0          # share of shadow rays towards the scene's emitters
+        self.c_sun = (1.0 - c_em) if has_emitters else 1.0      # ... towards the integrator's sun
+        self.sun_pdf = dr.rcp(dr.two_pi * integ.sun_vmax) if sun_mode == "disk" else None
+        self.one_strategy = {"nee": (1.0, 0.0), "phase": (0.0, 1.0)}.get(integ.sun_sampling)
+        self.has_env = scene.environment() is not None
+        self.transmittance = functools.partial(shadow_transmittance, self.tk, integ.tr_mode == "exact")
+
+    def sun_pdf_of(self, val, pdf):
+        """The continuation pdf in the sun's MIS: with aureole NEE the channel mean of the phase value (the
+        mixture's own pdf; a function of the vertex and the two directions only, so that the aureole
+        estimator can weight its vertex B exactly as the path does)."""
+        return dr.mean(val) if self.aureole else pdf
+
+    def sun_mis(self, pdf_a, pdf_b, nee=True):
+        """Weight of the sun-sampling (``nee``) or of the continuation strategy."""
+        if self.one_strategy is None:
+            return _mis_weight(pdf_a, pdf_b)
+        return self.one_strategy[0] if nee else self.one_strategy[1]
+
+    def initial(self, ray, medium, active):
+        """The state of paths starting with ``ray`` in ``medium`` (the sensor's), alive where ``active``."""
+        hide = self.hide
+        med0 = dr.zeros(mi.MediumPtr)
+        if medium is not None:
+            med0 = dr.select(active, mi.MediumPtr(medium), med0)
+        return self.State(
+            active=active, depth=mi.UInt32(0), ray=ray, throughput=mi.Spectrum(1.0), result=mi.Spectrum(0.0),
+            si=dr.zeros(mi.SurfaceInteraction3f), medium=med0, eta=mi.Float(1.0), last_event=dr.zeros(mi.Interaction3f),
+            last_pdf=mi.Float(1.0), needs_isect=mi.Bool(True), specular_chain=mi.Bool(active & (not hide)),
+            valid_ray=mi.Bool((not hide) and self.has_env), last_long=mi.UInt32(0),
+            guide_left=mi.Float(GUIDE_GROWTH), last_pdf_sun=mi.Float(1.0), aur_w=mi.Float(1.0))
+
+    def cond(self, sampler, p):
+        return p.active
+
+    def body(self, sampler, p):
+        """One event of every alive path."""
+        self.roulette(sampler, p)
+        v = self.free_flight(sampler, p)
+        self.emitters_hit(p, v)
+        self.vertex(p, v)
+        self.nee(sampler, p, v)
+        self.aureole_nee(sampler, p, v)
+        self.sample_phase(sampler, p, v)
+        self.sample_bsdf(sampler, p, v)
+        return sampler, p
+
+    def roulette(self, sampler, p):
+        """Russian roulette (``rr_mode``; long walks cut at depths 2^k >= LONG_WALK_DEPTH) and the depth limit."""
+        p.active &= dr.any(p.throughput != 0.0)
+        q = dr.minimum(dr.max(p.throughput) * dr.square(p.eta), self.rr_cap)
+        if self.rr_cap == 1.0:  # long walks: survive 1/2 at depths 2^k >= LONG_WALK_DEPTH (weight ~ depth)
+            depth = p.depth
+            long_walk = (depth >= LONG_WALK_DEPTH) & ((depth & (depth - 1)) == 0) & (depth != p.last_long)
+            p.last_long = dr.select(long_walk, depth, p.last_long)
+            q = dr.select(long_walk, q * 0.5, q)
+        perform_rr = (p.depth > self.rr_depth) & (q < 1.0)
+        p.active &= (sampler.next_1d(p.active) < q) | ~perform_rr
+        p.throughput = dr.select(perform_rr, p.throughput * dr.rcp(q), p.throughput)
+        p.active &= p.depth < self.max_depth
+
+    def free_flight(self, sampler, p) -> _Vertex:
+        """The next surface, and in the medium the free flight (delta tracking) to a real collision, with
+        the absorption weight (throughput *= sigma_s / sigma_t)."""
+        v = _Vertex()
+        isect = p.active & p.needs_isect
+        p.si = dr.select(isect, self.scene.ray_intersect(p.ray, isect), p.si)
+        p.needs_isect &= ~p.active
+        v.act_scatter = mi.Bool(False)
+        v.active_surface = mi.Bool(p.active)
+        v.mei = dr.zeros(mi.MediumInteraction3f)
+        if self.has_medium:
+            active_medium = p.active & (p.medium != None)  # noqa: E711
+            v.active_surface = p.active & ~active_medium
+            t_end = dr.minimum(p.si.t, p.ray.maxt)
+            found, t_coll, w_walk = delta_tracking(self.tk, p.ray, t_end, sampler, active_medium, p.throughput)
+            p.throughput = dr.select(active_medium, w_walk, p.throughput)
+            v.act_scatter = active_medium & found
+            v.active_surface |= active_medium & ~found
+            v.mei, albedo_w = scattering_event(self.ms, p.ray, t_coll, v.act_scatter)
+            p.depth = dr.select(v.act_scatter, p.depth + 1, p.depth)
+            p.last_event = dr.select(v.act_scatter, _as_interaction(v.mei), p.last_event)
+            p.active &= p.depth < self.max_depth
+            v.act_scatter &= p.active
+            p.throughput = dr.select(v.act_scatter, p.throughput * albedo_w, p.throughput)
+            p.valid_ray |= v.act_scatter
+            p.specular_chain &= ~v.act_scatter
+        return v
+
+    def emitters_hit(self, p, v):
+        """Emitters hit by the ray (environment, area emitters; the sun's disk), MIS against emitter
+        sampling at the previous vertex; then the surface's BSDF."""
+        count_direct = (p.depth == 0) | p.specular_chain
+        emitter = p.si.emitter(self.scene)
+        active_e = v.active_surface & (emitter != None)  # noqa: E711
+        if self.hide:
+            active_e &= p.depth != 0
+        ds_hit = mi.DirectionSample3f(self.scene, p.si, p.last_event)
+        em_pdf = self.scene.pdf_emitter_direction(p.last_event, ds_hit, active_e & ~count_direct)
+        emitted = emitter.eval(p.si, active_e)
+        w_hit = dr.select(count_direct, 1.0, _mis_weight(p.last_pdf, self.c_sky * em_pdf))
+        p.result = dr.select(active_e, p.result + p.throughput * w_hit * emitted, p.result)
+        if self.sun_mode == "disk":  # a ray that leaves the scene inside the sun's disk sees the sun
+            in_sun = v.active_surface & ~p.si.is_valid() & sun.in_disk(self.integ, p.ray.d)
+            if self.hide:
+                in_sun &= p.depth != 0
+            w_hit = dr.select(count_direct, 1.0, self.sun_mis(p.last_pdf_sun, self.c_sun * self.sun_pdf, nee=False))
+            p.result = dr.select(in_sun, p.result + p.throughput * w_hit * mi.Spectrum(self.integ.sun_value), p.result)
+        v.active_surface &= p.si.is_valid()
+        v.bsdf = p.si.bsdf(p.ray)
+
+    def vertex(self, p, v):
+        """The vertex of emitter sampling (a real collision or a smooth surface) and the channel
+        probabilities alpha of history-aware channel sampling (in proportion to the throughput)."""
+        v.act_e_surf = v.active_surface & mi.has_flag(v.bsdf.flags(), mi.BSDFFlags.Smooth) & (p.depth + 1 < self.max_depth)
+        v.act_e = v.act_e_surf | v.act_scatter
+        ref = dr.zeros(mi.Interaction3f)
+        ref = dr.select(v.act_scatter, _as_interaction(v.mei), ref)
+        v.ref = dr.select(v.act_e_surf, _as_interaction(p.si), ref)
+        v.eps = mi.Float(0.0)  # probability of a sun-guided continuation at this vertex
+        v.alpha = None
+        if self.by_channel:
+            t_sum = dr.sum(p.throughput)
+            v.alpha = p.throughput * dr.select(t_sum > 0.0, dr.rcp(t_sum), 0.0)
+
+    def f_eval(self, sampler, p, v, d):
+        """Phase function or BSDF value toward d, and the pdf with which this vertex continues the path in
+        direction d (phase: with sun guiding, the mixture of both samplers)."""
+        bsdf_val, bsdf_pdf = v.bsdf.eval_pdf(self.bsdf_ctx, p.si, p.si.to_local(d), v.act_e_surf)
+        if not self.has_medium:
+            return bsdf_val, bsdf_pdf
+        ph_val, ph_pdf = self.phase.eval_pdf(phase_ctx(sampler), v.mei, d, v.act_scatter)
+        ph_pdf = sun.continuation_pdf(self.integ, self.phase, sampler, v.mei, d, ph_val, ph_pdf, v.alpha, v.eps,
+                                      v.act_scatter)
+        return dr.select(v.act_e_surf, bsdf_val, ph_val), dr.select(v.act_e_surf, bsdf_pdf, ph_pdf)
+
+    def nee(self, sampler, p, v):
+        """Next-event estimation: one shadow ray per vertex, towards the integrator's sun with probability
+        1 - c and towards one of the scene's emitters (the sky) with probability c; as MIS techniques
+        their pdfs are (1 - c) p_sun and c p_emitter. Sets the vertex's sun-guiding probability eps."""
+        has_emitters, sun_mode = self.has_emitters, self.sun_mode
+        if not (has_emitters or sun_mode != "none"):
+            return
+        if not has_emitters:
+            pick_em = mi.Bool(False)
+        elif sun_mode == "none":
+            pick_em = mi.Bool(True)
+        else:
+            pick_em = sampler.next_1d(v.act_e) < self.c_em
+        em_val, ds = dr.zeros(mi.Spectrum), dr.zeros(mi.DirectionSample3f)
+        if has_emitters:
+            ds, em_val = self.scene.sample_emitter_direction(v.ref, sampler.next_2d(v.act_e), False, v.act_e & pick_em)
+            em_val = dr.select(ds.pdf != 0.0, em_val, 0.0)
+            d = mi.Vector3f(ds.d)
+            shadow = v.ref.spawn_ray_to(ds.p)
+        if sun_mode != "none":
+            wo_s = sun.sun_direction(self.integ, sampler, v.act_e)
+            d = dr.select(pick_em, ds.d, wo_s) if has_emitters else wo_s
+            shadow_sun = v.ref.spawn_ray(wo_s)
+            shadow = dr.select(pick_em, shadow, shadow_sun) if has_emitters else shadow_sun
+        # (at a medium boundary the shadow ray starts in the medium on the emitter's side)
+        shadow_med = dr.select(v.act_e_surf & p.si.is_medium_transition(), p.si.target_medium(d), p.medium)
+        tr = self.transmittance(self.scene, sampler, shadow, shadow_med, v.act_e)
+        if self.guiding and sun_mode != "none":
+            # guide only where the sun is seen (elsewhere p / q > 1 would only inflate weights) and while the
+            # product of the unguided draws' weights <= 1 / (1 - eps) stays below GUIDE_GROWTH; set before
+            # f_eval, so both MIS weights see the same continuation pdf
+            eps = dr.select(pick_em, 0.0, self.integ.guide_p * dr.minimum(dr.max(tr) * (1.0 / GUIDE_SEEN), 1.0))
+            v.eps = dr.select(v.act_scatter & ((1.0 - eps) * p.guide_left >= 1.0), eps, 0.0)
+            p.guide_left = dr.select(v.act_scatter, p.guide_left * (1.0 - v.eps), p.guide_left)
+        f_val, f_pdf = self.f_eval(sampler, p, v, d)
+        w, em_val = self.nee_weight(p, v, pick_em, ds, em_val, f_val, f_pdf)
+        p.result = dr.select(v.act_e, p.result + p.throughput * f_val * w * tr * em_val, p.result)
+
+    def nee_weight(self, p, v, pick_em, ds, em_val, f_val, f_pdf):
+        """(MIS weight / technique pdf, emitted value) of the shadow ray of :meth:`nee`."""
+        w = mi.Float(0.0)
+        if self.has_emitters:
+            w_em = _mis_weight(self.c_sky * ds.pdf, dr.select(ds.delta, 0.0, f_pdf)) * (1.0 / self.c_sky)
+            w = dr.select(pick_em, w_em, w)
+        if self.sun_mode != "none":
+            if self.sun_mode == "disk":  # L / pdf_sun x MIS weight against continuing the path
+                c_sun, sun_pdf = self.c_sun, self.sun_pdf
+                w_s = self.sun_mis(c_sun * sun_pdf, self.sun_pdf_of(f_val, f_pdf)) * dr.rcp(c_sun * sun_pdf)
+            else:                        # delta: irradiance, no MIS
+                w_s = mi.Float(1.0 / self.c_sun)
+            if self.aureole:  # MIS against the previous vertex's aureole estimator
+                w_s = dr.select(v.act_scatter, w_s * p.aur_w, w_s)
+            w = dr.select(pick_em, w, w_s)
+            em_val = dr.select(pick_em, em_val, mi.Spectrum(self.integ.sun_value))
+        return w, em_val
+
+    def aureole_nee(self, sampler, p, v):
+        """Aureole next-event estimation (:func:`.sun.aureole_nee`): a second way to the chain
+        A -> B -> sun, its direction at A drawn about the sun."""
+        v.eps_a = mi.Float(0.0)
+        if self.aureole:
+            integ = self.integ
+            act_x = v.act_scatter & (p.depth + 1 < self.max_depth)
+            act_x &= sampler.next_1d(act_x) < integ.aureole_p
+            v.eps_a = dr.select(v.act_scatter & (p.depth + 1 < self.max_depth), integ.aureole_p, 0.0)
+            p.result = sun.aureole_nee(integ, self.tk, self.transmittance, self.scene, sampler, self.phase, v.mei,
+                                       p.medium, p.throughput, v.alpha, v.eps_a, act_x, p.result, self.sun_mis,
+                                       self.c_sun, self.sun_pdf)
+
+    def sample_phase(self, sampler, p, v):
+        """Phase function sampling at a real collision (with channels and sun guiding: :meth:`guided_phase`)."""
+        if not self.has_medium:
+            return
+        act_scatter = v.act_scatter
+        ph_ctx = phase_ctx(sampler)
+        if self.guiding or self.by_channel:
+            wo, ph_val, ph_pdf = self.guided_phase(sampler, v, ph_ctx)
+            ph_w = ph_val * dr.select(ph_pdf > 0.0, dr.rcp(ph_pdf), 0.0)
+        else:
+            wo, ph_w, ph_pdf = self.phase.sample(ph_ctx, v.mei, sampler.next_1d(act_scatter),
+                                                 sampler.next_2d(act_scatter), act_scatter)
+            ph_val = ph_w * ph_pdf
+        v.act_scatter = act_scatter = act_scatter & (ph_pdf > 0.0)
+        if self.aureole:  # the sun-NEE weight at the next vertex
+            p.aur_w = dr.select(act_scatter, ph_pdf * dr.rcp(ph_pdf + v.eps_a * sun.aureole_pdf(
+                self.integ, self.phase, sampler, v.mei, wo, act_scatter)), p.aur_w)
+        p.last_pdf_sun = dr.select(act_scatter, self.sun_pdf_of(ph_val, ph_pdf), p.last_pdf_sun)
+        p.throughput = dr.select(act_scatter, p.throughput * ph_w, p.throughput)
+        p.ray = dr.select(act_scatter, v.mei.spawn_ray(wo), p.ray)
+        p.needs_isect |= act_scatter
+        p.last_pdf = dr.select(act_scatter, ph_pdf, p.last_pdf)
+
+    def guided_phase(self, sampler, v, ph_ctx):
+        """(direction, phase value, continuation pdf) drawn by channel (history-aware) and/or, with
+        probability eps, about the sun (half uniform in the disk, half from the phase function about it)."""
+        phase, act_scatter, integ = self.phase, v.act_scatter, self.integ
+        mei_s = v.mei
+        if self.guiding:
+            u_g = sampler.next_1d(act_scatter)
+            toward_sun = act_scatter & (u_g < v.eps)
+            # half the guided draws uniform in the disk, half from the phase function about it
+            in_disk = toward_sun & (u_g < 0.5 * v.eps) if self.sun_mode == "disk" else mi.Bool(False)
+            mei_s = sun.about_sun(integ, v.mei, toward_sun)
+        ph_pdf = None  # with channels, the channel mixture's pdf follows from the values
+        if self.by_channel:
+            u = sampler.next_1d(act_scatter)
+            alpha = v.alpha
+            channel = mi.UInt32(dr.select(u >= alpha[0], 1, 0) + dr.select(u >= alpha[0] + alpha[1], 1, 0))
+            wo, ph_val = phase.sample_channel(ph_ctx, mei_s, channel, sampler.next_1d(act_scatter),
+                                              sampler.next_2d(act_scatter), act_scatter)
+        else:
+            wo, _, _ = phase.sample(ph_ctx, mei_s, sampler.next_1d(act_scatter), sampler.next_2d(act_scatter),
+                                    act_scatter)
+        if self.guiding:  # the values are needed about the path's own direction
+            wo = dr.select(in_disk, sun.sample_disk(integ, sampler.next_2d(act_scatter)), wo)
+            ph_val, ph_pdf = phase.eval_pdf(ph_ctx, v.mei, wo, act_scatter)
+        ph_pdf = sun.continuation_pdf(integ, phase, sampler, v.mei, wo, ph_val, ph_pdf, v.alpha, v.eps, act_scatter)
+        return wo, ph_val, ph_pdf
+
+    def sample_bsdf(self, sampler, p, v):
+        """BSDF sampling at a surface (null BSDFs: passed through without counting depth); ends the paths
+        that neither scattered nor continue from a surface."""
+        si, active_surface = p.si, v.active_surface
+        bs, bsdf_w = v.bsdf.sample(self.bsdf_ctx, si, sampler.next_1d(active_surface),
+                                   sampler.next_2d(active_surface), active_surface)
+        active_surface &= bs.pdf > 0.0
+        p.throughput = dr.select(active_surface, p.throughput * bsdf_w, p.throughput)
+        p.eta = dr.select(active_surface, p.eta * bs.eta, p.eta)
+        p.ray = dr.select(active_surface, si.spawn_ray(si.to_world(bs.wo)), p.ray)
+        p.needs_isect |= active_surface
+        non_null = active_surface & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)
+        p.depth = dr.select(non_null, p.depth + 1, p.depth)
+        p.last_event = dr.select(non_null, _as_interaction(si), p.last_event)
+        p.last_pdf = dr.select(non_null, bs.pdf, p.last_pdf)
+        p.last_pdf_sun = dr.select(non_null, bs.pdf, p.last_pdf_sun)
+        p.aur_w = dr.select(non_null, 1.0, p.aur_w)
+        p.valid_ray |= non_null
+        p.specular_chain |= non_null & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        p.specular_chain &= ~(active_surface & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Smooth))
+        trans = active_surface & si.is_medium_transition()
+        p.medium = dr.select(trans, si.target_medium(p.ray.d), p.medium)
+        p.active &= active_surface | v.act_scatter
 
 
 def register() -> None:

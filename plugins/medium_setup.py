@@ -9,6 +9,8 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from .dda import Grid
+from .majorants import empty_space_radius, texel_majorant_grid
 from .variant_class import variant_class
 
 PLUGIN_NAME = "majorant_volpath"
@@ -86,6 +88,24 @@ def check_bbox(to_world, vol):
                            f"but the medium's sigma_t grid covers {vlo.tolist()} - {vhi.tolist()}")
 
 
+def unit_cube_to_world(to_world, vol) -> np.ndarray:
+    """The (4, 4) matrix that maps the unit cube onto the sigma_t grid: the ``to_world`` property
+    (checked against the grid's bounding box) or, without it, that box."""
+    if to_world is not None:
+        to_world = np.array(to_world.matrix, dtype=np.float64).reshape(4, 4)
+    elif vol is not None:
+        bb = vol.bbox()
+        lo = np.array([bb.min.x, bb.min.y, bb.min.z], np.float64)
+        hi = np.array([bb.max.x, bb.max.y, bb.max.z], np.float64)
+        to_world = np.diag(np.r_[hi - lo, 1.0])
+        to_world[:3, 3] = lo
+    else:
+        raise RuntimeError(f"{PLUGIN_NAME}: 'to_world' is required when the medium has no sigma_t grid")
+    if vol is not None:
+        check_bbox(to_world, vol)
+    return to_world
+
+
 def volume_data(vol):
     """The data (TensorXf) of a ``gridvolume``."""
     for name, (value, cpptype) in children(vol).items():
@@ -157,3 +177,58 @@ class Tracking:
     def __init__(self, ms, to_local=None, coarse=None, texel=None, track=None, texel_data=None):
         self.ms, self.to_local = ms, to_local
         self.coarse, self.texel, self.track, self.texel_data = coarse, texel, track, texel_data
+
+
+class GridCache:
+    """The DDA grids of an integrator, rebuilt only when their data change (keys: the Dr.Jit index of the
+    data, the scale and the shape)."""
+
+    def __init__(self):
+        self.skip = self.skip_key = None
+        self.texel_arrays = self.texel_key = None
+
+    def coarse(self, majorant, vol, scale: float, cell: int) -> Grid:
+        """The coarse grid of ``majorant`` (TensorXf (Z, Y, X), 1/m), checked against the medium's sigma_t
+        grid ``vol`` (None: the coarse cells tile the unit cube): its shape must be ceil(fine shape / cell)
+        and its maximum must bound the medium's maximum sigma_t (a stale grid raises instead of biasing)."""
+        nz, ny, nx = (int(s) for s in majorant.shape[:3])
+        if vol is not None:
+            rx, ry, rz = (int(v) for v in vol.resolution())
+            expect = tuple(-(-n // cell) for n in (rz, ry, rx))
+            if expect != (nz, ny, nx):
+                raise RuntimeError(
+                    f"{PLUGIN_NAME}: majorant grid {(nz, ny, nx)} does not match the sigma_t grid {(rz, ry, rx)} "
+                    f"with cell = {cell} (expected {expect}); rebuild it with majorant_grid(..., cell)")
+            cells_per_unit = (rx / cell, ry / cell, rz / cell)
+            # cheap staleness guard: the grid must bound the medium's maximum
+            vmax = float(vol.max()) * scale
+            mmax = float(np.max(majorant.numpy()))
+            if vmax > mmax * (1.0 + 1e-5) + 1e-30:
+                raise RuntimeError(
+                    f"{PLUGIN_NAME}: the majorant grid (max {mmax:g}) is below the medium's maximum sigma_t "
+                    f"({vmax:g} = grid max x scale): it is stale; rebuild it from the current data")
+        else:
+            cells_per_unit = (nx, ny, nz)
+        # opaque: new resolutions / values do not recompile
+        maj_key = (majorant.array.index, tuple(majorant.shape))
+        if maj_key != self.skip_key:
+            self.skip = mi.Int32(empty_space_radius(majorant.numpy()).ravel())
+            self.skip_key = maj_key
+        return Grid(majorant.array, self.skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
+
+    def texel(self, vol, scale: float):
+        """(The texel-centre grid, (data, scale) of a grey grid or None); (None, None) without a sigma_t
+        grid. Its cells lie between 2 x 2 x 2 texel centres (cells -1 .. N - 1 per axis, the first and last
+        halves cut by the box), where the trilinear interpolant is one trilinear polynomial; majorant =
+        SAFETY x the maximum of the cell's 8 texels, which is the maximum of the interpolant there."""
+        if vol is None:
+            return None, None
+        data = volume_data(vol)
+        key = (data.array.index, scale)
+        if key != self.texel_key:
+            maj = texel_majorant_grid(np.asarray(data) * scale)
+            self.texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty_space_radius(maj).ravel()))
+            self.texel_key = key
+        rx, ry, rz = (int(v) for v in vol.resolution())
+        texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
+        return Grid(*self.texel_arrays, (rx + 1, ry + 1, rz + 1), (rx, ry, rz), shift=-0.5, lo=-1), texel_data

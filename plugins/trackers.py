@@ -243,3 +243,42 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
     if rr:
         return mi.Spectrum(w * dr.exp(-tau))
     return mi.Spectrum(dr.select((dr.min(tau) if spectral else tau) > TAU_ZERO, 0.0, dr.exp(-tau)))
+
+
+def shadow_transmittance(tk, exact: bool, scene, sampler, ray, medium, active):
+    """Transmittance along a shadow ray: through the medium (``exact``: :func:`exact_transmittance` where
+    there is a texel grid, else :func:`ratio_tracking`) and null-BSDF surfaces (the medium's box), 0 at
+    opaque ones. ``ray.maxt`` is the distance to the emitter sample; ``medium`` the one the ray starts in.
+    Returns mi.Spectrum (0 where not ``active``)."""
+    max_dist = mi.Float(ray.maxt)
+    has_medium = tk.ms.medium is not None
+
+    def cond(sampler, active, ray, total, medium, tr):
+        return active
+
+    def body(sampler, active, ray, total, medium, tr):
+        remaining = max_dist - total
+        ray.maxt = remaining
+        active &= remaining > 0.0
+        si = scene.ray_intersect(ray, active)
+        if has_medium:
+            in_med = active & (medium != None)  # noqa: E711
+            if exact and tk.texel is not None:
+                tr_seg = exact_transmittance(tk, ray, dr.minimum(si.t, remaining), in_med, sampler)
+            else:
+                tr_seg = ratio_tracking(tk, ray, dr.minimum(si.t, remaining), sampler, in_med)
+            tr = dr.select(in_med, tr * tr_seg, tr)
+        hit = active & si.is_valid()
+        bsdf = si.bsdf(ray)
+        tr = dr.select(hit, tr * bsdf.eval_null_transmission(si, hit), tr)
+        total = dr.select(hit, total + si.t, total)
+        ray = dr.select(hit, si.spawn_ray(ray.d), ray)
+        trans = hit & si.is_medium_transition()
+        medium = dr.select(trans, si.target_medium(ray.d), medium)
+        active &= hit & dr.any(tr != 0.0)
+        return sampler, active, ray, total, medium, tr
+
+    _, _, _, _, _, tr = dr.while_loop(
+        state=(sampler, mi.Bool(active), mi.Ray3f(ray), mi.Float(0.0), mi.MediumPtr(medium), mi.Spectrum(1.0)),
+        cond=cond, body=body, label="majorant_volpath: shadow ray")
+    return dr.select(active, tr, 0.0)
