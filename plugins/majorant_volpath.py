@@ -1,148 +1,33 @@
 """Mitsuba 3 integrator ``majorant_volpath``: volumetric path tracing over grids of local majorants.
 
-Mitsuba 3.9.1's ``heterogeneous`` medium samples free flights by delta tracking against ONE global
-majorant (the maximum of sigma_t over the whole grid), so in a sparse storm every ray through clear
-air pays ~majorant x length null collisions. This integrator instead walks grids of local majorants
-along the ray with a 3-D DDA (Amanatides & Woo; pbrt-v4's ``DDAMajorantIterator``):
+Mitsuba's ``heterogeneous`` medium samples free flights by delta tracking against ONE global majorant,
+so in a sparse storm every ray through clear air pays ~majorant x length null collisions. This
+integrator walks grids of local majorants along the ray with a 3-D DDA (Amanatides & Woo 1987;
+pbrt-v4's ``DDAMajorantIterator``), crossing empty space in one step (Cohen & Sheffer 1994):
 
-* the texel-cell grid (``tracking_grid = "texel"``, the default for a medium with a sigma_t grid): one
-  cell between each 2 x 2 x 2 texel centres of the sigma_t grid (cells -1 .. N - 1 per axis; the first
-  and last are halves cut by the box). The trilinear interpolant is one trilinear polynomial in such a
-  cell, so the maximum of its 8 texels is its exact maximum there: the tightest majorants a grid of
-  this resolution can have. The coarse grid (``majorant``, ``cell`` fine voxels per cell, dilated by a
-  voxel because its cells are not aligned with the texel centres) remains for media without a grid and
-  for ``tracking_grid = "coarse"``. Measured on the demo supercell (side view, 80 x 60): per real
-  collision 6.4 null collisions over the coarse grid (cell 2; the interpolant's ramp from clear
-  air to a core of 0.4 / m spans a 1-km voxel, and the walks live in the first few hundred metres of
-  it), 1.3 over texel cells; with the coarse grid a render takes 1.8x the time
-  (``benchmarks/reference_noise.py --profile``).
-* empty space: cells whose majorant is 0 and whose neighbours within k cells are all empty
-  (``empty_space_radius``, "proximity clouds", Cohen & Sheffer 1994) are crossed in one step to where
-  the ray leaves that cube of cells.
-* free flights: delta tracking cell by cell. In each cell an exponential step is drawn with that
-  cell's majorant; a step that leaves the cell restarts at the cell exit with the next cell's majorant
-  (memorylessness). At a tentative collision the real sigma_t is looked up and the collision is real
-  with probability sigma_t / majorant.
-* transmittance for next-event estimation (``transmittance``): "exact" (default with a sigma_t grid):
-  along a ray the interpolant is a cubic in each texel cell, which Simpson's rule integrates exactly
-  (``_exact_walk``: the cell's 8 texels gathered once, the interpolant at the midpoint and the exit
-  computed from them; nothing in cells whose texels are 0), so
-  T = exp(-tau) with no variance from the integral. In a render the walk plays Russian roulette each
-  time T falls by another factor 10 below 0.01 (survival EXACT_RR_SURVIVE = 0.3, weight 1 / 0.3): the
-  walks that crawl through thin cloud towards the sun stop early (10-20% less time per spp on the
-  demo views, noise unchanged); without a sampler it is exact and stops at tau > TAU_ZERO = 50. "ratio": ratio tracking over the
-  tracking grid, with Russian roulette once the estimate is small. Both through null-BSDF surfaces
-  (the medium's box), stopped by opaque ones.
-* persistent lanes (``render_pass``; ``reference.render_pass`` uses it on LLVM variants unless
-  ``persistent_lanes`` is false). In a Dr.Jit LLVM kernel a SIMD packet of 8 lanes loops until its
-  longest path ends, and path lengths here are heavy-tailed (80 x 60 side view: median 0 DDA steps per
-  path, 99th percentile 2700, maximum 40000; packets of 8 kept about 32% of their lanes busy). So a
-  pass launches one LLVM block of lanes per thread, and each lane draws its next sample from a shared
-  atomic counter when its path ends (re-seeding its PCG32 from (seed, sample), so the image does not
-  depend on which lane ran which sample; each sample's radiance goes to its own slot, summed in sample
-  order: deterministic). Without them (``mi.render``) a render takes 1.7x the time. A launch still
-  ends when its longest path ends, so ``render_passes`` renders several passes in one launch (a pass
-  over a few pixels, as a render to a target adds them, took 1.8x the time per sample alone), and
-  ``pixels`` restricts a pass to some pixels (each with the values it has in the pass over all).
-* otherwise the structure and estimators of Mitsuba's ``volpath``: analog absorption (throughput *=
-  sigma_s / sigma_t at real collisions), phase-function and BSDF sampling with emitter sampling and MIS
-  (power heuristic) for environment emitters, delta emitters (``directional``) by NEE only,
-  null BSDFs passed through without counting depth, sensors inside media.
-  Differences: Russian roulette (below) is played once per real scattering / surface vertex, whereas
-  ``volpath`` plays it at every null collision as well; with many null collisions per segment (a high
-  global majorant) that makes ``volpath``'s multiple scattering a rare-event estimator that reads low
-  at practical sample counts. Both are unbiased; compare them without roulette (large ``rr_depth``,
-  finite ``max_depth``) when null collisions are numerous. The sun and the phase sampling: below.
+* majorants per texel cell (:mod:`.majorants`, exact bounds of the trilinear interpolant) or per coarse
+  cell; the DDA in :mod:`.dda`;
+* free flights by delta tracking, shadow rays by exact transmittance (Simpson's rule per texel cell) or
+  ratio tracking (Novak et al. 2014), in :mod:`.trackers`; spectrally varying extinction by
+  history-aware spectral tracking (Kutz et al. 2017);
+* the integrator's own sun (a disk or a point, with MIS against the path's continuation, optional sun
+  guiding after Buras & Mayer 2011 and aureole next-event estimation) in :mod:`.sun`;
+* history-aware channel sampling of a chromatic phase function (Kutz et al. 2017, applied to directions);
+* Russian roulette once per real scattering / surface vertex, survival min(max T, 1) (no weight grows),
+  long walks cut by a survival of 1/2 at each depth 2^k >= LONG_WALK_DEPTH;
+* persistent lanes (:mod:`.lanes`): ``render_pass`` / ``render_passes``, used by
+  ``reference.render_pass`` on LLVM variants.
 
-The sun (issue 10). With ``sun_direction`` the sun is the integrator's own light, not a scene emitter:
-a uniform disk of angular diameter ``sun_angular_diameter`` (radiance L = E / (pi sin^2 r), E the
-irradiance normal to the beam, so that the disk's irradiance equals the point sun's) or, with diameter
-0, a point (directional) sun. It is sampled at every medium and surface vertex (no emitter selection):
-a direction uniform in the disk, pdf p_sun = 1 / (2 pi v_max), v_max = 1 - cos r held as a versine for
-float32. A path that leaves the scene inside the disk collects L. Both are weighted by the power
-heuristic against the pdf q with which the vertex continues the path (below); a point sun is NEE
-only. One shadow ray per vertex: towards the scene's emitters (the sky) with probability
-``emitter_nee`` (c, ``DEFAULT_EMITTER_NEE`` = 0.1), else towards the sun; as techniques their pdfs are c x pdf_emitter
-and (1 - c) x p_sun, in both MIS weights.
+Otherwise the structure and estimators of Mitsuba's ``volpath``: analog absorption, phase-function and
+BSDF sampling with emitter sampling and MIS (power heuristic), delta emitters by NEE only, null BSDFs
+passed through without counting depth, sensors inside media. The path loop is :class:`PathLoop`, stages
+over a :func:`.path_state.path_state_class` state; all loops are symbolic (one kernel per render; new
+data through ``mi.traverse`` + ``params.update()``, new majorants and emitter parameters reuse it).
 
-Continuation at a medium vertex, q(d):
-* history-aware channel sampling (Kutz et al. 2017, applied to directions): a chromatic phase
-  function (``hydrometeor_mixture``, which has ``sample_channel``) is sampled in colour channel c with
-  probability alpha_c = T_c / sum T (T: the path throughput), so q = sum_c alpha_c p_c(d) and the
-  weights p_c / q keep sum_c T_c unchanged: no channel can run away. Sampling every event from the
-  channel mean instead (``phase_channels="mean"``, the estimator before issue 10) multiplies the
-  throughput by up to 3 per event, channel by channel: over the hundreds of events of a path in a
-  storm that made colour fireflies.
-* optional sun guiding (``sun_guiding`` eps, detector-directional importance sampling as in MYSTIC's
-  VROOM, Buras & Mayer 2011): with probability eps (scaled down where the sun's shadow-ray estimate is
-  below GUIDE_SEEN) the direction is drawn towards the sun, half uniform in the disk and half from the
-  phase function about the sun's direction; q = (1 - eps) q_phase + eps (q_phase,sun + U_disk) / 2.
-  The unguided draws have weights p / q <= 1 / (1 - eps), which compound along multiply scattered
-  paths: guiding stops once their product would exceed GUIDE_GROWTH. Off by default in
-  ``render_reference``: an early estimator measured 2-4x less noise on orbit views (paper preset) and
-  3-4x more on the ground view; the present one (delta-M cone, roulette, channels), on the six views of
-  ``benchmarks/reference_noise.py`` at 160 x 120, 32 spp: RMS se/mean 0.34-0.38 at eps = 0.1 and
-  0.40-0.41 at 0.25 against 0.31-0.33 without, on five of six views (the paper back view: equal).
-* optional aureole next-event estimation (``aureole_nee`` eps; exclusive with sun guiding): sun light
-  that reaches a vertex A through one more, forward, scattering at B is sampled a second way: at A
-  (with probability eps) a direction about the sun (half from A's phase function centred on the sun,
-  half uniform in the disk), free flight to B, sun NEE at B weighted as the path weights it there.
-  Balance heuristic against the path's own draw: the path's sun NEE at its next vertex is weighted
-  q / (q + eps g). The sun's MIS then uses the channel-mean phase pdf on both sides (a function of
-  the vertex only, so both estimators weight B alike). Measured on the demo ground view (80 x 60,
-  64 spp, 4 seeds, with a 0.1 deg delta-M of ``weather_mi.forward_peak``): RMS se/mean 0.6-2.2
-  against 1.4-3.2 without, at 1.8x the time; off by default.
-
-Russian roulette (``rr_mode``). "throughput" (default): survival probability min(max T, 1) after
-``rr_depth``, so a weight never grows: Mitsuba's volpath caps the survival probability at 0.95, which
-in a storm of albedo ~1 - 1e-6 plays roulette at every event and multiplies the survivors' weights by
-1/0.95 per event; the variance of that estimator is infinite (contributions at depth n do not decay
-like 0.95^n), which made the fireflies of issue 10. Long walks are cut by one survival of 1/2 at each
-depth 2^k >= LONG_WALK_DEPTH = 1024 (weights grow like the depth, not exponentially). From 32 on
-(as first tuned on one HG phase, where paths past 1000 events took 64% of the time and 0.2% of the
-light) the doubled weights made fireflies on the demo storm's ground view: RMS se/mean 0.5-1.9,
-worst pixel 8-50 at 64 spp against 0.29-0.34 and 2-4 from 512 on, at 1.8x the time; with no cut
-at all 0.26-0.29 and 2-4, at 3.6x the time. From 1024 rather than 512: on three orbit views, two
-seed pairs, the same efficiency (1 / (RMS^2 time)) and a lighter tail (worst pixel 1.5-2.5 against
-2.1-4.4), at 1.13x the time; 256 and 2048 were less efficient. Re-measured with persistent lanes
-(paper side and front views, 160 x 120, 32 spp): no cut 2.1-2.9x the time, a cut from 4096 1.5-1.8x,
-for 2-7% less RMS noise; from 128-512 less time but 1.2-2x the RMS noise. "volpath": the old rule.
-
-All loops are symbolic (``dr.while_loop``): one kernel per render; new sigma_t / albedo data (through
-``mi.traverse`` + ``params.update()``), new majorant values or resolutions and new emitter parameters
-reuse it.
-
-Scope: one medium in the scene (any number of shapes may reference it), extinction looked up directly in
-its ``sigma_t`` volume when it is a ``heterogeneous`` medium (scale applied; microflake phase
-functions are not supported), otherwise through ``get_scattering_coefficients``. Medium emission is
-not handled. Spectrally varying extinction (``has_spectral_extinction`` with an RGB sigma_t grid) is
-handled by history-aware spectral tracking (collision probabilities from the throughput-weighted
-channel mean, per-channel weights; unbiased; the majorant must bound every channel).
-
-Properties
-----------
-``max_depth`` (int, -1 = infinite), ``rr_depth`` (int, 5), ``rr_mode`` ("throughput" | "volpath"),
-``hide_emitters`` (bool, False), ``sun_direction`` (towards the sun), ``sun_irradiance`` (RGB),
-``sun_angular_diameter`` (degrees, <= 5), ``sun_sampling`` ("mis" | "nee" | "phase": the disk by
-MIS, or by one strategy alone, for tests), ``sun_guiding`` (probability in [0, 1)), ``emitter_nee``
-(probability in (0, 1]), ``phase_channels`` ("history" | "mean"),
-``majorant`` (TensorXf (Z, Y, X), majorants in 1/m, i.e. already multiplied by the medium's ``scale``;
-from :func:`majorant_grid`; optional: without it the grid is built from the medium's sigma_t data at
-render time and rebuilt whenever that data changes), ``cell`` (int, ``DEFAULT_CELL`` = 2: fine voxels
-per coarse cell along each axis, as given to :func:`majorant_grid`; seconds per spp at 256 x 256 on
-the demo supercell: 1.30 / 0.64 / 0.22 / 0.22 for cells of 8 / 4 / 2 / 1, on the real WRF supercell
-0.95 (8) and 0.24 (2): ``benchmarks/reference.py --integrators majorant --cells 8 4 2 1``),
-``to_world`` (transform of the unit cube onto the sigma_t grid's bounding box, as its gridvolume has;
-default: the bounding box of the medium's sigma_t volume; checked against it), ``tracking_grid``
-("texel" | "coarse"), ``transmittance`` ("exact" | "ratio"), ``persistent_lanes`` (bool; see above).
-
-At each render the grid is checked against the medium: its shape must be ceil(fine shape / cell) and
-its maximum must bound the medium's maximum sigma_t (a stale grid raises instead of biasing).
-
-Coarse cell (K, J, I) covers fine voxels [K*cell, (K+1)*cell) x ... of the (nz, ny, nx) sigma_t grid
-(the last cells may be partial), i.e. the unit-cube slab [K*cell/nz, min((K+1)*cell, nz)/nz] etc. The
-fine resolution is read from the medium's sigma_t volume; if it cannot be found the coarse cells are
-taken to tile the unit cube uniformly.
+Scope: one medium in the scene (any number of shapes may reference it), extinction looked up in its
+``sigma_t`` volume when it is a ``heterogeneous`` medium (scale applied; no microflakes), otherwise
+through ``get_scattering_coefficients``; no medium emission. The design, the measurements behind every
+default and their history: ``docs/reference-estimator.md``.
 """
 from __future__ import annotations
 
@@ -154,16 +39,16 @@ import drjit as dr
 import mitsuba as mi
 
 from ..scene import MAX_SUN_DIAMETER_DEG
-from .dda import Grid
-from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
-from .medium_setup import GridCache, MediumSetup, Tracking, phase_ctx, scattering_event, unit_cube_to_world, volume_data
-from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401
 from . import sun
+from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
+from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401 (re-exported)
+from .medium_setup import GridCache, MediumSetup, Tracking, phase_ctx, scattering_event, unit_cube_to_world, volume_data
+from .path_state import path_state_class
 from .trackers import delta_tracking, shadow_transmittance
 from .variant_class import variant_class
 
 PLUGIN_NAME = "majorant_volpath"
-LONG_WALK_DEPTH = 1024  # see "Russian roulette" in the module docstring
+LONG_WALK_DEPTH = 1024  # Russian roulette: long walks survive 1/2 at depths 2^k >= this (docs/reference-estimator.md)
 DEFAULT_EMITTER_NEE = 0.1  # probability of sampling the scene's emitters (the sky) at a vertex: 1.2x the efficiency of 0.25, 2x that of 0.05 (demo views)
 GUIDE_GROWTH = 2.0    # sun guiding: bound of the product of 1 / (1 - eps) along a path
 GUIDE_SEEN = 0.1      # sun guiding at full strength where the sun's transmittance estimate is >= this
@@ -187,105 +72,140 @@ def _as_interaction(x):
     return it
 
 
+def _check(ok, message: str) -> None:
+    """Raise ValueError("majorant_volpath: <message>") unless ``ok``."""
+    if not ok:
+        raise ValueError(f"{PLUGIN_NAME}: {message}")
+
+
+def _choice(props, name: str, default: str, allowed: tuple) -> str:
+    """The string property ``name``, one of ``allowed``."""
+    value = str(props.get(name, default))
+    options = ", ".join(repr(a) for a in allowed[:-1]) + f" or {allowed[-1]!r}"
+    _check(value in allowed, f"'{name}' must be {options}, got {value!r}")
+    return value
+
+
+def _majorant_property(value) -> np.ndarray:
+    """The ``majorant`` property as a finite, non-negative float32 (Z, Y, X) array."""
+    m = np.asarray(value, np.float32)
+    if m.ndim == 4 and m.shape[3] == 1:
+        m = m[..., 0]
+    _check(m.ndim == 3, f"'majorant' must be a (Z, Y, X) tensor, got shape {m.shape}")
+    _check(np.all(np.isfinite(m)) and not np.any(m < 0), "'majorant' must be finite and >= 0")
+    return np.ascontiguousarray(m)
+
+
 # ---------------------------------------------------------------- integrator
 
 class MajorantVolpath:
-    """Volumetric path tracer with DDA majorant-grid delta tracking (see the module docstring).
+    """Volumetric path tracer with DDA majorant-grid delta tracking (the module docstring).
+
+    .. pluginparameters::
+
+     * - max_depth, rr_depth
+       - |int|
+       - Longest path (-1: infinite; default -1); depth from which Russian roulette is played (default 5).
+     * - rr_mode
+       - |string|
+       - "throughput" (default: survival min(max T, 1), long walks cut) or "volpath" (capped at 0.95).
+     * - hide_emitters
+       - |bool|
+       - Hide directly visible emitters (default: false).
+     * - majorant, cell
+       - |tensor|, |int|
+       - Majorants (Z, Y, X) in 1/m (scale applied) from :func:`.majorants.majorant_grid` with ``cell``
+         fine voxels per cell (default DEFAULT_CELL); without it built from the medium at each render.
+     * - to_world
+       - |transform|
+       - The unit cube onto the sigma_t grid's box (default and check: the medium's sigma_t volume).
+     * - tracking_grid, transmittance
+       - |string|
+       - Free flights over "texel" cells (default) or the "coarse" grid; shadow rays by "exact"
+         transmittance (default) or "ratio" tracking.
+     * - persistent_lanes
+       - |bool|
+       - Whether ``reference.render_pass`` renders with persistent lanes (default: DEFAULT_PERSISTENT_LANES).
+     * - phase_channels
+       - |string|
+       - "history" (default: channels drawn in proportion to the throughput) or "mean".
+     * - emitter_nee
+       - |float|
+       - Probability of a shadow ray towards the scene's emitters (the sky), else the sun; in (0, 1].
+     * - sun_direction, sun_irradiance
+       - |vector|, |color|
+       - The integrator's own sun: direction towards it; irradiance normal to the beam (RGB, default 1).
+     * - sun_angular_diameter
+       - |float|
+       - Degrees, <= MAX_SUN_DIAMETER_DEG; 0 (default) is a point sun.
+     * - sun_sampling
+       - |string|
+       - "mis" (default), or one strategy alone, "nee" or "phase" (for tests).
+     * - sun_guiding, aureole_nee
+       - |float|
+       - Probabilities of a sun-guided scattering direction ([0, 1)) and of the aureole estimator
+         ([0, 1], needs "mis" and no guiding); default 0.
 
     The methods only: :func:`register` puts them on the current variant's ``mi.SamplingIntegrator``
     (see ``variant_class``)."""
 
     def __init__(self, props: mi.Properties):
         mi.SamplingIntegrator.__init__(self, props)
-        max_depth = int(props.get("max_depth", -1))
-        if max_depth < -1:
-            raise ValueError(f"{PLUGIN_NAME}: max_depth must be -1 (infinite) or >= 0, got {max_depth}")
-        self.max_depth = 0xFFFFFFFF if max_depth == -1 else max_depth
-        self.rr_depth = int(props.get("rr_depth", 5))
-        if self.rr_depth < 0:
-            raise ValueError(f"{PLUGIN_NAME}: rr_depth must be >= 0, got {self.rr_depth}")
-        self.hide_emitters_ = bool(props.get("hide_emitters", False))
-        self.cell = int(props.get("cell", DEFAULT_CELL))
-        if self.cell < 1:
-            raise ValueError(f"{PLUGIN_NAME}: cell must be >= 1, got {self.cell}")
-        self.auto_majorant = "majorant" not in props
-        if self.auto_majorant:
-            self.majorant = mi.TensorXf(np.zeros((1, 1, 1), np.float32))
-        else:
-            m = np.asarray(props["majorant"], np.float32)
-            if m.ndim == 4 and m.shape[3] == 1:
-                m = m[..., 0]
-            if m.ndim != 3:
-                raise ValueError(f"{PLUGIN_NAME}: 'majorant' must be a (Z, Y, X) tensor, got shape {m.shape}")
-            if not np.all(np.isfinite(m)) or np.any(m < 0):
-                raise ValueError(f"{PLUGIN_NAME}: 'majorant' must be finite and >= 0")
-            self.majorant = mi.TensorXf(np.ascontiguousarray(m))
-        self._auto_key = None
-        self.to_world = props["to_world"] if "to_world" in props else None
-        self.tr_mode = str(props.get("transmittance", DEFAULT_TRANSMITTANCE))
-        if self.tr_mode not in ("exact", "ratio"):
-            raise ValueError(f"{PLUGIN_NAME}: 'transmittance' must be 'exact' or 'ratio', got {self.tr_mode!r}")
-        self.track_mode = str(props.get("tracking_grid", DEFAULT_TRACKING_GRID))
-        if self.track_mode not in ("texel", "coarse"):
-            raise ValueError(f"{PLUGIN_NAME}: 'tracking_grid' must be 'texel' or 'coarse', got {self.track_mode!r}")
-        self.persistent = bool(props.get("persistent_lanes", DEFAULT_PERSISTENT_LANES))
-        self._init_sun(props)
+        self._parse(props)
         # per-render state, filled by _setup: the scene's medium, the trackers' grids and frame, and the
-        # caches of the grids built from the medium's data (keys: the data's index and scale)
+        # caches of the grids built from the medium's data
         self._ms = self._tk = None
         self._grids = GridCache()
+        self._auto_key = None
 
-    def _init_sun(self, props):
-        """The integrator's own sun (see the module docstring, "The sun"): ``sun_direction`` (towards the
-        sun), ``sun_irradiance`` (RGB, normal to the beam), ``sun_angular_diameter`` (degrees; 0 = a
-        point sun) and ``sun_guiding`` (probability of drawing a scattering direction from the phase
-        function centred on the sun). Without ``sun_direction`` the sun, if any, is a scene emitter."""
-        self.sun_mode = "none"
-        self.guiding = 0.0
-        self.aureole = 0.0
-        self.sun_sampling = "mis"
-        self.rr_mode = str(props.get("rr_mode", "throughput"))
-        if self.rr_mode not in ("throughput", "volpath"):
-            raise ValueError(f"{PLUGIN_NAME}: 'rr_mode' must be 'throughput' or 'volpath', got {self.rr_mode!r}")
-        self.channels = str(props.get("phase_channels", "history"))
-        self.emitter_nee = float(props.get("emitter_nee", DEFAULT_EMITTER_NEE))
-        if not 0.0 < self.emitter_nee <= 1.0:
-            raise ValueError(f"{PLUGIN_NAME}: 'emitter_nee' must be in (0, 1], got {self.emitter_nee}")
-        if self.channels not in ("history", "mean"):
-            raise ValueError(f"{PLUGIN_NAME}: 'phase_channels' must be 'history' or 'mean', got {self.channels!r}")
+    def _parse(self, props):
+        """The properties of the table above; any invalid value raises ValueError."""
+        get = props.get
+        max_depth = int(get("max_depth", -1))
+        _check(max_depth >= -1, f"max_depth must be -1 (infinite) or >= 0, got {max_depth}")
+        self.max_depth = 0xFFFFFFFF if max_depth == -1 else max_depth
+        self.rr_depth = int(get("rr_depth", 5))
+        _check(self.rr_depth >= 0, f"rr_depth must be >= 0, got {self.rr_depth}")
+        self.hide_emitters_ = bool(get("hide_emitters", False))
+        self.cell = int(get("cell", DEFAULT_CELL))
+        _check(self.cell >= 1, f"cell must be >= 1, got {self.cell}")
+        self.auto_majorant = "majorant" not in props
+        self.majorant = mi.TensorXf(np.zeros((1, 1, 1), np.float32) if self.auto_majorant
+                                    else _majorant_property(props["majorant"]))
+        self.to_world = props["to_world"] if "to_world" in props else None
+        self.tr_mode = _choice(props, "transmittance", DEFAULT_TRANSMITTANCE, ("exact", "ratio"))
+        self.track_mode = _choice(props, "tracking_grid", DEFAULT_TRACKING_GRID, ("texel", "coarse"))
+        self.persistent = bool(get("persistent_lanes", DEFAULT_PERSISTENT_LANES))
+        self.rr_mode = _choice(props, "rr_mode", "throughput", ("throughput", "volpath"))
+        self.emitter_nee = float(get("emitter_nee", DEFAULT_EMITTER_NEE))
+        _check(0.0 < self.emitter_nee <= 1.0, f"'emitter_nee' must be in (0, 1], got {self.emitter_nee}")
+        self.channels = _choice(props, "phase_channels", "history", ("history", "mean"))
+        self.sun_mode, self.guiding, self.aureole, self.sun_sampling = "none", 0.0, 0.0, "mis"
         if "sun_direction" not in props:
             for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee"):
-                if name in props:
-                    raise ValueError(f"{PLUGIN_NAME}: '{name}' needs 'sun_direction'")
+                _check(name not in props, f"'{name}' needs 'sun_direction'")
             return
-        if not mi.is_rgb:
-            raise ValueError(f"{PLUGIN_NAME}: the integrator's sun needs an RGB variant, not {mi.variant()!r}")
+        # the integrator's own sun (module docstring; without sun_direction the sun, if any, is a scene emitter)
+        _check(mi.is_rgb, f"the integrator's sun needs an RGB variant, not {mi.variant()!r}")
         d = np.asarray(props["sun_direction"], np.float64).reshape(3)
-        if not np.all(np.isfinite(d)) or np.linalg.norm(d) == 0:
-            raise ValueError(f"{PLUGIN_NAME}: 'sun_direction' must be a finite non-zero vector, got {d.tolist()}")
+        _check(np.all(np.isfinite(d)) and np.linalg.norm(d) != 0,
+               f"'sun_direction' must be a finite non-zero vector, got {d.tolist()}")
         d = d / np.linalg.norm(d)
-        e = np.broadcast_to(np.asarray(props.get("sun_irradiance", 1.0), np.float64), (3,))
-        if not np.all(np.isfinite(e)) or np.any(e < 0):
-            raise ValueError(f"{PLUGIN_NAME}: 'sun_irradiance' must be >= 0, got {e.tolist()}")
-        diameter = float(props.get("sun_angular_diameter", 0.0))
-        if not 0.0 <= diameter <= MAX_SUN_DIAMETER_DEG:
-            raise ValueError(f"{PLUGIN_NAME}: 'sun_angular_diameter' must be in [0, {MAX_SUN_DIAMETER_DEG}] degrees, "
-                             f"got {diameter}")
-        self.sun_sampling = str(props.get("sun_sampling", "mis"))
-        if self.sun_sampling not in ("mis", "nee", "phase"):
-            raise ValueError(f"{PLUGIN_NAME}: 'sun_sampling' must be 'mis', 'nee' or 'phase', got {self.sun_sampling!r}")
-        self.guiding = float(props.get("sun_guiding", 0.0))
-        if not 0.0 <= self.guiding < 1.0:
-            raise ValueError(f"{PLUGIN_NAME}: 'sun_guiding' must be in [0, 1), got {self.guiding}")
-        self.aureole = float(props.get("aureole_nee", 0.0))
-        if not 0.0 <= self.aureole <= 1.0:
-            raise ValueError(f"{PLUGIN_NAME}: 'aureole_nee' must be a probability in [0, 1], got {self.aureole}")
-        if self.aureole > 0.0 and (self.guiding > 0.0 or self.sun_sampling != "mis"):
-            raise ValueError(f"{PLUGIN_NAME}: 'aureole_nee' works with sun_sampling='mis' and no sun guiding")
+        e = np.broadcast_to(np.asarray(get("sun_irradiance", 1.0), np.float64), (3,))
+        _check(np.all(np.isfinite(e)) and not np.any(e < 0), f"'sun_irradiance' must be >= 0, got {e.tolist()}")
+        diameter = float(get("sun_angular_diameter", 0.0))
+        _check(0.0 <= diameter <= MAX_SUN_DIAMETER_DEG,
+               f"'sun_angular_diameter' must be in [0, {MAX_SUN_DIAMETER_DEG}] degrees, got {diameter}")
+        self.sun_sampling = _choice(props, "sun_sampling", "mis", ("mis", "nee", "phase"))
+        self.guiding = float(get("sun_guiding", 0.0))
+        _check(0.0 <= self.guiding < 1.0, f"'sun_guiding' must be in [0, 1), got {self.guiding}")
+        self.aureole = float(get("aureole_nee", 0.0))
+        _check(0.0 <= self.aureole <= 1.0, f"'aureole_nee' must be a probability in [0, 1], got {self.aureole}")
+        _check(not (self.aureole > 0.0 and (self.guiding > 0.0 or self.sun_sampling != "mis")),
+               "'aureole_nee' works with sun_sampling='mis' and no sun guiding")
         self.sun_mode = "disk" if diameter > 0 else "point"
-        if not self.emitter_nee < 1.0:
-            raise ValueError(f"{PLUGIN_NAME}: with the integrator's sun, 'emitter_nee' must be below 1 (the rest "
-                             f"of the shadow rays go to the sun), got {self.emitter_nee}")
+        _check(self.emitter_nee < 1.0, "with the integrator's sun, 'emitter_nee' must be below 1 (the rest of the "
+               f"shadow rays go to the sun), got {self.emitter_nee}")
         vmax, radiance = sun.sun_disk(diameter, e)
         # opaque: a new sun position, size or irradiance reuses the kernel
         self.sun_dir = mi.Vector3f(*(float(v) for v in d))
@@ -356,10 +276,7 @@ class MajorantVolpath:
     # ------------------------------------------------------------ persistent lanes
     def render_pass(self, scene, spp: int, seed: int, lanes: int | None = None,
                     max_jobs: int = MAX_JOBS_PER_LAUNCH, pixels=None) -> np.ndarray:
-        """One pass of ``spp`` samples per pixel of the scene's first sensor, as ``mi.render(scene, spp=spp,
-        seed=seed)`` renders it (box filter: the mean of the samples whose film position falls in the
-        pixel), but with persistent lanes (module docstring, "Persistent lanes"): ``render_passes`` of
-        one pass."""
+        """One pass of ``spp`` samples per pixel with persistent lanes: :meth:`render_passes` of one pass."""
         return self.render_passes(scene, [(spp, seed)], lanes, max_jobs, pixels)[0]
 
     def render_passes(self, scene, passes, lanes: int | None = None, max_jobs: int = MAX_JOBS_PER_LAUNCH,
@@ -369,40 +286,6 @@ class MajorantVolpath:
 
 
 # ---------------------------------------------------------------- the path loop
-
-_STATE_CLASSES: dict = {}
-
-
-def path_state_class() -> type:
-    """The loop state of a path (a ``DRJIT_STRUCT``, one class per variant).
-
-    Fields: ``active`` (the path is alive), ``depth`` (scattering and non-null surface events so far),
-    ``ray`` (the current ray), ``throughput`` and ``result`` (the path weight and the radiance collected),
-    ``si`` (the next surface along ``ray``), ``medium`` (the medium ``ray`` travels in), ``eta`` (relative
-    IOR product, for roulette), ``last_event`` (the previous vertex) and ``last_pdf`` (its continuation
-    pdf, for MIS of emitters hit), ``needs_isect`` (``si`` is stale), ``specular_chain`` (only delta
-    events so far: emitters hit count in full), ``valid_ray`` (the sample hit something), ``last_long``
-    (the depth of the last long-walk cut), ``guide_left`` (sun guiding's remaining weight budget),
-    ``last_pdf_sun`` (the previous vertex's continuation pdf in the sun's MIS) and ``aur_w`` (the
-    aureole estimator's MIS weight of the next sun NEE).
-    """
-    key = mi.variant()
-    if key not in _STATE_CLASSES:
-        class PathState:
-            DRJIT_STRUCT = {
-                "active": mi.Bool, "depth": mi.UInt32, "ray": mi.Ray3f, "throughput": mi.Spectrum,
-                "result": mi.Spectrum, "si": mi.SurfaceInteraction3f, "medium": mi.MediumPtr, "eta": mi.Float,
-                "last_event": mi.Interaction3f, "last_pdf": mi.Float, "needs_isect": mi.Bool,
-                "specular_chain": mi.Bool, "valid_ray": mi.Bool, "last_long": mi.UInt32, "guide_left": mi.Float,
-                "last_pdf_sun": mi.Float, "aur_w": mi.Float}
-
-            def __init__(self, **fields):
-                for name, value in fields.items():
-                    setattr(self, name, value)
-        PathState.__doc__ = path_state_class.__doc__
-        _STATE_CLASSES[key] = PathState
-    return _STATE_CLASSES[key]
-
 
 class _Vertex:
     """What the stages of one loop iteration pass on (not loop state): ``act_scatter`` (a real
