@@ -59,12 +59,6 @@ DEFAULT_TRANSMITTANCE = "exact"  # shadow rays: "exact" (Simpson per texel cell)
 
 # ---------------------------------------------------------------- Mitsuba helpers
 
-def _mis_weight(pdf_a, pdf_b):
-    a2 = dr.square(pdf_a)
-    w = a2 / (a2 + dr.square(pdf_b))
-    return dr.select(dr.isfinite(w), w, 0.0)
-
-
 def _as_interaction(x):
     """The ``Interaction3f`` part of a surface or medium interaction."""
     it = dr.zeros(mi.Interaction3f)
@@ -322,6 +316,7 @@ class PathLoop:
         self.sun_pdf = dr.rcp(dr.two_pi * integ.sun_vmax) if sun_mode == "disk" else None
         self.one_strategy = {"nee": (1.0, 0.0), "phase": (0.0, 1.0)}.get(integ.sun_sampling)
         self.has_env = scene.environment() is not None
+        self.mis_weight = mi.ad.integrators.common.mis_weight  # the power heuristic, Mitsuba's own
         self.transmittance = functools.partial(shadow_transmittance, self.tk, integ.tr_mode == "exact")
 
     def sun_pdf_of(self, val, pdf):
@@ -333,7 +328,7 @@ class PathLoop:
     def sun_mis(self, pdf_a, pdf_b, nee=True):
         """Weight of the sun-sampling (``nee``) or of the continuation strategy."""
         if self.one_strategy is None:
-            return _mis_weight(pdf_a, pdf_b)
+            return self.mis_weight(pdf_a, pdf_b)
         return self.one_strategy[0] if nee else self.one_strategy[1]
 
     def initial(self, ray, medium, active):
@@ -417,7 +412,7 @@ class PathLoop:
         ds_hit = mi.DirectionSample3f(self.scene, p.si, p.last_event)
         em_pdf = self.scene.pdf_emitter_direction(p.last_event, ds_hit, active_e & ~count_direct)
         emitted = emitter.eval(p.si, active_e)
-        w_hit = dr.select(count_direct, 1.0, _mis_weight(p.last_pdf, self.c_sky * em_pdf))
+        w_hit = dr.select(count_direct, 1.0, self.mis_weight(p.last_pdf, self.c_sky * em_pdf))
         p.result = dr.select(active_e, p.result + p.throughput * w_hit * emitted, p.result)
         if self.sun_mode == "disk":  # a ray that leaves the scene inside the sun's disk sees the sun
             in_sun = v.active_surface & ~p.si.is_valid() & sun.in_disk(self.integ, p.ray.d)
@@ -495,7 +490,7 @@ class PathLoop:
         """(MIS weight / technique pdf, emitted value) of the shadow ray of :meth:`nee`."""
         w = mi.Float(0.0)
         if self.has_emitters:
-            w_em = _mis_weight(self.c_sky * ds.pdf, dr.select(ds.delta, 0.0, f_pdf)) * (1.0 / self.c_sky)
+            w_em = self.mis_weight(self.c_sky * ds.pdf, dr.select(ds.delta, 0.0, f_pdf)) * (1.0 / self.c_sky)
             w = dr.select(pick_em, w_em, w)
         if self.sun_mode != "none":
             if self.sun_mode == "disk":  # L / pdf_sun x MIS weight against continuing the path
