@@ -21,12 +21,24 @@ SAFETY = 1.0001   # majorant = SAFETY x the maximum of the texels that enter the
 def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: float = SAFETY) -> np.ndarray:
     """Conservative majorants of the trilinear interpolant of ``sigma_t_zyx`` on a coarse grid.
 
-    ``sigma_t_zyx`` is (nz, ny, nx) (or (nz, ny, nx, C): the maximum over channels is used), indexed
-    like a Mitsuba ``gridvolume`` (texel centres at (i + 0.5) / N, clamped at the borders). Returns a
-    float32 array (ceil(nz/cell), ceil(ny/cell), ceil(nx/cell)): the majorant of coarse cell (K, J, I)
-    is ``safety`` x the maximum of the fine voxels [K*cell - 1, (K+1)*cell] x ... (the cell's own
-    voxels dilated by one voxel on each side, clipped to the grid): exactly the voxels whose values
-    enter the interpolant somewhere inside the cell. Negative values count as 0.
+    Parameters
+    ----------
+    sigma_t_zyx : numpy.ndarray
+        Extinction, 1/m, (nz, ny, nx) or (nz, ny, nx, C) (the maximum over channels is used), indexed
+        like a Mitsuba ``gridvolume`` (texel centres at (i + 0.5) / N, clamped at the borders). Negative
+        values count as 0.
+    cell : int
+        Fine voxels per coarse cell along each axis.
+    safety : float
+        Factor on the maxima.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32, 1/m, (ceil(nz/cell), ceil(ny/cell), ceil(nx/cell)): the majorant of coarse cell
+        (K, J, I) is ``safety`` x the maximum of the fine voxels [K*cell - 1, (K+1)*cell] x ... (the
+        cell's own voxels dilated by one voxel on each side, clipped to the grid): exactly the voxels
+        whose values enter the interpolant somewhere inside the cell.
     """
     a = np.asarray(sigma_t_zyx)
     if a.ndim == 4:
@@ -54,12 +66,24 @@ def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: flo
 
 
 def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.ndarray:
-    """Majorants per texel cell: the cells between 2 x 2 x 2 texel centres of a (nz, ny, nx) grid (or
-    (nz, ny, nx, C): the maximum over channels), cells -1 .. N - 1 per axis (array index + 1), the first
-    and last being the half cells between the box's faces and the outer texel centres (where the
-    gridvolume clamps). The trilinear interpolant is one trilinear polynomial in such a cell, so
-    ``safety`` x the maximum of its 8 texels bounds it there, tightly. float32, (nz + 1, ny + 1, nx + 1);
-    negative values count as 0."""
+    """Majorants per texel cell: the cells between 2 x 2 x 2 texel centres.
+
+    Parameters
+    ----------
+    sigma_t_zyx : numpy.ndarray
+        Extinction, 1/m, (nz, ny, nx) or (nz, ny, nx, C) (the maximum over channels); negative values
+        count as 0.
+    safety : float
+        Factor on the maxima.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32, 1/m, (nz + 1, ny + 1, nx + 1): cells -1 .. N - 1 per axis (array index + 1), the first
+        and last being the half cells between the box's faces and the outer texel centres (where the
+        gridvolume clamps). The trilinear interpolant is one trilinear polynomial in such a cell, so
+        ``safety`` x the maximum of its 8 texels bounds it there, tightly.
+    """
     a = np.asarray(sigma_t_zyx, np.float64)
     a = a.max(axis=3) if a.ndim == 4 else a
     if a.ndim != 3 or min(a.shape) < 1 or not np.all(np.isfinite(a)):
@@ -71,10 +95,21 @@ def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.n
 
 
 def empty_space_radius(majorant: np.ndarray) -> np.ndarray:
-    """For each coarse cell, the largest k such that every cell within k cells of it (Chebyshev
-    distance, i.e. the cube of side 2k + 1 centred on it, cells beyond the grid counting as empty) has
-    majorant 0: the DDA may cross that cube in one step (proximity clouds, Cohen & Sheffer 1994).
-    0 for occupied cells and for empty cells next to an occupied one. int32, the shape of ``majorant``."""
+    """Empty-space radii of a majorant grid (proximity clouds, Cohen & Sheffer 1994).
+
+    Parameters
+    ----------
+    majorant : numpy.ndarray
+        Majorants (any units), (Z, Y, X).
+
+    Returns
+    -------
+    numpy.ndarray
+        int32, the shape of ``majorant``: for each cell the largest k such that every cell within k cells
+        of it (Chebyshev distance, i.e. the cube of side 2k + 1 centred on it, cells beyond the grid
+        counting as empty) has majorant 0, so that the DDA may cross that cube in one step. 0 for
+        occupied cells and for empty cells next to an occupied one.
+    """
     from scipy.ndimage import distance_transform_cdt
     occupied = np.asarray(majorant) > 0.0
     if not occupied.any():

@@ -27,10 +27,23 @@ from .trackers import delta_tracking
 
 
 def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
-    """(v_max, radiance) of a uniform sun disk of angular ``diameter_deg`` whose irradiance on a plane
-    normal to its centre is ``irradiance`` (RGB): v_max = 1 - cos(radius) (computed as 2 sin^2(r/2):
-    float32 cannot hold 1 - cos of a quarter degree), radiance = E / (pi sin^2 r), because the disk
-    gives  integral_cap L cos(theta) d omega = pi sin^2(r) L  on that plane. (0, E) for a point sun."""
+    """The versine and the radiance of a uniform sun disk.
+
+    Parameters
+    ----------
+    diameter_deg : float
+        Angular diameter of the disk, degrees (0: a point sun).
+    irradiance : array_like
+        Irradiance E on a plane normal to the disk's centre, RGB (W m^-2, or any unit).
+
+    Returns
+    -------
+    v_max : float
+        1 - cos(radius), computed as 2 sin^2(r/2) (float32 cannot hold 1 - cos of a quarter degree).
+    radiance : numpy.ndarray
+        L = E / (pi sin^2 r) (E per steradian), because the disk gives integral_cap L cos(theta) d omega
+        = pi sin^2(r) L on that plane. (0, E) for a point sun.
+    """
     e = np.asarray(irradiance, np.float64)
     r = np.radians(float(diameter_deg)) / 2.0
     if r <= 0.0:

@@ -154,9 +154,21 @@ def delta_tracking(tk, ray, t_end, sampler, active, weight):
 
 
 def ratio_tracking(tk, ray, t_end, sampler, active):
-    """Transmittance estimate along ``ray`` over [0, t_end] (clipped to the grid's box) by ratio tracking:
+    """Transmittance estimate along ``ray`` over [0, t_end] (clipped to the grid's box) by ratio tracking.
+
     T *= 1 - sigma_t / majorant at each tentative collision, with Russian roulette once max(T) <
-    RR_THRESHOLD (survival RR_SURVIVE). Parameters as :func:`delta_tracking`; returns T (mi.Spectrum)."""
+    RR_THRESHOLD (survival RR_SURVIVE, weight its inverse): unbiased.
+
+    Parameters
+    ----------
+    tk, ray, t_end, sampler, active
+        As for :func:`delta_tracking`.
+
+    Returns
+    -------
+    mi.Spectrum
+        The transmittance estimate (dimensionless).
+    """
     walk = _tracking_walk(tk, ray, t_end, active)
     spectral = tk.ms.spectral
     tr = mi.Spectrum(1.0) if spectral else mi.Float(1.0)
@@ -181,19 +193,39 @@ def ratio_tracking(tk, ray, t_end, sampler, active):
         state=(sampler, walk.active, mi.Float(walk.t_near), cells[0], cells[1], cells[2],
                nexts[0], nexts[1], nexts[2], mi.Bool(False), tr),
         cond=cond, body=body, label="majorant_volpath: DDA ratio tracking")
-    tr = state[-1]
+    *_, tr = state
     return mi.Spectrum(tr) if not spectral else tr
 
 
 def exact_transmittance(tk, ray, t_end, active, sampler=None):
-    """exp(-optical depth) of ``ray`` over [0, t_end] (clipped to the grid's box), computed exactly:
-    the trilinear interpolant of sigma_t is one trilinear polynomial in each cell of the texel-centre
+    """exp(-optical depth) of ``ray`` over [0, t_end] (clipped to the grid's box), computed exactly.
+
+    The trilinear interpolant of sigma_t is one trilinear polynomial in each cell of the texel-centre
     grid (``tk.texel``), so along a ray it is a cubic in t there, which Simpson's rule integrates
     exactly: tau = sum over the cells crossed of (t1 - t0) / 6 (s(t0) + 4 s(tm) + s(t1)), with s the
     medium's own ``sigma_t`` lookup. Cells whose texels are all 0 cost no lookups and empty cubes of
-    cells are crossed in one step. Without ``sampler``: deterministic, 0 once tau > TAU_ZERO (the
-    rest is below e^-TAU_ZERO). With it: Russian roulette once tau passes EXACT_RR_TAU and after
-    every further EXACT_RR_STEP (survival EXACT_RR_SURVIVE, weight its inverse): unbiased, no cut."""
+    cells are crossed in one step.
+
+    Parameters
+    ----------
+    tk : medium_setup.Tracking
+        The per-render grids and medium (needs ``tk.texel``).
+    ray : mi.Ray3f
+        World ray; distances along it.
+    t_end : mi.Float
+        End of the segment.
+    active : mi.Bool
+        Lanes to compute.
+    sampler : optional
+        None: deterministic, 0 once tau > TAU_ZERO (the rest is below e^-TAU_ZERO). Given: Russian
+        roulette once tau passes EXACT_RR_TAU and after every further EXACT_RR_STEP (survival
+        EXACT_RR_SURVIVE, weight its inverse): unbiased, no cut.
+
+    Returns
+    -------
+    mi.Spectrum
+        The transmittance (dimensionless), or its roulette estimate.
+    """
     spectral = tk.ms.spectral
     walk = _Walk(tk, tk.texel, None if spectral else tk.texel_data, ray, t_end, active)
     grid, texels, q0, dq, t_max = walk.grid, walk.texels, walk.q0, walk.dq, walk.t_max
@@ -239,7 +271,7 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
     state = dr.while_loop(state=(sampler if rr else None, active, mi.Float(t_near), cells[0], cells[1], cells[2],
                                  nexts[0], nexts[1], nexts[2], s0, tau, mi.Float(1.0), mi.Float(EXACT_RR_TAU)),
                           cond=cond, body=body, label="majorant_volpath: exact transmittance")
-    tau, w = state[-3], state[-2]
+    *_, tau, w, _ = state
     if rr:
         return mi.Spectrum(w * dr.exp(-tau))
     return mi.Spectrum(dr.select((dr.min(tau) if spectral else tau) > TAU_ZERO, 0.0, dr.exp(-tau)))
