@@ -1,150 +1,37 @@
 """Mitsuba 3 integrator ``majorant_volpath``: volumetric path tracing over grids of local majorants.
 
-Mitsuba 3.9.1's ``heterogeneous`` medium samples free flights by delta tracking against ONE global
-majorant (the maximum of sigma_t over the whole grid), so in a sparse storm every ray through clear
-air pays ~majorant x length null collisions. This integrator instead walks grids of local majorants
-along the ray with a 3-D DDA (Amanatides & Woo; pbrt-v4's ``DDAMajorantIterator``):
+Mitsuba's ``heterogeneous`` medium samples free flights by delta tracking against ONE global majorant,
+so in a sparse storm every ray through clear air pays ~majorant x length null collisions. This
+integrator walks grids of local majorants along the ray with a 3-D DDA (Amanatides & Woo 1987;
+pbrt-v4's ``DDAMajorantIterator``), crossing empty space in one step (Cohen & Sheffer 1994):
 
-* the texel-cell grid (``tracking_grid = "texel"``, the default for a medium with a sigma_t grid): one
-  cell between each 2 x 2 x 2 texel centres of the sigma_t grid (cells -1 .. N - 1 per axis; the first
-  and last are halves cut by the box). The trilinear interpolant is one trilinear polynomial in such a
-  cell, so the maximum of its 8 texels is its exact maximum there: the tightest majorants a grid of
-  this resolution can have. The coarse grid (``majorant``, ``cell`` fine voxels per cell, dilated by a
-  voxel because its cells are not aligned with the texel centres) remains for media without a grid and
-  for ``tracking_grid = "coarse"``. Measured on the demo supercell (side view, 80 x 60): per real
-  collision 6.4 null collisions over the coarse grid (cell 2; the interpolant's ramp from clear
-  air to a core of 0.4 / m spans a 1-km voxel, and the walks live in the first few hundred metres of
-  it), 1.3 over texel cells; with the coarse grid a render takes 1.8x the time
-  (``benchmarks/reference_noise.py --profile``).
-* empty space: cells whose majorant is 0 and whose neighbours within k cells are all empty
-  (``empty_space_radius``, "proximity clouds", Cohen & Sheffer 1994) are crossed in one step to where
-  the ray leaves that cube of cells.
-* free flights: delta tracking cell by cell. In each cell an exponential step is drawn with that
-  cell's majorant; a step that leaves the cell restarts at the cell exit with the next cell's majorant
-  (memorylessness). At a tentative collision the real sigma_t is looked up and the collision is real
-  with probability sigma_t / majorant.
-* transmittance for next-event estimation (``transmittance``): "exact" (default with a sigma_t grid):
-  along a ray the interpolant is a cubic in each texel cell, which Simpson's rule integrates exactly
-  (``_exact_walk``: the cell's 8 texels gathered once, the interpolant at the midpoint and the exit
-  computed from them; nothing in cells whose texels are 0), so
-  T = exp(-tau) with no variance from the integral. In a render the walk plays Russian roulette each
-  time T falls by another factor 10 below 0.01 (survival EXACT_RR_SURVIVE = 0.3, weight 1 / 0.3): the
-  walks that crawl through thin cloud towards the sun stop early (10-20% less time per spp on the
-  demo views, noise unchanged); without a sampler it is exact and stops at tau > TAU_ZERO = 50. "ratio": ratio tracking over the
-  tracking grid, with Russian roulette once the estimate is small. Both through null-BSDF surfaces
-  (the medium's box), stopped by opaque ones.
-* persistent lanes (``render_pass``; ``reference.render_pass`` uses it on LLVM variants unless
-  ``persistent_lanes`` is false). In a Dr.Jit LLVM kernel a SIMD packet of 8 lanes loops until its
-  longest path ends, and path lengths here are heavy-tailed (80 x 60 side view: median 0 DDA steps per
-  path, 99th percentile 2700, maximum 40000; packets of 8 kept about 32% of their lanes busy). So a
-  pass launches one LLVM block of lanes per thread, and each lane draws its next sample from a shared
-  atomic counter when its path ends (re-seeding its PCG32 from (seed, sample), so the image does not
-  depend on which lane ran which sample; each sample's radiance goes to its own slot, summed in sample
-  order: deterministic). Without them (``mi.render``) a render takes 1.7x the time. A launch still
-  ends when its longest path ends, so ``render_passes`` renders several passes in one launch (a pass
-  over a few pixels, as a render to a target adds them, took 1.8x the time per sample alone), and
-  ``pixels`` restricts a pass to some pixels (each with the values it has in the pass over all).
-* otherwise the structure and estimators of Mitsuba's ``volpath``: analog absorption (throughput *=
-  sigma_s / sigma_t at real collisions), phase-function and BSDF sampling with emitter sampling and MIS
-  (power heuristic) for environment emitters, delta emitters (``directional``) by NEE only,
-  null BSDFs passed through without counting depth, sensors inside media.
-  Differences: Russian roulette (below) is played once per real scattering / surface vertex, whereas
-  ``volpath`` plays it at every null collision as well; with many null collisions per segment (a high
-  global majorant) that makes ``volpath``'s multiple scattering a rare-event estimator that reads low
-  at practical sample counts. Both are unbiased; compare them without roulette (large ``rr_depth``,
-  finite ``max_depth``) when null collisions are numerous. The sun and the phase sampling: below.
+* majorants per texel cell (:mod:`.majorants`, exact bounds of the trilinear interpolant) or per coarse
+  cell; the DDA in :mod:`.dda`;
+* free flights by delta tracking, shadow rays by exact transmittance (Simpson's rule per texel cell) or
+  ratio tracking (Novak et al. 2014), in :mod:`.trackers`; spectrally varying extinction by
+  history-aware spectral tracking (Kutz et al. 2017);
+* the integrator's own sun (a disk or a point, with MIS against the path's continuation, optional sun
+  guiding after Buras & Mayer 2011 and aureole next-event estimation) in :mod:`.sun`;
+* history-aware channel sampling of a chromatic phase function (Kutz et al. 2017, applied to directions);
+* Russian roulette once per real scattering / surface vertex, survival min(max T, 1) (no weight grows),
+  long walks cut by a survival of 1/2 at each depth 2^k >= LONG_WALK_DEPTH;
+* persistent lanes (:mod:`.lanes`): ``render_pass`` / ``render_passes``, used by
+  ``reference.render_pass`` on LLVM variants.
 
-The sun (issue 10). With ``sun_direction`` the sun is the integrator's own light, not a scene emitter:
-a uniform disk of angular diameter ``sun_angular_diameter`` (radiance L = E / (pi sin^2 r), E the
-irradiance normal to the beam, so that the disk's irradiance equals the point sun's) or, with diameter
-0, a point (directional) sun. It is sampled at every medium and surface vertex (no emitter selection):
-a direction uniform in the disk, pdf p_sun = 1 / (2 pi v_max), v_max = 1 - cos r held as a versine for
-float32. A path that leaves the scene inside the disk collects L. Both are weighted by the power
-heuristic against the pdf q with which the vertex continues the path (below); a point sun is NEE
-only. One shadow ray per vertex: towards the scene's emitters (the sky) with probability
-``emitter_nee`` (c, ``DEFAULT_EMITTER_NEE`` = 0.1), else towards the sun; as techniques their pdfs are c x pdf_emitter
-and (1 - c) x p_sun, in both MIS weights.
+Otherwise the structure and estimators of Mitsuba's ``volpath``: analog absorption, phase-function and
+BSDF sampling with emitter sampling and MIS (power heuristic), delta emitters by NEE only, null BSDFs
+passed through without counting depth, sensors inside media. The path loop is :class:`PathLoop`, stages
+over a :func:`.path_state.path_state_class` state; all loops are symbolic (one kernel per render; new
+data through ``mi.traverse`` + ``params.update()``, new majorants and emitter parameters reuse it).
 
-Continuation at a medium vertex, q(d):
-* history-aware channel sampling (Kutz et al. 2017, applied to directions): a chromatic phase
-  function (``hydrometeor_mixture``, which has ``sample_channel``) is sampled in colour channel c with
-  probability alpha_c = T_c / sum T (T: the path throughput), so q = sum_c alpha_c p_c(d) and the
-  weights p_c / q keep sum_c T_c unchanged: no channel can run away. Sampling every event from the
-  channel mean instead (``phase_channels="mean"``, the estimator before issue 10) multiplies the
-  throughput by up to 3 per event, channel by channel: over the hundreds of events of a path in a
-  storm that made colour fireflies.
-* optional sun guiding (``sun_guiding`` eps, detector-directional importance sampling as in MYSTIC's
-  VROOM, Buras & Mayer 2011): with probability eps (scaled down where the sun's shadow-ray estimate is
-  below GUIDE_SEEN) the direction is drawn towards the sun, half uniform in the disk and half from the
-  phase function about the sun's direction; q = (1 - eps) q_phase + eps (q_phase,sun + U_disk) / 2.
-  The unguided draws have weights p / q <= 1 / (1 - eps), which compound along multiply scattered
-  paths: guiding stops once their product would exceed GUIDE_GROWTH. Off by default in
-  ``render_reference``: an early estimator measured 2-4x less noise on orbit views (paper preset) and
-  3-4x more on the ground view; the present one (delta-M cone, roulette, channels), on the six views of
-  ``benchmarks/reference_noise.py`` at 160 x 120, 32 spp: RMS se/mean 0.34-0.38 at eps = 0.1 and
-  0.40-0.41 at 0.25 against 0.31-0.33 without, on five of six views (the paper back view: equal).
-* optional aureole next-event estimation (``aureole_nee`` eps; exclusive with sun guiding): sun light
-  that reaches a vertex A through one more, forward, scattering at B is sampled a second way: at A
-  (with probability eps) a direction about the sun (half from A's phase function centred on the sun,
-  half uniform in the disk), free flight to B, sun NEE at B weighted as the path weights it there.
-  Balance heuristic against the path's own draw: the path's sun NEE at its next vertex is weighted
-  q / (q + eps g). The sun's MIS then uses the channel-mean phase pdf on both sides (a function of
-  the vertex only, so both estimators weight B alike). Measured on the demo ground view (80 x 60,
-  64 spp, 4 seeds, with a 0.1 deg delta-M of ``weather_mi.forward_peak``): RMS se/mean 0.6-2.2
-  against 1.4-3.2 without, at 1.8x the time; off by default.
-
-Russian roulette (``rr_mode``). "throughput" (default): survival probability min(max T, 1) after
-``rr_depth``, so a weight never grows: Mitsuba's volpath caps the survival probability at 0.95, which
-in a storm of albedo ~1 - 1e-6 plays roulette at every event and multiplies the survivors' weights by
-1/0.95 per event; the variance of that estimator is infinite (contributions at depth n do not decay
-like 0.95^n), which made the fireflies of issue 10. Long walks are cut by one survival of 1/2 at each
-depth 2^k >= LONG_WALK_DEPTH = 1024 (weights grow like the depth, not exponentially). From 32 on
-(as first tuned on one HG phase, where paths past 1000 events took 64% of the time and 0.2% of the
-light) the doubled weights made fireflies on the demo storm's ground view: RMS se/mean 0.5-1.9,
-worst pixel 8-50 at 64 spp against 0.29-0.34 and 2-4 from 512 on, at 1.8x the time; with no cut
-at all 0.26-0.29 and 2-4, at 3.6x the time. From 1024 rather than 512: on three orbit views, two
-seed pairs, the same efficiency (1 / (RMS^2 time)) and a lighter tail (worst pixel 1.5-2.5 against
-2.1-4.4), at 1.13x the time; 256 and 2048 were less efficient. Re-measured with persistent lanes
-(paper side and front views, 160 x 120, 32 spp): no cut 2.1-2.9x the time, a cut from 4096 1.5-1.8x,
-for 2-7% less RMS noise; from 128-512 less time but 1.2-2x the RMS noise. "volpath": the old rule.
-
-All loops are symbolic (``dr.while_loop``): one kernel per render; new sigma_t / albedo data (through
-``mi.traverse`` + ``params.update()``), new majorant values or resolutions and new emitter parameters
-reuse it.
-
-Scope: one medium in the scene (any number of shapes may reference it), extinction looked up directly in
-its ``sigma_t`` volume when it is a ``heterogeneous`` medium (scale applied; microflake phase
-functions are not supported), otherwise through ``get_scattering_coefficients``. Medium emission is
-not handled. Spectrally varying extinction (``has_spectral_extinction`` with an RGB sigma_t grid) is
-handled by history-aware spectral tracking (collision probabilities from the throughput-weighted
-channel mean, per-channel weights; unbiased; the majorant must bound every channel).
-
-Properties
-----------
-``max_depth`` (int, -1 = infinite), ``rr_depth`` (int, 5), ``rr_mode`` ("throughput" | "volpath"),
-``hide_emitters`` (bool, False), ``sun_direction`` (towards the sun), ``sun_irradiance`` (RGB),
-``sun_angular_diameter`` (degrees, <= 5), ``sun_sampling`` ("mis" | "nee" | "phase": the disk by
-MIS, or by one strategy alone, for tests), ``sun_guiding`` (probability in [0, 1)), ``emitter_nee``
-(probability in (0, 1]), ``phase_channels`` ("history" | "mean"),
-``majorant`` (TensorXf (Z, Y, X), majorants in 1/m, i.e. already multiplied by the medium's ``scale``;
-from :func:`majorant_grid`; optional: without it the grid is built from the medium's sigma_t data at
-render time and rebuilt whenever that data changes), ``cell`` (int, ``DEFAULT_CELL`` = 2: fine voxels
-per coarse cell along each axis, as given to :func:`majorant_grid`; seconds per spp at 256 x 256 on
-the demo supercell: 1.30 / 0.64 / 0.22 / 0.22 for cells of 8 / 4 / 2 / 1, on the real WRF supercell
-0.95 (8) and 0.24 (2): ``benchmarks/reference.py --integrators majorant --cells 8 4 2 1``),
-``to_world`` (transform of the unit cube onto the sigma_t grid's bounding box, as its gridvolume has;
-default: the bounding box of the medium's sigma_t volume; checked against it), ``tracking_grid``
-("texel" | "coarse"), ``transmittance`` ("exact" | "ratio"), ``persistent_lanes`` (bool; see above).
-
-At each render the grid is checked against the medium: its shape must be ceil(fine shape / cell) and
-its maximum must bound the medium's maximum sigma_t (a stale grid raises instead of biasing).
-
-Coarse cell (K, J, I) covers fine voxels [K*cell, (K+1)*cell) x ... of the (nz, ny, nx) sigma_t grid
-(the last cells may be partial), i.e. the unit-cube slab [K*cell/nz, min((K+1)*cell, nz)/nz] etc. The
-fine resolution is read from the medium's sigma_t volume; if it cannot be found the coarse cells are
-taken to tile the unit cube uniformly.
+Scope: one medium in the scene (any number of shapes may reference it), extinction looked up in its
+``sigma_t`` volume when it is a ``heterogeneous`` medium (scale applied; no microflakes), otherwise
+through ``get_scattering_coefficients``; no medium emission. The design, the measurements behind every
+default and their history: ``docs/reference-estimator.md``.
 """
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 
@@ -152,200 +39,25 @@ import drjit as dr
 import mitsuba as mi
 
 from ..scene import MAX_SUN_DIAMETER_DEG
+from . import sun
+from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
+from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401 (re-exported)
+from .medium_setup import GridCache, MediumSetup, Tracking, phase_ctx, scattering_event, unit_cube_to_world, volume_data
+from .path_state import path_state_class
+from .trackers import delta_tracking, shadow_transmittance
 from .variant_class import variant_class
 
 PLUGIN_NAME = "majorant_volpath"
-DEFAULT_CELL = 2  # fine voxels per coarse majorant cell (measured fastest on the storms; see the docstring)
-SAFETY = 1.0001
-_RR_THRESHOLD = 0.1   # ratio tracking: roulette once max(T) drops below this ...
-_RR_SURVIVE = 0.5     # ... surviving with this probability
-LONG_WALK_DEPTH = 1024  # see "Russian roulette" in the module docstring
+LONG_WALK_DEPTH = 1024  # Russian roulette: long walks survive 1/2 at depths 2^k >= this (docs/reference-estimator.md)
 DEFAULT_EMITTER_NEE = 0.1  # probability of sampling the scene's emitters (the sky) at a vertex: 1.2x the efficiency of 0.25, 2x that of 0.05 (demo views)
 GUIDE_GROWTH = 2.0    # sun guiding: bound of the product of 1 / (1 - eps) along a path
 GUIDE_SEEN = 0.1      # sun guiding at full strength where the sun's transmittance estimate is >= this
 DEFAULT_TRACKING_GRID = "texel"  # free flights: "texel" (majorants per texel cell) or "coarse" (the majorant grid)
 DEFAULT_PERSISTENT_LANES = True  # reference.render_pass renders LLVM passes with render_pass (persistent lanes)
 DEFAULT_TRANSMITTANCE = "exact"  # shadow rays: "exact" (Simpson per texel cell) or "ratio" (ratio tracking)
-EXACT_RR_TAU = 4.6    # exact transmittance in a render: Russian roulette once T < e^-4.6 = 0.01 ...
-EXACT_RR_STEP = 2.3   # ... and again each time it falls by another factor e^2.3 = 10 ...
-EXACT_RR_SURVIVE = 0.3  # ... surviving with this probability (1: no roulette, stop at TAU_ZERO)
-TAU_ZERO = 50.0      # exact transmittance: 0 beyond this optical depth (e^-50 ~ 2e-22)
-MAX_JOBS_PER_LAUNCH = 1 << 22  # persistent lanes: samples per kernel launch (12 bytes of radiance each)
-
-
-def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
-    """(v_max, radiance) of a uniform sun disk of angular ``diameter_deg`` whose irradiance on a plane
-    normal to its centre is ``irradiance`` (RGB): v_max = 1 - cos(radius) (computed as 2 sin^2(r/2):
-    float32 cannot hold 1 - cos of a quarter degree), radiance = E / (pi sin^2 r), because the disk
-    gives  integral_cap L cos(theta) d omega = pi sin^2(r) L  on that plane. (0, E) for a point sun."""
-    e = np.asarray(irradiance, np.float64)
-    r = np.radians(float(diameter_deg)) / 2.0
-    if r <= 0.0:
-        return 0.0, e
-    return float(2.0 * np.sin(r / 2.0) ** 2), e / (np.pi * np.sin(r) ** 2)
-
-
-# ---------------------------------------------------------------- numpy side
-
-def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: float = SAFETY) -> np.ndarray:
-    """Conservative majorants of the trilinear interpolant of ``sigma_t_zyx`` on a coarse grid.
-
-    ``sigma_t_zyx`` is (nz, ny, nx) (or (nz, ny, nx, C): the maximum over channels is used), indexed
-    like a Mitsuba ``gridvolume`` (texel centres at (i + 0.5) / N, clamped at the borders). Returns a
-    float32 array (ceil(nz/cell), ceil(ny/cell), ceil(nx/cell)): the majorant of coarse cell (K, J, I)
-    is ``safety`` x the maximum of the fine voxels [K*cell - 1, (K+1)*cell] x ... (the cell's own
-    voxels dilated by one voxel on each side, clipped to the grid): exactly the voxels whose values
-    enter the interpolant somewhere inside the cell. Negative values count as 0.
-    """
-    a = np.asarray(sigma_t_zyx)
-    if a.ndim == 4:
-        a = a.max(axis=3)
-    if a.ndim != 3 or min(a.shape) < 1:
-        raise ValueError(f"majorant_grid: expected a (nz, ny, nx) or (nz, ny, nx, C) array, got shape {a.shape}")
-    cell = int(cell)
-    if cell < 1:
-        raise ValueError(f"majorant_grid: cell must be >= 1, got {cell}")
-    a = np.asarray(a, np.float64)
-    if not np.all(np.isfinite(a)):
-        raise ValueError("majorant_grid: sigma_t contains non-finite values")
-    d = a
-    for axis in range(3):  # 3-tap running maximum per axis == dilation by one voxel (edge clamped)
-        lo = [slice(None)] * 3
-        hi = [slice(None)] * 3
-        lo[axis], hi[axis] = slice(0, -1), slice(1, None)
-        e = d.copy()
-        e[tuple(hi)] = np.maximum(e[tuple(hi)], d[tuple(lo)])
-        e[tuple(lo)] = np.maximum(e[tuple(lo)], d[tuple(hi)])
-        d = e
-    for axis in range(3):  # block maxima, partial last blocks included
-        d = np.maximum.reduceat(d, np.arange(0, d.shape[axis], cell), axis=axis)
-    return (np.maximum(d, 0.0) * float(safety)).astype(np.float32)
-
-
-def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.ndarray:
-    """Majorants per texel cell: the cells between 2 x 2 x 2 texel centres of a (nz, ny, nx) grid (or
-    (nz, ny, nx, C): the maximum over channels), cells -1 .. N - 1 per axis (array index + 1), the first
-    and last being the half cells between the box's faces and the outer texel centres (where the
-    gridvolume clamps). The trilinear interpolant is one trilinear polynomial in such a cell, so
-    ``safety`` x the maximum of its 8 texels bounds it there, tightly. float32, (nz + 1, ny + 1, nx + 1);
-    negative values count as 0."""
-    a = np.asarray(sigma_t_zyx, np.float64)
-    a = a.max(axis=3) if a.ndim == 4 else a
-    if a.ndim != 3 or min(a.shape) < 1 or not np.all(np.isfinite(a)):
-        raise ValueError(f"texel_majorant_grid: expected a finite (nz, ny, nx) or (nz, ny, nx, C) array, got shape {a.shape}")
-    a = np.pad(np.maximum(a, 0.0), 1, mode="edge")  # clamped borders
-    for axis in range(3):  # the larger of the two texels on either side, per axis
-        a = np.maximum(a[(slice(None),) * axis + (slice(0, -1),)], a[(slice(None),) * axis + (slice(1, None),)])
-    return (a * float(safety)).astype(np.float32)
-
-
-def empty_space_radius(majorant: np.ndarray) -> np.ndarray:
-    """For each coarse cell, the largest k such that every cell within k cells of it (Chebyshev
-    distance, i.e. the cube of side 2k + 1 centred on it, cells beyond the grid counting as empty) has
-    majorant 0: the DDA may cross that cube in one step (proximity clouds, Cohen & Sheffer 1994).
-    0 for occupied cells and for empty cells next to an occupied one. int32, the shape of ``majorant``."""
-    from scipy.ndimage import distance_transform_cdt
-    occupied = np.asarray(majorant) > 0.0
-    if not occupied.any():
-        return np.full(occupied.shape, max(occupied.shape), np.int32)
-    d = distance_transform_cdt(~occupied, metric="chessboard")  # distance to the nearest occupied cell
-    return np.maximum(d - 1, 0).astype(np.int32)
 
 
 # ---------------------------------------------------------------- Mitsuba helpers
-
-class _Grid:
-    """A grid of majorants for the DDA: cell c (per axis lo <= c < lo + dims) spans [c, c + 1) in the
-    coordinates q = local * scale + shift; ``majorant`` (Float, flattened (Z, Y, X), index c - lo) and
-    ``empty`` (Int32, ``empty_space_radius``) per cell. Sizes and scales are opaque (no recompiles)."""
-
-    def __init__(self, majorant, empty, dims, scale, shift: float, lo: int):
-        self.majorant, self.empty = majorant, empty
-        self.dims = [dr.opaque(mi.Int32, int(v)) for v in dims]
-        self.scale = [dr.opaque(mi.Float, float(v)) for v in scale]
-        self.shift, self.lo = float(shift), int(lo)
-
-
-class _Children:
-    """Collects the direct children and values that an object exposes through ``traverse`` (methods
-    of a ``mi.TraversalCallback``, see ``variant_class``)."""
-
-    def __init__(self):
-        mi.TraversalCallback.__init__(self)
-        self.items = {}
-
-    def put(self, name, value, flags, cpptype=None):
-        self.items[name] = (value, cpptype)
-
-
-def _children(obj) -> dict:
-    cb = variant_class(_Children, "TraversalCallback")()
-    obj.traverse(cb)
-    return cb.items
-
-
-_JOB_SAMPLERS: dict = {}
-_PCG_MULT = 0x5851F42D4C957F2D
-
-
-def _splitmix64(x: int) -> int:
-    """SplitMix64 of ``x``: a well-mixed 64-bit key for a pass seed."""
-    z = (x + 0x9E3779B97F4A7C15) & 0xFFFFFFFFFFFFFFFF
-    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & 0xFFFFFFFFFFFFFFFF
-    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & 0xFFFFFFFFFFFFFFFF
-    return z ^ (z >> 31)
-
-
-def _seed_pcg(rng, initstate, initseq, active):
-    """PCG32's seeding (``PCG32.seed``: stream ``initseq``, offset ``initstate``) in the lanes ``active``."""
-    inc = (initseq << 1) | 1
-    state = inc + initstate          # state = 0; step; state += initstate
-    state = state * _PCG_MULT + inc  # step
-    rng.state = dr.select(active, state, rng.state)
-    rng.inc = dr.select(active, inc, rng.inc)
-
-
-def _job_sampler_class():
-    """The sampler of the persistent lanes (one per variant): ``next_1d`` / ``next_2d`` from a PCG32 that
-    is re-seeded for every sample (a Mitsuba sampler cannot be re-seeded per lane inside a kernel)."""
-    key = mi.variant()
-    if key not in _JOB_SAMPLERS:
-        class JobSampler:
-            DRJIT_STRUCT = {"rng": mi.PCG32}
-
-            def __init__(self):
-                self.rng = mi.PCG32()
-
-            def next_1d(self, active=True):
-                return self.rng.next_float32(mi.Bool(active))
-
-            def next_2d(self, active=True):
-                a = mi.Bool(active)
-                u = self.rng.next_float32(a)
-                return mi.Point2f(u, self.rng.next_float32(a))
-        _JOB_SAMPLERS[key] = JobSampler
-    return _JOB_SAMPLERS[key]
-
-
-def _default_lanes() -> int:
-    """Lanes of a persistent-lane launch: one LLVM block per worker thread (each thread's first packet
-    then takes samples until none are left), at least 64. Not critical: 512, 2048, 8192 and 32768 lanes
-    took the same time (0.19-0.20 s per spp, demo side view, 160 x 120, two rounds)."""
-    from ..variant import llvm_block_size
-    return max(64, int(dr.thread_count()) * int(llvm_block_size() or 1024))
-
-
-def _phase_ctx(sampler):
-    """A phase-function context; the persistent-lane renderer's samplers (``_JobSampler``) are not
-    Mitsuba samplers, and no phase function used here reads the context's sampler."""
-    return mi.PhaseFunctionContext(sampler if isinstance(sampler, mi.Sampler) else None)
-
-
-def _mis_weight(pdf_a, pdf_b):
-    a2 = dr.square(pdf_a)
-    w = a2 / (a2 + dr.square(pdf_b))
-    return dr.select(dr.isfinite(w), w, 0.0)
-
 
 def _as_interaction(x):
     """The ``Interaction3f`` part of a surface or medium interaction."""
@@ -354,141 +66,141 @@ def _as_interaction(x):
     return it
 
 
-def _key(obj):
-    return obj.ptr if hasattr(obj, "ptr") else id(obj)
+def _check(ok, message: str) -> None:
+    """Raise ValueError("majorant_volpath: <message>") unless ``ok``."""
+    if not ok:
+        raise ValueError(f"{PLUGIN_NAME}: {message}")
 
 
-class _MediumSetup:
-    """Everything the traced walk needs about the scene's one medium (built at each render)."""
+def _choice(props, name: str, default: str, allowed: tuple) -> str:
+    """The string property ``name``, one of ``allowed``."""
+    value = str(props.get(name, default))
+    options = ", ".join(repr(a) for a in allowed[:-1]) + f" or {allowed[-1]!r}"
+    _check(value in allowed, f"'{name}' must be {options}, got {value!r}")
+    return value
 
-    def __init__(self, integrator: "MajorantVolpath", scene, sensor_medium):
-        media = {}
-        for shape in scene.shapes():
-            for m in (shape.interior_medium(), shape.exterior_medium()):
-                if m is not None:
-                    media.setdefault(_key(m), m)
-        for sensor in scene.sensors():
-            m = sensor.get_medium() if hasattr(sensor, "get_medium") else None
-            if m is not None:
-                media.setdefault(_key(m), m)
-        if sensor_medium is not None:
-            media.setdefault(_key(sensor_medium), sensor_medium)
-        if len(media) > 1:
-            raise RuntimeError(f"{PLUGIN_NAME}: the scene references {len(media)} different media; "
-                               "this integrator handles exactly one (put all the data into one grid)")
-        self.medium = next(iter(media.values())) if media else None
-        self.volume = None
-        self.scale = 1.0
-        self.spectral = False
-        if self.medium is None:
-            return
-        self.spectral = bool(self.medium.has_spectral_extinction())
-        ch = _children(self.medium)
-        if "sigma_t" in ch and isinstance(ch["sigma_t"][0], mi.Volume) and "scale" in ch:
-            self.volume = ch["sigma_t"][0]
-            value, cpptype = ch["scale"]
-            self.scale = float(mi.get_property(value, cpptype, self.medium)) if cpptype is not None else float(value)
+
+def _majorant_property(value) -> np.ndarray:
+    """The ``majorant`` property as a finite, non-negative float32 (Z, Y, X) array."""
+    m = np.asarray(value, np.float32)
+    if m.ndim == 4 and m.shape[3] == 1:
+        m = m[..., 0]
+    _check(m.ndim == 3, f"'majorant' must be a (Z, Y, X) tensor, got shape {m.shape}")
+    _check(np.all(np.isfinite(m)) and not np.any(m < 0), "'majorant' must be finite and >= 0")
+    return np.ascontiguousarray(m)
 
 
 # ---------------------------------------------------------------- integrator
 
 class MajorantVolpath:
-    """Volumetric path tracer with DDA majorant-grid delta tracking (see the module docstring).
+    """Volumetric path tracer with DDA majorant-grid delta tracking (the module docstring).
+
+    .. pluginparameters::
+
+     * - max_depth, rr_depth
+       - |int|
+       - Longest path (-1: infinite; default -1); depth from which Russian roulette is played (default 5).
+     * - rr_mode
+       - |string|
+       - "throughput" (default: survival min(max T, 1), long walks cut) or "volpath" (capped at 0.95).
+     * - hide_emitters
+       - |bool|
+       - Hide directly visible emitters (default: false).
+     * - majorant, cell
+       - |tensor|, |int|
+       - Majorants (Z, Y, X) in 1/m (scale applied) from :func:`.majorants.majorant_grid` with ``cell``
+         fine voxels per cell (default DEFAULT_CELL); without it built from the medium at each render.
+     * - to_world
+       - |transform|
+       - The unit cube onto the sigma_t grid's box (default and check: the medium's sigma_t volume).
+     * - tracking_grid, transmittance
+       - |string|
+       - Free flights over "texel" cells (default) or the "coarse" grid; shadow rays by "exact"
+         transmittance (default) or "ratio" tracking.
+     * - persistent_lanes
+       - |bool|
+       - Whether ``reference.render_pass`` renders with persistent lanes (default: DEFAULT_PERSISTENT_LANES).
+     * - phase_channels
+       - |string|
+       - "history" (default: channels drawn in proportion to the throughput) or "mean".
+     * - emitter_nee
+       - |float|
+       - Probability of a shadow ray towards the scene's emitters (the sky), else the sun; in (0, 1].
+     * - sun_direction, sun_irradiance
+       - |vector|, |color|
+       - The integrator's own sun: direction towards it; irradiance normal to the beam (RGB, default 1).
+     * - sun_angular_diameter
+       - |float|
+       - Degrees, <= MAX_SUN_DIAMETER_DEG; 0 (default) is a point sun.
+     * - sun_sampling
+       - |string|
+       - "mis" (default), or one strategy alone, "nee" or "phase" (for tests).
+     * - sun_guiding, aureole_nee
+       - |float|
+       - Probabilities of a sun-guided scattering direction ([0, 1)) and of the aureole estimator
+         ([0, 1], needs "mis" and no guiding); default 0.
 
     The methods only: :func:`register` puts them on the current variant's ``mi.SamplingIntegrator``
     (see ``variant_class``)."""
 
     def __init__(self, props: mi.Properties):
         mi.SamplingIntegrator.__init__(self, props)
-        max_depth = int(props.get("max_depth", -1))
-        if max_depth < -1:
-            raise ValueError(f"{PLUGIN_NAME}: max_depth must be -1 (infinite) or >= 0, got {max_depth}")
-        self.max_depth = 0xFFFFFFFF if max_depth == -1 else max_depth
-        self.rr_depth = int(props.get("rr_depth", 5))
-        if self.rr_depth < 0:
-            raise ValueError(f"{PLUGIN_NAME}: rr_depth must be >= 0, got {self.rr_depth}")
-        self.hide_emitters_ = bool(props.get("hide_emitters", False))
-        self.cell = int(props.get("cell", DEFAULT_CELL))
-        if self.cell < 1:
-            raise ValueError(f"{PLUGIN_NAME}: cell must be >= 1, got {self.cell}")
-        self.auto_majorant = "majorant" not in props
-        if self.auto_majorant:
-            self.majorant = mi.TensorXf(np.zeros((1, 1, 1), np.float32))
-        else:
-            m = np.asarray(props["majorant"], np.float32)
-            if m.ndim == 4 and m.shape[3] == 1:
-                m = m[..., 0]
-            if m.ndim != 3:
-                raise ValueError(f"{PLUGIN_NAME}: 'majorant' must be a (Z, Y, X) tensor, got shape {m.shape}")
-            if not np.all(np.isfinite(m)) or np.any(m < 0):
-                raise ValueError(f"{PLUGIN_NAME}: 'majorant' must be finite and >= 0")
-            self.majorant = mi.TensorXf(np.ascontiguousarray(m))
+        self._parse(props)
+        # per-render state, filled by _setup: the scene's medium, the trackers' grids and frame, and the
+        # caches of the grids built from the medium's data
+        self._ms = self._tk = None
+        self._grids = GridCache()
         self._auto_key = None
-        self.to_world = props["to_world"] if "to_world" in props else None
-        self.tr_mode = str(props.get("transmittance", DEFAULT_TRANSMITTANCE))
-        if self.tr_mode not in ("exact", "ratio"):
-            raise ValueError(f"{PLUGIN_NAME}: 'transmittance' must be 'exact' or 'ratio', got {self.tr_mode!r}")
-        self.track_mode = str(props.get("tracking_grid", DEFAULT_TRACKING_GRID))
-        if self.track_mode not in ("texel", "coarse"):
-            raise ValueError(f"{PLUGIN_NAME}: 'tracking_grid' must be 'texel' or 'coarse', got {self.track_mode!r}")
-        self.persistent = bool(props.get("persistent_lanes", DEFAULT_PERSISTENT_LANES))
-        self._texel, self._texel_data = None, None
-        self._init_sun(props)
-        # per-render state (medium, transforms, majorant lanes), filled by _setup
-        self._track = self._coarse = None
 
-    def _init_sun(self, props):
-        """The integrator's own sun (see the module docstring, "The sun"): ``sun_direction`` (towards the
-        sun), ``sun_irradiance`` (RGB, normal to the beam), ``sun_angular_diameter`` (degrees; 0 = a
-        point sun) and ``sun_guiding`` (probability of drawing a scattering direction from the phase
-        function centred on the sun). Without ``sun_direction`` the sun, if any, is a scene emitter."""
-        self.sun_mode = "none"
-        self.guiding = 0.0
-        self.aureole = 0.0
-        self.sun_sampling = "mis"
-        self.rr_mode = str(props.get("rr_mode", "throughput"))
-        if self.rr_mode not in ("throughput", "volpath"):
-            raise ValueError(f"{PLUGIN_NAME}: 'rr_mode' must be 'throughput' or 'volpath', got {self.rr_mode!r}")
-        self.channels = str(props.get("phase_channels", "history"))
-        self.emitter_nee = float(props.get("emitter_nee", DEFAULT_EMITTER_NEE))
-        if not 0.0 < self.emitter_nee <= 1.0:
-            raise ValueError(f"{PLUGIN_NAME}: 'emitter_nee' must be in (0, 1], got {self.emitter_nee}")
-        if self.channels not in ("history", "mean"):
-            raise ValueError(f"{PLUGIN_NAME}: 'phase_channels' must be 'history' or 'mean', got {self.channels!r}")
+    def _parse(self, props):
+        """The properties of the table above; any invalid value raises ValueError."""
+        get = props.get
+        max_depth = int(get("max_depth", -1))
+        _check(max_depth >= -1, f"max_depth must be -1 (infinite) or >= 0, got {max_depth}")
+        self.max_depth = 0xFFFFFFFF if max_depth == -1 else max_depth
+        self.rr_depth = int(get("rr_depth", 5))
+        _check(self.rr_depth >= 0, f"rr_depth must be >= 0, got {self.rr_depth}")
+        self.hide_emitters_ = bool(get("hide_emitters", False))
+        self.cell = int(get("cell", DEFAULT_CELL))
+        _check(self.cell >= 1, f"cell must be >= 1, got {self.cell}")
+        self.auto_majorant = "majorant" not in props
+        self.majorant = mi.TensorXf(np.zeros((1, 1, 1), np.float32) if self.auto_majorant
+                                    else _majorant_property(props["majorant"]))
+        self.to_world = props["to_world"] if "to_world" in props else None
+        self.tr_mode = _choice(props, "transmittance", DEFAULT_TRANSMITTANCE, ("exact", "ratio"))
+        self.track_mode = _choice(props, "tracking_grid", DEFAULT_TRACKING_GRID, ("texel", "coarse"))
+        self.persistent = bool(get("persistent_lanes", DEFAULT_PERSISTENT_LANES))
+        self.rr_mode = _choice(props, "rr_mode", "throughput", ("throughput", "volpath"))
+        self.emitter_nee = float(get("emitter_nee", DEFAULT_EMITTER_NEE))
+        _check(0.0 < self.emitter_nee <= 1.0, f"'emitter_nee' must be in (0, 1], got {self.emitter_nee}")
+        self.channels = _choice(props, "phase_channels", "history", ("history", "mean"))
+        self.sun_mode, self.guiding, self.aureole, self.sun_sampling = "none", 0.0, 0.0, "mis"
         if "sun_direction" not in props:
             for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee"):
-                if name in props:
-                    raise ValueError(f"{PLUGIN_NAME}: '{name}' needs 'sun_direction'")
+                _check(name not in props, f"'{name}' needs 'sun_direction'")
             return
-        if not mi.is_rgb:
-            raise ValueError(f"{PLUGIN_NAME}: the integrator's sun needs an RGB variant, not {mi.variant()!r}")
+        # the integrator's own sun (module docstring; without sun_direction the sun, if any, is a scene emitter)
+        _check(mi.is_rgb, f"the integrator's sun needs an RGB variant, not {mi.variant()!r}")
         d = np.asarray(props["sun_direction"], np.float64).reshape(3)
-        if not np.all(np.isfinite(d)) or np.linalg.norm(d) == 0:
-            raise ValueError(f"{PLUGIN_NAME}: 'sun_direction' must be a finite non-zero vector, got {d.tolist()}")
+        _check(np.all(np.isfinite(d)) and np.linalg.norm(d) != 0,
+               f"'sun_direction' must be a finite non-zero vector, got {d.tolist()}")
         d = d / np.linalg.norm(d)
-        e = np.broadcast_to(np.asarray(props.get("sun_irradiance", 1.0), np.float64), (3,))
-        if not np.all(np.isfinite(e)) or np.any(e < 0):
-            raise ValueError(f"{PLUGIN_NAME}: 'sun_irradiance' must be >= 0, got {e.tolist()}")
-        diameter = float(props.get("sun_angular_diameter", 0.0))
-        if not 0.0 <= diameter <= MAX_SUN_DIAMETER_DEG:
-            raise ValueError(f"{PLUGIN_NAME}: 'sun_angular_diameter' must be in [0, {MAX_SUN_DIAMETER_DEG}] degrees, "
-                             f"got {diameter}")
-        self.sun_sampling = str(props.get("sun_sampling", "mis"))
-        if self.sun_sampling not in ("mis", "nee", "phase"):
-            raise ValueError(f"{PLUGIN_NAME}: 'sun_sampling' must be 'mis', 'nee' or 'phase', got {self.sun_sampling!r}")
-        self.guiding = float(props.get("sun_guiding", 0.0))
-        if not 0.0 <= self.guiding < 1.0:
-            raise ValueError(f"{PLUGIN_NAME}: 'sun_guiding' must be in [0, 1), got {self.guiding}")
-        self.aureole = float(props.get("aureole_nee", 0.0))
-        if not 0.0 <= self.aureole <= 1.0:
-            raise ValueError(f"{PLUGIN_NAME}: 'aureole_nee' must be a probability in [0, 1], got {self.aureole}")
-        if self.aureole > 0.0 and (self.guiding > 0.0 or self.sun_sampling != "mis"):
-            raise ValueError(f"{PLUGIN_NAME}: 'aureole_nee' works with sun_sampling='mis' and no sun guiding")
+        e = np.broadcast_to(np.asarray(get("sun_irradiance", 1.0), np.float64), (3,))
+        _check(np.all(np.isfinite(e)) and not np.any(e < 0), f"'sun_irradiance' must be >= 0, got {e.tolist()}")
+        diameter = float(get("sun_angular_diameter", 0.0))
+        _check(0.0 <= diameter <= MAX_SUN_DIAMETER_DEG,
+               f"'sun_angular_diameter' must be in [0, {MAX_SUN_DIAMETER_DEG}] degrees, got {diameter}")
+        self.sun_sampling = _choice(props, "sun_sampling", "mis", ("mis", "nee", "phase"))
+        self.guiding = float(get("sun_guiding", 0.0))
+        _check(0.0 <= self.guiding < 1.0, f"'sun_guiding' must be in [0, 1), got {self.guiding}")
+        self.aureole = float(get("aureole_nee", 0.0))
+        _check(0.0 <= self.aureole <= 1.0, f"'aureole_nee' must be a probability in [0, 1], got {self.aureole}")
+        _check(not (self.aureole > 0.0 and (self.guiding > 0.0 or self.sun_sampling != "mis")),
+               "'aureole_nee' works with sun_sampling='mis' and no sun guiding")
         self.sun_mode = "disk" if diameter > 0 else "point"
-        if not self.emitter_nee < 1.0:
-            raise ValueError(f"{PLUGIN_NAME}: with the integrator's sun, 'emitter_nee' must be below 1 (the rest "
-                             f"of the shadow rays go to the sun), got {self.emitter_nee}")
-        vmax, radiance = sun_disk(diameter, e)
+        _check(self.emitter_nee < 1.0, "with the integrator's sun, 'emitter_nee' must be below 1 (the rest of the "
+               f"shadow rays go to the sun), got {self.emitter_nee}")
+        vmax, radiance = sun.sun_disk(diameter, e)
         # opaque: a new sun position, size or irradiance reuses the kernel
         self.sun_dir = mi.Vector3f(*(float(v) for v in d))
         self.sun_vmax = mi.Float(vmax)                       # versine of the disk's radius
@@ -522,892 +234,362 @@ class MajorantVolpath:
 
     # ------------------------------------------------------------ per-render setup
     def _setup(self, scene, sensor_medium):
-        ms = _MediumSetup(self, scene, sensor_medium)
+        """Find the scene's medium and build (or reuse) the trackers' grids: ``self._ms``, ``self._tk``."""
+        ms = MediumSetup(scene, sensor_medium)
         self._ms = ms
+        self._tk = Tracking(ms)
         if ms.medium is None:
             return
         vol = ms.volume
-        if self.to_world is not None:
-            to_world = np.array(self.to_world.matrix, dtype=np.float64).reshape(4, 4)
-        elif vol is not None:
-            bb = vol.bbox()
-            lo = np.array([bb.min.x, bb.min.y, bb.min.z], np.float64)
-            hi = np.array([bb.max.x, bb.max.y, bb.max.z], np.float64)
-            to_world = np.diag(np.r_[hi - lo, 1.0])
-            to_world[:3, 3] = lo
-        else:
-            raise RuntimeError(f"{PLUGIN_NAME}: 'to_world' is required when the medium has no sigma_t grid")
-        if vol is not None:
-            self._check_bbox(to_world, vol)
-        to_local = np.linalg.inv(to_world)
-        self._to_local = mi.Transform4f(mi.ScalarTransform4f(to_local.astype(np.float32).tolist()))
-
+        to_world = unit_cube_to_world(self.to_world, vol)
+        to_local = mi.Transform4f(mi.ScalarTransform4f(np.linalg.inv(to_world).astype(np.float32).tolist()))
         if self.auto_majorant:
             if vol is None:
                 raise RuntimeError(f"{PLUGIN_NAME}: no 'majorant' given and the medium has no sigma_t grid")
-            data = self._volume_data(vol)
+            data = volume_data(vol)
             key = (data.array.index, ms.scale, self.cell)
             if key != self._auto_key:
                 self.majorant = mi.TensorXf(majorant_grid(np.asarray(data) * ms.scale, self.cell))
                 self._auto_key = key
-
-        nz, ny, nx = (int(s) for s in self.majorant.shape[:3])
-        if vol is not None:
-            rx, ry, rz = (int(v) for v in vol.resolution())
-            expect = tuple(-(-n // self.cell) for n in (rz, ry, rx))
-            if expect != (nz, ny, nx):
-                raise RuntimeError(
-                    f"{PLUGIN_NAME}: majorant grid {(nz, ny, nx)} does not match the sigma_t grid {(rz, ry, rx)} "
-                    f"with cell = {self.cell} (expected {expect}); rebuild it with majorant_grid(..., cell)")
-            cells_per_unit = (rx / self.cell, ry / self.cell, rz / self.cell)
-            # cheap staleness guard: the grid must bound the medium's maximum
-            vmax = float(vol.max()) * ms.scale
-            mmax = float(np.max(self.majorant.numpy()))
-            if vmax > mmax * (1.0 + 1e-5) + 1e-30:
-                raise RuntimeError(
-                    f"{PLUGIN_NAME}: the majorant grid (max {mmax:g}) is below the medium's maximum sigma_t "
-                    f"({vmax:g} = grid max x scale): it is stale; rebuild it from the current data")
-        else:
-            cells_per_unit = (nx, ny, nz)
-        # opaque: new resolutions / values do not recompile
-        maj_key = (self.majorant.array.index, tuple(self.majorant.shape))
-        if maj_key != getattr(self, "_skip_key", None):
-            self._skip = mi.Int32(empty_space_radius(self.majorant.numpy()).ravel())
-            self._skip_key = maj_key
-        self._coarse = _Grid(self.majorant.array, self._skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
-        self._texel = self._texel_grid(vol, ms.scale)
-        self._track = self._texel if (self._texel is not None and self.track_mode == "texel") else self._coarse
-
-    def _texel_grid(self, vol, scale):
-        """The texel-centre grid (None without a sigma_t grid): its cells lie between 2 x 2 x 2 texel
-        centres (cells -1 .. N - 1 per axis, the first and last halves cut by the box), where the trilinear
-        interpolant is one trilinear polynomial; majorant = SAFETY x the maximum of the cell's 8 texels,
-        which is the maximum of the interpolant there (0: it is 0 in the cell)."""
-        if vol is None:
-            return None
-        data = self._volume_data(vol)
-        key = (data.array.index, scale)
-        if key != getattr(self, "_texel_key", None):
-            maj = texel_majorant_grid(np.asarray(data) * scale)
-            self._texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty_space_radius(maj).ravel()))
-            self._texel_key = key
-        rx, ry, rz = (int(v) for v in vol.resolution())
-        self._texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
-        return _Grid(*self._texel_arrays, (rx + 1, ry + 1, rz + 1), (rx, ry, rz), shift=-0.5, lo=-1)
-
-    @staticmethod
-    def _check_bbox(to_world, vol):
-        """The majorant grid must sit on the sigma_t grid: compare the image of the unit cube with
-        the volume's bounding box (a mismatch would silently make the majorants non-conservative)."""
-        corners = np.array([[x, y, z, 1.0] for x in (0, 1) for y in (0, 1) for z in (0, 1)]) @ to_world.T
-        lo, hi = corners[:, :3].min(axis=0), corners[:, :3].max(axis=0)
-        bb = vol.bbox()
-        vlo = np.array([bb.min.x, bb.min.y, bb.min.z], np.float64)
-        vhi = np.array([bb.max.x, bb.max.y, bb.max.z], np.float64)
-        tol = 1e-4 * max(float(np.max(vhi - vlo)), 1e-30)
-        if np.any(np.abs(lo - vlo) > tol) or np.any(np.abs(hi - vhi) > tol):
-            raise RuntimeError(f"{PLUGIN_NAME}: 'to_world' maps the unit cube onto {lo.tolist()} - {hi.tolist()}, "
-                               f"but the medium's sigma_t grid covers {vlo.tolist()} - {vhi.tolist()}")
-
-    @staticmethod
-    def _volume_data(vol):
-        for name, (value, cpptype) in _children(vol).items():
-            if name == "data":
-                return mi.get_property(value, cpptype, vol) if cpptype is not None else value
-        raise RuntimeError(f"{PLUGIN_NAME}: cannot read the sigma_t grid data")
-
-    # ------------------------------------------------------------ medium lookups
-    def _sigma_t(self, p, ray, active):
-        """sigma_t at world point p (Spectrum if spectral extinction, else Float)."""
-        ms = self._ms
-        if ms.volume is not None:
-            it = dr.zeros(mi.Interaction3f)
-            it.p = p
-            it.time = ray.time
-            it.wavelengths = ray.wavelengths
-            if ms.spectral:
-                return ms.volume.eval(it, active) * ms.scale
-            return ms.volume.eval_1(it, active) * ms.scale
-        mei = self._make_mei(ray, p, mi.Float(0.0), active)
-        sigma_t = ms.medium.get_scattering_coefficients(mei, active)[2]
-        return sigma_t if ms.spectral else sigma_t[0]
-
-    def _make_mei(self, ray, p, t, active):
-        mei = dr.zeros(mi.MediumInteraction3f)
-        mei.t = dr.select(active, t, dr.inf)
-        mei.p = p
-        mei.wi = -ray.d
-        mei.sh_frame = mi.Frame3f(mei.wi)
-        mei.time = ray.time
-        mei.wavelengths = ray.wavelengths
-        mei.medium = dr.select(active, mi.MediumPtr(self._ms.medium), dr.zeros(mi.MediumPtr))
-        return mei
-
-    def _scattering_event(self, ray, t, active):
-        """The medium interaction at distance ``t`` along ``ray`` (with sigma_s and sigma_t set) and its
-        single-scattering albedo sigma_s / sigma_t (0 where sigma_t = 0)."""
-        mei = self._make_mei(ray, ray.o + ray.d * t, t, active)
-        sigma_s, _, sigma_t = self._ms.medium.get_scattering_coefficients(mei, active)
-        mei.sigma_s, mei.sigma_t = sigma_s, sigma_t
-        return mei, dr.select(sigma_t > 0.0, sigma_s / dr.select(sigma_t > 0.0, sigma_t, 1.0), 0.0)
-
-    # ------------------------------------------------------------ grids and the DDA
-    def _ray_box(self, ray, t_end, active):
-        """The ray in the grid's local (unit-cube) coordinates and its overlap [t_near, t_far] with the
-        cube within [0, t_end]; ``active`` cleared where it misses."""
-        o_l = self._to_local @ ray.o
-        d_l = self._to_local @ mi.Vector3f(ray.d)
-        t_near, t_far = mi.Float(0.0), mi.Float(t_end)
-        for k in range(3):
-            o, d = o_l[k], d_l[k]
-            flat = dr.abs(d) < 1e-30
-            inv = dr.rcp(dr.select(flat, 1.0, d))
-            ta, tb = (0.0 - o) * inv, (1.0 - o) * inv
-            inside = (o >= 0.0) & (o <= 1.0)
-            t_near = dr.select(flat, dr.select(inside, t_near, dr.inf), dr.maximum(t_near, dr.minimum(ta, tb)))
-            t_far = dr.select(flat, dr.select(inside, t_far, -dr.inf), dr.minimum(t_far, dr.maximum(ta, tb)))
-        return o_l, d_l, t_near, t_far, mi.Bool(active) & (t_near < t_far)
-
-    @staticmethod
-    def _locate(grid, q0, dq, t):
-        """DDA state at distance t: per axis the cell (clipped to the grid; on a face, the cell the ray
-        enters) and the distance at which the ray leaves it along that axis."""
-        cells, nexts = [], []
-        for k in range(3):
-            q = q0[k] + dq[k] * t
-            c = mi.Int32(dr.floor(q))
-            c = dr.select((dq[k] < 0.0) & (mi.Float(c) == q), c - 1, c)
-            c = dr.clip(c, grid.lo, grid.lo + grid.dims[k] - 1)
-            boundary = mi.Float(c) + dr.select(dq[k] > 0.0, 1.0, 0.0)
-            inv = dr.rcp(dr.select(dq[k] != 0.0, dq[k], 1.0))
-            nexts.append(dr.select(dq[k] != 0.0, dr.maximum(t + (boundary - q) * inv, t), dr.inf))
-            cells.append(c)
-        return cells, nexts
-
-    @classmethod
-    def _dda_step(cls, grid, q0, dq, t, cells, nexts, jump_k, move):
-        """Advance the DDA of the lanes ``move`` to distance t: to the next cell, or (``jump_k`` >= 1)
-        to where the ray leaves the empty cube of radius jump_k; returns (cells, nexts, outside)."""
-        jump = move & (jump_k > 0)
-        jc, jn = cls._locate(grid, q0, dq, t)
-        tx, ty, tz = nexts
-        ax = [(tx <= ty) & (tx <= tz)]
-        ax.append(~ax[0] & (ty <= tz))
-        ax.append(~ax[0] & ~ax[1])
-        out_cells, out_nexts = [], []
-        outside = mi.Bool(False)
-        for a in range(3):
-            plain = move & ~jump & ax[a]
-            step = dr.select(dq[a] > 0.0, mi.Int32(1), mi.Int32(-1))
-            delta = dr.abs(dr.rcp(dr.select(dq[a] != 0.0, dq[a], 1.0)))
-            c = dr.select(jump, jc[a], dr.select(plain, cells[a] + step, cells[a]))
-            out_cells.append(c)
-            out_nexts.append(dr.select(jump, jn[a], dr.select(plain, nexts[a] + delta, nexts[a])))
-            outside |= (c < grid.lo) | (c >= grid.lo + grid.dims[a])
-        return out_cells, out_nexts, outside
-
-    @staticmethod
-    def _cell_of(grid, cells, active):
-        """(majorant, flat index) of the current cells."""
-        cx, cy, cz = (dr.clip(c - grid.lo, 0, grid.dims[a] - 1) for a, c in enumerate(cells))
-        idx = mi.UInt32((cz * grid.dims[1] + cy) * grid.dims[0] + cx)
-        return dr.gather(mi.Float, grid.majorant, idx, active), idx
-
-    @staticmethod
-    def _cell_end(grid, q0, dq, cells, nexts, idx, empty, active):
-        """Where the ray leaves the current cell or, in empty space, the empty cube of radius k >= 1
-        about it (``empty_space_radius``): (t, k), k = 0 for a plain step."""
-        k = dr.gather(mi.Int32, grid.empty, idx, active & empty)
-        k = dr.select(active & empty, k, 0)
-        t_cell = dr.minimum(nexts[0], dr.minimum(nexts[1], nexts[2]))
-        t_exit = mi.Float(dr.inf)
-        for c_k, o_k, d_k in zip(cells, q0, dq):
-            face = dr.select(d_k > 0.0, mi.Float(c_k + k + 1), mi.Float(c_k - k))
-            t_k = (face - o_k) * dr.rcp(dr.select(d_k != 0.0, d_k, 1.0))
-            t_exit = dr.select(d_k != 0.0, dr.minimum(t_exit, t_k), t_exit)
-        return dr.select(k > 0, dr.maximum(t_exit, t_cell), t_cell), k
-
-    def _walk(self, ray, t_end, sampler, active, ratio: bool, weight=None):
-        """Walk a majorant grid (``self._track``: the texel-cell grid, else the coarse one) along ``ray``
-        over [0, t_end] (clipped to the grid's box), crossing empty cubes of cells in one step.
-
-        ratio=True: ratio tracking, returns the transmittance estimate (Spectrum).
-        ratio=False: delta tracking, returns (found, t, weight): whether and where the first real
-        collision is. With grey extinction the collision is real with probability sigma_t / majorant
-        and ``weight`` is returned unchanged. With spectral extinction (history-aware spectral
-        tracking, Kutz et al. 2017) the real-collision probability is
-        P = mean(w sigma_t) / (majorant mean(w)) for the path throughput w = ``weight``, and the
-        returned weight is w sigma_t / (majorant P) at the real collision times the product of
-        w (majorant - sigma_t) / (majorant (1 - P)) over the null collisions (unbiased, and the mean of
-        the throughput is preserved)."""
-        grid = self._track
-        texels = self._texel_data if (grid is self._texel and not self._ms.spectral) else None
-        o_l, d_l, t_near, t_max, active = self._ray_box(ray, t_end, active)
-        q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
-        dq = [d_l[k] * grid.scale[k] for k in range(3)]
-        cells, nexts = self._locate(grid, q0, dq, t_near)
-
-        ms = self._ms
-        spectral = ms.spectral
-        found = mi.Bool(False)
-        if ratio:
-            tr = mi.Spectrum(1.0) if spectral else mi.Float(1.0)
-        else:  # delta tracking: the path weight (only changed with spectral extinction)
-            tr = mi.Spectrum(weight) if spectral else mi.Float(1.0)
-
-        def cond(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
-            return active
-
-        def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
-            cells, nexts = [cx, cy, cz], [tx, ty, tz]
-            maj, idx = self._cell_of(grid, cells, active)
-            t_cell, k = self._cell_end(grid, q0, dq, cells, nexts, idx, maj <= 0.0, active)
-            seg_end = dr.minimum(t_cell, t_max)
-            u = sampler.next_1d(active)
-            dt = dr.select(maj > 0.0, -dr.log(1.0 - u) / maj, dr.inf)
-            tc = t + dt
-            collide = active & (tc < seg_end)
-            if texels is None:
-                s_t = self._sigma_t(ray.o + ray.d * tc, ray, collide)
-            else:  # in a texel cell: the interpolant of its 8 texels
-                s_t = self._cell_interpolant(texels, grid, q0, dq, cells, (tc,), collide)[0]
-            if ratio:
-                inv_maj = dr.rcp(dr.select(collide, maj, 1.0))
-                tr = dr.select(collide, tr * dr.clip(1.0 - s_t * inv_maj, 0.0, 1.0), tr)
-                low = collide & ((dr.max(tr) if spectral else tr) < _RR_THRESHOLD)
-                xi = sampler.next_1d(low)
-                tr = dr.select(low, dr.select(xi < _RR_SURVIVE, tr * (1.0 / _RR_SURVIVE), 0.0), tr)
-                stop = collide & (dr.all(tr <= 0.0) if spectral else (tr <= 0.0))
-            else:
-                xi = sampler.next_1d(collide)
-                if spectral:
-                    s_n = dr.maximum(maj - s_t, 0.0)
-                    a_t = dr.mean(tr * s_t)
-                    a_n = dr.mean(tr * s_n)
-                    a = a_t + a_n
-                    p_t = dr.select(a > 0.0, a_t / dr.select(a > 0.0, a, 1.0), 0.0)
-                    stop = collide & (xi < p_t)
-                    null = collide & ~stop
-                    w_t = s_t / dr.maximum(maj * p_t, 1e-30)
-                    w_n = s_n / dr.maximum(maj * (1.0 - p_t), 1e-30)
-                    tr = dr.select(stop, tr * w_t, dr.select(null, tr * w_n, tr))
-                    dead = collide & (a <= 0.0)
-                    stop |= dead
-                    found |= stop & ~dead
-                else:
-                    stop = collide & (xi * maj < s_t)
-                    found |= stop
-            t = dr.select(collide, tc, seg_end)
-            adv = active & ~collide
-            (cx, cy, cz), (tx, ty, tz), outside = self._dda_step(grid, q0, dq, t, cells, nexts, k, adv)
-            leave = adv & ((seg_end >= t_max) | outside)
-            active &= ~(stop | leave)
-            return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
-
-        state = dr.while_loop(
-            state=(sampler, active, mi.Float(t_near), cells[0], cells[1], cells[2],
-                   nexts[0], nexts[1], nexts[2], found, tr),
-            cond=cond, body=body, label="majorant_volpath: DDA " + ("ratio" if ratio else "delta") + " tracking")
-        _, _, t, _, _, _, _, _, _, found, tr = state
-        if ratio:
-            return mi.Spectrum(tr) if not spectral else tr
-        return found, t, (tr if spectral else weight)
-
-    # ------------------------------------------------------------ exact transmittance
-    def _exact_walk(self, ray, t_end, active, sampler=None):
-        """exp(-optical depth) of ``ray`` over [0, t_end] (clipped to the grid's box), computed exactly:
-        the trilinear interpolant of sigma_t is one trilinear polynomial in each cell of the texel-centre
-        grid (``self._texel``), so along a ray it is a cubic in t there, which Simpson's rule integrates
-        exactly: tau = sum over the cells crossed of (t1 - t0) / 6 (s(t0) + 4 s(tm) + s(t1)), with s the
-        medium's own ``sigma_t`` lookup. Cells whose texels are all 0 cost no lookups and empty cubes of
-        cells are crossed in one step. Without ``sampler``: deterministic, 0 once tau > TAU_ZERO (the
-        rest is below e^-TAU_ZERO). With it: Russian roulette once tau passes EXACT_RR_TAU and after
-        every further EXACT_RR_STEP (survival EXACT_RR_SURVIVE, weight its inverse): unbiased, no cut."""
-        grid = self._texel
-        spectral = self._ms.spectral
-        texels = None if spectral else self._texel_data
-        o_l, d_l, t_near, t_max, active = self._ray_box(ray, t_end, active)
-        q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
-        dq = [d_l[k] * grid.scale[k] for k in range(3)]
-        cells, nexts = self._locate(grid, q0, dq, t_near)
-        s0 = self._sigma_t(ray.o + ray.d * t_near, ray, active)
-        tau = dr.zeros(mi.Spectrum) if spectral else mi.Float(0.0)
-
-        rr = sampler is not None and EXACT_RR_SURVIVE < 1.0
-
-        def cond(sampler, active, t, cx, cy, cz, tx, ty, tz, s0, tau, w, next_rr):
-            return active
-
-        def body(sampler, active, t, cx, cy, cz, tx, ty, tz, s0, tau, w, next_rr):
-            cells, nexts = [cx, cy, cz], [tx, ty, tz]
-            maj, idx = self._cell_of(grid, cells, active)
-            empty = maj <= 0.0
-            t_cell, k = self._cell_end(grid, q0, dq, cells, nexts, idx, empty, active)
-            seg_end = dr.minimum(t_cell, t_max)
-            lookup = active & ~empty
-            if texels is None:
-                s_m = self._sigma_t(ray.o + ray.d * (0.5 * (t + seg_end)), ray, lookup)
-                s_1 = self._sigma_t(ray.o + ray.d * seg_end, ray, lookup)
-            else:  # the cell's 8 texels once, the interpolant at both points from them
-                s_m, s_1 = self._cell_interpolant(texels, grid, q0, dq, cells, (0.5 * (t + seg_end), seg_end), lookup)
-            tau = dr.select(lookup, tau + (seg_end - t) * (1.0 / 6.0) * (s0 + 4.0 * s_m + s_1), tau)  # Simpson
-            s0 = dr.select(lookup, s_1, 0.0)  # a cell whose texels are 0 is 0 on its faces
-            t = dr.select(active, seg_end, t)
-            (cx, cy, cz), (tx, ty, tz), outside = self._dda_step(grid, q0, dq, t, cells, nexts, k, active)
-            tau_min = dr.min(tau) if spectral else tau
-            if rr:  # Russian roulette each time T falls by another EXACT_RR_STEP (weights w)
-                low = active & (tau_min > next_rr)
-                survive = sampler.next_1d(low) < EXACT_RR_SURVIVE
-                w = dr.select(low, w * (1.0 / EXACT_RR_SURVIVE), w)
-                next_rr = dr.select(low, next_rr + EXACT_RR_STEP, next_rr)
-                w = dr.select(low & ~survive, 0.0, w)
-                active &= ~(low & ~survive)
-                deep = mi.Bool(False)
-            else:
-                deep = tau_min > TAU_ZERO
-            active &= ~((seg_end >= t_max) | outside | deep)
-            return sampler, active, t, cx, cy, cz, tx, ty, tz, s0, tau, w, next_rr
-
-        state = dr.while_loop(state=(sampler if rr else None, active, mi.Float(t_near), cells[0], cells[1], cells[2],
-                                     nexts[0], nexts[1], nexts[2], s0, tau, mi.Float(1.0), mi.Float(EXACT_RR_TAU)),
-                              cond=cond, body=body, label="majorant_volpath: exact transmittance")
-        tau, w = state[-3], state[-2]
-        if rr:
-            return mi.Spectrum(w * dr.exp(-tau))
-        return mi.Spectrum(dr.select((dr.min(tau) if spectral else tau) > TAU_ZERO, 0.0, dr.exp(-tau)))
-
-    @staticmethod
-    def _cell_interpolant(texels, grid, q0, dq, cells, ts, active):
-        """sigma_t at distances ``ts`` along the ray, all in the texel cell ``cells``: the trilinear
-        interpolant of its 8 texels (gathered once; indices clamped as the gridvolume clamps them),
-        times the medium's scale. ``texels`` = (data, scale); grey extinction."""
-        data, scale = texels
-        n = [d - 1 for d in grid.dims]  # texels per axis
-        lo = [dr.clip(c, 0, m - 1) for c, m in zip(cells, n)]
-        hi = [dr.clip(c + 1, 0, m - 1) for c, m in zip(cells, n)]
-        v = {}
-        for iz, z in enumerate((lo[2], hi[2])):
-            for iy, y in enumerate((lo[1], hi[1])):
-                for ix, x in enumerate((lo[0], hi[0])):
-                    v[iz, iy, ix] = dr.gather(mi.Float, data, mi.UInt32((z * n[1] + y) * n[0] + x), active)
-        out = []
-        for t in ts:
-            f = [q0[k] + dq[k] * t - mi.Float(cells[k]) for k in range(3)]
-            x00 = dr.lerp(v[0, 0, 0], v[0, 0, 1], f[0])
-            x01 = dr.lerp(v[0, 1, 0], v[0, 1, 1], f[0])
-            x10 = dr.lerp(v[1, 0, 0], v[1, 0, 1], f[0])
-            x11 = dr.lerp(v[1, 1, 0], v[1, 1, 1], f[0])
-            out.append(dr.lerp(dr.lerp(x00, x01, f[1]), dr.lerp(x10, x11, f[1]), f[2]) * scale)
-        return out
+        coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
+        texel, texel_data = self._grids.texel(vol, ms.scale)
+        track = texel if (texel is not None and self.track_mode == "texel") else coarse
+        self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data)
 
     # ------------------------------------------------------------ main entry
     def sample(self, scene, sampler, ray, medium=None, active=True):
-        cond, body, initial = self._path_loop(scene, medium)
-        state = dr.while_loop(state=initial(sampler, mi.Ray3f(ray), medium, mi.Bool(active)), cond=cond, body=body,
-                              label="majorant_volpath")
-        result, valid_ray = state[5], state[13]
-        return result, valid_ray, []
+        loop = self._path_loop(scene, medium)
+        _, path = dr.while_loop(state=(sampler, loop.initial(mi.Ray3f(ray), medium, mi.Bool(active))),
+                                cond=loop.cond, body=loop.body, label="majorant_volpath")
+        return path.result, path.valid_ray, []
 
-    def _path_loop(self, scene, medium):
-        """The path loop of :meth:`sample`: (cond, body, initial), where ``initial(sampler, ray, medium,
-        active)`` is the loop state of a path starting with ``ray`` in ``medium`` (the sensor's), its
-        element 1 whether the path is alive, 5 its radiance and 13 whether the ray is valid; ``body``
-        advances every alive path by one event (a scattering, a surface or the escape)."""
-        self._setup(scene, medium)
-        ms = self._ms
-        has_medium = ms.medium is not None
-        max_depth = self.max_depth
-        rr_depth = self.rr_depth
-        hide = self.hide_emitters_
-        phase = ms.medium.phase_function() if has_medium else None
-        bsdf_ctx = mi.BSDFContext()
-        has_emitters = len(scene.emitters()) > 0
-        sun_mode = self.sun_mode
-        guiding = has_medium and sun_mode != "none" and self.guiding > 0.0
-        aureole = has_medium and sun_mode != "none" and self.aureole > 0.0
-        by_channel = has_medium and self.channels == "history" and hasattr(phase, "sample_channel")
-        rr_cap = 0.95 if self.rr_mode == "volpath" else 1.0
-        c_em = self.emitter_nee
-        c_sky = c_em if sun_mode != "none" else 1.0             # share of shadow rays towards the scene's emitters
-        c_sun = (1.0 - c_em) if has_emitters else 1.0         # ... towards the integrator's sun
-        sun_pdf = dr.rcp(dr.two_pi * self.sun_vmax) if sun_mode == "disk" else None
-        one_strategy = {"nee": (1.0, 0.0), "phase": (0.0, 1.0)}.get(self.sun_sampling)
-
-        def sun_pdf_of(val, pdf):
-            # the continuation pdf in the sun's MIS: with aureole NEE the channel mean of the phase
-            # value (the mixture's own pdf; a function of the vertex and the two directions only, so
-            # that the aureole estimator can weight its vertex B exactly as the path does)
-            return dr.mean(val) if aureole else pdf
-
-        def sun_mis(pdf_a, pdf_b, nee=True):  # weight of the sun-sampling or of the continuation strategy
-            if one_strategy is None:
-                return _mis_weight(pdf_a, pdf_b)
-            return one_strategy[0] if nee else one_strategy[1]
-
-        has_env = scene.environment() is not None
-
-        def initial(sampler, ray, medium, active):
-            med0 = dr.zeros(mi.MediumPtr)
-            if medium is not None:
-                med0 = dr.select(active, mi.MediumPtr(medium), med0)
-            return (sampler, active, mi.UInt32(0), ray, mi.Spectrum(1.0), mi.Spectrum(0.0),
-                    dr.zeros(mi.SurfaceInteraction3f), med0, mi.Float(1.0), dr.zeros(mi.Interaction3f),
-                    mi.Float(1.0), mi.Bool(True), mi.Bool(active & (not hide)), mi.Bool((not hide) and has_env),
-                    mi.UInt32(0), mi.Float(GUIDE_GROWTH), mi.Float(1.0), mi.Float(1.0))
-
-        def cond(sampler, active, *_):
-            return active
-
-        def body(sampler, active, depth, ray, throughput, result, si, medium, eta,
-                 last_event, last_pdf, needs_isect, specular_chain, valid_ray, last_long, guide_left,
-                 last_pdf_sun, aur_w):
-            # ---------------- Russian roulette and depth limit
-            active &= dr.any(throughput != 0.0)
-            q = dr.minimum(dr.max(throughput) * dr.square(eta), rr_cap)
-            if rr_cap == 1.0:  # long walks: survive 1/2 at depths 2^k >= LONG_WALK_DEPTH (weight ~ depth)
-                long_walk = (depth >= LONG_WALK_DEPTH) & ((depth & (depth - 1)) == 0) & (depth != last_long)
-                last_long = dr.select(long_walk, depth, last_long)
-                q = dr.select(long_walk, q * 0.5, q)
-            perform_rr = (depth > rr_depth) & (q < 1.0)
-            active &= (sampler.next_1d(active) < q) | ~perform_rr
-            throughput = dr.select(perform_rr, throughput * dr.rcp(q), throughput)
-            active &= depth < max_depth
-
-            # ---------------- next surface
-            isect = active & needs_isect
-            si = dr.select(isect, scene.ray_intersect(ray, isect), si)
-            needs_isect &= ~active
-
-            act_scatter = mi.Bool(False)
-            active_surface = mi.Bool(active)
-            mei = dr.zeros(mi.MediumInteraction3f)
-            if has_medium:
-                active_medium = active & (medium != None)  # noqa: E711
-                active_surface = active & ~active_medium
-                t_end = dr.minimum(si.t, ray.maxt)
-                found, t_coll, w_walk = self._walk(ray, t_end, sampler, active_medium, ratio=False,
-                                                   weight=throughput)
-                throughput = dr.select(active_medium, w_walk, throughput)
-                act_scatter = active_medium & found
-                active_surface |= active_medium & ~found
-
-                # ---------------- real collision: absorption weight, NEE, phase sampling
-                mei, albedo_w = self._scattering_event(ray, t_coll, act_scatter)
-                depth = dr.select(act_scatter, depth + 1, depth)
-                last_event = dr.select(act_scatter, _as_interaction(mei), last_event)
-                active &= depth < max_depth
-                act_scatter &= active
-                throughput = dr.select(act_scatter, throughput * albedo_w, throughput)
-                valid_ray |= act_scatter
-                specular_chain &= ~act_scatter
-
-            # ---------------- emitters hit by the ray (environment; area emitters)
-            count_direct = (depth == 0) | specular_chain
-            emitter = si.emitter(scene)
-            active_e = active_surface & (emitter != None)  # noqa: E711
-            if hide:
-                active_e &= depth != 0
-            ds_hit = mi.DirectionSample3f(scene, si, last_event)
-            em_pdf = scene.pdf_emitter_direction(last_event, ds_hit, active_e & ~count_direct)
-            emitted = emitter.eval(si, active_e)
-            w_hit = dr.select(count_direct, 1.0, _mis_weight(last_pdf, c_sky * em_pdf))
-            result = dr.select(active_e, result + throughput * w_hit * emitted, result)
-            if sun_mode == "disk":  # a ray that leaves the scene inside the sun's disk sees the sun
-                in_sun = active_surface & ~si.is_valid() & self._in_sun(ray.d)
-                if hide:
-                    in_sun &= depth != 0
-                w_hit = dr.select(count_direct, 1.0, sun_mis(last_pdf_sun, c_sun * sun_pdf, nee=False))
-                result = dr.select(in_sun, result + throughput * w_hit * mi.Spectrum(self.sun_value), result)
-
-            active_surface &= si.is_valid()
-            bsdf = si.bsdf(ray)
-
-            # ---------------- emitter sampling (phase or BSDF) with MIS
-            act_e_surf = active_surface & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth) & (depth + 1 < max_depth)
-            act_e = act_e_surf | act_scatter
-            ref = dr.zeros(mi.Interaction3f)
-            ref = dr.select(act_scatter, _as_interaction(mei), ref)
-            ref = dr.select(act_e_surf, _as_interaction(si), ref)
-            # (at a medium boundary the shadow ray starts in the medium on the emitter's side)
-            eps = mi.Float(0.0)  # probability of a sun-guided continuation at this vertex
-
-            def f_eval(d):
-                """Phase function or BSDF value toward d, and the pdf with which this vertex continues
-                the path in direction d (phase: with sun guiding, the mixture of both samplers)."""
-                bsdf_val, bsdf_pdf = bsdf.eval_pdf(bsdf_ctx, si, si.to_local(d), act_e_surf)
-                if not has_medium:
-                    return bsdf_val, bsdf_pdf
-                ph_val, ph_pdf = phase.eval_pdf(_phase_ctx(sampler), mei, d, act_scatter)
-                ph_pdf = self._continuation_pdf(phase, sampler, mei, d, ph_val, ph_pdf, alpha, eps, act_scatter)
-                return dr.select(act_e_surf, bsdf_val, ph_val), dr.select(act_e_surf, bsdf_pdf, ph_pdf)
-
-            # history-aware channel sampling (module docstring): the phase function's colour channels
-            # are drawn in proportion alpha to the path's throughput
-            alpha = None
-            if by_channel:
-                t_sum = dr.sum(throughput)
-                alpha = throughput * dr.select(t_sum > 0.0, dr.rcp(t_sum), 0.0)
-
-            # ---------------- next-event estimation: one shadow ray per vertex, towards the integrator's
-            # sun with probability 1 - c and towards one of the scene's emitters (the sky) with
-            # probability c; as MIS techniques their pdfs are (1 - c) p_sun and c p_emitter
-            if has_emitters or sun_mode != "none":
-                if not has_emitters:
-                    pick_em = mi.Bool(False)
-                elif sun_mode == "none":
-                    pick_em = mi.Bool(True)
-                else:
-                    pick_em = sampler.next_1d(act_e) < c_em
-                em_val, ds = dr.zeros(mi.Spectrum), dr.zeros(mi.DirectionSample3f)
-                if has_emitters:
-                    ds, em_val = scene.sample_emitter_direction(ref, sampler.next_2d(act_e), False, act_e & pick_em)
-                    em_val = dr.select(ds.pdf != 0.0, em_val, 0.0)
-                    d = mi.Vector3f(ds.d)
-                    shadow = ref.spawn_ray_to(ds.p)
-                if sun_mode != "none":
-                    wo_s = self._sun_direction(sampler, act_e)
-                    d = dr.select(pick_em, ds.d, wo_s) if has_emitters else wo_s
-                    shadow_sun = ref.spawn_ray(wo_s)
-                    shadow = dr.select(pick_em, shadow, shadow_sun) if has_emitters else shadow_sun
-                # (at a medium boundary the shadow ray starts in the medium on the emitter's side)
-                shadow_med = dr.select(act_e_surf & si.is_medium_transition(), si.target_medium(d), medium)
-                tr = self._transmittance(scene, sampler, shadow, shadow_med, act_e)
-                if guiding and sun_mode != "none":
-                    # guide only where the sun is seen (elsewhere p / q > 1 would only inflate weights) and
-                    # while the product of the unguided draws' weights <= 1 / (1 - eps) stays below
-                    # GUIDE_GROWTH; set before f_eval, so both MIS weights see the same continuation pdf
-                    eps = dr.select(pick_em, 0.0, self.guide_p * dr.minimum(dr.max(tr) * (1.0 / GUIDE_SEEN), 1.0))
-                    eps = dr.select(act_scatter & ((1.0 - eps) * guide_left >= 1.0), eps, 0.0)
-                    guide_left = dr.select(act_scatter, guide_left * (1.0 - eps), guide_left)
-                f_val, f_pdf = f_eval(d)
-                w = mi.Float(0.0)
-                if has_emitters:
-                    w_em = _mis_weight(c_sky * ds.pdf, dr.select(ds.delta, 0.0, f_pdf)) * (1.0 / c_sky)
-                    w = dr.select(pick_em, w_em, w)
-                if sun_mode != "none":
-                    if sun_mode == "disk":  # L / pdf_sun x MIS weight against continuing the path
-                        w_s = sun_mis(c_sun * sun_pdf, sun_pdf_of(f_val, f_pdf)) * dr.rcp(c_sun * sun_pdf)
-                    else:                   # delta: irradiance, no MIS
-                        w_s = mi.Float(1.0 / c_sun)
-                    if aureole:  # MIS against the previous vertex's aureole estimator
-                        w_s = dr.select(act_scatter, w_s * aur_w, w_s)
-                    w = dr.select(pick_em, w, w_s)
-                    em_val = dr.select(pick_em, em_val, mi.Spectrum(self.sun_value))
-                result = dr.select(act_e, result + throughput * f_val * w * tr * em_val, result)
-
-            # ---------------- aureole next-event estimation (module docstring): a second way to the
-            # chain A -> B -> sun, its direction at A drawn about the sun
-            eps_a = mi.Float(0.0)
-            if aureole:
-                act_x = act_scatter & (depth + 1 < max_depth)
-                act_x &= sampler.next_1d(act_x) < self.aureole_p
-                eps_a = dr.select(act_scatter & (depth + 1 < max_depth), self.aureole_p, 0.0)
-                result = self._aureole_nee(scene, sampler, phase, mei, medium, throughput, alpha, eps_a,
-                                           act_x, result, sun_mis, c_sun, sun_pdf)
-
-            # ---------------- phase function sampling (with sun guiding: from the mixture of the phase
-            # function about the path's direction and the phase function about the sun's direction)
-            if has_medium:
-                ph_ctx = _phase_ctx(sampler)
-                if guiding or by_channel:
-                    mei_s = mei
-                    if guiding:
-                        u_g = sampler.next_1d(act_scatter)
-                        toward_sun = act_scatter & (u_g < eps)
-                        # half the guided draws uniform in the disk, half from the phase function about it
-                        in_disk = toward_sun & (u_g < 0.5 * eps) if sun_mode == "disk" else mi.Bool(False)
-                        mei_s = self._about_sun(mei, toward_sun)
-                    if by_channel:
-                        u = sampler.next_1d(act_scatter)
-                        channel = mi.UInt32(dr.select(u >= alpha[0], 1, 0) + dr.select(u >= alpha[0] + alpha[1], 1, 0))
-                        wo, ph_val = phase.sample_channel(ph_ctx, mei_s, channel, sampler.next_1d(act_scatter),
-                                                          sampler.next_2d(act_scatter), act_scatter)
-                        ph_pdf = None  # the channel mixture's pdf follows from the values
-                    else:
-                        wo, _, _ = phase.sample(ph_ctx, mei_s, sampler.next_1d(act_scatter),
-                                                sampler.next_2d(act_scatter), act_scatter)
-                    if guiding:  # the values are needed about the path's own direction
-                        wo = dr.select(in_disk, self._sample_sun(sampler.next_2d(act_scatter)), wo)
-                        ph_val, ph_pdf = phase.eval_pdf(ph_ctx, mei, wo, act_scatter)
-                    ph_pdf = self._continuation_pdf(phase, sampler, mei, wo, ph_val, ph_pdf, alpha, eps, act_scatter)
-                    ph_w = ph_val * dr.select(ph_pdf > 0.0, dr.rcp(ph_pdf), 0.0)
-                else:
-                    wo, ph_w, ph_pdf = phase.sample(ph_ctx, mei, sampler.next_1d(act_scatter),
-                                                    sampler.next_2d(act_scatter), act_scatter)
-                    ph_val = ph_w * ph_pdf
-                act_scatter &= ph_pdf > 0.0
-                if aureole:  # the sun-NEE weight at the next vertex
-                    aur_w = dr.select(act_scatter, ph_pdf * dr.rcp(ph_pdf + eps_a * self._aureole_pdf(
-                        phase, sampler, mei, wo, act_scatter)), aur_w)
-                last_pdf_sun = dr.select(act_scatter, sun_pdf_of(ph_val, ph_pdf), last_pdf_sun)
-                throughput = dr.select(act_scatter, throughput * ph_w, throughput)
-                ray = dr.select(act_scatter, mei.spawn_ray(wo), ray)
-                needs_isect |= act_scatter
-                last_pdf = dr.select(act_scatter, ph_pdf, last_pdf)
-
-            # ---------------- BSDF sampling (null BSDFs: pass through)
-            bs, bsdf_w = bsdf.sample(bsdf_ctx, si, sampler.next_1d(active_surface),
-                                     sampler.next_2d(active_surface), active_surface)
-            active_surface &= bs.pdf > 0.0
-            throughput = dr.select(active_surface, throughput * bsdf_w, throughput)
-            eta = dr.select(active_surface, eta * bs.eta, eta)
-            ray = dr.select(active_surface, si.spawn_ray(si.to_world(bs.wo)), ray)
-            needs_isect |= active_surface
-            non_null = active_surface & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)
-            depth = dr.select(non_null, depth + 1, depth)
-            last_event = dr.select(non_null, _as_interaction(si), last_event)
-            last_pdf = dr.select(non_null, bs.pdf, last_pdf)
-            last_pdf_sun = dr.select(non_null, bs.pdf, last_pdf_sun)
-            aur_w = dr.select(non_null, 1.0, aur_w)
-            valid_ray |= non_null
-            specular_chain |= non_null & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-            specular_chain &= ~(active_surface & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Smooth))
-            trans = active_surface & si.is_medium_transition()
-            medium = dr.select(trans, si.target_medium(ray.d), medium)
-            active &= active_surface | act_scatter
-            return (sampler, active, depth, ray, throughput, result, si, medium, eta,
-                    last_event, last_pdf, needs_isect, specular_chain, valid_ray, last_long, guide_left,
-                    last_pdf_sun, aur_w)
-
-        return cond, body, initial
+    def _path_loop(self, scene, medium) -> "PathLoop":
+        """The path loop over ``scene`` (after the per-render setup), its paths starting in ``medium``."""
+        return PathLoop(self, scene, medium)
 
     # ------------------------------------------------------------ persistent lanes
     def render_pass(self, scene, spp: int, seed: int, lanes: int | None = None,
                     max_jobs: int = MAX_JOBS_PER_LAUNCH, pixels=None) -> np.ndarray:
-        """One pass of ``spp`` samples per pixel of the scene's first sensor, as ``mi.render(scene, spp=spp,
-        seed=seed)`` renders it (box filter: the mean of the samples whose film position falls in the
-        pixel), but with persistent lanes (module docstring, "Persistent lanes"): ``render_passes`` of
-        one pass."""
+        """One pass of ``spp`` samples per pixel with persistent lanes: :meth:`render_passes` of one pass."""
         return self.render_passes(scene, [(spp, seed)], lanes, max_jobs, pixels)[0]
 
     def render_passes(self, scene, passes, lanes: int | None = None, max_jobs: int = MAX_JOBS_PER_LAUNCH,
                       pixels=None) -> list:
-        """Passes ``[(spp, seed), ...]`` rendered together, in launches of up to ``max_jobs`` samples: a
-        launch ends when its longest path ends, and path lengths are heavy-tailed (a walk of ~1e6 events
-        made one 1-spp pass of the demo's side view at 256 x 256 take 0.35 s or 2.7 s), so passes rendered
-        one by one pay that tail each time (16 passes of 2 spp, 160 x 120: 1.16x the time,
-        ``benchmarks/reference_noise.py --profile``).
-        Returns one (H, W, 3) float32 image per pass, each as ``render_pass`` renders it alone.
+        """Passes ``[(spp, seed), ...]`` rendered together with persistent lanes: :func:`.lanes.render_passes`."""
+        return render_passes(self, scene, passes, lanes, max_jobs, pixels, PLUGIN_NAME)
 
-        Deterministic: a sample's random numbers depend on (its pass's seed, its number in the pass) only,
-        each sample's radiance is written to its own slot and a pass's slots are summed layer by layer
-        in order. ``pixels`` (flat indices, row-major; None: all): only these pixels are rendered, the
-        others are 0; a sample is numbered by its layer and pixel in the whole film, so they get the
-        values of the pass over all."""
-        sensor = scene.sensors()[0]
-        film = sensor.film()
-        width, height = (int(v) for v in film.crop_size())
-        if any(int(v) != 0 for v in film.crop_offset()):
-            raise ValueError(f"{PLUGIN_NAME}: render_pass needs a film without a crop offset")
-        spps = [int(spp) for spp, _ in passes]
-        if not spps or min(spps) < 1:
-            raise ValueError(f"{PLUGIN_NAME}: every pass needs spp >= 1, got {spps}")
-        n_all = width * height
-        if pixels is None:
-            pix_list = None
-            n_pix = n_all
+
+# ---------------------------------------------------------------- the path loop
+
+class _Vertex:
+    """What the stages of one loop iteration pass on (not loop state): ``act_scatter`` (a real
+    collision), ``active_surface`` (a surface interaction), ``mei``, ``bsdf``, ``act_e_surf`` / ``act_e``
+    (emitter sampling at a surface / at any vertex), ``ref`` (the vertex), ``alpha`` (channel
+    probabilities), ``eps`` / ``eps_a`` (probabilities of a sun-guided draw and of the aureole estimator)."""
+
+
+class PathLoop:
+    """The path loop of ``majorant_volpath`` over one scene: :meth:`initial` is the :func:`path_state_class`
+    state of paths starting with a ray, :meth:`body` advances every alive path by one event (a scattering,
+    a surface or the escape) in stages: :meth:`roulette`, :meth:`free_flight`, :meth:`emitters_hit`,
+    :meth:`vertex`, :meth:`nee`, :meth:`aureole_nee`, :meth:`sample_phase`, :meth:`sample_bsdf`.
+    Structure and estimators: the module docstring."""
+
+    def __init__(self, integ, scene, medium):
+        integ._setup(scene, medium)
+        ms = integ._ms
+        self.integ, self.scene, self.ms, self.tk = integ, scene, ms, integ._tk
+        self.State = path_state_class()
+        self.has_medium = has_medium = ms.medium is not None
+        self.max_depth, self.rr_depth, self.hide = integ.max_depth, integ.rr_depth, integ.hide_emitters_
+        self.phase = phase = ms.medium.phase_function() if has_medium else None
+        self.bsdf_ctx = mi.BSDFContext()
+        self.has_emitters = has_emitters = len(scene.emitters()) > 0
+        self.sun_mode = sun_mode = integ.sun_mode
+        self.guiding = has_medium and sun_mode != "none" and integ.guiding > 0.0
+        self.aureole = has_medium and sun_mode != "none" and integ.aureole > 0.0
+        self.by_channel = has_medium and integ.channels == "history" and hasattr(phase, "sample_channel")
+        self.rr_cap = 0.95 if integ.rr_mode == "volpath" else 1.0
+        self.c_em = c_em = integ.emitter_nee
+        self.c_sky = c_em if sun_mode != "none" else 1.0          # share of shadow rays towards the scene's emitters
+        self.c_sun = (1.0 - c_em) if has_emitters else 1.0      # ... towards the integrator's sun
+        self.sun_pdf = dr.rcp(dr.two_pi * integ.sun_vmax) if sun_mode == "disk" else None
+        self.one_strategy = {"nee": (1.0, 0.0), "phase": (0.0, 1.0)}.get(integ.sun_sampling)
+        self.has_env = scene.environment() is not None
+        self.mis_weight = mi.ad.integrators.common.mis_weight  # the power heuristic, Mitsuba's own
+        self.transmittance = functools.partial(shadow_transmittance, self.tk, integ.tr_mode == "exact")
+
+    def sun_pdf_of(self, val, pdf):
+        """The continuation pdf in the sun's MIS: with aureole NEE the channel mean of the phase value (the
+        mixture's own pdf; a function of the vertex and the two directions only, so that the aureole
+        estimator can weight its vertex B exactly as the path does)."""
+        return dr.mean(val) if self.aureole else pdf
+
+    def sun_mis(self, pdf_a, pdf_b, nee=True):
+        """Weight of the sun-sampling (``nee``) or of the continuation strategy."""
+        if self.one_strategy is None:
+            return self.mis_weight(pdf_a, pdf_b)
+        return self.one_strategy[0] if nee else self.one_strategy[1]
+
+    def initial(self, ray, medium, active):
+        """The state of paths starting with ``ray`` in ``medium`` (the sensor's), alive where ``active``."""
+        hide = self.hide
+        med0 = dr.zeros(mi.MediumPtr)
+        if medium is not None:
+            med0 = dr.select(active, mi.MediumPtr(medium), med0)
+        return self.State(
+            active=active, depth=mi.UInt32(0), ray=ray, throughput=mi.Spectrum(1.0), result=mi.Spectrum(0.0),
+            si=dr.zeros(mi.SurfaceInteraction3f), medium=med0, eta=mi.Float(1.0), last_event=dr.zeros(mi.Interaction3f),
+            last_pdf=mi.Float(1.0), needs_isect=mi.Bool(True), specular_chain=mi.Bool(active & (not hide)),
+            valid_ray=mi.Bool((not hide) and self.has_env), last_long=mi.UInt32(0),
+            guide_left=mi.Float(GUIDE_GROWTH), last_pdf_sun=mi.Float(1.0), aur_w=mi.Float(1.0))
+
+    def cond(self, sampler, p):
+        return p.active
+
+    def body(self, sampler, p):
+        """One event of every alive path."""
+        self.roulette(sampler, p)
+        v = self.free_flight(sampler, p)
+        self.emitters_hit(p, v)
+        self.vertex(p, v)
+        self.nee(sampler, p, v)
+        self.aureole_nee(sampler, p, v)
+        self.sample_phase(sampler, p, v)
+        self.sample_bsdf(sampler, p, v)
+        return sampler, p
+
+    def roulette(self, sampler, p):
+        """Russian roulette (``rr_mode``; long walks cut at depths 2^k >= LONG_WALK_DEPTH) and the depth limit."""
+        p.active &= dr.any(p.throughput != 0.0)
+        q = dr.minimum(dr.max(p.throughput) * dr.square(p.eta), self.rr_cap)
+        if self.rr_cap == 1.0:  # long walks: survive 1/2 at depths 2^k >= LONG_WALK_DEPTH (weight ~ depth)
+            depth = p.depth
+            long_walk = (depth >= LONG_WALK_DEPTH) & ((depth & (depth - 1)) == 0) & (depth != p.last_long)
+            p.last_long = dr.select(long_walk, depth, p.last_long)
+            q = dr.select(long_walk, q * 0.5, q)
+        perform_rr = (p.depth > self.rr_depth) & (q < 1.0)
+        p.active &= (sampler.next_1d(p.active) < q) | ~perform_rr
+        p.throughput = dr.select(perform_rr, p.throughput * dr.rcp(q), p.throughput)
+        p.active &= p.depth < self.max_depth
+
+    def free_flight(self, sampler, p) -> _Vertex:
+        """The next surface, and in the medium the free flight (delta tracking) to a real collision, with
+        the absorption weight (throughput *= sigma_s / sigma_t)."""
+        v = _Vertex()
+        isect = p.active & p.needs_isect
+        p.si = dr.select(isect, self.scene.ray_intersect(p.ray, isect), p.si)
+        p.needs_isect &= ~p.active
+        v.act_scatter = mi.Bool(False)
+        v.active_surface = mi.Bool(p.active)
+        v.mei = dr.zeros(mi.MediumInteraction3f)
+        if self.has_medium:
+            active_medium = p.active & (p.medium != None)  # noqa: E711
+            v.active_surface = p.active & ~active_medium
+            t_end = dr.minimum(p.si.t, p.ray.maxt)
+            found, t_coll, w_walk = delta_tracking(self.tk, p.ray, t_end, sampler, active_medium, p.throughput)
+            p.throughput = dr.select(active_medium, w_walk, p.throughput)
+            v.act_scatter = active_medium & found
+            v.active_surface |= active_medium & ~found
+            v.mei, albedo_w = scattering_event(self.ms, p.ray, t_coll, v.act_scatter)
+            p.depth = dr.select(v.act_scatter, p.depth + 1, p.depth)
+            p.last_event = dr.select(v.act_scatter, _as_interaction(v.mei), p.last_event)
+            p.active &= p.depth < self.max_depth
+            v.act_scatter &= p.active
+            p.throughput = dr.select(v.act_scatter, p.throughput * albedo_w, p.throughput)
+            p.valid_ray |= v.act_scatter
+            p.specular_chain &= ~v.act_scatter
+        return v
+
+    def emitters_hit(self, p, v):
+        """Emitters hit by the ray (environment, area emitters; the sun's disk), MIS against emitter
+        sampling at the previous vertex; then the surface's BSDF."""
+        count_direct = (p.depth == 0) | p.specular_chain
+        emitter = p.si.emitter(self.scene)
+        active_e = v.active_surface & (emitter != None)  # noqa: E711
+        if self.hide:
+            active_e &= p.depth != 0
+        ds_hit = mi.DirectionSample3f(self.scene, p.si, p.last_event)
+        em_pdf = self.scene.pdf_emitter_direction(p.last_event, ds_hit, active_e & ~count_direct)
+        emitted = emitter.eval(p.si, active_e)
+        w_hit = dr.select(count_direct, 1.0, self.mis_weight(p.last_pdf, self.c_sky * em_pdf))
+        p.result = dr.select(active_e, p.result + p.throughput * w_hit * emitted, p.result)
+        if self.sun_mode == "disk":  # a ray that leaves the scene inside the sun's disk sees the sun
+            in_sun = v.active_surface & ~p.si.is_valid() & sun.in_disk(self.integ, p.ray.d)
+            if self.hide:
+                in_sun &= p.depth != 0
+            w_hit = dr.select(count_direct, 1.0, self.sun_mis(p.last_pdf_sun, self.c_sun * self.sun_pdf, nee=False))
+            p.result = dr.select(in_sun, p.result + p.throughput * w_hit * mi.Spectrum(self.integ.sun_value), p.result)
+        v.active_surface &= p.si.is_valid()
+        v.bsdf = p.si.bsdf(p.ray)
+
+    def vertex(self, p, v):
+        """The vertex of emitter sampling (a real collision or a smooth surface) and the channel
+        probabilities alpha of history-aware channel sampling (in proportion to the throughput)."""
+        v.act_e_surf = v.active_surface & mi.has_flag(v.bsdf.flags(), mi.BSDFFlags.Smooth) & (p.depth + 1 < self.max_depth)
+        v.act_e = v.act_e_surf | v.act_scatter
+        ref = dr.zeros(mi.Interaction3f)
+        ref = dr.select(v.act_scatter, _as_interaction(v.mei), ref)
+        v.ref = dr.select(v.act_e_surf, _as_interaction(p.si), ref)
+        v.eps = mi.Float(0.0)  # probability of a sun-guided continuation at this vertex
+        v.alpha = None
+        if self.by_channel:
+            t_sum = dr.sum(p.throughput)
+            v.alpha = p.throughput * dr.select(t_sum > 0.0, dr.rcp(t_sum), 0.0)
+
+    def f_eval(self, sampler, p, v, d):
+        """Phase function or BSDF value toward d, and the pdf with which this vertex continues the path in
+        direction d (phase: with sun guiding, the mixture of both samplers)."""
+        bsdf_val, bsdf_pdf = v.bsdf.eval_pdf(self.bsdf_ctx, p.si, p.si.to_local(d), v.act_e_surf)
+        if not self.has_medium:
+            return bsdf_val, bsdf_pdf
+        ph_val, ph_pdf = self.phase.eval_pdf(phase_ctx(sampler), v.mei, d, v.act_scatter)
+        ph_pdf = sun.continuation_pdf(self.integ, self.phase, sampler, v.mei, d, ph_val, ph_pdf, v.alpha, v.eps,
+                                      v.act_scatter)
+        return dr.select(v.act_e_surf, bsdf_val, ph_val), dr.select(v.act_e_surf, bsdf_pdf, ph_pdf)
+
+    def nee(self, sampler, p, v):
+        """Next-event estimation: one shadow ray per vertex, towards the integrator's sun with probability
+        1 - c and towards one of the scene's emitters (the sky) with probability c; as MIS techniques
+        their pdfs are (1 - c) p_sun and c p_emitter. Sets the vertex's sun-guiding probability eps."""
+        has_emitters, sun_mode = self.has_emitters, self.sun_mode
+        if not (has_emitters or sun_mode != "none"):
+            return
+        if not has_emitters:
+            pick_em = mi.Bool(False)
+        elif sun_mode == "none":
+            pick_em = mi.Bool(True)
         else:
-            pix = np.unique(np.asarray(pixels, np.int64).ravel())
-            if pix.size == 0 or pix[0] < 0 or pix[-1] >= n_all:
-                raise ValueError(f"{PLUGIN_NAME}: pixels must be flat indices in [0, {n_all}), got {pix.size} "
-                                 f"indices in [{pix.min() if pix.size else 0}, {pix.max() if pix.size else 0}]")
-            pix_list = mi.UInt32(pix.astype(np.uint32))
-            n_pix = int(pix.size)
-        # per layer (one sample of every pixel) of all passes in order: its pass, its number in the pass,
-        # and the pass's key (the PCG32 state; its high bits | the sample's number make the stream)
-        layer_pass = np.repeat(np.arange(len(spps)), spps)
-        layer_number = mi.UInt32(np.concatenate([np.arange(n) for n in spps]).astype(np.uint32))
-        layer_key = mi.UInt64(np.array([_splitmix64(int(seed)) for _, seed in passes], np.uint64)[layer_pass])
-        medium = sensor.get_medium()
-        cond, body, initial = self._path_loop(scene, medium)
-        job_sampler = _job_sampler_class()
-        lanes = int(lanes) if lanes is not None else _default_lanes()
-        total = len(layer_pass)
-        layers = max(1, min(total, int(max_jobs) // n_pix))   # layers per launch
-        size = [dr.opaque(mi.UInt32, v) for v in (width, height)]
-        n_sel = dr.opaque(mi.UInt32, n_pix)
-        n_all_op = dr.opaque(mi.UInt32, n_all)
-        inv_size = mi.Point2f(dr.opaque(mi.Float, 1.0 / width), dr.opaque(mi.Float, 1.0 / height))
-        acc = np.zeros((len(spps), n_pix, 3), np.float64)
-        for layer0 in range(0, total, layers):
-            n_layers = min(layers, total - layer0)
-            n = n_layers * n_pix
-            n_lanes = max(1, min(lanes, n))
-            counter = dr.zeros(mi.UInt32, 1)
-            slots = dr.zeros(mi.Float, 3 * n)
-            n_jobs, first = dr.opaque(mi.UInt32, n), dr.opaque(mi.UInt32, layer0)
-            sampler = job_sampler()
-            sampler.rng = mi.PCG32(n_lanes)
-            path = initial(sampler, dr.zeros(mi.Ray3f, n_lanes), medium, dr.full(mi.Bool, False, n_lanes))
-            start_state = (dr.full(mi.UInt32, 0xFFFFFFFF, n_lanes), dr.full(mi.Bool, True, n_lanes),
-                           dr.zeros(mi.Spectrum, n_lanes)) + path
+            pick_em = sampler.next_1d(v.act_e) < self.c_em
+        em_val, ds = dr.zeros(mi.Spectrum), dr.zeros(mi.DirectionSample3f)
+        if has_emitters:
+            ds, em_val = self.scene.sample_emitter_direction(v.ref, sampler.next_2d(v.act_e), False, v.act_e & pick_em)
+            em_val = dr.select(ds.pdf != 0.0, em_val, 0.0)
+            d = mi.Vector3f(ds.d)
+            shadow = v.ref.spawn_ray_to(ds.p)
+        if sun_mode != "none":
+            wo_s = sun.sun_direction(self.integ, sampler, v.act_e)
+            d = dr.select(pick_em, ds.d, wo_s) if has_emitters else wo_s
+            shadow_sun = v.ref.spawn_ray(wo_s)
+            shadow = dr.select(pick_em, shadow, shadow_sun) if has_emitters else shadow_sun
+        # (at a medium boundary the shadow ray starts in the medium on the emitter's side)
+        shadow_med = dr.select(v.act_e_surf & p.si.is_medium_transition(), p.si.target_medium(d), p.medium)
+        tr = self.transmittance(self.scene, sampler, shadow, shadow_med, v.act_e)
+        if self.guiding and sun_mode != "none":
+            # guide only where the sun is seen (elsewhere p / q > 1 would only inflate weights) and while the
+            # product of the unguided draws' weights <= 1 / (1 - eps) stays below GUIDE_GROWTH; set before
+            # f_eval, so both MIS weights see the same continuation pdf
+            eps = dr.select(pick_em, 0.0, self.integ.guide_p * dr.minimum(dr.max(tr) * (1.0 / GUIDE_SEEN), 1.0))
+            v.eps = dr.select(v.act_scatter & ((1.0 - eps) * p.guide_left >= 1.0), eps, 0.0)
+            p.guide_left = dr.select(v.act_scatter, p.guide_left * (1.0 - v.eps), p.guide_left)
+        f_val, f_pdf = self.f_eval(sampler, p, v, d)
+        w, em_val = self.nee_weight(p, v, pick_em, ds, em_val, f_val, f_pdf)
+        p.result = dr.select(v.act_e, p.result + p.throughput * f_val * w * tr * em_val, p.result)
 
-            def pcond(job, alive, weight, *path):
-                return alive
+    def nee_weight(self, p, v, pick_em, ds, em_val, f_val, f_pdf):
+        """(MIS weight / technique pdf, emitted value) of the shadow ray of :meth:`nee`."""
+        w = mi.Float(0.0)
+        if self.has_emitters:
+            w_em = self.mis_weight(self.c_sky * ds.pdf, dr.select(ds.delta, 0.0, f_pdf)) * (1.0 / self.c_sky)
+            w = dr.select(pick_em, w_em, w)
+        if self.sun_mode != "none":
+            if self.sun_mode == "disk":  # L / pdf_sun x MIS weight against continuing the path
+                c_sun, sun_pdf = self.c_sun, self.sun_pdf
+                w_s = self.sun_mis(c_sun * sun_pdf, self.sun_pdf_of(f_val, f_pdf)) * dr.rcp(c_sun * sun_pdf)
+            else:                        # delta: irradiance, no MIS
+                w_s = mi.Float(1.0 / self.c_sun)
+            if self.aureole:  # MIS against the previous vertex's aureole estimator
+                w_s = dr.select(v.act_scatter, w_s * p.aur_w, w_s)
+            w = dr.select(pick_em, w, w_s)
+            em_val = dr.select(pick_em, em_val, mi.Spectrum(self.integ.sun_value))
+        return w, em_val
 
-            def pbody(job, alive, weight, *path):
-                path = body(*path)
-                done = alive & ~path[1]
-                # the finished sample's radiance into its slot
-                finished = done & (job < n_jobs)
-                value = path[5] * weight
-                for c in range(3):
-                    dr.scatter(slots, value[c], job * 3 + c, finished)
-                # the next sample, from the shared counter
-                nxt = dr.scatter_inc(counter, mi.UInt32(0), done)
-                start = done & (nxt < n_jobs)
-                job = dr.select(done, nxt, job)
-                alive = (alive & path[1]) | start
-                sampler = path[0]
-                # the sample's number in its pass: its layer there x all pixels + its pixel (a pass over
-                # some pixels gives them the values of the pass over all)
-                k = job % n_sel
-                layer = first + job // n_sel
-                pixel = k if pix_list is None else dr.gather(mi.UInt32, pix_list, k, start)
-                number = dr.gather(mi.UInt32, layer_number, layer, start) * n_all_op + pixel
-                key = dr.gather(mi.UInt64, layer_key, layer, start)
-                _seed_pcg(sampler.rng, key, ((key >> 32) << 32) | mi.UInt64(number), start)
-                pos = mi.Point2f(mi.Float(pixel % size[0]), mi.Float(pixel // size[0])) + sampler.next_2d(start)
-                ray, ray_weight = sensor.sample_ray(sensor.shutter_open(), sampler.next_1d(start), pos * inv_size,
-                                                    mi.Point2f(0.5, 0.5), start)
-                new = initial(sampler, ray, medium, start)
-                path = (sampler,) + tuple(dr.select(start, a, b) for a, b in zip(new[1:], path[1:]))
-                weight = dr.select(start, mi.Spectrum(ray_weight), weight)
-                return (job, alive, weight) + path
+    def aureole_nee(self, sampler, p, v):
+        """Aureole next-event estimation (:func:`.sun.aureole_nee`): a second way to the chain
+        A -> B -> sun, its direction at A drawn about the sun."""
+        v.eps_a = mi.Float(0.0)
+        if self.aureole:
+            integ = self.integ
+            act_x = v.act_scatter & (p.depth + 1 < self.max_depth)
+            act_x &= sampler.next_1d(act_x) < integ.aureole_p
+            v.eps_a = dr.select(v.act_scatter & (p.depth + 1 < self.max_depth), integ.aureole_p, 0.0)
+            p.result = sun.aureole_nee(integ, self.tk, self.transmittance, self.scene, sampler, self.phase, v.mei,
+                                       p.medium, p.throughput, v.alpha, v.eps_a, act_x, p.result, self.sun_mis,
+                                       self.c_sun, self.sun_pdf)
 
-            dr.while_loop(state=start_state, cond=pcond, body=pbody, label="majorant_volpath: persistent lanes")
-            values = slots.numpy().reshape(n_layers, n_pix, 3)
-            for j in range(n_layers):  # layer by layer, in order: the sums do not depend on the launches
-                acc[layer_pass[layer0 + j]] += values[j]
-        images = []
-        for a, spp in zip(acc, spps):
-            out = np.zeros((n_all, 3), np.float32)
-            out[slice(None) if pix_list is None else pix] = a / spp
-            images.append(out.reshape(height, width, 3))
-        return images
-
-    # ------------------------------------------------------------ the integrator's sun
-    def _sample_sun(self, sample):
-        """A direction uniform in the sun's disk (a cap of versine v_max about ``sun_dir``), built from
-        the versine so that float32 keeps its angle (pdf 1 / (2 pi v_max))."""
-        v = sample.x * self.sun_vmax
-        sin_t = dr.safe_sqrt(v * (2.0 - v))
-        s, c = dr.sincos(dr.two_pi * sample.y)
-        return mi.Frame3f(self.sun_dir).to_world(mi.Vector3f(sin_t * c, sin_t * s, 1.0 - v))
-
-    def _sun_direction(self, sampler, active):
-        """The direction of a sun next-event estimate: uniform in the disk, or the point sun's."""
-        return self._sample_sun(sampler.next_2d(active)) if self.sun_mode == "disk" else mi.Vector3f(self.sun_dir)
-
-    def _in_sun(self, d):
-        """Whether unit direction d lies in the sun's disk: versine |d - s|^2 / 2 <= v_max."""
-        return dr.squared_norm(d - self.sun_dir) * 0.5 <= self.sun_vmax
-
-    def _about_sun(self, mei, toward_sun):
-        """``mei`` whose incident direction is replaced, where ``toward_sun``, by the one for which the
-        phase function's forward direction is the sun's direction (wi = -sun_dir)."""
-        m = mi.MediumInteraction3f(mei)
-        m.wi = dr.select(toward_sun, -mi.Vector3f(self.sun_dir), mei.wi)
-        m.sh_frame = mi.Frame3f(m.wi)
-        return m
-
-    def _continuation_pdf(self, phase, sampler, mei, d, value, pdf, alpha, eps, active):
-        """pdf with which a medium vertex continues the path in direction d, given the phase function's
-        per-channel ``value`` and its own ``pdf`` there:
-        * history-aware channels (``alpha`` not None): sum_c alpha_c p_c(d), channel c drawn with
-          probability alpha_c and d from its density;
-        * sun guiding (detector-directional importance sampling, Buras & Mayer 2011): d drawn about the
-          path's direction with probability 1 - eps and towards the sun with probability eps (eps per
-          vertex, see ``sample``), half of these uniform in the sun's disk U and half from the phase
-          function about the sun: (1 - eps) q(d | wi) + eps (q(d | -sun) + U(d)) / 2."""
-        def q(val, p):
-            return p if alpha is None else dr.sum(alpha * val)
-        out = q(value, pdf)
-        if self.guiding > 0.0 and self.sun_mode != "none":
-            val_s, pdf_s = phase.eval_pdf(_phase_ctx(sampler), self._about_sun(mei, mi.Bool(True)), d, active)
-            guide = q(val_s, pdf_s)
-            if self.sun_mode == "disk":  # half of the guided draws are uniform in the disk
-                disk = dr.select(self._in_sun(d), dr.rcp(dr.two_pi * self.sun_vmax), 0.0)
-                guide = 0.5 * (guide + disk)
-            out = (1.0 - eps) * out + eps * guide
-        return out
-
-    def _aureole_pdf(self, phase, sampler, mei, d, active):
-        """Density of the aureole estimator's direction at vertex ``mei``: the phase function (channel
-        mean) about the sun's direction, with half of it uniform in the disk for a disk sun."""
-        _, g = phase.eval_pdf(_phase_ctx(sampler), self._about_sun(mei, mi.Bool(True)), d, active)
-        if self.sun_mode == "disk":
-            disk = dr.select(self._in_sun(d), dr.rcp(dr.two_pi * self.sun_vmax), 0.0)
-            g = 0.5 * (g + disk)
-        return g
-
-    def _aureole_nee(self, scene, sampler, phase, mei, medium, throughput, alpha, eps, active, result,
-                     sun_mis, c_sun, sun_pdf):
-        """The aureole estimator at medium vertex A (``mei``): direction d about the sun (density g,
-        :meth:`_aureole_pdf`), free flight to B, sun next-event estimation at B weighted as the path
-        itself weights it there. Balance heuristic against the path's own draw (density q, sum over
-        channels of alpha_c p_c): this contributes T f_A(d) / (q(d) + eps g(d)) x (NEE at B), and the
-        path's own sun NEE at B is weighted q / (q + eps g) (``aur_w``)."""
-        ctx = _phase_ctx(sampler)
-        d, _, _ = phase.sample(ctx, self._about_sun(mei, active), sampler.next_1d(active), sampler.next_2d(active),
-                               active)
-        if self.sun_mode == "disk":
-            u = sampler.next_1d(active)
-            d = dr.select(u < 0.5, self._sample_sun(sampler.next_2d(active)), d)
-        f_a, p_a = phase.eval_pdf(ctx, mei, d, active)
-        q = p_a if alpha is None else dr.sum(alpha * f_a)
-        g = self._aureole_pdf(phase, sampler, mei, d, active)
-        denom = q + eps * g
-        active &= denom > 0.0
-        weight = throughput * f_a * dr.rcp(dr.select(active, denom, 1.0))
-        ray = mei.spawn_ray(d)
-        si = scene.ray_intersect(ray, active)
-        found, t, weight = self._walk(ray, dr.minimum(si.t, ray.maxt), sampler, active, ratio=False, weight=weight)
-        act_b = active & found
-        mei_b, albedo = self._scattering_event(ray, t, act_b)
-        wo = self._sun_direction(sampler, act_b)
-        f_b, _ = phase.eval_pdf(ctx, mei_b, wo, act_b)
-        if self.sun_mode == "disk":  # the MIS weight the path's own NEE has at B, times 1 / pdf_sun
-            w_b = sun_mis(c_sun * sun_pdf, dr.mean(f_b)) * dr.rcp(sun_pdf)
+    def sample_phase(self, sampler, p, v):
+        """Phase function sampling at a real collision (with channels and sun guiding: :meth:`guided_phase`)."""
+        if not self.has_medium:
+            return
+        act_scatter = v.act_scatter
+        ph_ctx = phase_ctx(sampler)
+        if self.guiding or self.by_channel:
+            wo, ph_val, ph_pdf = self.guided_phase(sampler, v, ph_ctx)
+            ph_w = ph_val * dr.select(ph_pdf > 0.0, dr.rcp(ph_pdf), 0.0)
         else:
-            w_b = mi.Float(1.0)
-        tr = self._transmittance(scene, sampler, mei_b.spawn_ray(wo), medium, act_b)
-        return dr.select(act_b, result + weight * albedo * f_b * w_b * tr * mi.Spectrum(self.sun_value), result)
+            wo, ph_w, ph_pdf = self.phase.sample(ph_ctx, v.mei, sampler.next_1d(act_scatter),
+                                                 sampler.next_2d(act_scatter), act_scatter)
+            ph_val = ph_w * ph_pdf
+        v.act_scatter = act_scatter = act_scatter & (ph_pdf > 0.0)
+        if self.aureole:  # the sun-NEE weight at the next vertex
+            p.aur_w = dr.select(act_scatter, ph_pdf * dr.rcp(ph_pdf + v.eps_a * sun.aureole_pdf(
+                self.integ, self.phase, sampler, v.mei, wo, act_scatter)), p.aur_w)
+        p.last_pdf_sun = dr.select(act_scatter, self.sun_pdf_of(ph_val, ph_pdf), p.last_pdf_sun)
+        p.throughput = dr.select(act_scatter, p.throughput * ph_w, p.throughput)
+        p.ray = dr.select(act_scatter, v.mei.spawn_ray(wo), p.ray)
+        p.needs_isect |= act_scatter
+        p.last_pdf = dr.select(act_scatter, ph_pdf, p.last_pdf)
 
-    def _transmittance(self, scene, sampler, ray, medium, active):
-        """Transmittance along a shadow ray (its maxt is the distance to the emitter sample)."""
-        max_dist = mi.Float(ray.maxt)
-        has_medium = self._ms.medium is not None
+    def guided_phase(self, sampler, v, ph_ctx):
+        """(direction, phase value, continuation pdf) drawn by channel (history-aware) and/or, with
+        probability eps, about the sun (half uniform in the disk, half from the phase function about it)."""
+        phase, act_scatter, integ = self.phase, v.act_scatter, self.integ
+        mei_s = v.mei
+        if self.guiding:
+            u_g = sampler.next_1d(act_scatter)
+            toward_sun = act_scatter & (u_g < v.eps)
+            # half the guided draws uniform in the disk, half from the phase function about it
+            in_disk = toward_sun & (u_g < 0.5 * v.eps) if self.sun_mode == "disk" else mi.Bool(False)
+            mei_s = sun.about_sun(integ, v.mei, toward_sun)
+        ph_pdf = None  # with channels, the channel mixture's pdf follows from the values
+        if self.by_channel:
+            u = sampler.next_1d(act_scatter)
+            alpha = v.alpha
+            channel = mi.UInt32(dr.select(u >= alpha[0], 1, 0) + dr.select(u >= alpha[0] + alpha[1], 1, 0))
+            wo, ph_val = phase.sample_channel(ph_ctx, mei_s, channel, sampler.next_1d(act_scatter),
+                                              sampler.next_2d(act_scatter), act_scatter)
+        else:
+            wo, _, _ = phase.sample(ph_ctx, mei_s, sampler.next_1d(act_scatter), sampler.next_2d(act_scatter),
+                                    act_scatter)
+        if self.guiding:  # the values are needed about the path's own direction
+            wo = dr.select(in_disk, sun.sample_disk(integ, sampler.next_2d(act_scatter)), wo)
+            ph_val, ph_pdf = phase.eval_pdf(ph_ctx, v.mei, wo, act_scatter)
+        ph_pdf = sun.continuation_pdf(integ, phase, sampler, v.mei, wo, ph_val, ph_pdf, v.alpha, v.eps, act_scatter)
+        return wo, ph_val, ph_pdf
 
-        def cond(sampler, active, ray, total, medium, tr):
-            return active
-
-        def body(sampler, active, ray, total, medium, tr):
-            remaining = max_dist - total
-            ray.maxt = remaining
-            active &= remaining > 0.0
-            si = scene.ray_intersect(ray, active)
-            if has_medium:
-                in_med = active & (medium != None)  # noqa: E711
-                if self.tr_mode == "exact" and self._texel is not None:
-                    tr_seg = self._exact_walk(ray, dr.minimum(si.t, remaining), in_med, sampler)
-                else:
-                    tr_seg = self._walk(ray, dr.minimum(si.t, remaining), sampler, in_med, ratio=True)
-                tr = dr.select(in_med, tr * tr_seg, tr)
-            hit = active & si.is_valid()
-            bsdf = si.bsdf(ray)
-            tr = dr.select(hit, tr * bsdf.eval_null_transmission(si, hit), tr)
-            total = dr.select(hit, total + si.t, total)
-            ray = dr.select(hit, si.spawn_ray(ray.d), ray)
-            trans = hit & si.is_medium_transition()
-            medium = dr.select(trans, si.target_medium(ray.d), medium)
-            active &= hit & dr.any(tr != 0.0)
-            return sampler, active, ray, total, medium, tr
-
-        _, _, _, _, _, tr = dr.while_loop(
-            state=(sampler, mi.Bool(active), mi.Ray3f(ray), mi.Float(0.0), mi.MediumPtr(medium), mi.Spectrum(1.0)),
-            cond=cond, body=body, label="majorant_volpath: shadow ray")
-        return dr.select(active, tr, 0.0)
+    def sample_bsdf(self, sampler, p, v):
+        """BSDF sampling at a surface (null BSDFs: passed through without counting depth); ends the paths
+        that neither scattered nor continue from a surface."""
+        si, active_surface = p.si, v.active_surface
+        bs, bsdf_w = v.bsdf.sample(self.bsdf_ctx, si, sampler.next_1d(active_surface),
+                                   sampler.next_2d(active_surface), active_surface)
+        active_surface &= bs.pdf > 0.0
+        p.throughput = dr.select(active_surface, p.throughput * bsdf_w, p.throughput)
+        p.eta = dr.select(active_surface, p.eta * bs.eta, p.eta)
+        p.ray = dr.select(active_surface, si.spawn_ray(si.to_world(bs.wo)), p.ray)
+        p.needs_isect |= active_surface
+        non_null = active_surface & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)
+        p.depth = dr.select(non_null, p.depth + 1, p.depth)
+        p.last_event = dr.select(non_null, _as_interaction(si), p.last_event)
+        p.last_pdf = dr.select(non_null, bs.pdf, p.last_pdf)
+        p.last_pdf_sun = dr.select(non_null, bs.pdf, p.last_pdf_sun)
+        p.aur_w = dr.select(non_null, 1.0, p.aur_w)
+        p.valid_ray |= non_null
+        p.specular_chain |= non_null & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        p.specular_chain &= ~(active_surface & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Smooth))
+        trans = active_surface & si.is_medium_transition()
+        p.medium = dr.select(trans, si.target_medium(p.ray.d), p.medium)
+        p.active &= active_surface | v.act_scatter
 
 
 def register() -> None:

@@ -17,6 +17,7 @@ import mitsuba as mi
 
 import weather_mi  # noqa: F401  (variant + plugins)
 from weather_mi.plugins import majorant_volpath as mv
+from weather_mi.plugins.trackers import exact_transmittance
 from weather_mi.plugins.hydrometeor_mixture import bbox_transform
 
 mv.register()
@@ -372,7 +373,7 @@ def optical_depth_numpy(s, o, d, t_end, steps=8_000):
 
 
 def test_exact_transmittance_is_the_optical_depth_of_the_interpolant():
-    """Shadow-ray transmittance by Simpson's rule per texel cell (``_exact_walk``) against an
+    """Shadow-ray transmittance by Simpson's rule per texel cell (``trackers.exact_transmittance``) against an
     independent fine midpoint integral of the trilinear interpolant (``trilinear_numpy``) along random
     rays that start inside and outside the box, end inside and beyond it, and cross a voxel 10x
     denser than the rest. Exact up to float32 rounding; deterministic. Simpson's rule over the coarse
@@ -391,9 +392,9 @@ def test_exact_transmittance_is_the_optical_depth_of_the_interpolant():
     t_end = rng.random(n) * 16.0
     ray = mi.Ray3f(mi.Point3f(*(o[:, k].astype(np.float32) for k in range(3))),
                    mi.Vector3f(*(d[:, k].astype(np.float32) for k in range(3))))
-    got = np.array(integ._exact_walk(ray, mi.Float(t_end.astype(np.float32)), mi.Bool(True)))
+    got = np.array(exact_transmittance(integ._tk, ray, mi.Float(t_end.astype(np.float32)), mi.Bool(True)))
     got = got.reshape(-1, n) if got.shape[0] != n else got.T
-    assert np.array_equal(got, np.array(integ._exact_walk(ray, mi.Float(t_end.astype(np.float32)),
+    assert np.array_equal(got, np.array(exact_transmittance(integ._tk, ray, mi.Float(t_end.astype(np.float32)),
                                                           mi.Bool(True))).reshape(got.shape))
     tau = optical_depth_numpy(s, o, d, t_end)
     expect = np.exp(-tau)
@@ -415,7 +416,7 @@ def test_exact_transmittance_with_roulette_is_unbiased():
         rep = lambda a: np.repeat(a, reps, axis=0).astype(np.float32)  # noqa: E731
         oo, dd = rep(o), rep(d)
         ray = mi.Ray3f(mi.Point3f(*(oo[:, k] for k in range(3))), mi.Vector3f(*(dd[:, k] for k in range(3))))
-        out = np.array(integ._exact_walk(ray, mi.Float(np.full(len(oo), 30.0, np.float32)), mi.Bool(True), sampler))
+        out = np.array(exact_transmittance(integ._tk, ray, mi.Float(np.full(len(oo), 30.0, np.float32)), mi.Bool(True), sampler))
         return out[0].reshape(len(o), reps)
 
     o = np.tile([5.0, 5.0, 2.0], (256, 1))

@@ -1,0 +1,118 @@
+"""Majorant grids on the numpy side: bounds of the trilinear interpolant of a sigma_t grid per cell, and
+the empty-space radii that let the DDA cross clear air in one step.
+
+* :func:`majorant_grid`: the coarse grid (``cell`` fine voxels per cell, dilated by one voxel, because
+  its cells are not aligned with the texel centres).
+* :func:`texel_majorant_grid`: one cell between each 2 x 2 x 2 texel centres (cells -1 .. N - 1 per
+  axis). The trilinear interpolant is one trilinear polynomial in such a cell, so the maximum of its 8
+  texels is its exact maximum there: the tightest majorants a grid of this resolution can have.
+* :func:`empty_space_radius`: "proximity clouds" (Cohen & Sheffer 1994).
+
+All majorants are in the units of the input (1/m for sigma_t already multiplied by the medium's scale).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+DEFAULT_CELL = 2  # fine voxels per coarse majorant cell (measured fastest on the storms: docs/reference-estimator.md)
+SAFETY = 1.0001   # majorant = SAFETY x the maximum of the texels that enter the cell
+
+
+def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: float = SAFETY) -> np.ndarray:
+    """Conservative majorants of the trilinear interpolant of ``sigma_t_zyx`` on a coarse grid.
+
+    Parameters
+    ----------
+    sigma_t_zyx : numpy.ndarray
+        Extinction, 1/m, (nz, ny, nx) or (nz, ny, nx, C) (the maximum over channels is used), indexed
+        like a Mitsuba ``gridvolume`` (texel centres at (i + 0.5) / N, clamped at the borders). Negative
+        values count as 0.
+    cell : int
+        Fine voxels per coarse cell along each axis.
+    safety : float
+        Factor on the maxima.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32, 1/m, (ceil(nz/cell), ceil(ny/cell), ceil(nx/cell)): the majorant of coarse cell
+        (K, J, I) is ``safety`` x the maximum of the fine voxels [K*cell - 1, (K+1)*cell] x ... (the
+        cell's own voxels dilated by one voxel on each side, clipped to the grid): exactly the voxels
+        whose values enter the interpolant somewhere inside the cell.
+    """
+    a = np.asarray(sigma_t_zyx)
+    if a.ndim == 4:
+        a = a.max(axis=3)
+    if a.ndim != 3 or min(a.shape) < 1:
+        raise ValueError(f"majorant_grid: expected a (nz, ny, nx) or (nz, ny, nx, C) array, got shape {a.shape}")
+    cell = int(cell)
+    if cell < 1:
+        raise ValueError(f"majorant_grid: cell must be >= 1, got {cell}")
+    a = np.asarray(a, np.float64)
+    if not np.all(np.isfinite(a)):
+        raise ValueError("majorant_grid: sigma_t contains non-finite values")
+    d = a
+    for axis in range(3):  # 3-tap running maximum per axis == dilation by one voxel (edge clamped)
+        lo = [slice(None)] * 3
+        hi = [slice(None)] * 3
+        lo[axis], hi[axis] = slice(0, -1), slice(1, None)
+        e = d.copy()
+        e[tuple(hi)] = np.maximum(e[tuple(hi)], d[tuple(lo)])
+        e[tuple(lo)] = np.maximum(e[tuple(lo)], d[tuple(hi)])
+        d = e
+    for axis in range(3):  # block maxima, partial last blocks included
+        d = np.maximum.reduceat(d, np.arange(0, d.shape[axis], cell), axis=axis)
+    return (np.maximum(d, 0.0) * float(safety)).astype(np.float32)
+
+
+def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.ndarray:
+    """Majorants per texel cell: the cells between 2 x 2 x 2 texel centres.
+
+    Parameters
+    ----------
+    sigma_t_zyx : numpy.ndarray
+        Extinction, 1/m, (nz, ny, nx) or (nz, ny, nx, C) (the maximum over channels); negative values
+        count as 0.
+    safety : float
+        Factor on the maxima.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32, 1/m, (nz + 1, ny + 1, nx + 1): cells -1 .. N - 1 per axis (array index + 1), the first
+        and last being the half cells between the box's faces and the outer texel centres (where the
+        gridvolume clamps). The trilinear interpolant is one trilinear polynomial in such a cell, so
+        ``safety`` x the maximum of its 8 texels bounds it there, tightly.
+    """
+    a = np.asarray(sigma_t_zyx, np.float64)
+    a = a.max(axis=3) if a.ndim == 4 else a
+    if a.ndim != 3 or min(a.shape) < 1 or not np.all(np.isfinite(a)):
+        raise ValueError(f"texel_majorant_grid: expected a finite (nz, ny, nx) or (nz, ny, nx, C) array, got shape {a.shape}")
+    a = np.pad(np.maximum(a, 0.0), 1, mode="edge")  # clamped borders
+    for axis in range(3):  # the larger of the two texels on either side, per axis
+        a = np.maximum(a[(slice(None),) * axis + (slice(0, -1),)], a[(slice(None),) * axis + (slice(1, None),)])
+    return (a * float(safety)).astype(np.float32)
+
+
+def empty_space_radius(majorant: np.ndarray) -> np.ndarray:
+    """Empty-space radii of a majorant grid (proximity clouds, Cohen & Sheffer 1994).
+
+    Parameters
+    ----------
+    majorant : numpy.ndarray
+        Majorants (any units), (Z, Y, X).
+
+    Returns
+    -------
+    numpy.ndarray
+        int32, the shape of ``majorant``: for each cell the largest k such that every cell within k cells
+        of it (Chebyshev distance, i.e. the cube of side 2k + 1 centred on it, cells beyond the grid
+        counting as empty) has majorant 0, so that the DDA may cross that cube in one step. 0 for
+        occupied cells and for empty cells next to an occupied one.
+    """
+    from scipy.ndimage import distance_transform_cdt
+    occupied = np.asarray(majorant) > 0.0
+    if not occupied.any():
+        return np.full(occupied.shape, max(occupied.shape), np.int32)
+    d = distance_transform_cdt(~occupied, metric="chessboard")  # distance to the nearest occupied cell
+    return np.maximum(d - 1, 0).astype(np.int32)

@@ -1,0 +1,145 @@
+"""The integrator's own sun: a uniform disk of angular diameter ``sun_angular_diameter`` (or a point),
+sampled at every vertex and weighted by MIS against the path's continuation; optional sun guiding and
+aureole next-event estimation.
+
+* :func:`sun_disk`: v_max = 1 - cos r (held as a versine for float32) and the disk's radiance
+  L = E / (pi sin^2 r), E the irradiance normal to the beam, so that the disk's irradiance equals the
+  point sun's. A direction uniform in the disk has pdf p_sun = 1 / (2 pi v_max).
+* :func:`continuation_pdf`: the pdf q with which a medium vertex continues the path: history-aware
+  channel sampling (Kutz et al. 2017: channel c with probability alpha_c = T_c / sum T, so
+  q = sum_c alpha_c p_c(d)) and sun guiding (detector-directional importance sampling as in MYSTIC's
+  VROOM, Buras & Mayer 2011): q = (1 - eps) q_phase + eps (q_phase,sun + U_disk) / 2.
+* :func:`aureole_nee`: sun light that reaches a vertex A through one more, forward, scattering at B,
+  sampled from A about the sun; balance heuristic against the path's own draw.
+
+``sun`` is the integrator (its ``sun_dir``, ``sun_vmax``, ``sun_value``, ``sun_mode``, ``guiding``);
+measurements of these estimators: ``docs/reference-estimator.md``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+import drjit as dr
+import mitsuba as mi
+
+from .medium_setup import phase_ctx, scattering_event
+from .trackers import delta_tracking
+
+
+def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
+    """The versine and the radiance of a uniform sun disk.
+
+    Parameters
+    ----------
+    diameter_deg : float
+        Angular diameter of the disk, degrees (0: a point sun).
+    irradiance : array_like
+        Irradiance E on a plane normal to the disk's centre, RGB (W m^-2, or any unit).
+
+    Returns
+    -------
+    v_max : float
+        1 - cos(radius), computed as 2 sin^2(r/2) (float32 cannot hold 1 - cos of a quarter degree).
+    radiance : numpy.ndarray
+        L = E / (pi sin^2 r) (E per steradian), because the disk gives integral_cap L cos(theta) d omega
+        = pi sin^2(r) L on that plane. (0, E) for a point sun.
+    """
+    e = np.asarray(irradiance, np.float64)
+    r = np.radians(float(diameter_deg)) / 2.0
+    if r <= 0.0:
+        return 0.0, e
+    return float(2.0 * np.sin(r / 2.0) ** 2), e / (np.pi * np.sin(r) ** 2)
+
+
+def sample_disk(sun, sample):
+    """A direction uniform in the sun's disk (a cap of versine v_max about ``sun_dir``), built from
+    the versine so that float32 keeps its angle (pdf 1 / (2 pi v_max))."""
+    v = sample.x * sun.sun_vmax
+    sin_t = dr.safe_sqrt(v * (2.0 - v))
+    s, c = dr.sincos(dr.two_pi * sample.y)
+    return mi.Frame3f(sun.sun_dir).to_world(mi.Vector3f(sin_t * c, sin_t * s, 1.0 - v))
+
+
+def sun_direction(sun, sampler, active):
+    """The direction of a sun next-event estimate: uniform in the disk, or the point sun's."""
+    return sample_disk(sun, sampler.next_2d(active)) if sun.sun_mode == "disk" else mi.Vector3f(sun.sun_dir)
+
+
+def in_disk(sun, d):
+    """Whether unit direction d lies in the sun's disk: versine |d - s|^2 / 2 <= v_max."""
+    return dr.squared_norm(d - sun.sun_dir) * 0.5 <= sun.sun_vmax
+
+
+def about_sun(sun, mei, toward_sun):
+    """``mei`` whose incident direction is replaced, where ``toward_sun``, by the one for which the
+    phase function's forward direction is the sun's direction (wi = -sun_dir)."""
+    m = mi.MediumInteraction3f(mei)
+    m.wi = dr.select(toward_sun, -mi.Vector3f(sun.sun_dir), mei.wi)
+    m.sh_frame = mi.Frame3f(m.wi)
+    return m
+
+
+def continuation_pdf(sun, phase, sampler, mei, d, value, pdf, alpha, eps, active):
+    """pdf with which a medium vertex continues the path in direction d, given the phase function's
+    per-channel ``value`` and its own ``pdf`` there:
+    * history-aware channels (``alpha`` not None): sum_c alpha_c p_c(d), channel c drawn with
+      probability alpha_c and d from its density;
+    * sun guiding (detector-directional importance sampling, Buras & Mayer 2011): d drawn about the
+      path's direction with probability 1 - eps and towards the sun with probability eps (eps per
+      vertex, see ``sample``), half of these uniform in the sun's disk U and half from the phase
+      function about the sun: (1 - eps) q(d | wi) + eps (q(d | -sun) + U(d)) / 2."""
+    def q(val, p):
+        return p if alpha is None else dr.sum(alpha * val)
+    out = q(value, pdf)
+    if sun.guiding > 0.0 and sun.sun_mode != "none":
+        val_s, pdf_s = phase.eval_pdf(phase_ctx(sampler), about_sun(sun, mei, mi.Bool(True)), d, active)
+        guide = q(val_s, pdf_s)
+        if sun.sun_mode == "disk":  # half of the guided draws are uniform in the disk
+            disk = dr.select(in_disk(sun, d), dr.rcp(dr.two_pi * sun.sun_vmax), 0.0)
+            guide = 0.5 * (guide + disk)
+        out = (1.0 - eps) * out + eps * guide
+    return out
+
+
+def aureole_pdf(sun, phase, sampler, mei, d, active):
+    """Density of the aureole estimator's direction at vertex ``mei``: the phase function (channel
+    mean) about the sun's direction, with half of it uniform in the disk for a disk sun."""
+    _, g = phase.eval_pdf(phase_ctx(sampler), about_sun(sun, mei, mi.Bool(True)), d, active)
+    if sun.sun_mode == "disk":
+        disk = dr.select(in_disk(sun, d), dr.rcp(dr.two_pi * sun.sun_vmax), 0.0)
+        g = 0.5 * (g + disk)
+    return g
+
+
+def aureole_nee(sun, tk, transmittance, scene, sampler, phase, mei, medium, throughput, alpha, eps, active,
+                result, sun_mis, c_sun, sun_pdf):
+    """The aureole estimator at medium vertex A (``mei``): direction d about the sun (density g,
+    :func:`aureole_pdf`), free flight to B, sun next-event estimation at B weighted as the path
+    itself weights it there. Balance heuristic against the path's own draw (density q, sum over
+    channels of alpha_c p_c): this contributes T f_A(d) / (q(d) + eps g(d)) x (NEE at B), and the
+    path's own sun NEE at B is weighted q / (q + eps g) (``aur_w``)."""
+    ctx = phase_ctx(sampler)
+    d, _, _ = phase.sample(ctx, about_sun(sun, mei, active), sampler.next_1d(active), sampler.next_2d(active),
+                           active)
+    if sun.sun_mode == "disk":
+        u = sampler.next_1d(active)
+        d = dr.select(u < 0.5, sample_disk(sun, sampler.next_2d(active)), d)
+    f_a, p_a = phase.eval_pdf(ctx, mei, d, active)
+    q = p_a if alpha is None else dr.sum(alpha * f_a)
+    g = aureole_pdf(sun, phase, sampler, mei, d, active)
+    denom = q + eps * g
+    active &= denom > 0.0
+    weight = throughput * f_a * dr.rcp(dr.select(active, denom, 1.0))
+    ray = mei.spawn_ray(d)
+    si = scene.ray_intersect(ray, active)
+    found, t, weight = delta_tracking(tk, ray, dr.minimum(si.t, ray.maxt), sampler, active, weight)
+    act_b = active & found
+    mei_b, albedo = scattering_event(tk.ms, ray, t, act_b)
+    wo = sun_direction(sun, sampler, act_b)
+    f_b, _ = phase.eval_pdf(ctx, mei_b, wo, act_b)
+    if sun.sun_mode == "disk":  # the MIS weight the path's own NEE has at B, times 1 / pdf_sun
+        w_b = sun_mis(c_sun * sun_pdf, dr.mean(f_b)) * dr.rcp(sun_pdf)
+    else:
+        w_b = mi.Float(1.0)
+    tr = transmittance(scene, sampler, mei_b.spawn_ray(wo), medium, act_b)
+    return dr.select(act_b, result + weight * albedo * f_b * w_b * tr * mi.Spectrum(sun.sun_value), result)

@@ -1,0 +1,316 @@
+"""The trackers of ``majorant_volpath``: free flights and transmittance along a ray over grids of local
+majorants, walked cell by cell with the DDA (:mod:`.dda`), empty cubes of cells crossed in one step.
+
+* :func:`delta_tracking`: free flights. In each cell an exponential step is drawn with that cell's
+  majorant; a step that leaves the cell restarts at the cell exit with the next cell's majorant
+  (memorylessness). At a tentative collision the collision is real with probability sigma_t / majorant;
+  with spectral extinction by history-aware spectral tracking (Kutz et al. 2017).
+* :func:`ratio_tracking`: transmittance estimates (Novak et al. 2014), Russian roulette once small.
+* :func:`exact_transmittance`: T = exp(-tau), tau integrated exactly by Simpson's rule per texel cell
+  (the trilinear interpolant is a cubic along a ray there), with Russian roulette in a render.
+
+Every function takes the per-render :class:`.medium_setup.Tracking` ``tk``; distances are along the ray.
+"""
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+from .dda import cell_end, cell_interpolant, cell_of, dda_step, locate, ray_box
+from .medium_setup import sigma_t_at
+
+RR_THRESHOLD = 0.1    # ratio tracking: roulette once max(T) drops below this ...
+RR_SURVIVE = 0.5      # ... surviving with this probability
+EXACT_RR_TAU = 4.6    # exact transmittance in a render: Russian roulette once T < e^-4.6 = 0.01 ...
+EXACT_RR_STEP = 2.3   # ... and again each time it falls by another factor e^2.3 = 10 ...
+EXACT_RR_SURVIVE = 0.3  # ... surviving with this probability (1: no roulette, stop at TAU_ZERO)
+TAU_ZERO = 50.0       # exact transmittance: 0 beyond this optical depth (e^-50 ~ 2e-22)
+
+
+class _Walk:
+    """A ray in a grid's coordinates: q(t) = q0 + dq t, the DDA state where it enters the grid's box
+    within [0, t_end] (``cells``, ``nexts``, ``t_near``), ``t_max`` where it leaves, ``active`` where it
+    meets the box."""
+
+    def __init__(self, tk, grid, texels, ray, t_end, active):
+        self.tk, self.grid, self.texels, self.ray = tk, grid, texels, ray
+        o_l, d_l, self.t_near, self.t_max, self.active = ray_box(tk.to_local, ray, t_end, active)
+        self.q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
+        self.dq = [d_l[k] * grid.scale[k] for k in range(3)]
+        self.cells, self.nexts = locate(grid, self.q0, self.dq, self.t_near)
+
+    def sigma_t(self, t, active):
+        """sigma_t at distance t (in the current texel cell ``cells`` when interpolating texels)."""
+        return sigma_t_at(self.tk.ms, self.ray.o + self.ray.d * t, self.ray, active)
+
+    def tentative(self, sampler, active, t, cells, nexts):
+        """One step of a tracker in the current cell: (majorant, k, end of the segment in this cell,
+        tentative collision distance tc, whether it lies in the cell, sigma_t there)."""
+        grid, q0, dq = self.grid, self.q0, self.dq
+        maj, idx = cell_of(grid, cells, active)
+        t_cell, k = cell_end(grid, q0, dq, cells, nexts, idx, maj <= 0.0, active)
+        seg_end = dr.minimum(t_cell, self.t_max)
+        u = sampler.next_1d(active)
+        dt = dr.select(maj > 0.0, -dr.log(1.0 - u) / maj, dr.inf)
+        tc = t + dt
+        collide = active & (tc < seg_end)
+        if self.texels is None:
+            s_t = self.sigma_t(tc, collide)
+        else:  # in a texel cell: the interpolant of its 8 texels
+            s_t = cell_interpolant(self.texels, grid, q0, dq, cells, (tc,), collide)[0]
+        return maj, k, seg_end, tc, collide, s_t
+
+    def advance(self, active, collide, tc, seg_end, cells, nexts, k, stop):
+        """To the collision, or to the next cell; returns (t, cells, nexts, active)."""
+        t = dr.select(collide, tc, seg_end)
+        adv = active & ~collide
+        cells, nexts, outside = dda_step(self.grid, self.q0, self.dq, t, cells, nexts, k, adv)
+        leave = adv & ((seg_end >= self.t_max) | outside)
+        active &= ~(stop | leave)
+        return t, cells, nexts, active
+
+
+def _tracking_walk(tk, ray, t_end, active):
+    """The walk of free flights and ratio tracking: over ``tk.track``, texels interpolated in texel cells."""
+    grid = tk.track
+    texels = tk.texel_data if (grid is tk.texel and not tk.ms.spectral) else None
+    return _Walk(tk, grid, texels, ray, t_end, active)
+
+
+def _spectral_collision(tr, maj, s_t, xi, collide, found):
+    """History-aware spectral tracking at a tentative collision: (stop, tr, found)."""
+    s_n = dr.maximum(maj - s_t, 0.0)
+    a_t = dr.mean(tr * s_t)
+    a_n = dr.mean(tr * s_n)
+    a = a_t + a_n
+    p_t = dr.select(a > 0.0, a_t / dr.select(a > 0.0, a, 1.0), 0.0)
+    stop = collide & (xi < p_t)
+    null = collide & ~stop
+    w_t = s_t / dr.maximum(maj * p_t, 1e-30)
+    w_n = s_n / dr.maximum(maj * (1.0 - p_t), 1e-30)
+    tr = dr.select(stop, tr * w_t, dr.select(null, tr * w_n, tr))
+    dead = collide & (a <= 0.0)
+    stop |= dead
+    found |= stop & ~dead
+    return stop, tr, found
+
+
+def delta_tracking(tk, ray, t_end, sampler, active, weight):
+    """Free flight along ``ray`` over [0, t_end] (clipped to the grid's box) by delta tracking.
+
+    Parameters
+    ----------
+    tk : medium_setup.Tracking
+        The per-render grids and medium.
+    ray : mi.Ray3f
+        World ray; distances along it.
+    t_end : mi.Float
+        End of the walk (the next surface).
+    sampler
+        ``next_1d`` source (a Mitsuba sampler or the persistent lanes' one).
+    active : mi.Bool
+        Lanes that walk.
+    weight : mi.Spectrum
+        The path throughput w (used with spectral extinction only).
+
+    Returns
+    -------
+    found : mi.Bool
+        Whether a real collision lies before ``t_end``.
+    t : mi.Float
+        Its distance.
+    weight : mi.Spectrum
+        ``weight`` unchanged for grey extinction. With spectral extinction the real-collision probability
+        is P = mean(w sigma_t) / (majorant mean(w)) and the weight is w sigma_t / (majorant P) at the real
+        collision times the product of w (majorant - sigma_t) / (majorant (1 - P)) over the null
+        collisions (unbiased; the mean of the throughput is preserved).
+    """
+    walk = _tracking_walk(tk, ray, t_end, active)
+    spectral = tk.ms.spectral
+    tr = mi.Spectrum(weight) if spectral else mi.Float(1.0)
+
+    def cond(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
+        return active
+
+    def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
+        cells, nexts = [cx, cy, cz], [tx, ty, tz]
+        maj, k, seg_end, tc, collide, s_t = walk.tentative(sampler, active, t, cells, nexts)
+        xi = sampler.next_1d(collide)
+        if spectral:
+            stop, tr, found = _spectral_collision(tr, maj, s_t, xi, collide, found)
+        else:
+            stop = collide & (xi * maj < s_t)
+            found |= stop
+        t, (cx, cy, cz), (tx, ty, tz), active = walk.advance(active, collide, tc, seg_end, cells, nexts, k, stop)
+        return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
+
+    cells, nexts = walk.cells, walk.nexts
+    state = dr.while_loop(
+        state=(sampler, walk.active, mi.Float(walk.t_near), cells[0], cells[1], cells[2],
+               nexts[0], nexts[1], nexts[2], mi.Bool(False), tr),
+        cond=cond, body=body, label="majorant_volpath: DDA delta tracking")
+    _, _, t, _, _, _, _, _, _, found, tr = state
+    return found, t, (tr if spectral else weight)
+
+
+def ratio_tracking(tk, ray, t_end, sampler, active):
+    """Transmittance estimate along ``ray`` over [0, t_end] (clipped to the grid's box) by ratio tracking.
+
+    T *= 1 - sigma_t / majorant at each tentative collision, with Russian roulette once max(T) <
+    RR_THRESHOLD (survival RR_SURVIVE, weight its inverse): unbiased.
+
+    Parameters
+    ----------
+    tk, ray, t_end, sampler, active
+        As for :func:`delta_tracking`.
+
+    Returns
+    -------
+    mi.Spectrum
+        The transmittance estimate (dimensionless).
+    """
+    walk = _tracking_walk(tk, ray, t_end, active)
+    spectral = tk.ms.spectral
+    tr = mi.Spectrum(1.0) if spectral else mi.Float(1.0)
+
+    def cond(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
+        return active
+
+    def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
+        cells, nexts = [cx, cy, cz], [tx, ty, tz]
+        maj, k, seg_end, tc, collide, s_t = walk.tentative(sampler, active, t, cells, nexts)
+        inv_maj = dr.rcp(dr.select(collide, maj, 1.0))
+        tr = dr.select(collide, tr * dr.clip(1.0 - s_t * inv_maj, 0.0, 1.0), tr)
+        low = collide & ((dr.max(tr) if spectral else tr) < RR_THRESHOLD)
+        xi = sampler.next_1d(low)
+        tr = dr.select(low, dr.select(xi < RR_SURVIVE, tr * (1.0 / RR_SURVIVE), 0.0), tr)
+        stop = collide & (dr.all(tr <= 0.0) if spectral else (tr <= 0.0))
+        t, (cx, cy, cz), (tx, ty, tz), active = walk.advance(active, collide, tc, seg_end, cells, nexts, k, stop)
+        return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
+
+    cells, nexts = walk.cells, walk.nexts
+    state = dr.while_loop(
+        state=(sampler, walk.active, mi.Float(walk.t_near), cells[0], cells[1], cells[2],
+               nexts[0], nexts[1], nexts[2], mi.Bool(False), tr),
+        cond=cond, body=body, label="majorant_volpath: DDA ratio tracking")
+    *_, tr = state
+    return mi.Spectrum(tr) if not spectral else tr
+
+
+def exact_transmittance(tk, ray, t_end, active, sampler=None):
+    """exp(-optical depth) of ``ray`` over [0, t_end] (clipped to the grid's box), computed exactly.
+
+    The trilinear interpolant of sigma_t is one trilinear polynomial in each cell of the texel-centre
+    grid (``tk.texel``), so along a ray it is a cubic in t there, which Simpson's rule integrates
+    exactly: tau = sum over the cells crossed of (t1 - t0) / 6 (s(t0) + 4 s(tm) + s(t1)), with s the
+    medium's own ``sigma_t`` lookup. Cells whose texels are all 0 cost no lookups and empty cubes of
+    cells are crossed in one step.
+
+    Parameters
+    ----------
+    tk : medium_setup.Tracking
+        The per-render grids and medium (needs ``tk.texel``).
+    ray : mi.Ray3f
+        World ray; distances along it.
+    t_end : mi.Float
+        End of the segment.
+    active : mi.Bool
+        Lanes to compute.
+    sampler : optional
+        None: deterministic, 0 once tau > TAU_ZERO (the rest is below e^-TAU_ZERO). Given: Russian
+        roulette once tau passes EXACT_RR_TAU and after every further EXACT_RR_STEP (survival
+        EXACT_RR_SURVIVE, weight its inverse): unbiased, no cut.
+
+    Returns
+    -------
+    mi.Spectrum
+        The transmittance (dimensionless), or its roulette estimate.
+    """
+    spectral = tk.ms.spectral
+    walk = _Walk(tk, tk.texel, None if spectral else tk.texel_data, ray, t_end, active)
+    grid, texels, q0, dq, t_max = walk.grid, walk.texels, walk.q0, walk.dq, walk.t_max
+    t_near, active, cells, nexts = walk.t_near, walk.active, walk.cells, walk.nexts
+    s0 = walk.sigma_t(t_near, active)
+    tau = dr.zeros(mi.Spectrum) if spectral else mi.Float(0.0)
+
+    rr = sampler is not None and EXACT_RR_SURVIVE < 1.0
+
+    def cond(sampler, active, t, cx, cy, cz, tx, ty, tz, s0, tau, w, next_rr):
+        return active
+
+    def body(sampler, active, t, cx, cy, cz, tx, ty, tz, s0, tau, w, next_rr):
+        cells, nexts = [cx, cy, cz], [tx, ty, tz]
+        maj, idx = cell_of(grid, cells, active)
+        empty = maj <= 0.0
+        t_cell, k = cell_end(grid, q0, dq, cells, nexts, idx, empty, active)
+        seg_end = dr.minimum(t_cell, t_max)
+        lookup = active & ~empty
+        if texels is None:
+            s_m = walk.sigma_t(0.5 * (t + seg_end), lookup)
+            s_1 = walk.sigma_t(seg_end, lookup)
+        else:  # the cell's 8 texels once, the interpolant at both points from them
+            s_m, s_1 = cell_interpolant(texels, grid, q0, dq, cells, (0.5 * (t + seg_end), seg_end), lookup)
+        tau = dr.select(lookup, tau + (seg_end - t) * (1.0 / 6.0) * (s0 + 4.0 * s_m + s_1), tau)  # Simpson
+        s0 = dr.select(lookup, s_1, 0.0)  # a cell whose texels are 0 is 0 on its faces
+        t = dr.select(active, seg_end, t)
+        (cx, cy, cz), (tx, ty, tz), outside = dda_step(grid, q0, dq, t, cells, nexts, k, active)
+        tau_min = dr.min(tau) if spectral else tau
+        if rr:  # Russian roulette each time T falls by another EXACT_RR_STEP (weights w)
+            low = active & (tau_min > next_rr)
+            survive = sampler.next_1d(low) < EXACT_RR_SURVIVE
+            w = dr.select(low, w * (1.0 / EXACT_RR_SURVIVE), w)
+            next_rr = dr.select(low, next_rr + EXACT_RR_STEP, next_rr)
+            w = dr.select(low & ~survive, 0.0, w)
+            active &= ~(low & ~survive)
+            deep = mi.Bool(False)
+        else:
+            deep = tau_min > TAU_ZERO
+        active &= ~((seg_end >= t_max) | outside | deep)
+        return sampler, active, t, cx, cy, cz, tx, ty, tz, s0, tau, w, next_rr
+
+    state = dr.while_loop(state=(sampler if rr else None, active, mi.Float(t_near), cells[0], cells[1], cells[2],
+                                 nexts[0], nexts[1], nexts[2], s0, tau, mi.Float(1.0), mi.Float(EXACT_RR_TAU)),
+                          cond=cond, body=body, label="majorant_volpath: exact transmittance")
+    *_, tau, w, _ = state
+    if rr:
+        return mi.Spectrum(w * dr.exp(-tau))
+    return mi.Spectrum(dr.select((dr.min(tau) if spectral else tau) > TAU_ZERO, 0.0, dr.exp(-tau)))
+
+
+def shadow_transmittance(tk, exact: bool, scene, sampler, ray, medium, active):
+    """Transmittance along a shadow ray: through the medium (``exact``: :func:`exact_transmittance` where
+    there is a texel grid, else :func:`ratio_tracking`) and null-BSDF surfaces (the medium's box), 0 at
+    opaque ones. ``ray.maxt`` is the distance to the emitter sample; ``medium`` the one the ray starts in.
+    Returns mi.Spectrum (0 where not ``active``)."""
+    max_dist = mi.Float(ray.maxt)
+    has_medium = tk.ms.medium is not None
+
+    def cond(sampler, active, ray, total, medium, tr):
+        return active
+
+    def body(sampler, active, ray, total, medium, tr):
+        remaining = max_dist - total
+        ray.maxt = remaining
+        active &= remaining > 0.0
+        si = scene.ray_intersect(ray, active)
+        if has_medium:
+            in_med = active & (medium != None)  # noqa: E711
+            if exact and tk.texel is not None:
+                tr_seg = exact_transmittance(tk, ray, dr.minimum(si.t, remaining), in_med, sampler)
+            else:
+                tr_seg = ratio_tracking(tk, ray, dr.minimum(si.t, remaining), sampler, in_med)
+            tr = dr.select(in_med, tr * tr_seg, tr)
+        hit = active & si.is_valid()
+        bsdf = si.bsdf(ray)
+        tr = dr.select(hit, tr * bsdf.eval_null_transmission(si, hit), tr)
+        total = dr.select(hit, total + si.t, total)
+        ray = dr.select(hit, si.spawn_ray(ray.d), ray)
+        trans = hit & si.is_medium_transition()
+        medium = dr.select(trans, si.target_medium(ray.d), medium)
+        active &= hit & dr.any(tr != 0.0)
+        return sampler, active, ray, total, medium, tr
+
+    _, _, _, _, _, tr = dr.while_loop(
+        state=(sampler, mi.Bool(active), mi.Ray3f(ray), mi.Float(0.0), mi.MediumPtr(medium), mi.Spectrum(1.0)),
+        cond=cond, body=body, label="majorant_volpath: shadow ray")
+    return dr.select(active, tr, 0.0)
