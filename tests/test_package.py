@@ -26,7 +26,7 @@ def readme_names() -> list[str]:
 
 def test_readme_finds_names():
     names = readme_names()
-    assert "metrics.compare" in names and "synthetic.supercell" in names and "reference.cloud_mask" in names
+    assert "metrics.compare" in names and "synthetic.supercell" in names and "estimates.cloud_mask" in names
 
 
 def test_every_name_the_readme_uses_is_reachable_from_import_weather_mi():
