@@ -87,7 +87,7 @@ def test_a_slider_changes_the_frame(page):
     before = frame_src(page)
     n0 = page.evaluate("window.wmStats.frames")
     drag(page, page.locator(".wm-sun-azimuth input").first, -80, steps=20, seconds=0.6)
-    wait_idle(page, 1.0)
+    wait_idle(page, 1.0, since=n0)
     after = frame_src(page)
     assert after != before and page.evaluate("window.wmStats.frames") > n0
     assert np.abs(decoded(after) - decoded(before)).mean() > 0.5
@@ -99,16 +99,18 @@ def test_a_slider_changes_the_frame(page):
 def test_dragging_the_view_turns_the_camera_and_the_wheel_zooms(page):
     code0 = snippet(page)
     before = frame_src(page)
+    n0 = page.evaluate("window.wmStats.frames")
     drag(page, page.locator("img.wm-frame").first, 60, steps=15, seconds=0.5)
-    wait_idle(page, 1.0)
+    wait_idle(page, 1.0, since=n0)
     assert frame_src(page) != before
     code1 = snippet(page)
     o0, o1 = camera_origin(code0), camera_origin(code1)
     assert np.linalg.norm(o1[:2] - o0[:2]) > 100.0      # the camera walked around the storm
     box = page.locator("img.wm-frame").first.bounding_box()
     page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    n1 = page.evaluate("window.wmStats.frames")
     page.mouse.wheel(0, -300)                           # towards the storm
-    wait_idle(page, 1.0)
+    wait_idle(page, 1.0, since=n1)
     o2 = camera_origin(snippet(page))
     core = np.array([float(v) for v in re.search(r'"target": \[([^\]]+)\]', code1).group(1).split(",")])
     assert np.linalg.norm(o2[:2] - core[:2]) < np.linalg.norm(o1[:2] - core[:2])
@@ -202,8 +204,9 @@ def _hover_checks(page):
 
 def test_a_keyframed_path_becomes_an_mp4(page):
     page.get_by_role("button", name="Add keyframe").click()
+    n0 = page.evaluate("window.wmStats.frames")
     drag(page, page.locator("img.wm-frame").first, 40, steps=10, seconds=0.3)
-    wait_idle(page, 0.8)
+    wait_idle(page, 0.8, since=n0)
     page.get_by_role("button", name="Add keyframe").click()
     page.get_by_text("Keyframes: 2").wait_for(timeout=5000)
     page.get_by_role("button", name="Render MP4").click()

@@ -115,10 +115,15 @@ def wait_frames(page, n: int = 1, timeout_s: float = 60.0) -> int:
     return page.evaluate("window.wmStats.frames")
 
 
-def wait_idle(page, quiet_s: float = 1.0, timeout_s: float = 30.0, refined: bool = True) -> int:
+def wait_idle(page, quiet_s: float = 1.0, timeout_s: float = 30.0, refined: bool = True,
+              since: int | None = None) -> int:
     """Wait until no frame has arrived for ``quiet_s`` and, with ``refined``, the last frame is not a
     draft (the refine after an input has landed, however long it took: a kernel compiled on first use
-    can take longer than ``quiet_s``)."""
+    can take longer than ``quiet_s``). With ``since`` (a frame count read before an input), first wait
+    for a frame after it: on a loaded machine the first frame of a drag can come more than ``quiet_s``
+    after the input."""
+    if since is not None:
+        wait_frames(page, since + 1, timeout_s)
     t_end = time.perf_counter() + timeout_s
     last = page.evaluate("window.wmStats.frames")
     quiet_since = time.perf_counter()
