@@ -95,6 +95,16 @@ def _spectral_collision(tr, maj, s_t, xi, collide, found):
     return stop, tr, found
 
 
+def _walk_loop(walk, sampler, tr, body, label: str):
+    """The symbolic loop of a tracker over the DDA: state (sampler, active, t, cell x/y/z, next crossing
+    x/y/z, found, tr), run while a lane is active; returns the final state."""
+    cells, nexts = walk.cells, walk.nexts
+    return dr.while_loop(
+        state=(sampler, walk.active, mi.Float(walk.t_near), cells[0], cells[1], cells[2],
+               nexts[0], nexts[1], nexts[2], mi.Bool(False), tr),
+        cond=lambda sampler, active, *_: active, body=body, label=label)
+
+
 def delta_tracking(tk, ray, t_end, sampler, active, weight):
     """Free flight along ``ray`` over [0, t_end] (clipped to the grid's box) by delta tracking.
 
@@ -129,9 +139,6 @@ def delta_tracking(tk, ray, t_end, sampler, active, weight):
     spectral = tk.ms.spectral
     tr = mi.Spectrum(weight) if spectral else mi.Float(1.0)
 
-    def cond(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
-        return active
-
     def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
         cells, nexts = [cx, cy, cz], [tx, ty, tz]
         maj, k, seg_end, tc, collide, s_t = walk.tentative(sampler, active, t, cells, nexts)
@@ -144,12 +151,7 @@ def delta_tracking(tk, ray, t_end, sampler, active, weight):
         t, (cx, cy, cz), (tx, ty, tz), active = walk.advance(active, collide, tc, seg_end, cells, nexts, k, stop)
         return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
 
-    cells, nexts = walk.cells, walk.nexts
-    state = dr.while_loop(
-        state=(sampler, walk.active, mi.Float(walk.t_near), cells[0], cells[1], cells[2],
-               nexts[0], nexts[1], nexts[2], mi.Bool(False), tr),
-        cond=cond, body=body, label="majorant_volpath: DDA delta tracking")
-    _, _, t, _, _, _, _, _, _, found, tr = state
+    _, _, t, _, _, _, _, _, _, found, tr = _walk_loop(walk, sampler, tr, body, "majorant_volpath: DDA delta tracking")
     return found, t, (tr if spectral else weight)
 
 
@@ -173,9 +175,6 @@ def ratio_tracking(tk, ray, t_end, sampler, active):
     spectral = tk.ms.spectral
     tr = mi.Spectrum(1.0) if spectral else mi.Float(1.0)
 
-    def cond(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
-        return active
-
     def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
         cells, nexts = [cx, cy, cz], [tx, ty, tz]
         maj, k, seg_end, tc, collide, s_t = walk.tentative(sampler, active, t, cells, nexts)
@@ -188,12 +187,7 @@ def ratio_tracking(tk, ray, t_end, sampler, active):
         t, (cx, cy, cz), (tx, ty, tz), active = walk.advance(active, collide, tc, seg_end, cells, nexts, k, stop)
         return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
 
-    cells, nexts = walk.cells, walk.nexts
-    state = dr.while_loop(
-        state=(sampler, walk.active, mi.Float(walk.t_near), cells[0], cells[1], cells[2],
-               nexts[0], nexts[1], nexts[2], mi.Bool(False), tr),
-        cond=cond, body=body, label="majorant_volpath: DDA ratio tracking")
-    *_, tr = state
+    *_, tr = _walk_loop(walk, sampler, tr, body, "majorant_volpath: DDA ratio tracking")
     return mi.Spectrum(tr) if not spectral else tr
 
 
