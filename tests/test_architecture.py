@@ -169,5 +169,20 @@ def test_the_length_check_counts_code_not_docstrings(tmp_path):
     assert len(found) == 1 and "over (81 code lines)" in found[0], found
 
 
-if __name__ == "__main__":
-    pytest.main([__file__, "-q"])
+def report(most: int = 12) -> str:
+    """The longest functions (code lines), the longest modules (lines) and the import cycles, as text."""
+    rows = []
+    for mod, (path, _) in modules(PACKAGES).items():
+        lines = path.read_text().splitlines()
+        for node in ast.walk(ast.parse("\n".join(lines), str(path))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                rows.append((code_lines(node, lines), f"{_shown(path)}:{node.lineno} {node.name}"))
+    sizes = sorted(((len(p.read_text().splitlines()), _shown(p)) for p, _ in modules(PACKAGES).values()), reverse=True)
+    out = ["longest functions (code lines):"] + [f"  {n:5d}  {name}" for n, name in sorted(rows, reverse=True)[:most]]
+    out += ["longest modules (lines):"] + [f"  {n:5d}  {name}" for n, name in sizes[:most]]
+    out += [f"import cycles: {cycles(import_graph(PACKAGES)) or 'none'}"]
+    return "\n".join(out)
+
+
+if __name__ == "__main__":  # python tests/test_architecture.py: the figures these tests check
+    print(report())
