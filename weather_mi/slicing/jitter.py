@@ -1,0 +1,39 @@
+"""Per-pixel slab offsets of the eye pass: no terraces on lit faces.
+
+The eye pass composites slabs [k - 1/2, k + 1/2] between slice planes; on the lit faces of a coarsely
+gridded cloud the slab boundaries show as steps that follow the planes ("terraces"). Shifting every
+pixel's slabs by its own offset j (slice units) moves the steps to a different depth in each pixel, so
+their coherent pattern turns into fine, unstructured grain (benchmarks/banding.py measures the
+difference). The offsets are interleaved gradient noise (Jimenez 2014), a fixed function of the pixel,
+so the image does not crawl between frames; ``SliceParams.jitter_frame`` rotates them by the golden ratio
+(Cranley-Patterson rotation), so that frames averaged with successive indices converge to the smooth
+slab average.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+GOLDEN = 0.6180339887498949  # rotation of the offsets per frame index (a low-discrepancy sequence)
+
+
+def offset_pattern(width: int, height: int) -> np.ndarray:
+    """Interleaved gradient noise in [0, 1) per pixel, (height x width) flattened row-major from the top
+    left: frac(52.9829189 frac(0.06711056 x + 0.00583715 y)) at pixel (x, y) (Jimenez 2014, "Next
+    generation post processing in Call of Duty: Advanced Warfare"): any 3 x 3 block of pixels holds well
+    spread values, so the grain it leaves has little low-frequency energy."""
+    y, x = np.mgrid[0:int(height), 0:int(width)].astype(np.float64)
+    return np.mod(52.9829189 * np.mod(0.06711056 * x + 0.00583715 * y, 1.0), 1.0).ravel()
+
+
+def jitter_rotation(frame_index: int) -> float:
+    """The rotation of the offsets for ``SliceParams.jitter_frame`` (a plain number in [0, 1))."""
+    return (GOLDEN * float(frame_index)) % 1.0
+
+
+def slab_offsets(dr, pattern, amplitude, rotation):
+    """Each pixel's slab offset j (slice units) inside a kernel: amplitude x (frac(pattern + rotation) -
+    1/2), in [-amplitude / 2, amplitude / 2); ``amplitude`` (0: none, 1: spread over a whole slab) and
+    ``rotation`` are opaque kernel scalars (changing them recompiles nothing)."""
+    u = pattern + rotation
+    u = dr.select(u >= 1.0, u - 1.0, u)
+    return amplitude * (u - 0.5)
