@@ -120,7 +120,7 @@ class SliceParams:
         side; little in thin cloud).
     diffusion_scale : float, default MULTIPLE_DEFAULTS["diffusion_scale"]
         In [0, 1]: the profile is in transport optical depths diffusion_scale x tau (~ 1 - g).
-    slab_jitter : float, default DEFAULT_SLAB_JITTER
+    slab_jitter : float, default 0.0
         In [0, 1]: each pixel's slabs are offset by up to +-slab_jitter / 2 slice (jitter.py), which
         turns the terraces of the slab planes on lit faces into fine grain (0: aligned slabs, as before).
     jitter_frame : int, default 0
