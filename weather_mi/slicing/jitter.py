@@ -37,3 +37,14 @@ def slab_offsets(dr, pattern, amplitude, rotation):
     u = pattern + rotation
     u = dr.select(u >= 1.0, u - 1.0, u)
     return amplitude * (u - 0.5)
+
+
+def texel_offsets(dr, mi, x, y, amplitude, rotation):
+    """The light buffer's per-texel plane offsets (slice units) inside a kernel, for integer texel
+    coordinates (x, y) (mi.UInt32): the same interleaved gradient noise, rotated and scaled as
+    ``slab_offsets``. The light pass stores texel t's light at planes k + j_t, so that the kinks of the
+    light's interpolation between planes do not line up with the slab planes either."""
+    fx, fy = mi.Float(x), mi.Float(y)
+    t = 0.06711056 * fx + 0.00583715 * fy
+    t = 52.9829189 * (t - dr.floor(t))
+    return slab_offsets(dr, t - dr.floor(t), amplitude, rotation)

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..jitarrays import aligned_float
 from .geometry import SliceGeometry, ray_box
+from .jitter import texel_offsets
 
 # largest blur variance per step, in texels^2, that the 5-tap kernel reproduces with weights >= 0
 MAX_TEXEL_VARIANCE = 4.0 / 3.0
@@ -61,7 +62,8 @@ def blur_weights(dr, var):
 class LookupFrame:
     """A light volume's geometry as kernel values (opaque scalars, a Dr.Jit PyTree): buffer axes e1, e2
     and the slice axis (unit), buffer texel coordinates x = (p . e1 - u0) u_scale (likewise y), and the
-    slice index k = (d_first - p . axis) inv_spacing = (d_first - p . axis) / spacing."""
+    slice index k = (d_first - p . axis) inv_spacing = (d_first - p . axis) / spacing. With ``jitter``, texel
+    t's planes (and slabs) are offset by j_t = jitter.texel_offsets(...) slice units along its light ray."""
 
     e1: object
     e2: object
@@ -73,15 +75,18 @@ class LookupFrame:
     d_first: object
     inv_spacing: object
     spacing: object
+    jitter: object = None      # None, or the texels' plane offsets: amplitude and rotation (jitter.py)
+    rotation: object = None
 
 
-def lookup_frame(mi, g: SliceGeometry, res: int) -> LookupFrame:
-    """``LookupFrame`` of geometry ``g`` with a ``res`` x ``res`` buffer (values rounded from float64)."""
+def lookup_frame(mi, g: SliceGeometry, res: int, jitter=None) -> LookupFrame:
+    """``LookupFrame`` of geometry ``g`` with a ``res`` x ``res`` buffer (values rounded from float64);
+    ``jitter``: None or (amplitude, rotation) of the texels' plane offsets, opaque scalars."""
     vec = lambda v: mi.Vector3f(*(dr_opaque(mi, c) for c in v))  # noqa: E731
     return LookupFrame(vec(g.e1), vec(g.e2), vec(g.axis), dr_opaque(mi, g.u_range[0]),
                        dr_opaque(mi, res / (g.u_range[1] - g.u_range[0])), dr_opaque(mi, g.v_range[0]),
                        dr_opaque(mi, res / (g.v_range[1] - g.v_range[0])), dr_opaque(mi, g.d_first),
-                       dr_opaque(mi, 1.0 / g.spacing), dr_opaque(mi, g.spacing))
+                       dr_opaque(mi, 1.0 / g.spacing), dr_opaque(mi, g.spacing), *(jitter or (None, None)))
 
 
 @dataclass
@@ -153,8 +158,9 @@ class LightVolume:
         self.bind(plan, self.run(plan, source))
 
     def plan(self, g: SliceGeometry, grid_box, translucent: bool, variance_per_m=None,
-             reference_variance_per_m: float | None = None) -> "SweepPlan":
-        """Everything ``run`` needs from ``g`` and the parameters, as kernel inputs (see ``sweep``)."""
+             reference_variance_per_m: float | None = None, jitter=None) -> "SweepPlan":
+        """Everything ``run`` needs from ``g`` and the parameters, as kernel inputs (see ``sweep``);
+        ``jitter``: None, or (amplitude, rotation) of per-texel plane offsets (opaque scalars, jitter.py)."""
         mi = self.mi
         dl = dr_opaque(mi, g.light_step_m)
         chunk, var, inv_du2, inv_dv2 = g.n_slices, None, None, None
@@ -165,7 +171,7 @@ class LightVolume:
                tuple(np.asarray(grid_box, dtype=np.float64).ravel()))
         if self._rays_key != key:  # a slider move keeps the light rays (numpy work) of the last frame
             self._rays, self._rays_key = self._light_rays(g, grid_box), key
-        return SweepPlan(*self._rays, dl, var, inv_du2, inv_dv2, lookup_frame(mi, g, self.res), g.n_slices,
+        return SweepPlan(*self._rays, dl, var, inv_du2, inv_dv2, lookup_frame(mi, g, self.res, jitter), g.n_slices,
                          int(chunk), bool(translucent))
 
     def run(self, plan: "SweepPlan", source):
@@ -175,8 +181,11 @@ class LightVolume:
         R, N = self.res, plan.n_slices
         store = dr.zeros(mi.Float, (N + 1) * R * R * 2)
         lane = dr.arange(mi.UInt32, R * R)
+        offset = None
+        if plan.frame.jitter is not None:
+            offset = texel_offsets(dr, mi, lane % R, lane // R, plan.frame.jitter, plan.frame.rotation)
         through_slab = _slab_step(mi, source, (plan.q0, plan.qs, plan.kin, plan.kout), plan.dl, store, lane,
-                                  dr.opaque(mi.UInt32, R * R), plan.translucent)
+                                  dr.opaque(mi.UInt32, R * R), plan.translucent, offset, N)
         D = dr.full(mi.Float, 1.0, R * R)
         I = dr.zeros(mi.Float, R * R)
         starts = list(range(0, N, plan.chunk))
@@ -306,6 +315,8 @@ class LightVolume:
         def light(v):
             return mi.Array2f(dr.exp(v[0]), v[1]) if log_direct else v
 
+        if f.jitter is not None:
+            return self._lookup_offset(kf, x0, y0, fx, fy, outside, texel, light, with_previous, exit_plane)
         here, after = plane(k0), plane(k0 + 1)
         val = light((1.0 - fk) * here + fk * after)
         unlit = (kf < -0.5) | outside
@@ -318,6 +329,34 @@ class LightVolume:
         unlit = (kf < 0.5) | outside
         return out, (dr.select(unlit, 1.0, prev[0]), dr.select(unlit, 0.0, prev[1]))
 
+    def _lookup_offset(self, kf, x0, y0, fx, fy, outside, texel, light, with_previous, exit_plane):
+        """``lookup`` where every texel's planes are offset (``LookupFrame.jitter``): linear between the
+        two nearest of each corner texel's planes, then bilinear between the four corners."""
+        mi = self.mi
+        import drjit as dr
+        f, R, N = self.frame, self.res, self.n_slices
+        val, prev = 0.0, 0.0
+        for dx, dy, w in ((0, 0, (1 - fx) * (1 - fy)), (1, 0, fx * (1 - fy)), (0, 1, (1 - fx) * fy), (1, 1, fx * fy)):
+            xt, yt = x0 + dx, y0 + dy
+            kt = kf if exit_plane else kf - texel_offsets(dr, mi, xt, yt, f.jitter, f.rotation)
+            kc = dr.clip(kt, 0.0, float(N))
+            k0 = dr.minimum(mi.UInt32(kc), max(N - 1, 0))
+            fk = kc - mi.Float(k0)
+            base = (k0 * R + yt) * R + xt
+            here, after = texel(base), texel(base + R * R)
+            val = val + w * ((1.0 - fk) * here + fk * after)
+            if with_previous:
+                before = texel(dr.select(k0 > 0, base - R * R, base))
+                prev = prev + w * dr.select(k0 > 0, (1.0 - fk) * before + fk * here, here)
+        val = light(val)
+        unlit = (kf < -0.5) | outside
+        out = (dr.select(unlit, 1.0, val[0]), dr.select(unlit, 0.0, val[1]))
+        if not with_previous:
+            return out
+        prev = light(prev)
+        unlit = (kf < 0.5) | outside
+        return out, (dr.select(unlit, 1.0, prev[0]), dr.select(unlit, 0.0, prev[1]))
+
     def light_at(self, points) -> tuple[np.ndarray, np.ndarray]:
         """Direct and indirect light (fractions of the light's irradiance) at world points (N, 3)."""
         mi = self.mi
@@ -326,18 +365,26 @@ class LightVolume:
         return np.asarray(direct, dtype=np.float64), np.asarray(indirect, dtype=np.float64)
 
 
-def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool):
+def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offset=None, n_slices: int = 0):
     """The step of the light pass through one slab k: (k, D, I) -> (D, I) after the slab, storing the
     light at plane k (``store[(lane + k plane) 2 + (0, 1)]``). ``rays``: (q0, qs, kin, kout) of
-    ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab."""
+    ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab; ``offset``: None or each
+    lane's plane offset j (slice units): its slabs are [k + j - 1/2, k + j + 1/2], the first and the last
+    reaching to where the ray enters and leaves the box."""
     import drjit as dr
     q0, qs, kin, kout = rays
 
     def through_slab(k, D, I):
-        """Carry (D, I) through slab k in two halves, [k - 1/2, k] and [k, k + 1/2] clipped to the
-        box (slice units); store the light at plane k."""
+        """Carry (D, I) through slab k in two halves, [k - 1/2, k] and [k, k + 1/2] (+ j) clipped to
+        the box (slice units); store the light at plane k (+ j)."""
         kf = mi.Float(k)
-        a, m, b = (dr.clip(kf + h, kin, kout) for h in (-0.5, 0.0, 0.5))
+        if offset is None:
+            a, m, b = (dr.clip(kf + h, kin, kout) for h in (-0.5, 0.0, 0.5))
+        else:
+            kj = kf + offset
+            a = dr.select(k == 0, kin, dr.clip(kj - 0.5, kin, kout))
+            m = dr.clip(kj, kin, kout)
+            b = dr.select(k == n_slices - 1, kout, dr.clip(kj + 0.5, kin, kout))
         ext, fwd = source.eval(q0 + (0.5 * (a + b)) * qs)  # the clipped slab's middle
         ext = dr.maximum(ext, 0.0)
         t1, t2 = dr.exp(-ext * dl * (m - a)), dr.exp(-ext * dl * (b - m))

@@ -296,9 +296,12 @@ class SliceRenderer:
         mi = self.mi
         translucent = self.mode.light == "translucent"
         blur = params.blur_length_m if params.blur_length_m is not None else self.voxel_m
+        # offset light planes too (only when asked for: aligned planes keep the default frame as it was)
+        jitter = None if _number(params.slab_jitter) == 0.0 else \
+            (_param(mi, params.slab_jitter), _param(mi, jitter_rotation(params.jitter_frame)))
         sun = self.light.plan(g, self.grid_box, translucent,
                               variance_per_metre(params.cone_angle_deg, blur, mi) if translucent else None,
-                              variance_per_metre(REFERENCE_CONE_DEG, _number(blur)) if translucent else None)
+                              variance_per_metre(REFERENCE_CONE_DEG, _number(blur)) if translucent else None, jitter)
         sky, sky_store, sky_frame = None, None, None
         if self.sky_light is not None:
             if rebuilt:  # the zenith sweep depends on the extinction only
