@@ -198,18 +198,20 @@ class SliceRenderer:
                 raise ValueError(f"unknown species {n!r} in detail; expected one of {self.vol.species}")
         return [float(params.detail.get(n, DEFAULT_DETAIL)) for n in self.vol.species]
 
-    def _build_textures(self, scale, omega, fwd, detail=None):
-        """Eye texture [beta_ext, beta_sca per group] and light source [beta_ext, beta_forward] (1/m)."""
+    def _build_textures(self, scale, omega, fwd, detail=None, data: dict | None = None):
+        """Eye texture [beta_ext, beta_sca per group] and light source [beta_ext, beta_forward] (1/m);
+        ``data``: the arrays read and written (default the renderer's; see ``_texture_data``)."""
         mi = self.mi
         import drjit as dr
+        d = data or self._texture_data()
         S = self.n_species
         vox = dr.arange(mi.UInt32, int(np.prod(self.shape)))
         sc, om, fw = ([_param(mi, v) for v in x] for x in (scale, omega, fwd))
         ext, beta_fwd, sca = mi.Float(0.0), mi.Float(0.0), []
-        noise = None if self.detail_noise is None else dr.gather(mi.Float, self.detail_noise, vox)
+        noise = None if d["noise"] is None else dr.gather(mi.Float, d["noise"], vox)
         amp = None if noise is None else [_param(mi, a) for a in detail]
         for s in range(S):
-            b = dr.gather(mi.Float, self.beta_s, vox * S + s) * sc[s]
+            b = dr.gather(mi.Float, d["beta_s"], vox * S + s) * sc[s]
             if noise is not None:  # the amount of detail per species (paper section 5.4), log-normal, mean one
                 b = b * dr.exp(amp[s] * noise - 0.5 * amp[s] * amp[s])
             ext += b
@@ -221,8 +223,14 @@ class SliceRenderer:
             for si in members[1:]:
                 g_sca = g_sca + sca[si]
             grouped.append(g_sca)
-        self.tex_eye.set_tensor(mi.TensorXf(_interleave(mi, [ext] + grouped), shape=self.shape + (1 + len(self.groups),)))
-        self.tex_light_src.set_tensor(mi.TensorXf(_interleave(mi, [ext, beta_fwd]), shape=self.shape + (2,)))
+        d["tex_eye"].set_tensor(mi.TensorXf(_interleave(mi, [ext] + grouped), shape=self.shape + (1 + len(self.groups),)))
+        d["tex_light"].set_tensor(mi.TensorXf(_interleave(mi, [ext, beta_fwd]), shape=self.shape + (2,)))
+
+    def _texture_data(self) -> dict:
+        """The arrays ``_build_textures`` reads (the species' extinction, the detail noise) and the
+        textures it writes."""
+        return {"beta_s": self.beta_s, "noise": self.detail_noise, "tex_eye": self.tex_eye,
+                "tex_light": self.tex_light_src}
 
     # ------------------------------------------------------------------ public
     def light_at(self, points) -> tuple[np.ndarray, np.ndarray]:
@@ -254,12 +262,12 @@ class SliceRenderer:
         scale, omega, tint, fwd = self._species_vectors(params)
         detail = self._detail_amplitudes(params) if self.detail_noise is not None else None
         key = _texture_key(scale, omega, fwd, detail)
-        rebuilt = key is None or key != self._texture_key
-        if rebuilt:  # a sun or camera move keeps the volume's textures (and the zenith light volume)
-            self._build_textures(scale, omega, fwd, detail)
+        rebuilt = key is None or key != self._texture_key  # a sun or camera move keeps the textures
         self._texture_key = key
         g = slice_geometry(spec.camera.forward, spec.sun.to_sun, self.box, self.slices)
         inputs = self._frame_inputs(g, spec, params, tint, rebuilt)
+        if rebuilt:  # built by the frame's kernels, from opaque values
+            inputs["build"] = [[_param(mi, v) for v in x] for x in (scale, omega, fwd, detail or [])]
         if return_arrays or self.differentiable or not self.frozen:
             out, transmittance, store, sky_store = self._kernels(inputs, timed=not return_arrays)
             if return_arrays:
@@ -309,13 +317,16 @@ class SliceRenderer:
                 sky_frame = sky.frame
             else:
                 sky_store, sky_frame = self.sky_light.store, self.sky_light.frame
-        return {"tex_eye": self.tex_eye, "tex_light": self.tex_light_src, "sun": sun, "sky": sky,
+        return {**self._texture_data(), "build": None, "sun": sun, "sky": sky,
                 "sky_store": sky_store, "sky_frame": sky_frame, "eye": self._eye_inputs(spec, params, tint)}
 
     def _kernels(self, inputs: dict, timed: bool = False):
         """The frame's kernels from ``_frame_inputs``: (radiance, transmittance, sun store, zenith store).
         Reads nothing but ``inputs`` and constants of the renderer (``dr.freeze`` records it)."""
         import drjit as dr
+        if inputs["build"] is not None:
+            scale, omega, fwd, detail = inputs["build"]
+            self._build_textures(scale, omega, fwd, detail, data=inputs)
         store = self.light.run(inputs["sun"], inputs["tex_light"])
         sky_store = inputs["sky_store"]
         if inputs["sky"] is not None:
@@ -337,10 +348,13 @@ class SliceRenderer:
         sun = np.asarray(spec.sun.irradiance, dtype=np.float64)
         F = lambda a: aligned_float(mi, a)  # noqa: E731
         phase_colour, diffuse_colour = [], []
-        for members in self.groups:
+        for gi, members in enumerate(self.groups):
             colour = self.colors[members[0]] if self.mode.species_colors else np.mean(tint[members], axis=0)
-            k = self.tables[members[0]].eval_cos(rays.cos_to_light) * (colour * sun)[None]
-            phase_colour.append(mi.Color3f(*(F(k[:, c]) for c in range(3))))
+            key = (gi, tuple(colour * sun))  # per view (and sun): a slider move reuses the uploaded array
+            if key not in rays.phase_colour:
+                k = self.tables[members[0]].eval_cos(rays.cos_to_light) * (colour * sun)[None]
+                rays.phase_colour[key] = mi.Color3f(*(F(k[:, c]) for c in range(3)))
+            phase_colour.append(rays.phase_colour[key])
             diffuse_colour.append(_colour(mi, colour * sun / (4 * np.pi)))
         e_sky = sky_irradiance_horizontal(spec, cache=self.views.sky)
         model = None
@@ -420,16 +434,15 @@ def _scatter_groups(tables, colours) -> list[list[int]]:
 
 
 def _interleave(mi, channels):
-    """Flat array with the channels interleaved (voxel-major), as a (..., C) tensor's storage."""
+    """Flat array with the channels interleaved (voxel-major), as a (..., C) tensor's storage: one kernel
+    over the voxels that scatters each voxel's C values."""
     import drjit as dr
     C = len(channels)
     n = dr.width(channels[0])
-    idx = dr.arange(mi.UInt32, n * C)
-    vox = idx // C
-    ch = idx - vox * C
-    out = dr.gather(mi.Float, channels[0], vox)
-    for c in range(1, C):
-        out = dr.select(ch == c, dr.gather(mi.Float, channels[c], vox), out)
+    vox = dr.arange(mi.UInt32, n) * C
+    out = dr.zeros(mi.Float, n * C)
+    for c in range(C):
+        dr.scatter(out, channels[c], vox + c)
     return out
 
 

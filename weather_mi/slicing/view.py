@@ -4,7 +4,7 @@ the ray misses the ground), kept for the last few views in a bounded cache."""
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -43,7 +43,8 @@ class ViewRays:
     ``t0``/``t1``: where each ray is inside the slicing box (t1 clipped by the ground; t0 > t1:
     misses), ``ground``: where it hits the ground (``hit_ground``), ``background``: sky radiance
     along the ray (zero where it hits the ground, which the eye pass lights), ``pattern``: the
-    pixel's slab-offset pattern in [0, 1) (jitter.py)."""
+    pixel's slab-offset pattern in [0, 1) (jitter.py), ``phase_colour``: a cache of the renderer's
+    per-pixel phase colours (they depend on the view, the sun and the colour only)."""
 
     origin: object       # mi.Point3f
     direction: object    # mi.Vector3f
@@ -55,6 +56,7 @@ class ViewRays:
     cos_to_light: np.ndarray  # (N,) numpy, for the phase functions
     n: int
     pattern: object = None    # mi.Float
+    phase_colour: dict = field(default_factory=lambda: BoundedCache(8))  # per-pixel phase colours by (group, colour)
 
 
 class ViewCache:
