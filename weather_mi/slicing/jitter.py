@@ -4,10 +4,18 @@ The eye pass composites slabs [k - 1/2, k + 1/2] between slice planes; on the li
 gridded cloud the slab boundaries show as steps that follow the planes ("terraces"). Shifting every
 pixel's slabs by its own offset j (slice units) moves the steps to a different depth in each pixel, so
 their coherent pattern turns into fine, unstructured grain (benchmarks/banding.py measures the
-difference). The offsets are interleaved gradient noise (Jimenez 2014), a fixed function of the pixel,
+difference). The light pass does the same per texel of the light buffer (``texel_offsets``: texel t's slabs and
+stored planes at k + j_t), so that the kinks of the light's interpolation between planes do not line up
+either. The offsets are interleaved gradient noise (Jimenez 2014), a fixed function of the pixel (texel),
 so the image does not crawl between frames; ``SliceParams.jitter_frame`` rotates them by the golden ratio
 (Cranley-Patterson rotation), so that frames averaged with successive indices converge to the smooth
 slab average.
+
+Measured (benchmarks/banding.py, demo supercell, 640 x 480, 128 slices): the banding energy falls 6.1x
+("multiple") and 4.6x (per-species translucent) at equal frame time (0.8-1.04x), the slice convergence
+is no worse, but the grain raises the per-pixel RMS error against 1024 slices by 28% in the "multiple"
+model. The default stays 0 (aligned: images, the calibration and the study's per-pixel metrics as
+before); the viewer, where the terraces are seen, can ask for ``SliceParams(slab_jitter=1.0)``.
 """
 from __future__ import annotations
 

@@ -122,7 +122,9 @@ class SliceParams:
         In [0, 1]: the profile is in transport optical depths diffusion_scale x tau (~ 1 - g).
     slab_jitter : float, default 0.0
         In [0, 1]: each pixel's slabs are offset by up to +-slab_jitter / 2 slice (jitter.py), which
-        turns the terraces of the slab planes on lit faces into fine grain (0: aligned slabs, as before).
+        turns the terraces of the slab planes on lit faces into fine grain (0: aligned slabs, as before;
+        the default by measurement, see jitter.py). Nonzero also offsets the light buffer's planes per
+        texel (a first nonzero value compiles once; values after it compile nothing).
     jitter_frame : int, default 0
         Rotates the slab offsets (a different but equally stable pattern per index): frames averaged
         over successive indices converge to the smooth slab average.
