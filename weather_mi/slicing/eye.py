@@ -38,8 +38,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .geometry import SliceGeometry
-from .light import LightVolume
+from .light import LightVolume, LookupFrame
 
 
 @dataclass
@@ -196,19 +195,22 @@ class SlabAverage:
         return dr.select(self.thin, 1.0, dr.exp(dr.minimum(self.base + s, 30.0)))
 
 
-def composite(mi, g: SliceGeometry, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
-              ambient, ground, differentiable: bool = False):
-    """Radiance (mi.Color3f) and transmittance of every pixel ray.
+def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
+              ambient, ground, differentiable: bool = False, offset=None):
+    """Radiance (mi.Color3f) and transmittance of every pixel ray through the slices of ``f`` (the sun's
+    light volume's frame: the slice planes of the frame's geometry).
 
     phase_colour   : per group, P_g(Theta) colour_g E_sun along each ray (mi.Color3f, one per pixel)
     diffuse_colour : per group, colour_g E_sun / (4 pi) (mi.Color3f)
     ambient        : mi.Color3f, L_amb before occlusion
     ground         : None, or (rho E_sun mu0 / pi, rho E_sky / pi) as two mi.Color3f
+    offset         : None, or each ray's slab offset j in slice units (mi.Float, |j| <= 1/2, see jitter.py):
+                     its slabs are [k + j - 1/2, k + j + 1/2] instead of [k - 1/2, k + 1/2], so that the
+                     terraces the slab planes leave on lit faces fall at a different depth in every pixel
     """
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
-    s = mi.Vector3f(*(op(c) for c in g.axis))
-    d_first, spacing = op(g.d_first), op(g.spacing)
+    s, d_first, spacing = f.axis, f.d_first, f.spacing
     glo = mi.Point3f(*(op(c) for c in grid_box[0]))
     inv_span = mi.Vector3f(*(op(1.0 / (h - l)) for l, h in zip(*grid_box)))
     o, d = rays.origin, rays.direction
@@ -218,15 +220,16 @@ def composite(mi, g: SliceGeometry, rays, tex_eye, grid_box, phase_colour, diffu
     ka = (d_first - (os_ + rays.t0 * sd)) / spacing                 # the ray's span in slice units
     kb = (d_first - (os_ + rays.t1 * sd)) / spacing
     k_step = dr.select(sd < 0, 1.0, -1.0)                           # k grows along the ray when s . d < 0
-    k_start = dr.round(ka)                                          # slab holding the entry point
-    count = dr.select(rays.t1 > rays.t0, mi.UInt32(dr.abs(dr.round(kb) - k_start) + 1.5), 0)
+    j = 0.0 if offset is None else offset
+    k_start = dr.round(ka - j)                                      # slab holding the entry point
+    count = dr.select(rays.t1 > rays.t0, mi.UInt32(dr.abs(dr.round(kb - j) - k_start) + 1.5), 0)
     k_lo, k_hi = dr.minimum(ka, kb), dr.maximum(ka, kb)
     de = spacing / dr.abs(sd)
     G = len(phase_colour)
 
     def body(i, T, C, active):
-        kc = k_start + k_step * mi.Float(i)
-        # slab [k - 1/2, k + 1/2] clipped to the ray's span in the box; sample at its middle
+        kc = k_start + k_step * mi.Float(i) + j
+        # slab [k + j - 1/2, k + j + 1/2] clipped to the ray's span in the box; sample at its middle
         a = dr.clip(kc - 0.5, k_lo, k_hi)
         b = dr.clip(kc + 0.5, k_lo, k_hi)
         kf = 0.5 * (a + b)
@@ -249,7 +252,7 @@ def composite(mi, g: SliceGeometry, rays, tex_eye, grid_box, phase_colour, diffu
 
     n = rays.n
     state = (dr.zeros(mi.UInt32, n), dr.full(mi.Float, 1.0, n), dr.zeros(mi.Color3f, n), count > 0)
-    kw = dict(max_iterations=g.n_slices + 2, mode="evaluated") if differentiable else {}
+    kw = dict(max_iterations=n_slices + 2, mode="evaluated") if differentiable else {}
     _, T, C, _ = dr.while_loop(state, lambda *st: st[-1], body, **kw)
 
     if ground is not None:

@@ -20,11 +20,13 @@ given distance is the same for any number of slices.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..jitarrays import aligned_float
 from .geometry import SliceGeometry, ray_box
+from .jitter import texel_offsets
 
 # largest blur variance per step, in texels^2, that the 5-tap kernel reproduces with weights >= 0
 MAX_TEXEL_VARIANCE = 4.0 / 3.0
@@ -56,6 +58,64 @@ def blur_weights(dr, var):
     return 1.0 - 2.0 * w1 - 2.0 * w2, w1, w2
 
 
+@dataclass
+class LookupFrame:
+    """A light volume's geometry as kernel values (opaque scalars, a Dr.Jit PyTree): buffer axes e1, e2
+    and the slice axis (unit), buffer texel coordinates x = (p . e1 - u0) u_scale (likewise y), and the
+    slice index k = (d_first - p . axis) inv_spacing = (d_first - p . axis) / spacing. With ``jitter``, texel
+    t's planes (and slabs) are offset by j_t = jitter.texel_offsets(...) slice units along its light ray."""
+
+    e1: object
+    e2: object
+    axis: object
+    u0: object
+    u_scale: object
+    v0: object
+    v_scale: object
+    d_first: object
+    inv_spacing: object
+    spacing: object
+    jitter: object = None      # None, or the texels' plane offsets: amplitude and rotation (jitter.py)
+    rotation: object = None
+
+
+def lookup_frame(mi, g: SliceGeometry, res: int, jitter=None) -> LookupFrame:
+    """``LookupFrame`` of geometry ``g`` with a ``res`` x ``res`` buffer (values rounded from float64);
+    ``jitter``: None or (amplitude, rotation) of the texels' plane offsets, opaque scalars."""
+    vec = lambda v: mi.Vector3f(*(dr_opaque(mi, c) for c in v))  # noqa: E731
+    return LookupFrame(vec(g.e1), vec(g.e2), vec(g.axis), dr_opaque(mi, g.u_range[0]),
+                       dr_opaque(mi, res / (g.u_range[1] - g.u_range[0])), dr_opaque(mi, g.v_range[0]),
+                       dr_opaque(mi, res / (g.v_range[1] - g.v_range[0])), dr_opaque(mi, g.d_first),
+                       dr_opaque(mi, 1.0 / g.spacing), dr_opaque(mi, g.spacing), *(jitter or (None, None)))
+
+
+@dataclass
+class SweepPlan:
+    """Inputs of ``LightVolume.run`` (a Dr.Jit PyTree; the ints and the flag set the kernels' structure):
+    the light rays (q0, qs, kin, kout of ``LightVolume._light_rays``), the light path across a slab dl (m),
+    the blur's variance per slab (m^2) and inverse squared texel sizes (1/m^2; None unless translucent),
+    the store's ``LookupFrame``, the slice count and the slabs per blur step."""
+
+    q0: object
+    qs: object
+    kin: object
+    kout: object
+    dl: object
+    var: object
+    inv_du2: object
+    inv_dv2: object
+    frame: LookupFrame
+    n_slices: int
+    chunk: int
+    translucent: bool
+
+
+def dr_opaque(mi, value):
+    """A Python number as an opaque kernel scalar (a new value recompiles nothing)."""
+    import drjit as dr
+    return dr.opaque(mi.Float, float(value))
+
+
 class LightVolume:
     """Light arriving at every slice plane of a sweep from one light direction (the sun, or the
     zenith for skylight): ``sweep`` fills it, ``lookup`` reads it inside kernels, ``light_at`` from
@@ -66,13 +126,16 @@ class LightVolume:
         self.lo, self.hi = (np.asarray(p, dtype=np.float64) for p in box)  # slicing box (world)
         self.res = int(res)
         self.differentiable = differentiable
-        self.geometry: SliceGeometry | None = None
         self.store = None
+        self.frame: LookupFrame | None = None   # the geometry of the store, as kernel values
+        self.n_slices = 0
+        self._rays, self._rays_key = None, None
 
     # ------------------------------------------------------------------ the light pass
     def sweep(self, g: SliceGeometry, source, grid_box, translucent: bool, variance_per_m=None,
               reference_variance_per_m: float | None = None):
-        """Carry the light through the slices of ``g``.
+        """Carry the light through the slices of ``g``: ``plan`` then ``run`` (which the renderer's
+        recorded frame launches without tracing).
 
         Parameters
         ----------
@@ -91,33 +154,57 @@ class LightVolume:
             ``variance_per_m``. Keeping it independent of the interactive parameters keeps the image a
             smooth function of them (finite differences and reverse-mode gradients agree).
         """
-        mi = self.mi
-        import drjit as dr
-        R, N = self.res, g.n_slices
-        rays = self._light_rays(g, grid_box)
-        dl = dr.opaque(mi.Float, g.light_step_m)
-        store = dr.zeros(mi.Float, (N + 1) * R * R * 2)
-        lane = dr.arange(mi.UInt32, R * R)
-        through_slab = _slab_step(mi, source, rays, dl, store, lane, dr.opaque(mi.UInt32, R * R), translucent)
+        plan = self.plan(g, grid_box, translucent, variance_per_m, reference_variance_per_m)
+        self.bind(plan, self.run(plan, source))
 
-        D = dr.full(mi.Float, 1.0, R * R)
-        I = dr.zeros(mi.Float, R * R)
-        chunk = N
+    def plan(self, g: SliceGeometry, grid_box, translucent: bool, variance_per_m=None,
+             reference_variance_per_m: float | None = None, jitter=None) -> "SweepPlan":
+        """Everything ``run`` needs from ``g`` and the parameters, as kernel inputs (see ``sweep``);
+        ``jitter``: None, or (amplitude, rotation) of per-texel plane offsets (opaque scalars, jitter.py)."""
+        mi = self.mi
+        dl = dr_opaque(mi, g.light_step_m)
+        chunk, var, inv_du2, inv_dv2 = g.n_slices, None, None, None
         if translucent:
             chunk, var, du, dv = self._blur_plan(g, variance_per_m, reference_variance_per_m, dl)
-        starts = list(range(0, N, chunk))
+            inv_du2, inv_dv2 = dr_opaque(mi, 1.0 / du ** 2), dr_opaque(mi, 1.0 / dv ** 2)
+        key = (g.axis.tobytes(), g.to_light.tobytes(), g.d_first, g.spacing, g.n_slices, g.u_range, g.v_range,
+               tuple(np.asarray(grid_box, dtype=np.float64).ravel()))
+        if self._rays_key != key:  # a slider move keeps the light rays (numpy work) of the last frame
+            self._rays, self._rays_key = self._light_rays(g, grid_box), key
+        return SweepPlan(*self._rays, dl, var, inv_du2, inv_dv2, lookup_frame(mi, g, self.res, jitter), g.n_slices,
+                         int(chunk), bool(translucent))
+
+    def run(self, plan: "SweepPlan", source):
+        """The light pass's kernels: the store of (planes, R, R, 2) floats (see the module docstring)."""
+        mi = self.mi
+        import drjit as dr
+        R, N = self.res, plan.n_slices
+        store = dr.zeros(mi.Float, (N + 1) * R * R * 2)
+        lane = dr.arange(mi.UInt32, R * R)
+        offset = None
+        if plan.frame.jitter is not None:
+            offset = texel_offsets(dr, mi, lane % R, lane // R, plan.frame.jitter, plan.frame.rotation)
+        through_slab = _slab_step(mi, source, (plan.q0, plan.qs, plan.kin, plan.kout), plan.dl, store, lane,
+                                  dr.opaque(mi.UInt32, R * R), plan.translucent, offset, N)
+        D = dr.full(mi.Float, 1.0, R * R)
+        I = dr.zeros(mi.Float, R * R)
+        starts = list(range(0, N, plan.chunk))
         for j, k0 in enumerate(starts):
-            k1 = min(k0 + chunk, N)
-            if translucent and j > 0:
+            k1 = min(k0 + plan.chunk, N)
+            if plan.translucent and j > 0:
                 n_prev = dr.opaque(mi.Float, float(k0 - starts[j - 1]))
-                I = _blur(mi, dr, I, R, blur_weights(dr, var * n_prev * dr.opaque(mi.Float, 1.0 / du ** 2)),
-                          blur_weights(dr, var * n_prev * dr.opaque(mi.Float, 1.0 / dv ** 2)))
+                I = _blur(mi, dr, I, R, blur_weights(dr, plan.var * n_prev * plan.inv_du2),
+                          blur_weights(dr, plan.var * n_prev * plan.inv_dv2))
             D, I = self._through_slabs(through_slab, D, I, k0, k1, lane, store)
         at = (lane + dr.opaque(mi.UInt32, N * R * R)) * 2
         dr.scatter(store, D, at)
         dr.scatter(store, I, at + 1)
         dr.eval(store)
-        self.store, self.geometry = store, g
+        return store
+
+    def bind(self, plan: "SweepPlan", store):
+        """Make ``store`` (of ``run(plan, ...)``) the light that ``lookup`` reads."""
+        self.store, self.frame, self.n_slices = store, plan.frame, plan.n_slices
 
     def _light_rays(self, g: SliceGeometry, grid_box):
         """One light ray per buffer texel: (q0, qs, kin, kout), its point on plane 0 and its step to the
@@ -201,20 +288,19 @@ class LightVolume:
         slab unshadowed and then drops)."""
         mi = self.mi
         import drjit as dr
-        g, R = self.geometry, self.res
-        e1, e2, s = (mi.Vector3f(*(dr.opaque(mi.Float, float(c)) for c in v)) for v in (g.e1, g.e2, g.axis))
+        f, R, n_slices = self.frame, self.res, self.n_slices
         fR = float(R)
-        x = (dr.dot(p, e1) - dr.opaque(mi.Float, g.u_range[0])) * dr.opaque(mi.Float, fR / (g.u_range[1] - g.u_range[0]))
-        y = (dr.dot(p, e2) - dr.opaque(mi.Float, g.v_range[0])) * dr.opaque(mi.Float, fR / (g.v_range[1] - g.v_range[0]))
-        kf = (dr.opaque(mi.Float, g.d_first) - dr.dot(p, s)) * dr.opaque(mi.Float, 1.0 / g.spacing)
+        x = (dr.dot(p, f.e1) - f.u0) * f.u_scale
+        y = (dr.dot(p, f.e2) - f.v0) * f.v_scale
+        kf = (f.d_first - dr.dot(p, f.axis)) * f.inv_spacing
         if exit_plane:
-            kf = mi.Float(float(g.n_slices))
+            kf = mi.Float(float(n_slices))
         outside = (x < 0.0) | (x > fR) | (y < 0.0) | (y > fR)
         x = dr.clip(x - 0.5, 0.0, fR - 1.0)
         y = dr.clip(y - 0.5, 0.0, fR - 1.0)
-        kc = dr.clip(kf, 0.0, float(g.n_slices))
+        kc = dr.clip(kf, 0.0, float(n_slices))
         x0, y0 = dr.minimum(mi.UInt32(x), R - 2), dr.minimum(mi.UInt32(y), R - 2)
-        k0 = dr.minimum(mi.UInt32(kc), max(g.n_slices - 1, 0))
+        k0 = dr.minimum(mi.UInt32(kc), max(n_slices - 1, 0))
         fx, fy, fk = x - mi.Float(x0), y - mi.Float(y0), kc - mi.Float(k0)
 
         def texel(at):
@@ -229,6 +315,8 @@ class LightVolume:
         def light(v):
             return mi.Array2f(dr.exp(v[0]), v[1]) if log_direct else v
 
+        if f.jitter is not None:
+            return self._lookup_offset(kf, x0, y0, fx, fy, outside, texel, light, with_previous, exit_plane)
         here, after = plane(k0), plane(k0 + 1)
         val = light((1.0 - fk) * here + fk * after)
         unlit = (kf < -0.5) | outside
@@ -241,6 +329,34 @@ class LightVolume:
         unlit = (kf < 0.5) | outside
         return out, (dr.select(unlit, 1.0, prev[0]), dr.select(unlit, 0.0, prev[1]))
 
+    def _lookup_offset(self, kf, x0, y0, fx, fy, outside, texel, light, with_previous, exit_plane):
+        """``lookup`` where every texel's planes are offset (``LookupFrame.jitter``): linear between the
+        two nearest of each corner texel's planes, then bilinear between the four corners."""
+        mi = self.mi
+        import drjit as dr
+        f, R, N = self.frame, self.res, self.n_slices
+        val, prev = 0.0, 0.0
+        for dx, dy, w in ((0, 0, (1 - fx) * (1 - fy)), (1, 0, fx * (1 - fy)), (0, 1, (1 - fx) * fy), (1, 1, fx * fy)):
+            xt, yt = x0 + dx, y0 + dy
+            kt = kf if exit_plane else kf - texel_offsets(dr, mi, xt, yt, f.jitter, f.rotation)
+            kc = dr.clip(kt, 0.0, float(N))
+            k0 = dr.minimum(mi.UInt32(kc), max(N - 1, 0))
+            fk = kc - mi.Float(k0)
+            base = (k0 * R + yt) * R + xt
+            here, after = texel(base), texel(base + R * R)
+            val = val + w * ((1.0 - fk) * here + fk * after)
+            if with_previous:
+                before = texel(dr.select(k0 > 0, base - R * R, base))
+                prev = prev + w * dr.select(k0 > 0, (1.0 - fk) * before + fk * here, here)
+        val = light(val)
+        unlit = (kf < -0.5) | outside
+        out = (dr.select(unlit, 1.0, val[0]), dr.select(unlit, 0.0, val[1]))
+        if not with_previous:
+            return out
+        prev = light(prev)
+        unlit = (kf < 0.5) | outside
+        return out, (dr.select(unlit, 1.0, prev[0]), dr.select(unlit, 0.0, prev[1]))
+
     def light_at(self, points) -> tuple[np.ndarray, np.ndarray]:
         """Direct and indirect light (fractions of the light's irradiance) at world points (N, 3)."""
         mi = self.mi
@@ -249,18 +365,26 @@ class LightVolume:
         return np.asarray(direct, dtype=np.float64), np.asarray(indirect, dtype=np.float64)
 
 
-def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool):
+def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offset=None, n_slices: int = 0):
     """The step of the light pass through one slab k: (k, D, I) -> (D, I) after the slab, storing the
     light at plane k (``store[(lane + k plane) 2 + (0, 1)]``). ``rays``: (q0, qs, kin, kout) of
-    ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab."""
+    ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab; ``offset``: None or each
+    lane's plane offset j (slice units): its slabs are [k + j - 1/2, k + j + 1/2], the first and the last
+    reaching to where the ray enters and leaves the box."""
     import drjit as dr
     q0, qs, kin, kout = rays
 
     def through_slab(k, D, I):
-        """Carry (D, I) through slab k in two halves, [k - 1/2, k] and [k, k + 1/2] clipped to the
-        box (slice units); store the light at plane k."""
+        """Carry (D, I) through slab k in two halves, [k - 1/2, k] and [k, k + 1/2] (+ j) clipped to
+        the box (slice units); store the light at plane k (+ j)."""
         kf = mi.Float(k)
-        a, m, b = (dr.clip(kf + h, kin, kout) for h in (-0.5, 0.0, 0.5))
+        if offset is None:
+            a, m, b = (dr.clip(kf + h, kin, kout) for h in (-0.5, 0.0, 0.5))
+        else:
+            kj = kf + offset
+            a = dr.select(k == 0, kin, dr.clip(kj - 0.5, kin, kout))
+            m = dr.clip(kj, kin, kout)
+            b = dr.select(k == n_slices - 1, kout, dr.clip(kj + 0.5, kin, kout))
         ext, fwd = source.eval(q0 + (0.5 * (a + b)) * qs)  # the clipped slab's middle
         ext = dr.maximum(ext, 0.0)
         t1, t2 = dr.exp(-ext * dl * (m - a)), dr.exp(-ext * dl * (b - m))

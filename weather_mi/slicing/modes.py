@@ -120,6 +120,14 @@ class SliceParams:
         side; little in thin cloud).
     diffusion_scale : float, default MULTIPLE_DEFAULTS["diffusion_scale"]
         In [0, 1]: the profile is in transport optical depths diffusion_scale x tau (~ 1 - g).
+    slab_jitter : float, default 0.0
+        In [0, 1]: each pixel's slabs are offset by up to +-slab_jitter / 2 slice (jitter.py), which
+        turns the terraces of the slab planes on lit faces into fine grain (0: aligned slabs, as before;
+        the default by measurement, see jitter.py). Nonzero also offsets the light buffer's planes per
+        texel (a first nonzero value compiles once; values after it compile nothing).
+    jitter_frame : int, default 0
+        Rotates the slab offsets (a different but equally stable pattern per index): frames averaged
+        over successive indices converge to the smooth slab average.
     detail : dict of str to float, default {}
         Detail modes with a ``detail_noise`` renderer: the amount of simulated detail per species
         (paper section 5.4), the amplitude s in [0, 3] of the log-normal multiplier exp(s n - s^2/2) of
@@ -144,6 +152,8 @@ class SliceParams:
     sky_extinction: float = MULTIPLE_DEFAULTS["sky_extinction"]
     diffusion_gain: float = MULTIPLE_DEFAULTS["diffusion_gain"]
     diffusion_scale: float = MULTIPLE_DEFAULTS["diffusion_scale"]
+    slab_jitter: float = 0.0
+    jitter_frame: int = 0
     detail: dict = field(default_factory=dict)
 
     def __post_init__(self):
@@ -157,7 +167,7 @@ class SliceParams:
             raise ValueError(f"albedo must be in [0, 1], got {self.albedo}")
         if number(self.blur_length_m) and not self.blur_length_m >= 0.0:
             raise ValueError(f"blur_length_m must be >= 0, got {self.blur_length_m}")
-        for name in ("ms_extinction", "ms_contribution", "ms_eccentricity", "diffusion_scale"):
+        for name in ("ms_extinction", "ms_contribution", "ms_eccentricity", "diffusion_scale", "slab_jitter"):
             v = getattr(self, name)
             if number(v) and not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {v}")

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import math
 import time
+import weakref
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -25,6 +27,7 @@ from ..scene import SceneSpec
 from .background import sky_irradiance_horizontal
 from .eye import LightModel, composite
 from .geometry import slice_geometry, slicing_box
+from .jitter import jitter_rotation, slab_offsets
 from .light import LightVolume, _param, auto_light_res, variance_per_metre
 from .modes import SliceMode, SliceParams
 from .view import ViewCache
@@ -153,6 +156,11 @@ class SliceRenderer:
         self.g_scattering = float(np.sum(sca * gs) / np.sum(sca)) if np.sum(sca) > 0 else 0.85
         self._texture_key = None  # the per-species inputs of the textures last built (plain numbers)
         self.timing = {}
+        self._t_light = None
+        # frames whose inputs keep their structure launch the recorded kernels without tracing Python
+        # (dr.freeze; FROZEN_FRAMES False or SliceRenderer.frozen = False: traced every frame)
+        self.frozen = FROZEN_FRAMES
+        self._frozen_kernels = _freeze(weakref.ref(self))
 
     # ------------------------------------------------------------------ per-frame volume data
     def _species_vectors(self, params: SliceParams):
@@ -190,18 +198,20 @@ class SliceRenderer:
                 raise ValueError(f"unknown species {n!r} in detail; expected one of {self.vol.species}")
         return [float(params.detail.get(n, DEFAULT_DETAIL)) for n in self.vol.species]
 
-    def _build_textures(self, scale, omega, fwd, detail=None):
-        """Eye texture [beta_ext, beta_sca per group] and light source [beta_ext, beta_forward] (1/m)."""
+    def _build_textures(self, scale, omega, fwd, detail=None, data: dict | None = None):
+        """Eye texture [beta_ext, beta_sca per group] and light source [beta_ext, beta_forward] (1/m);
+        ``data``: the arrays read and written (default the renderer's; see ``_texture_data``)."""
         mi = self.mi
         import drjit as dr
+        d = data or self._texture_data()
         S = self.n_species
         vox = dr.arange(mi.UInt32, int(np.prod(self.shape)))
         sc, om, fw = ([_param(mi, v) for v in x] for x in (scale, omega, fwd))
         ext, beta_fwd, sca = mi.Float(0.0), mi.Float(0.0), []
-        noise = None if self.detail_noise is None else dr.gather(mi.Float, self.detail_noise, vox)
+        noise = None if d["noise"] is None else dr.gather(mi.Float, d["noise"], vox)
         amp = None if noise is None else [_param(mi, a) for a in detail]
         for s in range(S):
-            b = dr.gather(mi.Float, self.beta_s, vox * S + s) * sc[s]
+            b = dr.gather(mi.Float, d["beta_s"], vox * S + s) * sc[s]
             if noise is not None:  # the amount of detail per species (paper section 5.4), log-normal, mean one
                 b = b * dr.exp(amp[s] * noise - 0.5 * amp[s] * amp[s])
             ext += b
@@ -213,8 +223,14 @@ class SliceRenderer:
             for si in members[1:]:
                 g_sca = g_sca + sca[si]
             grouped.append(g_sca)
-        self.tex_eye.set_tensor(mi.TensorXf(_interleave(mi, [ext] + grouped), shape=self.shape + (1 + len(self.groups),)))
-        self.tex_light_src.set_tensor(mi.TensorXf(_interleave(mi, [ext, beta_fwd]), shape=self.shape + (2,)))
+        d["tex_eye"].set_tensor(mi.TensorXf(_interleave(mi, [ext] + grouped), shape=self.shape + (1 + len(self.groups),)))
+        d["tex_light"].set_tensor(mi.TensorXf(_interleave(mi, [ext, beta_fwd]), shape=self.shape + (2,)))
+
+    def _texture_data(self) -> dict:
+        """The arrays ``_build_textures`` reads (the species' extinction, the detail noise) and the
+        textures it writes."""
+        return {"beta_s": self.beta_s, "noise": self.detail_noise, "tex_eye": self.tex_eye,
+                "tex_light": self.tex_light_src}
 
     # ------------------------------------------------------------------ public
     def light_at(self, points) -> tuple[np.ndarray, np.ndarray]:
@@ -246,30 +262,32 @@ class SliceRenderer:
         scale, omega, tint, fwd = self._species_vectors(params)
         detail = self._detail_amplitudes(params) if self.detail_noise is not None else None
         key = _texture_key(scale, omega, fwd, detail)
-        rebuilt = key is None or key != self._texture_key
-        if rebuilt:  # a sun or camera move keeps the volume's textures (and the zenith light volume)
-            self._build_textures(scale, omega, fwd, detail)
+        rebuilt = key is None or key != self._texture_key  # a sun or camera move keeps the textures
         self._texture_key = key
         g = slice_geometry(spec.camera.forward, spec.sun.to_sun, self.box, self.slices)
-        translucent = self.mode.light == "translucent"
-        blur = params.blur_length_m if params.blur_length_m is not None else self.voxel_m
-        self.light.sweep(g, self.tex_light_src, self.grid_box, translucent,
-                         variance_per_metre(params.cone_angle_deg, blur, mi) if translucent else None,
-                         variance_per_metre(REFERENCE_CONE_DEG, _number(blur)) if translucent else None)
-        if self.sky_light is not None and rebuilt:  # the zenith sweep depends on the extinction only
-            self.sky_light.sweep(self._sky_geometry, self.tex_light_src, self.grid_box, False)
-        dr.sync_thread()  # kernels run asynchronously: wait before reading the clock
-        t_light = time.perf_counter()
-        out, transmittance = self._eye_pass(g, spec, params, tint)
-        if return_arrays:
-            return out, transmittance
+        inputs = self._frame_inputs(g, spec, params, tint, rebuilt)
+        if rebuilt:  # built by the frame's kernels, from opaque values
+            inputs["build"] = [[_param(mi, v) for v in x] for x in (scale, omega, fwd, detail or [])]
+        if return_arrays or self.differentiable or not self.frozen:
+            out, transmittance, store, sky_store = self._kernels(inputs, timed=not return_arrays)
+            if return_arrays:
+                return out, transmittance
+        else:  # the recorded kernels (re-recorded when the structure of the inputs changes)
+            out, transmittance, store, sky_store = self._frozen_kernels(inputs)
+        self.light.bind(inputs["sun"], store)  # the arrays outside the recording
+        if self.sky_light is not None:
+            self.sky_light.store, self.sky_light.frame = sky_store, inputs["sky_frame"]
+        t_launch = time.perf_counter()
         dr.eval(out, transmittance)
         dr.sync_thread()
         t_eye = time.perf_counter()
         H, W = spec.height, spec.width
         rgb = np.asarray(out, dtype=np.float32).T.reshape(H, W, 3)
         self.transmittance = np.asarray(transmittance, dtype=np.float32).reshape(H, W)
-        self.timing = {"light_s": t_light - t_start, "eye_s": t_eye - t_light, "total_s": t_eye - t_start}
+        self.timing = {"light_s": self._t_light - t_start if self._t_light else float("nan"),
+                       "eye_s": t_eye - self._t_light if self._t_light else float("nan"),
+                       "launch_s": t_launch - t_start, "total_s": t_eye - t_start}
+        self._t_light = None
         plain = lambda v: None if dr.is_array_v(v) else v  # noqa: E731
         meta = {"renderer": "slicing", "mode": self.mode.__dict__, "slices": self.slices,
                 "light_res": self.light_res, "forward_peak_deg": self.forward_peak_deg,
@@ -279,34 +297,113 @@ class SliceRenderer:
                 "forward_fraction_per_species": [None if dr.is_array_v(v) else float(v) for v in fwd]}
         return Image(rgb, np.zeros_like(rgb), meta)
 
-    def _eye_pass(self, g, spec: SceneSpec, params: SliceParams, tint):
+    def _frame_inputs(self, g, spec: SceneSpec, params: SliceParams, tint, rebuilt: bool) -> dict:
+        """Everything the frame's kernels read, as a Dr.Jit PyTree (arrays, opaque scalars, textures; the
+        plain ints and flags in it set the kernels' structure): the light passes' plans, the eye pass's
+        per-pixel and per-frame values."""
+        mi = self.mi
+        translucent = self.mode.light == "translucent"
+        blur = params.blur_length_m if params.blur_length_m is not None else self.voxel_m
+        # offset light planes too (only when asked for: aligned planes keep the default frame as it was)
+        jitter = None if _number(params.slab_jitter) == 0.0 else \
+            (_param(mi, params.slab_jitter), _param(mi, jitter_rotation(params.jitter_frame)))
+        sun = self.light.plan(g, self.grid_box, translucent,
+                              variance_per_metre(params.cone_angle_deg, blur, mi) if translucent else None,
+                              variance_per_metre(REFERENCE_CONE_DEG, _number(blur)) if translucent else None, jitter)
+        sky, sky_store, sky_frame = None, None, None
+        if self.sky_light is not None:
+            if rebuilt:  # the zenith sweep depends on the extinction only
+                sky = self.sky_light.plan(self._sky_geometry, self.grid_box, False)
+                sky_frame = sky.frame
+            else:
+                sky_store, sky_frame = self.sky_light.store, self.sky_light.frame
+        return {**self._texture_data(), "build": None, "sun": sun, "sky": sky,
+                "sky_store": sky_store, "sky_frame": sky_frame, "eye": self._eye_inputs(spec, params, tint)}
+
+    def _kernels(self, inputs: dict, timed: bool = False):
+        """The frame's kernels from ``_frame_inputs``: (radiance, transmittance, sun store, zenith store).
+        Reads nothing but ``inputs`` and constants of the renderer (``dr.freeze`` records it)."""
+        import drjit as dr
+        if inputs["build"] is not None:
+            scale, omega, fwd, detail = inputs["build"]
+            self._build_textures(scale, omega, fwd, detail, data=inputs)
+        store = self.light.run(inputs["sun"], inputs["tex_light"])
+        sky_store = inputs["sky_store"]
+        if inputs["sky"] is not None:
+            sky_store = self.sky_light.run(inputs["sky"], inputs["tex_light"])
+        self.light.bind(inputs["sun"], store)
+        if self.sky_light is not None:
+            self.sky_light.store, self.sky_light.frame = sky_store, inputs["sky_frame"]
+            self.sky_light.n_slices = self._sky_geometry.n_slices
+        if timed:
+            dr.sync_thread()  # kernels run asynchronously: wait before reading the clock
+            self._t_light = time.perf_counter()
+        out, transmittance = self._eye_pass(inputs["tex_eye"], inputs["eye"])
+        return out, transmittance, store, sky_store
+
+    def _eye_inputs(self, spec: SceneSpec, params: SliceParams, tint) -> dict:
+        """The eye pass's inputs (see ``_frame_inputs``)."""
         mi = self.mi
         rays = self.views.get(mi, spec)
         sun = np.asarray(spec.sun.irradiance, dtype=np.float64)
         F = lambda a: aligned_float(mi, a)  # noqa: E731
         phase_colour, diffuse_colour = [], []
-        for members in self.groups:
+        for gi, members in enumerate(self.groups):
             colour = self.colors[members[0]] if self.mode.species_colors else np.mean(tint[members], axis=0)
-            k = self.tables[members[0]].eval_cos(rays.cos_to_light) * (colour * sun)[None]
-            phase_colour.append(mi.Color3f(*(F(k[:, c]) for c in range(3))))
+            key = (gi, tuple(colour * sun))  # per view (and sun): a slider move reuses the uploaded array
+            if key not in rays.phase_colour:
+                k = self.tables[members[0]].eval_cos(rays.cos_to_light) * (colour * sun)[None]
+                rays.phase_colour[key] = mi.Color3f(*(F(k[:, c]) for c in range(3)))
+            phase_colour.append(rays.phase_colour[key])
             diffuse_colour.append(_colour(mi, colour * sun / (4 * np.pi)))
         e_sky = sky_irradiance_horizontal(spec, cache=self.views.sky)
+        model = None
         if self.mode.light == "multiple":
-            model = LightModel(self.light, self.sky_light, self.mode.octaves, _param(mi, params.ms_extinction),
-                               _param(mi, params.ms_contribution), _param(mi, params.ms_eccentricity),
-                               _param(mi, params.sky_extinction), _param(mi, params.diffusion_gain),
-                               _param(mi, params.diffusion_scale), g=self.g_scattering,
-                               mu0=_param(mi, max(float(spec.sun.to_sun[2]), 1e-3)))
+            model = [_param(mi, v) for v in (params.ms_extinction, params.ms_contribution, params.ms_eccentricity,
+                                            params.sky_extinction, params.diffusion_gain, params.diffusion_scale,
+                                            max(float(spec.sun.to_sun[2]), 1e-3))]
             gain = params.sky_gain
         else:
-            model, gain = LightModel(self.light), params.ambient
-        ambient = _colour(mi, e_sky / np.pi) * _param(mi, gain)
+            gain = params.ambient
         ground = None
         if spec.ground is not None:
             rho = np.asarray(spec.ground.albedo, dtype=np.float64)
             ground = (_colour(mi, rho / np.pi * sun * max(float(spec.sun.to_sun[2]), 0.0)), _colour(mi, rho / np.pi * e_sky))
-        return composite(mi, g, rays, self.tex_eye, self.grid_box, phase_colour, diffuse_colour, model, ambient,
-                         ground, self.differentiable)
+        ray_arrays = {k: getattr(rays, k) for k in ("origin", "direction", "t0", "t1", "hit_ground", "ground",
+                                                    "background", "pattern")}
+        return {"rays": ray_arrays, "n": rays.n, "phase_colour": phase_colour, "diffuse_colour": diffuse_colour, "model": model,
+                "ambient": _colour(mi, e_sky / np.pi) * _param(mi, gain), "ground": ground,
+                "jitter": _param(mi, params.slab_jitter), "jitter_rotation": _param(mi, jitter_rotation(params.jitter_frame))}
+
+    def _eye_pass(self, tex_eye, e: dict):
+        mi = self.mi
+        import drjit as dr
+        if e["model"] is not None:
+            a, b, c, sky_ext, gain, scale, mu0 = e["model"]
+            model = LightModel(self.light, self.sky_light, self.mode.octaves, a, b, c, sky_ext, gain, scale,
+                               g=self.g_scattering, mu0=mu0)
+        else:
+            model = LightModel(self.light)
+        r = e["rays"]
+        rays = SimpleNamespace(**r, n=e["n"])
+        offset = slab_offsets(dr, r["pattern"], e["jitter"], e["jitter_rotation"])
+        return composite(mi, self.light.frame, self.light.n_slices, rays, tex_eye, self.grid_box, e["phase_colour"],
+                         e["diffuse_colour"], model, e["ambient"], e["ground"], self.differentiable, offset)
+
+
+FROZEN_FRAMES = True
+FREEZE_LIMIT = 8  # recordings kept per renderer (slice counts of the viewer's drafts, rebuilt or not, ...)
+
+
+def _freeze(renderer_ref):
+    """The renderer's ``_kernels`` recorded by ``dr.freeze`` (one recording per structure of its inputs,
+    the last FREEZE_LIMIT kept). Through a weak reference: a frozen function that held its renderer would
+    make a reference cycle, and Dr.Jit aborts when the garbage collector frees recordings."""
+    import drjit as dr
+
+    def kernels(inputs):
+        return renderer_ref()._kernels(inputs)
+    return dr.freeze(kernels, limit=FREEZE_LIMIT, warn_after=4 * FREEZE_LIMIT)
 
 
 def _number(value) -> float:
@@ -337,16 +434,15 @@ def _scatter_groups(tables, colours) -> list[list[int]]:
 
 
 def _interleave(mi, channels):
-    """Flat array with the channels interleaved (voxel-major), as a (..., C) tensor's storage."""
+    """Flat array with the channels interleaved (voxel-major), as a (..., C) tensor's storage: one kernel
+    over the voxels that scatters each voxel's C values."""
     import drjit as dr
     C = len(channels)
     n = dr.width(channels[0])
-    idx = dr.arange(mi.UInt32, n * C)
-    vox = idx // C
-    ch = idx - vox * C
-    out = dr.gather(mi.Float, channels[0], vox)
-    for c in range(1, C):
-        out = dr.select(ch == c, dr.gather(mi.Float, channels[c], vox), out)
+    vox = dr.arange(mi.UInt32, n) * C
+    out = dr.zeros(mi.Float, n * C)
+    for c in range(C):
+        dr.scatter(out, channels[c], vox + c)
     return out
 
 

@@ -4,7 +4,7 @@ the ray misses the ground), kept for the last few views in a bounded cache."""
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -12,6 +12,7 @@ from ..jitarrays import aligned_float
 from ..scene import SceneSpec
 from .background import ground_hits, sky_radiance
 from .geometry import camera_rays, ray_box
+from .jitter import offset_pattern
 
 
 class BoundedCache(OrderedDict):
@@ -41,7 +42,9 @@ class ViewRays:
     """Pixel rays of one view as Dr.Jit arrays (N = width x height, row-major from the top left).
     ``t0``/``t1``: where each ray is inside the slicing box (t1 clipped by the ground; t0 > t1:
     misses), ``ground``: where it hits the ground (``hit_ground``), ``background``: sky radiance
-    along the ray (zero where it hits the ground, which the eye pass lights)."""
+    along the ray (zero where it hits the ground, which the eye pass lights), ``pattern``: the
+    pixel's slab-offset pattern in [0, 1) (jitter.py), ``phase_colour``: a cache of the renderer's
+    per-pixel phase colours (they depend on the view, the sun and the colour only)."""
 
     origin: object       # mi.Point3f
     direction: object    # mi.Vector3f
@@ -52,6 +55,8 @@ class ViewRays:
     background: object   # mi.Color3f
     cos_to_light: np.ndarray  # (N,) numpy, for the phase functions
     n: int
+    pattern: object = None    # mi.Float
+    phase_colour: dict = field(default_factory=lambda: BoundedCache(8))  # per-pixel phase colours by (group, colour)
 
 
 class ViewCache:
@@ -84,5 +89,5 @@ class ViewCache:
                 mi.Point3f(*(F(o[:, i]) for i in range(3))), mi.Vector3f(*(F(d[:, i]) for i in range(3))),
                 F(t0), F(np.where(np.isfinite(t1), t1, t0)), F(hit) > 0.5,
                 mi.Point3f(*(F(pg[:, i]) for i in range(3))), mi.Color3f(*(F(bg[:, i]) for i in range(3))),
-                d @ spec.sun.to_sun, o.shape[0])
+                d @ spec.sun.to_sun, o.shape[0], F(offset_pattern(spec.width, spec.height)))
         return self.backgrounds[bg_key]
