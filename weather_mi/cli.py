@@ -68,7 +68,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     from .reference import render_reference
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase)
-    spec, sun_meta = scene_spec(args, vol, hyd), None
+    spec, sun_meta = scene_spec(args, vol), None
     if args.sun_from_time:
         spec, sun_meta = _sun_from_time(spec, hyd)
     from .cluster import session
@@ -92,7 +92,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     return out
 
 
-def scene_spec(args, vol, hyd=None):
+def scene_spec(args, vol):
     """The SceneSpec of the scene options (camera, sun, sky, ground, size, seed) for ``vol``."""
     from .framing import SCENE_OPTIONS, scene_spec
     return scene_spec(vol, _parse_size(args.size), **{k: getattr(args, k) for k in SCENE_OPTIONS})
@@ -102,10 +102,10 @@ def _sun_from_time(spec, hyd):
     """``spec`` lit by the sun at ``hyd``'s centre at its valid time (``place.sun_from_time``), and the
     metadata the image keeps of it."""
     import dataclasses
+    from .geo import latlon_text
     from .place import sun_from_time
     azimuth, elevation, meta = sun_from_time(hyd)
     sun = dataclasses.replace(spec.sun, azimuth=azimuth, elevation=elevation)
-    from .geo import latlon_text
     print(f"sun from the time: {meta['valid_time']} at {latlon_text(meta['centre_lat'], meta['centre_lon'], 3)}: "
           f"elevation {elevation:.2f} deg, azimuth {azimuth:.2f} deg in the grid's frame; one sun for the domain, "
           f"up to {meta['one_sun_max_error_deg']:.2f} deg from a column's own")
