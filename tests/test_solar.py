@@ -14,7 +14,7 @@ from weather_mi.geo import EARTH_RADIUS_M, haversine_m
 from weather_mi.imageio import Image, read_exr
 from weather_mi.place import assume_place, place_of, sun_from_time
 from weather_mi.solar import solar_position, sun_across_domain
-from conftest import WRF_SUPERCELL, WRF_THOMPSON, shared_file
+from conftest import WRF_THOMPSON, shared_file, write_wrfout
 
 
 def test_spa_published_example():
@@ -85,8 +85,15 @@ def test_sun_at_and_grid_north():
         wm.Sun.at(39.742476, -105.1786, "2003-10-17T07:00:00Z")
 
 
-def test_sun_from_time_needs_a_place_and_day():
-    hyd = wm.open_wrf(shared_file(WRF_SUPERCELL))
+def _ideal_wrfout(tmp_path):
+    """A small ideal-case wrfout (MAP_PROJ 0, no XLAT/XLONG) with a cloud."""
+    q = np.zeros((1, 6, 4, 5))
+    q[0, 2:4, 1:3, 2:4] = 1e-3
+    return write_wrfout(tmp_path / "ideal.nc", override={"QCLOUD": q})
+
+
+def test_sun_from_time_needs_a_place_and_day(tmp_path):
+    hyd = wm.open_wrf(_ideal_wrfout(tmp_path))
     with pytest.raises(ValueError, match="--lat, --lon and --date"):
         sun_from_time(hyd)
     with pytest.raises(ValueError, match="below the horizon"):
@@ -107,7 +114,7 @@ def test_render_sun_from_time_writes_it(tmp_path, monkeypatch, capsys):
         rad = np.full((spec.height, spec.width, 3), 0.5, np.float32)
         return Image(rad, np.full_like(rad, 0.01), {"spp": 1, "seconds": 0.0, "noise": None})
     monkeypatch.setattr(reference_module, "render_reference", render)
-    path = str(shared_file(WRF_SUPERCELL))
+    path = str(_ideal_wrfout(tmp_path))
     args = ["render", path, "--size", "8x6", "--spp", "1", "--lat", "35.2", "--lon", "-97.4", "--sun-from-time"]
     assert cli.main([*args, "--date", "2013-05-20T20:00", "-o", str(tmp_path / "a.exr")]) == 0
     p = solar_position("2013-05-20T20:00Z", 35.2, -97.4)
