@@ -215,3 +215,66 @@ def test_cli_reports_error_without_traceback(tmp_path, capsys):
     assert main(["info", str(tmp_path / "missing.nc")]) == 2
     err = capsys.readouterr().err
     assert "missing.nc" in err and "Traceback" not in err
+
+
+def test_plateau_terrain_and_heights_above_sea_level():
+    """Issue 23, item 3, on the Tibetan-plateau file (terrain 4484-5499 m): HGT on the model grid, land from
+    LANDMASK (one lake column), albedo from ALBEDO at the time read; WRF's surface w-level (PH + PHB) / g
+    is HGT; the regridded volume is in metres above MSL and starts at the lowest terrain; every cell wholly
+    below a column's HGT is clear, and the volume's air above each column's HGT is the model's column of
+    dry air within 0.2 % (the lowest model level sits on HGT: 50 m off would be 0.7 %)."""
+    path = shared_file(WRF_THOMPSON)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        hyd = wm.open_wrf(path, time=2, dz=250.0)
+    ds = xr.open_dataset(path)
+    hgt = ds["HGT"].values.astype(float)
+    terrain = wm.terrain.Terrain.of(hyd)
+    np.testing.assert_array_equal(terrain.height_m, hgt)
+    assert hgt.min() > 4400 and hgt.max() > 5400
+    np.testing.assert_array_equal(terrain.land, ds["LANDMASK"].values > 0.5)
+    assert int((~terrain.land).sum()) == 1 and terrain.albedo[~terrain.land][0] == pytest.approx(0.08)
+    np.testing.assert_allclose(terrain.albedo, ds["ALBEDO"].values[2], rtol=1e-6)
+    assert hyd.attrs["terrain_surface_max_diff_m"] < 0.01 and terrain.albedo_source == "ALBEDO"
+    dz = float(hyd.z[1] - hyd.z[0])
+    bottom = float(hyd.z[0]) - dz / 2
+    assert bottom == pytest.approx(hgt.min(), abs=1e-3)  # above MSL, from the lowest terrain
+    tops = (hyd.z.values + dz / 2)[:, None, None]
+    below = tops <= hgt[None]  # cells wholly under the ground
+    assert int(below.sum()) > 50
+    water = sum(hyd[f"q_{s}"].values for s in ("cloud", "ice", "rain", "snow", "graupel"))
+    assert float(water[below].max()) == 0.0
+    # the air above HGT in the volume (each cell's part above HGT) is the model's column of dry air
+    z_w = (ds["PH"].values[2] + ds["PHB"].values[2]) / 9.81
+    above = np.clip((np.minimum(tops, z_w[-1][None]) - np.maximum(tops - dz, hgt[None])) / dz, 0.0, 1.0)
+    column = (hyd["rho_air"].values * above).sum(axis=0) * dz
+    p = ds["P"].values[2] + ds["PB"].values[2]
+    rho = wm.io.wrf.dry_air_density(p, ds["T"].values[2] + 300.0, ds["QVAPOR"].values[2])
+    native = vertical.column_integral(z_w, rho)
+    print(f"column air: max relative difference {np.max(np.abs(column / native - 1)):.2e}")
+    np.testing.assert_allclose(column, native, rtol=2e-3)
+    np.testing.assert_allclose(z_w[0], hgt, atol=0.01)
+    # the same columns' terrain in the height-field mesh the scene can build
+    vertices, faces, albedo = terrain.mesh()
+    assert vertices.shape == (80, 3) and faces.shape == (2 * 7 * 9, 3) and albedo.shape == (80,)
+    np.testing.assert_array_equal(vertices[:, 2].reshape(8, 10), hgt)
+    v = vertices[faces]
+    normals = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    assert np.all(normals[:, 2] > 0)
+
+
+def test_terrain_defaults_without_surface_variables(tmp_path):
+    """A wrfout without HGT, LANDMASK, XLAND and ALBEDO: the terrain is the surface w-level and the albedo
+    WRF's LW12 land default (20 %); with XLAND only, water columns get 8 %."""
+    terrain = np.zeros((4, 5))
+    terrain[:, 3:] = 1200.0
+    path = write_wrfout(tmp_path / "w.nc", terrain=terrain)
+    hyd = wm.open_wrf(path)
+    np.testing.assert_allclose(hyd["terrain_height"].values, terrain, atol=1e-3)
+    assert np.all(hyd["surface_albedo"].values == 0.20) and "land assumed" in hyd.attrs["surface_albedo_source"]
+    xland = np.ones((1, 4, 5))
+    xland[0, :, :2] = 2.0
+    path = write_wrfout(tmp_path / "x.nc", override={"XLAND": xland})
+    hyd = wm.open_wrf(path)
+    np.testing.assert_array_equal(hyd["land"].values, xland[0] < 1.5)
+    np.testing.assert_array_equal(hyd["surface_albedo"].values, np.where(xland[0] < 1.5, 0.20, 0.08))

@@ -1,6 +1,6 @@
 """Command line.
 
-    weather-mi info FILE | --demo supercell|cumulus
+    weather-mi info FILE | --demo supercell|cumulus [--lat LAT --lon LON --date UTC]
     weather-mi render FILE | --demo supercell|cumulus [options] [--scheduler ADDR | --workers N] -o out.exr
     weather-mi animate WRFOUT... [--renderer slices|reference] [options] [--scheduler ADDR | --workers N] -o DIR
     weather-mi validate -o DIR [--quick]
@@ -66,15 +66,19 @@ def render_command(args) -> Path:
 def _render(args, out, png_path, ckpt) -> Path:
     from .optics import optical_volume
     from .reference import render_reference
-    hyd = open_source(args.file, args.demo, parse_time(args.time))
+    hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase)
-    spec = scene_spec(args, vol)
+    spec, sun_meta = scene_spec(args, vol), None
+    if args.sun_from_time:
+        spec, sun_meta = _sun_from_time(spec, hyd)
     from .cluster import session
     with session(args.scheduler, args.workers) as client:
         img = render_reference(spec, vol, spp=args.spp, integrator=args.integrator, checkpoint=ckpt,
                                resume=ckpt if args.resume else None, target_rse=args.target_rse,
                                max_seconds=args.max_seconds, sun_guiding=args.sun_guiding,
                                forward_peak_deg=args.forward_peak, aureole_nee=args.aureole_nee, client=client)
+    if sun_meta:
+        img.metadata["sun_from_time"] = sun_meta
     img.save(out)
     png = img.save_png(png_path, exposure=args.exposure)
     ckpt.unlink(missing_ok=True)
@@ -92,6 +96,36 @@ def scene_spec(args, vol):
     """The SceneSpec of the scene options (camera, sun, sky, ground, size, seed) for ``vol``."""
     from .framing import SCENE_OPTIONS, scene_spec
     return scene_spec(vol, _parse_size(args.size), **{k: getattr(args, k) for k in SCENE_OPTIONS})
+
+
+def _sun_from_time(spec, hyd):
+    """``spec`` lit by the sun at ``hyd``'s centre at its valid time (``place.sun_from_time``), and the
+    metadata the image keeps of it."""
+    import dataclasses
+    from .geo import latlon_text
+    from .place import sun_from_time
+    azimuth, elevation, meta = sun_from_time(hyd)
+    sun = dataclasses.replace(spec.sun, azimuth=azimuth, elevation=elevation)
+    print(f"sun from the time: {meta['valid_time']} at {latlon_text(meta['centre_lat'], meta['centre_lon'], 3)}: "
+          f"elevation {elevation:.2f} deg, azimuth {azimuth:.2f} deg in the grid's frame; one sun for the domain, "
+          f"up to {meta['one_sun_max_error_deg']:.2f} deg from a column's own")
+    return dataclasses.replace(spec, sun=sun), meta
+
+
+def open_placed(args):
+    """The input of ``info``/``render``, placed and dated by ``--lat/--lon/--date`` where given (ideal cases)."""
+    hyd = open_source(args.file, args.demo, parse_time(args.time))
+    if args.lat is None and args.lon is None and args.date is None:
+        return hyd
+    from .place import assume_place
+    return assume_place(hyd, args.lat, args.lon, args.date)
+
+
+def add_place_options(p) -> None:
+    """``--lat/--lon/--date``: the place and valid time of an ideal case (one without latitude/longitude)."""
+    p.add_argument("--lat", type=float, default=None, help="ideal cases: latitude of the grid's centre (deg N)")
+    p.add_argument("--lon", type=float, default=None, help="ideal cases: longitude of the grid's centre (deg E)")
+    p.add_argument("--date", default=None, help="ideal cases: the valid time (UTC), e.g. 2024-05-20T21:00")
 
 
 def add_scene_options(p) -> None:
@@ -157,6 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
     info = sub.add_parser("info", help="summarise a data file or a demo storm")
     _add_source(info)
     info.add_argument("--species", default="paper", choices=("paper", "physical"))
+    add_place_options(info)
     _add_render_parser(sub)
     _add_animate_parser(sub)
     _add_view_parser(sub)
@@ -174,6 +209,10 @@ def _add_render_parser(sub) -> None:
     render.add_argument("--target-rse", type=float, default=None,
                         help="add passes until the mean relative standard error over cloud pixels is this")
     render.add_argument("--max-seconds", type=float, default=None, help="with --target-rse: time limit")
+    add_place_options(render)
+    render.add_argument("--sun-from-time", action="store_true",
+                        help="the sun where and when the data is (its centre, its valid time; NREL SPA), instead "
+                             "of --sun-azimuth/--sun-elevation")
     render.add_argument("--sun-guiding", type=float, default=None,
                         help="probability of sun-guided scattering directions (default: the renderer's)")
     render.add_argument("--forward-peak", type=float, default=None, metavar="DEG",
@@ -236,7 +275,7 @@ def _add_validate_parser(sub) -> None:
 
 
 def info_command(args) -> None:
-    print(info_text(open_source(args.file, args.demo, parse_time(args.time)), args.species))
+    print(info_text(open_placed(args), args.species))
 
 
 def view_command(args) -> None:

@@ -5,6 +5,13 @@ Data variables ``q_cloud, q_ice, q_rain, q_snow, q_graupel`` (kg per kg of dry a
 the model gives none). Coordinates ``z, y, x`` are cell centres in metres (z above mean sea level),
 uniformly spaced. Attributes keep the source (file, time, model, microphysics scheme) and
 ``n_negative_clipped``. Every reader returns a Dataset that passes :func:`validate`.
+
+Optional, where the input has them (WRF files; ``weather_mi.io.georef``), all on (y, x) and none of them
+data variables: the georeference, coordinates ``lat``, ``lon`` (degrees) with the attributes
+``crs_proj4``, ``map_proj``, ``map_projection``, ``proj_x0_m``, ``proj_y0_m``, ``proj_dx_m``,
+``proj_dy_m`` (``weather_mi.geo.Georeference``; ``weather_mi.place.place_of`` reads them back) and
+``valid_time`` ("YYYY-MM-DDTHH:MM:SSZ", UTC); the ground, coordinates ``terrain_height`` (m above MSL),
+``land`` (1 land, 0 water) and ``surface_albedo`` (``weather_mi.terrain.Terrain``).
 """
 from __future__ import annotations
 
@@ -17,6 +24,7 @@ from .errors import WeatherDataError
 
 SPECIES_NAMES: tuple[str, ...] = ("cloud", "ice", "rain", "snow", "graupel")
 DIMS = ("z", "y", "x")
+GROUND_COORDS = ("lat", "lon", "terrain_height", "land", "surface_albedo")  # optional (y, x) coordinates
 
 
 def check_species_name(name: str, source: str = "input", variable: str | None = None) -> str:
@@ -189,4 +197,9 @@ def validate(ds: xr.Dataset) -> xr.Dataset:
             raise WeatherDataError(source, var, "mixing ratios >= 0 (clip negatives first)")
     if "rho_air" not in ds or ds["rho_air"].dims != DIMS:
         raise WeatherDataError(source, "rho_air", f"dry-air density with dims {DIMS}")
+    for name in GROUND_COORDS:
+        if name in ds.coords and ds[name].dims != ("y", "x"):
+            raise WeatherDataError(source, name, "a (y, x) coordinate", f"dims {ds[name].dims}")
+    if "lat" in ds.coords and not bool(((ds["lat"] >= -90) & (ds["lat"] <= 90)).all()):
+        raise WeatherDataError(source, "lat", "latitudes in [-90, 90] degrees")
     return ds

@@ -92,6 +92,20 @@ class Sun:
                              f"(0: a point sun; the real sun: {SUN_DIAMETER_DEG}), got {d!r}")
         object.__setattr__(self, "angular_diameter_deg", float(d))
 
+    @classmethod
+    def at(cls, lat: float, lon: float, time, *, grid_north_deg: float = 0.0, **kw) -> Sun:
+        """The sun seen from (``lat``, ``lon``) (degrees) at ``time`` (UTC; ``weather_mi.solar``, NREL SPA).
+
+        ``grid_north_deg``: azimuth of the scene's +y axis, degrees clockwise from true north (the map's
+        meridian convergence, ``Georeference.grid_north_deg``); ``kw``: the other fields (irradiance,
+        angular_diameter_deg). A ValueError where the sun is below the horizon there and then."""
+        from .solar import solar_position
+        p = solar_position(time, lat, lon)
+        if not p.above_horizon:
+            raise ValueError(f"at {time} the sun is {-p.elevation_deg:.2f} degrees below the horizon at "
+                             f"latitude {lat:.3f}, longitude {lon:.3f}")
+        return cls(azimuth=(p.azimuth_deg - grid_north_deg) % 360.0, elevation=p.elevation_deg, **kw)
+
     @property
     def to_sun(self) -> np.ndarray:
         """Unit vector pointing towards the sun (the light arrives along -to_sun)."""

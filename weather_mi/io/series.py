@@ -16,6 +16,7 @@ import xarray as xr
 
 from ..errors import WeatherDataError
 from . import wrfout
+from .georef import valid_time_iso
 from .times import select_times, time_strings
 
 
@@ -80,6 +81,9 @@ def time_steps(ds: xr.Dataset) -> list[xr.Dataset]:
         attrs = dict(ds.attrs, time=str(one["time"].values), time_index=int(one["time_index"].values),
                      source=str(one["source"].values))
         attrs.pop("times", None)
+        valid = valid_time_iso(attrs["time"], int(attrs.get("map_proj", 0)))
+        if valid:  # drop_conflicts dropped the per-time valid times
+            attrs["valid_time"] = valid
         one = one.drop_vars(["time", "time_index", "source"])
         one.attrs = attrs
         out.append(one)

@@ -6,7 +6,9 @@ levels as their mean (destaggering); dry-air density rho_d = p / (R_d T (1 + 1.6
 p = P + PB, T = (T' + 300 K)(p / 1e5)^(R_d/c_p) (cross-checked against ALT = 1/rho_d when the file has
 it); species mass densities rho_d q regridded conservatively onto a uniform height grid
 (weather_mi.io.vertical); the horizontal spacing DX, DY over the mean map factor
-(weather_mi.io.map_factors, with a warning where it varies). Negative mixing ratios are clipped, counted
+(weather_mi.io.map_factors, with a warning where it varies); the place, valid time and ground
+(weather_mi.io.georef: lat/lon, the map projection checked against XLAT/XLONG, HGT, land, albedo) as
+(y, x) coordinates and attributes. Negative mixing ratios are clipped, counted
 and reported in a warning (count and minimum per variable); species the scheme does not carry become
 zeros with a warning that names the scheme, while a variable the scheme writes and the file lacks is an
 error (``schemes.SCHEME_VARS``).
@@ -22,8 +24,9 @@ import numpy as np
 import xarray as xr
 
 from ..errors import WeatherDataError
-from ..hydrometeors import from_arrays, warn_clipped
+from ..hydrometeors import from_arrays, validate, warn_clipped
 from . import vertical
+from .georef import place_coords
 from .map_factors import horizontal_spacing
 from .schemes import MP_SCHEMES, SCHEME_VARS
 
@@ -106,7 +109,10 @@ def convert(ds, path, it: int, stamp: str, x, y, dz, top, bottom) -> xr.Dataset:
     hyd = from_arrays(q_new, np.maximum(rho_above, 1e-6), (dz, dy, dx),
                       (z_lo + dz / 2, j0 * dy, i0 * dx), r_eff=r_eff, attrs=attrs, source=path)
     hyd.attrs["n_negative_clipped"] = int(sum(negatives.values()))
-    return hyd
+    coords, place_attrs = place_coords(ds, path, it, stamp, sel, z_w[0])
+    hyd = hyd.assign_coords(coords)
+    hyd.attrs.update(place_attrs)
+    return validate(hyd)
 
 
 def _sub_box(path, x, y) -> dict:

@@ -1,0 +1,106 @@
+"""The ground under a model grid: terrain height (m above sea level) and a surface albedo per column, on
+the Hydrometeors (y, x) grid, as data a renderer can turn into a height-field mesh (``Terrain.mesh``).
+
+Readers put them in a Hydrometeors Dataset as (y, x) coordinates, not data variables, so that they never
+mix with the hydrometeors: ``terrain_height`` (m above MSL: WRF's HGT), ``land`` (1 land, 0 water, from
+LANDMASK or XLAND) and ``surface_albedo`` (WRF's ALBEDO where the file has it, else ALBBCK, else the
+default of the column's class). The defaults are WRF's own all-season land/water table (``LW12`` in
+WRF's ``run/LANDUSE.TBL``: land 20 %, water 8 %); a file without LANDMASK/XLAND is taken as land.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+LAND_ALBEDO = 0.20   # WRF run/LANDUSE.TBL, table LW12, class 1 'Land' (ALBD 20 %)
+WATER_ALBEDO = 0.08  # WRF run/LANDUSE.TBL, table LW12, class 2 'Water' (ALBD 8 %; the USGS 'Water Bodies' too)
+COORDS = ("terrain_height", "land", "surface_albedo")
+
+
+@dataclass(frozen=True)
+class Terrain:
+    """Terrain of a Hydrometeors grid.
+
+    Attributes
+    ----------
+    x, y : numpy.ndarray
+        Column centres (m) in the Hydrometeors frame (x east, y grid north), (nx,) and (ny,).
+    height_m : numpy.ndarray
+        (ny, nx) terrain height above mean sea level (m).
+    land : numpy.ndarray
+        (ny, nx) bool, True over land.
+    albedo : numpy.ndarray
+        (ny, nx) broadband surface albedo in [0, 1].
+    albedo_source : str
+        Where the albedo came from (a variable of the file, or the default table).
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    height_m: np.ndarray
+    land: np.ndarray
+    albedo: np.ndarray
+    albedo_source: str
+
+    @classmethod
+    def of(cls, hyd) -> Terrain | None:
+        """The terrain stored in a Hydrometeors Dataset (None where it has none: LES, arrays, demos)."""
+        if "terrain_height" not in hyd.coords:
+            return None
+        return cls(np.asarray(hyd.x.values, float), np.asarray(hyd.y.values, float),
+                   np.asarray(hyd["terrain_height"].values, float), np.asarray(hyd["land"].values) > 0,
+                   np.asarray(hyd["surface_albedo"].values, float),
+                   str(hyd.attrs.get("surface_albedo_source", "?")))
+
+    def mesh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A height-field triangle mesh through the column centres: vertices (ny * nx, 3) at (x, y,
+        height) in metres, triangles (2 (ny - 1)(nx - 1), 3) of vertex indices, counter-clockwise seen from
+        above (normals up), and the albedo per vertex (ny * nx,)."""
+        ny, nx = self.height_m.shape
+        gx, gy = np.meshgrid(self.x, self.y)
+        vertices = np.stack([gx.ravel(), gy.ravel(), self.height_m.ravel()], axis=1)
+        k = np.arange(ny * nx).reshape(ny, nx)
+        a, b, c, d = k[:-1, :-1].ravel(), k[:-1, 1:].ravel(), k[1:, 1:].ravel(), k[1:, :-1].ravel()
+        faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+        return vertices, faces, self.albedo.ravel()
+
+
+def surface_fields(read2d, has, z_surface_m: np.ndarray) -> tuple[dict, dict]:
+    """Terrain coordinates and attributes of a wrfout time.
+
+    Parameters
+    ----------
+    read2d : callable
+        ``read2d(name)``: the variable's (y, x) values at that time and sub-box.
+    has : callable
+        ``has(name)``: whether the file has the variable.
+    z_surface_m : numpy.ndarray
+        (y, x) height of the lowest w-level (m above MSL), the terrain where the file has no HGT.
+
+    Returns
+    -------
+    (dict, dict)
+        Coordinates name -> ((y, x), array, attributes) for ``terrain_height`` (m), ``land`` (int8) and
+        ``surface_albedo``; attributes ``surface_albedo_source`` and ``land_source``.
+    """
+    hgt, hgt_source = (read2d("HGT"), "HGT") if has("HGT") else (z_surface_m, "lowest w-level (PH + PHB) / g")
+    if has("LANDMASK"):
+        land, land_source = read2d("LANDMASK") > 0.5, "LANDMASK"
+    elif has("XLAND"):
+        land, land_source = read2d("XLAND") < 1.5, "XLAND"
+    else:
+        land, land_source = np.ones(hgt.shape, bool), "none in the file: land assumed"
+    albedo_var = next((v for v in ("ALBEDO", "ALBBCK") if has(v)), None)
+    if albedo_var:
+        albedo, albedo_source = np.clip(read2d(albedo_var), 0.0, 1.0), albedo_var
+    else:
+        albedo = np.where(land, LAND_ALBEDO, WATER_ALBEDO)
+        albedo_source = f"default of WRF's LW12 table (land {LAND_ALBEDO}, water {WATER_ALBEDO}) by {land_source}"
+    dims = ("y", "x")
+    coords = {"terrain_height": (dims, np.asarray(hgt, np.float64),
+                                 {"units": "m", "long_name": "terrain height above MSL", "source": hgt_source}),
+              "land": (dims, land.astype(np.int8), {"long_name": "1 land, 0 water", "source": land_source}),
+              "surface_albedo": (dims, np.asarray(albedo, np.float64),
+                                 {"units": "1", "long_name": "surface albedo", "source": albedo_source})}
+    return coords, {"surface_albedo_source": albedo_source, "land_source": land_source, "terrain_source": hgt_source}
