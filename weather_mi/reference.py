@@ -151,8 +151,10 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         _open_checkpoint(run, checkpoint, resume)
         remote = _merge_passes(run, client, worker_variant, progress, on_pass)
         image = run.image(run.done, run.stats(run.done))
-        if remote is not None:
+        if remote is not None:  # which variant each pass used (workers may differ: "auto")
+            from .cluster import pass_variants
             image.metadata["dask"] = remote.summary
+            image.metadata.update(pass_variants(remote.summary["passes_by_variant"], image.metadata["variant"]))
         return image
 
 
