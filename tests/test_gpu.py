@@ -32,10 +32,9 @@ needs_gpu = pytest.mark.skipif(not CUDA_OK, reason=f"no usable CUDA device: {CUD
 LLVM_ONLY = ("tune_llvm", "llvm_block_size", "llvm_vector_width", "set_llvm_vector_width")
 
 
-@pytest.fixture
-def llvm_calls_fail(monkeypatch):
-    """Every call into Dr.Jit's LLVM-only core settings fails the test (they all go through
-    ``jit_settings._core_function``); yields the list of symbols asked for."""
+def forbid_llvm_calls(monkeypatch) -> list:
+    """From now on every call into Dr.Jit's LLVM-only core settings fails the test (they all go through
+    ``jit_settings._core_function``); returns the list of symbols asked for."""
     asked = []
 
     def forbidden(name):
@@ -43,6 +42,11 @@ def llvm_calls_fail(monkeypatch):
         pytest.fail(f"LLVM-only Dr.Jit setting {name} called under {mi.variant()}")
     monkeypatch.setattr(jit_settings, "_core_function", forbidden)
     return asked
+
+
+@pytest.fixture
+def llvm_calls_fail(monkeypatch):
+    return forbid_llvm_calls(monkeypatch)
 
 
 @pytest.fixture
@@ -142,16 +146,19 @@ def test_metadata_names_the_variants_of_the_passes():
 
 def test_llvm_settings_are_read_on_llvm(monkeypatch):
     """The control for the guard tests below: on LLVM the same code does call the core settings."""
-    if not variant.is_llvm():
-        pytest.skip(f"the test process renders with {mi.variant()}, not LLVM")
+    before = mi.variant()
+    wm.set_variant("llvm_ad_rgb")
     asked = []
     real = jit_settings._core_function
     monkeypatch.setattr(jit_settings, "_core_function", lambda name: asked.append(name) or real(name))
-    with variant.path_tracing_width():
-        pass
-    assert "_Z21jit_llvm_vector_widthv" in asked
-    assert lanes.default_lanes() >= 64 and "_Z19jit_llvm_block_sizev" in asked
-    assert passes._persistent(_Scene(), None) is True
+    try:
+        with variant.path_tracing_width():
+            pass
+        assert "_Z21jit_llvm_vector_widthv" in asked
+        assert lanes.default_lanes() >= 64 and "_Z19jit_llvm_block_sizev" in asked
+        assert passes._persistent(_Scene(), None) is True
+    finally:
+        wm.set_variant(before)
 
 
 def test_no_llvm_setting_is_touched_under_cuda(as_cuda, llvm_calls_fail, monkeypatch):
@@ -208,15 +215,6 @@ def test_llvm_only_settings_are_called_only_from_the_guarded_places():
 
 # ------------------------------------------------------------------ on a GPU
 
-@pytest.fixture
-def on_cuda():
-    """cuda_ad_rgb selected for the test, the previous variant selected again after it."""
-    before = mi.variant()
-    wm.set_variant("cuda_ad_rgb")
-    yield
-    wm.set_variant(before)
-
-
 def _z_scores(a: wm.Image, b: wm.Image) -> np.ndarray:
     """(a - b) / sqrt(se_a^2 + se_b^2) over a's cloud pixels, per channel."""
     cloud = a.transmittance < 0.5
@@ -224,17 +222,46 @@ def _z_scores(a: wm.Image, b: wm.Image) -> np.ndarray:
     return ((a.radiance - b.radiance)[cloud] / np.maximum(se, 1e-30)).ravel()
 
 
-@needs_gpu
-def test_plugins_load_and_no_llvm_setting_is_read_under_cuda(on_cuda, llvm_calls_fail):
+def _phase_values(vol) -> np.ndarray:
+    """The Eq. 8 plugin of ``vol`` (current variant): eval_pdf's value (3 channels) and pdf at 64 angles
+    and 4 points of the box, and sample's (direction, weight, pdf) for 16 fixed random numbers."""
+    import drjit as dr
     from weather_mi.medium import phase_dict
+    phase = mi.load_dict(phase_dict(vol))
+    lo, hi = (np.asarray(b, np.float64) for b in vol.bbox)
+    pts = lo + (hi - lo) * np.array([[0.1, 0.2, 0.3], [0.5, 0.5, 0.5], [0.9, 0.4, 0.2], [0.3, 0.8, 0.7]])
+    ct = np.repeat(np.cos(np.linspace(0.0, np.pi, 64)), len(pts)).astype(np.float32)
+    p = np.tile(pts, (64, 1)).astype(np.float32)
+    mei = dr.zeros(mi.MediumInteraction3f, ct.size)
+    mei.p, mei.wi = mi.Point3f(*(p[:, k] for k in range(3))), mi.Vector3f(0, 0, 1)
+    mei.sh_frame = mi.Frame3f(mei.wi)
+    ctx = mi.PhaseFunctionContext(None)
+    value, pdf = phase.eval_pdf(ctx, mei, mi.Vector3f(np.sqrt(1 - ct ** 2), np.zeros_like(ct), -ct))
+    u = np.random.default_rng(0).random((3, ct.size)).astype(np.float32)
+    wo, weight, pdf_s = phase.sample(ctx, mei, mi.Float(u[0]), mi.Point2f(u[1], u[2]))
+    return np.concatenate([np.array(value).ravel(), np.array(pdf).ravel(), np.array(wo).ravel(),
+                           np.array(weight).ravel(), np.array(pdf_s).ravel()]).astype(np.float64)
+
+
+@needs_gpu
+def test_plugins_load_and_agree_and_no_llvm_setting_is_read_under_cuda(monkeypatch):
     from weather_mi.mitsuba_scene import integrator_dict
     vol = cloud_volume()
-    phase = mi.load_dict(phase_dict(vol))
-    integrator = mi.load_dict(integrator_dict(vol, "majorant", -1, None, None))
-    assert "hydrometeor_mixture" in str(phase) or phase is not None
-    assert integrator is not None and mi.variant() == "cuda_ad_rgb"
-    with variant.path_tracing_width():
-        pass
+    before = mi.variant()
+    wm.set_variant("llvm_ad_rgb")   # (may tune the LLVM block size: the first LLVM variant of the process)
+    cpu = _phase_values(vol)
+    llvm_calls_fail = forbid_llvm_calls(monkeypatch)
+    wm.set_variant("cuda_ad_rgb")
+    try:
+        gpu = _phase_values(vol)
+        integrator = mi.load_dict(integrator_dict(vol, "majorant", -1, None, None))
+        assert hasattr(integrator, "render_passes") and mi.variant() == "cuda_ad_rgb"
+        with variant.path_tracing_width():
+            pass
+    finally:
+        wm.set_variant(before)
+    assert np.isfinite(gpu).all()
+    np.testing.assert_allclose(gpu, cpu, rtol=1e-4, atol=1e-6)   # the same float32 code on both
     assert llvm_calls_fail == []
 
 
@@ -247,8 +274,10 @@ def test_reference_on_cuda_agrees_with_llvm_within_combined_standard_error():
     assert cuda.metadata["variant"] == "cuda_ad_rgb" and llvm.metadata["variant"] == "llvm_ad_rgb"
     assert np.isfinite(cuda.radiance).all() and (cuda.transmittance < 0.5).sum() > 100
     z = _z_scores(cuda, llvm)
-    # 16 passes: se from 15 degrees of freedom (t-distributed z: 0.9% beyond 3 for a t15)
-    assert abs(z.mean()) < 0.15, z.mean()
+    # 16 passes: se from 15 degrees of freedom (t-distributed z: 0.9% beyond 3 for a t15); the mean of
+    # ~200 pixels' z (3 correlated channels) has a spread of ~0.07: 0.25 is 3.5 of it. Two LLVM renders
+    # of other seeds gave means -0.011, -0.008, +0.003 and fractions 0, 0, 0.005.
+    assert abs(z.mean()) < 0.25, z.mean()
     assert (np.abs(z) > 3).mean() < 0.03, (np.abs(z) > 3).mean()
     # the eye-ray optical depth (cloud mask) in software interpolation on both: the same within float32
     np.testing.assert_allclose(cuda.transmittance, llvm.transmittance, rtol=1e-4, atol=1e-6)
