@@ -31,19 +31,21 @@ tiny sizes (48 x 36, 16 spp; slicer 64 x 48, 16 slices, two modes): it checks th
 from __future__ import annotations
 
 import argparse
+import json
 import statistics
 import subprocess
 import sys
 import time
 import traceback
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import weather_mi as wm  # noqa: E402
-from weather_mi.variant import cuda_usable  # noqa: E402
+from weather_mi.variant import cuda_usable, llvm_usable  # noqa: E402
 
 VARIANTS = ("llvm_ad_rgb", "cuda_ad_rgb")
 SLICER_SIZES = [(300, 300, 128), (1024, 768, 256)]
@@ -74,31 +76,67 @@ def z_scores(a, b) -> np.ndarray:
     return ((a.radiance.astype(np.float64) - b.radiance)[cloud] / np.maximum(se, 1e-30)).ravel()
 
 
-def reference_section(vol, width: int, height: int, spp: int) -> None:
-    small = wm.scene.default_spec(vol, max(8, width // 4), max(6, height // 4))
+def ref_spec(vol, width: int, height: int, seed: int):
+    return wm.scene.default_spec(vol, width, height, seed=seed)
+
+
+def render_ref(vol, v: str, width: int, height: int, spp: int, seed: int = 1):
+    """(seconds of a first render: compilation + 1 pass of 1 spp at 1/4 size, the Image) in variant v."""
+    t0 = time.perf_counter()
+    wm.render_reference(ref_spec(vol, max(8, width // 4), max(6, height // 4), seed), vol, spp=1, passes=1,
+                        progress=False, variant=v)
+    first = time.perf_counter() - t0
+    img = wm.render_reference(ref_spec(vol, width, height, seed), vol, spp=spp, passes=16, progress=False, variant=v)
+    assert img.metadata["variant"] == v, img.metadata["variant"]
+    return first, img
+
+
+def cloud_mean(img) -> float:
+    cloud = img.transmittance < 0.5
+    return float(img.radiance[cloud].mean()) if cloud.any() else float("nan")
+
+
+def saved_reference(saved, width: int, height: int, spp: int):
+    """The LLVM reference of ``--llvm-images`` as an Image-like namespace, or None (absent, other settings)."""
+    if saved is None:
+        return None
+    meta = json.loads(str(saved["settings"]))
+    if (meta["width"], meta["height"], meta["spp"]) != (width, height, spp):
+        say(f"(--llvm-images holds {meta['width']} x {meta['height']} at {meta['spp']} spp, not these settings: "
+            f"not used)")
+        return None
+    return SimpleNamespace(radiance=saved["ref_radiance"], stderr=saved["ref_stderr"],
+                           transmittance=saved["ref_transmittance"], meta=meta)
+
+
+def reference_section(vol, width: int, height: int, spp: int, llvm_here: bool, saved) -> None:
     say(f"\n## Reference: majorant_volpath, {width} x {height}, {spp} spp in 16 passes, demo supercell")
     say("| variant | first render (s) | s per spp | speed-up vs llvm | cloud mean radiance |")
     say("|---|---:|---:|---:|---:|")
-    images, per_spp = [], []
-    for k, v in enumerate((VARIANTS[0], GPU)):
-        t0 = time.perf_counter()
-        wm.render_reference(small, vol, spp=1, passes=1, progress=False, variant=v)
-        first = time.perf_counter() - t0
-        # the same seed on both (other variants draw other numbers anyway); --dry-run: another seed
-        seed = 2 if k and v == VARIANTS[0] else 1
-        img = wm.render_reference(wm.scene.default_spec(vol, width, height, seed=seed), vol, spp=spp, passes=16,
-                                  progress=False, variant=v)
-        assert img.metadata["variant"] == v, img.metadata["variant"]
-        images.append(img)
-        per_spp.append(img.metadata["seconds"] / spp)
-        cloud = img.transmittance < 0.5
-        mean = float(img.radiance[cloud].mean()) if cloud.any() else float("nan")
-        say(f"| {v} | {first:.1f} | {per_spp[-1]:.4f} | {per_spp[0] / per_spp[-1]:.1f}x | {mean:.5g} |")
-    z = z_scores(images[1], images[0])
-    cloud_px = int((images[0].transmittance < 0.5).sum())
-    say(f"\n{GPU} vs llvm_ad_rgb over {cloud_px} cloud pixels x 3 channels: z mean {z.mean():+.3f}, max |z| "
-        f"{np.abs(z).max():.2f}, fraction |z| > 3: {(np.abs(z) > 3).mean():.4f} (Gaussian 0.0027, t15 ~0.009)")
-    tm = np.abs(images[1].transmittance - images[0].transmittance).max()
+    base, base_spp = None, None
+    if llvm_here:
+        first, base = render_ref(vol, "llvm_ad_rgb", width, height, spp)
+        base_spp = base.metadata["seconds"] / spp
+        say(f"| llvm_ad_rgb | {first:.1f} | {base_spp:.4f} | 1.0x | {cloud_mean(base):.5g} |")
+    else:
+        base = saved_reference(saved, width, height, spp)
+        if base is not None:
+            m = base.meta
+            say(f"| llvm_ad_rgb (--llvm-images: {m['host']}, {m['threads']} threads, not this machine) | - | "
+                f"{m['seconds'] / spp:.4f} | - | {cloud_mean(base):.5g} |")
+    # the same seed as the LLVM render (other variants draw other numbers anyway); --dry-run: another seed
+    first, img = render_ref(vol, GPU, width, height, spp, seed=2 if GPU == "llvm_ad_rgb" else 1)
+    per = img.metadata["seconds"] / spp
+    ratio = f"{base_spp / per:.1f}x" if base_spp else "-"
+    say(f"| {GPU} | {first:.1f} | {per:.4f} | {ratio} | {cloud_mean(img):.5g} |")
+    if base is None:
+        say("\nno LLVM image to compare with (no LLVM backend here and no --llvm-images of these settings)")
+        return
+    z = z_scores(img, base)
+    say(f"\n{GPU} vs llvm_ad_rgb over {int((base.transmittance < 0.5).sum())} cloud pixels x 3 channels: z mean "
+        f"{z.mean():+.3f}, max |z| {np.abs(z).max():.2f}, fraction |z| > 3: {(np.abs(z) > 3).mean():.4f} "
+        f"(Gaussian 0.0027, t15 ~0.009)")
+    tm = np.abs(img.transmittance - base.transmittance).max()
     say(f"eye-ray transmittance (cloud mask), max |{GPU} - llvm|: {tm:.2e}")
 
 
@@ -123,20 +161,47 @@ def slicer_frames(vol, mode_name: str, w: int, h: int, slices: int, frames: int,
     return statistics.median(t), img.radiance
 
 
-def slicer_section(vol, frames: int) -> None:
+def slicer_key(name: str, w: int, h: int, slices: int) -> str:
+    return f"slicer {name} {w}x{h}x{slices}"
+
+
+def slicer_section(vol, frames: int, llvm_here: bool, saved) -> None:
     from weather_mi.slicing import MODES
     for w, h, slices in SLICER_SIZES:
         say(f"\n## Slicer: {w} x {h}, {slices} slices, light buffer 128^2 ({frames} timed frame(s) per mode)")
         say(f"| mode | llvm fps | {GPU} fps | ratio | max abs({GPU} - llvm) / max |")
         say("|---|---:|---:|---:|---:|")
         for name in SLICER_MODES or MODES:
-            res = []
-            for v in (VARIANTS[0], GPU):
-                wm.set_variant(v)
-                res.append(slicer_frames(vol, name, w, h, slices, frames))
-            (tl, a), (tc, b) = res
-            diff = float(np.abs(a - b).max() / max(float(a.max()), 1e-30))
-            say(f"| {name} | {1 / tl:.2f} | {1 / tc:.2f} | {tl / tc:.1f}x | {diff:.2e} |")
+            tl, a = None, None
+            if llvm_here:
+                wm.set_variant("llvm_ad_rgb")
+                tl, a = slicer_frames(vol, name, w, h, slices, frames)
+            elif saved is not None and slicer_key(name, w, h, slices) in saved:
+                a = saved[slicer_key(name, w, h, slices)]   # rendered elsewhere (--llvm-images)
+            wm.set_variant(GPU)
+            tc, b = slicer_frames(vol, name, w, h, slices, frames)
+            diff = f"{float(np.abs(a - b).max() / max(float(a.max()), 1e-30)):.2e}" if a is not None else "-"
+            llvm_fps, ratio = (f"{1 / tl:.2f}", f"{tl / tc:.1f}x") if tl else ("-", "-")
+            say(f"| {name} | {llvm_fps} | {1 / tc:.2f} | {ratio} | {diff} |")
+
+
+def save_llvm(path: Path, vol, width: int, height: int, spp: int) -> None:
+    """--save-llvm: the LLVM reference and slicer frames (first slicer size) that --llvm-images compares with."""
+    import platform
+
+    import drjit as dr
+    from weather_mi.slicing import MODES
+    wm.set_variant("llvm_ad_rgb")
+    _, img = render_ref(vol, "llvm_ad_rgb", width, height, spp)
+    out = {"ref_radiance": img.radiance, "ref_stderr": img.stderr, "ref_transmittance": img.transmittance}
+    w, h, slices = SLICER_SIZES[0]
+    for name in SLICER_MODES or MODES:
+        out[slicer_key(name, w, h, slices)] = slicer_frames(vol, name, w, h, slices, 1)[1]
+    settings = {"width": width, "height": height, "spp": spp, "seconds": img.metadata["seconds"],
+                "host": platform.node(), "threads": int(dr.thread_count())}
+    np.savez_compressed(path, settings=json.dumps(settings), **out)
+    say(f"saved the LLVM reference ({width} x {height}, {spp} spp, {img.metadata['seconds']:.1f} s) and "
+        f"{len(out) - 3} slicer frames ({w} x {h}, {slices} slices) to {path}")
 
 
 def accel_section(vol, frames: int) -> None:
@@ -157,34 +222,42 @@ def main() -> int:
     ap.add_argument("--quick", action="store_true", help="~5 min on an H200: smaller reference, 1 timed frame")
     ap.add_argument("--out", type=Path, default=None, help="also write the table (markdown) here")
     ap.add_argument("--dry-run", action="store_true", help="llvm_ad_rgb as both variants, tiny sizes (no GPU)")
+    ap.add_argument("--save-llvm", type=Path, default=None, metavar="NPZ",
+                    help="render the LLVM images for --llvm-images (same --quick/--dry-run) and stop; no GPU needed")
+    ap.add_argument("--llvm-images", type=Path, default=None, metavar="NPZ",
+                    help="where this machine has no LLVM backend: compare with these LLVM images (--save-llvm)")
     args = ap.parse_args()
     global GPU, SLICER_SIZES, SLICER_MODES
     ok, why = cuda_usable()
     if args.dry_run:
         GPU, SLICER_SIZES, SLICER_MODES = "llvm_ad_rgb", [(64, 48, 16)], ["uniform/low-albedo", ACCEL_MODE]
-    elif not ok:
+    elif not ok and args.save_llvm is None:
         print(f"benchmarks/gpu.py: no usable CUDA device ({why}); nothing measured")
         return 0
     width, height, spp = (48, 36, 16) if args.dry_run else (160, 120, 256) if args.quick else (320, 240, 1024)
     frames = 1 if args.quick or args.dry_run else 3
     t0 = time.perf_counter()
     vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
+    if args.save_llvm is not None:
+        save_llvm(args.save_llvm, vol, width, height, spp)
+        return 0
     import drjit as dr
     import mitsuba as mi
+    llvm_here = llvm_usable()
+    saved = np.load(args.llvm_images) if args.llvm_images is not None else None
     say(f"# weather-mi {wm.__version__} (mitsuba {mi.__version__}, drjit {dr.__version__}) on "
         f"{'no GPU: --dry-run, llvm twice' if args.dry_run else device_name()}; CPU threads {dr.thread_count()}; "
-        f"demo supercell {vol.shape}{' (--quick)' if args.quick else ''}")
+        f"LLVM backend {'here' if llvm_here else 'absent here'}; demo supercell {vol.shape}"
+        f"{' (--quick)' if args.quick else ''}")
     failed = 0
-    for name, run in (("reference", lambda: reference_section(vol, width, height, spp)),
-                      ("slicer", lambda: slicer_section(vol, frames)),
+    for name, run in (("reference", lambda: reference_section(vol, width, height, spp, llvm_here, saved)),
+                      ("slicer", lambda: slicer_section(vol, frames, llvm_here, saved)),
                       ("texture interpolation", lambda: accel_section(vol, max(frames, 2)))):
         try:
             run()
         except Exception:  # report and go on: a later session gets the other sections anyway
             failed += 1
             say(f"\n## {name}: FAILED\n```\n{traceback.format_exc()}```")
-        finally:
-            wm.set_variant("llvm_ad_rgb")
     say(f"\ntotal {time.perf_counter() - t0:.0f} s")
     if args.out is not None:
         args.out.write_text("\n".join(LINES) + "\n")

@@ -83,6 +83,16 @@ def probe_kernel(backend) -> float:
     return float(dr.sum(x * 2.0).numpy()[0])
 
 
+def llvm_usable() -> bool:
+    """Whether Dr.Jit's LLVM backend initialises in this process (a libLLVM >= 16 found, or the one
+    ``DRJIT_LIBLLVM_PATH`` names): a GPU machine may have CUDA and no libLLVM."""
+    import drjit as dr
+    try:
+        return bool(dr.has_backend(dr.JitBackend.LLVM))
+    except Exception:
+        return False
+
+
 def default_variant() -> str:
     """``cuda_ad_rgb`` where this process can run it (:func:`cuda_usable`), else ``llvm_ad_rgb``."""
     return "cuda_ad_rgb" if cuda_usable()[0] else "llvm_ad_rgb"
