@@ -24,9 +24,37 @@ line saying so and exits 0. With one, on the demo supercell (``species="physical
 ``--quick`` (meant to fit 5 min on an H200 including kernel compilation, most of it LLVM's): the
 reference at 160 x 120 with 256 spp, 1 timed slicer frame per mode and size. Default: 320 x 240 with
 1024 spp, 3 timed frames. Every timed frame follows two warm-up frames (the first compiles the frame,
-the second the texture rebuild after a change of scaling). Each section prints as it finishes; a failing section prints its error and the others
-still run (exit code 1 then). ``--dry-run`` runs every section with llvm_ad_rgb standing in for CUDA at
-tiny sizes (48 x 36, 16 spp; slicer 64 x 48, 16 slices, two modes): it checks the script, not a GPU.
+the second the texture rebuild after a change of scaling). Each section prints as it finishes; a failing
+section prints its error and the others still run (exit code 1 then). ``--dry-run`` runs every section
+with llvm_ad_rgb standing in for CUDA at tiny sizes (48 x 36, 16 spp; slicer 64 x 48, 16 slices, two
+modes): it checks the script, not a GPU.
+
+Where the GPU machine has no libLLVM (Dr.Jit's LLVM backend absent: ``variant.llvm_usable``), the LLVM
+side cannot run in the same process: ``--save-llvm NPZ`` renders the LLVM reference and the 300 x 300
+slicer frames with the same settings on any machine, and ``--llvm-images NPZ`` on the GPU machine
+compares with them (z-scores and image differences; LLVM timings then are the other machine's, marked).
+
+On the project's device machine (an H200 with Python 3.12, no mitsuba, probably no libLLVM, nothing
+reachable): prepare here, in the repository root (``build/`` is git-ignored; ~3 min on 2 cores)::
+
+    mkdir -p build/gpu /tmp/whl312 /tmp/site312
+    python3 -m pip download -q --no-deps --only-binary=:all: --python-version 3.12 --implementation cp \
+        --platform manylinux_2_28_x86_64 --platform manylinux_2_27_x86_64 -d /tmp/whl312 mitsuba==3.9.1 drjit==1.5.0
+    for w in /tmp/whl312/*.whl; do python3 -m zipfile -e $w /tmp/site312; done
+    (cd /tmp/site312 && rm -rf share mitsuba/include mitsuba/cmake mitsuba/pkgconfig mitsuba/mitsuba_stubs \
+        drjit/include drjit/cmake mitsuba/{cuda,llvm}_ad_{mono,mono_polarized,spectral,spectral_polarized}.cpython-312* \
+        mitsuba/scalar_{mono,mono_polarized,spectral,spectral_polarized}.cpython-312* && find . -name '*.pyi' -delete)
+    tar cJf build/gpu/mi312.tar.xz -C /tmp/site312 .     # ~33 MB: the two wheels (67 MB) exceed a call's 64 MiB
+    .venv/bin/python benchmarks/gpu.py --quick --save-llvm build/gpu/llvm_quick.npz
+
+then one device call, ``carry=["build/gpu"]``, ``timeout_s=540``::
+
+    mkdir -p /tmp/site && tar xJf build/gpu/mi312.tar.xz -C /tmp/site && ln -s ../plugins weather_mi/plugins &&
+    export PYTHONPATH=/tmp/site PYTHONUNBUFFERED=1 && (ldconfig -p | grep -iE 'libLLVM|nvoptix'; nvidia-smi -L);
+    python3 benchmarks/gpu.py --quick --llvm-images build/gpu/llvm_quick.npz --out $OUT/gpu.md 2>&1 | tee $OUT/gpu.log;
+    python3 -m pytest -q -rs -p no:cacheprovider tests/test_gpu.py 2>&1 | tee $OUT/test_gpu.log
+
+(``weather_mi/plugins`` -> ``plugins``: the package as installed, without installing it.)
 """
 from __future__ import annotations
 
