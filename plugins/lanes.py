@@ -16,6 +16,7 @@ import drjit as dr
 import mitsuba as mi
 
 MAX_JOBS_PER_LAUNCH = 1 << 22  # persistent lanes: samples per kernel launch (12 bytes of radiance each)
+CUDA_LANES = 1 << 20           # lanes of a launch off LLVM: a GPU wants ~10^5-10^6 threads in flight
 
 _JOB_SAMPLERS: dict = {}
 _PCG_MULT = 0x5851F42D4C957F2D
@@ -63,7 +64,11 @@ def job_sampler_class():
 def default_lanes() -> int:
     """Lanes of a persistent-lane launch: one LLVM block per worker thread (each thread's first packet
     then takes samples until none are left), at least 64. Not critical: 512, 2048, 8192 and 32768 lanes
-    took the same time (0.19-0.20 s per spp, demo side view, 160 x 120, two rounds)."""
+    took the same time (0.19-0.20 s per spp, demo side view, 160 x 120, two rounds). Persistent lanes are
+    meant for LLVM (``passes._persistent`` never picks them elsewhere); called on another variant (a direct
+    ``render_pass``) this reads no LLVM setting and gives CUDA_LANES, enough lanes to fill a GPU."""
+    if not mi.variant().startswith("llvm"):
+        return CUDA_LANES
     from ..jit_settings import llvm_block_size
     return max(64, int(dr.thread_count()) * int(llvm_block_size() or 1024))
 

@@ -199,6 +199,25 @@ def test_unknown_worker_variant_is_refused_naming_the_worker(client, vol):
     assert _settles(lambda: not _scheduler_tasks(client))
 
 
+def test_auto_worker_variant_is_probed_and_recorded(client, vol):
+    """"auto": cuda_ad_rgb only on workers where a CUDA kernel ran (here, the same machine as the test:
+    ``variant.cuda_usable``), else llvm_ad_rgb; the metadata says which variant the passes used and
+    whether the image is the in-process one bit for bit."""
+    sp = spec(seed=5)
+    remote = render(sp, vol, client, worker_variant="auto")
+    gpu = wm.variant.cuda_usable()[0]
+    expected = "cuda_ad_rgb" if gpu else "llvm_ad_rgb"
+    m = remote.metadata
+    assert m["dask"]["variants"] == [expected] and m["variant"] == expected
+    assert m["passes_by_variant"] == {expected: 8}
+    if expected == wm.passes.current_or_default_variant():
+        assert m["agreement"] == "bit-identical to the in-process render"
+        if expected.startswith("llvm"):  # (CUDA's film accumulates with atomics: its bits may vary run to run)
+            assert same(remote, render(sp, vol))
+    else:
+        assert m["agreement"].startswith("within noise")
+
+
 def test_worker_variant_rules():
     v = cluster.variant_for
     assert v("tcp://a:1", None, "llvm_ad_rgb", "cuda_ad_rgb") == "llvm_ad_rgb"

@@ -16,11 +16,43 @@ CONNECT_TIMEOUT_S = 8.0     # an unreachable scheduler is reported within 10 s
 WORKER_WAIT_S = 60.0        # a scheduler without workers: how long to wait for the first one
 CHECKED_PACKAGES = ("weather_mi", "mitsuba", "drjit")
 
+CHECKPOINT_PASSES = "checkpoint (variant not recorded)"   # passes_by_variant's key for resumed passes
+
+
 def _probe_variants():
-    """Mitsuba variants compiled into this worker's Mitsuba and weather_mi's default among them."""
+    """On a worker: the Mitsuba variants compiled into its Mitsuba, whether it can run CUDA
+    (``variant.cuda_usable``: a tiny kernel ran there) and why, and the variant "auto" gives it."""
     import mitsuba as mi
-    from .variant import default_variant
-    return {"variants": sorted(mi.variants()), "default": default_variant()}
+    from .variant import cuda_usable
+    ok, why = cuda_usable()
+    info = {"variants": sorted(mi.variants()), "cuda": ok, "cuda_reason": why}
+    info["default"] = auto_variant(info)
+    return info
+
+
+def auto_variant(info: dict) -> str:
+    """The variant ``worker_variant="auto"`` gives a worker whose probe (``_probe_variants``) is ``info``:
+    cuda_ad_rgb only where a CUDA test kernel ran and the variant is compiled in, else llvm_ad_rgb."""
+    if info.get("cuda") and "cuda_ad_rgb" in info.get("variants", ()):
+        return "cuda_ad_rgb"
+    return "llvm_ad_rgb"
+
+
+def pass_variants(passes_by_variant: dict, client_variant: str) -> dict:
+    """The metadata of a render whose passes ran with these variants ({variant: number of passes}; resumed
+    passes under CHECKPOINT_PASSES): ``variant`` (the one variant, or "mixed"), ``passes_by_variant`` and
+    ``agreement`` with the same render in this process: bit for bit only when every pass used
+    ``client_variant`` (another variant draws other random numbers with other rounding: within noise)."""
+    used = {k: int(v) for k, v in passes_by_variant.items() if v}
+    one = next(iter(used)) if len(used) == 1 and CHECKPOINT_PASSES not in used else None
+    if set(used) <= {client_variant}:
+        agreement = "bit-identical to the in-process render"
+    elif CHECKPOINT_PASSES in used and set(used) - {CHECKPOINT_PASSES} <= {client_variant}:
+        agreement = "bit-identical to the in-process render if the checkpoint's passes were " + client_variant
+    else:
+        agreement = (f"within noise of the in-process render ({client_variant}), not bit for bit: passes "
+                     f"rendered with other variants")
+    return {"variant": one or "mixed", "passes_by_variant": used, "agreement": agreement}
 
 
 def local_versions() -> dict:
@@ -160,8 +192,9 @@ def resolve_variants(client, worker_variant, client_variant: str | None) -> dict
 
 def variant_for(address: str, worker_variant, client_variant: str | None, worker_default: str) -> str:
     """The variant a worker renders with: ``worker_variant`` None -> the client's variant (bit-identical
-    images); "auto" -> the worker's default (cuda_ad_rgb where it has a GPU); a variant name; or a dict
-    {worker address: variant} (workers not in it: the client's variant)."""
+    images); "auto" -> ``worker_default``, the worker's ``auto_variant`` (cuda_ad_rgb only where a CUDA
+    kernel ran there); a variant name; or a dict {worker address: variant} (workers not in it: the
+    client's variant)."""
     fallback = client_variant or worker_default
     if worker_variant is None:
         return fallback

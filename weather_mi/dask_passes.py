@@ -53,7 +53,8 @@ def held(client, obj, key: str):
 
 
 def _render_pass_task(job, i: int, spp: int, seed: int, worker_variant, client_variant: str):
-    """On a worker: pass ``i`` of ``job`` -> (index, (H, W, 3) float32 image, seconds, worker address)."""
+    """On a worker: pass ``i`` of ``job`` -> (index, (H, W, 3) float32 image, seconds, worker address,
+    the variant it rendered with)."""
     from distributed import get_worker
 
     from .cluster import variant_for
@@ -61,7 +62,7 @@ def _render_pass_task(job, i: int, spp: int, seed: int, worker_variant, client_v
     address = get_worker().address
     variant = variant_for(address, worker_variant, client_variant, default_variant())
     raw, seconds = on_render_thread(_render_pass, job, variant, spp, seed, job.pixels_of(i))
-    return i, raw, seconds, address
+    return i, raw, seconds, address, variant
 
 
 def _render_pass(job, variant: str, spp: int, seed: int, pixels=None):
@@ -113,7 +114,8 @@ class RemotePasses:
             token = uuid.uuid4().hex[:12]
             scene = self._scene = held(client, self.job, f"weather-mi-scene-{token}")
             summary = {"workers": len(variants), "threads": threads, "variants": sorted(set(variants.values())),
-                       "passes_by_worker": {}, "bytes_per_pass": 0, "worker_seconds": 0.0}
+                       "passes_by_worker": {}, "bytes_per_pass": 0, "worker_seconds": 0.0,
+                       "passes_by_variant": {cluster.CHECKPOINT_PASSES: self.start} if self.start else {}}
             self.summary = summary
             nxt, i = self.start, self.start   # next pass to submit, next pass to hand over
             last, idle_since = time.perf_counter(), None
@@ -129,7 +131,7 @@ class RemotePasses:
                 future = self._futures[i]
                 while True:  # pass i, in order (later passes render meanwhile and wait on their workers)
                     try:
-                        k, raw, secs, addr = future.result(timeout=POLL_S)  # a task error raises here
+                        k, raw, secs, addr, used = future.result(timeout=POLL_S)  # a task error raises here
                         break
                     except TimeoutError:
                         idle_since = self._check_alive(idle_since)
@@ -140,6 +142,7 @@ class RemotePasses:
                 future.release()
                 del future
                 summary["passes_by_worker"][addr] = summary["passes_by_worker"].get(addr, 0) + 1
+                summary["passes_by_variant"][used] = summary["passes_by_variant"].get(used, 0) + 1
                 summary["bytes_per_pass"] = int(raw.nbytes)
                 summary["worker_seconds"] += secs
                 now = time.perf_counter()

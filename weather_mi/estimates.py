@@ -105,7 +105,7 @@ def eye_optical_depth(sensor, vol_k: OpticalVolume, spec: SceneSpec, steps: int 
         t0, t1 = dr.maximum(t0, dr.minimum(ta, tb)), dr.minimum(t1, dr.maximum(ta, tb))
     seg = dr.maximum(t1 - t0, 0.0)
     tex = mi.Texture3f(mi.TensorXf(np.ascontiguousarray(vol_k.beta_total, np.float32)[..., None]),
-                       wrap_mode=dr.WrapMode.Clamp)
+                       wrap_mode=dr.WrapMode.Clamp, use_accel=False)  # CUDA: float weights, as on LLVM
     n_steps = dr.opaque(mi.UInt32, steps)
 
     def body(i, tau):  # one small symbolic loop: an unrolled march compiles for a minute

@@ -1,6 +1,10 @@
 """Dr.Jit's core settings that have no Python binding (the LLVM backend's block size and SIMD width),
 read and set through ctypes from ``libdrjit-core.so``. Below both the plugins and :mod:`weather_mi.variant`
 (which re-exports these names), so that neither imports the other for them.
+
+Only for LLVM variants: callers apply them while an LLVM variant is selected (``variant.is_llvm``) and
+skip them on CUDA, whose kernels read neither setting (one GPU launch over all lanes: no CPU blocks, no
+SIMD packets).
 """
 from __future__ import annotations
 

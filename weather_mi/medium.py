@@ -32,12 +32,15 @@ def medium_dict(vol: OpticalVolume) -> dict:
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     to_world = bbox_transform(vol.bbox)
+    # accel False: on CUDA the grids' hardware texture units interpolate with 8-bit weights, while
+    # majorant_volpath's trackers interpolate the same texels in float32 (plugins/dda.py): one medium for
+    # both only in software. LLVM has no texture units: no effect there.
     return {
         "type": "heterogeneous",
         "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(vol.beta_total[..., None]),
-                    "to_world": to_world, "filter_type": "trilinear"},
+                    "to_world": to_world, "filter_type": "trilinear", "accel": False},
         "albedo": {"type": "gridvolume", "data": mi.TensorXf(vol.albedo), "to_world": to_world,
-                   "filter_type": "trilinear"},
+                   "filter_type": "trilinear", "accel": False},
         "scale": 1.0,
         "has_spectral_extinction": False,
         "phase": phase_dict(vol),

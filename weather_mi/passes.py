@@ -144,13 +144,19 @@ class PassScene:
 
 def _persistent(scene, persistent: bool | None) -> bool:
     """Whether passes of ``scene`` run with persistent lanes: as asked, or (None) wherever they apply:
-    ``majorant_volpath`` on an LLVM variant, unless its ``persistent_lanes`` is false."""
+    ``majorant_volpath`` on an LLVM variant, unless its ``persistent_lanes`` is false.
+
+    Never on other variants, even when asked: persistent lanes refill the lanes of a CPU SIMD packet whose
+    longest path holds it (sized in LLVM blocks per CPU thread); on CUDA a launch is many warps of 32 lanes
+    that the hardware schedules as slots free up, and the lane count is an LLVM setting, so ``mi.render``
+    renders the pass there (skipped, not an error: the same image in expectation, other random numbers)."""
     import mitsuba as mi
+    if not mi.variant().startswith("llvm"):
+        return False
     if persistent is not None:
         return persistent
     integrator = scene.integrator()
-    return (mi.variant().startswith("llvm") and hasattr(integrator, "render_passes")
-            and getattr(integrator, "persistent", False))
+    return hasattr(integrator, "render_passes") and getattr(integrator, "persistent", False)
 
 
 def render_pass(scene, spp: int, seed: int, persistent: bool | None = None, pixels=None) -> np.ndarray:

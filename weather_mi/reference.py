@@ -103,7 +103,9 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         pass order, so the image is bit-identical to the in-process one.
     worker_variant : str or dict, optional
         With ``client``: the Mitsuba variant of the workers (None: this process's; "auto": each
-        worker's default, cuda_ad_rgb where it has a GPU; a name; or {worker address: name}).
+        worker's default, cuda_ad_rgb where a CUDA test kernel runs there, else llvm_ad_rgb; a name; or
+        {worker address: name}). The metadata then records ``variant`` (or "mixed"),
+        ``passes_by_variant`` and ``agreement`` (``cluster.pass_variants``).
     on_pass : callable, optional
         Invoked after every merged pass (after its checkpoint is written) with an ``Image`` of the
         estimate so far: mean radiance and standard error (float32; NaN while fewer than 2 passes), and
@@ -151,8 +153,10 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         _open_checkpoint(run, checkpoint, resume)
         remote = _merge_passes(run, client, worker_variant, progress, on_pass)
         image = run.image(run.done, run.stats(run.done))
-        if remote is not None:
+        if remote is not None:  # which variant each pass used (workers may differ: "auto")
+            from .cluster import pass_variants
             image.metadata["dask"] = remote.summary
+            image.metadata.update(pass_variants(remote.summary["passes_by_variant"], image.metadata["variant"]))
         return image
 
 
