@@ -48,13 +48,16 @@ def spp_for_ciede(raw: list[tuple[int, float]], target: float) -> tuple[float, b
     return s, not (np.exp(spp.min()) <= s <= np.exp(spp.max()))
 
 
-def bias_rows(scene: str, lighting: str, spec, vol, ref, spp_list, aux=("albedo+normal",), raw_spp=None,
+def bias_rows(scene: str, lighting: str, spec, vol, ref, spp_list, aux=None, raw_spp=None,
               integrator: str = "majorant", seed: int = 1, slicer_frame=None) -> list[dict]:
     """Rows (``KEYS`` and ``aux``) of raw and denoised images of ``spec``'s view at each of ``spp_list``
-    (raw also at ``raw_spp``, for the CIEDE2000 curve) against ``ref``; images with seeds from ``seed``
+    (raw also at ``raw_spp``, for the CIEDE2000 curve) against ``ref``, denoised with each of ``aux``
+    (default: ``weather_mi.denoise.DEFAULT_AUX``); images with seeds from ``seed``
     on, independent of the reference's. Returns (rows, {spp: (raw Image, {aux: denoised radiance})})."""
     from ..denoise import auxiliaries, denoise_radiance
+    from ..denoise import DEFAULT_AUX
     from ..reference import render_reference
+    aux = (DEFAULT_AUX,) if aux is None else tuple(aux)
     mask = np.asarray(ref.transmittance) < 0.5
     if not mask.any():
         return [], {}
@@ -79,19 +82,3 @@ def bias_rows(scene: str, lighting: str, spec, vol, ref, spp_list, aux=("albedo+
             s, extra = spp_for_ciede(raw_curve, row["ciede2000"])
             row["spp_equiv"] = f"{s:.0f}{' (extrapolated)' if extra else ''}"
     return rows, images
-
-
-def report_section(rows: list[dict], ref_note: str) -> list[str]:
-    """The report's section on the denoised display layer (markdown lines)."""
-    from .report import _table
-    if not rows:
-        return ["## The denoised display layer", "", "No view with cloud pixels: nothing measured.", ""]
-    return ["## The denoised display layer (OIDN) and its bias", "",
-            "What the PNG of `weather-mi render` shows by default: OIDN's denoised radiance (an extra EXR layer, "
-            "`denoised.R/G/B`; every metric above uses the unbiased radiance). Raw and denoised images at the spp "
-            f"below (seeds independent of the reference's) against {ref_note}, over its cloud pixels "
-            "(eye-ray transmittance < 1/2): CIEDE2000, relative mean bias, and the relative RMS error with the "
-            "reference's own noise removed (E[(X - R)^2] = MSE(X) + var(R)). `spp_equiv`: the spp the raw image "
-            "would need for the denoised image's CIEDE2000 (a power law fitted to the raw CIEDE2000 against spp; "
-            "'extrapolated' beyond the measured spp).", "",
-            _table(rows, KEYS), ""]
