@@ -5,7 +5,8 @@ denoiser fails (thin edges, the darkest and brightest cloud pixels) with crops i
 
     .venv/bin/python validation/denoiser_bias.py [--size 64x48] [--target-rse 0.025] [--views ...]
 
-Prints a markdown table and writes out/denoiser_bias/{table.md, rows.json, *_crops.png}.
+Prints a markdown table and writes out/denoiser_bias/{table.md, rows.json, *_crops.png} and the references
+(*_reference.exr, reused by a later run of the same size: delete them to render afresh).
 ``--demo-reference-spp N``: the README demo (320 x 240 at its default spp) raw and denoised against an
 N-spp reference of the same view instead (out/denoiser_bias/demo.md, demo_crops.png).
 """
@@ -41,14 +42,26 @@ def regions(spec, vol, ref) -> dict:
             "darkest 10%": cloud & (lum <= lo), "brightest 5%": cloud & (lum >= hi)}
 
 
-def crops(path: Path, ref, raw, den: dict, scale: int = 4) -> None:
-    """reference | raw | denoised (each aux) | |denoised - ref| x 4, one exposure, nearest-neighbour x scale."""
+def crops(path: Path, ref, raw, den: dict, scale: int = 8, margin: int = 3) -> None:
+    """reference | raw | denoised (each aux) | |denoised(none) - ref| x 4, cropped to the cloud pixels' box
+    (plus ``margin``), one exposure (the reference's), nearest-neighbour x ``scale``."""
     from PIL import Image as PILImage
     e = auto_exposure(ref.radiance)
-    best = den[next(iter(den))]
-    panels = [ref.radiance, raw.radiance] + list(den.values()) + [np.abs(best - ref.radiance) * 4]
-    row = np.concatenate([to_srgb8(p, e) for p in panels], axis=1)
+    cloud = np.asarray(ref.transmittance) < 0.5
+    ys, xs = np.nonzero(cloud) if cloud.any() else (np.array([0, ref.shape[0] - 1]), np.array([0, ref.shape[1] - 1]))
+    box = (slice(max(ys.min() - margin, 0), ys.max() + margin + 1), slice(max(xs.min() - margin, 0), xs.max() + margin + 1))
+    first = den.get("none", den[next(iter(den))])
+    panels = [ref.radiance, raw.radiance] + list(den.values()) + [np.abs(first - ref.radiance) * 4]
+    row = np.concatenate([to_srgb8(p[box], e) for p in panels], axis=1)
     PILImage.fromarray(row).resize((row.shape[1] * scale, row.shape[0] * scale), PILImage.NEAREST).save(path)
+
+
+def noise_ciede(ref, mask: np.ndarray, seed: int = 0) -> float:
+    """The CIEDE2000 over ``mask`` that the reference's own noise alone gives: the reference against
+    itself plus Gaussian noise of its per-pixel standard error (an estimate, for reading the others)."""
+    rng = np.random.default_rng(seed)
+    noisy = ref.radiance + np.nan_to_num(ref.stderr) * rng.standard_normal(ref.radiance.shape)
+    return wm.metrics.compare(ref, np.maximum(noisy, 0.0), mask=mask)["ciede2000"]
 
 
 def demo(ref_spp: int, out: Path) -> None:
@@ -62,7 +75,13 @@ def demo(ref_spp: int, out: Path) -> None:
     t0 = time.perf_counter()
     img = wm.render_reference(spec, vol, spp=args.spp, progress=False)
     t_raw = time.perf_counter() - t0
-    ref = wm.render_reference(replace(spec, seed=7), vol, spp=ref_spp, progress=False)
+    img.save(out / "demo_raw.exr")
+    cached = out / f"demo_reference_{ref_spp}spp.exr"
+    if cached.is_file():
+        ref = wm.Image.load(cached)
+    else:
+        ref = wm.render_reference(replace(spec, seed=7), vol, spp=ref_spp, progress=False)
+        ref.save(cached)
     mask = np.asarray(ref.transmittance) < 0.5
     rows = [{"image": f"raw {args.spp} spp", "seconds": t_raw, **error_figures(ref, img.radiance, mask)}]
     den = {}
@@ -70,13 +89,17 @@ def demo(ref_spp: int, out: Path) -> None:
         t0 = time.perf_counter()
         alb, nrm = auxiliaries(aux, spec, vol, img.radiance)
         den[aux] = denoise_radiance(img.radiance, alb, nrm)
-        rows.append({"image": f"denoised ({aux})", "seconds": t_raw + time.perf_counter() - t0,
+        rows.append({"image": f"denoised ({aux})", "seconds": time.perf_counter() - t0,
                      **error_figures(ref, den[aux], mask)})
-    crops(out / "demo_crops.png", ref, img, den, scale=1)
+    rows.append({"image": "reference + its own noise (estimate)", "seconds": float("nan"),
+                 "ciede2000": noise_ciede(ref, mask), "rel_bias": 0.0,
+                 "rel_rms": float(np.sqrt(np.mean(np.nan_to_num(ref.stderr[mask]) ** 2)) / ref.radiance[mask].mean())})
+    crops(out / "demo_crops.png", ref, img, den, scale=2)
     n = ref.metadata["noise"]
     text = [f"README demo, 320 x 240, {args.spp} spp (the demo's budget), against a {ref_spp}-spp reference "
             f"(seed 7; cloud RSE {n['rse_mean']:.3f}, RMS se/mean {n['rms_se_over_mean']:.3f}), "
-            f"{int(mask.sum())} cloud pixels; rel_rms with the reference's noise removed:", "",
+            f"{int(mask.sum())} cloud pixels; rel_rms with the reference's noise removed; seconds: the raw "
+            "render's (wall, on the shared machine), the denoiser's own (features + OIDN):", "",
             _table(rows, ["image", "seconds", "ciede2000", "rel_bias", "rel_rms"])]
     (out / "demo.md").write_text("\n".join(text))
     (out / "demo.json").write_text(json.dumps(rows, indent=1))
@@ -110,8 +133,13 @@ def main() -> None:
         vol, _ = load_scene(scene, cfg, data_dir=a.data)
         spec = view(vol, lighting, cfg)
         t0 = time.perf_counter()
-        ref = wm.render_reference(replace(spec, seed=7), vol, spp=256, target_rse=a.target_rse,
-                                  max_seconds=a.max_seconds, progress=False)
+        cached = out / f"{scene}_{lighting}_{w}x{h}_reference.exr"
+        if cached.is_file():  # a reference of an earlier run (delete it to render afresh)
+            ref = wm.Image.load(cached)
+        else:
+            ref = wm.render_reference(replace(spec, seed=7), vol, spp=256, target_rse=a.target_rse,
+                                      max_seconds=a.max_seconds, progress=False)
+            ref.save(cached)
         noise = ref.metadata["noise"]
         refs.append({"scene": scene, "lighting": lighting, "spp": ref.metadata["spp"], "seconds": time.perf_counter() - t0,
                      "rse_mean": noise["rse_mean"], "rms_se_over_mean": noise["rms_se_over_mean"]})
