@@ -13,7 +13,7 @@ def test_study_end_to_end_tiny(tmp_path):
     report = run(tmp_path, CONFIGS["tiny"], progress=False)
     text = report.read_text()
     for section in ("The reference and its noise", "Table IV modes", "Convergence", "figure pairs", "Calibration",
-                    "Time against error", "misses"):
+                    "Time against error", "denoised display layer", "misses"):
         assert section in text
     with open(tmp_path / "metrics.csv") as f:
         rows = list(csv.DictReader(f))
@@ -30,6 +30,10 @@ def test_study_end_to_end_tiny(tmp_path):
         assert (tmp_path / png).stat().st_size > 0
     for png in ("demo-cumulus_front_side_by_side.png", "fig7-8_light.png"):
         assert PILImage.open(tmp_path / png).size[0] >= 320 * 2  # every panel at least 320 px wide
+
+    # the denoiser's bias: raw and denoised rows of every view, figures finite
+    den = [line for line in text.splitlines() if line.startswith("| demo-cumulus |") and "denoised (" in line]
+    assert len(den) == 2 and all(float(line.split("|")[7]) >= 0 for line in den), den
 
     # calibration (trained on the front-lit view) lowers the error of the back-lit view it never saw
     calib = [line for line in text.splitlines() if line.startswith("| demo-cumulus | back | held-out |")]

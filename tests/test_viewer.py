@@ -242,3 +242,37 @@ def test_the_species_colour_view_paints_the_species(cumulus_storm):
     assert cloud.any()
     chroma = lambda rgb: (rgb.max(axis=-1) - rgb.min(axis=-1)) / np.maximum(rgb.max(axis=-1), 1e-12)  # noqa: E731
     assert chroma(painted.radiance[cloud]).mean() > chroma(plain.radiance[cloud]).mean() + 0.05
+
+
+def test_the_b_view_offers_the_denoised_reference_and_the_metrics_keep_the_radiance():
+    """"B: denoised": OIDN's image of the reference for the eye (smoother than B's raw estimate of a flat
+    noisy field); the image the metrics and the difference map use stays the unbiased one."""
+    import base64
+    import io
+    from types import SimpleNamespace
+
+    from PIL import Image as PILImage
+
+    from weather_mi.imageio import Image
+    from weather_mi.viewer.comparison import SHOW_CHOICES, ReferencePanel
+    pytest.importorskip("pyoidn")
+    session = SimpleNamespace(loop=SimpleNamespace(last_frame=SimpleNamespace(exposure=1.0)), refresh_canvas=lambda: None)
+    panel = ReferencePanel(session, {})
+    try:
+        rng = np.random.default_rng(0)
+        rad = (0.5 + 0.1 * rng.standard_normal((48, 64, 3))).astype(np.float32)
+        panel.image = Image(rad)
+        assert "B: denoised" in SHOW_CHOICES
+
+        def shown(choice):
+            panel.show.value = choice
+            url = panel.overlay_url()
+            return np.asarray(PILImage.open(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))), np.float64)
+
+        raw, den = shown("B: reference"), shown("B: denoised")
+        assert den.shape == raw.shape == (48, 64, 3)
+        assert den.std() < raw.std() / 3
+        assert abs(den.mean() - raw.mean()) < 0.02 * raw.mean()
+        assert np.array_equal(panel.image.radiance, rad)   # the data is untouched
+    finally:
+        panel.close()

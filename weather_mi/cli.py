@@ -54,6 +54,9 @@ def render_command(args) -> Path:
     from .output_paths import OutputLock, check_writable_folder, render_outputs
     check_scene_options(args)
     check_time(args.file, args.demo, args.time)
+    if args.denoise:
+        from .denoise import check_available
+        check_available()
     exr, png, ckpt = render_outputs(args.output)
     check_writable_folder(exr)
     with OutputLock(exr):
@@ -79,6 +82,9 @@ def _render(args, out, png_path, ckpt) -> Path:
                                forward_peak_deg=args.forward_peak, aureole_nee=args.aureole_nee, client=client)
     if sun_meta:
         img.metadata["sun_from_time"] = sun_meta
+    if args.denoise:
+        from .denoise import denoise_image
+        denoise_image(img, spec, vol)
     img.save(out)
     png = img.save_png(png_path, exposure=args.exposure)
     ckpt.unlink(missing_ok=True)
@@ -88,7 +94,9 @@ def _render(args, out, png_path, ckpt) -> Path:
         else f", mean relative standard error {img.relative_stderr():.3f}"
     spp, background = img.metadata["spp"], img.metadata.get("spp_background", img.metadata["spp"])
     spp_text = f"{spp} spp" if background == spp else f"{spp} spp on cloud pixels, {background} elsewhere"
-    print(f"wrote {out} and {png} ({spp_text}, {img.metadata['seconds']:.1f} s{cloud})")
+    shows = (f"the PNG shows the {img.metadata['display']} image; the EXR's R, G, B stay the unbiased radiance, "
+             "denoised.R/G/B the display layer") if args.denoise else "the PNG shows the raw (unbiased) radiance"
+    print(f"wrote {out} and {png} ({spp_text}, {img.metadata['seconds']:.1f} s{cloud}); {shows}")
     return out
 
 
@@ -224,6 +232,9 @@ def _add_render_parser(sub) -> None:
     render.add_argument("--seed", type=int, default=0)
     render.add_argument("--integrator", default="majorant", choices=("majorant", "volpath"))
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")
+    render.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
+                        help="the PNG shows the OIDN-denoised image (an extra EXR layer, denoised.R/G/B; the "
+                             "EXR's radiance and standard error stay unbiased); --no-denoise: the raw radiance")
     render.add_argument("--resume", action="store_true", help="continue from OUTPUT.ckpt.npz")
     add_dask_options(render)
     render.add_argument("-o", "--output", default="weather-mi.exr",

@@ -1,6 +1,5 @@
 """Images out of either renderer: radiance with its standard error, metadata and (a reference's) eye-ray
-transmittance; EXR for data (OpenEXR: R, G, B, stderr.R/G/B, transmittance.Y and the metadata as JSON),
-PNG for eyes (sRGB transfer function from colour-science). Files are written under a unique temporary
+transmittance; EXR for data (OpenEXR: R, G, B, stderr.R/G/B, transmittance.Y, the denoised display layer denoised.R/G/B and the metadata as JSON), PNG for eyes (sRGB transfer function from colour-science). Files are written under a unique temporary
 name and renamed into place (``output_paths``)."""
 from __future__ import annotations
 
@@ -13,6 +12,7 @@ import numpy as np
 from .output_paths import image_format, write_error, written_atomically
 
 TRANSMITTANCE_CHANNEL = "transmittance.Y"  # the EXR layer of Image.transmittance
+DENOISED_LAYER = "denoised"  # the EXR layer (denoised.R/G/B) of Image.denoised
 
 
 @dataclass
@@ -33,12 +33,16 @@ class Image:
         minus the optical depth of the full extinction), the fraction of the background seen through the
         cloud: its cloud pixels are those below 1/2. ``metrics.compare(..., mask="cloud")`` uses it.
         None where unknown (the slicer's images, a scalar variant's reference).
+    denoised : ndarray, (H, W, 3) float32, or None
+        The denoised display layer (``weather_mi.denoise``; biased): what the PNG shows when present,
+        named in ``metadata["display"]``. Never the data: ``radiance`` and ``stderr`` are.
     """
 
     radiance: np.ndarray
     stderr: np.ndarray | None = None
     metadata: dict = field(default_factory=dict)
     transmittance: np.ndarray | None = None
+    denoised: np.ndarray | None = None
 
     def __post_init__(self):
         self.radiance = np.ascontiguousarray(self.radiance, dtype=np.float32)
@@ -52,6 +56,11 @@ class Image:
             if self.transmittance.shape != self.radiance.shape[:2]:
                 raise ValueError(f"Image transmittance must be (H, W) = {self.radiance.shape[:2]}, got "
                                  f"{self.transmittance.shape}")
+        if self.denoised is not None:
+            self.denoised = np.ascontiguousarray(self.denoised, dtype=np.float32)
+            if self.denoised.shape != self.radiance.shape:
+                raise ValueError(f"Image denoised must be (H, W, 3) = {self.radiance.shape}, got "
+                                 f"{self.denoised.shape}")
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -66,37 +75,46 @@ class Image:
 
     def save(self, path) -> Path:
         """Write the image in the format of the name's extension: ``.exr`` (R, G, B radiance, stderr.R/G/B,
-        transmittance.Y when known, and the metadata as a JSON header attribute) or ``.png`` (as
+        transmittance.Y when known, denoised.R/G/B when present, and the metadata as a JSON header attribute) or ``.png`` (as
         :meth:`save_png`); ValueError else, ``OutputWriteError`` naming the file when it cannot be written."""
         if image_format(path) == "png":
             return self.save_png(path)
-        return write_exr(path, self.radiance, self.stderr, self.metadata, transmittance=self.transmittance)
+        return write_exr(path, self.radiance, self.stderr, self.metadata, transmittance=self.transmittance,
+                         denoised=self.denoised)
+
+    @property
+    def display(self) -> np.ndarray:
+        """The radiance a person looks at: the denoised layer when present, else the radiance."""
+        return self.radiance if self.denoised is None else self.denoised
 
     def save_png(self, path, exposure: float | None = None) -> Path:
-        """Write a tone-mapped sRGB preview (a ``.png`` name): radiance x exposure, clipped, sRGB-encoded.
-        The default exposure maps the 99.5th percentile of the luminance to 1."""
+        """Write a tone-mapped sRGB preview (a ``.png`` name) of :attr:`display` (the denoised layer when
+        present, else the radiance) x exposure, clipped, sRGB-encoded. The default exposure maps the
+        99.5th percentile of the radiance's luminance to 1."""
         if image_format(path) != "png":
             raise ValueError(f"{path}: save_png writes PNG data: expected a name ending in .png")
-        return write_png(path, self.radiance, exposure)
+        return write_png(path, self.display, auto_exposure(self.radiance) if exposure is None else exposure)
 
     @classmethod
     def load(cls, path) -> "Image":
-        """The image an EXR written by :meth:`save` holds (radiance, stderr, metadata, transmittance)."""
+        """The image an EXR written by :meth:`save` holds (radiance, stderr, metadata, transmittance,
+        denoised)."""
         radiance, stderr, metadata, transmittance = read_exr_layers(path)
-        return cls(radiance, stderr, metadata, transmittance)
+        return cls(radiance, stderr, metadata, transmittance, read_layer(path, DENOISED_LAYER))
 
 
 def write_exr(path, radiance: np.ndarray, stderr: np.ndarray | None = None, metadata: dict | None = None,
-              transmittance: np.ndarray | None = None) -> Path:
+              transmittance: np.ndarray | None = None, denoised: np.ndarray | None = None) -> Path:
     """Write an EXR (ZIP-compressed float32 scanlines): R, G, B (radiance), stderr.R/G/B when given,
-    transmittance.Y ((H, W)) when given, ``metadata`` as the JSON header attribute ``weather_mi``;
+    transmittance.Y ((H, W)) when given, denoised.R/G/B (the display layer) when given, ``metadata`` as the JSON header attribute ``weather_mi``;
     ``OutputWriteError`` naming the file when it cannot be written (a full disk)."""
     import OpenEXR
     path = Path(path)
     channels = {c: np.ascontiguousarray(radiance[..., i], dtype=np.float32) for i, c in enumerate("RGB")}
-    if stderr is not None:
-        for i, c in enumerate("RGB"):
-            channels[f"stderr.{c}"] = np.ascontiguousarray(stderr[..., i], dtype=np.float32)
+    for layer, rgb in (("stderr", stderr), (DENOISED_LAYER, denoised)):
+        if rgb is not None:
+            for i, c in enumerate("RGB"):
+                channels[f"{layer}.{c}"] = np.ascontiguousarray(rgb[..., i], dtype=np.float32)
     if transmittance is not None:
         channels[TRANSMITTANCE_CHANNEL] = np.ascontiguousarray(transmittance, dtype=np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
@@ -129,6 +147,16 @@ def read_exr_layers(path):
         if TRANSMITTANCE_CHANNEL in ch:
             transmittance = np.array(ch[TRANSMITTANCE_CHANNEL].pixels, np.float32)
     return radiance, stderr, metadata, transmittance
+
+
+def read_layer(path, layer: str):
+    """The (H, W, 3) float32 RGB layer ``layer`` (channels LAYER.R/G/B) of an EXR, or None without it."""
+    import OpenEXR
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        ch = f.channels()
+        if not all(f"{layer}.{c}" in ch for c in "RGB"):
+            return None
+        return np.stack([np.asarray(ch[f"{layer}.{c}"].pixels, np.float32) for c in "RGB"], axis=-1)
 
 
 def auto_exposure(radiance: np.ndarray, percentile: float = 99.5) -> float:

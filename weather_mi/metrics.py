@@ -45,8 +45,18 @@ SSIM_K1, SSIM_K2 = 0.01, 0.03
 REL_MSE_EPS = 1e-2
 
 
-def _radiance(x, what: str) -> np.ndarray:
-    rad = x.radiance if isinstance(x, Image) else np.asarray(x)
+LAYERS = ("radiance", "denoised")  # the layers of an approximation compare can measure, by name
+
+
+def _radiance(x, what: str, layer: str = "radiance") -> np.ndarray:
+    if layer not in LAYERS:
+        raise ValueError(f"layer {layer!r}: expected one of {', '.join(LAYERS)}")
+    if layer == "denoised":
+        if not isinstance(x, Image) or x.denoised is None:
+            raise ValueError(f"layer='denoised': {what} must be an Image with a denoised layer (weather_mi.denoise)")
+        rad = x.denoised
+    else:  # the unbiased radiance, never the denoised display layer
+        rad = x.radiance if isinstance(x, Image) else np.asarray(x)
     rad = np.asarray(rad, dtype=np.float64)
     if rad.ndim != 3 or rad.shape[2] != 3:
         raise ValueError(f"{what} must be an Image or an (H, W, 3) radiance array, got shape {rad.shape}")
@@ -164,7 +174,7 @@ def noise_floor(ref, *, mask="all", transmittance=None, threshold: float = 0.99)
 
 
 def compare(ref, approx, *, exposure: float | None = None, mask="all", transmittance=None,
-            threshold: float = 0.99, error_map=None) -> dict:
+            threshold: float = 0.99, error_map=None, layer: str = "radiance") -> dict:
     """Metrics of ``approx`` against ``ref``.
 
     Parameters
@@ -185,6 +195,9 @@ def compare(ref, approx, *, exposure: float | None = None, mask="all", transmitt
         Transmittance below which a pixel is a cloud pixel (mask="cloud").
     error_map : path, optional
         Write a PNG with both display images and the CIEDE2000 and FLIP maps.
+    layer : {"radiance", "denoised"}
+        The layer of ``approx`` measured: its (unbiased) radiance, the default, or, only when asked for by
+        this name, its denoised display layer (``Image.denoised``). The reference's radiance is always used.
 
     Returns
     -------
@@ -194,7 +207,7 @@ def compare(ref, approx, *, exposure: float | None = None, mask="all", transmitt
         definitions.
     """
     r = _radiance(ref, "ref")
-    a = _radiance(approx, "approx")
+    a = _radiance(approx, "approx", layer)
     if r.shape != a.shape:
         raise ValueError(f"images differ in shape: ref {r.shape}, approx {a.shape}")
     m = _resolve_mask(mask, r.shape[:2], ref, transmittance, threshold)

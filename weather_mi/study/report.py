@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..imageio import Image, to_srgb8
+from .denoiser import KEYS as DENOISER_KEYS
 
 METRIC_KEYS = ("rmse", "rel_mse", "ssim", "ciede2000", "flip", "noise_floor", "n_pixels")
 
@@ -75,7 +76,7 @@ def _table(rows: list[dict], keys: list[str]) -> str:
 
 
 def write_report(cfg, scenes, skipped, rows, timings, convergence, figure_pairs, fitted, history, calib_rows,
-            seconds) -> str:
+            seconds, denoise_rows=()) -> str:
     main_rows = [r for r in rows if not r["setting"].startswith(("slices=", "cone="))]
     L = ["# weather-mi validation: half-angle slicing against path-traced ground truth", "",
          f"Configuration: {json.dumps(asdict(cfg))}", "",
@@ -126,6 +127,7 @@ def write_report(cfg, scenes, skipped, rows, timings, convergence, figure_pairs,
                    "slicer s": r["slicer_s"], "rmse": r["rmse"], "ciede2000": r["ciede2000"]}
                   for r in main_rows if r["setting"] == "physical-ff"],
                  ["scene", "lighting", "mode", "reference s", "slicer s", "rmse", "ciede2000"]), ""]
+    L += denoiser_section(list(denoise_rows), f"the study's reference ({cfg.spp} spp, seed 0)")
     L += ["## What the ground truth shows that the approximation misses", ""] + _findings(rows) + [""]
     return "\n".join(L)
 
@@ -222,3 +224,18 @@ def side_by_side(path: Path, ref: Image, approx, exposure: float, min_width: int
     """PNG of the reference and one or more approximations side by side (see ``image_grid``)."""
     return image_grid(path, [[ref] + (list(approx) if isinstance(approx, (list, tuple)) else [approx])],
                       exposure, min_width)
+
+
+def denoiser_section(rows: list[dict], ref_note: str) -> list[str]:
+    """The report's section on the denoised display layer (markdown lines)."""
+    if not rows:
+        return ["## The denoised display layer", "", "No view with cloud pixels: nothing measured.", ""]
+    return ["## The denoised display layer (OIDN) and its bias", "",
+            "What the PNG of `weather-mi render` shows by default: OIDN's denoised radiance (an extra EXR layer, "
+            "`denoised.R/G/B`; every metric above uses the unbiased radiance). Raw and denoised images at the spp "
+            f"below (seeds independent of the reference's) against {ref_note}, over its cloud pixels "
+            "(eye-ray transmittance < 1/2): CIEDE2000, relative mean bias, and the relative RMS error with the "
+            "reference's own noise removed (E[(X - R)^2] = MSE(X) + var(R)). `spp_equiv`: the spp the raw image "
+            "would need for the denoised image's CIEDE2000 (a power law fitted to the raw CIEDE2000 against spp; "
+            "'extrapolated' beyond the measured spp).", "",
+            _table(rows, DENOISER_KEYS), ""]

@@ -44,15 +44,18 @@ class StudyConfig:
     phase_quality: str = "default"
     integrator: str = "majorant"
     species: str = "physical"
+    denoise_spp: tuple = (32, 64)  # the denoised display layer's bias: raw and denoised images at these spp
 
 
 CONFIGS = {
     "full": StudyConfig(),
     "quick": StudyConfig(width=96, height=72, spp=32, slices=96,
-                         convergence_slices=(32, 64, 128, 256), calibration_iterations=12, phase_quality="test"),
+                         convergence_slices=(32, 64, 128, 256), calibration_iterations=12, phase_quality="test",
+                         denoise_spp=(8,)),
     "tiny": StudyConfig(width=24, height=18, spp=4, slices=24, light_res=24, scenes=("demo-cumulus",),
                         lightings=("front", "back"), convergence_slices=(12, 24), cone_angles=(10.0, 20.0),
-                        calibration_iterations=12, calibration_slices=24, phase_quality="test"),
+                        calibration_iterations=12, calibration_slices=24, phase_quality="test",
+                        denoise_spp=(2,)),
 }
 
 
@@ -172,7 +175,7 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True, data
 
     jobs = [(s, l) for s in scenes for l in cfg.lightings]
     bar = tqdm(jobs, desc="validate", disable=not progress)
-    refs = {}
+    refs, denoise_rows = {}, []
     for scene, lighting in bar:
         vol, _ = scenes[scene]
         spec = view(vol, lighting, cfg)
@@ -223,6 +226,7 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True, data
             convergence.setdefault((scene, lighting, "cone"), []).append((angle, m["rmse"], m["ciede2000"]))
             rows.append(_row(scene, lighting, "per-species/translucent", f"cone={angle:g}deg", m,
                              ref.metadata["seconds"], img.metadata["seconds"], noise))
+        denoise_rows += _denoiser_rows(scene, lighting, spec, vol, ref, cfg)
         timings.append((scene, lighting, ref.metadata["seconds"], cfg.spp, noise,
                         float(np.mean(ref.radiance[mask]) if mask.any() else np.mean(ref.radiance))))
 
@@ -233,9 +237,20 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True, data
     write_csv(out / "metrics.csv", rows, METRIC_KEYS)
     plot_convergence(out, convergence)
     report = write_report(cfg, scenes, skipped, rows, timings, convergence, figure_pairs, fitted, history,
-                          calib_rows, time.perf_counter() - t_start)
+                          calib_rows, time.perf_counter() - t_start, denoise_rows=denoise_rows)
     (out / "report.md").write_text(report)
     return out / "report.md"
+
+
+def _denoiser_rows(scene, lighting, spec, vol, ref, cfg: StudyConfig) -> list[dict]:
+    """The denoised display layer's bias on this view (``study.denoiser``): raw and denoised (default
+    auxiliaries) images at ``cfg.denoise_spp``, raw also at half of each (the CIEDE2000 curve), against
+    the study's reference. Not in metrics.csv: the slicer's table."""
+    if ref.transmittance is None:
+        return []
+    from .denoiser import bias_rows
+    half = tuple(max(1, s // 2) for s in cfg.denoise_spp)
+    return bias_rows(scene, lighting, spec, vol, ref, cfg.denoise_spp, raw_spp=half, integrator=cfg.integrator)[0]
 
 
 def _calibration(refs, scenes, cfg: StudyConfig, out: Path, progress: bool):

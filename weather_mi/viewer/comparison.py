@@ -11,14 +11,14 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import panel as pn
 
-from ..imageio import to_srgb8
+from ..imageio import auto_exposure, to_srgb8
 from .frames import jpeg_url
 from .state import ViewState
 
 PHYSICAL_FIELDS = ("camera", "sun_azimuth", "sun_elevation", "sun_diameter_deg", "width", "height", "scale", "time",
                    "sky", "ground_albedo")  # what the path tracer sees
 DIFF_MAX_DE = 20.0  # the difference map's colour scale: CIEDE2000 0 .. 20
-SHOW_CHOICES = ["A: slicer", "B: reference", "difference"]
+SHOW_CHOICES = ["A: slicer", "B: reference", "B: denoised", "difference"]  # B denoised: OIDN, display only
 
 
 class ReferencePanel:
@@ -131,12 +131,21 @@ class ReferencePanel:
         f = self.session.loop.last_frame
         key = (show, id(self.image), id(self.metrics), f.exposure if f else None)
         if self._overlay is None or self._overlay[0] != key:
-            self._overlay = (key, self._reference_url() if show == "B: reference" else self._difference_url())
+            url = {"B: reference": self._reference_url, "B: denoised": self._denoised_url}.get(show, self._difference_url)
+            self._overlay = (key, url())
         return self._overlay[1]
 
     def _reference_url(self) -> str:
         f = self.session.loop.last_frame
         return jpeg_url(to_srgb8(self.image.radiance, f.exposure if f else None))
+
+    def _denoised_url(self) -> str:
+        """B denoised (``weather_mi.denoise``, once per reference update): for the eye; the metrics and the
+        difference map stay on the unbiased radiance."""
+        from ..denoise import denoise_radiance
+        f = self.session.loop.last_frame
+        rad = np.nan_to_num(self.image.radiance)
+        return jpeg_url(to_srgb8(denoise_radiance(rad), f.exposure if f else auto_exposure(rad)))
 
     def _difference_url(self) -> str:
         from matplotlib import colormaps
