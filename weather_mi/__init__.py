@@ -35,7 +35,8 @@ __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open
 
 # submodules imported on first use (the phase tables pull in miepython/numba, the metrics FLIP)
 _LAZY_SUBMODULES = ("phase", "metrics", "study", "cli", "detail", "fluxes", "forward_peak", "mitsuba_scene",
-                    "framing", "summary", "animate", "dask_passes", "cluster", "geo", "solar", "place", "terrain")
+                    "framing", "summary", "animate", "dask_passes", "cluster", "geo", "solar", "place", "terrain",
+                    "denoise")
 
 
 def view(source, **kw):

@@ -10,6 +10,8 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
+
 import panel as pn
 
 from ..imageio import to_srgb8, write_exr, write_png
@@ -60,14 +62,18 @@ class Exports:
 
     def _reference_shown(self):
         ref = self.session.reference
-        return ref.image if ref.show.value == "B: reference" and ref.image is not None else None
+        return ref.image if ref.show.value in ("B: reference", "B: denoised") and ref.image is not None else None
 
     def _png_bytes(self):
         f = self._full_frame()
         ref = self._reference_shown()
+        rad = f.radiance if ref is None else ref.radiance
+        if ref is not None and self.session.reference.show.value == "B: denoised":  # the PNG shows what B shows
+            from ..denoise import denoise_radiance
+            rad = denoise_radiance(np.nan_to_num(ref.radiance))
         with tempfile.TemporaryDirectory() as tmp:
             p = Path(tmp) / "view.png"
-            write_png(p, (ref.radiance if ref is not None else f.radiance), f.exposure)
+            write_png(p, rad, f.exposure)
             return io.BytesIO(p.read_bytes())
 
     def _exr_bytes(self):
