@@ -143,7 +143,8 @@ class PassScene:
         vol_render = delta_scaled(vol_k, o.forward_peak_deg)
         integ = integrator_dict(vol_render, o.integrator, o.max_depth, o.rr_depth, o.cell,
                                 sun=self.spec.sun if o.own_sun else None, sun_guiding=o.sun_guiding,
-                                aureole_nee=o.aureole_nee, mvnee=o.mvnee, legacy=o.legacy and o.integrator == "majorant")
+                                aureole_nee=o.aureole_nee, mvnee=o.mvnee,
+                                legacy=o.legacy and o.integrator == "majorant")
         return mi.load_dict(scene_dict(spec_k, vol_render, integ))
 
 
