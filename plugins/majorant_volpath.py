@@ -11,7 +11,8 @@ pbrt-v4's ``DDAMajorantIterator``), crossing empty space in one step (Cohen & Sh
   ratio tracking (Novak et al. 2014), in :mod:`.trackers`; spectrally varying extinction by
   history-aware spectral tracking (Kutz et al. 2017);
 * the integrator's own sun (a disk or a point, with MIS against the path's continuation, optional sun
-  guiding after Buras & Mayer 2011 and aureole next-event estimation) in :mod:`.sun`;
+  guiding after Buras & Mayer 2011 and aureole next-event estimation) in :mod:`.sun`; multiple-vertex
+  next-event estimation towards it (Weber et al. 2017; off by default) in :mod:`.mvnee`;
 * history-aware channel sampling of a chromatic phase function (Kutz et al. 2017, applied to directions);
 * Russian roulette once per real scattering / surface vertex, survival min(max T, 1) (no weight grows),
   long walks cut by a survival of 1/2 at each depth 2^k >= LONG_WALK_DEPTH;
