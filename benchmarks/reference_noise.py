@@ -8,6 +8,7 @@ exact transmittance and persistent lanes) and "last" (new with one pass per laun
 before ``render_passes``), in the same process, on the same scenes.
 
     .venv/bin/python benchmarks/reference_noise.py [--views] [--time-to 0.01] [--bias] [--profile] [--quick]
+        [--mvnee [--mvnee-configs 0.3:2 0.5:4] [--mvnee-size 64 48] [--mvnee-spp 64]]
 
 Scenes: the demo supercell (``wm.synthetic.supercell()``), camera ``Camera.orbit(vol, azimuth=200,
 elevation=8, fov=45)``, sunsky + ground; sun at azimuth/elevation 200/35 (front), 290/35 (side),
@@ -30,6 +31,15 @@ Sections (all by default):
             of the texel grid, exact transmittance and persistent lanes), with the differences in
             combined standard errors (the heavy-tailed estimators' standard errors are themselves unreliable, and with
             the full tables both read low: validation/forward_peak_slabs.py).
+--mvnee     multiple-vertex NEE (plugins/mvnee.py, render_reference(mvnee=...)) against today's estimator
+            on the six views (--mvnee-size, --mvnee-spp, 16 passes). Configurations: EPS:K (chains of
+            K vertices launched with probability EPS), aureole:EPS (the aureole estimator), today
+            (today's estimator again, another seed: the spread of these figures). Seconds, RMS
+            se/mean, efficiency 1 / (RMS^2 x time) over today's (eff; eff RSE: with the mean RSE; time:
+            this process's CPU seconds, as the machine is shared),
+            and the z-test of unbiasedness: per cloud pixel z = (on - off) / sqrt(se_on^2 + se_off^2)
+            (channel means): mean z, fraction |z| > 3, and the cloud-mean difference in combined
+            standard errors.
 --profile   where the time of the new estimator goes, by ablation on the side view: each row changes
             one thing and gives its seconds per spp against the full estimator in the same run.
 """
@@ -198,6 +208,70 @@ def bias(vols, args):
                   f"(new - prev {(mn - mp) / math.hypot(sp, sn):+.2f} se)", flush=True)
 
 
+def zstats(a, b, cloud):
+    """(mean z, fraction |z| > 3, relative cloud-mean difference, its z) of image ``a`` against ``b``."""
+    la, lb = a.radiance.mean(axis=2)[cloud], b.radiance.mean(axis=2)[cloud]
+    sa, sb = a.stderr.mean(axis=2)[cloud], b.stderr.mean(axis=2)[cloud]
+    z = (la - lb) / np.sqrt(sa ** 2 + sb ** 2)
+    z = z[np.isfinite(z)]
+    se_m = math.sqrt((sa ** 2).sum() + (sb ** 2).sum()) / cloud.sum()
+    return float(z.mean()), float((np.abs(z) > 3).mean()), float(la.mean() / lb.mean() - 1), \
+        float((la.mean() - lb.mean()) / se_m)
+
+
+def mvnee_render(spec, vol, args, config, mvnee):
+    """``config``: "EPS:K" (multiple-vertex NEE), "aureole:EPS" (the aureole estimator) or "today" (today's
+    estimator again, another seed: the spread of these figures); kernels compiled outside the timing."""
+    kind, _, value = config.partition(":")
+    kw = {} if kind == "today" else {"aureole_nee": float(value)} if kind == "aureole" else {"mvnee": float(kind)}
+    with plugin_defaults({"DEFAULT_LENGTH": int(value)} if "mvnee" in kw else {}, module=mvnee):
+        render(replace(spec, width=8, height=8, seed=4), vol, 1, "new", passes=1, **kw)
+        return cpu_timed(lambda: render(replace(spec, seed=4), vol, args.mvnee_spp, "new", **kw))
+
+
+def cpu_timed(fn):
+    """``fn()``'s image with metadata["cpu_seconds"]: the CPU time of this process (all its threads) it took,
+    less sensitive than the wall time to other processes on a shared machine."""
+    t0 = time.process_time()
+    img = fn()
+    img.metadata["cpu_seconds"] = time.process_time() - t0
+    return img
+
+
+def mvnee_rows(vols, args):
+    from weather_mi.plugins import mvnee
+    w, h = args.mvnee_size
+    print(f"\n## multiple-vertex NEE against today's estimator, six views, {w} x {h}, {args.mvnee_spp} spp "
+          "(16 passes); cpu x: CPU seconds over today's; eff = (rms^2 t_cpu)_today / (rms^2 t_cpu), eff RSE the same "
+          "with the mean RSE")
+    print(HEADER + f" {'cpu x':>6s} {'eff':>6s} {'eff RSE':>7s} {'mean z':>7s} {'|z|>3':>6s} {'mean diff':>10s}")
+    effs = {c: [] for c in args.mvnee_configs}
+    for preset, vol in vols.items():
+        for view in VIEWS:
+            spec = spec_for(vol, view, w, h, 0.53, seed=3)
+            cloud = wm.estimates.cloud_mask(spec, vol)
+            render(replace(spec, width=8, height=8), vol, 1, "new", passes=1)
+            base = cpu_timed(lambda: render(spec, vol, args.mvnee_spp, "new"))
+            nb, tb = base.metadata["noise"], base.metadata["cpu_seconds"]
+            print(row(f"{preset} {view} today", base), flush=True)
+            for c in args.mvnee_configs:
+                img = mvnee_render(spec, vol, args, c, mvnee)
+                n = img.metadata["noise"]
+                tc = img.metadata["cpu_seconds"]
+                eff = (nb["rms_se_over_mean"] ** 2 * tb) / (n["rms_se_over_mean"] ** 2 * tc)
+                eff_rse = (nb["rse_mean"] ** 2 * tb) / (n["rse_mean"] ** 2 * tc)
+                effs[c].append((eff, eff_rse))
+                mz, f3, rel, zm = zstats(img, base, cloud)
+                print(row(f"{preset} {view} {c}", img) + f" {tc / tb:6.2f} {eff:6.2f} {eff_rse:7.2f} "
+                      f"{mz:+7.2f} {f3:6.3f} "
+                      f"{100 * rel:+6.1f}% ({zm:+.1f} se)", flush=True)
+    for c, pairs in effs.items():
+        for i, label in enumerate(("rms", "mean RSE")):
+            e = [p[i] for p in pairs]
+            print(f"{c}: efficiency ({label}) over today's, median {np.median(e):.2f}x, range {min(e):.2f}-"
+                  f"{max(e):.2f}x, wins on {sum(x > 1 for x in e)} of {len(e)} views")
+
+
 def toggled(spec, vol, args, module=None, **defaults):
     """The new estimator with plugin (or ``module``) defaults changed (``plugin_defaults``), kernels compiled
     outside."""
@@ -249,11 +323,15 @@ def main(argv=None):
     ap.add_argument("--bias", action="store_true")
     ap.add_argument("--profile", action="store_true")
     ap.add_argument("--quick", action="store_true", help="smaller images and budgets")
+    ap.add_argument("--mvnee", action="store_true")
+    ap.add_argument("--mvnee-configs", dest="mvnee_configs", nargs="+", default=["0.3:2"], metavar="EPS:K")
+    ap.add_argument("--mvnee-size", dest="mvnee_size", nargs=2, type=int, default=[64, 48])
+    ap.add_argument("--mvnee-spp", dest="mvnee_spp", type=int, default=64)
     ap.add_argument("--target", type=float, default=0.01)
     ap.add_argument("--budget", type=float, default=120.0)
     ap.add_argument("--presets", nargs="+", default=["paper", "physical"])
     args = ap.parse_args(argv)
-    if not (args.views or args.time_to or args.bias or args.profile):
+    if not (args.views or args.time_to or args.bias or args.profile or args.mvnee):
         args.views = args.time_to = args.bias = args.profile = True
     args.width, args.height, args.spp, args.size = (160, 120, 64, 256) if not args.quick else (80, 60, 32, 128)
     args.bias_spp = 1024 if not args.quick else 256
@@ -274,6 +352,8 @@ def main(argv=None):
         bias(vols, args)
     if args.profile:
         profile(first, args)
+    if args.mvnee:
+        mvnee_rows(vols, args)
     print(f"\ntotal {time.perf_counter() - t0:.0f} s")
 
 

@@ -11,7 +11,8 @@ pbrt-v4's ``DDAMajorantIterator``), crossing empty space in one step (Cohen & Sh
   ratio tracking (Novak et al. 2014), in :mod:`.trackers`; spectrally varying extinction by
   history-aware spectral tracking (Kutz et al. 2017);
 * the integrator's own sun (a disk or a point, with MIS against the path's continuation, optional sun
-  guiding after Buras & Mayer 2011 and aureole next-event estimation) in :mod:`.sun`;
+  guiding after Buras & Mayer 2011 and aureole next-event estimation) in :mod:`.sun`; multiple-vertex
+  next-event estimation towards it (Weber et al. 2017; off by default) in :mod:`.mvnee`;
 * history-aware channel sampling of a chromatic phase function (Kutz et al. 2017, applied to directions);
 * Russian roulette once per real scattering / surface vertex, survival min(max T, 1) (no weight grows),
   long walks cut by a survival of 1/2 at each depth 2^k >= LONG_WALK_DEPTH;
@@ -39,11 +40,12 @@ import drjit as dr
 import mitsuba as mi
 
 from ..scene import MAX_SUN_DIAMETER_DEG
-from . import sun
+from . import mvnee, sun
 from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
 from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401 (re-exported)
 from .medium_setup import GridCache, MediumSetup, Tracking, phase_ctx, scattering_event, unit_cube_to_world, volume_data
 from .path_state import path_state_class
+from .properties import check as _check, choice as _choice, majorant_property as _majorant_property
 from .trackers import delta_tracking, shadow_transmittance
 from .variant_class import variant_class
 
@@ -64,30 +66,6 @@ def _as_interaction(x):
     it = dr.zeros(mi.Interaction3f)
     it.t, it.time, it.wavelengths, it.p, it.n = x.t, x.time, x.wavelengths, x.p, x.n
     return it
-
-
-def _check(ok, message: str) -> None:
-    """Raise ValueError("majorant_volpath: <message>") unless ``ok``."""
-    if not ok:
-        raise ValueError(f"{PLUGIN_NAME}: {message}")
-
-
-def _choice(props, name: str, default: str, allowed: tuple) -> str:
-    """The string property ``name``, one of ``allowed``."""
-    value = str(props.get(name, default))
-    options = ", ".join(repr(a) for a in allowed[:-1]) + f" or {allowed[-1]!r}"
-    _check(value in allowed, f"'{name}' must be {options}, got {value!r}")
-    return value
-
-
-def _majorant_property(value) -> np.ndarray:
-    """The ``majorant`` property as a finite, non-negative float32 (Z, Y, X) array."""
-    m = np.asarray(value, np.float32)
-    if m.ndim == 4 and m.shape[3] == 1:
-        m = m[..., 0]
-    _check(m.ndim == 3, f"'majorant' must be a (Z, Y, X) tensor, got shape {m.shape}")
-    _check(np.all(np.isfinite(m)) and not np.any(m < 0), "'majorant' must be finite and >= 0")
-    return np.ascontiguousarray(m)
 
 
 # ---------------------------------------------------------------- integrator
@@ -139,6 +117,9 @@ class MajorantVolpath:
        - |float|
        - Probabilities of a sun-guided scattering direction ([0, 1)) and of the aureole estimator
          ([0, 1], needs "mis" and no guiding); default 0.
+     * - mvnee, mvnee_length
+       - |float|, |int|
+       - Probability of a multiple-vertex NEE chain (:mod:`.mvnee`; exclusive as the aureole) and its length.
 
     The methods only: :func:`register` puts them on the current variant's ``mi.SamplingIntegrator``
     (see ``variant_class``)."""
@@ -174,9 +155,9 @@ class MajorantVolpath:
         self.emitter_nee = float(get("emitter_nee", DEFAULT_EMITTER_NEE))
         _check(0.0 < self.emitter_nee <= 1.0, f"'emitter_nee' must be in (0, 1], got {self.emitter_nee}")
         self.channels = _choice(props, "phase_channels", "history", ("history", "mean"))
-        self.sun_mode, self.guiding, self.aureole, self.sun_sampling = "none", 0.0, 0.0, "mis"
+        self.sun_mode, self.guiding, self.aureole, self.sun_sampling, self.mvnee = "none", 0.0, 0.0, "mis", 0.0
         if "sun_direction" not in props:
-            for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee"):
+            for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee", "mvnee"):
                 _check(name not in props, f"'{name}' needs 'sun_direction'")
             return
         # the integrator's own sun (module docstring; without sun_direction the sun, if any, is a scene emitter)
@@ -197,6 +178,9 @@ class MajorantVolpath:
         _check(0.0 <= self.aureole <= 1.0, f"'aureole_nee' must be a probability in [0, 1], got {self.aureole}")
         _check(not (self.aureole > 0.0 and (self.guiding > 0.0 or self.sun_sampling != "mis")),
                "'aureole_nee' works with sun_sampling='mis' and no sun guiding")
+        self.mvnee, self.mvnee_length = mvnee.parse(props, _check)
+        _check(not (self.mvnee > 0.0 and (self.guiding > 0.0 or self.aureole > 0.0 or self.sun_sampling != "mis")),
+               "'mvnee' works with sun_sampling='mis', no sun guiding and no aureole estimator")
         self.sun_mode = "disk" if diameter > 0 else "point"
         _check(self.emitter_nee < 1.0, "with the integrator's sun, 'emitter_nee' must be below 1 (the rest of the "
                f"shadow rays go to the sun), got {self.emitter_nee}")
@@ -308,6 +292,7 @@ class PathLoop:
         self.sun_mode = sun_mode = integ.sun_mode
         self.guiding = has_medium and sun_mode != "none" and integ.guiding > 0.0
         self.aureole = has_medium and sun_mode != "none" and integ.aureole > 0.0
+        self.mvnee = has_medium and sun_mode != "none" and integ.mvnee > 0.0
         self.by_channel = has_medium and integ.channels == "history" and hasattr(phase, "sample_channel")
         self.rr_cap = 0.95 if integ.rr_mode == "volpath" else 1.0
         self.c_em = c_em = integ.emitter_nee
@@ -323,7 +308,7 @@ class PathLoop:
         """The continuation pdf in the sun's MIS: with aureole NEE the channel mean of the phase value (the
         mixture's own pdf; a function of the vertex and the two directions only, so that the aureole
         estimator can weight its vertex B exactly as the path does)."""
-        return dr.mean(val) if self.aureole else pdf
+        return dr.mean(val) if (self.aureole or self.mvnee) else pdf
 
     def sun_mis(self, pdf_a, pdf_b, nee=True):
         """Weight of the sun-sampling (``nee``) or of the continuation strategy."""
@@ -342,7 +327,8 @@ class PathLoop:
             si=dr.zeros(mi.SurfaceInteraction3f), medium=med0, eta=mi.Float(1.0), last_event=dr.zeros(mi.Interaction3f),
             last_pdf=mi.Float(1.0), needs_isect=mi.Bool(True), specular_chain=mi.Bool(active & (not hide)),
             valid_ray=mi.Bool((not hide) and self.has_env), last_long=mi.UInt32(0),
-            guide_left=mi.Float(GUIDE_GROWTH), last_pdf_sun=mi.Float(1.0), aur_w=mi.Float(1.0))
+            guide_left=mi.Float(GUIDE_GROWTH), last_pdf_sun=mi.Float(1.0), aur_w=mi.Float(1.0),
+            mv_r=mvnee.zeros())
 
     def cond(self, sampler, p):
         return p.active
@@ -498,8 +484,8 @@ class PathLoop:
                 w_s = self.sun_mis(c_sun * sun_pdf, self.sun_pdf_of(f_val, f_pdf)) * dr.rcp(c_sun * sun_pdf)
             else:                        # delta: irradiance, no MIS
                 w_s = mi.Float(1.0 / self.c_sun)
-            if self.aureole:  # MIS against the previous vertex's aureole estimator
-                w_s = dr.select(v.act_scatter, w_s * p.aur_w, w_s)
+            if self.aureole or self.mvnee:  # MIS against the aureole estimator / the chains launched before
+                w_s = dr.select(v.act_scatter, w_s * (p.aur_w if self.aureole else mvnee.path_weight(p.mv_r)), w_s)
             w = dr.select(pick_em, w, w_s)
             em_val = dr.select(pick_em, em_val, mi.Spectrum(self.integ.sun_value))
         return w, em_val
@@ -516,6 +502,10 @@ class PathLoop:
             p.result = sun.aureole_nee(integ, self.tk, self.transmittance, self.scene, sampler, self.phase, v.mei,
                                        p.medium, p.throughput, v.alpha, v.eps_a, act_x, p.result, self.sun_mis,
                                        self.c_sun, self.sun_pdf)
+        if self.mvnee:  # multiple-vertex NEE (.mvnee): a chain towards the sun, launched with probability eps
+            act_x = v.act_scatter & (p.depth + 1 < self.max_depth)
+            act_x &= sampler.next_1d(act_x) < self.integ.mvnee
+            p.result = mvnee.chain(self, sampler, v, p, self.integ.mvnee, self.integ.mvnee_length, act_x)
 
     def sample_phase(self, sampler, p, v):
         """Phase function sampling at a real collision (with channels and sun guiding: :meth:`guided_phase`)."""
@@ -534,6 +524,9 @@ class PathLoop:
         if self.aureole:  # the sun-NEE weight at the next vertex
             p.aur_w = dr.select(act_scatter, ph_pdf * dr.rcp(ph_pdf + v.eps_a * sun.aureole_pdf(
                 self.integ, self.phase, sampler, v.mei, wo, act_scatter)), p.aur_w)
+        if self.mvnee:
+            p.mv_r = mvnee.path_update(self.integ, self.phase, sampler, v.mei, wo, ph_val, self.integ.mvnee,
+                                       self.integ.mvnee_length, p.mv_r, act_scatter)
         p.last_pdf_sun = dr.select(act_scatter, self.sun_pdf_of(ph_val, ph_pdf), p.last_pdf_sun)
         p.throughput = dr.select(act_scatter, p.throughput * ph_w, p.throughput)
         p.ray = dr.select(act_scatter, v.mei.spawn_ray(wo), p.ray)
@@ -584,6 +577,7 @@ class PathLoop:
         p.last_pdf = dr.select(non_null, bs.pdf, p.last_pdf)
         p.last_pdf_sun = dr.select(non_null, bs.pdf, p.last_pdf_sun)
         p.aur_w = dr.select(non_null, 1.0, p.aur_w)
+        p.mv_r = dr.select(non_null, mvnee.zeros(), p.mv_r)
         p.valid_ray |= non_null
         p.specular_chain |= non_null & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
         p.specular_chain &= ~(active_surface & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Smooth))

@@ -18,8 +18,9 @@ def path_state_class() -> type:
     pdf, for MIS of emitters hit), ``needs_isect`` (``si`` is stale), ``specular_chain`` (only delta
     events so far: emitters hit count in full), ``valid_ray`` (the sample hit something), ``last_long``
     (the depth of the last long-walk cut), ``guide_left`` (sun guiding's remaining weight budget),
-    ``last_pdf_sun`` (the previous vertex's continuation pdf in the sun's MIS) and ``aur_w`` (the
-    aureole estimator's MIS weight of the next sun NEE).
+    ``last_pdf_sun`` (the previous vertex's continuation pdf in the sun's MIS), ``aur_w`` (the
+    aureole estimator's MIS weight of the next sun NEE) and ``mv_r`` (multiple-vertex NEE's R_1..R_4,
+    :mod:`.mvnee`).
     """
     key = mi.variant()
     if key not in _STATE_CLASSES:
@@ -29,7 +30,7 @@ def path_state_class() -> type:
                 "result": mi.Spectrum, "si": mi.SurfaceInteraction3f, "medium": mi.MediumPtr, "eta": mi.Float,
                 "last_event": mi.Interaction3f, "last_pdf": mi.Float, "needs_isect": mi.Bool,
                 "specular_chain": mi.Bool, "valid_ray": mi.Bool, "last_long": mi.UInt32, "guide_left": mi.Float,
-                "last_pdf_sun": mi.Float, "aur_w": mi.Float}
+                "last_pdf_sun": mi.Float, "aur_w": mi.Float, "mv_r": mi.Vector4f}
 
             def __init__(self, **fields):
                 for name, value in fields.items():

@@ -132,18 +132,18 @@ def medium_shape_dict(vol: OpticalVolume, floor_m: float | None = None) -> dict:
     return {"type": "cube", "to_world": to_world, "bsdf": {"type": "null"}, "interior": medium_dict(vol)}
 
 
-def integrator_sun(sun: Sun, guiding: float = 0.0, aureole: float = 0.0) -> dict:
+def integrator_sun(sun: Sun, guiding: float = 0.0, aureole: float = 0.0, mvnee: float = 0.0) -> dict:
     """Properties of ``majorant_volpath`` that make the sun the integrator's own light (a disk with
     MIS, or a point), sampled at every vertex instead of being one of the scene's emitters, with sun
-    guiding or aureole next-event estimation (probabilities)."""
+    guiding, aureole or multiple-vertex next-event estimation (probabilities; ``mvnee`` only where > 0)."""
     return {"sun_direction": sun.to_sun.tolist(), "sun_irradiance": list(sun.irradiance),
             "sun_angular_diameter": float(sun.angular_diameter_deg), "sun_guiding": float(guiding),
-            "aureole_nee": float(aureole)}
+            "aureole_nee": float(aureole), **({"mvnee": float(mvnee)} if mvnee > 0 else {})}
 
 
 def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_depth: int | None = None,
                     cell: int | None = None, sun: Sun | None = None, sun_guiding: float = 0.0, legacy: bool = False,
-                    aureole_nee: float = 0.0) -> dict:
+                    aureole_nee: float = 0.0, mvnee: float = 0.0) -> dict:
     """Mitsuba integrator dict: stock ``volpath`` or ``majorant_volpath``.
 
     Parameters
@@ -162,8 +162,9 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
     sun : Sun or None
         A sun that ``majorant_volpath`` samples itself at every vertex (a disk with MIS, or a point);
         None: the sun is a scene emitter.
-    sun_guiding, aureole_nee : float
-        Probabilities of sun guiding and of the aureole estimator (with ``sun``; see ``render_reference``).
+    sun_guiding, aureole_nee, mvnee : float
+        Probabilities of sun guiding, of the aureole estimator and of multiple-vertex NEE (with ``sun``;
+        see ``render_reference``).
     legacy : bool
         The estimator before issue 10 ("majorant"; see ``render_reference``).
 
@@ -184,7 +185,7 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
              "majorant": mi.TensorXf(majorant_grid(vol.beta_total, cell=int(cell))),
              "to_world": bbox_transform(vol.bbox)}
         if sun is not None:
-            d.update(integrator_sun(sun, sun_guiding, aureole_nee))
+            d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
         if legacy:  # the estimator before issue 10 (see render_reference)
             d.update({"rr_mode": "volpath", "phase_channels": "mean", "emitter_nee": 1.0, "tracking_grid": "coarse",
                       "transmittance": "ratio", "persistent_lanes": False})

@@ -23,6 +23,9 @@ BATCH_SAMPLES = 1 << 20  # passes rendered together up to this many samples (ren
 MAX_BATCH_PASSES = 16    # ... and this many passes
 # probability of the aureole estimator (majorant_volpath): 1.8x the time for a 1.5-2x lower RMS noise, off
 DEFAULT_AUREOLE_NEE = 0.0
+# probability of a multiple-vertex NEE chain (plugins/mvnee.py): 1.6-1.8x the CPU time for a 1.25-1.6x lower
+# variance, 0.7-1.0x the efficiency on the six demo views (docs/reference-estimator.md): off
+DEFAULT_MVNEE = 0.0
 DEFAULT_SUN_GUIDING = 0.0  # guiding adds noise on five of the six issue-10 views (plugins/majorant_volpath.py): off
 
 
@@ -96,6 +99,8 @@ class PassOptions:
     target_pixels : ndarray of int or None
         Flat (row-major) indices of the pixels the passes past the planned ones render (a render to a
         target: its cloud pixels); None: there are no such passes.
+    mvnee : float
+        Probability of a multiple-vertex NEE chain at a scattering vertex, in [0, 1].
     """
 
     integrator: str
@@ -109,6 +114,7 @@ class PassOptions:
     forward_peak_deg: float
     planned: int
     target_pixels: np.ndarray | None = None
+    mvnee: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -138,7 +144,8 @@ class PassScene:
         vol_render = delta_scaled(vol_k, o.forward_peak_deg)
         integ = integrator_dict(vol_render, o.integrator, o.max_depth, o.rr_depth, o.cell,
                                 sun=self.spec.sun if o.own_sun else None, sun_guiding=o.sun_guiding,
-                                aureole_nee=o.aureole_nee, legacy=o.legacy and o.integrator == "majorant")
+                                aureole_nee=o.aureole_nee, mvnee=o.mvnee,
+                                legacy=o.legacy and o.integrator == "majorant")
         return mi.load_dict(scene_dict(spec_k, vol_render, integ))
 
 

@@ -25,7 +25,7 @@ from .estimates import cloud_mask  # noqa: F401  (re-exported: wm.reference.clou
 from .forward_peak import DEFAULT_CONE_DEG, check_cone_deg
 from .imageio import Image
 from .optics import OpticalVolume
-from .passes import (DEFAULT_AUREOLE_NEE, DEFAULT_SUN_GUIDING, PassOptions, PassScene, current_or_default_variant,
+from .passes import (DEFAULT_AUREOLE_NEE, DEFAULT_MVNEE, DEFAULT_SUN_GUIDING, PassOptions, PassScene, current_or_default_variant,
                      local_passes, plan_passes)
 from .scene import SceneSpec
 
@@ -39,7 +39,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                      rr_depth: int | None = None, cell: int | None = None, target_rse: float | None = None,
                      max_seconds: float | None = None, sun_guiding: float | None = None,
                      forward_peak_deg: float | None = None, aureole_nee: float | None = None,
-                     legacy: bool = False, client=None, worker_variant=None, on_pass=None) -> Image:
+                     legacy: bool = False, client=None, worker_variant=None, on_pass=None,
+                     mvnee: float | None = None) -> Image:
     """Path-trace ``vol`` as seen by ``spec`` (Mitsuba ``volpath`` or our local-majorant tracker).
 
     Parameters
@@ -94,6 +95,10 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         Probability of the aureole estimator at a scattering vertex ("majorant" only; sun light through
         one more, forward, scattering sampled about the sun; None: ``passes.DEFAULT_AUREOLE_NEE``, 0
         where sun guiding is asked for: the two are exclusive).
+    mvnee : float, optional
+        Probability of a multiple-vertex next-event estimation chain towards the sun at a scattering
+        vertex ("majorant" with its own sun; ``plugins/mvnee.py``; None: ``passes.DEFAULT_MVNEE``, off;
+        exclusive with sun guiding and the aureole estimator).
     legacy : bool
         The estimator before issue 10, for benchmarks: the sun one of the scene's emitters (point sun
         only), Russian roulette as Mitsuba's volpath, phase sampling by channel mean.
@@ -144,7 +149,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
                               own_sun=integrator == "majorant" and not legacy, sun_guiding=sun_guiding,
                               aureole_nee=aureole_nee, legacy=legacy, forward_peak_deg=forward_peak_deg,
                               planned=len(spp_list),
-                              target_pixels=None if target is None else np.flatnonzero(target.ravel()))
+                              target_pixels=None if target is None else np.flatnonzero(target.ravel()),
+                              mvnee=_mvnee_option(mvnee, integrator, legacy, sun_guiding, aureole_nee))
         key = _render_key(spec, vol, spp_list, options, normalize, target_rse,
                           worker_variant if client is not None else None)
         run = _Run(PassScene(spec, vol, options, key), spp_list, cloud, transmittance, normalize, target_rse,
@@ -250,7 +256,20 @@ class _Run:
                                                       ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
                 "sun_guiding": o.sun_guiding if o.own_sun else None, "target_rse": self.target_rse,
                 "forward_peak_deg": o.forward_peak_deg, "aureole_nee": o.aureole_nee if o.own_sun else None,
+                "mvnee": o.mvnee if o.own_sun else None,
                 "noise": noise}
+
+
+def _mvnee_option(mvnee, integrator, legacy, sun_guiding, aureole_nee) -> float:
+    """The multiple-vertex NEE probability (default ``DEFAULT_MVNEE``), checked against the other options."""
+    if mvnee is None:
+        return DEFAULT_MVNEE if not (legacy or sun_guiding or aureole_nee or integrator != "majorant") else 0.0
+    mvnee = float(mvnee)
+    if not 0.0 <= mvnee <= 1.0:
+        raise ValueError(f"mvnee must be a probability in [0, 1], got {mvnee}")
+    if mvnee > 0 and (integrator != "majorant" or legacy or sun_guiding or aureole_nee):
+        raise ValueError("mvnee needs integrator='majorant' (not legacy), no sun guiding and no aureole estimator")
+    return mvnee
 
 
 def _estimator_defaults(spec, integrator, target_rse, max_seconds, sun_guiding, aureole_nee, forward_peak_deg,
@@ -282,7 +301,8 @@ def _render_key(spec, vol, spp_list, o: PassOptions, normalize, target_rse, work
     if o.forward_peak_deg > 0:
         options.append(["forward peak", o.forward_peak_deg])
     if o.own_sun:
-        options.append(["integrator sun", o.sun_guiding] + ([o.aureole_nee] if o.aureole_nee else []))
+        options.append(["integrator sun", o.sun_guiding] + ([o.aureole_nee] if o.aureole_nee else [])
+                       + ([["mvnee", o.mvnee]] if o.mvnee else []))
     if worker_variant is not None:  # other variants: the same image within noise only
         options.append(["worker variant", worker_variant])
     plan = ["target", spp_list[0], "cloud passes"] if target_rse is not None else spp_list
