@@ -82,21 +82,9 @@ def _march(sensor, vol_k: OpticalVolume, spec: SceneSpec, steps: int) -> dict:
     where tau reached SURFACE_TAU and the world gradient (1/m^2) of the extinction there, the ray."""
     import drjit as dr
     import mitsuba as mi
-    from .jitarrays import aligned_float
+    from .estimates import eye_rays_in_box
     h, w = spec.height, spec.width
-    jj, ii = np.meshgrid(np.arange(h), np.arange(w), indexing="ij")
-    pos = mi.Point2f(aligned_float(mi, ((ii + 0.5) / w).ravel()), aligned_float(mi, ((jj + 0.5) / h).ravel()))
-    ray, _ = sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
-    lo, hi = (np.asarray(p, np.float64) for p in vol_k.bbox)
-    ext = hi - lo
-    o = [(ray.o[k] - float(lo[k])) / float(ext[k]) for k in range(3)]
-    d = [ray.d[k] / float(ext[k]) for k in range(3)]
-    t0, t1 = mi.Float(0.0), mi.Float(dr.inf)
-    for k in range(3):
-        inv = dr.rcp(dr.select(dr.abs(d[k]) < 1e-30, 1e-30, d[k]))
-        ta, tb = -o[k] * inv, (1.0 - o[k]) * inv
-        t0, t1 = dr.maximum(t0, dr.minimum(ta, tb)), dr.minimum(t1, dr.maximum(ta, tb))
-    seg = dr.maximum(t1 - t0, 0.0)
+    o, d, t0, seg, ray, ext = eye_rays_in_box(sensor, spec, vol_k.bbox)
     beta = np.ascontiguousarray(vol_k.beta_total, np.float32)
     packed = np.concatenate([beta[..., None], beta[..., None] * np.asarray(vol_k.albedo, np.float32)], axis=-1)
     tex = mi.Texture3f(mi.TensorXf(np.ascontiguousarray(packed)), wrap_mode=dr.WrapMode.Clamp)

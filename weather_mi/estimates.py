@@ -8,6 +8,8 @@ of the pass means over sqrt(P).
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .mitsuba_scene import recentred, sensor_dict
@@ -83,10 +85,20 @@ def cloud_mask(spec: SceneSpec, vol: OpticalVolume) -> np.ndarray:
     return view_optical_depth(spec, vol) > CLOUD_TAU
 
 
-def eye_optical_depth(sensor, vol_k: OpticalVolume, spec: SceneSpec, steps: int = 512) -> np.ndarray:
-    """Optical depth (H, W) of the medium along each pixel's central camera ray, by the midpoint rule
-    over ``steps`` steps of the ray's segment in the volume's box (deterministic; the scene's own
-    ``sensor``, so the same rays as the render). ``vol_k``: the volume in the sensor's coordinates."""
+class EyeRays(NamedTuple):
+    o: list
+    d: list
+    t0: object
+    seg: object
+    ray: object
+    ext: np.ndarray
+
+
+def eye_rays_in_box(sensor, spec: SceneSpec, bbox):
+    """The central camera ray of every pixel (row-major) of ``sensor`` in the unit-cube coordinates of
+    ``bbox`` (m): origins ``o`` and directions ``d`` (3 lists of mi.Float; t counts metres along the
+    world ray), where the ray enters the box ``t0`` (0 for a camera inside), the length of its segment
+    inside ``seg`` (0 for a ray that misses it), the world rays ``ray`` and the box's size ``ext`` (m)."""
     import drjit as dr
     import mitsuba as mi
     from .jitarrays import aligned_float
@@ -94,7 +106,7 @@ def eye_optical_depth(sensor, vol_k: OpticalVolume, spec: SceneSpec, steps: int 
     jj, ii = np.meshgrid(np.arange(h), np.arange(w), indexing="ij")
     pos = mi.Point2f(aligned_float(mi, ((ii + 0.5) / w).ravel()), aligned_float(mi, ((jj + 0.5) / h).ravel()))
     ray, _ = sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
-    lo, hi = (np.asarray(p, np.float64) for p in vol_k.bbox)
+    lo, hi = (np.asarray(p, np.float64) for p in bbox)
     ext = hi - lo
     o = [(ray.o[k] - float(lo[k])) / float(ext[k]) for k in range(3)]
     d = [ray.d[k] / float(ext[k]) for k in range(3)]
@@ -104,6 +116,17 @@ def eye_optical_depth(sensor, vol_k: OpticalVolume, spec: SceneSpec, steps: int 
         ta, tb = -o[k] * inv, (1.0 - o[k]) * inv
         t0, t1 = dr.maximum(t0, dr.minimum(ta, tb)), dr.minimum(t1, dr.maximum(ta, tb))
     seg = dr.maximum(t1 - t0, 0.0)
+    return EyeRays(o, d, t0, seg, ray, ext)
+
+
+def eye_optical_depth(sensor, vol_k: OpticalVolume, spec: SceneSpec, steps: int = 512) -> np.ndarray:
+    """Optical depth (H, W) of the medium along each pixel's central camera ray, by the midpoint rule
+    over ``steps`` steps of the ray's segment in the volume's box (deterministic; the scene's own
+    ``sensor``, so the same rays as the render). ``vol_k``: the volume in the sensor's coordinates."""
+    import drjit as dr
+    import mitsuba as mi
+    h, w = spec.height, spec.width
+    o, d, t0, seg, _, _ = eye_rays_in_box(sensor, spec, vol_k.bbox)
     tex = mi.Texture3f(mi.TensorXf(np.ascontiguousarray(vol_k.beta_total, np.float32)[..., None]),
                        wrap_mode=dr.WrapMode.Clamp, use_accel=False)  # CUDA: float weights, as on LLVM
     n_steps = dr.opaque(mi.UInt32, steps)
