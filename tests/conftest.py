@@ -8,7 +8,10 @@ import pytest
 
 import weather_mi
 
-weather_mi.set_variant()  # tests call Mitsuba directly; importing weather_mi selects no variant
+# tests call Mitsuba directly; importing weather_mi selects no variant. LLVM wherever it runs, also on a GPU
+# machine: the bit-for-bit tests assume it (CUDA's film adds samples with atomics); tests/test_gpu.py selects
+# cuda_ad_rgb itself
+weather_mi.set_variant("llvm_ad_rgb" if weather_mi.variant.llvm_usable() else None)
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 WRF_SUPERCELL = SHARED_DATA / "wrf" / "wrfout_quarter_ss_0130.nc"
