@@ -157,8 +157,8 @@ def _persistent(scene, persistent: bool | None) -> bool:
     longest path holds it (sized in LLVM blocks per CPU thread); on CUDA a launch is many warps of 32 lanes
     that the hardware schedules as slots free up, and the lane count is an LLVM setting, so ``mi.render``
     renders the pass there (skipped, not an error: the same image in expectation, other random numbers)."""
-    import mitsuba as mi
-    if not mi.variant().startswith("llvm"):
+    from .variant import is_llvm
+    if not is_llvm():
         return False
     if persistent is not None:
         return persistent

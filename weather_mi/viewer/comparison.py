@@ -33,6 +33,7 @@ class ReferencePanel:
         self.state = None
         self.metrics = None
         self._overlay = None         # (key, data URL) of the last B or difference picture
+        self._denoised = None        # (reference Image, its denoised radiance)
         self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="weather-mi metrics")
         w = pn.widgets
         self.show = w.RadioButtonGroup(label="Show", options=SHOW_CHOICES, value="A: slicer", color="default")
@@ -142,10 +143,17 @@ class ReferencePanel:
     def _denoised_url(self) -> str:
         """B denoised (``weather_mi.denoise``, once per reference update): for the eye; the metrics and the
         difference map stay on the unbiased radiance."""
-        from ..denoise import denoise_radiance
         f = self.session.loop.last_frame
-        rad = np.nan_to_num(self.image.radiance)
-        return jpeg_url(to_srgb8(denoise_radiance(rad), f.exposure if f else auto_exposure(rad)))
+        rad = self.denoised()
+        return jpeg_url(to_srgb8(rad, f.exposure if f else auto_exposure(rad)))
+
+    def denoised(self) -> np.ndarray:
+        """The reference's denoised radiance, computed once per reference update (not per exposure or
+        export)."""
+        from ..denoise import denoise_radiance
+        if self._denoised is None or self._denoised[0] is not self.image:
+            self._denoised = (self.image, denoise_radiance(np.nan_to_num(self.image.radiance)))
+        return self._denoised[1]
 
     def _difference_url(self) -> str:
         from matplotlib import colormaps

@@ -69,8 +69,7 @@ class Exports:
         ref = self._reference_shown()
         rad = f.radiance if ref is None else ref.radiance
         if ref is not None and self.session.reference.show.value == "B: denoised":  # the PNG shows what B shows
-            from ..denoise import denoise_radiance
-            rad = denoise_radiance(np.nan_to_num(ref.radiance))
+            rad = self.session.reference.denoised()
         with tempfile.TemporaryDirectory() as tmp:
             p = Path(tmp) / "view.png"
             write_png(p, rad, f.exposure)
