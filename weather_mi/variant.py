@@ -166,7 +166,8 @@ def _register_current() -> None:
             tune_llvm()
         _tuned = True
     if current not in _registered:
-        from .plugins import hydrometeor_mixture, majorant_volpath
+        from .plugins import hydrometeor_mixture, majorant_volpath, raytable_sensor
         hydrometeor_mixture.register()
         majorant_volpath.register()
+        raytable_sensor.register()
         _registered.add(current)
