@@ -30,6 +30,10 @@ def fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
         h.update(np.ascontiguousarray(t.theta, np.float64).tobytes())
         h.update(np.ascontiguousarray(t.values, np.float64).tobytes())
     h.update(json.dumps([list(map(float, p)) for p in vol.bbox]).encode())
+    terrain = getattr(vol, "terrain", None)
+    if terrain is not None:  # the ground mesh (no terrain: the key of before)
+        for a in (terrain.x, terrain.y, terrain.height_m, terrain.albedo):
+            h.update(np.ascontiguousarray(a, np.float64).tobytes())
     return h.hexdigest()
 
 

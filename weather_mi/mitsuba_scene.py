@@ -24,6 +24,8 @@ def recentred(spec: SceneSpec, vol: OpticalVolume):
     cam = replace(spec.camera, origin=tuple(np.asarray(spec.camera.origin) - c),
                   target=tuple(np.asarray(spec.camera.target) - c))
     vol2 = replace(vol, bbox=(tuple(lo - c), tuple(hi - c)))
+    if getattr(vol, "terrain", None) is not None:  # the ground mesh moves with the volume
+        vol2 = replace(vol2, terrain=replace(vol.terrain, x=vol.terrain.x - c[0], y=vol.terrain.y - c[1]))
     return replace(spec, camera=cam), vol2, c
 
 
@@ -109,6 +111,63 @@ def ground_dict(spec: SceneSpec, vol_bbox) -> dict:
     to_world = mi.ScalarTransform4f().translate([cx, cy, spec.ground.height]).scale([half, half, 1.0])
     return {"type": "rectangle", "to_world": to_world,
             "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(spec.ground.albedo)}}}
+
+
+_PLY_DIR = None
+
+
+def _terrain_ply(terrain) -> str:
+    """A binary PLY of ``Terrain.mesh`` (float32 x, y, z and r, g, b = the albedo, grey) in a directory
+    of this process removed at exit, named by its content (the same terrain: the same file)."""
+    import hashlib
+    import tempfile
+    global _PLY_DIR
+    v, f, albedo = terrain.mesh()
+    vert = np.empty(len(v), dtype=[(n, "<f4") for n in ("x", "y", "z", "r", "g", "b")])
+    for i, n in enumerate("xyz"):
+        vert[n] = v[:, i]
+    for n in "rgb":
+        vert[n] = np.clip(albedo, 0.0, 1.0)
+    faces = np.empty(len(f), dtype=[("n", "u1"), ("i", "<i4", (3,))])
+    faces["n"], faces["i"] = 3, f
+    header = ("ply\nformat binary_little_endian 1.0\n"
+              f"element vertex {len(v)}\n" + "".join(f"property float {n}\n" for n in "xyzrgb")
+              + f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n").encode()
+    data = header + vert.tobytes() + faces.tobytes()
+    if _PLY_DIR is None:
+        _PLY_DIR = tempfile.TemporaryDirectory(prefix="weather_mi_terrain_")
+    from pathlib import Path
+    path = Path(_PLY_DIR.name) / f"terrain_{hashlib.sha256(data).hexdigest()[:20]}.ply"
+    if not path.is_file():
+        path.write_bytes(data)
+    return str(path)
+
+
+def terrain_floor_m(terrain) -> float:
+    """The medium box's floor over a terrain: its lowest height (the mesh lies inside the box)."""
+    return float(np.min(terrain.height_m))
+
+
+def terrain_ground_dicts(terrain, medium_ref: dict) -> dict:
+    """The ground over a terrain: the height-field mesh through the column centres (``Terrain.mesh``),
+    Lambertian with the per-vertex albedo (grey RGB, a ``mesh_attribute`` texture), the medium above it
+    (``exterior``: rays it reflects go on in the cloud's medium), and around it out to the horizon a flat
+    rectangle just below the lowest terrain height (below every part of the mesh, so it never shows
+    through a valley; it shows in the half cell between the outer column centres and the box edge and
+    outside the grid), with the mean albedo of the grid's edge columns."""
+    import mitsuba as mi
+    edge = np.concatenate([terrain.albedo[0], terrain.albedo[-1], terrain.albedo[1:-1, 0], terrain.albedo[1:-1, -1]])
+    cx, cy = float(np.mean(terrain.x)), float(np.mean(terrain.y))
+    lo = terrain_floor_m(terrain)
+    gap = 3.0 * RAY_EPSILON * (1.0 + max(abs(lo), float(np.max(np.abs(np.r_[terrain.x, terrain.y])))))
+    half = 1e7
+    surround = {"type": "rectangle",
+                "to_world": mi.ScalarTransform4f().translate([cx, cy, lo - gap]).scale([half, half, 1.0]),
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [float(np.mean(edge))] * 3}}}
+    mesh = {"type": "ply", "filename": _terrain_ply(terrain), "face_normals": True,
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "mesh_attribute", "name": "vertex_color"}},
+            "exterior": medium_ref}
+    return {"terrain": mesh, "ground": surround}
 
 
 def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -204,18 +263,22 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
     The sun is a ``directional`` emitter unless the integrator carries it (``integrator_sun``). A
     camera inside the medium's box carries the medium (its rays start in it)."""
     ensure_registered()
-    floor = None if spec.ground is None else spec.ground.height
+    terrain = getattr(vol, "terrain", None) if spec.ground is not None else None
+    floor = None if spec.ground is None else (spec.ground.height if terrain is None else terrain_floor_m(terrain))
     box = medium_shape_dict(vol, floor)
     sensor = sensor_dict(spec)
     d = {"type": "scene", "integrator": integrator, "sensor": sensor, "medium_box": box}
     if "sun_direction" not in integrator:
         d["sun"] = sun_dict(spec.sun)
-    if _inside(spec.camera.origin, medium_box(vol, floor)):
+    if terrain is not None or _inside(spec.camera.origin, medium_box(vol, floor)):
         d["weather_medium"] = box["interior"]
         box["interior"] = {"type": "ref", "id": "weather_medium"}
-        sensor["medium"] = {"type": "ref", "id": "weather_medium"}
+        if _inside(spec.camera.origin, medium_box(vol, floor)):
+            sensor["medium"] = {"type": "ref", "id": "weather_medium"}
     if spec.sky is not None:
         d["sky"] = sky_dict(spec.sky, spec.sun)
-    if spec.ground is not None:
+    if terrain is not None:  # the terrain mesh and a flat surround (Ground.height unused; its albedo too)
+        d.update(terrain_ground_dicts(terrain, {"type": "ref", "id": "weather_medium"}))
+    elif spec.ground is not None:
         d["ground"] = ground_dict(spec, vol.bbox)
     return d

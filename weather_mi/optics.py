@@ -19,6 +19,7 @@ import xarray as xr
 from .errors import WeatherDataError
 from .hydrometeors import DIMS, SPECIES_NAMES, bbox_of, check_species_name, validate
 from .species import SpeciesSet, preset
+from .terrain import Terrain
 
 
 @dataclass(frozen=True)
@@ -53,6 +54,9 @@ class OpticalVolume:
     phase_tables : tuple or None
         One phase table per species, built at construction from ``species_set`` and ``phase_mode``
         when not given; None only for raw optics without a phase function.
+    terrain : Terrain or None
+        The ground under the grid (:class:`weather_mi.terrain.Terrain`, the hydrometeors' terrain
+        coordinates; None where they have none): the reference's ground is then a height-field mesh.
     """
 
     species: tuple[str, ...]
@@ -66,6 +70,7 @@ class OpticalVolume:
     phase_quality: str = "default"
     attrs: dict = field(default_factory=dict)
     phase_tables: tuple | None = field(default=None, repr=False)
+    terrain: Terrain | None = field(default=None, repr=False)
 
     def __post_init__(self):
         for name in ("beta_ext", "beta_total", "albedo", "weights"):
@@ -261,4 +266,5 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
     return OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
-                         phase_quality, attrs, None if phase_tables is None else tuple(phase_tables))
+                         phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
+                         Terrain.of(hyd))

@@ -1,0 +1,99 @@
+"""Terrain as the ground of the path-traced reference (issue 23 item 3): the height-field mesh of
+``Terrain.mesh`` in the Mitsuba scene, against numbers not from our code."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mitsuba as mi
+
+import weather_mi as wm
+from weather_mi.mitsuba_scene import integrator_dict, recentred, scene_dict
+from weather_mi.terrain import Terrain
+
+NZ, NY, NX, D = 4, 6, 7, 1000.0  # 1 km columns
+ORIGIN = (4500.0, 20000.0, -30000.0)  # (z0, y0, x0) cell centres: off the origin, so recentring shows
+
+
+def hydrometeors(height, albedo, q_cloud=0.0):
+    """Clear (or thin-cloud) hydrometeors over a terrain (m above MSL) of (NY, NX) heights and albedos."""
+    q = np.full((NZ, NY, NX), q_cloud)
+    hyd = wm.from_arrays({"cloud": q}, 0.8, (D, D, D), origin=ORIGIN)
+    dims = ("y", "x")
+    return hyd.assign_coords(terrain_height=(dims, np.asarray(height, float)),
+                             land=(dims, np.ones((NY, NX), np.int8)),
+                             surface_albedo=(dims, np.broadcast_to(np.asarray(albedo, float), (NY, NX)).copy()))
+
+
+def relief():
+    y, x = np.mgrid[0:NY, 0:NX]
+    return 3000.0 + 400.0 * np.sin(x * 0.9) * np.cos(y * 0.7) + 50.0 * x
+
+
+def volume(hyd):
+    return wm.optical_volume(hyd, phase_quality="test")
+
+
+def nadir_spec(vol, elevation=50.0, irradiance=2.0, w=8, h=6):
+    (x0, y0, _), (x1, y1, z1) = vol.bbox
+    cam = wm.Camera.orthographic(center=((x0 + x1) / 2, (y0 + y1) / 2, z1 + 1000.0), direction=(0.0, 0.0, -1.0),
+                                 width=(x1 - x0) * 0.5, height=(y1 - y0) * 0.5, up=(0.0, 1.0, 0.0))
+    return wm.SceneSpec(camera=cam, sun=wm.Sun(140.0, elevation, irradiance=(irradiance,) * 3, angular_diameter_deg=0.0),
+                        width=w, height=h, sky=None, ground=wm.Ground(albedo=(0.5, 0.5, 0.5), height=0.0), seed=3)
+
+
+def test_terrain_travels_with_the_optical_volume():
+    hyd = hydrometeors(relief(), 0.25)
+    vol = volume(hyd)
+    assert vol.terrain is not None
+    np.testing.assert_array_equal(vol.terrain.height_m, hyd["terrain_height"].values)
+    assert volume(wm.from_arrays({"cloud": np.zeros((NZ, NY, NX))}, 0.8, (D, D, D))).terrain is None
+    spec_k, vol_k, c = recentred(nadir_spec(vol), vol)
+    np.testing.assert_allclose(vol_k.terrain.x + c[0], hyd.x.values)
+    np.testing.assert_allclose(vol_k.terrain.y + c[1], hyd.y.values)
+
+
+def test_vertical_rays_hit_the_terrain_at_the_column_centres():
+    h = relief()
+    hyd = hydrometeors(h, 0.25)
+    vol = volume(hyd)
+    spec_k, vol_k, c = recentred(nadir_spec(vol), vol)
+    scene = mi.load_dict(scene_dict(spec_k, vol_k, integrator_dict(vol_k, "volpath", -1)))
+    gx, gy = np.meshgrid(hyd.x.values - c[0], hyd.y.values - c[1])
+    # 1 cm towards the middle: a ray exactly on the mesh's outer boundary edge may miss it (the slope
+    # changes the height by < 1 cm there)
+    gx, gy = gx - 0.01 * np.sign(gx - gx.mean()), gy - 0.01 * np.sign(gy - gy.mean())
+    n = gx.size
+    o = mi.Point3f(mi.Float(gx.ravel()), mi.Float(gy.ravel()), mi.Float(np.full(n, 20000.0)))
+    ray = mi.Ray3f(o, mi.Vector3f(mi.Float(np.zeros(n)), mi.Float(np.zeros(n)), mi.Float(-np.ones(n))))
+    # the cube is null: step through it until an opaque surface (the terrain) is hit
+    hit_z = np.full(n, np.nan)
+    for _ in range(6):
+        si = scene.ray_intersect(ray)
+        z = np.array(si.p.z)
+        valid = np.array(si.is_valid())
+        null = np.array(mi.has_flag(si.bsdf().flags(), mi.BSDFFlags.Null)) & valid
+        opaque = valid & ~null & np.isnan(hit_z)
+        hit_z[opaque] = z[opaque]
+        ray = si.spawn_ray(ray.d)
+    np.testing.assert_allclose(hit_z, h.ravel(), atol=1.0)
+
+
+@pytest.mark.parametrize("integrator", ["volpath", "majorant"])
+def test_clear_sky_plateau_radiance_is_albedo_e_sin_e_over_pi(integrator):
+    albedo, e, irr = 0.3, 50.0, 2.0
+    vol = volume(hydrometeors(np.full((NY, NX), 4000.0), albedo))
+    sp = nadir_spec(vol, elevation=e, irradiance=irr)
+    img = wm.render_reference(sp, vol, spp=8, passes=2, progress=False, integrator=integrator, max_depth=4)
+    want = albedo * irr * np.sin(np.radians(e)) / np.pi
+    se = np.maximum(np.nan_to_num(img.stderr), 1e-6 * want)
+    assert np.all(np.abs(img.radiance - want) <= 3 * se + 1e-5 * want), (img.radiance.mean(), want)
+
+
+def test_no_terrain_scene_dict_unchanged():
+    vol = volume(wm.from_arrays({"cloud": np.full((NZ, NY, NX), 1e-5)}, 0.8, (D, D, D), origin=ORIGIN))
+    assert vol.terrain is None
+    spec_k, vol_k, _ = recentred(nadir_spec(vol), vol)
+    d = scene_dict(spec_k, vol_k, integrator_dict(vol_k, "volpath", -1))
+    assert "terrain" not in d and "weather_medium" not in d and d["ground"]["type"] == "rectangle"
+    assert d["medium_box"]["interior"]["type"] != "ref"
