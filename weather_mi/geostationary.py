@@ -7,6 +7,7 @@ earth's centre a + h, a = 6378137 m). Fixed-grid coordinates are scan angles in 
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -72,6 +73,7 @@ def satellite(name: str) -> Satellite:
         raise ValueError(f"unknown satellite {name!r}; choose one of {', '.join(SATELLITES)}") from None
 
 
+@functools.lru_cache(maxsize=16)  # a Transformer takes milliseconds to build: one per satellite and direction
 def _transformer(sat: Satellite, inverse: bool = False):
     import pyproj
     geo = pyproj.CRS.from_proj4("+proj=longlat +ellps=WGS84 +no_defs")
