@@ -16,7 +16,7 @@ from .sources import open_source, open_times
 from .optics import OpticalVolume, optical_volume
 from .variant import ensure_registered, register_lazily, set_variant
 from .medium import medium_dict, phase_dict
-from .scene import Camera, Ground, SceneSpec, Sky, Sun
+from .scene import Camera, Ground, RayTable, SceneSpec, Sky, Sun
 from .imageio import Image
 from .reference import render_reference, render_transmittance
 from .slicing import SliceMode, SliceParams, SliceRenderer, render_slices
@@ -29,7 +29,7 @@ __version__ = "0.1.0"
 __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les", "open_source",
            "open_times", "sources",
            "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
-           "Camera", "Ground", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "render_transmittance",
+           "Camera", "Ground", "RayTable", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "render_transmittance",
            "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "species", "synthetic", "hydrometeors",
            "atmosphere", "phase", "metrics", "reference", "slicing", "io", "imageio", "scene", "view"]
 

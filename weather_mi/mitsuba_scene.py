@@ -26,7 +26,8 @@ def recentred(spec: SceneSpec, vol: OpticalVolume):
     vol2 = replace(vol, bbox=(tuple(lo - c), tuple(hi - c)))
     if getattr(vol, "terrain", None) is not None:  # the ground mesh moves with the volume
         vol2 = replace(vol2, terrain=replace(vol.terrain, x=vol.terrain.x - c[0], y=vol.terrain.y - c[1]))
-    return replace(spec, camera=cam), vol2, c
+    rays = None if spec.rays is None else spec.rays.shifted(-c)
+    return replace(spec, camera=cam, rays=rays), vol2, c
 
 
 def _look_at(camera: Camera):
@@ -35,11 +36,15 @@ def _look_at(camera: Camera):
 
 
 def sensor_dict(spec: SceneSpec) -> dict:
-    """Perspective (horizontal fov) or orthographic sensor with a box filter (independent pixels)."""
+    """Perspective (horizontal fov) or orthographic sensor, or the ``raytable`` sensor of ``spec.rays``, with
+    a box filter (independent pixels)."""
     import mitsuba as mi
     cam = spec.camera
     film = {"type": "hdrfilm", "width": int(spec.width), "height": int(spec.height),
             "rfilter": {"type": "box"}, "pixel_format": "rgb", "component_format": "float32"}
+    if spec.rays is not None:
+        from .plugins.raytable_sensor import sensor_dict as raytable_dict
+        return raytable_dict(spec.rays.origins_m, spec.rays.directions, film)
     if cam.kind == "orthographic":
         # Mitsuba's orthographic film spans [-1, 1] horizontally and [-1/aspect, 1/aspect] vertically
         aspect = spec.width / spec.height

@@ -8,7 +8,7 @@ Perspective field of view is horizontal (degrees).
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -391,6 +391,58 @@ def _bbox(vol_or_bbox):
     return lo, hi
 
 
+@dataclass(frozen=True, eq=False)
+class RayTable:
+    """Every pixel's rays from a table (a geostationary imager's view, ``weather_mi.satellite_rays``): a
+    ray at every pixel corner, bilinear in between (the ``raytable`` sensor).
+
+    Parameters
+    ----------
+    origins_m : array_like, shape (H + 1, W + 1, 3)
+        Ray origins at the pixel corners (m, world frame; row 0 the film's top edge, column 0 its left).
+    directions : array_like, shape (H + 1, W + 1, 3)
+        Ray directions there (normalised here).
+
+    Raises
+    ------
+    ValueError
+        For tables of another shape, non-finite values or zero directions.
+    """
+
+    origins_m: np.ndarray
+    directions: np.ndarray
+
+    def __post_init__(self):
+        o, d = (np.array(v, dtype=np.float64) for v in (self.origins_m, self.directions))
+        if o.ndim != 3 or o.shape[2] != 3 or o.shape[0] < 2 or o.shape[1] < 2 or d.shape != o.shape:
+            raise ValueError("RayTable origins_m and directions must both have shape (H + 1, W + 1, 3), got "
+                             f"{o.shape} and {d.shape}")
+        norm = np.linalg.norm(d, axis=-1, keepdims=True)
+        if not (np.all(np.isfinite(o)) and np.all(np.isfinite(d)) and np.all(norm > 0)):
+            raise ValueError("RayTable origins_m and directions must be finite, the directions non-zero")
+        d = d / norm
+        for name, v in (("origins_m", o), ("directions", d)):
+            v.flags.writeable = False
+            object.__setattr__(self, name, v)
+
+    @property
+    def film_size(self) -> tuple[int, int]:
+        """(width, height) in pixels."""
+        return self.origins_m.shape[1] - 1, self.origins_m.shape[0] - 1
+
+    def shifted(self, offset_m) -> "RayTable":
+        """The same rays with their origins moved by ``offset_m`` (m)."""
+        return RayTable(self.origins_m + np.asarray(offset_m, np.float64), self.directions)
+
+    def to_dict(self) -> dict:
+        """Shape and a SHA-256 digest of the table (for metadata and checkpoint fingerprints; a table of a
+        million pixels is not written out)."""
+        import hashlib
+        h = hashlib.sha256(np.ascontiguousarray(self.origins_m).tobytes())
+        h.update(np.ascontiguousarray(self.directions).tobytes())
+        return {"kind": "raytable", "shape": list(self.origins_m.shape), "sha256": h.hexdigest()}
+
+
 @dataclass(frozen=True)
 class SceneSpec:
     """Everything about a picture except the medium: drives both renderers identically.
@@ -409,11 +461,16 @@ class SceneSpec:
         Image size in pixels, >= 1.
     seed : int, default 0
         Seed of the renderers' random numbers, >= 0.
+    rays : RayTable or None, default None
+        Every pixel's rays from a table (the reference renderer's ``raytable`` sensor; a satellite's
+        view) instead of ``camera``'s projection; its film size must be (width, height). ``camera`` then
+        only names a nominal view (metadata).
 
     Raises
     ------
     ValueError
-        For an image size or seed that is not a valid integer, or a camera inside the ground.
+        For an image size or seed that is not a valid integer, a camera inside the ground or a ray table
+        of another size than the image.
     """
 
     camera: Camera
@@ -423,6 +480,7 @@ class SceneSpec:
     width: int = 300
     height: int = 300
     seed: int = 0
+    rays: RayTable | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "width", _positive_int(self.width, "Image size (width, pixels)"))
@@ -431,13 +489,24 @@ class SceneSpec:
         if self.ground is not None and self.camera.origin[2] <= self.ground.height:
             raise ValueError(f"Camera at z = {self.camera.origin[2]:.1f} m is inside the ground "
                              f"(ground height {self.ground.height:.1f} m)")
+        if self.rays is not None and self.rays.film_size != (self.width, self.height):
+            raise ValueError(f"the ray table is for a {self.rays.film_size[0]} x {self.rays.film_size[1]} image, "
+                             f"the scene is {self.width} x {self.height}")
 
     def to_dict(self) -> dict:
-        """A JSON-serialisable description (for image metadata and checkpoints)."""
-        return asdict(self)
+        """A JSON-serialisable description (for image metadata and checkpoints; a ray table as its digest,
+        ``RayTable.to_dict``)."""
+        d = asdict(replace(self, rays=None))
+        del d["rays"]
+        if self.rays is not None:  # absent otherwise: descriptions and fingerprints as before ray tables
+            d["rays"] = self.rays.to_dict()
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "SceneSpec":
+        if d.get("rays") is not None:
+            raise ValueError("a scene description with a ray table keeps only its digest: rebuild the rays "
+                             "(weather_mi.satellite_rays.satellite_view)")
         return cls(camera=Camera(**d["camera"]), sun=Sun(**d["sun"]),
                    sky=None if d.get("sky") is None else Sky(**d["sky"]),
                    ground=None if d.get("ground") is None else Ground(**d["ground"]),
