@@ -34,6 +34,16 @@ os.environ.setdefault("MIEPYTHON_USE_JIT", "1")
 # complex refractive index n - i k per channel wavelength (R, G, B)
 WATER_M = {650e-9: 1.331 - 1.6e-8j, 550e-9: 1.333 - 2.0e-9j, 450e-9: 1.337 - 1.0e-9j}
 
+# Hale & Querry (1973, Appl. Opt. 12, 555) refractive index of liquid water n, k at 25 C (their Table 1):
+# wavelength (m), n, k; ``water_index`` interpolates (n linearly, k log-linearly) for single-band tables
+WATER_HALE_QUERRY = ((450e-9, 1.337, 1.02e-9), (475e-9, 1.336, 9.35e-10), (500e-9, 1.335, 1.00e-9),
+                     (525e-9, 1.334, 1.32e-9), (550e-9, 1.333, 1.96e-9), (575e-9, 1.333, 3.60e-9),
+                     (600e-9, 1.332, 1.09e-8), (625e-9, 1.332, 1.39e-8), (650e-9, 1.331, 1.64e-8),
+                     (675e-9, 1.331, 2.23e-8), (700e-9, 1.331, 3.35e-8), (725e-9, 1.330, 9.15e-8),
+                     (750e-9, 1.330, 1.56e-7), (775e-9, 1.330, 1.48e-7), (800e-9, 1.329, 1.25e-7),
+                     (825e-9, 1.329, 1.82e-7), (850e-9, 1.329, 2.93e-7), (875e-9, 1.328, 3.91e-7),
+                     (900e-9, 1.328, 4.86e-7))
+
 # quality -> number of radii per wavelength
 CLOUD_SIZES = {"test": 200, "default": 600, "high": 2000}
 RAIN_SIZES = {"test": 6, "default": 32, "high": 96}
@@ -45,6 +55,23 @@ def _rain_grid(quality: str) -> np.ndarray:
     if quality == "test":
         return angle_grid(n_forward=60, middle_step_deg=1.0)
     return angle_grid()
+
+
+def water_index(wavelength_m: float) -> complex:
+    """Complex refractive index n - i k of liquid water at ``wavelength_m`` (450-900 nm, Hale & Querry 1973)."""
+    wl, n, k = (np.array(c, np.float64) for c in zip(*WATER_HALE_QUERRY))
+    lam = float(wavelength_m)
+    if not wl[0] <= lam <= wl[-1]:
+        raise ValueError(f"water refractive index tabulated for {wl[0] * 1e9:.0f}-{wl[-1] * 1e9:.0f} nm, "
+                         f"got {lam * 1e9:.1f} nm")
+    return complex(np.interp(lam, wl, n), -np.exp(np.interp(lam, wl, np.log(k))))
+
+
+def _channels(wavelength_m):
+    """(wavelength, refractive index) of the three channels: R, G, B, or one band's in all three."""
+    if wavelength_m is None:
+        return [(wl, WATER_M[wl]) for wl in RGB_WAVELENGTHS_M]
+    return [(float(wavelength_m), water_index(wavelength_m))] * 3
 
 
 def _miepython():
@@ -93,28 +120,42 @@ def _progress(total: int, desc: str, enable: bool):
     return tqdm(total=total, desc=desc, unit="size", leave=False, disable=not enable)
 
 
-def _compute_cloud(r_eff, v_eff, n_sizes, theta):
+def _compute_cloud(r_eff, v_eff, n_sizes, theta, wavelength_m=None):
     radii = gamma_area_quantile_radii(r_eff, v_eff, n_sizes)
+    channels = _channels(wavelength_m)
     values = np.empty((theta.size, 3))
     with _progress(3 * n_sizes, "Mie cloud", n_sizes >= 300) as bar:
-        for c, wl in enumerate(RGB_WAVELENGTHS_M):
-            values[:, c] = _distribution_phase(radii, wl, WATER_M[wl], theta, progress=bar)
+        for c, (wl, m) in enumerate(channels):
+            if c and channels[c] == channels[c - 1]:
+                values[:, c] = values[:, c - 1]  # one band in all three channels
+                continue
+            values[:, c] = _distribution_phase(radii, wl, m, theta, progress=bar)
     return values
 
 
+def _band_params(params: dict, wavelength_m) -> dict:
+    """Cache parameters, with the band's wavelength where one is given (RGB tables keep their old keys)."""
+    return params if wavelength_m is None else {**params, "wavelength_m": float(wavelength_m)}
+
+
 def mie_cloud(r_eff: float = 10e-6, v_eff: float = 0.1, *, quality: str = "default",
-              theta=None, cache: bool = True) -> PhaseTable:
+              theta=None, cache: bool = True, wavelength_m: float | None = None) -> PhaseTable:
     """Cloud droplets: Mie theory averaged over a gamma distribution (r_eff in m, v_eff), at the
-    R, G, B wavelengths 650 / 550 / 450 nm. ``quality`` "test" (200 radii per wavelength, ~2 s),
+    R, G, B wavelengths 650 / 550 / 450 nm, or at one band's ``wavelength_m`` in all three channels
+    (refractive index ``water_index``). ``quality`` "test" (200 radii per wavelength, ~2 s),
     "default" (600, ~10 s) or "high" (2000, ~35 s). For r_eff = 10 um, v_eff = 0.1: g ~ 0.86, 4 pi p(0) ~ 7400 at
     550 nm. Cached on disk (see :mod:`weather_mi.phase.cache`)."""
     n_sizes = _quality(quality, CLOUD_SIZES)
     th = angle_grid() if theta is None else np.asarray(theta, np.float64)
-    params = {"r_eff": float(r_eff), "v_eff": float(v_eff), "n_sizes": n_sizes, "theta": th}
+    params = _band_params({"r_eff": float(r_eff), "v_eff": float(v_eff), "n_sizes": n_sizes, "theta": th},
+                          wavelength_m)
+    wl = () if wavelength_m is None else (float(wavelength_m),) * 3
 
     def compute():
-        return PhaseTable.from_values(th, _compute_cloud(float(r_eff), float(v_eff), n_sizes, th),
-                                      name=f"mie_cloud(r_eff={r_eff:g}, v_eff={v_eff:g})")
+        return PhaseTable.from_values(th, _compute_cloud(float(r_eff), float(v_eff), n_sizes, th, wavelength_m),
+                                      name=f"mie_cloud(r_eff={r_eff:g}, v_eff={v_eff:g}"
+                                           + (f", {wavelength_m * 1e9:.0f} nm)" if wl else ")"),
+                                      **({"wavelengths_m": wl} if wl else {}))
 
     return cached_table("mie_cloud", params, compute, use_cache=cache)
 
@@ -133,18 +174,22 @@ def _stratified_offsets(theta: np.ndarray, n: int) -> np.ndarray:
     return (s - 0.5)[:, None] * h[None, :]
 
 
-def _compute_rain(radius, v_eff, n_sizes, theta, progress):
+def _compute_rain(radius, v_eff, n_sizes, theta, progress, wavelength_m=None):
     radii = gamma_area_quantile_radii(radius, v_eff, n_sizes)
     offsets = _stratified_offsets(theta, n_sizes)
+    channels = _channels(wavelength_m)
     values = np.empty((theta.size, 3))
     with _progress(3 * n_sizes, "Mie rain", progress) as bar:
-        for c, wl in enumerate(RGB_WAVELENGTHS_M):
-            values[:, c] = _distribution_phase(radii, wl, WATER_M[wl], theta, offsets, progress=bar)
+        for c, (wl, m) in enumerate(channels):
+            if c and channels[c] == channels[c - 1]:
+                values[:, c] = values[:, c - 1]
+                continue
+            values[:, c] = _distribution_phase(radii, wl, m, theta, offsets, progress=bar)
     return values
 
 
 def mie_rain(radius: float = 1e-3, *, v_eff: float = 0.003, quality: str = "default", theta=None,
-             cache: bool = True) -> PhaseTable:
+             cache: bool = True, wavelength_m: float | None = None) -> PhaseTable:
     """Raindrops of effective radius ``radius`` (m): Mie theory (size parameter ~11400 for 1 mm at
     550 nm) over a narrow gamma distribution (v_eff = 0.003: relative standard deviation ~5.5 %)
     so that single-size ripple averages out, plus a per-size stratified angle offset within each
@@ -152,17 +197,22 @@ def mie_rain(radius: float = 1e-3, *, v_eff: float = 0.003, quality: str = "defa
     is <= 0.1 deg from 120 to 180 deg, resolving the primary (~138 deg) and secondary (~129 deg)
     bows. ``quality``: "test" (6 radii per wavelength on a thinned grid, ~3 s), "default" (32,
     ~30 s) or "high" (96, ~100 s). Drops are spheres (real large drops flatten, which shifts and
-    weakens the bows; not modelled). Cached on disk."""
+    weakens the bows; not modelled). ``wavelength_m``: one band's wavelength in all three channels
+    (as ``mie_cloud``). Cached on disk."""
     n_sizes = _quality(quality, RAIN_SIZES)
     th = _rain_grid(quality) if theta is None else np.asarray(theta, np.float64)
-    params = {"radius": float(radius), "v_eff": float(v_eff), "n_sizes": n_sizes, "theta": th}
+    params = _band_params({"radius": float(radius), "v_eff": float(v_eff), "n_sizes": n_sizes, "theta": th},
+                          wavelength_m)
+    wl = () if wavelength_m is None else (float(wavelength_m),) * 3
 
     def compute():
         est_s = 3 * n_sizes * th.size * radius / 1e-3 * 1.6e-4  # ~0.23 s per size per 1400 angles at 1 mm
-        values = _compute_rain(float(radius), float(v_eff), n_sizes, th, progress=est_s > 3)
-        return PhaseTable.from_values(th, values, name=f"mie_rain(radius={radius:g}, v_eff={v_eff:g})")
+        values = _compute_rain(float(radius), float(v_eff), n_sizes, th, est_s > 3, wavelength_m)
+        return PhaseTable.from_values(th, values, name=f"mie_rain(radius={radius:g}, v_eff={v_eff:g}"
+                                                       + (f", {wavelength_m * 1e9:.0f} nm)" if wl else ")"),
+                                      **({"wavelengths_m": wl} if wl else {}))
 
     return cached_table("mie_rain", params, compute, use_cache=cache)
 
 
-__all__ = ["mie_cloud", "mie_rain", "WATER_M", "gamma_area_quantile_radii"]
+__all__ = ["mie_cloud", "mie_rain", "WATER_M", "water_index", "gamma_area_quantile_radii"]

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
+
 from .ice import graupel, ice_crystals, snow
 from .mie import mie_cloud, mie_rain
 from .table import PhaseTable
@@ -28,8 +30,25 @@ def _attr(sp, name):
         raise TypeError(f"species object {sp!r} has no attribute {name!r} (needs name, radius_m, phase_class)") from None
 
 
-def table_for(sp, mode: str = "per_species", quality: str = "default") -> PhaseTable:
-    """The phase table of one species object."""
+def nearest_channel(table: PhaseTable, wavelength_m: float) -> PhaseTable:
+    """``table``'s channel nearest ``wavelength_m`` in all three channels (ice tables at one band: the
+    geometric optics depends on the wavelength only through the refractive index, which changes by 0.3%
+    from 450 to 650 nm, and the diffraction peak's width, proportional to the wavelength)."""
+    c = int(np.argmin(np.abs(np.asarray(table.wavelengths_m) - float(wavelength_m))))
+    return table.gray(c)
+
+
+def table_for(sp, mode: str = "per_species", quality: str = "default",
+              wavelength_m: float | None = None) -> PhaseTable:
+    """The phase table of one species object: R, G, B, or one band's (``wavelength_m``) in all three
+    channels (water by Mie theory at that wavelength, ice from its nearest channel, ``nearest_channel``)."""
+    if wavelength_m is not None:
+        cloud_like = _attr(sp, "phase_class") == "water" if mode == "paper" else _attr(sp, "name") == "cloud"
+        if cloud_like:
+            return mie_cloud(quality=quality, wavelength_m=wavelength_m)
+        if mode != "paper" and _attr(sp, "name") == "rain":
+            return mie_rain(radius=float(_attr(sp, "radius_m")), quality=quality, wavelength_m=wavelength_m)
+        return nearest_channel(table_for(sp, mode, quality), wavelength_m)
     if mode not in MODES:
         raise ValueError(f"mode must be one of {', '.join(map(repr, MODES))}, got {mode!r}")
     if quality not in QUALITIES:
@@ -55,10 +74,12 @@ def table_for(sp, mode: str = "per_species", quality: str = "default") -> PhaseT
     raise ValueError(f"species name must be one of cloud, ice, rain, snow, graupel; got {name!r}")
 
 
-def for_species(species: Sequence, mode: str = "per_species", quality: str = "default") -> list[PhaseTable]:
+def for_species(species: Sequence, mode: str = "per_species", quality: str = "default",
+                wavelength_m: float | None = None) -> list[PhaseTable]:
     """One :class:`PhaseTable` per entry of ``species``, in order (see the module doc for the
-    mapping). Tables are cached on disk and in memory, so repeated species cost nothing."""
-    return [table_for(sp, mode, quality) for sp in species]
+    mapping; ``wavelength_m``: one band's tables, ``table_for``). Tables are cached on disk and in memory,
+    so repeated species cost nothing."""
+    return [table_for(sp, mode, quality, wavelength_m) for sp in species]
 
 
-__all__ = ["for_species", "table_for", "MODES"]
+__all__ = ["for_species", "table_for", "nearest_channel", "MODES"]
