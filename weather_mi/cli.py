@@ -2,6 +2,8 @@
 
     weather-mi info FILE | --demo supercell|cumulus [--lat LAT --lon LON --date UTC]
     weather-mi render FILE | --demo supercell|cumulus [options] [--scheduler ADDR | --workers N] -o out.exr
+    weather-mi satellite FILE | --demo NAME [--satellite goes-east|goes-west|himawari|meteosat] [--band 0.64]
+               [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC] -o out/sat.nc
     weather-mi animate WRFOUT... [--renderer slices|reference] [options] [--scheduler ADDR | --workers N] -o DIR
     weather-mi validate -o DIR [--quick]
 """
@@ -120,6 +122,40 @@ def _sun_from_time(spec, hyd):
     return dataclasses.replace(spec, sun=sun), meta
 
 
+def satellite_command(args) -> Path:
+    """A synthetic geostationary image (``satellite_image``): checked (outputs, place, visibility) before
+    rendering, written as NetCDF + EXR + PNG."""
+    from .output_paths import OutputLock, check_writable_folder
+    from . import satellite_image as si
+    resolution = si.parse_resolution_km(args.resolution)
+    nc, exr, png, ckpt = si.satellite_outputs(args.output)
+    check_time(args.file, args.demo, args.time)
+    check_writable_folder(nc)
+    from .optics import optical_volume
+    hyd = open_placed(args)
+    vol = optical_volume(hyd, species=args.preset, phase=args.phase)
+    scene = si.satellite_scene(hyd, vol, args.satellite, args.band, resolution, rayleigh=args.rayleigh,
+                               ground_albedo=args.ground_albedo, seed=args.seed)
+    w, h = scene.view.size
+    print(f"{scene.satellite.name} (sub-satellite longitude {scene.satellite.sub_lon_deg}), band {scene.band.name} um: "
+          f"{w} x {h} pixels of {resolution:g} km, view zenith {scene.view.view_zenith_deg.min():.1f}-"
+          f"{scene.view.view_zenith_deg.max():.1f} deg, solar zenith {90 - scene.spec.sun.elevation:.2f} deg at the "
+          f"centre ({scene.sun_meta['valid_time']}; one sun, up to {scene.sun_meta['one_sun_max_error_deg']:.2f} deg "
+          "from a column's own)")
+    from .cluster import session
+    with OutputLock(nc), session(args.scheduler, args.workers) as client:
+        if ckpt.is_file() and not args.resume:
+            raise ValueError(f"{ckpt} holds an unfinished render: add --resume to continue it, or delete it")
+        ds, img = si.render_satellite(scene, spp=args.spp, checkpoint=ckpt, resume=ckpt if args.resume else None,
+                                      target_rse=args.target_rse, max_seconds=args.max_seconds, client=client)
+        si.write_satellite(ds, img, nc, exr, png)
+        ckpt.unlink(missing_ok=True)
+    print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s; cloud pixels "
+          f"{int(ds.cloud.sum())}, mean relative standard error {ds.attrs['cloud_rse_mean']:.3f}; reflectance "
+          f"{float(ds.reflectance.where(ds.in_domain == 1).mean()):.3f} mean over the domain)")
+    return nc
+
+
 def open_placed(args):
     """The input of ``info``/``render``, placed and dated by ``--lat/--lon/--date`` where given (ideal cases)."""
     hyd = open_source(args.file, args.demo, parse_time(args.time))
@@ -201,6 +237,7 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--species", default="paper", choices=("paper", "physical"))
     add_place_options(info)
     _add_render_parser(sub)
+    _add_satellite_parser(sub)
     _add_animate_parser(sub)
     _add_view_parser(sub)
     _add_validate_parser(sub)
@@ -240,6 +277,31 @@ def _add_render_parser(sub) -> None:
     add_dask_options(render)
     render.add_argument("-o", "--output", default="weather-mi.exr",
                         help="OUT.exr (or OUT.png): writes OUT.exr and OUT.png; OUT.exr.ckpt.npz while rendering")
+
+
+def _add_satellite_parser(sub) -> None:
+    from .bands import BANDS
+    from .geostationary import SATELLITES
+    sat = sub.add_parser("satellite", help="synthetic geostationary imagery: reflectance on the satellite's fixed "
+                                           "grid, 3-D path-traced (NetCDF + EXR + PNG)")
+    _add_source(sat)
+    add_place_options(sat)
+    sat.add_argument("--satellite", default="goes-east", choices=tuple(SATELLITES))
+    sat.add_argument("--band", default="0.64", choices=tuple(BANDS), help="central wavelength (um), rendered "
+                                                                         "monochromatically")
+    sat.add_argument("--resolution", default="1km", help="pixel size at the sub-satellite point (e.g. 1km, 500m)")
+    sat.add_argument("--rayleigh", action="store_true", help="molecular scattering of the air in the domain")
+    sat.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
+    sat.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
+    sat.add_argument("--ground-albedo", type=float, default=0.06,
+                     help="surface albedo where the file has none (default 0.06, the sea)")
+    sat.add_argument("--spp", type=int, default=64, help="samples per pixel (with --target-rse: the first estimate)")
+    sat.add_argument("--target-rse", type=float, default=None, help="add passes until this cloud RSE")
+    sat.add_argument("--max-seconds", type=float, default=None, help="with --target-rse: time limit")
+    sat.add_argument("--seed", type=int, default=0)
+    sat.add_argument("--resume", action="store_true", help="continue from OUTPUT.exr.ckpt.npz")
+    add_dask_options(sat)
+    sat.add_argument("-o", "--output", default="weather-mi-satellite.nc", help="output NetCDF (.nc)")
 
 
 def _add_animate_parser(sub) -> None:
@@ -305,14 +367,14 @@ def validate_command(args) -> None:
     print(f"wrote {report}")
 
 
-COMMANDS = {"info": info_command, "render": render_command, "animate": animate_command, "view": view_command,
-            "validate": validate_command}
+COMMANDS = {"info": info_command, "render": render_command, "satellite": satellite_command,
+            "animate": animate_command, "view": view_command, "validate": validate_command}
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.command in ("info", "render", "view") and (args.file is None) == (args.demo is None):
+    if args.command in ("info", "render", "satellite", "view") and (args.file is None) == (args.demo is None):
         parser.commands[args.command].error("give a data FILE or --demo NAME (one of them)")
     try:
         COMMANDS[args.command](args)
@@ -341,11 +403,12 @@ def _add_source(parser) -> None:
 
 
 def _resume_hint(args) -> str:
-    if args.command != "render":
+    if args.command not in ("render", "satellite"):
         return ""
     from .output_paths import render_outputs
+    from .satellite_image import satellite_outputs
     try:
-        _, _, ckpt = render_outputs(args.output)
+        ckpt = (render_outputs(args.output) if args.command == "render" else satellite_outputs(args.output))[-1]
     except ValueError:
         return ""
     if not ckpt.is_file():

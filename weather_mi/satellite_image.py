@@ -146,3 +146,39 @@ def satellite_dataset(scene: SatelliteScene, img):
 
 
 __all__ = ["SatelliteScene", "satellite_scene", "render_satellite", "satellite_dataset"]
+
+
+def parse_resolution_km(text) -> float:
+    """A pixel size "1km", "0.5 km", "500m" or "2" (km) in km; a ValueError naming the option otherwise."""
+    t = str(text).strip().lower().replace(" ", "")
+    scale = 1e-3 if t.endswith("m") and not t.endswith("km") else 1.0
+    try:
+        value = float(t.removesuffix("km").removesuffix("m")) * scale
+    except ValueError:
+        value = float("nan")
+    if not (value > 0 and np.isfinite(value)):
+        raise ValueError(f"--resolution {text!r}: expected a pixel size such as 1km, 0.5km or 500m")
+    return value
+
+
+def satellite_outputs(output):
+    """(NetCDF, EXR, PNG, checkpoint) of ``-o`` (a .nc name; ValueError otherwise)."""
+    from pathlib import Path
+    out = Path(output)
+    if out.suffix.lower() != ".nc":
+        raise ValueError(f"-o {output}: a satellite image is written as NetCDF: expected a name ending in .nc")
+    exr = out.with_suffix(".exr")
+    return out, exr, out.with_suffix(".png"), exr.with_name(exr.name + ".ckpt.npz")
+
+
+def write_satellite(ds, img, nc_path, exr_path, png_path) -> None:
+    """The dataset as NetCDF (written under a temporary name, then renamed), the image as EXR (reflectance in
+    R, G, B, its standard error, the metadata) and a PNG (reflectance 0-1, sRGB-encoded)."""
+    from .output_paths import written_atomically
+    with written_atomically(nc_path, "NetCDF file") as tmp:
+        ds.to_netcdf(tmp)
+    img.save(exr_path)
+    img.save_png(png_path, exposure=1.0)
+
+
+__all__ += ["parse_resolution_km", "satellite_outputs", "write_satellite"]
