@@ -1,0 +1,109 @@
+"""``weather-mi satellite`` (weather_mi/satellite_image.py, weather_mi/ipa.py): the 1-D solver's geometry
+against the single-scattering closed form, the satellite view of a uniform layer against DISORT, per-pixel
+solar angles against NREL SPA, the command's outputs and its refusals before rendering."""
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import weather_mi as wm
+from weather_mi import cli
+from weather_mi.ipa import disort_reflectance, scattering_geometry
+from conftest import WRF_THOMPSON, shared_file
+
+pytest.importorskip("disortpp")
+
+
+@pytest.mark.parametrize("phi_deg", [0.0, 60.0, 180.0])
+def test_disort_geometry_in_the_single_scattering_limit(phi_deg):
+    """tau 1e-5 (single scattering; double scattering adds ~tau): R = pi I / mu0 with
+    I = omega p(Theta) mu0 / (mu0 + mu) (1 - exp(-tau (1/mu0 + 1/mu))), p normalised to 1 over 4 pi; the
+    azimuth convention (phi - phi0 = 0 forward) shows in p(Theta)."""
+    g, mu0, mu, w, tau = 0.7, 0.6, 0.8, 0.9, 1e-5
+    r = disort_reflectance([tau], [w], np.array([[g ** k for k in range(65)]]), mu0, mu, phi_deg)
+    cos_t = -mu0 * mu + np.sqrt(1 - mu0 ** 2) * np.sqrt(1 - mu ** 2) * np.cos(np.radians(phi_deg))
+    p = (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * cos_t) ** 1.5)
+    assert r == pytest.approx(np.pi * w * p / (mu0 + mu) * (1 - np.exp(-tau * (1 / mu0 + 1 / mu))), rel=2e-4)
+
+
+def test_scattering_geometry_of_sun_and_sensor_vectors():
+    sun = wm.Sun(120.0, 40.0).to_sun
+    sensor = wm.scene.direction_from_angles(300.0, 60.0)  # the sensor opposite the sun: forward scattering
+    mu0, mu, phi = scattering_geometry(sun, sensor)
+    assert (mu0, mu, phi) == pytest.approx((np.sin(np.radians(40)), np.sin(np.radians(60)), 0.0), abs=1e-6)
+    _, _, phi = scattering_geometry(sun, wm.scene.direction_from_angles(120.0, 60.0))  # towards the sun
+    assert phi == pytest.approx(180.0)
+
+
+def test_satellite_view_of_a_uniform_layer_matches_disort():
+    """validation/satellite_plane_parallel.py's near-nadir case at tau 10 (the table in its docstring):
+    within 1% of DISORT or 3 standard errors."""
+    from validation.satellite_plane_parallel import GEOMETRIES, run_case
+    wm.set_variant("llvm_ad_rgb")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        row = run_case(10.0, GEOMETRIES[0], spp=1024)
+    assert row["pixels"] >= 50 and 0.3 < row["R_disort"] < 0.6
+    assert abs(row["R_mc"] - row["R_disort"]) <= max(0.01 * row["R_disort"], 3 * row["se"]), row
+
+
+def test_per_pixel_sun_is_the_spa_sun_there():
+    """One SPA evaluation at the centre carried to points 1000 km away: within 0.01 deg of SPA there."""
+    from weather_mi.solar import solar_position, sun_angles_at
+    t = "2005-09-21T03:00:00Z"
+    centre = solar_position(t, 30.0, 87.0)
+    lat, lon = np.array([38.0, 22.0, 30.5]), np.array([95.0, 80.0, 98.0])
+    zen, az = sun_angles_at(centre, 30.0, 87.0, lat, lon)
+    for k in range(3):
+        p = solar_position(t, lat[k], lon[k])
+        assert zen[k] == pytest.approx(p.zenith_geometric_deg, abs=0.01)
+        assert az[k] == pytest.approx(p.azimuth_deg, abs=0.01)
+
+
+def _plateau_args(tmp_path, *more):
+    return ["satellite", str(shared_file(WRF_THOMPSON)), "--time", "1", "--satellite", "himawari",
+            "--resolution", "30km", "--spp", "4", "-o", str(tmp_path / "sat.nc"), *more]
+
+
+def test_satellite_command_writes_a_cf_netcdf_exr_and_png(tmp_path, capsys):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        assert cli.main(_plateau_args(tmp_path, "--rayleigh")) == 0
+    out = capsys.readouterr().out
+    assert "himawari" in out and "wrote" in out
+    for ext in ("nc", "exr", "png"):
+        assert (tmp_path / f"sat.{ext}").is_file()
+    assert not (tmp_path / "sat.exr.ckpt.npz").exists()
+    ds = xr.open_dataset(tmp_path / "sat.nc")
+    assert ds.attrs["Conventions"] == "CF-1.8" and ds.attrs["rayleigh"] == 1
+    assert ds["fixed_grid_projection"].attrs["grid_mapping_name"] == "geostationary"
+    assert ds["reflectance"].attrs["grid_mapping"] == "fixed_grid_projection"
+    for name in ("reflectance", "reflectance_standard_error", "solar_zenith_angle", "sensor_zenith_angle",
+                 "sensor_azimuth_angle", "solar_azimuth_angle", "lat", "lon", "cloud", "in_domain"):
+        assert name in ds.variables, name
+    r = ds.reflectance.values
+    assert np.all(np.isfinite(r)) and 0.0 < float(r.mean()) < 1.5
+    assert 55.0 < float(ds.sensor_zenith_angle.mean()) < 75.0  # the plateau seen from 140.7 E
+    assert int(ds.in_domain.sum()) > 0
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["satellite", "--demo", "cumulus", "--resolution", "5km", "-o", "{tmp}/a.nc"], "latitude/longitude"),
+    (["satellite", str(WRF_THOMPSON), "--time", "1", "--satellite", "meteosat", "-o", "{tmp}/a.nc"],
+     r"view zenith angle 9\d\.\d deg from meteosat"),
+    (["satellite", str(WRF_THOMPSON), "--time", "1", "-o", "{tmp}/a.exr"], "ending in .nc"),
+    (["satellite", str(WRF_THOMPSON), "--time", "1", "--resolution", "fine", "-o", "{tmp}/a.nc"], "--resolution"),
+])
+def test_satellite_refuses_before_rendering(tmp_path, capsys, argv, message):
+    shared_file(WRF_THOMPSON)
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert len(__import__("re").findall(message, err)) == 1, err
+    assert not list(tmp_path.glob("*.exr")) and not list(tmp_path.glob("*.nc"))
