@@ -64,3 +64,18 @@ def test_orbit_refuses_a_field_of_view_outside_0_180(small_cumulus, fov):
 def test_orbit_refuses_other_bad_arguments(small_cumulus, kw):
     with pytest.raises(ValueError):
         wm.Camera.orbit(small_cumulus, **kw)
+
+
+def test_regional_domain_gets_an_aerial_view_by_default():
+    """``render``'s default camera ("auto"): a storm-scale box keeps the ground camera; a domain wider than
+    300 km (a regional wrfout) is seen from above at 50 degrees, the weather in the picture, not the sky."""
+    import numpy as np
+    import weather_mi as wm
+    from weather_mi.framing import scene_spec
+    beta = np.full((4, 8, 8), 1e-3, np.float32)
+    wide = wm.OpticalVolume.from_arrays(beta, 1.0, wm.phase.isotropic(), ((0, 0, 0), (480e3, 480e3, 16e3)))
+    small = wm.OpticalVolume.from_arrays(beta, 1.0, wm.phase.isotropic(), ((0, 0, 0), (80e3, 80e3, 16e3)))
+    spec = scene_spec(wide, camera="auto")
+    elevation = np.degrees(np.arcsin(-spec.camera.forward[2]))
+    assert 40.0 < elevation < 60.0 and spec.camera.origin[2] > 100e3
+    assert scene_spec(small, camera="auto").camera == scene_spec(small, camera="ground").camera

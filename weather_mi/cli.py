@@ -181,9 +181,10 @@ def add_scene_options(p) -> None:
     p.add_argument("--sun-elevation", type=float, default=35.0)
     p.add_argument("--sun-diameter", type=float, default=0.53,
                    help="angular diameter of the sun disk (degrees); 0: a point sun")
-    p.add_argument("--camera", default="ground", choices=("ground", "orbit"),
+    p.add_argument("--camera", default="auto", choices=("auto", "ground", "orbit"),
                    help="ground: a photographer's view from near the ground (Camera.ground_view); "
-                        "orbit: on a sphere around the cloud (Camera.orbit)")
+                        "orbit: on a sphere around the cloud (Camera.orbit); auto (default): ground, and for "
+                        "a domain wider than 300 km an aerial oblique (orbit at 50 degrees elevation)")
     p.add_argument("--camera-azimuth", type=float, default=200.0,
                    help="where the camera stands, seen from the storm (degrees clockwise from north)")
     p.add_argument("--camera-elevation", type=float, default=8.0, help="orbit camera: elevation (degrees)")

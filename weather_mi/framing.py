@@ -29,6 +29,10 @@ def default_ground_distance_km(vol) -> float:
     return max(0.55 * max(x1 - x0, y1 - y0), 1.2 * z1) / 1000.0
 
 
+REGIONAL_DOMAIN_KM = 300.0  # wider domains get an aerial view by default (camera "auto")
+AERIAL_ELEVATION_DEG = 50.0
+
+
 def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground", camera_azimuth: float = 200.0,
                camera_elevation: float = 8.0, distance: float | None = None, camera_distance_km: float | None = None,
                camera_height: float = 1500.0, fov: float | None = None, sun_azimuth: float = 290.0,
@@ -42,9 +46,12 @@ def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground
         The storm the camera is aimed at.
     size : (int, int)
         Width and height (pixels).
-    camera : {"ground", "orbit"}
+    camera : {"ground", "orbit", "auto"}
         A photographer near the ground (``Camera.ground_view``) or a camera on a sphere around the cloud
-        (``Camera.orbit``).
+        (``Camera.orbit``); "auto": the ground camera for a storm-scale box, and for a domain wider than
+        ``REGIONAL_DOMAIN_KM`` an aerial oblique (the orbit camera at ``AERIAL_ELEVATION_DEG``, fitting the
+        box): from the ground a regional domain is sky and a strip of horizon, from a low orbit a smear
+        (``weather-mi satellite`` is the view from space).
     camera_azimuth : float
         Where the camera stands, seen from the storm (degrees clockwise from north).
     camera_elevation, distance : float
@@ -68,6 +75,12 @@ def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground
     SceneSpec
     """
     width, height = size
+    if camera == "auto":
+        (x0, y0, _), (x1, y1, _) = vol.bbox
+        regional = max(x1 - x0, y1 - y0) > REGIONAL_DOMAIN_KM * 1e3
+        camera = "orbit" if regional else "ground"
+        if regional:
+            camera_elevation = AERIAL_ELEVATION_DEG
     sky_ = None if sky == "none" else Sky(sky)
     ground = None if ground_albedo < 0 else Ground(albedo=ground_albedo, height=min(0.0, vol.bbox[0][2]))
     if camera == "orbit":

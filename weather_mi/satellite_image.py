@@ -38,8 +38,9 @@ class SatelliteScene:
 
 def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east", band_name: str = "0.64",
                     resolution_km: float = 1.0, *, rayleigh: bool = False, ground_albedo: float = 0.06,
-                    seed: int = 0, max_vza_deg: float = 80.0) -> SatelliteScene:
-    """The satellite's view of ``hyd`` (its place and valid time) with ``vol``'s optics in the band.
+                    seed: int = 0, max_vza_deg: float = 80.0, sun_time=None) -> SatelliteScene:
+    """The satellite's view of ``hyd`` (its place and valid time) with ``vol``'s optics in the band;
+    ``sun_time`` (UTC): the sun of another time over the same clouds (a study of the sun's elevation).
 
     Raises
     ------
@@ -49,6 +50,10 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     """
     from .place import place_of, sun_from_time
     source = str(hyd.attrs.get("source", "input"))
+    if sun_time is not None:
+        from .solar import as_utc
+        hyd = hyd.copy()
+        hyd.attrs["valid_time"] = as_utc(sun_time).strftime("%Y-%m-%dT%H:%M:%SZ")
     place = place_of(hyd)
     if place is None:
         raise ValueError(f"{source}: a satellite view needs the domain's latitude/longitude; the file has none "
