@@ -107,3 +107,15 @@ def test_satellite_refuses_before_rendering(tmp_path, capsys, argv, message):
     err = capsys.readouterr().err
     assert len(__import__("re").findall(message, err)) == 1, err
     assert not list(tmp_path.glob("*.exr")) and not list(tmp_path.glob("*.nc"))
+
+
+def test_satellite_over_dask_is_bit_identical(tmp_path, capsys):
+    """The satellite render's passes as Dask tasks (a LocalCluster of one worker): the same reflectance."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        assert cli.main(_plateau_args(tmp_path)) == 0
+        far = tmp_path / "dask"
+        assert cli.main(_plateau_args(far) + ["--workers", "1"]) == 0
+    a = xr.open_dataset(tmp_path / "sat.nc").reflectance.values
+    b = xr.open_dataset(far / "sat.nc").reflectance.values
+    np.testing.assert_array_equal(a, b)
