@@ -97,3 +97,21 @@ def test_no_terrain_scene_dict_unchanged():
     d = scene_dict(spec_k, vol_k, integrator_dict(vol_k, "volpath", -1))
     assert "terrain" not in d and "weather_medium" not in d and d["ground"]["type"] == "rectangle"
     assert d["medium_box"]["interior"]["type"] != "ref"
+
+
+def test_skirt_faces_outwards_and_hides_the_mesh_underside():
+    """The wall under the mesh's boundary: every face's normal (from its winding, as Mitsuba's face normals)
+    points away from the grid's centre and is horizontal; a wall of no height has no faces."""
+    h = relief()
+    hyd = hydrometeors(h, 0.25)
+    terrain = wm.terrain.Terrain.of(hyd)
+    floor = float(h.min())
+    v, f, albedo = terrain.skirt(floor)
+    assert len(albedo) == len(v)
+    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    centre = np.array([terrain.x.mean(), terrain.y.mean()])
+    mid = v[f].mean(axis=1)[:, :2] - centre
+    assert np.all(np.einsum("ij,ij->i", n[:, :2], mid) > 0) and np.allclose(n[:, 2], 0.0, atol=1e-6 * np.abs(n).max())
+    ring = 2 * (h.shape[0] + h.shape[1]) - 4
+    tall = np.sum(np.r_[h[0, :-1], h[:-1, -1], h[-1, :0:-1], h[:0:-1, 0]] > floor)
+    assert len(f) == 2 * tall and len(v) == 2 * ring

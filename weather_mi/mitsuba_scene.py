@@ -119,15 +119,22 @@ def ground_dict(spec: SceneSpec, vol_bbox) -> dict:
 
 
 _PLY_DIR = None
+TERRAIN_APRON_M = 100e3  # the ground continues level this far past a terrain grid's edge
 
 
-def _terrain_ply(terrain) -> str:
-    """A binary PLY of ``Terrain.mesh`` (float32 x, y, z and r, g, b = the albedo, grey) in a directory
+def _terrain_ply(terrain, skirt_floor_m: float) -> str:
+    """A binary PLY of ``Terrain.mesh`` with an apron (``Terrain.with_apron``, ``TERRAIN_APRON_M``: the edge's
+    heights continued past the domain) and its ``Terrain.skirt`` down to ``skirt_floor_m`` (below the
+    surround: no gap for a grazing ray to pass under the wall) (float32 x, y, z and r, g, b = the albedo,
+    grey) in a directory
     of this process removed at exit, named by its content (the same terrain: the same file)."""
     import hashlib
     import tempfile
     global _PLY_DIR
+    terrain = terrain.with_apron(TERRAIN_APRON_M)
     v, f, albedo = terrain.mesh()
+    sv, sf, salbedo = terrain.skirt(skirt_floor_m)  # the apron's edge a cliff, not the mesh's underside
+    v, f, albedo = np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.r_[albedo, salbedo]
     vert = np.empty(len(v), dtype=[(n, "<f4") for n in ("x", "y", "z", "r", "g", "b")])
     for i, n in enumerate("xyz"):
         vert[n] = v[:, i]
@@ -149,27 +156,36 @@ def _terrain_ply(terrain) -> str:
 
 
 def terrain_floor_m(terrain) -> float:
-    """The medium box's floor over a terrain: its lowest height (the mesh lies inside the box)."""
+    """The lowest height of a terrain (m)."""
     return float(np.min(terrain.height_m))
 
 
-def terrain_ground_dicts(terrain, medium_ref: dict) -> dict:
-    """The ground over a terrain: the height-field mesh through the column centres (``Terrain.mesh``),
-    Lambertian with the per-vertex albedo (grey RGB, a ``mesh_attribute`` texture), the medium above it
-    (``exterior``: rays it reflects go on in the cloud's medium), and around it out to the horizon a flat
-    rectangle just below the lowest terrain height (below every part of the mesh, so it never shows
-    through a valley; it shows in the half cell between the outer column centres and the box edge and
-    outside the grid), with the mean albedo of the grid's edge columns."""
+def terrain_gap_m(terrain, bbox) -> float:
+    """Three times Mitsuba's ray offset at the scene's largest coordinate (the volume's box, the terrain's
+    columns and its apron): the spacing kept between the medium box's floor, the terrain mesh, the
+    surround and the skirt's foot (closer faces make spawned rays skip one of them)."""
+    extent = max(float(np.max(np.abs(np.asarray(bbox, np.float64)))),
+                 float(np.max(np.abs(np.r_[terrain.x, terrain.y]))) + TERRAIN_APRON_M)
+    return 3.0 * RAY_EPSILON * (1.0 + extent)
+
+
+def terrain_ground_dicts(terrain, medium_ref: dict, bbox) -> dict:
+    """The ground over a terrain: the height-field mesh through the column centres (``Terrain.mesh``) with
+    its apron and skirt (``_terrain_ply``), Lambertian with the per-vertex albedo (grey RGB, a
+    ``mesh_attribute`` texture), the medium above it (``exterior``: rays it reflects go on in the cloud's
+    medium), and around it out to the horizon a flat rectangle below the medium box's floor (below every
+    part of the mesh, so it never shows through a valley; it shows beyond the apron), with the mean albedo
+    of the grid's edge columns. Heights, from the lowest terrain height lo down (``terrain_gap_m`` g): the
+    box's floor lo - g (the whole mesh inside the box), the surround lo - 2 g, the skirt's foot lo - 3 g."""
     import mitsuba as mi
     edge = np.concatenate([terrain.albedo[0], terrain.albedo[-1], terrain.albedo[1:-1, 0], terrain.albedo[1:-1, -1]])
     cx, cy = float(np.mean(terrain.x)), float(np.mean(terrain.y))
-    lo = terrain_floor_m(terrain)
-    gap = 3.0 * RAY_EPSILON * (1.0 + max(abs(lo), float(np.max(np.abs(np.r_[terrain.x, terrain.y])))))
+    lo, gap = terrain_floor_m(terrain), terrain_gap_m(terrain, bbox)
     half = 1e7
     surround = {"type": "rectangle",
-                "to_world": mi.ScalarTransform4f().translate([cx, cy, lo - gap]).scale([half, half, 1.0]),
+                "to_world": mi.ScalarTransform4f().translate([cx, cy, lo - 2.0 * gap]).scale([half, half, 1.0]),
                 "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [float(np.mean(edge))] * 3}}}
-    mesh = {"type": "ply", "filename": _terrain_ply(terrain), "face_normals": True,
+    mesh = {"type": "ply", "filename": _terrain_ply(terrain, lo - 3.0 * gap), "face_normals": True,
             "bsdf": {"type": "diffuse", "reflectance": {"type": "mesh_attribute", "name": "vertex_color"}},
             "exterior": medium_ref}
     return {"terrain": mesh, "ground": surround}
@@ -178,9 +194,13 @@ def terrain_ground_dicts(terrain, medium_ref: dict) -> dict:
 def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi) of the box that holds the medium: the volume's bbox, starting above a ground at
     ``floor_m`` by three times Mitsuba's ray offset (coincident or too close faces of the box and the
-    ground make rays skip the ground). The grids keep the full bbox."""
+    ground make rays skip the ground); over a terrain (``vol.terrain``) from ``terrain_gap_m`` below its
+    lowest height instead (the whole mesh inside the box). The grids keep the full bbox."""
     lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
-    if floor_m is not None:
+    terrain = getattr(vol, "terrain", None)
+    if floor_m is not None and terrain is not None:
+        lo[2] = terrain_floor_m(terrain) - terrain_gap_m(terrain, vol.bbox)
+    elif floor_m is not None:
         gap = 3.0 * RAY_EPSILON * (1.0 + float(np.max(np.abs(np.r_[lo, hi]))))
         lo[2] = max(lo[2], floor_m + gap)
         if lo[2] >= hi[2]:
@@ -283,7 +303,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
     if spec.sky is not None:
         d["sky"] = sky_dict(spec.sky, spec.sun)
     if terrain is not None:  # the terrain mesh and a flat surround (Ground.height unused; its albedo too)
-        d.update(terrain_ground_dicts(terrain, {"type": "ref", "id": "weather_medium"}))
+        d.update(terrain_ground_dicts(terrain, {"type": "ref", "id": "weather_medium"}, vol.bbox))
     elif spec.ground is not None:
         d["ground"] = ground_dict(spec, vol.bbox)
     return d

@@ -65,6 +65,38 @@ class Terrain:
         faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
         return vertices, faces, self.albedo.ravel()
 
+    def with_apron(self, distance_m: float) -> "Terrain":
+        """This terrain with one more ring of columns ``distance_m`` (m) beyond its edge, at the edge's
+        heights and albedo: the ground continues level past the domain instead of ending in a cliff at it
+        (a slanted view sees past the domain's edge: 20 km of cloud at 67 deg is 47 km of parallax)."""
+        x = np.r_[self.x[0] - distance_m, self.x, self.x[-1] + distance_m]
+        y = np.r_[self.y[0] - distance_m, self.y, self.y[-1] + distance_m]
+        pad = {"pad_width": 1, "mode": "edge"}
+        return Terrain(x, y, np.pad(self.height_m, **pad), np.pad(self.land, **pad), np.pad(self.albedo, **pad),
+                       self.albedo_source)
+
+    def skirt(self, floor_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A vertical wall from the mesh's boundary down to ``floor_m`` (m), facing outwards, as
+        (vertices, triangles, albedo) like :meth:`mesh` (the boundary's albedo). Without it, a slanted line
+        of sight that passes under the mesh's edge (the edge stands above the flat surround, e.g. a
+        plateau) meets the mesh's underside, black to a one-sided diffuse surface: a dark line along the
+        domain's edge in a satellite's view. With it, the domain's edge is a cliff, lit as one."""
+        ny, nx = self.height_m.shape
+        k = np.arange(ny * nx).reshape(ny, nx)
+        ring = np.concatenate([k[0, :-1], k[:-1, -1], k[-1, :0:-1], k[:0:-1, 0]])  # counter-clockwise from above
+        gx, gy = np.meshgrid(self.x, self.y)
+        top = np.stack([gx.ravel()[ring], gy.ravel()[ring], self.height_m.ravel()[ring]], 1)
+        bottom = top.copy()
+        bottom[:, 2] = float(floor_m)
+        n = ring.size
+        a_top, a_bot = np.arange(n), n + np.arange(n)
+        b_top, b_bot = np.roll(a_top, -1), np.roll(a_bot, -1)
+        tall = top[:, 2] > float(floor_m)  # a wall of no height has no triangle (a zero-area face)
+        faces = np.concatenate([np.stack([a_top, b_bot, b_top], 1)[np.roll(tall, -1)],
+                                np.stack([a_top, a_bot, b_bot], 1)[tall]])
+        albedo = np.r_[self.albedo.ravel()[ring], self.albedo.ravel()[ring]]
+        return np.concatenate([top, bottom]), faces, albedo
+
 
 def surface_fields(read2d, has, z_surface_m: np.ndarray) -> tuple[dict, dict]:
     """Terrain coordinates and attributes of a wrfout time.
