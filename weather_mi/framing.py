@@ -87,9 +87,11 @@ def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground
         cam = Camera.orbit(vol, azimuth=camera_azimuth, elevation=camera_elevation, distance=distance,
                            fov=45.0 if fov is None else fov)
     else:
+        terrain = getattr(vol, "terrain", None)  # a photographer above the highest terrain, not inside it
+        ground_m = 0.0 if ground is None else ground.height if terrain is None else float(terrain.height_m.max())
         cam = Camera.ground_view(vol, azimuth=camera_azimuth, fov=70.0 if fov is None else fov, aspect=width / height,
                                  distance_km=camera_distance_km or default_ground_distance_km(vol),
-                                 height_m=camera_height, ground_m=0.0 if ground is None else ground.height)
+                                 height_m=camera_height, ground_m=ground_m)
     return SceneSpec(camera=cam, sun=Sun(sun_azimuth, sun_elevation, angular_diameter_deg=sun_diameter),
                      sky=sky_, ground=ground, width=width, height=height, seed=seed)
 

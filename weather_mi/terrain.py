@@ -65,6 +65,71 @@ class Terrain:
         faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
         return vertices, faces, self.albedo.ravel()
 
+    def surface_at(self, x_m, y_m):
+        """Height (m), albedo and unit normal (..., 3) of the mesh (``mesh``: the same triangles, split along
+        each cell's diagonal from its (j, i) corner to its (j + 1, i + 1) corner, linear on each) at points
+        (x_m, y_m); beyond the grid the edge continues level (``with_apron``)."""
+        x, y = np.asarray(x_m, float), np.asarray(y_m, float)
+        ny, nx = self.height_m.shape
+        dx, dy = (self.x[1] - self.x[0]) if nx > 1 else 1.0, (self.y[1] - self.y[0]) if ny > 1 else 1.0
+        fi = np.clip((x - self.x[0]) / dx, 0.0, nx - 1.0)
+        fj = np.clip((y - self.y[0]) / dy, 0.0, ny - 1.0)
+        i, j = np.minimum(fi.astype(int), max(nx - 2, 0)), np.minimum(fj.astype(int), max(ny - 2, 0))
+        u, v = fi - i, fj - j
+        i1, j1 = np.minimum(i + 1, nx - 1), np.minimum(j + 1, ny - 1)
+        out = []
+        for f in (self.height_m, self.albedo):
+            a, b, c, d = f[j, i], f[j, i1], f[j1, i1], f[j1, i]
+            lower = u >= v  # triangle (a, b, c), else (a, c, d)
+            out.append((np.where(lower, a + u * (b - a) + v * (c - b), a + u * (c - d) + v * (d - a)),
+                        np.where(lower, b - a, c - d) / dx, np.where(lower, c - b, d - a) / dy))
+        (h, hx, hy), (albedo, _, _) = out
+        outside_x = (x < self.x[0]) | (x > self.x[-1])
+        outside_y = (y < self.y[0]) | (y > self.y[-1])
+        hx, hy = np.where(outside_x, 0.0, hx), np.where(outside_y, 0.0, hy)
+        n = np.stack([-hx, -hy, np.ones_like(h)], -1)
+        return h, albedo, n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+    def ray_hits(self, origins, dirs, max_steps: int = 2048, bisections: int = 40) -> np.ndarray:
+        """Distance along each ray (N, 3) to its first hit of the surface (``surface_at``), inf where it has
+        none: marched in steps of a quarter cell (horizontally) through the heights the terrain spans, the
+        crossing then bisected."""
+        o, d = np.asarray(origins, float), np.asarray(dirs, float)
+        lo, hi = float(self.height_m.min()), float(self.height_m.max())
+        dz = d[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_a = np.where(o[:, 2] > hi, (hi - o[:, 2]) / dz, 0.0)
+            t_b = np.where(dz < 0, (lo - o[:, 2]) / dz, np.inf)
+        live = (dz < 0) & (t_a >= 0) & np.isfinite(t_b)
+        t_hit = np.full(len(o), np.inf)
+        if not np.any(live):
+            return t_hit
+        cell = min(abs(self.x[1] - self.x[0]) if self.x.size > 1 else 1e3, abs(self.y[1] - self.y[0]) if self.y.size > 1 else 1e3)
+        horiz = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-12)
+        step = np.maximum(cell / 4.0 / horiz, (t_b - t_a) / max_steps)
+
+        def above(t, rows):
+            p = o[rows] + t[:, None] * d[rows]
+            return p[:, 2] - self.surface_at(p[:, 0], p[:, 1])[0]
+
+        rows = np.nonzero(live)[0]
+        t_prev = t_a[rows]
+        for _ in range(max_steps + 1):
+            t_next = np.minimum(t_prev + step[rows], t_b[rows])
+            below = above(t_next, rows) <= 0.0
+            if np.any(below):
+                lo_t, hi_t, r = t_prev[below], t_next[below], rows[below]
+                for _ in range(bisections):
+                    mid = 0.5 * (lo_t + hi_t)
+                    m_below = above(mid, r) <= 0.0
+                    hi_t, lo_t = np.where(m_below, mid, hi_t), np.where(m_below, lo_t, mid)
+                t_hit[r] = hi_t
+            keep = ~below & (t_next < t_b[rows])
+            rows, t_prev = rows[keep], t_next[keep]
+            if rows.size == 0:
+                break
+        return t_hit
+
     def with_apron(self, distance_m: float) -> "Terrain":
         """This terrain with one more ring of columns ``distance_m`` (m) beyond its edge, at the edge's
         heights and albedo: the ground continues level past the domain instead of ending in a cliff at it

@@ -203,7 +203,8 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
     phase_colour   : per group, P_g(Theta) colour_g E_sun along each ray (mi.Color3f, one per pixel)
     diffuse_colour : per group, colour_g E_sun / (4 pi) (mi.Color3f)
     ambient        : mi.Color3f, L_amb before occlusion
-    ground         : None, or (rho E_sun mu0 / pi, rho E_sky / pi) as two mi.Color3f
+    ground         : None, or (rho E_sun mu0 / pi, rho E_sky / pi) as two mi.Color3f (over a terrain rho = 1
+                     and ``rays.ground_sun``/``ground_sky`` carry each ray's albedo and slope)
     offset         : None, or each ray's slab offset j in slice units (mi.Float, |j| <= 1/2, see jitter.py):
                      its slabs are [k + j - 1/2, k + j + 1/2] instead of [k - 1/2, k + 1/2], so that the
                      terraces the slab planes leave on lit faces fall at a different depth in every pixel
@@ -257,6 +258,8 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
 
     if ground is not None:
         sun_factor, occ = model.ground_light(rays.ground)
+        if getattr(rays, "ground_sun", None) is not None:  # a terrain: its albedo and slope per ray
+            sun_factor, occ = sun_factor * rays.ground_sun, occ * rays.ground_sky
         lit = ground[0] * sun_factor + ground[1] * occ
         bg = dr.select(rays.hit_ground, lit, rays.background)
     else:

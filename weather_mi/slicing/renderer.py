@@ -148,7 +148,7 @@ class SliceRenderer:
             self.sky_light = LightVolume(mi, self.box, min(SKY_RES, self.light_res))
             self._sky_geometry = slice_geometry(np.array([0.0, 0.0, -1.0]), np.array([0.0, 0.0, 1.0]), self.box,
                                                 min(SKY_SLICES, self.slices))
-        self.views = ViewCache(self.box)
+        self.views = ViewCache(self.box, terrain=getattr(vol, "terrain", None))
         # the cloud's asymmetry parameter for the ground's transmission: species weighted by their scattering
         sca = np.array([float(np.sum(vol.beta_ext[si])) * float(np.mean(self.albedo_rgb[si]))
                         for si in range(self.n_species)]) * (1.0 - self.peak_fraction)
@@ -366,11 +366,11 @@ class SliceRenderer:
         else:
             gain = params.ambient
         ground = None
-        if spec.ground is not None:
-            rho = np.asarray(spec.ground.albedo, dtype=np.float64)
+        if spec.ground is not None:  # over a terrain the rays carry its albedo and slope (ViewRays.ground_sun/_sky)
+            rho = np.asarray(spec.ground.albedo, dtype=np.float64) if rays.ground_sun is None else np.ones(3)
             ground = (_colour(mi, rho / np.pi * sun * max(float(spec.sun.to_sun[2]), 0.0)), _colour(mi, rho / np.pi * e_sky))
-        ray_arrays = {k: getattr(rays, k) for k in ("origin", "direction", "t0", "t1", "hit_ground", "ground",
-                                                    "background", "pattern")}
+        names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern")
+        ray_arrays = {k: getattr(rays, k) for k in names + (("ground_sun", "ground_sky") if rays.ground_sun is not None else ())}
         return {"rays": ray_arrays, "n": rays.n, "phase_colour": phase_colour, "diffuse_colour": diffuse_colour, "model": model,
                 "ambient": _colour(mi, e_sky / np.pi) * _param(mi, gain), "ground": ground,
                 "jitter": _param(mi, params.slab_jitter), "jitter_rotation": _param(mi, jitter_rotation(params.jitter_frame))}

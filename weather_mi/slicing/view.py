@@ -56,6 +56,8 @@ class ViewRays:
     cos_to_light: np.ndarray  # (N,) numpy, for the phase functions
     n: int
     pattern: object = None    # mi.Float
+    ground_sun: object = None  # mi.Float over a terrain: albedo max(n . s, 0) / mu0 at the ground point
+    ground_sky: object = None  # mi.Float over a terrain: albedo (1 + n_z) / 2 (a tilted plane's share of the sky)
     phase_colour: dict = field(default_factory=lambda: BoundedCache(8))  # per-pixel phase colours by (group, colour)
 
 
@@ -63,8 +65,9 @@ class ViewCache:
     """Camera rays and background radiance for the most recent views (``maxsize`` of each: an orbiting
     camera or a moving sun does not grow memory), and the sky emitters they were made with."""
 
-    def __init__(self, box, maxsize: int = 4):
+    def __init__(self, box, maxsize: int = 4, terrain=None):
         self.box = tuple(np.asarray(p, dtype=np.float64) for p in box)
+        self.terrain = terrain  # weather_mi.terrain.Terrain: the ground is its surface, not the flat plane
         self.rays = BoundedCache(maxsize)
         self.backgrounds = BoundedCache(maxsize)
         self.sky = BoundedCache(4 * maxsize)  # sky emitters and sky irradiance (background.py)
@@ -75,7 +78,7 @@ class ViewCache:
             origins, dirs = camera_rays(spec)
             o, d = origins.reshape(-1, 3), dirs.reshape(-1, 3)
             t0, t1 = ray_box(o, d, self.box)
-            tg = ground_hits(spec, o, d)
+            tg = ground_hits(spec, o, d) if self.terrain is None or spec.ground is None else self.terrain.ray_hits(o, d)
             self.rays[ray_key] = (o, d, t0, np.minimum(t1, tg), tg)
         o, d, t0, t1, tg = self.rays[ray_key]
         hit = np.isfinite(tg)
@@ -89,5 +92,17 @@ class ViewCache:
                 mi.Point3f(*(F(o[:, i]) for i in range(3))), mi.Vector3f(*(F(d[:, i]) for i in range(3))),
                 F(t0), F(np.where(np.isfinite(t1), t1, t0)), F(hit) > 0.5,
                 mi.Point3f(*(F(pg[:, i]) for i in range(3))), mi.Color3f(*(F(bg[:, i]) for i in range(3))),
-                d @ spec.sun.to_sun, o.shape[0], F(offset_pattern(spec.width, spec.height)))
+                d @ spec.sun.to_sun, o.shape[0], F(offset_pattern(spec.width, spec.height)),
+                *self._terrain_weights(F, spec, pg, hit))
         return self.backgrounds[bg_key]
+
+    def _terrain_weights(self, F, spec: SceneSpec, pg: np.ndarray, hit: np.ndarray):
+        """(ground_sun, ground_sky) of ``ViewRays`` at the ground points ``pg`` over a terrain, else (None, None)."""
+        if self.terrain is None or spec.ground is None:
+            return None, None
+        _, albedo, n = self.terrain.surface_at(pg[:, 0], pg[:, 1])
+        s = spec.sun.to_sun
+        mu0 = max(float(s[2]), 1e-3)
+        sun = np.where(hit, albedo * np.maximum(n @ s, 0.0) / mu0, 0.0)
+        sky = np.where(hit, albedo * (1.0 + n[:, 2]) / 2.0, 0.0)
+        return F(sun), F(sky)
