@@ -119,3 +119,13 @@ def test_satellite_over_dask_is_bit_identical(tmp_path, capsys):
     a = xr.open_dataset(tmp_path / "sat.nc").reflectance.values
     b = xr.open_dataset(far / "sat.nc").reflectance.values
     np.testing.assert_array_equal(a, b)
+
+
+def test_satellite_keeps_an_unfinished_render(tmp_path, capsys):
+    """A checkpoint left by an unfinished satellite render is not overwritten without --resume."""
+    ckpt = tmp_path / "sat.exr.ckpt.npz"
+    ckpt.write_bytes(b"earlier passes")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        assert cli.main(_plateau_args(tmp_path)) == 2
+    assert "--resume" in capsys.readouterr().err and ckpt.read_bytes() == b"earlier passes"

@@ -343,3 +343,19 @@ def test_supercell_magnitudes_against_real_wrf(sc, real):
     area = _area_above(_total(sc), z, 9000.0, cell_km2)
     assert real["anvil_km2"] / 2.5 <= area <= real["anvil_km2"] * 2.5, \
         f"anvil {area:.0f} km^2 vs WRF {real['anvil_km2']:.0f} km^2"
+
+
+def test_stratocumulus_is_a_dense_deck():
+    """The demo deck: cloud water only between the 400 m base and the undulating top (850 +- 70 m, so
+    within 600-1000 m), at most the adiabatic 0.85 x 2 g/kg/km x (z - base) x 1.3, covering the domain with
+    vertical optical depths of a dense stratocumulus (median 20-40 at r = 10 um)."""
+    import numpy as np
+    import weather_mi as wm
+    hyd = wm.synthetic.stratocumulus()
+    q = hyd["q_cloud"].values
+    z = hyd.z.values[:, None, None]
+    assert np.all(q[np.broadcast_to(z < 400.0, q.shape)] == 0) and np.all(q[np.broadcast_to(z > 1000.0, q.shape)] == 0)
+    assert np.all(q <= 0.85 * 2.0e-6 * np.maximum(z - 400.0, 0.0) * 1.3 * (1 + 1e-6))  # float32
+    assert all(float(hyd[f"q_{s}"].max()) == 0.0 for s in ("ice", "rain", "snow", "graupel"))
+    tau = wm.optical_volume(hyd, species="physical", phase_quality="test").optical_depth_z()
+    assert np.all(tau > 1.0) and 20.0 < float(np.median(tau)) < 40.0

@@ -99,6 +99,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="4x coarser pixels, 16 spp")
     ap.add_argument("--out", default=None, help="folder of the figures (none without)")
     ap.add_argument("--json", default=None)
+    ap.add_argument("--only", default="", help="the cases whose label contains this text (e.g. plateau)")
     args = ap.parse_args(argv)
     import weather_mi as wm
     wm.set_variant("llvm_ad_rgb")
@@ -106,7 +107,7 @@ def main(argv=None) -> int:
     rows = []
     print(f"{'case':22s} {'px':>8s} {'SZA':>5s} {'VZA':>5s} {'cloud':>6s} {'R3D':>6s} {'R1D':>6s} {'mean':>7s} "
           f"{'p5':>7s} {'p25':>7s} {'p50':>7s} {'p75':>7s} {'p95':>7s} {'RSE':>5s} {'s 3D':>6s} {'s 1D':>6s}")
-    for case in CASES:
+    for case in (c for c in CASES if args.only in c[0]):
         row, images = run_case(case, spp, scale)
         rows.append(row)
         print(f"{row['case']:22s} {row['pixels']:>8s} {row['sza_deg']:5.1f} {row['vza_deg']:5.1f} {row['cloud_pixels']:6d} "

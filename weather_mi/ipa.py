@@ -112,31 +112,52 @@ def scattering_geometry(to_sun, to_sensor):
     return mu0, mu, float(np.degrees(np.arccos(cphi)))
 
 
-def surface_columns(vol: OpticalVolume, x_m, y_m, to_sensor, iterations: int = 4):
-    """(j, i, inside) of the column where each pixel's line of sight meets the surface: from its ground point
-    at sea level (x_m, y_m), up the line (``to_sensor``) to the terrain height of the column there, a few
-    fixed-point steps (the terrain's own parallax, h tan(VZA): 10 km for the plateau's 4.5 km at 67 deg)."""
+def surface_points(vol: OpticalVolume, x_m, y_m, to_sensor, iterations: int = 4):
+    """(x, y) where each pixel's line of sight meets the surface: from its ground point at sea level
+    (x_m, y_m) up the line (``to_sensor``) to the terrain's height there (``Terrain.surface_at``, level
+    past the grid's edge as the reference's apron), a few fixed-point steps (the terrain's own parallax,
+    h tan(VZA): 10 km for the plateau's 4.5 km at 67 deg)."""
+    x, y = np.asarray(x_m, float), np.asarray(y_m, float)
+    if vol.terrain is None:
+        return x, y
+    z = np.zeros(x.shape)
+    for _ in range(iterations):
+        px = x + to_sensor[..., 0] * z / to_sensor[..., 2]
+        py = y + to_sensor[..., 1] * z / to_sensor[..., 2]
+        z = vol.terrain.surface_at(px, py)[0]
+    return px, py
+
+
+def columns_of(vol: OpticalVolume, x_m, y_m):
+    """(j, i, inside) of the grid column holding each point (m)."""
     nz, ny, nx = vol.shape
     (x0, y0, _), (x1, y1, _) = vol.bbox
-    height = None if vol.terrain is None else np.asarray(vol.terrain.height_m, float)
-    z = np.zeros(np.shape(x_m))
-    for _ in range(iterations if height is not None else 1):
-        x = np.asarray(x_m) + to_sensor[..., 0] * z / to_sensor[..., 2]
-        y = np.asarray(y_m) + to_sensor[..., 1] * z / to_sensor[..., 2]
-        i = np.floor((x - x0) / (x1 - x0) * nx).astype(int)
-        j = np.floor((y - y0) / (y1 - y0) * ny).astype(int)
-        inside = (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
-        if height is not None:
-            z = np.where(inside, height[np.clip(j, 0, ny - 1), np.clip(i, 0, nx - 1)], 0.0)
-    return j, i, inside
+    i = np.floor((np.asarray(x_m) - x0) / (x1 - x0) * nx).astype(int)
+    j = np.floor((np.asarray(y_m) - y0) / (y1 - y0) * ny).astype(int)
+    return j, i, (i >= 0) & (i < nx) & (j >= 0) & (j < ny)
+
+
+def bare_surface(vol: OpticalVolume, spec, x_m, y_m) -> np.ndarray:
+    """Reflectance of the bare Lambertian surface at points outside the grid: its albedo (the ground's, or
+    the terrain's apron within ``mitsuba_scene.TERRAIN_APRON_M`` of the grid, the surround beyond it)."""
+    if vol.terrain is None:
+        return np.full(np.shape(x_m), float(np.mean(spec.ground.albedo)))
+    from .mitsuba_scene import TERRAIN_APRON_M
+    t = vol.terrain
+    a = np.asarray(t.albedo)
+    edge = float(np.mean(np.r_[a[0], a[-1], a[1:-1, 0], a[1:-1, -1]]))
+    x, y = np.asarray(x_m), np.asarray(y_m)
+    near = ((x > t.x[0] - TERRAIN_APRON_M) & (x < t.x[-1] + TERRAIN_APRON_M)
+            & (y > t.y[0] - TERRAIN_APRON_M) & (y < t.y[-1] + TERRAIN_APRON_M))
+    return np.where(near, t.surface_at(x, y)[1], edge)
 
 
 def ipa_reflectance(scene, n_streams: int = 16, n_moments: int = 256, progress: bool = True) -> np.ndarray:
     """The 1-D counterpart (H, W) of a ``satellite_image.SatelliteScene``: at each pixel, DISORT's reflectance
-    of the column where the pixel's line of sight meets the surface (``surface_columns``: the terrain's
+    of the column where the pixel's line of sight meets the surface (``surface_points``: the terrain's
     parallax kept, the clouds' not), under the rendered sun and the pixel's view direction, over that
     column's surface albedo (the terrain's, else the ground's); pixels whose line of sight meets the
-    surface outside the domain see the bare surround (R = its albedo, as ``terrain_ground_dicts`` sets it). The optics are the path
+    surface outside the domain see the bare surface (``bare_surface``). The optics are the path
     tracer's: the forward peaks within ``forward_peak.DEFAULT_CONE_DEG`` counted as unscattered (delta-M,
     ``forward_peak.delta_scaled``), which also makes the ice and snow tables' Legendre series converge
     (their raw peaks need thousands of moments, and truncated series give negative corrected radiances)."""
@@ -145,11 +166,11 @@ def ipa_reflectance(scene, n_streams: int = 16, n_moments: int = 256, progress: 
     vol, spec, view = delta_scaled(scene.vol, DEFAULT_CONE_DEG), scene.spec, scene.view
     nz, ny, nx = vol.shape
     to_sensor = pixel_directions(scene)
-    j, i, inside = surface_columns(vol, view.x_m, view.y_m, to_sensor)
+    sx, sy = surface_points(vol, view.x_m, view.y_m, to_sensor)
+    j, i, inside = columns_of(vol, sx, sy)
     terrain = vol.terrain
     surface = np.full((ny, nx), float(np.mean(spec.ground.albedo))) if terrain is None else np.asarray(terrain.albedo)
-    edge = np.r_[surface[0], surface[-1], surface[1:-1, 0], surface[1:-1, -1]]
-    out = np.where(inside, np.nan, float(np.mean(spec.ground.albedo)) if terrain is None else float(np.mean(edge)))
+    out = np.where(inside, np.nan, bare_surface(vol, spec, sx, sy))
     species_moments = layer_moments(vol, n_moments)
     for (r, c) in tqdm(list(zip(*np.nonzero(inside))), desc="IPA (DISORT)", unit="px", disable=not progress):
         jj, ii = int(j[r, c]), int(i[r, c])
@@ -160,4 +181,5 @@ def ipa_reflectance(scene, n_streams: int = 16, n_moments: int = 256, progress: 
 
 
 __all__ = ["relative_azimuth_deg", "disort_reflectance", "layer_moments", "column_optics", "merged_layers",
-           "pixel_directions", "scattering_geometry", "surface_columns", "ipa_reflectance"]
+           "pixel_directions", "scattering_geometry", "surface_points", "columns_of", "bare_surface",
+           "ipa_reflectance"]

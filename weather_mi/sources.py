@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-DEMOS = ("supercell", "cumulus")
+DEMOS = ("supercell", "cumulus", "stratocumulus")
 LES_SUFFIXES = (".txt", ".dat", ".csv")
 
 

@@ -75,6 +75,8 @@ _COARSE_CUMULUS = {"shape": (40, 48, 48), "spacing_m": (100.0, 100.0, 100.0)}
 DEMO_STORMS = {
     "demo-supercell": ("supercell", {}, None, "built-in demo supercell (synthetic, 1 km grid)"),
     "demo-cumulus": ("cumulus", _COARSE_CUMULUS, None, "built-in demo cumulus (synthetic, coarse 100 m grid)"),
+    "demo-stratocumulus": ("stratocumulus", {}, None, "built-in demo stratocumulus deck (synthetic, 100 m, "
+                                                      "dense: tau ~30-40)"),
     "demo-cumulus-thin": ("cumulus", _COARSE_CUMULUS, {s: THIN_FACTOR for s in ("cloud", "rain")},
                           "built-in demo cumulus (synthetic, coarse 100 m grid), its cloud water and rain "
                           f"x {THIN_FACTOR} (optically thin)"),
