@@ -48,7 +48,7 @@ def test_tilted_rays_land_displaced_by_h_tan_theta(theta_deg):
 
 
 def test_shape_of_the_table_is_checked():
-    with pytest.raises(Exception, match=r"\(H \+ 1, W \+ 1, 3\)"):
+    with pytest.raises(RuntimeError, match=r"\(H \+ 1, W \+ 1, 3\)"):  # Mitsuba wraps the plugin's ValueError
         o, d, _ = _corner_rays(8, 4, 1.0, 10.0, 0.0)
         _scene(o[:-1], d[:-1], 8, 4)
 

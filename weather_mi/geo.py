@@ -15,6 +15,7 @@ point, and the projection is then checked against every XLAT/XLONG of the file (
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -103,10 +104,7 @@ class Georeference:
         return PROJECTIONS.get(self.map_proj, LOCAL_PROJECTION)
 
     def _transformer(self, inverse: bool):
-        import pyproj
-        geo = pyproj.CRS.from_proj4(f"+proj=longlat +a={EARTH_RADIUS_M:.0f} +b={EARTH_RADIUS_M:.0f} +no_defs")
-        a, b = (self.crs, geo) if inverse else (geo, self.crs)
-        return pyproj.Transformer.from_crs(a, b, always_xy=True)
+        return _transformer(self.proj, inverse)
 
     def projected_xy(self) -> tuple[np.ndarray, np.ndarray]:
         """1-D projected x (nx,) and y (ny,) of the mass points (m)."""
@@ -163,6 +161,15 @@ class Georeference:
             return None
         return cls(str(attrs["crs_proj4"]), int(attrs["map_proj"]), float(attrs["proj_x0_m"]),
                    float(attrs["proj_y0_m"]), float(attrs["proj_dx_m"]), float(attrs["proj_dy_m"]), nx, ny)
+
+
+@functools.lru_cache(maxsize=32)  # a Transformer takes milliseconds: one per projection and direction
+def _transformer(proj: str, inverse: bool):
+    import pyproj
+    geo = pyproj.CRS.from_proj4(f"+proj=longlat +a={EARTH_RADIUS_M:.0f} +b={EARTH_RADIUS_M:.0f} +no_defs")
+    crs = pyproj.CRS.from_proj4(proj)
+    a, b = (crs, geo) if inverse else (geo, crs)
+    return pyproj.Transformer.from_crs(a, b, always_xy=True)
 
 
 def domain_georeference(attrs, source: str) -> Georeference:
