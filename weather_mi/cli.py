@@ -1,7 +1,7 @@
 """Command line.
 
-    weather-mi info FILE | --demo supercell|cumulus [--lat LAT --lon LON --date UTC]
-    weather-mi render FILE | --demo supercell|cumulus [options] [--scheduler ADDR | --workers N] -o out.exr
+    weather-mi info FILE | --demo supercell|cumulus|stratocumulus [--lat LAT --lon LON --date UTC]
+    weather-mi render FILE | --demo supercell|cumulus|stratocumulus [options] [--scheduler ADDR | --workers N] -o out.exr
     weather-mi satellite FILE | --demo NAME [--satellite goes-east|goes-west|himawari|meteosat] [--band 0.64]
                [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC] -o out/sat.nc
     weather-mi animate WRFOUT... [--renderer slices|reference] [options] [--scheduler ADDR | --workers N] -o DIR
