@@ -59,10 +59,18 @@ def test_view_covers_the_domain_and_its_angles_are_the_satellites():
     # every ray starts at 20 km and points away from the satellite (down)
     np.testing.assert_allclose(view.rays.origins_m[..., 2], 20000.0, atol=1e-6)
     assert np.all(view.rays.directions[..., 2] < 0)
-    cos_vza = -view.rays.directions[..., 2]
-    assert 55.0 < np.degrees(np.arccos(cos_vza)).mean() < 70.0  # the plateau from 140.7 E
-    vza, vaa = view_angles(sat, view.lat, view.lon)
-    np.testing.assert_array_equal(vza, view.view_zenith_deg)
+    # each corner ray's zenith angle is the view zenith angle of a spherical earth's closed form at the
+    # corner (WGS84 vs sphere: < 0.05 deg, tests/test_geostationary.py) and its direction is away from
+    # the satellite, whose azimuth (closed form) is turned into the grid by the meridian convergence
+    from weather_mi.geostationary import pixel_lonlat, view_angles_sphere
+    from weather_mi.satellite_rays import _edges
+    clon, clat = pixel_lonlat(sat, *np.meshgrid(_edges(view.x_rad), _edges(view.y_rad)))
+    vza_s, vaa_s = view_angles_sphere(sat, clat, clon)
+    d = -view.rays.directions
+    np.testing.assert_allclose(np.degrees(np.arccos(d[..., 2])), vza_s, atol=0.05)
+    az = np.degrees(np.arctan2(d[..., 0], d[..., 1])) + place.georef.grid_north_deg(clat, clon)
+    np.testing.assert_allclose((az - vaa_s + 180.0) % 360.0 - 180.0, 0.0, atol=0.05)
+    assert 55.0 < vza_s.mean() < 70.0  # the plateau from 140.7 E
 
 
 def test_domain_beyond_80_degrees_is_refused_naming_the_angle():
@@ -84,3 +92,18 @@ def test_ray_table_checks_its_shape_and_scene_size():
     spec = wm.SceneSpec(camera=cam, width=4, height=2, rays=rays)
     assert spec.to_dict()["rays"]["shape"] == [3, 5, 3]
     assert "rays" not in wm.SceneSpec(camera=cam).to_dict()  # fingerprints of camera views unchanged
+
+
+def test_lines_of_sight_through_the_box():
+    """``crosses_box``: rays tilted 45 deg towards +x from 20 km, over a box 0-10 km wide and 0-5 km tall,
+    meeting the ground at x_g: between z = 5 km and the floor a ray spans x_g - 5 km to x_g, so it crosses
+    the box iff 0 < x_g < 15 km (and its y is inside)."""
+    from weather_mi.satellite_rays import crosses_box
+    cx = np.arange(-3.0, 18.5, 1.0) * 1e3 + 0.25e3  # corners; pixel centres at x_g = -2.25 ... 17.75 km
+    for y, inside_y in ((5e3, True), (12e3, False)):
+        gx, gy = np.meshgrid(cx, [y - 500.0, y + 500.0])
+        d = np.broadcast_to(np.array([1.0, 0.0, -1.0]) / np.sqrt(2.0), gx.shape + (3,))
+        o = np.stack([gx - 20e3, gy, np.full_like(gx, 20e3)], -1)
+        got = crosses_box(wm.RayTable(o, d), ((0.0, 0.0, 0.0), (10e3, 10e3, 5e3)))[0]
+        x_g = (cx[:-1] + cx[1:]) / 2
+        np.testing.assert_array_equal(got, (x_g > 0) & (x_g < 15e3) & inside_y)

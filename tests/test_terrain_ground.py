@@ -101,7 +101,9 @@ def test_no_terrain_scene_dict_unchanged():
 
 def test_skirt_faces_outwards_and_hides_the_mesh_underside():
     """The wall under the mesh's boundary: every face's normal (from its winding, as Mitsuba's face normals)
-    points away from the grid's centre and is horizontal; a wall of no height has no faces."""
+    points away from the grid's centre and is horizontal, no face is degenerate, and the faces' area is the
+    wall's: per side, the trapezoids between the edge heights and the floor (by the trapezoid rule on the
+    grid's boundary rows and columns)."""
     h = relief()
     hyd = hydrometeors(h, 0.25)
     terrain = wm.terrain.Terrain.of(hyd)
@@ -112,9 +114,10 @@ def test_skirt_faces_outwards_and_hides_the_mesh_underside():
     centre = np.array([terrain.x.mean(), terrain.y.mean()])
     mid = v[f].mean(axis=1)[:, :2] - centre
     assert np.all(np.einsum("ij,ij->i", n[:, :2], mid) > 0) and np.allclose(n[:, 2], 0.0, atol=1e-6 * np.abs(n).max())
-    ring = 2 * (h.shape[0] + h.shape[1]) - 4
-    tall = np.sum(np.r_[h[0, :-1], h[:-1, -1], h[-1, :0:-1], h[:0:-1, 0]] > floor)
-    assert len(f) == 2 * tall and len(v) == 2 * ring
+    area = 0.5 * np.linalg.norm(n, axis=1)
+    assert np.all(area > 0)
+    wall = sum(np.trapezoid(side - floor, dx=D) for side in (h[0], h[-1], h[:, 0], h[:, -1]))
+    assert area.sum() == pytest.approx(wall, rel=1e-9)
 
 
 def test_height_field_rays_meet_the_reference_mesh():

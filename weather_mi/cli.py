@@ -41,6 +41,13 @@ def _parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def check_unfinished(ckpt, resume: bool) -> None:
+    """A ValueError where a checkpoint of an unfinished render is there and ``--resume`` is not given."""
+    if ckpt.is_file() and not resume:
+        raise ValueError(f"{ckpt} holds an unfinished render: add --resume to continue it, or delete it to "
+                         "render afresh")
+
+
 def check_scene_options(args) -> None:
     """The scene options that can be judged without the input (``--size``, ``--fov``), checked before it
     is read; ``scene_spec`` builds from them."""
@@ -62,9 +69,7 @@ def render_command(args) -> Path:
     exr, png, ckpt = render_outputs(args.output)
     check_writable_folder(exr)
     with OutputLock(exr):
-        if ckpt.is_file() and not args.resume:
-            raise ValueError(f"{ckpt} holds an unfinished render: add --resume to continue it, or delete it to "
-                             "render afresh")
+        check_unfinished(ckpt, args.resume)
         return _render(args, exr, png, ckpt)
 
 
@@ -123,14 +128,22 @@ def _sun_from_time(spec, hyd):
 
 
 def satellite_command(args) -> Path:
-    """A synthetic geostationary image (``satellite_image``): checked (outputs, place, visibility) before
-    rendering, written as NetCDF + EXR + PNG."""
+    """A synthetic geostationary image (``satellite_image``): checked (outputs, an unfinished render, place,
+    visibility) before rendering, written as NetCDF + EXR + PNG."""
     from .output_paths import OutputLock, check_writable_folder
     from . import satellite_image as si
     resolution = si.parse_resolution_km(args.resolution)
     nc, exr, png, ckpt = si.satellite_outputs(args.output)
     check_time(args.file, args.demo, args.time)
     check_writable_folder(nc)
+    with OutputLock(nc):
+        check_unfinished(ckpt, args.resume)
+        return _satellite(args, resolution, nc, exr, png, ckpt)
+
+
+def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
+    from . import satellite_image as si
+    from .cluster import session
     from .optics import optical_volume
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, phase=args.phase)
@@ -142,14 +155,11 @@ def satellite_command(args) -> Path:
           f"{scene.view.view_zenith_deg.max():.1f} deg, solar zenith {90 - scene.spec.sun.elevation:.2f} deg at the "
           f"centre ({scene.sun_meta['valid_time']}; one sun, up to {scene.sun_meta['one_sun_max_error_deg']:.2f} deg "
           "from a column's own)")
-    from .cluster import session
-    with OutputLock(nc), session(args.scheduler, args.workers) as client:
-        if ckpt.is_file() and not args.resume:
-            raise ValueError(f"{ckpt} holds an unfinished render: add --resume to continue it, or delete it")
+    with session(args.scheduler, args.workers) as client:
         ds, img = si.render_satellite(scene, spp=args.spp, checkpoint=ckpt, resume=ckpt if args.resume else None,
                                       target_rse=args.target_rse, max_seconds=args.max_seconds, client=client)
-        si.write_satellite(ds, img, nc, exr, png)
-        ckpt.unlink(missing_ok=True)
+    si.write_satellite(ds, img, nc, exr, png)
+    ckpt.unlink(missing_ok=True)
     print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s; cloud pixels "
           f"{int(ds.cloud.sum())}, mean relative standard error {ds.attrs['cloud_rse_mean']:.3f}; reflectance "
           f"{float(ds.reflectance.where(ds.in_domain == 1).mean()):.3f} mean over the domain)")

@@ -197,11 +197,8 @@ def slab_radiance(tau: float, albedo: float, phase_table, mu0: float, spp: int =
 def disort_slab(tau: float, albedo: float, g, mu0: float, n_streams: int = 64,
                 n_moments: int = 512) -> dict:
     """DISORT (``disortpp``) solution for one homogeneous HG layer over a black surface, sun flux
-    F0 = 1 at zenith cosine mu0, no diffuse illumination. Delta-M scaling is applied by the solver
-    whenever the moment n_streams is non-zero; intensities get the Nakajima-Tanaka (TMS/IMS)
-    correction, which in DisORT++ is only active when BOTH ``intensity_corr_buras`` (the C code's
-    ``corint``) and ``intensity_corr_nakajima`` are set (with only the latter nothing happens), using
-    ``n_moments`` HG moments g^l. ``g`` may instead be a PhaseTable: its own Legendre moments (green
+    F0 = 1 at zenith cosine mu0, no diffuse illumination (``weather_mi.disort.solve``: delta-M, the
+    Nakajima-Tanaka intensity correction from ``n_moments`` HG moments g^l). ``g`` may instead be a PhaseTable: its own Legendre moments (green
     channel). Then the fluxes are exact to the solver's accuracy, but the corrected intensities only
     where the moments converge (a cloud droplet table at 2048: yes; ice or snow: no, they come out
     negative).
@@ -209,37 +206,11 @@ def disort_slab(tau: float, albedo: float, g, mu0: float, n_streams: int = 64,
     Returns R, T (direct beam included), T_diffuse, T_direct, and the normalised radiances
     pi I / (mu0 F0): ``L_nadir`` (upward, umu = +1, at the top) and ``L_zenith`` (diffuse
     downward, umu = -1, at the bottom)."""
-    import disortpp
-    cfg = disortpp.DisortConfig(1, int(n_streams), int(n_moments))
-    flags = cfg.flags  # a copy: modify and assign back
-    flags.comp_only_fluxes = False
-    flags.use_lambertian_surface = True
-    flags.use_user_mu = True
-    flags.use_user_tau = True
-    flags.intensity_corr_buras = True
-    flags.intensity_corr_nakajima = True
-    cfg.flags = flags
-    cfg.num_user_mu = 2
-    cfg.num_user_tau = 2
-    cfg.num_phi = 1
-    cfg.allocate()
-    cfg.delta_tau = [float(tau)]
-    cfg.single_scat_albedo = [float(albedo)]
-    if hasattr(g, "legendre"):
-        cfg.phase_function_moments = [[float(x) for x in np.asarray(g.legendre(int(n_moments)))[:, 1]]]
-    else:
-        cfg.set_henyey_greenstein(float(g))
-    cfg.mu_user = [-1.0, 1.0]
-    cfg.tau_user = [0.0, float(tau)]
-    cfg.phi_user = [0.0]
-    bc = cfg.bc
-    bc.direct_beam_flux = 1.0
-    bc.direct_beam_mu = float(mu0)
-    bc.direct_beam_phi = 0.0
-    bc.surface_albedo = 0.0
-    bc.isotropic_flux_top = 0.0
-    cfg.bc = bc
-    res = disortpp.DisortSolver().solve(cfg)
+    from .disort import solve
+    table = hasattr(g, "legendre")
+    res = solve([tau], [albedo], mu0, [-1.0, 1.0], [0.0, float(tau)], [0.0], n_streams=n_streams,
+                moments=np.asarray(g.legendre(int(n_moments)))[:, 1][None] if table else None,
+                hg_g=None if table else float(g), n_moments=n_moments)
     f_in = mu0 * 1.0
     up, down, direct = list(res.flux_up), list(res.flux_down), list(res.flux_direct_beam)
     return {"R": up[0] / f_in, "T": (down[-1] + direct[-1]) / f_in, "T_diffuse": down[-1] / f_in,

@@ -90,6 +90,16 @@ def ecef_m(lat_deg, lon_deg, height_m=0.0):
                                         (n * (1.0 - WGS84_E2) + h) * np.sin(lat)), axis=-1)
 
 
+def enu_vectors(lat_deg, lon_deg):
+    """Local east, north and up unit vectors (..., 3) in earth-centred coordinates at geodetic points (up:
+    the ellipsoid's normal)."""
+    lat, lon = np.radians(lat_deg), np.radians(lon_deg)
+    east = np.stack(np.broadcast_arrays(-np.sin(lon), np.cos(lon), 0.0 * lon), -1)
+    north = np.stack(np.broadcast_arrays(-np.sin(lat) * np.cos(lon), -np.sin(lat) * np.sin(lon), np.cos(lat)), -1)
+    up = np.stack(np.broadcast_arrays(np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)), -1)
+    return east, north, up
+
+
 def satellite_ecef_m(sat: Satellite) -> np.ndarray:
     """ECEF position (metres) of the satellite: a + h from the centre, on the equator."""
     lon = np.radians(sat.sub_lon_deg)
@@ -114,11 +124,8 @@ def view_angles(sat: Satellite, lat_deg, lon_deg, height_m=0.0):
         Angle between the ellipsoid normal and the direction to the satellite (above 90 where it is below
         the horizon), and that direction's azimuth clockwise from true north in the local east-north plane.
     """
-    lat, lon = np.radians(lat_deg), np.radians(lon_deg)
     v = satellite_ecef_m(sat) - ecef_m(lat_deg, lon_deg, height_m)
-    up = np.stack(np.broadcast_arrays(np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)), -1)
-    east = np.stack(np.broadcast_arrays(-np.sin(lon), np.cos(lon), 0.0 * lon), -1)
-    north = np.cross(up, east)
+    east, north, up = enu_vectors(lat_deg, lon_deg)
     u, e, n = (np.sum(v * d, axis=-1) for d in (up, east, north))
     vza = np.degrees(np.arctan2(np.hypot(e, n), u))
     vaa = np.degrees(np.arctan2(e, n)) % 360.0

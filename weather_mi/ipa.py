@@ -9,20 +9,14 @@ column is the one below the ground point, not the one the slanted line of sight 
 DISORT: ``n_streams`` streams with delta-M and the Nakajima-Tanaka intensity correction from
 ``n_moments`` Legendre moments of each layer's Eq. 8 mixture (moments mix linearly with the scattering
 weights). Azimuth: DISORT's relative azimuth phi - phi0 = 0 is forward scattering (the scattering angle
-cos Theta = -mu0 mu + sin theta0 sin theta cos(phi - phi0)); a sun at true azimuth A_s seen from a
-sensor towards azimuth A_v has cos Theta = -(mu0 mu + sin theta0 sin theta cos(A_s - A_v)), so
-phi - phi0 = 180 - (A_s - A_v).
+cos Theta = -mu0 mu + sin theta0 sin theta cos(phi - phi0)); ``scattering_geometry`` finds it from the sun's
+and the sensor's directions.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from .optics import OpticalVolume
-
-
-def relative_azimuth_deg(sun_azimuth_deg, view_azimuth_deg):
-    """DISORT's phi - phi0 (degrees, in [0, 360)) of a sun and a sensor at these azimuths (towards each)."""
-    return (180.0 - (np.asarray(sun_azimuth_deg, float) - np.asarray(view_azimuth_deg, float))) % 360.0
 
 
 def disort_reflectance(tau, ssa, moments, mu0: float, mu: float, phi_rel_deg: float, surface_albedo: float = 0.0,
@@ -38,31 +32,9 @@ def disort_reflectance(tau, ssa, moments, mu0: float, mu: float, phi_rel_deg: fl
     moments : array_like, (layers, n_moments + 1)
         Legendre moments of each layer's phase function (moment 0 = 1).
     """
-    import disortpp
-    moments = np.atleast_2d(np.asarray(moments, np.float64))
-    n_layers, n_mom = len(tau), moments.shape[1] - 1
-    cfg = disortpp.DisortConfig(n_layers, int(n_streams), int(n_mom))
-    flags = cfg.flags
-    flags.comp_only_fluxes = False
-    flags.use_lambertian_surface = True
-    flags.use_user_mu = True
-    flags.use_user_tau = True
-    flags.intensity_corr_buras = True  # both flags: the Nakajima-Tanaka correction (weather_mi.fluxes)
-    flags.intensity_corr_nakajima = True
-    cfg.flags = flags
-    cfg.num_user_mu, cfg.num_user_tau, cfg.num_phi = 1, 1, 1
-    cfg.allocate()
-    cfg.delta_tau = [max(float(t), 1e-12) for t in tau]
-    cfg.single_scat_albedo = [float(min(max(w, 0.0), 1.0 - 1e-9)) for w in ssa]
-    cfg.phase_function_moments = [[float(x) for x in m] for m in moments]
-    cfg.mu_user = [float(mu)]
-    cfg.tau_user = [0.0]
-    cfg.phi_user = [float(phi_rel_deg)]
-    bc = cfg.bc
-    bc.direct_beam_flux, bc.direct_beam_mu, bc.direct_beam_phi = 1.0, float(mu0), 0.0
-    bc.surface_albedo, bc.isotropic_flux_top = float(surface_albedo), 0.0
-    cfg.bc = bc
-    res = disortpp.DisortSolver().solve(cfg)
+    from .disort import solve
+    res = solve(tau, ssa, mu0, [mu], [0.0], [phi_rel_deg], moments=moments, surface_albedo=surface_albedo,
+                n_streams=n_streams)
     return float(np.pi * res.intensities(0, 0, 0) / mu0)
 
 
@@ -98,9 +70,8 @@ def merged_layers(tau, ssa, moments, min_tau: float = 1e-6):
 def pixel_directions(scene):
     """Unit vectors (H, W, 3) towards the satellite at the pixel centres in the domain's frame (the mean of
     the corner rays, reversed)."""
-    d = -np.asarray(scene.view.rays.directions)
-    u = (d[:-1, :-1] + d[1:, :-1] + d[:-1, 1:] + d[1:, 1:]) / 4.0
-    return u / np.linalg.norm(u, axis=-1, keepdims=True)
+    from .satellite_rays import pixel_rays
+    return -pixel_rays(scene.view.rays)[1]
 
 
 def scattering_geometry(to_sun, to_sensor):
@@ -114,7 +85,7 @@ def scattering_geometry(to_sun, to_sensor):
 
 def surface_points(vol: OpticalVolume, x_m, y_m, to_sensor, iterations: int = 4):
     """(x, y) where each pixel's line of sight meets the surface: from its ground point at sea level
-    (x_m, y_m) up the line (``to_sensor``) to the terrain's height there (``Terrain.surface_at``, level
+    (x_m, y_m) up the line (``to_sensor``) to the terrain's height there (``Terrain.height_at``, level
     past the grid's edge as the reference's apron), a few fixed-point steps (the terrain's own parallax,
     h tan(VZA): 10 km for the plateau's 4.5 km at 67 deg)."""
     x, y = np.asarray(x_m, float), np.asarray(y_m, float)
@@ -124,7 +95,7 @@ def surface_points(vol: OpticalVolume, x_m, y_m, to_sensor, iterations: int = 4)
     for _ in range(iterations):
         px = x + to_sensor[..., 0] * z / to_sensor[..., 2]
         py = y + to_sensor[..., 1] * z / to_sensor[..., 2]
-        z = vol.terrain.surface_at(px, py)[0]
+        z = vol.terrain.height_at(px, py)
     return px, py
 
 
@@ -144,12 +115,10 @@ def bare_surface(vol: OpticalVolume, spec, x_m, y_m) -> np.ndarray:
         return np.full(np.shape(x_m), float(np.mean(spec.ground.albedo)))
     from .mitsuba_scene import TERRAIN_APRON_M
     t = vol.terrain
-    a = np.asarray(t.albedo)
-    edge = float(np.mean(np.r_[a[0], a[-1], a[1:-1, 0], a[1:-1, -1]]))
     x, y = np.asarray(x_m), np.asarray(y_m)
     near = ((x > t.x[0] - TERRAIN_APRON_M) & (x < t.x[-1] + TERRAIN_APRON_M)
             & (y > t.y[0] - TERRAIN_APRON_M) & (y < t.y[-1] + TERRAIN_APRON_M))
-    return np.where(near, t.surface_at(x, y)[1], edge)
+    return np.where(near, t.surface_at(x, y)[1], t.edge_albedo())
 
 
 def ipa_reflectance(scene, n_streams: int = 16, n_moments: int = 256, progress: bool = True) -> np.ndarray:
@@ -172,14 +141,17 @@ def ipa_reflectance(scene, n_streams: int = 16, n_moments: int = 256, progress: 
     surface = np.full((ny, nx), float(np.mean(spec.ground.albedo))) if terrain is None else np.asarray(terrain.albedo)
     out = np.where(inside, np.nan, bare_surface(vol, spec, sx, sy))
     species_moments = layer_moments(vol, n_moments)
+    columns, to_sun = {}, spec.sun.to_sun  # a column's layers serve every pixel that sees it
     for (r, c) in tqdm(list(zip(*np.nonzero(inside))), desc="IPA (DISORT)", unit="px", disable=not progress):
         jj, ii = int(j[r, c]), int(i[r, c])
-        tau, ssa, mom = merged_layers(*column_optics(vol, jj, ii, species_moments))
-        mu0, mu, phi = scattering_geometry(spec.sun.to_sun, to_sensor[r, c])
+        if (jj, ii) not in columns:
+            columns[jj, ii] = merged_layers(*column_optics(vol, jj, ii, species_moments))
+        tau, ssa, mom = columns[jj, ii]
+        mu0, mu, phi = scattering_geometry(to_sun, to_sensor[r, c])
         out[r, c] = disort_reflectance(tau, ssa, mom, mu0, mu, phi, float(surface[jj, ii]), n_streams)
     return out
 
 
-__all__ = ["relative_azimuth_deg", "disort_reflectance", "layer_moments", "column_optics", "merged_layers",
+__all__ = ["disort_reflectance", "layer_moments", "column_optics", "merged_layers",
            "pixel_directions", "scattering_geometry", "surface_points", "columns_of", "bare_surface",
            "ipa_reflectance"]

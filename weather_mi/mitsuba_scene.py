@@ -178,13 +178,12 @@ def terrain_ground_dicts(terrain, medium_ref: dict, bbox) -> dict:
     of the grid's edge columns. Heights, from the lowest terrain height lo down (``terrain_gap_m`` g): the
     box's floor lo - g (the whole mesh inside the box), the surround lo - 2 g, the skirt's foot lo - 3 g."""
     import mitsuba as mi
-    edge = np.concatenate([terrain.albedo[0], terrain.albedo[-1], terrain.albedo[1:-1, 0], terrain.albedo[1:-1, -1]])
     cx, cy = float(np.mean(terrain.x)), float(np.mean(terrain.y))
     lo, gap = terrain_floor_m(terrain), terrain_gap_m(terrain, bbox)
     half = 1e7
     surround = {"type": "rectangle",
                 "to_world": mi.ScalarTransform4f().translate([cx, cy, lo - 2.0 * gap]).scale([half, half, 1.0]),
-                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [float(np.mean(edge))] * 3}}}
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [terrain.edge_albedo()] * 3}}}
     mesh = {"type": "ply", "filename": _terrain_ply(terrain, lo - 3.0 * gap), "face_normals": True,
             "bsdf": {"type": "diffuse", "reflectance": {"type": "mesh_attribute", "name": "vertex_color"}},
             "exterior": medium_ref}
@@ -194,8 +193,9 @@ def terrain_ground_dicts(terrain, medium_ref: dict, bbox) -> dict:
 def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi) of the box that holds the medium: the volume's bbox, starting above a ground at
     ``floor_m`` by three times Mitsuba's ray offset (coincident or too close faces of the box and the
-    ground make rays skip the ground); over a terrain (``vol.terrain``) from ``terrain_gap_m`` below its
-    lowest height instead (the whole mesh inside the box). The grids keep the full bbox."""
+    ground make rays skip the ground); with a ground over a terrain (``vol.terrain``; ``floor_m`` then
+    unused) from ``terrain_gap_m`` below its lowest height (the whole mesh inside the box). The grids keep
+    the full bbox."""
     lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
     terrain = getattr(vol, "terrain", None)
     if floor_m is not None and terrain is not None:
@@ -289,7 +289,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
     camera inside the medium's box carries the medium (its rays start in it)."""
     ensure_registered()
     terrain = getattr(vol, "terrain", None) if spec.ground is not None else None
-    floor = None if spec.ground is None else (spec.ground.height if terrain is None else terrain_floor_m(terrain))
+    floor = None if spec.ground is None else spec.ground.height  # over a terrain medium_box uses the terrain
     box = medium_shape_dict(vol, floor)
     sensor = sensor_dict(spec)
     d = {"type": "scene", "integrator": integrator, "sensor": sensor, "medium_box": box}

@@ -167,7 +167,8 @@ def sun_from_time(hyd) -> tuple[float, float, dict]:
     north = place.grid_north_deg()
     spread = place.sun_spread()
     meta = {"valid_time": place.valid_time, "centre_lat": place.centre_lat, "centre_lon": place.centre_lon,
-            "solar_zenith_deg": sun.zenith_deg, "solar_azimuth_true_deg": sun.azimuth_deg,
+            "solar_zenith_deg": sun.zenith_deg, "solar_zenith_geometric_deg": sun.zenith_geometric_deg,
+            "solar_azimuth_true_deg": sun.azimuth_deg,
             "grid_north_deg": north, "one_sun_max_error_deg": spread["max_angle_deg"],
             "one_sun_error_columns": spread["columns"]}
     return (sun.azimuth_deg - north) % 360.0, sun.elevation_deg, meta

@@ -103,10 +103,10 @@ def satellite_dataset(scene: SatelliteScene, img):
     v, m = scene.view, scene.sun_meta
     refl = np.asarray(img.radiance, np.float64).mean(axis=2)
     se = np.asarray(img.stderr, np.float64).mean(axis=2) if img.stderr is not None else np.full_like(refl, np.nan)
-    centre = SolarPosition(m["solar_zenith_deg"], m["solar_zenith_deg"], m["solar_azimuth_true_deg"])
+    centre = SolarPosition(m["solar_zenith_deg"], m["solar_zenith_geometric_deg"], m["solar_azimuth_true_deg"])
     sza, saa = sun_angles_at(centre, m["centre_lat"], m["centre_lon"], v.lat, v.lon)
-    (x0, y0, _), (x1, y1, _) = scene.vol.bbox
-    inside = (v.x_m >= x0) & (v.x_m <= x1) & (v.y_m >= y0) & (v.y_m <= y1)
+    from .satellite_rays import crosses_box
+    inside = crosses_box(v.rays, scene.vol.bbox)
     cloud = np.zeros_like(inside) if img.transmittance is None else np.asarray(img.transmittance) < 0.5
     dims = ("y", "x")
     gm = "fixed_grid_projection"
@@ -127,7 +127,7 @@ def satellite_dataset(scene: SatelliteScene, img):
                                      "degree", standard_name="sensor_azimuth_angle"),
          "cloud": (dims, cloud.astype(np.int8), {"long_name": "cloud pixel: eye-ray transmittance below 1/2",
                                                  "flag_values": [0, 1], "grid_mapping": gm}),
-         "in_domain": (dims, inside.astype(np.int8), {"long_name": "pixel centre's ground point inside the model domain",
+         "in_domain": (dims, inside.astype(np.int8), {"long_name": "line of sight through the model domain's box",
                                                       "flag_values": [0, 1], "grid_mapping": gm}),
          gm: ((), np.int32(0), _grid_mapping(scene.satellite))},
         coords={"x": ("x", v.x_rad, {"standard_name": "projection_x_coordinate", "units": "rad",
@@ -150,9 +150,6 @@ def satellite_dataset(scene: SatelliteScene, img):
     return ds
 
 
-__all__ = ["SatelliteScene", "satellite_scene", "render_satellite", "satellite_dataset"]
-
-
 def parse_resolution_km(text) -> float:
     """A pixel size "1km", "0.5 km", "500m" or "2" (km) in km; a ValueError naming the option otherwise."""
     t = str(text).strip().lower().replace(" ", "")
@@ -167,13 +164,14 @@ def parse_resolution_km(text) -> float:
 
 
 def satellite_outputs(output):
-    """(NetCDF, EXR, PNG, checkpoint) of ``-o`` (a .nc name; ValueError otherwise)."""
+    """(NetCDF, EXR, PNG, checkpoint) of ``-o`` (a .nc name; ValueError otherwise): OUT.nc and ``render``'s
+    OUT.exr, OUT.png, OUT.exr.ckpt.npz (``output_paths.render_outputs``)."""
     from pathlib import Path
+    from .output_paths import render_outputs
     out = Path(output)
     if out.suffix.lower() != ".nc":
         raise ValueError(f"-o {output}: a satellite image is written as NetCDF: expected a name ending in .nc")
-    exr = out.with_suffix(".exr")
-    return out, exr, out.with_suffix(".png"), exr.with_name(exr.name + ".ckpt.npz")
+    return (out, *render_outputs(out.with_suffix(".exr")))
 
 
 def write_satellite(ds, img, nc_path, exr_path, png_path) -> None:
@@ -186,4 +184,5 @@ def write_satellite(ds, img, nc_path, exr_path, png_path) -> None:
     img.save_png(png_path, exposure=1.0)
 
 
-__all__ += ["parse_resolution_km", "satellite_outputs", "write_satellite"]
+__all__ = ["SatelliteScene", "satellite_scene", "render_satellite", "satellite_dataset", "parse_resolution_km",
+           "satellite_outputs", "write_satellite"]

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .geostationary import Satellite, check_visible, fixed_grid, pixel_lonlat, view_angles
+from .geostationary import Satellite, apparent_ground_point, check_visible, fixed_grid, pixel_lonlat, view_angles
 from .place import Place
 from .scene import RayTable
 
@@ -98,7 +98,9 @@ def _edges(centres: np.ndarray) -> np.ndarray:
 def satellite_view(place: Place, sat: Satellite, resolution_km: float, top_m: float,
                    max_vza_deg: float = 80.0, source: str = "input") -> SatelliteView:
     """The satellite's fixed-grid pixels of ``resolution_km`` covering the domain of ``place`` and their
-    corner rays from ``top_m`` (m, above the medium).
+    corner rays from ``top_m`` (m, above the medium). The pixels cover the columns' ground points and where
+    their tops at ``top_m`` appear (``apparent_ground_point``, h tan(VZA) away from the sub-satellite point):
+    a cloud at the domain's far edge is in the image, not cut off by its parallax.
 
     Raises
     ------
@@ -109,7 +111,9 @@ def satellite_view(place: Place, sat: Satellite, resolution_km: float, top_m: fl
     if not (resolution_km > 0 and np.isfinite(resolution_km)):
         raise ValueError(f"--resolution: expected a positive pixel size in km, got {resolution_km}")
     check_visible(sat, place.lat, place.lon, max_vza_deg, source)
-    x_rad, y_rad = fixed_grid(sat, place.lat, place.lon, resolution_km)
+    top_lat, top_lon = apparent_ground_point(sat, place.lat, place.lon, top_m)
+    x_rad, y_rad = fixed_grid(sat, np.r_[place.lat.ravel(), top_lat.ravel()], np.r_[place.lon.ravel(), top_lon.ravel()],
+                              resolution_km)
     gx, gy = np.meshgrid(_edges(x_rad), _edges(y_rad))
     clon, clat = pixel_lonlat(sat, gx, gy)
     if not np.all(np.isfinite(clon)):
@@ -121,4 +125,30 @@ def satellite_view(place: Place, sat: Satellite, resolution_km: float, top_m: fl
     return SatelliteView(sat, x_rad, y_rad, lat, lon, vza, vaa, x_m, y_m, rays, float(resolution_km))
 
 
-__all__ = ["SatelliteView", "satellite_view", "corner_rays", "model_xy", "to_satellite"]
+def pixel_rays(rays: RayTable) -> tuple[np.ndarray, np.ndarray]:
+    """Origins and unit directions (H, W, 3) of the pixel centres' rays: the means of their corner rays."""
+    def centre(a):
+        return (a[:-1, :-1] + a[1:, :-1] + a[:-1, 1:] + a[1:, 1:]) / 4.0
+    d = centre(rays.directions)
+    return centre(rays.origins_m), d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def crosses_box(rays: RayTable, bbox) -> np.ndarray:
+    """(H, W) whether each pixel centre's line of sight (going down) passes through the box
+    ((x0, y0, z0), (x1, y1, z1), m) after its start."""
+    o, d = pixel_rays(rays)
+    (lo, hi) = (np.asarray(p, float) for p in bbox)
+    # the rays go down: inside the box's heights between its top (or the start) and its floor
+    t0 = np.maximum((hi[2] - o[..., 2]) / d[..., 2], 0.0)
+    t1 = (lo[2] - o[..., 2]) / d[..., 2]
+    for k in range(2):  # the prism's sides
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ta, tb = (lo[k] - o[..., k]) / d[..., k], (hi[k] - o[..., k]) / d[..., k]
+        inside = (o[..., k] >= lo[k]) & (o[..., k] <= hi[k])
+        near = np.where(d[..., k] == 0, np.where(inside, -np.inf, np.inf), np.minimum(ta, tb))
+        far = np.where(d[..., k] == 0, np.where(inside, np.inf, -np.inf), np.maximum(ta, tb))
+        t0, t1 = np.maximum(t0, near), np.minimum(t1, far)
+    return t0 <= t1
+
+
+__all__ = ["SatelliteView", "satellite_view", "corner_rays", "model_xy", "to_satellite", "pixel_rays", "crosses_box"]

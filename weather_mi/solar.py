@@ -90,24 +90,16 @@ def sun_vector(zenith_deg, azimuth_deg) -> np.ndarray:
     return np.stack([np.sin(z) * np.sin(a), np.sin(z) * np.cos(a), np.cos(z)], axis=-1)
 
 
-def _enu(lat_deg, lon_deg):
-    """Local east, north, up unit vectors (..., 3) in earth-centred coordinates (geodetic lat/lon)."""
-    lat, lon = np.radians(lat_deg), np.radians(lon_deg)
-    east = np.stack(np.broadcast_arrays(-np.sin(lon), np.cos(lon), 0.0 * lon), -1)
-    north = np.stack(np.broadcast_arrays(-np.sin(lat) * np.cos(lon), -np.sin(lat) * np.sin(lon), np.cos(lat)), -1)
-    up = np.stack(np.broadcast_arrays(np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)), -1)
-    return east, north, up
-
-
 def sun_angles_at(position: SolarPosition, lat0_deg: float, lon0_deg: float, lat_deg, lon_deg):
     """Solar zenith and azimuth (degrees, unrefracted) at many points from the sun's position at one point
     (lat0, lon0) at the same instant: the direction to the sun is the same everywhere (its parallax over the
     earth, 8.8 arcsec at most, is neglected), so it is carried from (lat0, lon0)'s horizon frame into each
     point's. One NREL SPA evaluation for a satellite image's million pixels."""
-    e0, n0, u0 = _enu(lat0_deg, lon0_deg)
+    from .geostationary import enu_vectors
+    e0, n0, u0 = enu_vectors(lat0_deg, lon0_deg)
     local = sun_vector(position.zenith_geometric_deg, position.azimuth_deg)
     s = local[0] * e0 + local[1] * n0 + local[2] * u0
-    e, n, u = _enu(lat_deg, lon_deg)
+    e, n, u = enu_vectors(lat_deg, lon_deg)
     se, sn, su = (np.sum(s * v, axis=-1) for v in (e, n, u))
     return np.degrees(np.arccos(np.clip(su, -1.0, 1.0))), np.degrees(np.arctan2(se, sn)) % 360.0
 

@@ -65,10 +65,15 @@ class Terrain:
         faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
         return vertices, faces, self.albedo.ravel()
 
-    def surface_at(self, x_m, y_m):
-        """Height (m), albedo and unit normal (..., 3) of the mesh (``mesh``: the same triangles, split along
-        each cell's diagonal from its (j, i) corner to its (j + 1, i + 1) corner, linear on each) at points
-        (x_m, y_m); beyond the grid the edge continues level (``with_apron``)."""
+    def edge_albedo(self) -> float:
+        """The mean albedo of the grid's boundary columns (the surround's, beyond the apron)."""
+        a = self.albedo
+        return float(np.mean(np.concatenate([a[0], a[-1], a[1:-1, 0], a[1:-1, -1]])))
+
+    def _cells(self, x_m, y_m):
+        """Cell indices (j, i, j + 1, i + 1), the position (u, v) in the cell, the lower-triangle mask
+        (u >= v: triangle (j, i), (j, i + 1), (j + 1, i + 1); else (j, i), (j + 1, i + 1), (j + 1, i)),
+        clamped to the grid (the edge continues level beyond it), and the spacing (dx, dy)."""
         x, y = np.asarray(x_m, float), np.asarray(y_m, float)
         ny, nx = self.height_m.shape
         dx, dy = (self.x[1] - self.x[0]) if nx > 1 else 1.0, (self.y[1] - self.y[0]) if ny > 1 else 1.0
@@ -76,22 +81,36 @@ class Terrain:
         fj = np.clip((y - self.y[0]) / dy, 0.0, ny - 1.0)
         i, j = np.minimum(fi.astype(int), max(nx - 2, 0)), np.minimum(fj.astype(int), max(ny - 2, 0))
         u, v = fi - i, fj - j
-        i1, j1 = np.minimum(i + 1, nx - 1), np.minimum(j + 1, ny - 1)
-        out = []
-        for f in (self.height_m, self.albedo):
-            a, b, c, d = f[j, i], f[j, i1], f[j1, i1], f[j1, i]
-            lower = u >= v  # triangle (a, b, c), else (a, c, d)
-            out.append((np.where(lower, a + u * (b - a) + v * (c - b), a + u * (c - d) + v * (d - a)),
-                        np.where(lower, b - a, c - d) / dx, np.where(lower, c - b, d - a) / dy))
-        (h, hx, hy), (albedo, _, _) = out
-        outside_x = (x < self.x[0]) | (x > self.x[-1])
-        outside_y = (y < self.y[0]) | (y > self.y[-1])
-        hx, hy = np.where(outside_x, 0.0, hx), np.where(outside_y, 0.0, hy)
+        return j, i, np.minimum(j + 1, ny - 1), np.minimum(i + 1, nx - 1), u, v, u >= v, dx, dy
+
+    @staticmethod
+    def _linear(f, cells):
+        """``f`` (ny, nx) linear on the cells' triangles: (value, df/du, df/dv)."""
+        j, i, j1, i1, u, v, lower, _, _ = cells
+        a, b, c, d = f[j, i], f[j, i1], f[j1, i1], f[j1, i]
+        du, dv = np.where(lower, b - a, c - d), np.where(lower, c - b, d - a)
+        return a + u * du + v * dv, du, dv
+
+    def height_at(self, x_m, y_m) -> np.ndarray:
+        """Height (m) of the mesh (``mesh``'s triangles, linear on each; level beyond the grid) at (x_m, y_m)."""
+        return self._linear(self.height_m, self._cells(x_m, y_m))[0]
+
+    def surface_at(self, x_m, y_m):
+        """Height (m), albedo and unit normal (..., 3) of the mesh (``mesh``: the same triangles, split along
+        each cell's diagonal from its (j, i) corner to its (j + 1, i + 1) corner, linear on each) at points
+        (x_m, y_m); beyond the grid the edge continues level (``with_apron``)."""
+        x, y = np.asarray(x_m, float), np.asarray(y_m, float)
+        cells = self._cells(x, y)
+        dx, dy = cells[-2:]
+        h, hu, hv = self._linear(self.height_m, cells)
+        albedo = self._linear(self.albedo, cells)[0]
+        hx = np.where((x < self.x[0]) | (x > self.x[-1]), 0.0, hu / dx)
+        hy = np.where((y < self.y[0]) | (y > self.y[-1]), 0.0, hv / dy)
         n = np.stack([-hx, -hy, np.ones_like(h)], -1)
         return h, albedo, n / np.linalg.norm(n, axis=-1, keepdims=True)
 
     def ray_hits(self, origins, dirs, max_steps: int = 2048, bisections: int = 40) -> np.ndarray:
-        """Distance along each ray (N, 3) to its first hit of the surface (``surface_at``), inf where it has
+        """Distance along each ray (N, 3) to its first hit of the surface (``height_at``), inf where it has
         none: marched in steps of a quarter cell (horizontally) through the heights the terrain spans, the
         crossing then bisected."""
         o, d = np.asarray(origins, float), np.asarray(dirs, float)
@@ -110,7 +129,7 @@ class Terrain:
 
         def above(t, rows):
             p = o[rows] + t[:, None] * d[rows]
-            return p[:, 2] - self.surface_at(p[:, 0], p[:, 1])[0]
+            return p[:, 2] - self.height_at(p[:, 0], p[:, 1])
 
         rows = np.nonzero(live)[0]
         t_prev = t_a[rows]

@@ -120,22 +120,33 @@ def _progress(total: int, desc: str, enable: bool):
     return tqdm(total=total, desc=desc, unit="size", leave=False, disable=not enable)
 
 
-def _compute_cloud(r_eff, v_eff, n_sizes, theta, wavelength_m=None):
-    radii = gamma_area_quantile_radii(r_eff, v_eff, n_sizes)
+def _per_channel(theta, wavelength_m, one_channel) -> np.ndarray:
+    """(N, 3) values of ``one_channel(wavelength, refractive index)`` per channel (``_channels``); one band's
+    single wavelength is computed once and copied to the three channels."""
     channels = _channels(wavelength_m)
     values = np.empty((theta.size, 3))
-    with _progress(3 * n_sizes, "Mie cloud", n_sizes >= 300) as bar:
-        for c, (wl, m) in enumerate(channels):
-            if c and channels[c] == channels[c - 1]:
-                values[:, c] = values[:, c - 1]  # one band in all three channels
-                continue
-            values[:, c] = _distribution_phase(radii, wl, m, theta, progress=bar)
+    for c, (wl, m) in enumerate(channels):
+        values[:, c] = values[:, c - 1] if c and channels[c] == channels[c - 1] else one_channel(wl, m)
     return values
+
+
+def _compute_cloud(r_eff, v_eff, n_sizes, theta, wavelength_m=None):
+    radii = gamma_area_quantile_radii(r_eff, v_eff, n_sizes)
+    with _progress(3 * n_sizes, "Mie cloud", n_sizes >= 300) as bar:
+        return _per_channel(theta, wavelength_m, lambda wl, m: _distribution_phase(radii, wl, m, theta, progress=bar))
 
 
 def _band_params(params: dict, wavelength_m) -> dict:
     """Cache parameters, with the band's wavelength where one is given (RGB tables keep their old keys)."""
     return params if wavelength_m is None else {**params, "wavelength_m": float(wavelength_m)}
+
+
+def _table(theta, values, name: str, wavelength_m) -> PhaseTable:
+    """A Mie table named ``name(...)``, of R, G, B or of one band (its wavelength in the name and channels)."""
+    if wavelength_m is None:
+        return PhaseTable.from_values(theta, values, name=f"{name})")
+    return PhaseTable.from_values(theta, values, name=f"{name}, {wavelength_m * 1e9:.0f} nm)",
+                                  wavelengths_m=(float(wavelength_m),) * 3)
 
 
 def mie_cloud(r_eff: float = 10e-6, v_eff: float = 0.1, *, quality: str = "default",
@@ -149,13 +160,10 @@ def mie_cloud(r_eff: float = 10e-6, v_eff: float = 0.1, *, quality: str = "defau
     th = angle_grid() if theta is None else np.asarray(theta, np.float64)
     params = _band_params({"r_eff": float(r_eff), "v_eff": float(v_eff), "n_sizes": n_sizes, "theta": th},
                           wavelength_m)
-    wl = () if wavelength_m is None else (float(wavelength_m),) * 3
 
     def compute():
-        return PhaseTable.from_values(th, _compute_cloud(float(r_eff), float(v_eff), n_sizes, th, wavelength_m),
-                                      name=f"mie_cloud(r_eff={r_eff:g}, v_eff={v_eff:g}"
-                                           + (f", {wavelength_m * 1e9:.0f} nm)" if wl else ")"),
-                                      **({"wavelengths_m": wl} if wl else {}))
+        return _table(th, _compute_cloud(float(r_eff), float(v_eff), n_sizes, th, wavelength_m),
+                      f"mie_cloud(r_eff={r_eff:g}, v_eff={v_eff:g}", wavelength_m)
 
     return cached_table("mie_cloud", params, compute, use_cache=cache)
 
@@ -177,15 +185,9 @@ def _stratified_offsets(theta: np.ndarray, n: int) -> np.ndarray:
 def _compute_rain(radius, v_eff, n_sizes, theta, progress, wavelength_m=None):
     radii = gamma_area_quantile_radii(radius, v_eff, n_sizes)
     offsets = _stratified_offsets(theta, n_sizes)
-    channels = _channels(wavelength_m)
-    values = np.empty((theta.size, 3))
     with _progress(3 * n_sizes, "Mie rain", progress) as bar:
-        for c, (wl, m) in enumerate(channels):
-            if c and channels[c] == channels[c - 1]:
-                values[:, c] = values[:, c - 1]
-                continue
-            values[:, c] = _distribution_phase(radii, wl, m, theta, offsets, progress=bar)
-    return values
+        return _per_channel(theta, wavelength_m,
+                            lambda wl, m: _distribution_phase(radii, wl, m, theta, offsets, progress=bar))
 
 
 def mie_rain(radius: float = 1e-3, *, v_eff: float = 0.003, quality: str = "default", theta=None,
@@ -203,14 +205,11 @@ def mie_rain(radius: float = 1e-3, *, v_eff: float = 0.003, quality: str = "defa
     th = _rain_grid(quality) if theta is None else np.asarray(theta, np.float64)
     params = _band_params({"radius": float(radius), "v_eff": float(v_eff), "n_sizes": n_sizes, "theta": th},
                           wavelength_m)
-    wl = () if wavelength_m is None else (float(wavelength_m),) * 3
 
     def compute():
         est_s = 3 * n_sizes * th.size * radius / 1e-3 * 1.6e-4  # ~0.23 s per size per 1400 angles at 1 mm
         values = _compute_rain(float(radius), float(v_eff), n_sizes, th, est_s > 3, wavelength_m)
-        return PhaseTable.from_values(th, values, name=f"mie_rain(radius={radius:g}, v_eff={v_eff:g}"
-                                                       + (f", {wavelength_m * 1e9:.0f} nm)" if wl else ")"),
-                                      **({"wavelengths_m": wl} if wl else {}))
+        return _table(th, values, f"mie_rain(radius={radius:g}, v_eff={v_eff:g}", wavelength_m)
 
     return cached_table("mie_rain", params, compute, use_cache=cache)
 

@@ -42,6 +42,10 @@ def table_for(sp, mode: str = "per_species", quality: str = "default",
               wavelength_m: float | None = None) -> PhaseTable:
     """The phase table of one species object: R, G, B, or one band's (``wavelength_m``) in all three
     channels (water by Mie theory at that wavelength, ice from its nearest channel, ``nearest_channel``)."""
+    if mode not in MODES:
+        raise ValueError(f"mode must be one of {', '.join(map(repr, MODES))}, got {mode!r}")
+    if quality not in QUALITIES:
+        raise ValueError(f"quality must be one of {', '.join(map(repr, QUALITIES))}, got {quality!r}")
     if wavelength_m is not None:
         cloud_like = _attr(sp, "phase_class") == "water" if mode == "paper" else _attr(sp, "name") == "cloud"
         if cloud_like:
@@ -49,10 +53,6 @@ def table_for(sp, mode: str = "per_species", quality: str = "default",
         if mode != "paper" and _attr(sp, "name") == "rain":
             return mie_rain(radius=float(_attr(sp, "radius_m")), quality=quality, wavelength_m=wavelength_m)
         return nearest_channel(table_for(sp, mode, quality), wavelength_m)
-    if mode not in MODES:
-        raise ValueError(f"mode must be one of {', '.join(map(repr, MODES))}, got {mode!r}")
-    if quality not in QUALITIES:
-        raise ValueError(f"quality must be one of {', '.join(map(repr, QUALITIES))}, got {quality!r}")
     if mode == "paper":
         cls = _attr(sp, "phase_class")
         if cls == "water":

@@ -78,9 +78,14 @@ class ViewCache:
             origins, dirs = camera_rays(spec)
             o, d = origins.reshape(-1, 3), dirs.reshape(-1, 3)
             t0, t1 = ray_box(o, d, self.box)
-            tg = ground_hits(spec, o, d) if self.terrain is None or spec.ground is None else self.terrain.ray_hits(o, d)
-            self.rays[ray_key] = (o, d, t0, np.minimum(t1, tg), tg)
-        o, d, t0, t1, tg = self.rays[ray_key]
+            terrain = None if spec.ground is None else self.terrain
+            tg = ground_hits(spec, o, d) if terrain is None else terrain.ray_hits(o, d)
+            surface = None  # over a terrain: albedo and normal where the rays meet it (per view, not per sun)
+            if terrain is not None:
+                pg = o + np.where(np.isfinite(tg), tg, 0.0)[:, None] * d
+                surface = terrain.surface_at(pg[:, 0], pg[:, 1])[1:]
+            self.rays[ray_key] = (o, d, t0, np.minimum(t1, tg), tg, surface)
+        o, d, t0, t1, tg, surface = self.rays[ray_key]
         hit = np.isfinite(tg)
         bg_key = ray_key + (spec.sun.azimuth, spec.sun.elevation, spec.sun.irradiance, spec.sky)
         if bg_key not in self.backgrounds:
@@ -93,16 +98,18 @@ class ViewCache:
                 F(t0), F(np.where(np.isfinite(t1), t1, t0)), F(hit) > 0.5,
                 mi.Point3f(*(F(pg[:, i]) for i in range(3))), mi.Color3f(*(F(bg[:, i]) for i in range(3))),
                 d @ spec.sun.to_sun, o.shape[0], F(offset_pattern(spec.width, spec.height)),
-                *self._terrain_weights(F, spec, pg, hit))
+                *_terrain_weights(F, spec, surface, hit))
         return self.backgrounds[bg_key]
 
-    def _terrain_weights(self, F, spec: SceneSpec, pg: np.ndarray, hit: np.ndarray):
-        """(ground_sun, ground_sky) of ``ViewRays`` at the ground points ``pg`` over a terrain, else (None, None)."""
-        if self.terrain is None or spec.ground is None:
-            return None, None
-        _, albedo, n = self.terrain.surface_at(pg[:, 0], pg[:, 1])
-        s = spec.sun.to_sun
-        mu0 = max(float(s[2]), 1e-3)
-        sun = np.where(hit, albedo * np.maximum(n @ s, 0.0) / mu0, 0.0)
-        sky = np.where(hit, albedo * (1.0 + n[:, 2]) / 2.0, 0.0)
-        return F(sun), F(sky)
+
+def _terrain_weights(F, spec: SceneSpec, surface, hit: np.ndarray):
+    """(ground_sun, ground_sky) of ``ViewRays`` from the terrain's (albedo, normal) where the rays meet it,
+    else (None, None): albedo max(n . s, 0) / mu0 and albedo (1 + n_z) / 2."""
+    if surface is None:
+        return None, None
+    albedo, n = surface
+    s = spec.sun.to_sun
+    mu0 = max(float(s[2]), 1e-3)
+    sun = np.where(hit, albedo * np.maximum(n @ s, 0.0) / mu0, 0.0)
+    sky = np.where(hit, albedo * (1.0 + n[:, 2]) / 2.0, 0.0)
+    return F(sun), F(sky)
