@@ -344,6 +344,7 @@ class SliceRenderer:
     def _eye_inputs(self, spec: SceneSpec, params: SliceParams, tint) -> dict:
         """The eye pass's inputs (see ``_frame_inputs``)."""
         mi = self.mi
+        import drjit as dr
         rays = self.views.get(mi, spec)
         sun = np.asarray(spec.sun.irradiance, dtype=np.float64)
         F = lambda a: aligned_float(mi, a)  # noqa: E731
@@ -371,7 +372,10 @@ class SliceRenderer:
             ground = (_colour(mi, rho / np.pi * sun * max(float(spec.sun.to_sun[2]), 0.0)), _colour(mi, rho / np.pi * e_sky))
         names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern")
         ray_arrays = {k: getattr(rays, k) for k in names + (("ground_sun", "ground_sky") if rays.ground_sun is not None else ())}
-        return {"rays": ray_arrays, "n": rays.n, "phase_colour": phase_colour, "diffuse_colour": diffuse_colour, "model": model,
+        op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
+        grid = (mi.Point3f(*(op(c) for c in self.grid_box[0])),
+                mi.Vector3f(*(op(1.0 / (h - l)) for l, h in zip(*self.grid_box))))
+        return {"rays": ray_arrays, "n": rays.n, "tex_light": self.tex_light_src, "grid": grid, "phase_colour": phase_colour, "diffuse_colour": diffuse_colour, "model": model,
                 "ambient": _colour(mi, e_sky / np.pi) * _param(mi, gain), "ground": ground,
                 "jitter": _param(mi, params.slab_jitter), "jitter_rotation": _param(mi, jitter_rotation(params.jitter_frame))}
 
@@ -381,9 +385,9 @@ class SliceRenderer:
         if e["model"] is not None:
             a, b, c, sky_ext, gain, scale, mu0 = e["model"]
             model = LightModel(self.light, self.sky_light, self.mode.octaves, a, b, c, sky_ext, gain, scale,
-                               g=self.g_scattering, mu0=mu0)
+                               g=self.g_scattering, mu0=mu0, carry=(e["tex_light"], e["grid"]))
         else:
-            model = LightModel(self.light)
+            model = LightModel(self.light, log_forward=self.mode.light == "translucent")
         r = e["rays"]
         rays = SimpleNamespace(**r, n=e["n"])
         offset = slab_offsets(dr, r["pattern"], e["jitter"], e["jitter_rotation"])
