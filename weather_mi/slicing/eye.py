@@ -65,26 +65,27 @@ class LightModel:
     carry: object = None  # None, or (light-source texture, (its lo corner, 1 / span)): ``LightVolume.carried``
     log_forward: bool = False  # interpolate all forward light as its logarithm (translucent light)
 
-    def terms(self, p, slab=None, ext=None):
+    def terms(self, p, slab=None, ext=None, active=True):
         """(A, B, occlusion of the sky) at world points p (mi.Point3f), inside a kernel. With ``slab``
         (a ``SlabAverage``), the light at the sample becomes its average over the eye's segment, with
         decay rates read from the light volume one slice further towards the sun, or, with ``carry``,
-        the light carried from the plane before p and the local extinction ``ext`` (1/m) at p."""
+        the light carried from the plane before p and the local extinction ``ext`` (1/m) at p.
+        ``active``: lanes whose light is used (the others read nothing)."""
         import drjit as dr
         factor, k_d, k_f, cap = (lambda kappa: 1.0), 0.0, 0.0, None  # noqa: E731
         # the "multiple" model reads optical depths, translucent light its forward light's: interpolated as such
         log = self.octaves is not None or self.log_forward
         if slab is not None and self.carry is not None and self.sun.frame.jitter is None:  # ("multiple": no forward light)
-            direct, indirect = self.sun.carried(p, *self.carry, samples=CARRY_SAMPLES)
+            direct, indirect = self.sun.carried(p, *self.carry, samples=CARRY_SAMPLES, active=active)
             k_d = ext * self.sun.frame.light_step     # optical depth per slice unit along the light at p
             # the local rate need not hold across the whole segment (it may reach clear air towards the
             # sun): an average of the sunlight is at most the sun's
             factor, cap = slab.factor, 1.0
         elif slab is None:
-            direct, indirect = self.sun.lookup(p, log_direct=log, log_forward=self.log_forward)
+            direct, indirect = self.sun.lookup(p, log_direct=log, log_forward=self.log_forward, active=active)
         else:
             (direct, indirect), (d_prev, i_prev) = self.sun.lookup(p, with_previous=True, log_direct=log,
-                                                                   log_forward=self.log_forward)
+                                                                   log_forward=self.log_forward, active=active)
             k_d = _depth_between(dr, direct, d_prev)                   # one slice's depth, direct beam
             k_f = _depth_between(dr, direct + indirect, d_prev + i_prev)  # and all forward light
             factor = slab.factor
@@ -101,7 +102,7 @@ class LightModel:
             B += bi * (1.0 - ci) * t
         # multiple scattering needs a cloud to scatter in: the octaves are weighted by the fraction of
         # the sunlight that the whole cloud column along the sun ray through p intercepts
-        column, _ = self.sun.lookup(p, exit_plane=True, log_direct=True)
+        column, _ = self.sun.lookup(p, exit_plane=True, log_direct=True, active=active)
         A = _capped(dr, direct * factor(k_d), cap) + (1.0 - column) * A
         tau_col = -dr.log(dr.maximum(column, 1e-30))
         tau = -log_d
@@ -110,7 +111,7 @@ class LightModel:
         B = (1.0 - column) * B + self.diffusion_gain * diffusion_profile(dr, tau, tau_col, self.diffusion_scale)
         occ = 1.0
         if self.sky is not None:
-            up, _ = self.sky.lookup(p, log_direct=True)
+            up, _ = self.sky.lookup(p, log_direct=True, active=active)
             occ = dr.exp(self.sky_extinction * dr.log(dr.maximum(up, 1e-30)))
         return A, B, occ
 
@@ -274,7 +275,8 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
         ext = dr.maximum(vals[0], 0.0)
         # an optically thick slab is done again in M sub-segments (this sample only decides that)
         split = ~sub & (ext * de * (b - a) > EYE_SPLIT_DEPTH)
-        A, B, occ = model.terms(p, SlabAverage(ext * de, k_step, 0.5 * (b - a)), ext)
+        # the light is read where it is scattered towards the eye (not in clear air, nor to decide a split)
+        A, B, occ = model.terms(p, SlabAverage(ext * de, k_step, 0.5 * (b - a)), ext, (ext > 0) & ~split)
         alpha = dr.select(split, 0.0, 1.0 - dr.exp(-ext * de * (b - a)))
         w = dr.select(ext > 0, T * alpha / dr.maximum(ext, 1e-30), 0.0)
         src = mi.Color3f(0.0)

@@ -284,7 +284,7 @@ class LightVolume:
 
     # ------------------------------------------------------------------ the lookup
     def lookup(self, p, exit_plane: bool = False, with_previous: bool = False, log_direct: bool = False,
-               log_forward: bool = False):
+               log_forward: bool = False, active=True):
         """(direct, indirect) light at world points ``p`` (mi.Point3f) inside a kernel: bilinear in
         the buffer, linear between the two nearest planes; (1, 0) on the light's side of the box and
         outside the buffer's footprint (light rays that miss the box). With ``exit_plane``: the light
@@ -296,7 +296,7 @@ class LightVolume:
         of a dense tower, D falls from 1 to exp(-50), and a linear interpolation of D leaves most of the
         slab unshadowed and then drops). With ``log_forward``: all forward light D + I is interpolated as
         its logarithm too (it decays exponentially, at the extinction less the forward scattering), and
-        I = (D + I) - D."""
+        I = (D + I) - D. ``active``: lanes that need the light (the others read nothing)."""
         mi = self.mi
         import drjit as dr
         f, R, n_slices = self.frame, self.res, self.n_slices
@@ -308,7 +308,7 @@ class LightVolume:
         fk = kc - mi.Float(k0)
 
         def texel(at):
-            v = dr.gather(mi.Array2f, self.store, at)
+            v = dr.gather(mi.Array2f, self.store, at, active)
             if log_forward:
                 return mi.Array2f(dr.log(dr.maximum(v[0], 1e-30)), dr.log(dr.maximum(v[0] + v[1], 1e-30)))
             return mi.Array2f(dr.log(dr.maximum(v[0], 1e-30)), v[1]) if log_direct else v
@@ -354,7 +354,7 @@ class LightVolume:
         x0, y0 = dr.minimum(mi.UInt32(x), R - 2), dr.minimum(mi.UInt32(y), R - 2)
         return kf, x0, y0, x - mi.Float(x0), y - mi.Float(y0), outside
 
-    def carried(self, p, source, grid, samples: int = 2):
+    def carried(self, p, source, grid, samples: int = 2, active=True):
         """(direct, indirect) light at world points p carried from the last plane before p on its light
         ray (bilinear in the buffer; before plane 0: the unattenuated light at slab 0's outer face):
             D = D_k exp(-tau),   D + I = (D_k + I_k) exp(-tau_keep)
@@ -363,7 +363,8 @@ class LightVolume:
         scattering) in 1/m; ``grid``: its (lo corner, 1 / span) as kernel vectors; zero outside it). Unlike
         an interpolation between two planes, this puts a cloud's face that lies between them where it is
         (to the sampling's resolution), and the light decays across the face at the local extinction.
-        Needs the frame's light direction and step (``lookup_frame``); ignores plane offsets (jitter)."""
+        Needs the frame's light direction and step (``lookup_frame``); ignores plane offsets (jitter).
+        ``active``: lanes that need the light."""
         mi = self.mi
         import drjit as dr
         f, R, N = self.frame, self.res, self.n_slices
@@ -371,7 +372,7 @@ class LightVolume:
         first = kf < 0.0                                    # between slab 0's outer face and plane 0
         k0 = dr.minimum(mi.UInt32(dr.clip(kf, 0.0, float(N))), N)
         base = (k0 * R + y0) * R + x0
-        a, b, c, d = (dr.gather(mi.Array2f, self.store, i) for i in (base, base + 1, base + R, base + R + 1))
+        a, b, c, d = (dr.gather(mi.Array2f, self.store, i, active) for i in (base, base + 1, base + R, base + R + 1))
         v = (a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy
         D0, F0 = dr.select(first, 1.0, v[0]), dr.select(first, 1.0, v[0] + v[1])
         u = dr.select(first, kf + 0.5, kf - mi.Float(k0))   # slice units from there to p
@@ -380,11 +381,10 @@ class LightVolume:
         tau, tau_keep = mi.Float(0.0), mi.Float(0.0)
         for i in range(samples):
             t = (p + f.to_light * (ds * (i + 0.5)) - glo) * inv_span
-            e, fwd = source.eval(t)
-            inside = (t.x >= 0.0) & (t.x <= 1.0) & (t.y >= 0.0) & (t.y <= 1.0) & (t.z >= 0.0) & (t.z <= 1.0)
-            e = dr.select(inside, dr.maximum(e, 0.0), 0.0)
-            tau += e * ds
-            tau_keep += dr.maximum(e - dr.select(inside, dr.maximum(fwd, 0.0), 0.0), 0.0) * ds
+            inside = active & (t.x >= 0.0) & (t.x <= 1.0) & (t.y >= 0.0) & (t.y <= 1.0) & (t.z >= 0.0) & (t.z <= 1.0)
+            e, keep = source_extinction(dr, source, t, inside)
+            tau += dr.select(inside, e, 0.0) * ds
+            tau_keep += dr.select(inside, keep, 0.0) * ds
         D, F = D0 * dr.exp(-tau), F0 * dr.exp(-tau_keep)
         unlit = (kf < -0.5) | outside
         return dr.select(unlit, 1.0, D), dr.select(unlit, 0.0, dr.maximum(F - D, 0.0))
@@ -445,8 +445,8 @@ def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offs
             a = dr.select(k == 0, kin, dr.clip(kj - 0.5, kin, kout))
             m = dr.clip(kj, kin, kout)
             b = dr.select(k == n_slices - 1, kout, dr.clip(kj + 0.5, kin, kout))
-        (e1, keep1), (e2, keep2) = (_mean_extinction(dr, source, q0, qs, x0, x1, LIGHT_SUBSAMPLES)
-                                    for x0, x1 in ((a, m), (m, b)))
+        (e1, keep1), (e2, keep2) = (_mean_extinction(dr, source, q0, qs, x0, x1, LIGHT_SUBSAMPLES, x1 > x0)
+                                    for x0, x1 in ((a, m), (m, b)))   # (nothing to sample outside the box)
         t1, t2 = dr.exp(-e1 * dl * (m - a)), dr.exp(-e2 * dl * (b - m))
         D_mid = D * t1
         if translucent:
@@ -464,15 +464,25 @@ def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offs
     return through_slab
 
 
-def _mean_extinction(dr, source, q0, qs, x0, x1, n: int):
+def source_extinction(dr, source, t, active=True):
+    """(extinction, extinction of all forward light beta - beta_f) in 1/m of the light pass's ``source``
+    texture at texture coordinates t: channels (beta, beta_f), or beta alone where no light is scattered
+    forward (the low-albedo and "multiple" light: then both are beta)."""
+    v = source.eval(t, active)
+    e = dr.maximum(v[0], 0.0)
+    if len(v) == 1:
+        return e, e
+    return e, dr.maximum(e - dr.maximum(v[1], 0.0), 0.0)
+
+
+def _mean_extinction(dr, source, q0, qs, x0, x1, n: int, active=True):
     """Mean extinction and mean extinction of all forward light (beta - beta_f, 1/m) along the light ray
     q0 + k qs between slice units x0 and x1, from ``n`` evenly spaced samples (the midpoint rule)."""
     ext, keep = 0.0, 0.0
     for i in range(n):
-        e, fwd = source.eval(q0 + (x0 + ((i + 0.5) / n) * (x1 - x0)) * qs)
-        e = dr.maximum(e, 0.0)
+        e, k = source_extinction(dr, source, q0 + (x0 + ((i + 0.5) / n) * (x1 - x0)) * qs, active)
         ext += e
-        keep += dr.maximum(e - dr.maximum(fwd, 0.0), 0.0)  # extinction of all forward light
+        keep += k
     return ext * (1.0 / n), keep * (1.0 / n)
 
 

@@ -139,7 +139,10 @@ class SliceRenderer:
                                       self.albedo_rgb / np.maximum(self.albedo_rgb.mean(axis=1, keepdims=True), 1e-12))
         self.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (1 + len(self.groups),), np.float32)),
                                     use_accel=False)
-        self.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (2,), np.float32)), use_accel=False)
+        # the light pass's source: (beta, beta_f), or beta alone where no light is scattered forward
+        self.light_channels = 2 if mode.light == "translucent" else 1
+        self.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (self.light_channels,), np.float32)),
+                                          use_accel=False)
         # the "multiple" model's parameters act in the eye pass only: its light pass is not differentiated
         # (one kernel for all slices instead of one per slice)
         self.light = LightVolume(mi, self.box, self.light_res, differentiable and mode.light != "multiple")
@@ -224,7 +227,8 @@ class SliceRenderer:
                 g_sca = g_sca + sca[si]
             grouped.append(g_sca)
         d["tex_eye"].set_tensor(mi.TensorXf(_interleave(mi, [ext] + grouped), shape=self.shape + (1 + len(self.groups),)))
-        d["tex_light"].set_tensor(mi.TensorXf(_interleave(mi, [ext, beta_fwd]), shape=self.shape + (2,)))
+        light = [ext, beta_fwd][:self.light_channels]
+        d["tex_light"].set_tensor(mi.TensorXf(_interleave(mi, light), shape=self.shape + (len(light),)))
 
     def _texture_data(self) -> dict:
         """The arrays ``_build_textures`` reads (the species' extinction, the detail noise) and the
@@ -442,6 +446,8 @@ def _interleave(mi, channels):
     over the voxels that scatters each voxel's C values."""
     import drjit as dr
     C = len(channels)
+    if C == 1:
+        return channels[0]
     n = dr.width(channels[0])
     vox = dr.arange(mi.UInt32, n) * C
     out = dr.zeros(mi.Float, n * C)
