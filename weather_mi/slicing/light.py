@@ -127,7 +127,9 @@ def dr_opaque(mi, value):
 class LightVolume:
     """Light arriving at every slice plane of a sweep from one light direction (the sun, or the
     zenith for skylight): ``sweep`` fills it, ``lookup`` reads it inside kernels, ``light_at`` from
-    numpy. Storage: (planes, R, R, 2) floats, channels direct D and forward-scattered I."""
+    numpy. Storage: (planes, R, R, 2) floats, channels direct D and forward-scattered I; for translucent
+    light (``log_store``) log D and log(D + I) instead, which its lookups interpolate (as logarithms:
+    ``lookup(log_forward=True)``) without taking a logarithm per texel read."""
 
     def __init__(self, mi, box, res: int, differentiable: bool = False):
         self.mi = mi
@@ -135,6 +137,7 @@ class LightVolume:
         self.res = int(res)
         self.differentiable = differentiable
         self.store = None
+        self.log_store = False  # the store holds log D, log(D + I) (translucent light)
         self.frame: LookupFrame | None = None   # the geometry of the store, as kernel values
         self.n_slices = 0
         self._rays, self._rays_key = None, None
@@ -205,6 +208,7 @@ class LightVolume:
                           blur_weights(dr, plan.var * n_prev * plan.inv_dv2))
             D, I = self._through_slabs(through_slab, D, I, k0, k1, lane, store)
         at = (lane + dr.opaque(mi.UInt32, N * R * R)) * 2
+        D, I = _stored(dr, D, I, plan.translucent)
         dr.scatter(store, D, at)
         dr.scatter(store, I, at + 1)
         dr.eval(store)
@@ -213,6 +217,7 @@ class LightVolume:
     def bind(self, plan: "SweepPlan", store):
         """Make ``store`` (of ``run(plan, ...)``) the light that ``lookup`` reads."""
         self.store, self.frame, self.n_slices = store, plan.frame, plan.n_slices
+        self.log_store = plan.translucent
 
     def _light_rays(self, g: SliceGeometry, grid_box):
         """One light ray per buffer texel: (q0, qs, kin, kout), its point on plane 0 and its step to the
@@ -309,6 +314,11 @@ class LightVolume:
 
         def texel(at):
             v = dr.gather(mi.Array2f, self.store, at, active)
+            if self.log_store:  # (log D, log(D + I)) stored
+                if log_forward:
+                    return v
+                d, f = dr.exp(v[0]), dr.exp(v[1])
+                return mi.Array2f(v[0] if log_direct else d, dr.maximum(f - d, 0.0))
             if log_forward:
                 return mi.Array2f(dr.log(dr.maximum(v[0], 1e-30)), dr.log(dr.maximum(v[0] + v[1], 1e-30)))
             return mi.Array2f(dr.log(dr.maximum(v[0], 1e-30)), v[1]) if log_direct else v
@@ -372,9 +382,13 @@ class LightVolume:
         first = kf < 0.0                                    # between slab 0's outer face and plane 0
         k0 = dr.minimum(mi.UInt32(dr.clip(kf, 0.0, float(N))), N)
         base = (k0 * R + y0) * R + x0
-        a, b, c, d = (dr.gather(mi.Array2f, self.store, i, active) for i in (base, base + 1, base + R, base + R + 1))
+        def texel(i):
+            v = dr.gather(mi.Array2f, self.store, i, active)   # as (D, D + I)
+            return mi.Array2f(dr.exp(v[0]), dr.exp(v[1])) if self.log_store else mi.Array2f(v[0], v[0] + v[1])
+
+        a, b, c, d = (texel(i) for i in (base, base + 1, base + R, base + R + 1))
         v = (a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy
-        D0, F0 = dr.select(first, 1.0, v[0]), dr.select(first, 1.0, v[0] + v[1])
+        D0, F0 = dr.select(first, 1.0, v[0]), dr.select(first, 1.0, v[1])
         u = dr.select(first, kf + 0.5, kf - mi.Float(k0))   # slice units from there to p
         ds = u * f.light_step * (1.0 / samples)             # metres per sample
         glo, inv_span = grid
@@ -455,13 +469,21 @@ def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offs
         else:
             I_mid = I
         at = (lane + k * plane) * 2
-        dr.scatter(store, D_mid, at)
-        dr.scatter(store, I_mid, at + 1)
+        stored = _stored(dr, D_mid, I_mid, translucent)
+        dr.scatter(store, stored[0], at)
+        dr.scatter(store, stored[1], at + 1)
         if translucent:
             return D_mid * t2, (D_mid + I_mid) * f2 - D_mid * t2
         return D_mid * t2, I_mid
 
     return through_slab
+
+
+def _stored(dr, D, I, log_store: bool):
+    """The two values stored for light (D, I): themselves, or log D and log(D + I) (``log_store``)."""
+    if not log_store:
+        return D, I
+    return dr.log(dr.maximum(D, 1e-30)), dr.log(dr.maximum(D + I, 1e-30))
 
 
 def source_extinction(dr, source, t, active=True):
