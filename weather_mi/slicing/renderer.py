@@ -110,7 +110,7 @@ class SliceRenderer:
             if n.shape != self.shape:
                 raise ValueError(f"detail_noise must have the volume's shape {self.shape}, got {n.shape}")
             self.detail_noise = mi.Float(np.ascontiguousarray(n).ravel())
-        self.beta_s = mi.Float(np.ascontiguousarray(beta_s).ravel())  # (z, y, x, S) flattened
+        self.beta_s = [mi.Float(np.ascontiguousarray(beta_s[..., si]).ravel()) for si in range(self.n_species)]  # (z, y, x) each
         self.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
         self.voxel_m = float(np.mean(vol.spacing))
         tables = list(vol.require_phase_tables())
@@ -208,13 +208,12 @@ class SliceRenderer:
         import drjit as dr
         d = data or self._texture_data()
         S = self.n_species
-        vox = dr.arange(mi.UInt32, int(np.prod(self.shape)))
         sc, om, fw = ([_param(mi, v) for v in x] for x in (scale, omega, fwd))
         ext, beta_fwd, sca = mi.Float(0.0), mi.Float(0.0), []
-        noise = None if d["noise"] is None else dr.gather(mi.Float, d["noise"], vox)
+        noise = d["noise"]
         amp = None if noise is None else [_param(mi, a) for a in detail]
         for s in range(S):
-            b = dr.gather(mi.Float, d["beta_s"], vox * S + s) * sc[s]
+            b = d["beta_s"][s] * sc[s]
             if noise is not None:  # the amount of detail per species (paper section 5.4), log-normal, mean one
                 b = b * dr.exp(amp[s] * noise - 0.5 * amp[s] * amp[s])
             ext += b
