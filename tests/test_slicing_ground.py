@@ -21,6 +21,18 @@ def test_the_layer_transmission_matches_disort(tau, mu0):
     assert t == pytest.approx(ref, rel=0.10 if mu0 < 0.4 else 0.05)
 
 
+@pytest.mark.parametrize("tau", [0.5, 5.0, 20.0, 60.0])
+def test_skylight_through_the_layer_matches_disort(tau):
+    """The ground's skylight under a cloud column ("multiple" model): the delta-Eddington transmission at
+    the diffusivity cosine 1/1.66 against the exact transmission of isotropic incident light, 2 int T(mu)
+    mu dmu over DISORT's beam transmissions (8-point Gauss-Legendre in mu), within 6%."""
+    from weather_mi.slicing.eye import DIFFUSE_MU
+    x, w = np.polynomial.legendre.leggauss(8)
+    mu, w = 0.5 * (x + 1.0), 0.5 * w
+    exact = 2.0 * sum(wi * m * disort_slab(tau, 1.0, 0.85, m, n_streams=32, n_moments=256)["T"] for m, wi in zip(mu, w))
+    assert float(ground_transmission(np, tau, DIFFUSE_MU, 0.85)) == pytest.approx(exact, rel=0.06)
+
+
 def test_a_cloud_layer_shades_the_ground_as_disort_says():
     """A uniform layer (vertical optical depth 20, HG g = 0.85, no absorption) over half a 40 km domain,
     the sun 60 degrees high, no sky: the ground under the layer's middle, seen from below the layer,

@@ -19,11 +19,11 @@ from .renderer import SliceRenderer
 # the "multiple" light model's parameters and their range: "unit" in (0, 1), "positive" > 0
 MULTIPLE_PARAMS = {"ms_extinction": "unit", "ms_contribution": "unit", "ms_eccentricity": "unit",
                    "sky_gain": "positive", "sky_extinction": "positive", "diffusion_gain": "positive",
-                   "diffusion_scale": "unit"}
+                   "diffusion_scale": "unit", "leak_gain": "positive", "leak_rate": "positive"}
 # where a fit starts from: close to single scattering with a faint, lightly shadowed sky and a faint
 # diffusion term whose transport optical depth is (1 - g) tau for g = 0.85
 FIT_START = SliceParams(ms_extinction=0.5, ms_contribution=0.05, ms_eccentricity=0.5, sky_gain=0.05,
-                        sky_extinction=0.5, diffusion_gain=0.5, diffusion_scale=0.15)
+                        sky_extinction=0.5, diffusion_gain=0.5, diffusion_scale=0.15, leak_gain=0.2, leak_rate=1.0)
 
 
 @dataclass

@@ -519,18 +519,20 @@ def _param(mi, value):
 
 def _blur(mi, dr, buf, R, wx, wy):
     """Separable 5 x 5 convolution of an R x R buffer with per-axis weights (w0, w1, w2) (see
-    ``blur_weights``); edges clamped."""
+    ``blur_weights``); edges clamped. Two passes: along x (evaluated), then along y (left to the kernel
+    that reads it): 10 reads per texel instead of 25."""
     lane = dr.arange(mi.UInt32, R * R)
     yi = mi.Int32(lane // R)
     xi = mi.Int32(lane) - yi * R
-    out = mi.Float(0.0)
     taps = lambda w: ((-2, w[2]), (-1, w[1]), (0, w[0]), (1, w[1]), (2, w[2]))  # noqa: E731
+    row = mi.UInt32(yi) * R
+    along_x = mi.Float(0.0)
+    for ox, wxv in taps(wx):
+        along_x += wxv * dr.gather(mi.Float, buf, row + mi.UInt32(dr.clip(xi + ox, 0, R - 1)))
+    dr.eval(along_x)
+    out = mi.Float(0.0)
     for oy, wyv in taps(wy):
-        row = mi.UInt32(dr.clip(yi + oy, 0, R - 1)) * R
-        acc = mi.Float(0.0)
-        for ox, wxv in taps(wx):
-            acc += wxv * dr.gather(mi.Float, buf, row + mi.UInt32(dr.clip(xi + ox, 0, R - 1)))
-        out += wyv * acc
+        out += wyv * dr.gather(mi.Float, along_x, mi.UInt32(dr.clip(yi + oy, 0, R - 1)) * R + mi.UInt32(xi))
     return out
 
 

@@ -69,7 +69,7 @@ MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple"
 # "The slicer").
 MULTIPLE_DEFAULTS = {"ms_extinction": 0.0772, "ms_contribution": 0.1768, "ms_eccentricity": 0.4674,
                      "sky_gain": 0.6237, "sky_extinction": 0.0051, "diffusion_gain": 1.2837,
-                     "diffusion_scale": 0.4322}
+                     "diffusion_scale": 0.4322, "leak_gain": 0.0, "leak_rate": 1.0}
 
 
 DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail field, detail.field(amplitude=0.5))
@@ -120,6 +120,13 @@ class SliceParams:
         side; little in thin cloud).
     diffusion_scale : float, default MULTIPLE_DEFAULTS["diffusion_scale"]
         In [0, 1]: the profile is in transport optical depths diffusion_scale x tau (~ 1 - g).
+    leak_gain : float, default MULTIPLE_DEFAULTS["leak_gain"]
+        "multiple" light, >= 0: isotropic in-scattering of diffused sunlight that a finite cloud loses
+        through its sides, leak_gain x E_sun / (4 pi) x (1 - exp(-X)) exp(-leak_rate x) (x, X: the
+        transport optical depths of the diffusion profile): bright at the sunlit faces, dark in the
+        shadowed parts, unlike the 1-D profile, which does not decay into a thick cloud.
+    leak_rate : float, default MULTIPLE_DEFAULTS["leak_rate"]
+        >= 0: its decay per transport optical depth.
     slab_jitter : float, default 0.0
         In [0, 1]: each pixel's slabs are offset by up to +-slab_jitter / 2 slice (jitter.py), which
         turns the terraces of the slab planes on lit faces into fine grain (0: aligned slabs, as before;
@@ -152,6 +159,8 @@ class SliceParams:
     sky_extinction: float = MULTIPLE_DEFAULTS["sky_extinction"]
     diffusion_gain: float = MULTIPLE_DEFAULTS["diffusion_gain"]
     diffusion_scale: float = MULTIPLE_DEFAULTS["diffusion_scale"]
+    leak_gain: float = MULTIPLE_DEFAULTS["leak_gain"]
+    leak_rate: float = MULTIPLE_DEFAULTS["leak_rate"]
     slab_jitter: float = 0.0
     jitter_frame: int = 0
     detail: dict = field(default_factory=dict)
@@ -171,7 +180,7 @@ class SliceParams:
             v = getattr(self, name)
             if number(v) and not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {v}")
-        for name in ("sky_gain", "sky_extinction", "ambient", "diffusion_gain"):
+        for name in ("sky_gain", "sky_extinction", "ambient", "diffusion_gain", "leak_gain", "leak_rate"):
             v = getattr(self, name)
             if number(v) and v < 0.0:
                 raise ValueError(f"{name} must be >= 0, got {v}")

@@ -365,7 +365,7 @@ class SliceRenderer:
         if self.mode.light == "multiple":
             model = [_param(mi, v) for v in (params.ms_extinction, params.ms_contribution, params.ms_eccentricity,
                                             params.sky_extinction, params.diffusion_gain, params.diffusion_scale,
-                                            max(float(spec.sun.to_sun[2]), 1e-3))]
+                                            max(float(spec.sun.to_sun[2]), 1e-3), params.leak_gain, params.leak_rate)]
             gain = params.sky_gain
         else:
             gain = params.ambient
@@ -386,9 +386,10 @@ class SliceRenderer:
         mi = self.mi
         import drjit as dr
         if e["model"] is not None:
-            a, b, c, sky_ext, gain, scale, mu0 = e["model"]
+            a, b, c, sky_ext, gain, scale, mu0, leak_gain, leak_rate = e["model"]
             model = LightModel(self.light, self.sky_light, self.mode.octaves, a, b, c, sky_ext, gain, scale,
-                               g=self.g_scattering, mu0=mu0, carry=(e["tex_light"], e["grid"]))
+                               g=self.g_scattering, mu0=mu0, carry=(e["tex_light"], e["grid"]), leak_gain=leak_gain,
+                               leak_rate=leak_rate)
         else:
             model = LightModel(self.light, log_forward=self.mode.light == "translucent")
         r = e["rays"]

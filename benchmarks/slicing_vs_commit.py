@@ -1,0 +1,78 @@
+"""The slicer's frame rate now against an earlier commit, measured in one run: the two trees take turns,
+round after round, so that the shared cores' load falls on both alike.
+
+    .venv/bin/python benchmarks/slicing_vs_commit.py [--commit c73a480] [--rounds 3] [--size 300x300]
+                                                     [--slices 128] [--frames 5]
+
+The earlier commit is checked out into a temporary git worktree (its plugins linked in, as
+validation/bit_identity.py does); each round runs, in a fresh process per tree, the frames-per-second
+measurement of benchmarks/slicing.py (frozen frames, every frame changing a scaling as a slider drag
+does) on the demo supercell. Prints the median over rounds per mode and tree and their ratio.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+MEASURE = """
+import sys, weather_mi as wm
+from weather_mi.slicing import MODES, SliceRenderer
+sys.path.insert(0, {bench!r})
+from slicing import detail_field, seconds_per_frame
+wm.set_variant(None)
+vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
+spec = wm.scene.default_spec(vol, {w}, {h})
+for name, mode in MODES.items():
+    r = SliceRenderer(vol, mode, slices={slices}, light_res=128, detail_field=detail_field(vol) if mode.detail else None)
+    print("FPS", name, 1.0 / seconds_per_frame(r, spec, {frames}), flush=True)
+"""
+
+
+def measure(tree: Path, w: int, h: int, slices: int, frames: int) -> dict:
+    code = MEASURE.format(bench=str(ROOT / "benchmarks"), w=w, h=h, slices=slices, frames=frames)
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    out = subprocess.run([sys.executable, "-c", code], cwd=tree, capture_output=True, text=True, env=env,
+                         check=True).stdout
+    return {line.split()[1]: float(line.split()[2]) for line in out.splitlines() if line.startswith("FPS ")}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--commit", default="c73a480")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--size", default="300x300")
+    ap.add_argument("--slices", type=int, default=128)
+    ap.add_argument("--frames", type=int, default=5)
+    args = ap.parse_args()
+    w, h = (int(v) for v in args.size.lower().split("x"))
+    with tempfile.TemporaryDirectory() as tmp:
+        old = Path(tmp) / "old"
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(old), args.commit], check=True,
+                       capture_output=True)
+        try:
+            if not (old / "weather_mi" / "plugins").exists():  # as the editable install maps them
+                (old / "weather_mi" / "plugins").symlink_to("../plugins")
+            fps = {"old": [], "new": []}
+            for k in range(args.rounds):
+                for label, tree in (("old", old), ("new", ROOT)):
+                    fps[label].append(measure(tree, w, h, args.slices, args.frames))
+                print(f"round {k + 1}/{args.rounds} done", flush=True)
+        finally:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(old)], capture_output=True)
+    print(f"\n{w} x {h}, {args.slices} slices, frames per second (median of {args.rounds} rounds)")
+    print(f"{'mode':<34}{args.commit:>10}{'now':>10}{'ratio':>8}")
+    for name in fps["new"][0]:
+        a = statistics.median(r[name] for r in fps["old"] if name in r)
+        b = statistics.median(r[name] for r in fps["new"])
+        print(f"{name:<34}{a:>10.2f}{b:>10.2f}{b / a:>7.2f}x")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
