@@ -275,6 +275,13 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
     j = 0.0 if offset is None else offset
     k_start = dr.round(ka - j)                                      # slab holding the entry point
     count = dr.select(rays.t1 > rays.t0, mi.UInt32(dr.abs(dr.round(kb - j) - k_start) + 1.5), 0)
+    span_a = getattr(rays, "span_a", None)
+    if span_a is not None:  # only the slabs of the ray's occupied span (occupancy.py): the others are empty
+        ka_s = (d_first - (os_ + span_a * sd)) / spacing
+        kb_s = (d_first - (os_ + rays.span_b * sd)) / spacing
+        k_start = dr.round(ka_s - j)
+        count = dr.select((rays.t1 > rays.t0) & (rays.span_b >= span_a),
+                          mi.UInt32(dr.abs(dr.round(kb_s - j) - k_start) + 1.5), 0)
     k_lo, k_hi = dr.minimum(ka, kb), dr.maximum(ka, kb)
     de = spacing / dr.abs(sd)
     G = len(phase_colour)

@@ -30,7 +30,8 @@ from .geometry import slice_geometry, slicing_box
 from .jitter import jitter_rotation, slab_offsets
 from .light import LightVolume, _param, auto_light_res, variance_per_metre
 from .modes import SliceMode, SliceParams
-from .view import ViewCache
+from .occupancy import OccupancyMap
+from .view import BoundedCache, ViewCache
 
 # the cone angle whose spread sets the light pass's blur steps (independent of the interactive cone angle)
 REFERENCE_CONE_DEG = 20.0
@@ -152,6 +153,9 @@ class SliceRenderer:
             self._sky_geometry = slice_geometry(np.array([0.0, 0.0, -1.0]), np.array([0.0, 0.0, 1.0]), self.box,
                                                 min(SKY_SLICES, self.slices))
         self.views = ViewCache(self.box, terrain=getattr(vol, "terrain", None))
+        # each view's rays visit only the slabs between their first and last occupied block (occupancy.py)
+        self.occupancy = OccupancyMap(mi, vol.beta_total, self.grid_box, vol.spacing)
+        self._spans = BoundedCache(4)
         # the cloud's asymmetry parameter for the ground's transmission: species weighted by their scattering
         sca = np.array([float(np.sum(vol.beta_ext[si])) * float(np.mean(self.albedo_rgb[si]))
                         for si in range(self.n_species)]) * (1.0 - self.peak_fraction)
@@ -375,6 +379,10 @@ class SliceRenderer:
             ground = (_colour(mi, rho / np.pi * sun * max(float(spec.sun.to_sun[2]), 0.0)), _colour(mi, rho / np.pi * e_sky))
         names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern")
         ray_arrays = {k: getattr(rays, k) for k in names + (("ground_sun", "ground_sky") if rays.ground_sun is not None else ())}
+        span_key = (spec.camera, spec.width, spec.height, spec.ground)
+        if span_key not in self._spans:
+            self._spans[span_key] = self.occupancy.spans(rays.origin, rays.direction, rays.t0, rays.t1)
+        ray_arrays["span_a"], ray_arrays["span_b"] = self._spans[span_key]
         op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
         grid = (mi.Point3f(*(op(c) for c in self.grid_box[0])),
                 mi.Vector3f(*(op(1.0 / (h - l)) for l, h in zip(*self.grid_box))))
