@@ -57,7 +57,7 @@ def main(argv=None) -> int:
     head = " ".join(f"{a}-{b}".rjust(9) for a, b in zip(slices, slices[1:]))
     res = f"{args.light_res}^2" if args.light_res else "automatic"
     print(f"CIEDE2000 over cloud pixels between slice counts ({width} x {height}, light buffer {res})")
-    print(f"{'scene':<16}{'light':<7}{'mode':<32}{head}")
+    print(f"{'scene':<20}{'light':<7}{'mode':<32}{head}")
     worst = {}
     for scene in args.scenes.split(","):
         loaded = load_scene(scene, cfg, data_dir=args.data)
@@ -77,7 +77,7 @@ def main(argv=None) -> int:
                 pw = pairwise(imgs, mask)
                 for n0, n1, de in pw:
                     worst[(n0, n1)] = max(worst.get((n0, n1), 0.0), de)
-                print(f"{scene:<16}{lighting:<7}{name:<32}" + " ".join(f"{de:9.3f}" for *_, de in pw), flush=True)
+                print(f"{scene:<20}{lighting:<7}{name:<32}" + " ".join(f"{de:9.3f}" for *_, de in pw), flush=True)
     print("worst: " + ", ".join(f"{a} vs {b}: {v:.3f}" for (a, b), v in worst.items()))
     ok = worst.get((256, 512), 0.0) <= 1.0 and worst.get((128, 256), 0.0) <= 2.0
     print("targets (256 vs 512 <= 1, 128 vs 256 <= 2):", "met" if ok else "NOT met")
