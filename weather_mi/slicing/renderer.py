@@ -127,15 +127,7 @@ class SliceRenderer:
         if self.forward_peak_deg > 0:
             self.peak_fraction, tables = peak_tables(tables, self.forward_peak_deg)
         self.tables = tables
-        sp = vol.species_set
-        if sp is not None:
-            self.albedo_rgb = np.array([sp[n].albedo_rgb for n in vol.species])          # (S, 3)
-            self.colors = np.array([sp[n].color_rgb for n in vol.species])
-        else:
-            mean_alb = vol.albedo.reshape(-1, 3)[vol.beta_total.ravel() > 0].mean(axis=0) \
-                if np.any(vol.beta_total > 0) else np.ones(3)
-            self.albedo_rgb = np.broadcast_to(mean_alb, (self.n_species, 3)).copy()
-            self.colors = np.ones((self.n_species, 3))
+        self.albedo_rgb, self.colors = _species_albedo_and_colour(vol)                  # (S, 3) each
         self.groups = _scatter_groups(self.tables, self.colors if mode.species_colors else
                                       self.albedo_rgb / np.maximum(self.albedo_rgb.mean(axis=1, keepdims=True), 1e-12))
         self.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (1 + len(self.groups),), np.float32)),
@@ -420,6 +412,17 @@ def _freeze(renderer_ref):
     def kernels(inputs):
         return renderer_ref()._kernels(inputs)
     return dr.freeze(kernels, limit=FREEZE_LIMIT, warn_after=4 * FREEZE_LIMIT)
+
+
+def _species_albedo_and_colour(vol) -> tuple[np.ndarray, np.ndarray]:
+    """(S, 3) single-scattering albedo and Table III display colour per species; a volume without a
+    species set: its mean albedo over the medium for all, white."""
+    sp, S = vol.species_set, len(vol.species)
+    if sp is not None:
+        return np.array([sp[n].albedo_rgb for n in vol.species]), np.array([sp[n].color_rgb for n in vol.species])
+    mean_alb = vol.albedo.reshape(-1, 3)[vol.beta_total.ravel() > 0].mean(axis=0) \
+        if np.any(vol.beta_total > 0) else np.ones(3)
+    return np.broadcast_to(mean_alb, (S, 3)).copy(), np.ones((S, 3))
 
 
 def _number(value) -> float:
