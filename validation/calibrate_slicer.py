@@ -8,7 +8,8 @@ beside the paper's Table IV modes.
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them);
    training views at --spp, or to --train-target-rse (the loss clips display colours at 1, so that noisy
-   references pull the brightest faces down; the shipped defaults were fitted to 2%), held-out views to
+   references pull the brightest faces down; measured: it did not help the held-out views, and the shipped
+   defaults were fitted to --spp 128), held-out views to
    --target-rse:
    training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
    its condensate x 0.15), front-, side- and back-lit;

@@ -67,9 +67,9 @@ MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple"
 # of 128 spp), with the forward peaks within 3 deg as unscattered light in both renderers; judged on the
 # real WRF supercell, WRF plateau, BOMEX and RICO storms against references of 2-5% cloud RSE (README,
 # "The slicer").
-MULTIPLE_DEFAULTS = {"ms_extinction": 0.0772, "ms_contribution": 0.1768, "ms_eccentricity": 0.4674,
-                     "sky_gain": 0.6237, "sky_extinction": 0.0051, "diffusion_gain": 1.2837,
-                     "diffusion_scale": 0.4322, "leak_gain": 0.0, "leak_rate": 1.0}
+MULTIPLE_DEFAULTS = {"ms_extinction": 0.1271, "ms_contribution": 0.2245, "ms_eccentricity": 0.5304,
+                     "sky_gain": 0.6405, "sky_extinction": 0.0061, "diffusion_gain": 1.2184,
+                     "diffusion_scale": 0.3073, "leak_gain": 0.5536, "leak_rate": 0.6525}
 
 
 DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail field, detail.field(amplitude=0.5))
