@@ -127,9 +127,10 @@ def dr_opaque(mi, value):
 class LightVolume:
     """Light arriving at every slice plane of a sweep from one light direction (the sun, or the
     zenith for skylight): ``sweep`` fills it, ``lookup`` reads it inside kernels, ``light_at`` from
-    numpy. Storage: (planes, R, R, 2) floats, channels direct D and forward-scattered I; for translucent
-    light (``log_store``) log D and log(D + I) instead, which its lookups interpolate (as logarithms:
-    ``lookup(log_forward=True)``) without taking a logarithm per texel read."""
+    numpy. Storage: (planes, R, R) floats of direct light D where no light is scattered forward; for
+    translucent light (``log_store``) (planes, R, R, 2): log D and log(D + I) (I: forward-scattered), which
+    its lookups interpolate (as logarithms: ``lookup(log_forward=True)``) without taking a logarithm per
+    texel read."""
 
     def __init__(self, mi, box, res: int, differentiable: bool = False):
         self.mi = mi
@@ -190,7 +191,8 @@ class LightVolume:
         mi = self.mi
         import drjit as dr
         R, N = self.res, plan.n_slices
-        store = dr.zeros(mi.Float, (N + 1) * R * R * 2)
+        C = 2 if plan.translucent else 1  # stored channels: (log D, log(D + I)), or D alone (I = 0)
+        store = dr.zeros(mi.Float, (N + 1) * R * R * C)
         lane = dr.arange(mi.UInt32, R * R)
         offset = None
         if plan.frame.jitter is not None:
@@ -207,10 +209,11 @@ class LightVolume:
                 I = _blur(mi, dr, I, R, blur_weights(dr, plan.var * n_prev * plan.inv_du2),
                           blur_weights(dr, plan.var * n_prev * plan.inv_dv2))
             D, I = self._through_slabs(through_slab, D, I, k0, k1, lane, store)
-        at = (lane + dr.opaque(mi.UInt32, N * R * R)) * 2
+        at = (lane + dr.opaque(mi.UInt32, N * R * R)) * C
         D, I = _stored(dr, D, I, plan.translucent)
         dr.scatter(store, D, at)
-        dr.scatter(store, I, at + 1)
+        if plan.translucent:
+            dr.scatter(store, I, at + 1)
         dr.eval(store)
         return store
 
@@ -313,7 +316,7 @@ class LightVolume:
         fk = kc - mi.Float(k0)
 
         def texel(at):
-            v = dr.gather(mi.Array2f, self.store, at, active)
+            v = self._gather(at, active)
             if self.log_store:  # (log D, log(D + I)) stored
                 if log_forward:
                     return v
@@ -347,6 +350,15 @@ class LightVolume:
         prev = light(dr.select(k0 > 0, (1.0 - fk) * before + fk * here, here))
         unlit = (kf < 0.5) | outside
         return out, (dr.select(unlit, 1.0, prev[0]), dr.select(unlit, 0.0, prev[1]))
+
+    def _gather(self, at, active):
+        """The stored pair at texel-plane index ``at``; where no light is scattered forward (I = 0, not
+        translucent) only D is read."""
+        mi = self.mi
+        import drjit as dr
+        if self.log_store:
+            return dr.gather(mi.Array2f, self.store, at, active)
+        return mi.Array2f(dr.gather(mi.Float, self.store, at, active), 0.0)
 
     def _coordinates(self, p):
         """(k, x0, y0, fx, fy, outside) of world points p: the slice index k (real), the buffer texel
@@ -385,7 +397,7 @@ class LightVolume:
         k0 = dr.minimum(mi.UInt32(dr.clip(kf, 0.0, float(N))), N)
         base = (k0 * R + y0) * R + x0
         def texel(i):  # as (log D, log(D + I))
-            v = dr.gather(mi.Array2f, self.store, i, active)
+            v = self._gather(i, active)
             if self.log_store:
                 return v
             return mi.Array2f(dr.log(dr.maximum(v[0], 1e-30)), dr.log(dr.maximum(v[0] + v[1], 1e-30)))
@@ -445,8 +457,8 @@ class LightVolume:
 
 def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offset=None, n_slices: int = 0):
     """The step of the light pass through one slab k: (k, D, I) -> (D, I) after the slab, storing the
-    light at plane k (``store[(lane + k plane) 2 + (0, 1)]``). ``rays``: (q0, qs, kin, kout) of
-    ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab; ``offset``: None or each
+    light at plane k (``store[lane + k plane]``, or its 2 channels for translucent light). ``rays``:
+    (q0, qs, kin, kout) of ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab; ``offset``: None or each
     lane's plane offset j (slice units): its slabs are [k + j - 1/2, k + j + 1/2], the first and the last
     reaching to where the ray enters and leaves the box."""
     import drjit as dr
@@ -472,10 +484,13 @@ def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offs
             I_mid = (D + I) * f1 - D_mid
         else:
             I_mid = I
-        at = (lane + k * plane) * 2
         stored = _stored(dr, D_mid, I_mid, translucent)
-        dr.scatter(store, stored[0], at)
-        dr.scatter(store, stored[1], at + 1)
+        if translucent:
+            at = (lane + k * plane) * 2
+            dr.scatter(store, stored[0], at)
+            dr.scatter(store, stored[1], at + 1)
+        else:  # no forward light: D alone
+            dr.scatter(store, stored[0], lane + k * plane)
         if translucent:
             return D_mid * t2, (D_mid + I_mid) * f2 - D_mid * t2
         return D_mid * t2, I_mid
