@@ -71,7 +71,7 @@ class LightModel:
     g: float = 0.85  # the cloud's asymmetry parameter, for the ground's transmission ("multiple")
     mu0: object = 1.0  # the sun's zenith cosine (an opaque Dr.Jit scalar)
     carry: object = None  # None, or (light-source texture, (its lo corner, 1 / span)): ``LightVolume.carried``
-    log_forward: bool = False  # interpolate all forward light as its logarithm (translucent light)
+    log_forward: bool = False  # translucent light: all forward light, interpolated as its logarithm
     leak_gain: object = 0.0    # the diffused light a finite cloud loses through its sides ("multiple")
     leak_rate: object = 1.0
 
@@ -101,6 +101,8 @@ class LightModel:
             factor = slab.factor
         if self.octaves is None:
             d_avg = direct * factor(k_d)
+            if not self.log_forward:  # low-albedo light: no forward-scattered light (I = 0)
+                return d_avg, 0.0, 1.0
             return d_avg, dr.maximum((direct + indirect) * factor(k_f) - d_avg, 0.0), 1.0
         log_d = dr.log(dr.maximum(direct, 1e-30))      # -tau
         A, B = 0.0 * direct, 0.0 * direct
