@@ -192,7 +192,8 @@ class LightVolume:
         import drjit as dr
         R, N = self.res, plan.n_slices
         C = 2 if plan.translucent else 1  # stored channels: (log D, log(D + I)), or D alone (I = 0)
-        store = dr.zeros(mi.Float, (N + 1) * R * R * C)
+        # every plane of every lane is written (the exit plane too); only a differentiated pass starts from zeros
+        store = (dr.zeros if self.differentiable else dr.empty)(mi.Float, (N + 1) * R * R * C)
         lane = dr.arange(mi.UInt32, R * R)
         offset = None
         if plan.frame.jitter is not None:

@@ -281,7 +281,7 @@ class SliceRenderer:
         dr.sync_thread()
         t_eye = time.perf_counter()
         H, W = spec.height, spec.width
-        rgb = np.asarray(out, dtype=np.float32).T.reshape(H, W, 3)
+        rgb = np.asarray(dr.ravel(out), dtype=np.float32).reshape(H, W, 3)  # interleaved by Dr.Jit: no transpose
         self.transmittance = np.asarray(transmittance, dtype=np.float32).reshape(H, W)
         self.timing = {"light_s": self._t_light - t_start if self._t_light else float("nan"),
                        "eye_s": t_eye - self._t_light if self._t_light else float("nan"),
@@ -461,7 +461,7 @@ def _interleave(mi, channels):
         return channels[0]
     n = dr.width(channels[0])
     vox = dr.arange(mi.UInt32, n) * C
-    out = dr.zeros(mi.Float, n * C)
+    out = dr.empty(mi.Float, n * C)  # every element is written below
     for c in range(C):
         dr.scatter(out, channels[c], vox + c)
     return out
