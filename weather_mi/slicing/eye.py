@@ -195,6 +195,10 @@ def ground_transmission(xp, tau, mu0, g):
 EYE_SPLIT = 4
 EYE_SPLIT_DEPTH = 0.1
 CARRY_SAMPLES = 2  # extinction samples of ``LightVolume.carried`` ("multiple" model)
+# an eye ray stops where its transmittance falls below this: what lies behind adds at most this fraction
+# of the light it would add unattenuated (at 1e-4 instead: images within 1e-3 of the brightest pixel,
+# 8% slower in the uniform low-albedo mode)
+OPAQUE_T = 1e-3
 
 
 def _capped(dr, light, cap):
@@ -322,7 +326,7 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
         done = ~split & (~sub | (part == M))        # the slab is done: on to the next
         i = dr.select(done, i + 1, i)
         part = dr.select(done, 0, part + 1)
-        return i, part, T, C, (i < count) & (T > 1e-4)
+        return i, part, T, C, (i < count) & (T > OPAQUE_T)
 
     n = rays.n
     state = (dr.zeros(mi.UInt32, n), dr.zeros(mi.UInt32, n), dr.full(mi.Float, 1.0, n), dr.zeros(mi.Color3f, n),
