@@ -222,7 +222,8 @@ def test_the_notebook_viewer_renders_and_closes():
         sess.state = sess.state.with_scale("cloud", 2.0)
         doubled = sess.hover_text(x + 0.5, y + 0.5)
         q = lambda text: float(text.split("q_cloud: ")[1].split(" g/kg")[0])  # noqa: E731
-        assert q(doubled) == pytest.approx(2 * q(plain), rel=2e-3) and "(x2)" in doubled
+        # both are shown to 3 significant digits: up to half a unit of the last digit each (0.6% at 1.0x)
+        assert q(doubled) == pytest.approx(2 * q(plain), rel=6e-3) and "(x2)" in doubled
     finally:
         v.close()
     assert not v.session.loop.alive
