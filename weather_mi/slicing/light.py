@@ -116,6 +116,8 @@ class SweepPlan:
     n_slices: int
     chunk: int
     translucent: bool
+    ka: object = None   # None, or each light ray's occupied span in slice units (occupancy.py): outside it
+    kb: object = None   # the medium is empty, and the light pass reads nothing there
 
 
 def dr_opaque(mi, value):
@@ -132,7 +134,7 @@ class LightVolume:
     its lookups interpolate (as logarithms: ``lookup(log_forward=True)``) without taking a logarithm per
     texel read."""
 
-    def __init__(self, mi, box, res: int, differentiable: bool = False):
+    def __init__(self, mi, box, res: int, differentiable: bool = False, occupancy=None):
         self.mi = mi
         self.lo, self.hi = (np.asarray(p, dtype=np.float64) for p in box)  # slicing box (world)
         self.res = int(res)
@@ -142,6 +144,7 @@ class LightVolume:
         self.frame: LookupFrame | None = None   # the geometry of the store, as kernel values
         self.n_slices = 0
         self._rays, self._rays_key = None, None
+        self.occupancy = occupancy  # an occupancy.OccupancyMap of the medium, or None
 
     # ------------------------------------------------------------------ the light pass
     def sweep(self, g: SliceGeometry, source, grid_box, translucent: bool, variance_per_m=None,
@@ -183,8 +186,9 @@ class LightVolume:
                tuple(np.asarray(grid_box, dtype=np.float64).ravel()))
         if self._rays_key != key:  # a slider move keeps the light rays (numpy work) of the last frame
             self._rays, self._rays_key = self._light_rays(g, grid_box), key
-        return SweepPlan(*self._rays, dl, var, inv_du2, inv_dv2, lookup_frame(mi, g, self.res, jitter), g.n_slices,
-                         int(chunk), bool(translucent))
+        q0, qs, kin, kout, span = self._rays
+        return SweepPlan(q0, qs, kin, kout, dl, var, inv_du2, inv_dv2, lookup_frame(mi, g, self.res, jitter),
+                         g.n_slices, int(chunk), bool(translucent), *span)
 
     def run(self, plan: "SweepPlan", source):
         """The light pass's kernels: the store of (planes, R, R, 2) floats (see the module docstring)."""
@@ -199,7 +203,7 @@ class LightVolume:
         if plan.frame.jitter is not None:
             offset = texel_offsets(dr, mi, lane % R, lane // R, plan.frame.jitter, plan.frame.rotation)
         through_slab = _slab_step(mi, source, (plan.q0, plan.qs, plan.kin, plan.kout), plan.dl, store, lane,
-                                  dr.opaque(mi.UInt32, R * R), plan.translucent, offset, N)
+                                  dr.opaque(mi.UInt32, R * R), plan.translucent, offset, N, (plan.ka, plan.kb))
         D = dr.full(mi.Float, 1.0, R * R)
         I = dr.zeros(mi.Float, R * R)
         starts = list(range(0, N, plan.chunk))
@@ -245,7 +249,13 @@ class LightVolume:
         F = lambda a: aligned_float(mi, a)  # noqa: E731
         q0 = mi.Point3f(F(q0[:, 0]), F(q0[:, 1]), F(q0[:, 2]))
         qs = mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in qs))
-        return q0, qs, F(k_in), F(k_out)
+        span = (None, None)
+        if self.occupancy is not None:  # the occupied part of each light ray, in slice units
+            L = float(np.linalg.norm(step))
+            o = mi.Point3f(*(F(p0[:, i]) for i in range(3)))
+            ta, tb = self.occupancy.spans(o, mi.Vector3f(*(float(c) / L for c in step)), F(k_in * L), F(k_out * L))
+            span = (ta / L, tb / L)
+        return q0, qs, F(k_in), F(k_out), span
 
     def _blur_plan(self, g: SliceGeometry, variance_per_m, reference_variance_per_m, dl):
         """(slabs per chunk, variance per slab (m^2), texel sizes du, dv (m)) of the operator splitting.
@@ -456,7 +466,8 @@ class LightVolume:
         return np.asarray(direct, dtype=np.float64), np.asarray(indirect, dtype=np.float64)
 
 
-def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offset=None, n_slices: int = 0):
+def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offset=None, n_slices: int = 0,
+               span=(None, None)):
     """The step of the light pass through one slab k: (k, D, I) -> (D, I) after the slab, storing the
     light at plane k (``store[lane + k plane]``, or its 2 channels for translucent light). ``rays``:
     (q0, qs, kin, kout) of ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab; ``offset``: None or each
@@ -476,8 +487,10 @@ def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offs
             a = dr.select(k == 0, kin, dr.clip(kj - 0.5, kin, kout))
             m = dr.clip(kj, kin, kout)
             b = dr.select(k == n_slices - 1, kout, dr.clip(kj + 0.5, kin, kout))
-        (e1, keep1), (e2, keep2) = (_mean_extinction(dr, source, q0, qs, x0, x1, LIGHT_SUBSAMPLES, x1 > x0)
-                                    for x0, x1 in ((a, m), (m, b)))   # (nothing to sample outside the box)
+        ka, kb = span  # (nothing to sample outside the box, nor outside the occupied span)
+        (e1, keep1), (e2, keep2) = (_mean_extinction(dr, source, q0, qs, x0, x1, LIGHT_SUBSAMPLES,
+                                                     (x1 > x0) if ka is None else (x1 > x0) & (x1 >= ka) & (x0 <= kb))
+                                    for x0, x1 in ((a, m), (m, b)))
         t1, t2 = dr.exp(-e1 * dl * (m - a)), dr.exp(-e2 * dl * (b - m))
         D_mid = D * t1
         if translucent:

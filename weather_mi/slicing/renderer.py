@@ -138,15 +138,16 @@ class SliceRenderer:
                                           use_accel=False)
         # the "multiple" model's parameters act in the eye pass only: its light pass is not differentiated
         # (one kernel for all slices instead of one per slice)
-        self.light = LightVolume(mi, self.box, self.light_res, differentiable and mode.light != "multiple")
+        # each view's rays visit only the slabs between their first and last occupied block (occupancy.py)
+        self.occupancy = OccupancyMap(mi, vol.beta_total, self.grid_box, vol.spacing)
+        self.light = LightVolume(mi, self.box, self.light_res, differentiable and mode.light != "multiple",
+                                 occupancy=self.occupancy)
         self.sky_light = None
         if mode.light == "multiple":
-            self.sky_light = LightVolume(mi, self.box, min(SKY_RES, self.light_res))
+            self.sky_light = LightVolume(mi, self.box, min(SKY_RES, self.light_res), occupancy=self.occupancy)
             self._sky_geometry = slice_geometry(np.array([0.0, 0.0, -1.0]), np.array([0.0, 0.0, 1.0]), self.box,
                                                 min(SKY_SLICES, self.slices))
         self.views = ViewCache(self.box, terrain=getattr(vol, "terrain", None))
-        # each view's rays visit only the slabs between their first and last occupied block (occupancy.py)
-        self.occupancy = OccupancyMap(mi, vol.beta_total, self.grid_box, vol.spacing)
         self._spans = BoundedCache(4)
         # the cloud's asymmetry parameter for the ground's transmission: species weighted by their scattering
         sca = np.array([float(np.sum(vol.beta_ext[si])) * float(np.mean(self.albedo_rgb[si]))
