@@ -253,8 +253,10 @@ class LightVolume:
         if self.occupancy is not None:  # the occupied part of each light ray, in slice units
             L = float(np.linalg.norm(step))
             o = mi.Point3f(*(F(p0[:, i]) for i in range(3)))
-            ta, tb = self.occupancy.spans(o, mi.Vector3f(*(float(c) / L for c in step)), F(k_in * L), F(k_out * L))
-            span = (ta / L, tb / L)
+            direction = mi.Vector3f(*(dr.opaque(mi.Float, float(c) / L) for c in step))
+            ta, tb = self.occupancy.spans(o, direction, F(k_in * L), F(k_out * L))
+            inv_L = dr.opaque(mi.Float, 1.0 / L)
+            span = (ta * inv_L, tb * inv_L)
         return q0, qs, F(k_in), F(k_out), span
 
     def _blur_plan(self, g: SliceGeometry, variance_per_m, reference_variance_per_m, dl):

@@ -58,12 +58,14 @@ class OccupancyMap:
 
     def spans(self, origin, direction, t0, t1):
         """(ta, tb): per ray, the part of [t0, t1] between its first and last sample in a marked block,
-        widened by a step (ta > tb: none)."""
+        widened by a step (ta > tb: none). Directions given as numbers should be opaque Dr.Jit values, or
+        every new one compiles a kernel."""
         mi = self.mi
         import drjit as dr
-        glo = mi.Point3f(*(float(c) for c in self.lo))
-        inv = mi.Vector3f(*(float(c) for c in self.inv_span))
-        dt = self.step_m
+        op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731  (new values compile nothing)
+        glo = mi.Point3f(*(op(c) for c in self.lo))
+        inv = mi.Vector3f(*(op(c) for c in self.inv_span))
+        dt = op(self.step_m)
         n = dr.width(t0)
 
         def body(t, first, last):
