@@ -32,35 +32,19 @@ import weather_mi as wm
 from weather_mi.imageio import auto_exposure, write_png
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer
 from weather_mi.slicing.geometry import slice_geometry
+from weather_mi.study.regions import eye_surface
 
 TILE = 32
 
 
 def surface_slice_index(r: SliceRenderer, spec, slices: int):
     """(k, tau_total): the slice index (of a ``slices``-plane geometry) where the eye ray's optical depth
-    reaches 1, and the ray's total optical depth through the slicing box, both (H, W)."""
-    import drjit as dr
-    mi = r.mi
-    rays = r.views.get(mi, spec)
+    reaches 1 (``study.regions.eye_surface``; 0 where it does not), and the ray's total optical depth
+    through the slicing box, both (H, W)."""
     g = slice_geometry(spec.camera.forward, spec.sun.to_sun, r.box, slices)
-    glo = mi.Point3f(*(float(c) for c in r.grid_box[0]))
-    inv = mi.Vector3f(*(1.0 / float(h - l) for l, h in zip(*r.grid_box)))
-    dt = 0.25 * min(r.vol.spacing)
-    o, d = rays.origin, rays.direction
-
-    def body(t, tau, t_hit):
-        ext = dr.maximum(r.tex_eye.eval((o + (t + 0.5 * dt) * d - glo) * inv)[0], 0.0)
-        tau2 = tau + ext * dt
-        crossing = (tau < 1.0) & (tau2 >= 1.0)
-        t_hit = dr.select(crossing, t + dt * (1.0 - tau) / dr.maximum(tau2 - tau, 1e-30), t_hit)
-        return t + dt, tau2, t_hit
-
-    _, tau, t_hit = dr.while_loop((mi.Float(rays.t0), dr.zeros(mi.Float, rays.n), dr.zeros(mi.Float, rays.n)),
-                                  lambda t, tau, th: t < rays.t1, body)
-    p = np.asarray(o + t_hit * d, dtype=np.float64).T
-    k = g.slice_of(p @ g.axis)
-    shape = (spec.height, spec.width)
-    return k.reshape(shape), np.asarray(tau, dtype=np.float64).reshape(shape)
+    p1, tau = eye_surface(r, spec)
+    k = g.slice_of(p1.reshape(-1, 3) @ g.axis).reshape(tau.shape)
+    return np.where(np.isfinite(k), k, 0.0), tau
 
 
 def luminance(rgb):

@@ -66,7 +66,7 @@ def main(argv=None) -> int:
     modes = args.modes.split(",")
     per_mode = {m: [] for m in modes}
     worst = []
-    vols = {}
+    vols, renderers = {}, {}
     for scene, lighting in names:
         if scene not in vols:
             vols[scene] = load_scene(scene, cfg, data_dir=args.data)
@@ -77,7 +77,9 @@ def main(argv=None) -> int:
         spec = view(vol, lighting, cfg)
         ref = reference(out, scene, lighting, vol, spec, 128, args.target_rse, args.max_seconds).radiance
         for m in modes:
-            r = SliceRenderer(vol, MODES[m], slices=args.slices)
+            if (scene, m) not in renderers:  # one per storm and mode: its lightings reuse textures and kernels
+                renderers[(scene, m)] = SliceRenderer(vol, MODES[m], slices=args.slices)
+            r = renderers[(scene, m)]
             img = r.frame(spec, fitted if MODES[m].light == "multiple" else SliceParams()).radiance
             rows = region_residuals(ref, img, pixel_regions(r, spec))
             per_mode[m].append(rows)

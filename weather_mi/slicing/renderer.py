@@ -31,7 +31,7 @@ from .jitter import jitter_rotation, slab_offsets
 from .light import LightVolume, _param, auto_light_res, variance_per_metre
 from .modes import SliceMode, SliceParams
 from .occupancy import OccupancyMap
-from .view import BoundedCache, ViewCache
+from .view import ViewCache
 
 # the cone angle whose spread sets the light pass's blur steps (independent of the interactive cone angle)
 REFERENCE_CONE_DEG = 20.0
@@ -136,10 +136,10 @@ class SliceRenderer:
         self.light_channels = 2 if mode.light == "translucent" else 1
         self.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (self.light_channels,), np.float32)),
                                           use_accel=False)
+        # light and eye rays read the medium only between their first and last occupied block (occupancy.py)
+        self.occupancy = OccupancyMap(mi, vol.beta_total, self.grid_box, vol.spacing)
         # the "multiple" model's parameters act in the eye pass only: its light pass is not differentiated
         # (one kernel for all slices instead of one per slice)
-        # each view's rays visit only the slabs between their first and last occupied block (occupancy.py)
-        self.occupancy = OccupancyMap(mi, vol.beta_total, self.grid_box, vol.spacing)
         self.light = LightVolume(mi, self.box, self.light_res, differentiable and mode.light != "multiple",
                                  occupancy=self.occupancy)
         self.sky_light = None
@@ -147,8 +147,7 @@ class SliceRenderer:
             self.sky_light = LightVolume(mi, self.box, min(SKY_RES, self.light_res), occupancy=self.occupancy)
             self._sky_geometry = slice_geometry(np.array([0.0, 0.0, -1.0]), np.array([0.0, 0.0, 1.0]), self.box,
                                                 min(SKY_SLICES, self.slices))
-        self.views = ViewCache(self.box, terrain=getattr(vol, "terrain", None))
-        self._spans = BoundedCache(4)
+        self.views = ViewCache(self.box, terrain=getattr(vol, "terrain", None), occupancy=self.occupancy)
         # the cloud's asymmetry parameter for the ground's transmission: species weighted by their scattering
         sca = np.array([float(np.sum(vol.beta_ext[si])) * float(np.mean(self.albedo_rgb[si]))
                         for si in range(self.n_species)]) * (1.0 - self.peak_fraction)
@@ -370,12 +369,8 @@ class SliceRenderer:
         if spec.ground is not None:  # over a terrain the rays carry its albedo and slope (ViewRays.ground_sun/_sky)
             rho = np.asarray(spec.ground.albedo, dtype=np.float64) if rays.ground_sun is None else np.ones(3)
             ground = (_colour(mi, rho / np.pi * sun * max(float(spec.sun.to_sun[2]), 0.0)), _colour(mi, rho / np.pi * e_sky))
-        names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern")
+        names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern", "span_a", "span_b")
         ray_arrays = {k: getattr(rays, k) for k in names + (("ground_sun", "ground_sky") if rays.ground_sun is not None else ())}
-        span_key = (spec.camera, spec.width, spec.height, spec.ground)
-        if span_key not in self._spans:
-            self._spans[span_key] = self.occupancy.spans(rays.origin, rays.direction, rays.t0, rays.t1)
-        ray_arrays["span_a"], ray_arrays["span_b"] = self._spans[span_key]
         op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
         grid = (mi.Point3f(*(op(c) for c in self.grid_box[0])),
                 mi.Vector3f(*(op(1.0 / (h - l)) for l, h in zip(*self.grid_box))))

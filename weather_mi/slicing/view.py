@@ -58,6 +58,8 @@ class ViewRays:
     pattern: object = None    # mi.Float
     ground_sun: object = None  # mi.Float over a terrain: albedo max(n . s, 0) / mu0 at the ground point
     ground_sky: object = None  # mi.Float over a terrain: albedo (1 + n_z) / 2 (a tilted plane's share of the sky)
+    span_a: object = None      # mi.Float: where each ray's occupied span begins and ends (occupancy.py; the
+    span_b: object = None      # whole [t0, t1] without an occupancy map)
     phase_colour: dict = field(default_factory=lambda: BoundedCache(8))  # per-pixel phase colours by (group, colour)
 
 
@@ -65,9 +67,10 @@ class ViewCache:
     """Camera rays and background radiance for the most recent views (``maxsize`` of each: an orbiting
     camera or a moving sun does not grow memory), and the sky emitters they were made with."""
 
-    def __init__(self, box, maxsize: int = 4, terrain=None):
+    def __init__(self, box, maxsize: int = 4, terrain=None, occupancy=None):
         self.box = tuple(np.asarray(p, dtype=np.float64) for p in box)
         self.terrain = terrain  # weather_mi.terrain.Terrain: the ground is its surface, not the flat plane
+        self.occupancy = occupancy  # occupancy.OccupancyMap of the medium: each ray's occupied span
         self.rays = BoundedCache(maxsize)
         self.backgrounds = BoundedCache(maxsize)
         self.sky = BoundedCache(4 * maxsize)  # sky emitters and sky irradiance (background.py)
@@ -84,8 +87,8 @@ class ViewCache:
             if terrain is not None:
                 pg = o + np.where(np.isfinite(tg), tg, 0.0)[:, None] * d
                 surface = terrain.surface_at(pg[:, 0], pg[:, 1])[1:]
-            self.rays[ray_key] = (o, d, t0, np.minimum(t1, tg), tg, surface)
-        o, d, t0, t1, tg, surface = self.rays[ray_key]
+            self.rays[ray_key] = (o, d, t0, np.minimum(t1, tg), tg, surface, self._spans(mi, o, d, t0, np.minimum(t1, tg)))
+        o, d, t0, t1, tg, surface, spans = self.rays[ray_key]
         hit = np.isfinite(tg)
         bg_key = ray_key + (spec.sun.azimuth, spec.sun.elevation, spec.sun.irradiance, spec.sky)
         if bg_key not in self.backgrounds:
@@ -98,8 +101,17 @@ class ViewCache:
                 F(t0), F(np.where(np.isfinite(t1), t1, t0)), F(hit) > 0.5,
                 mi.Point3f(*(F(pg[:, i]) for i in range(3))), mi.Color3f(*(F(bg[:, i]) for i in range(3))),
                 d @ spec.sun.to_sun, o.shape[0], F(offset_pattern(spec.width, spec.height)),
-                *_terrain_weights(F, spec, surface, hit))
+                *_terrain_weights(F, spec, surface, hit), *spans)
         return self.backgrounds[bg_key]
+
+    def _spans(self, mi, o, d, t0, t1):
+        """(span_a, span_b) of ``ViewRays`` (once per view, not per sun)."""
+        F = lambda a: aligned_float(mi, a)  # noqa: E731
+        t1 = np.where(np.isfinite(t1), t1, t0)
+        if self.occupancy is None:
+            return F(t0), F(t1)
+        return self.occupancy.spans(mi.Point3f(*(F(o[:, i]) for i in range(3))),
+                                    mi.Vector3f(*(F(d[:, i]) for i in range(3))), F(t0), F(t1))
 
 
 def _terrain_weights(F, spec: SceneSpec, surface, hit: np.ndarray):
