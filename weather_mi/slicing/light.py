@@ -118,6 +118,7 @@ class SweepPlan:
     translucent: bool
     ka: object = None   # None, or each light ray's occupied span in slice units (occupancy.py): outside it
     kb: object = None   # the medium is empty, and the light pass reads nothing there
+    keep: object = None  # None, or (beta - beta_f) / beta where the source holds beta alone (translucent)
 
 
 def dr_opaque(mi, value):
@@ -173,9 +174,11 @@ class LightVolume:
         self.bind(plan, self.run(plan, source))
 
     def plan(self, g: SliceGeometry, grid_box, translucent: bool, variance_per_m=None,
-             reference_variance_per_m: float | None = None, jitter=None) -> "SweepPlan":
+             reference_variance_per_m: float | None = None, jitter=None, keep=None) -> "SweepPlan":
         """Everything ``run`` needs from ``g`` and the parameters, as kernel inputs (see ``sweep``);
-        ``jitter``: None, or (amplitude, rotation) of per-texel plane offsets (opaque scalars, jitter.py)."""
+        ``jitter``: None, or (amplitude, rotation) of per-texel plane offsets (opaque scalars, jitter.py);
+        ``keep``: None, or the ratio (beta - beta_f) / beta (a Dr.Jit Float) of translucent light whose
+        ``source`` holds beta alone (one forward fraction over the whole medium)."""
         mi = self.mi
         dl = dr_opaque(mi, g.light_step_m)
         chunk, var, inv_du2, inv_dv2 = g.n_slices, None, None, None
@@ -188,7 +191,7 @@ class LightVolume:
             self._rays, self._rays_key = self._light_rays(g, grid_box), key
         q0, qs, kin, kout, span = self._rays
         return SweepPlan(q0, qs, kin, kout, dl, var, inv_du2, inv_dv2, lookup_frame(mi, g, self.res, jitter),
-                         g.n_slices, int(chunk), bool(translucent), *span)
+                         g.n_slices, int(chunk), bool(translucent), *span, keep=keep)
 
     def run(self, plan: "SweepPlan", source):
         """The light pass's kernels: the store of (planes, R, R, 2) floats (see the module docstring)."""
@@ -203,7 +206,8 @@ class LightVolume:
         if plan.frame.jitter is not None:
             offset = texel_offsets(dr, mi, lane % R, lane // R, plan.frame.jitter, plan.frame.rotation)
         through_slab = _slab_step(mi, source, (plan.q0, plan.qs, plan.kin, plan.kout), plan.dl, store, lane,
-                                  dr.opaque(mi.UInt32, R * R), plan.translucent, offset, N, (plan.ka, plan.kb))
+                                  dr.opaque(mi.UInt32, R * R), plan.translucent, offset, N, (plan.ka, plan.kb),
+                                  plan.keep)
         D = dr.full(mi.Float, 1.0, R * R)
         I = dr.zeros(mi.Float, R * R)
         starts = list(range(0, N, plan.chunk))
@@ -469,12 +473,12 @@ class LightVolume:
 
 
 def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offset=None, n_slices: int = 0,
-               span=(None, None)):
+               span=(None, None), keep=None):
     """The step of the light pass through one slab k: (k, D, I) -> (D, I) after the slab, storing the
     light at plane k (``store[lane + k plane]``, or its 2 channels for translucent light). ``rays``:
     (q0, qs, kin, kout) of ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab; ``offset``: None or each
     lane's plane offset j (slice units): its slabs are [k + j - 1/2, k + j + 1/2], the first and the last
-    reaching to where the ray enters and leaves the box."""
+    reaching to where the ray enters and leaves the box; ``keep``: see ``SweepPlan``."""
     import drjit as dr
     q0, qs, kin, kout = rays
 
@@ -491,7 +495,8 @@ def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offs
             b = dr.select(k == n_slices - 1, kout, dr.clip(kj + 0.5, kin, kout))
         ka, kb = span  # (nothing to sample outside the box, nor outside the occupied span)
         (e1, keep1), (e2, keep2) = (_mean_extinction(dr, source, q0, qs, x0, x1, LIGHT_SUBSAMPLES,
-                                                     (x1 > x0) if ka is None else (x1 > x0) & (x1 >= ka) & (x0 <= kb))
+                                                     (x1 > x0) if ka is None else (x1 > x0) & (x1 >= ka) & (x0 <= kb),
+                                                     keep)
                                     for x0, x1 in ((a, m), (m, b)))
         t1, t2 = dr.exp(-e1 * dl * (m - a)), dr.exp(-e2 * dl * (b - m))
         D_mid = D * t1
@@ -521,26 +526,27 @@ def _stored(dr, D, I, log_store: bool):
     return dr.log(dr.maximum(D, 1e-30)), dr.log(dr.maximum(D + I, 1e-30))
 
 
-def source_extinction(dr, source, t, active=True):
+def source_extinction(dr, source, t, active=True, keep=None):
     """(extinction, extinction of all forward light beta - beta_f) in 1/m of the light pass's ``source``
-    texture at texture coordinates t: channels (beta, beta_f), or beta alone where no light is scattered
-    forward (the low-albedo and "multiple" light: then both are beta)."""
+    texture at texture coordinates t: channels (beta, beta_f), or beta alone, where no light is scattered
+    forward (the low-albedo and "multiple" light: then both are beta) or where beta - beta_f is ``keep``
+    x beta."""
     v = source.eval(t, active)
     e = dr.maximum(v[0], 0.0)
     if len(v) == 1:
-        return e, e
+        return e, (e if keep is None else e * keep)
     return e, dr.maximum(e - dr.maximum(v[1], 0.0), 0.0)
 
 
-def _mean_extinction(dr, source, q0, qs, x0, x1, n: int, active=True):
+def _mean_extinction(dr, source, q0, qs, x0, x1, n: int, active=True, keep=None):
     """Mean extinction and mean extinction of all forward light (beta - beta_f, 1/m) along the light ray
     q0 + k qs between slice units x0 and x1, from ``n`` evenly spaced samples (the midpoint rule)."""
-    ext, keep = 0.0, 0.0
+    ext, kept = 0.0, 0.0
     for i in range(n):
-        e, k = source_extinction(dr, source, q0 + (x0 + ((i + 0.5) / n) * (x1 - x0)) * qs, active)
+        e, k = source_extinction(dr, source, q0 + (x0 + ((i + 0.5) / n) * (x1 - x0)) * qs, active, keep)
         ext += e
-        keep += k
-    return ext * (1.0 / n), keep * (1.0 / n)
+        kept += k
+    return ext * (1.0 / n), kept * (1.0 / n)
 
 
 def _param(mi, value):

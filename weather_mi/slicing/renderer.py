@@ -112,6 +112,7 @@ class SliceRenderer:
                 raise ValueError(f"detail_noise must have the volume's shape {self.shape}, got {n.shape}")
             self.detail_noise = mi.Float(np.ascontiguousarray(n).ravel())
         self.beta_s = [mi.Float(np.ascontiguousarray(beta_s[..., si]).ravel()) for si in range(self.n_species)]  # (z, y, x) each
+        self.beta_sum_s = beta_s.reshape(-1, self.n_species).sum(axis=0, dtype=np.float64)  # 1/m, over all voxels
         self.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
         self.voxel_m = float(np.mean(vol.spacing))
         tables = list(vol.require_phase_tables())
@@ -132,8 +133,10 @@ class SliceRenderer:
                                       self.albedo_rgb / np.maximum(self.albedo_rgb.mean(axis=1, keepdims=True), 1e-12))
         self.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (1 + len(self.groups),), np.float32)),
                                     use_accel=False)
-        # the light pass's source: (beta, beta_f), or beta alone where no light is scattered forward
-        self.light_channels = 2 if mode.light == "translucent" else 1
+        # the light pass's source: (beta, beta_f), or beta alone where no light is scattered forward or
+        # where beta_f is one fraction of beta (``forward_keep``)
+        self.uniform_forward = mode.light == "translucent" and _one_forward_fraction(mode, self.albedo_rgb)
+        self.light_channels = 2 if mode.light == "translucent" and not self.uniform_forward else 1
         self.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (self.light_channels,), np.float32)),
                                           use_accel=False)
         # light and eye rays read the medium only between their first and last occupied block (occupancy.py)
@@ -189,6 +192,16 @@ class SliceRenderer:
         else:
             fwd = np.array([float(np.mean(t.cone_fraction(theta0))) for t in self.tables])
         return scale, omega, tint, fwd
+
+    def forward_keep(self, scale, omega, fwd):
+        """(beta - beta_f) / beta of a medium whose species share one forward fraction f (``uniform_forward``):
+        1 - f omega_bar, omega_bar the species' albedos weighted by their extinction over the volume (a
+        Dr.Jit Float: f may carry gradients). The light pass then reads beta alone. The albedos of such a
+        medium agree within UNIFORM_ALBEDO_SPREAD (cloud, ice, rain, snow, graupel at 550 nm: 1e-4), and
+        so does beta_f / beta everywhere. ``scale, omega, fwd``: of ``_species_vectors``."""
+        w = np.asarray(scale, dtype=np.float64) * self.beta_sum_s
+        w = w / max(float(w.sum()), 1e-30)
+        return 1.0 - _param(self.mi, fwd[0]) * float(np.dot(w, omega))
 
     def _detail_amplitudes(self, params: SliceParams) -> list[float]:
         from .modes import DEFAULT_DETAIL
@@ -264,7 +277,8 @@ class SliceRenderer:
         rebuilt = key is None or key != self._texture_key  # a sun or camera move keeps the textures
         self._texture_key = key
         g = slice_geometry(spec.camera.forward, spec.sun.to_sun, self.box, self.slices)
-        inputs = self._frame_inputs(g, spec, params, tint, rebuilt)
+        keep = self.forward_keep(scale, omega, fwd) if self.uniform_forward else None
+        inputs = self._frame_inputs(g, spec, params, tint, rebuilt, keep)
         if rebuilt:  # built by the frame's kernels, from opaque values
             inputs["build"] = [[_param(mi, v) for v in x] for x in (scale, omega, fwd, detail or [])]
         if return_arrays or self.differentiable or not self.frozen:
@@ -296,10 +310,10 @@ class SliceRenderer:
                 "forward_fraction_per_species": [None if dr.is_array_v(v) else float(v) for v in fwd]}
         return Image(rgb, np.zeros_like(rgb), meta)
 
-    def _frame_inputs(self, g, spec: SceneSpec, params: SliceParams, tint, rebuilt: bool) -> dict:
+    def _frame_inputs(self, g, spec: SceneSpec, params: SliceParams, tint, rebuilt: bool, keep=None) -> dict:
         """Everything the frame's kernels read, as a Dr.Jit PyTree (arrays, opaque scalars, textures; the
         plain ints and flags in it set the kernels' structure): the light passes' plans, the eye pass's
-        per-pixel and per-frame values."""
+        per-pixel and per-frame values. ``keep``: ``forward_keep`` where the light source is beta alone."""
         mi = self.mi
         translucent = self.mode.light == "translucent"
         blur = params.blur_length_m if params.blur_length_m is not None else self.voxel_m
@@ -308,7 +322,8 @@ class SliceRenderer:
             (_param(mi, params.slab_jitter), _param(mi, jitter_rotation(params.jitter_frame)))
         sun = self.light.plan(g, self.grid_box, translucent,
                               variance_per_metre(params.cone_angle_deg, blur, mi) if translucent else None,
-                              variance_per_metre(REFERENCE_CONE_DEG, _number(blur)) if translucent else None, jitter)
+                              variance_per_metre(REFERENCE_CONE_DEG, _number(blur)) if translucent else None, jitter,
+                              keep=keep)
         sky, sky_store, sky_frame = None, None, None
         if self.sky_light is not None:
             if rebuilt:  # the zenith sweep depends on the extinction only
@@ -419,6 +434,18 @@ def _species_albedo_and_colour(vol) -> tuple[np.ndarray, np.ndarray]:
     mean_alb = vol.albedo.reshape(-1, 3)[vol.beta_total.ravel() > 0].mean(axis=0) \
         if np.any(vol.beta_total > 0) else np.ones(3)
     return np.broadcast_to(mean_alb, (S, 3)).copy(), np.ones((S, 3))
+
+
+# a "uniform" medium's light pass reads beta alone (beta_f = f omega_bar beta) where the species' albedos
+# agree within this; otherwise it reads (beta, beta_f)
+UNIFORM_ALBEDO_SPREAD = 1e-3
+
+
+def _one_forward_fraction(mode, albedo_rgb) -> bool:
+    """Whether beta_f / beta is one number over the medium: one phase function (so one forward fraction
+    f) and albedos that agree within UNIFORM_ALBEDO_SPREAD."""
+    omega = np.asarray(albedo_rgb, dtype=np.float64).mean(axis=1)
+    return mode.phase == "uniform" and float(omega.max() - omega.min()) <= UNIFORM_ALBEDO_SPREAD
 
 
 def _number(value) -> float:
