@@ -93,6 +93,12 @@ class LightModel:
             factor, cap = slab.factor, 1.0
         elif slab is None:
             direct, indirect = self.sun.lookup(p, log_direct=log, log_forward=self.log_forward, active=active)
+        elif self.log_forward:  # translucent: the decay rates straight from the interpolated logarithms
+            (log_d, log_f), (log_d_prev, log_f_prev) = self.sun.lookup(p, with_previous=True, log_forward=True,
+                                                                       logs=True, active=active)
+            d_avg = dr.exp(log_d) * slab.factor(dr.maximum(log_d_prev - log_d, 0.0))  # one slice's depth, direct
+            forward = dr.exp(log_f) * slab.factor(dr.maximum(log_f_prev - log_f, 0.0))  # and all forward light
+            return d_avg, dr.maximum(forward - d_avg, 0.0), 1.0
         else:
             (direct, indirect), (d_prev, i_prev) = self.sun.lookup(p, with_previous=True, log_direct=log,
                                                                    log_forward=self.log_forward, active=active)

@@ -208,18 +208,21 @@ class LightVolume:
         through_slab = _slab_step(mi, source, (plan.q0, plan.qs, plan.kin, plan.kout), plan.dl, store, lane,
                                   dr.opaque(mi.UInt32, R * R), plan.translucent, offset, N, (plan.ka, plan.kb),
                                   plan.keep)
-        D = dr.full(mi.Float, 1.0, R * R)
-        I = dr.zeros(mi.Float, R * R)
+        # (D, I), and log D for translucent light (carried as such: no logarithm per stored plane)
+        state = (dr.full(mi.Float, 1.0, R * R), dr.zeros(mi.Float, R * R))
+        if plan.translucent:
+            state += (dr.zeros(mi.Float, R * R),)
         starts = list(range(0, N, plan.chunk))
         for j, k0 in enumerate(starts):
             k1 = min(k0 + plan.chunk, N)
             if plan.translucent and j > 0:
                 n_prev = dr.opaque(mi.Float, float(k0 - starts[j - 1]))
-                I = _blur(mi, dr, I, R, blur_weights(dr, plan.var * n_prev * plan.inv_du2),
-                          blur_weights(dr, plan.var * n_prev * plan.inv_dv2))
-            D, I = self._through_slabs(through_slab, D, I, k0, k1, lane, store)
+                blurred = _blur(mi, dr, state[1], R, blur_weights(dr, plan.var * n_prev * plan.inv_du2),
+                                blur_weights(dr, plan.var * n_prev * plan.inv_dv2))
+                state = (state[0], blurred, *state[2:])
+            state = self._through_slabs(through_slab, state, k0, k1, lane, store)
         at = (lane + dr.opaque(mi.UInt32, N * R * R)) * C
-        D, I = _stored(dr, D, I, plan.translucent)
+        D, I = _stored(dr, state[0], state[1], plan.translucent)
         dr.scatter(store, D, at)
         if plan.translucent:
             dr.scatter(store, I, at + 1)
@@ -282,34 +285,34 @@ class LightVolume:
         chunk = int(np.clip(BLUR_STEP_VARIANCE / max(per_slab, 1e-12), 1, g.n_slices))
         return chunk, var, du, dv
 
-    def _through_slabs(self, through_slab, D, I, k0: int, k1: int, lane, store):
-        """Carry (D, I) through slabs k0 .. k1 - 1: one loop kernel, or slab by slab when differentiable."""
+    def _through_slabs(self, through_slab, state, k0: int, k1: int, lane, store):
+        """Carry the light's ``state`` ((D, I), and log D for translucent light) through slabs k0 .. k1 - 1:
+        one loop kernel, or slab by slab when differentiable."""
         mi = self.mi
         import drjit as dr
         if self.differentiable:
             for k in range(k0, k1):
-                D, I = through_slab(dr.opaque(mi.UInt32, k), D, I)
-                dr.eval(D, I, store)  # AD keeps its graph across evaluations
+                state = through_slab(dr.opaque(mi.UInt32, k), *state)
+                dr.eval(*state, store)  # AD keeps its graph across evaluations
                 # identity gathers: their adjoints are scatters, so the reverse pass stores the
                 # adjoints of D and I at every slice instead of rebuilding the whole chain of later
                 # slices in each kernel (O(N^2) operations, minutes of LLVM time at 96 slices)
-                D = dr.gather(mi.Float, D, lane)
-                I = dr.gather(mi.Float, I, lane)
-            return D, I
+                state = tuple(dr.gather(mi.Float, v, lane) for v in state)
+            return state
         stop = dr.opaque(mi.UInt32, k1)
 
-        def body(k, D, I):
-            D, I = through_slab(k, D, I)
-            return k + 1, D, I
+        def body(k, *st):
+            return (k + 1, *through_slab(k, *st))
 
-        _, D, I = dr.while_loop((dr.zeros(mi.UInt32, self.res * self.res) + dr.opaque(mi.UInt32, k0), D, I),
-                                lambda k, D, I: k < stop, body)
-        dr.eval(D, I, store)
-        return D, I
+        out = dr.while_loop((dr.zeros(mi.UInt32, self.res * self.res) + dr.opaque(mi.UInt32, k0), *state),
+                            lambda k, *st: k < stop, body)
+        state = tuple(out[1:])
+        dr.eval(*state, store)
+        return state
 
     # ------------------------------------------------------------------ the lookup
     def lookup(self, p, exit_plane: bool = False, with_previous: bool = False, log_direct: bool = False,
-               log_forward: bool = False, active=True):
+               log_forward: bool = False, logs: bool = False, active=True):
         """(direct, indirect) light at world points ``p`` (mi.Point3f) inside a kernel: bilinear in
         the buffer, linear between the two nearest planes; (1, 0) on the light's side of the box and
         outside the buffer's footprint (light rays that miss the box). With ``exit_plane``: the light
@@ -321,10 +324,13 @@ class LightVolume:
         of a dense tower, D falls from 1 to exp(-50), and a linear interpolation of D leaves most of the
         slab unshadowed and then drops). With ``log_forward``: all forward light D + I is interpolated as
         its logarithm too (it decays exponentially, at the extinction less the forward scattering), and
-        I = (D + I) - D. ``active``: lanes that need the light (the others read nothing)."""
+        I = (D + I) - D; with ``logs`` as well, the interpolated logarithms themselves: (log D, log(D + I))
+        instead of (D, I), 0 where unlit. ``active``: lanes that need the light (the others read nothing)."""
         mi = self.mi
         import drjit as dr
         f, R, n_slices = self.frame, self.res, self.n_slices
+        logs = logs and log_forward
+        unlit_value = (0.0, 0.0) if logs else (1.0, 0.0)
         kf, x0, y0, fx, fy, outside = self._coordinates(p)
         if exit_plane:
             kf = mi.Float(float(n_slices))
@@ -349,24 +355,28 @@ class LightVolume:
             return (a * (1 - fx) + b * fx) * (1 - fy) + (c * (1 - fx) + d * fx) * fy
 
         def light(v):
+            if logs:
+                return v
             if log_forward:
                 d = dr.exp(v[0])
                 return mi.Array2f(d, dr.maximum(dr.exp(v[1]) - d, 0.0))
             return mi.Array2f(dr.exp(v[0]), v[1]) if log_direct else v
 
         if f.jitter is not None:
-            return self._lookup_offset(kf, x0, y0, fx, fy, outside, texel, light, with_previous, exit_plane)
+            return self._lookup_offset(kf, x0, y0, fx, fy, outside, texel, light, with_previous, exit_plane,
+                                       unlit_value)
         here, after = plane(k0), plane(k0 + 1)
         val = light((1.0 - fk) * here + fk * after)
+        u0, u1 = unlit_value
         unlit = (kf < -0.5) | outside
-        out = (dr.select(unlit, 1.0, val[0]), dr.select(unlit, 0.0, val[1]))
+        out = (dr.select(unlit, u0, val[0]), dr.select(unlit, u1, val[1]))
         if not with_previous:
             return out
         # one plane nearer the light: planes k0 - 1 and k0 (plane 0 where k0 = 0: the clamp of kf - 1)
         before = plane(dr.select(k0 > 0, k0 - 1, 0))
         prev = light(dr.select(k0 > 0, (1.0 - fk) * before + fk * here, here))
         unlit = (kf < 0.5) | outside
-        return out, (dr.select(unlit, 1.0, prev[0]), dr.select(unlit, 0.0, prev[1]))
+        return out, (dr.select(unlit, u0, prev[0]), dr.select(unlit, u1, prev[1]))
 
     def _gather(self, at, active):
         """The stored pair at texel-plane index ``at``; where no light is scattered forward (I = 0, not
@@ -436,7 +446,8 @@ class LightVolume:
         unlit = (kf < -0.5) | outside
         return dr.select(unlit, 1.0, D), dr.select(unlit, 0.0, dr.maximum(F - D, 0.0))
 
-    def _lookup_offset(self, kf, x0, y0, fx, fy, outside, texel, light, with_previous, exit_plane):
+    def _lookup_offset(self, kf, x0, y0, fx, fy, outside, texel, light, with_previous, exit_plane,
+                       unlit_value=(1.0, 0.0)):
         """``lookup`` where every texel's planes are offset (``LookupFrame.jitter``): linear between the
         two nearest of each corner texel's planes, then bilinear between the four corners."""
         mi = self.mi
@@ -456,13 +467,14 @@ class LightVolume:
                 before = texel(dr.select(k0 > 0, base - R * R, base))
                 prev = prev + w * dr.select(k0 > 0, (1.0 - fk) * before + fk * here, here)
         val = light(val)
+        u0, u1 = unlit_value
         unlit = (kf < -0.5) | outside
-        out = (dr.select(unlit, 1.0, val[0]), dr.select(unlit, 0.0, val[1]))
+        out = (dr.select(unlit, u0, val[0]), dr.select(unlit, u1, val[1]))
         if not with_previous:
             return out
         prev = light(prev)
         unlit = (kf < 0.5) | outside
-        return out, (dr.select(unlit, 1.0, prev[0]), dr.select(unlit, 0.0, prev[1]))
+        return out, (dr.select(unlit, u0, prev[0]), dr.select(unlit, u1, prev[1]))
 
     def light_at(self, points) -> tuple[np.ndarray, np.ndarray]:
         """Direct and indirect light (fractions of the light's irradiance) at world points (N, 3)."""
@@ -474,7 +486,8 @@ class LightVolume:
 
 def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offset=None, n_slices: int = 0,
                span=(None, None), keep=None):
-    """The step of the light pass through one slab k: (k, D, I) -> (D, I) after the slab, storing the
+    """The step of the light pass through one slab k: (k, D, I) -> (D, I) after the slab (translucent
+    light: (k, D, I, log D) -> (D, I, log D), in logarithms: no logarithm per stored value), storing the
     light at plane k (``store[lane + k plane]``, or its 2 channels for translucent light). ``rays``:
     (q0, qs, kin, kout) of ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab; ``offset``: None or each
     lane's plane offset j (slice units): its slabs are [k + j - 1/2, k + j + 1/2], the first and the last
@@ -482,9 +495,9 @@ def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offs
     import drjit as dr
     q0, qs, kin, kout = rays
 
-    def through_slab(k, D, I):
-        """Carry (D, I) through slab k in two halves, [k - 1/2, k] and [k, k + 1/2] (+ j) clipped to
-        the box (slice units); store the light at plane k (+ j)."""
+    def through_slab(k, D, I, log_direct=None):
+        """Carry (D, I) (and log D: translucent light) through slab k in two halves, [k - 1/2, k] and
+        [k, k + 1/2] (+ j) clipped to the box (slice units); store the light at plane k (+ j)."""
         kf = mi.Float(k)
         if offset is None:
             a, m, b = (dr.clip(kf + h, kin, kout) for h in (-0.5, 0.0, 0.5))
@@ -498,25 +511,25 @@ def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offs
                                                      (x1 > x0) if ka is None else (x1 > x0) & (x1 >= ka) & (x0 <= kb),
                                                      keep)
                                     for x0, x1 in ((a, m), (m, b)))
+        if translucent:  # in logarithms: D' = D exp(-tau), F' = F exp(-tau_keep), F = D + I (I: blurred)
+            log_d, log_f = log_direct, dr.log(dr.maximum(D + I, 1e-30))
+            tau1, tau2 = e1 * dl * (m - a), e2 * dl * (b - m)
+            kap1, kap2 = keep1 * dl * (m - a), keep2 * dl * (b - m)
+            at = (lane + k * plane) * 2  # stored at the plane: log D, log(D + I), floored at log(1e-30)
+            dr.scatter(store, dr.maximum(log_d - tau1, LOG_FLOOR), at)
+            dr.scatter(store, dr.maximum(log_f - kap1, LOG_FLOOR), at + 1)
+            log_d = log_d - (tau1 + tau2)
+            D_out = dr.exp(log_d)
+            return D_out, dr.exp(log_f - (kap1 + kap2)) - D_out, log_d
         t1, t2 = dr.exp(-e1 * dl * (m - a)), dr.exp(-e2 * dl * (b - m))
         D_mid = D * t1
-        if translucent:
-            f1, f2 = dr.exp(-keep1 * dl * (m - a)), dr.exp(-keep2 * dl * (b - m))
-            I_mid = (D + I) * f1 - D_mid
-        else:
-            I_mid = I
-        stored = _stored(dr, D_mid, I_mid, translucent)
-        if translucent:
-            at = (lane + k * plane) * 2
-            dr.scatter(store, stored[0], at)
-            dr.scatter(store, stored[1], at + 1)
-        else:  # no forward light: D alone
-            dr.scatter(store, stored[0], lane + k * plane)
-        if translucent:
-            return D_mid * t2, (D_mid + I_mid) * f2 - D_mid * t2
-        return D_mid * t2, I_mid
+        dr.scatter(store, D_mid, lane + k * plane)  # no forward light: D alone
+        return D_mid * t2, I
 
     return through_slab
+
+
+LOG_FLOOR = math.log(1e-30)  # stored logarithms of light are at least this (the light at least 1e-30)
 
 
 def _stored(dr, D, I, log_store: bool):
