@@ -14,7 +14,7 @@ which is exact for a homogeneous slab, so that thick slabs are handled and the l
 the slice count (a per-slice survival factor omega f would compound once per slice). In translucent mode
 I also spreads sideways like a diffusion: a Gaussian whose variance grows by ``variance_per_m`` (m^2 per
 metre of light path), applied by operator splitting (slabs in chunks, then the chunk's accumulated
-variance with 5 x 5 taps of exactly that variance: no bilinear-tap diffusion), so the spread after a
+variance with 9 x 9 taps of exactly that variance: no bilinear-tap diffusion), so the spread after a
 given distance is the same for any number of slices.
 """
 from __future__ import annotations
@@ -28,12 +28,14 @@ from ..jitarrays import aligned_float
 from .geometry import SliceGeometry, ray_box
 from .jitter import texel_offsets
 
-# largest blur variance per step, in texels^2, that the 5-tap kernel reproduces with weights >= 0
-MAX_TEXEL_VARIANCE = 4.0 / 3.0
+# largest blur variance per step, in texels^2, that the 9-tap kernel reproduces with weights >= 0
+MAX_TEXEL_VARIANCE = 8.0 / 3.0
 # variance (texels^2) that forward-scattered light accumulates between two blur steps at the reference
 # spread (see LightVolume.sweep); larger spreads up to MAX_TEXEL_VARIANCE / BLUR_STEP_VARIANCE times the
-# reference (cone angles up to ~30 deg for a 20 deg reference) are still blurred exactly
-BLUR_STEP_VARIANCE = 0.5
+# reference (cone angles up to ~30 deg for a 20 deg reference) are still blurred exactly. Each step is one
+# kernel launch over the light buffer: at the demo's default spread, 1.0 blurs every 2-3 slabs (0.5 with a
+# 5-tap kernel, whose exact range ends at 4/3: every slab)
+BLUR_STEP_VARIANCE = 1.0
 # extinction samples per half slab of the light pass (the midpoint rule over each half). One sample per
 # slab puts a cloud top that lies inside the slab at the slab's middle, and the dense stratocumulus deck
 # kept changing with the slice count (validation/slice_convergence.py: 128 vs 256 up to 2.9 with the eye
@@ -54,10 +56,18 @@ def auto_light_res(box, spacing, low: int = 128, high: int = 256) -> int:
 
 
 def blur_weights(dr, var):
-    """Weights (w0, w1, w2) of the symmetric 5-tap kernel [w2, w1, w0, w1, w2] whose variance is
-    ``var`` texels^2 (exact up to MAX_TEXEL_VARIANCE, clamped beyond) and, above 1/3, whose fourth
-    moment is a Gaussian's (3 var^2); below 1/3 it is the 3-tap [var/2, 1 - var, var/2]."""
-    v = dr.clip(var, 0.0, MAX_TEXEL_VARIANCE)
+    """Weights (c0, c1, c2, c3, c4) of the symmetric 9-tap kernel [c4, .., c1, c0, c1, .., c4] whose
+    variance is ``var`` texels^2 (exact up to MAX_TEXEL_VARIANCE, clamped beyond): the 5-tap kernel of
+    ``_five_tap`` at var / 2 convolved with itself, so that above 2/3 its fourth moment is a Gaussian's
+    (3 var^2; the fourth cumulants of the two halves are zero)."""
+    w0, w1, w2 = _five_tap(dr, 0.5 * dr.clip(var, 0.0, MAX_TEXEL_VARIANCE))
+    return (w0 * w0 + 2.0 * (w1 * w1 + w2 * w2), 2.0 * w1 * (w0 + w2), 2.0 * w0 * w2 + w1 * w1, 2.0 * w1 * w2,
+            w2 * w2)
+
+
+def _five_tap(dr, v):
+    """(w0, w1, w2) of the symmetric 5-tap kernel [w2, w1, w0, w1, w2] of variance v <= 4/3 texels^2
+    whose fourth moment is a Gaussian's (3 v^2) above v = 1/3; below it the 3-tap [v/2, 1 - v, v/2]."""
     w2 = dr.maximum((3.0 * v * v - v) / 24.0, 0.0)
     w1 = 0.5 * (v - 8.0 * w2)
     return 1.0 - 2.0 * w1 - 2.0 * w2, w1, w2
@@ -572,13 +582,13 @@ def _param(mi, value):
 
 
 def _blur(mi, dr, buf, R, wx, wy):
-    """Separable 5 x 5 convolution of an R x R buffer with per-axis weights (w0, w1, w2) (see
+    """Separable 9 x 9 convolution of an R x R buffer with per-axis weights (c0, .., c4) (see
     ``blur_weights``); edges clamped. Two passes: along x (evaluated), then along y (left to the kernel
-    that reads it): 10 reads per texel instead of 25."""
+    that reads it): 18 reads per texel instead of 81."""
     lane = dr.arange(mi.UInt32, R * R)
     yi = mi.Int32(lane // R)
     xi = mi.Int32(lane) - yi * R
-    taps = lambda w: ((-2, w[2]), (-1, w[1]), (0, w[0]), (1, w[1]), (2, w[2]))  # noqa: E731
+    taps = lambda w: [(o, w[abs(o)]) for o in range(1 - len(w), len(w))]  # noqa: E731
     row = mi.UInt32(yi) * R
     along_x = mi.Float(0.0)
     for ox, wxv in taps(wx):
