@@ -45,6 +45,25 @@ def test_frozen_frames_equal_traced_frames_as_everything_changes(vol, name):
         assert frozen._frozen_kernels.n_recordings <= 4  # (textures rebuilt or not) x (first literal values)
 
 
+@pytest.mark.parametrize("name", ["per-species/translucent", "uniform/translucent"])
+def test_a_frame_depends_on_its_inputs_alone(vol, name):
+    """What a renderer keeps from its last frame (geometry, cone fractions, the scene's description)
+    never leaks into the next: every frame of a sequence that changes the cone angle, the sun and the
+    camera, and returns, equals the frame of a new renderer, image and metadata."""
+    r = SliceRenderer(vol, MODES[name], slices=16, light_res=16)
+    sequence = [(0, 10.0), (0, 25.0), (1, 25.0), (1, 10.0), (0, 10.0)]
+    images = set()
+    for i, cone in sequence:
+        spec, params = spec_at(vol, i), SliceParams(cone_angle_deg=cone)
+        a, b = r.frame(spec, params), SliceRenderer(vol, MODES[name], slices=16, light_res=16).frame(spec, params)
+        np.testing.assert_array_equal(a.radiance, b.radiance)
+        for key in ("scene", "forward_fraction_per_species", "back_to_front"):
+            assert a.metadata[key] == b.metadata[key]
+        assert a.metadata["scene"] == spec.to_dict()
+        images.add(a.radiance.tobytes())
+    assert len(images) == 4  # the four distinct inputs give four images
+
+
 def test_a_new_structure_is_recorded_again(vol):
     frozen = SliceRenderer(vol, MODES["per-species/multiple"], slices=24, light_res=16)
     traced = SliceRenderer(vol, MODES["per-species/multiple"], slices=24, light_res=16)

@@ -157,6 +157,7 @@ class SliceRenderer:
         gs = np.array([float(t.g[1]) for t in self.tables])
         self.g_scattering = float(np.sum(sca * gs) / np.sum(sca)) if np.sum(sca) > 0 else 0.85
         self._texture_key = None  # the per-species inputs of the textures last built (plain numbers)
+        self._last = {}  # per-frame numpy work kept from the last frame (``_reuse``)
         self.timing = {}
         self._t_light = None
         # frames whose inputs keep their structure launch the recorded kernels without tracing Python
@@ -190,8 +191,20 @@ class SliceRenderer:
         elif params.forward_fraction is not None:
             fwd = [params.forward_fraction] * self.n_species  # may be a Dr.Jit Float with gradients
         else:
-            fwd = np.array([float(np.mean(t.cone_fraction(theta0))) for t in self.tables])
+            fwd = self._reuse("cone", theta0, lambda: np.array([float(np.mean(t.cone_fraction(theta0)))
+                                                                for t in self.tables]))
         return scale, omega, tint, fwd
+
+    def _reuse(self, name: str, key, make):
+        """``make()``, or its value of the last frame where ``key`` is the same (an object compared by
+        identity, or plain values by equality): a slider move does not redo the numpy work of the
+        sun, the camera or the cone angle."""
+        last = self._last.get(name)
+        if last is not None and (last[0] is key or (isinstance(key, (tuple, float)) and last[0] == key)):
+            return last[1]
+        value = make()
+        self._last[name] = (key, value)
+        return value
 
     def forward_keep(self, scale, omega, fwd):
         """(beta - beta_f) / beta of a medium whose species share one forward fraction f (``uniform_forward``):
@@ -276,7 +289,9 @@ class SliceRenderer:
         key = _texture_key(scale, omega, fwd, detail)
         rebuilt = key is None or key != self._texture_key  # a sun or camera move keeps the textures
         self._texture_key = key
-        g = slice_geometry(spec.camera.forward, spec.sun.to_sun, self.box, self.slices)
+        forward, to_sun = np.asarray(spec.camera.forward, float), np.asarray(spec.sun.to_sun, float)
+        g = self._reuse("geometry", (tuple(forward), tuple(to_sun), self.slices),
+                        lambda: slice_geometry(forward, to_sun, self.box, self.slices))
         keep = self.forward_keep(scale, omega, fwd) if self.uniform_forward else None
         inputs = self._frame_inputs(g, spec, params, tint, rebuilt, keep)
         if rebuilt:  # built by the frame's kernels, from opaque values
@@ -305,7 +320,8 @@ class SliceRenderer:
         meta = {"renderer": "slicing", "mode": self.mode.__dict__, "slices": self.slices,
                 "light_res": self.light_res, "forward_peak_deg": self.forward_peak_deg,
                 "params": {k: plain(v) for k, v in params.__dict__.items()},
-                "seconds": t_eye - t_start, "back_to_front": g.back_to_front, "scene": spec.to_dict(),
+                "seconds": t_eye - t_start, "back_to_front": g.back_to_front,
+                "scene": self._reuse("scene", spec, spec.to_dict),
                 "species_preset": self.vol.attrs.get("species_preset"), "source": self.vol.attrs.get("source"),
                 "forward_fraction_per_species": [None if dr.is_array_v(v) else float(v) for v in fwd]}
         return Image(rgb, np.zeros_like(rgb), meta)
