@@ -251,7 +251,7 @@ def test_uniform_translucent_light_reads_extinction_alone_where_albedos_agree(mo
 def test_blur_weights_have_the_requested_variance():
     """The 9 taps sum to 1, are >= 0, have the variance asked for and, above 2/3 texels^2, a Gaussian's
     fourth moment 3 var^2; beyond MAX_TEXEL_VARIANCE they clamp."""
-    from weather_mi.slicing.light import MAX_TEXEL_VARIANCE, blur_weights
+    from weather_mi.slicing.blur import MAX_TEXEL_VARIANCE, blur_weights
     offsets = np.arange(-4, 5)
     for v in (0.0, 0.01, 0.2, 1 / 3, 0.7, 1.2, 2.0, MAX_TEXEL_VARIANCE, 4.0):
         c = [float(x) for x in blur_weights(np, np.float64(v))]

@@ -1,4 +1,4 @@
-"""Host arrays handed to Dr.Jit kernels."""
+"""Host arrays and scalars handed to Dr.Jit kernels."""
 from __future__ import annotations
 
 import numpy as np
@@ -15,3 +15,12 @@ def aligned_float(mi, a) -> "mi.Float":
     out = buf[off:off + a.size]
     out[:] = a
     return mi.Float(out)
+
+
+def kernel_scalar(mi, value):
+    """A per-frame scalar for a kernel: Dr.Jit arrays pass through (they may carry gradients), Python
+    numbers become opaque values (a new value recompiles nothing; a literal would)."""
+    import drjit as dr
+    if dr.is_array_v(value):
+        return value
+    return dr.opaque(mi.Float, float(value))

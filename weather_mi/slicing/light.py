@@ -24,12 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..jitarrays import aligned_float
+from ..jitarrays import aligned_float, kernel_scalar
+from .blur import _blur, blur_weights
 from .geometry import SliceGeometry, ray_box
 from .jitter import texel_offsets
 
-# largest blur variance per step, in texels^2, that the 9-tap kernel reproduces with weights >= 0
-MAX_TEXEL_VARIANCE = 8.0 / 3.0
 # variance (texels^2) that forward-scattered light accumulates between two blur steps at the reference
 # spread (see LightVolume.sweep); larger spreads up to MAX_TEXEL_VARIANCE / BLUR_STEP_VARIANCE times the
 # reference (cone angles up to ~30 deg for a 20 deg reference) are still blurred exactly. Each step is one
@@ -53,24 +52,6 @@ def auto_light_res(box, spacing, low: int = 128, high: int = 256) -> int:
     diagonal = float(np.hypot(hi[0] - lo[0], hi[1] - lo[1]))
     n = diagonal / (3.0 * float(min(spacing)))
     return int(np.clip(16 * math.ceil(n / 16), low, high))
-
-
-def blur_weights(dr, var):
-    """Weights (c0, c1, c2, c3, c4) of the symmetric 9-tap kernel [c4, .., c1, c0, c1, .., c4] whose
-    variance is ``var`` texels^2 (exact up to MAX_TEXEL_VARIANCE, clamped beyond): the 5-tap kernel of
-    ``_five_tap`` at var / 2 convolved with itself, so that above 2/3 its fourth moment is a Gaussian's
-    (3 var^2; the fourth cumulants of the two halves are zero)."""
-    w0, w1, w2 = _five_tap(dr, 0.5 * dr.clip(var, 0.0, MAX_TEXEL_VARIANCE))
-    return (w0 * w0 + 2.0 * (w1 * w1 + w2 * w2), 2.0 * w1 * (w0 + w2), 2.0 * w0 * w2 + w1 * w1, 2.0 * w1 * w2,
-            w2 * w2)
-
-
-def _five_tap(dr, v):
-    """(w0, w1, w2) of the symmetric 5-tap kernel [w2, w1, w0, w1, w2] of variance v <= 4/3 texels^2
-    whose fourth moment is a Gaussian's (3 v^2) above v = 1/3; below it the 3-tap [v/2, 1 - v, v/2]."""
-    w2 = dr.maximum((3.0 * v * v - v) / 24.0, 0.0)
-    w1 = 0.5 * (v - 8.0 * w2)
-    return 1.0 - 2.0 * w1 - 2.0 * w2, w1, w2
 
 
 @dataclass
@@ -99,12 +80,12 @@ class LookupFrame:
 def lookup_frame(mi, g: SliceGeometry, res: int, jitter=None) -> LookupFrame:
     """``LookupFrame`` of geometry ``g`` with a ``res`` x ``res`` buffer (values rounded from float64);
     ``jitter``: None or (amplitude, rotation) of the texels' plane offsets, opaque scalars."""
-    vec = lambda v: mi.Vector3f(*(dr_opaque(mi, c) for c in v))  # noqa: E731
-    return LookupFrame(vec(g.e1), vec(g.e2), vec(g.axis), dr_opaque(mi, g.u_range[0]),
-                       dr_opaque(mi, res / (g.u_range[1] - g.u_range[0])), dr_opaque(mi, g.v_range[0]),
-                       dr_opaque(mi, res / (g.v_range[1] - g.v_range[0])), dr_opaque(mi, g.d_first),
-                       dr_opaque(mi, 1.0 / g.spacing), dr_opaque(mi, g.spacing), *(jitter or (None, None)),
-                       to_light=vec(g.to_light), light_step=dr_opaque(mi, g.light_step_m))
+    vec = lambda v: mi.Vector3f(*(kernel_scalar(mi, c) for c in v))  # noqa: E731
+    return LookupFrame(vec(g.e1), vec(g.e2), vec(g.axis), kernel_scalar(mi, g.u_range[0]),
+                       kernel_scalar(mi, res / (g.u_range[1] - g.u_range[0])), kernel_scalar(mi, g.v_range[0]),
+                       kernel_scalar(mi, res / (g.v_range[1] - g.v_range[0])), kernel_scalar(mi, g.d_first),
+                       kernel_scalar(mi, 1.0 / g.spacing), kernel_scalar(mi, g.spacing), *(jitter or (None, None)),
+                       to_light=vec(g.to_light), light_step=kernel_scalar(mi, g.light_step_m))
 
 
 @dataclass
@@ -129,12 +110,6 @@ class SweepPlan:
     ka: object = None   # None, or each light ray's occupied span in slice units (occupancy.py): outside it
     kb: object = None   # the medium is empty, and the light pass reads nothing there
     keep: object = None  # None, or (beta - beta_f) / beta where the source holds beta alone (translucent)
-
-
-def dr_opaque(mi, value):
-    """A Python number as an opaque kernel scalar (a new value recompiles nothing)."""
-    import drjit as dr
-    return dr.opaque(mi.Float, float(value))
 
 
 class LightVolume:
@@ -190,11 +165,11 @@ class LightVolume:
         ``keep``: None, or the ratio (beta - beta_f) / beta (a Dr.Jit Float) of translucent light whose
         ``source`` holds beta alone (one forward fraction over the whole medium)."""
         mi = self.mi
-        dl = dr_opaque(mi, g.light_step_m)
+        dl = kernel_scalar(mi, g.light_step_m)
         chunk, var, inv_du2, inv_dv2 = g.n_slices, None, None, None
         if translucent:
             chunk, var, du, dv = self._blur_plan(g, variance_per_m, reference_variance_per_m, dl)
-            inv_du2, inv_dv2 = dr_opaque(mi, 1.0 / du ** 2), dr_opaque(mi, 1.0 / dv ** 2)
+            inv_du2, inv_dv2 = kernel_scalar(mi, 1.0 / du ** 2), kernel_scalar(mi, 1.0 / dv ** 2)
         key = (g.axis.tobytes(), g.to_light.tobytes(), g.d_first, g.spacing, g.n_slices, g.u_range, g.v_range,
                tuple(np.asarray(grid_box, dtype=np.float64).ravel()))
         if self._rays_key != key:  # a slider move keeps the light rays (numpy work) of the last frame
@@ -288,8 +263,8 @@ class LightVolume:
         R = self.res
         du = (g.u_range[1] - g.u_range[0]) / R
         dv = (g.v_range[1] - g.v_range[0]) / R
-        var = _param(mi, variance_per_m) * dl                 # m^2 per slab
-        ref = float(dr.detach(_param(mi, variance_per_m))[0]) if reference_variance_per_m is None \
+        var = kernel_scalar(mi, variance_per_m) * dl                 # m^2 per slab
+        ref = float(dr.detach(kernel_scalar(mi, variance_per_m))[0]) if reference_variance_per_m is None \
             else float(reference_variance_per_m)
         per_slab = ref * g.light_step_m / min(du, dv) ** 2   # texels^2 per slab at the reference
         chunk = int(np.clip(BLUR_STEP_VARIANCE / max(per_slab, 1e-12), 1, g.n_slices))
@@ -570,41 +545,3 @@ def _mean_extinction(dr, source, q0, qs, x0, x1, n: int, active=True, keep=None)
         ext += e
         kept += k
     return ext * (1.0 / n), kept * (1.0 / n)
-
-
-def _param(mi, value):
-    """A per-frame scalar for a kernel: Dr.Jit arrays pass through (they may carry gradients),
-    Python numbers become opaque values (so a new value does not recompile)."""
-    import drjit as dr
-    if dr.is_array_v(value):
-        return value
-    return dr.opaque(mi.Float, float(value))
-
-
-def _blur(mi, dr, buf, R, wx, wy):
-    """Separable 9 x 9 convolution of an R x R buffer with per-axis weights (c0, .., c4) (see
-    ``blur_weights``); edges clamped. Two passes: along x (evaluated), then along y (left to the kernel
-    that reads it): 18 reads per texel instead of 81."""
-    lane = dr.arange(mi.UInt32, R * R)
-    yi = mi.Int32(lane // R)
-    xi = mi.Int32(lane) - yi * R
-    taps = lambda w: [(o, w[abs(o)]) for o in range(1 - len(w), len(w))]  # noqa: E731
-    row = mi.UInt32(yi) * R
-    along_x = mi.Float(0.0)
-    for ox, wxv in taps(wx):
-        along_x += wxv * dr.gather(mi.Float, buf, row + mi.UInt32(dr.clip(xi + ox, 0, R - 1)))
-    dr.eval(along_x)
-    out = mi.Float(0.0)
-    for oy, wyv in taps(wy):
-        out += wyv * dr.gather(mi.Float, along_x, mi.UInt32(dr.clip(yi + oy, 0, R - 1)) * R + mi.UInt32(xi))
-    return out
-
-
-def variance_per_metre(cone_angle_deg, blur_length_m, mi=None):
-    """tan^2(cone) x blur length: the sideways variance (m^2) that forward-scattered light gains per
-    metre of light path (a Dr.Jit Float with ``mi``, else a number)."""
-    if mi is None:
-        return math.tan(math.radians(float(cone_angle_deg))) ** 2 * float(blur_length_m)
-    import drjit as dr
-    t = dr.tan(_param(mi, cone_angle_deg) * (math.pi / 180.0))
-    return t * t * _param(mi, blur_length_m)

@@ -3,6 +3,7 @@ the glue between the modules that do the work:
 
 geometry.py  the half-angle axis and the slice planes (visited from the light's side)
 light.py     ``LightVolume``: the light pass and the one light lookup
+blur.py      the translucency blur of the light pass (9-tap weights of an exact variance)
 eye.py       the eye pass: composite along camera rays (Eq. 8/9), the ground
 view.py      camera rays and background per view, in a bounded cache
 
@@ -21,14 +22,15 @@ import numpy as np
 
 from ..forward_peak import DEFAULT_CONE_DEG, check_cone_deg, peak_tables
 from ..imageio import Image
-from ..jitarrays import aligned_float
+from ..jitarrays import aligned_float, kernel_scalar
 from ..optics import OpticalVolume
 from ..scene import SceneSpec
 from .background import sky_irradiance_horizontal
+from .blur import variance_per_metre
 from .eye import LightModel, composite
 from .geometry import slice_geometry, slicing_box
 from .jitter import jitter_rotation, slab_offsets
-from .light import LightVolume, _param, auto_light_res, variance_per_metre
+from .light import LightVolume, auto_light_res
 from .modes import SliceMode, SliceParams
 from .occupancy import OccupancyMap
 from .view import ViewCache
@@ -214,7 +216,7 @@ class SliceRenderer:
         so does beta_f / beta everywhere. ``scale, omega, fwd``: of ``_species_vectors``."""
         w = np.asarray(scale, dtype=np.float64) * self.beta_sum_s
         w = w / max(float(w.sum()), 1e-30)
-        return 1.0 - _param(self.mi, fwd[0]) * float(np.dot(w, omega))
+        return 1.0 - kernel_scalar(self.mi, fwd[0]) * float(np.dot(w, omega))
 
     def _detail_amplitudes(self, params: SliceParams) -> list[float]:
         from .modes import DEFAULT_DETAIL
@@ -230,10 +232,10 @@ class SliceRenderer:
         import drjit as dr
         d = data or self._texture_data()
         S = self.n_species
-        sc, om, fw = ([_param(mi, v) for v in x] for x in (scale, omega, fwd))
+        sc, om, fw = ([kernel_scalar(mi, v) for v in x] for x in (scale, omega, fwd))
         ext, beta_fwd, sca = mi.Float(0.0), mi.Float(0.0), []
         noise = d["noise"]
-        amp = None if noise is None else [_param(mi, a) for a in detail]
+        amp = None if noise is None else [kernel_scalar(mi, a) for a in detail]
         for s in range(S):
             b = d["beta_s"][s] * sc[s]
             if noise is not None:  # the amount of detail per species (paper section 5.4), log-normal, mean one
@@ -295,7 +297,7 @@ class SliceRenderer:
         keep = self.forward_keep(scale, omega, fwd) if self.uniform_forward else None
         inputs = self._frame_inputs(g, spec, params, tint, rebuilt, keep)
         if rebuilt:  # built by the frame's kernels, from opaque values
-            inputs["build"] = [[_param(mi, v) for v in x] for x in (scale, omega, fwd, detail or [])]
+            inputs["build"] = [[kernel_scalar(mi, v) for v in x] for x in (scale, omega, fwd, detail or [])]
         if return_arrays or self.differentiable or not self.frozen:
             out, transmittance, store, sky_store = self._kernels(inputs, timed=not return_arrays)
             if return_arrays:
@@ -335,7 +337,7 @@ class SliceRenderer:
         blur = params.blur_length_m if params.blur_length_m is not None else self.voxel_m
         # offset light planes too (only when asked for: aligned planes keep the default frame as it was)
         jitter = None if _number(params.slab_jitter) == 0.0 else \
-            (_param(mi, params.slab_jitter), _param(mi, jitter_rotation(params.jitter_frame)))
+            (kernel_scalar(mi, params.slab_jitter), kernel_scalar(mi, jitter_rotation(params.jitter_frame)))
         sun = self.light.plan(g, self.grid_box, translucent,
                               variance_per_metre(params.cone_angle_deg, blur, mi) if translucent else None,
                               variance_per_metre(REFERENCE_CONE_DEG, _number(blur)) if translucent else None, jitter,
@@ -390,7 +392,7 @@ class SliceRenderer:
         e_sky = sky_irradiance_horizontal(spec, cache=self.views.sky)
         model = None
         if self.mode.light == "multiple":
-            model = [_param(mi, v) for v in (params.ms_extinction, params.ms_contribution, params.ms_eccentricity,
+            model = [kernel_scalar(mi, v) for v in (params.ms_extinction, params.ms_contribution, params.ms_eccentricity,
                                             params.sky_extinction, params.diffusion_gain, params.diffusion_scale,
                                             max(float(spec.sun.to_sun[2]), 1e-3), params.leak_gain, params.leak_rate)]
             gain = params.sky_gain
@@ -406,8 +408,8 @@ class SliceRenderer:
         grid = (mi.Point3f(*(op(c) for c in self.grid_box[0])),
                 mi.Vector3f(*(op(1.0 / (h - l)) for l, h in zip(*self.grid_box))))
         return {"rays": ray_arrays, "n": rays.n, "tex_light": self.tex_light_src, "grid": grid, "phase_colour": phase_colour, "diffuse_colour": diffuse_colour, "model": model,
-                "ambient": _colour(mi, e_sky / np.pi) * _param(mi, gain), "ground": ground,
-                "jitter": _param(mi, params.slab_jitter), "jitter_rotation": _param(mi, jitter_rotation(params.jitter_frame))}
+                "ambient": _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), "ground": ground,
+                "jitter": kernel_scalar(mi, params.slab_jitter), "jitter_rotation": kernel_scalar(mi, jitter_rotation(params.jitter_frame))}
 
     def _eye_pass(self, tex_eye, e: dict):
         mi = self.mi
