@@ -193,21 +193,25 @@ class LightVolume:
         through_slab = _slab_step(mi, source, (plan.q0, plan.qs, plan.kin, plan.kout), plan.dl, store, lane,
                                   dr.opaque(mi.UInt32, R * R), plan.translucent, offset, N, (plan.ka, plan.kb),
                                   plan.keep)
-        # (D, I), and log D for translucent light (carried as such: no logarithm per stored plane)
-        state = (dr.full(mi.Float, 1.0, R * R), dr.zeros(mi.Float, R * R))
-        if plan.translucent:
-            state += (dr.zeros(mi.Float, R * R),)
+        if plan.translucent:  # (log D, log F), F = D + I: a slab subtracts optical depths, nothing more
+            state = (dr.zeros(mi.Float, R * R), dr.zeros(mi.Float, R * R))
+        else:  # (D, I = 0)
+            state = (dr.full(mi.Float, 1.0, R * R), dr.zeros(mi.Float, R * R))
         starts = list(range(0, N, plan.chunk))
         for j, k0 in enumerate(starts):
             k1 = min(k0 + plan.chunk, N)
-            if plan.translucent and j > 0:
+            if plan.translucent and j > 0:  # the blur step spreads I = F - D
                 n_prev = dr.opaque(mi.Float, float(k0 - starts[j - 1]))
-                blurred = _blur(mi, dr, state[1], R, blur_weights(dr, plan.var * n_prev * plan.inv_du2),
+                D = dr.exp(state[0])
+                blurred = _blur(mi, dr, state[2], R, blur_weights(dr, plan.var * n_prev * plan.inv_du2),
                                 blur_weights(dr, plan.var * n_prev * plan.inv_dv2))
-                state = (state[0], blurred, *state[2:])
-            state = self._through_slabs(through_slab, state, k0, k1, lane, store)
+                state = (state[0], dr.log(dr.maximum(D + blurred, 1e-30)))
+            state = self._through_slabs(through_slab, state, k0, k1, lane, store, plan.translucent)
         at = (lane + dr.opaque(mi.UInt32, N * R * R)) * C
-        D, I = _stored(dr, state[0], state[1], plan.translucent)
+        if plan.translucent:
+            D, I = (dr.maximum(v, LOG_FLOOR) for v in state[:2])
+        else:
+            D, I = state
         dr.scatter(store, D, at)
         if plan.translucent:
             dr.scatter(store, I, at + 1)
@@ -270,9 +274,10 @@ class LightVolume:
         chunk = int(np.clip(BLUR_STEP_VARIANCE / max(per_slab, 1e-12), 1, g.n_slices))
         return chunk, var, du, dv
 
-    def _through_slabs(self, through_slab, state, k0: int, k1: int, lane, store):
-        """Carry the light's ``state`` ((D, I), and log D for translucent light) through slabs k0 .. k1 - 1:
-        one loop kernel, or slab by slab when differentiable."""
+    def _through_slabs(self, through_slab, state, k0: int, k1: int, lane, store, translucent: bool = False):
+        """Carry the light's ``state`` ((D, I), or (log D, log(D + I)) for translucent light) through slabs
+        k0 .. k1 - 1: one loop kernel, or slab by slab when differentiable. Translucent light comes back
+        with I = (D + I) - D as a third value, for the next blur step (evaluated in the same kernel)."""
         mi = self.mi
         import drjit as dr
         if self.differentiable:
@@ -283,15 +288,17 @@ class LightVolume:
                 # adjoints of D and I at every slice instead of rebuilding the whole chain of later
                 # slices in each kernel (O(N^2) operations, minutes of LLVM time at 96 slices)
                 state = tuple(dr.gather(mi.Float, v, lane) for v in state)
-            return state
-        stop = dr.opaque(mi.UInt32, k1)
+        else:
+            stop = dr.opaque(mi.UInt32, k1)
 
-        def body(k, *st):
-            return (k + 1, *through_slab(k, *st))
+            def body(k, *st):
+                return (k + 1, *through_slab(k, *st))
 
-        out = dr.while_loop((dr.zeros(mi.UInt32, self.res * self.res) + dr.opaque(mi.UInt32, k0), *state),
-                            lambda k, *st: k < stop, body)
-        state = tuple(out[1:])
+            out = dr.while_loop((dr.zeros(mi.UInt32, self.res * self.res) + dr.opaque(mi.UInt32, k0), *state),
+                                lambda k, *st: k < stop, body)
+            state = tuple(out[1:])
+        if translucent:
+            state = (*state, dr.exp(state[1]) - dr.exp(state[0]))
         dr.eval(*state, store)
         return state
 
@@ -472,17 +479,17 @@ class LightVolume:
 def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offset=None, n_slices: int = 0,
                span=(None, None), keep=None):
     """The step of the light pass through one slab k: (k, D, I) -> (D, I) after the slab (translucent
-    light: (k, D, I, log D) -> (D, I, log D), in logarithms: no logarithm per stored value), storing the
-    light at plane k (``store[lane + k plane]``, or its 2 channels for translucent light). ``rays``:
+    light: (k, log D, log(D + I)) -> the same after the slab: optical depths subtracted, no exp or log),
+    storing the light at plane k (``store[lane + k plane]``, or its 2 channels for translucent light). ``rays``:
     (q0, qs, kin, kout) of ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab; ``offset``: None or each
     lane's plane offset j (slice units): its slabs are [k + j - 1/2, k + j + 1/2], the first and the last
     reaching to where the ray enters and leaves the box; ``keep``: see ``SweepPlan``."""
     import drjit as dr
     q0, qs, kin, kout = rays
 
-    def through_slab(k, D, I, log_direct=None):
-        """Carry (D, I) (and log D: translucent light) through slab k in two halves, [k - 1/2, k] and
-        [k, k + 1/2] (+ j) clipped to the box (slice units); store the light at plane k (+ j)."""
+    def through_slab(k, D, I):
+        """Carry (D, I) (translucent light: (log D, log(D + I))) through slab k in two halves, [k - 1/2, k]
+        and [k, k + 1/2] (+ j) clipped to the box (slice units); store the light at plane k (+ j)."""
         kf = mi.Float(k)
         if offset is None:
             a, m, b = (dr.clip(kf + h, kin, kout) for h in (-0.5, 0.0, 0.5))
@@ -496,16 +503,13 @@ def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offs
                                                      (x1 > x0) if ka is None else (x1 > x0) & (x1 >= ka) & (x0 <= kb),
                                                      keep)
                                     for x0, x1 in ((a, m), (m, b)))
-        if translucent:  # in logarithms: D' = D exp(-tau), F' = F exp(-tau_keep), F = D + I (I: blurred)
-            log_d, log_f = log_direct, dr.log(dr.maximum(D + I, 1e-30))
-            tau1, tau2 = e1 * dl * (m - a), e2 * dl * (b - m)
-            kap1, kap2 = keep1 * dl * (m - a), keep2 * dl * (b - m)
+        if translucent:  # in logarithms: D' = D exp(-tau), F' = F exp(-tau_keep), F = D + I
+            log_d, log_f = D, I
+            tau1, kap1 = e1 * dl * (m - a), keep1 * dl * (m - a)
             at = (lane + k * plane) * 2  # stored at the plane: log D, log(D + I), floored at log(1e-30)
             dr.scatter(store, dr.maximum(log_d - tau1, LOG_FLOOR), at)
             dr.scatter(store, dr.maximum(log_f - kap1, LOG_FLOOR), at + 1)
-            log_d = log_d - (tau1 + tau2)
-            D_out = dr.exp(log_d)
-            return D_out, dr.exp(log_f - (kap1 + kap2)) - D_out, log_d
+            return log_d - (tau1 + e2 * dl * (b - m)), log_f - (kap1 + keep2 * dl * (b - m))
         t1, t2 = dr.exp(-e1 * dl * (m - a)), dr.exp(-e2 * dl * (b - m))
         D_mid = D * t1
         dr.scatter(store, D_mid, lane + k * plane)  # no forward light: D alone
@@ -515,13 +519,6 @@ def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offs
 
 
 LOG_FLOOR = math.log(1e-30)  # stored logarithms of light are at least this (the light at least 1e-30)
-
-
-def _stored(dr, D, I, log_store: bool):
-    """The two values stored for light (D, I): themselves, or log D and log(D + I) (``log_store``)."""
-    if not log_store:
-        return D, I
-    return dr.log(dr.maximum(D, 1e-30)), dr.log(dr.maximum(D + I, 1e-30))
 
 
 def source_extinction(dr, source, t, active=True, keep=None):
