@@ -423,3 +423,20 @@ def test_the_eye_weighted_mean_position_in_a_segment():
         expected = np.trapezoid(u * w, u) / np.trapezoid(w, u)
         got = float(SlabAverage(mi.Float(x), 1.0, mi.Float(h)).mean_offset()[0])
         assert got == pytest.approx(expected, abs=1e-4 * max(h, 1e-3)), (x, h)
+
+
+def test_the_slab_average_of_exponentially_varying_light():
+    """``SlabAverage.factor``: the in-scattering of light L_m exp(-sigma kappa u) over a segment [-h, h]
+    seen through the transmittance exp(-x (u + h)), x int L T du, over the midpoint rule's
+    (1 - exp(-2 x h)) L_m, by numerical quadrature; thin segments, kappa cancelling x (q h -> 0),
+    light that grows or decays along the ray."""
+    import mitsuba as mi
+    from weather_mi.slicing.eye import SlabAverage
+    cases = [(1e-5, 1.0, 3.0, 0.5), (0.3, 1.0, 0.0, 0.5), (0.3, -1.0, 0.3, 0.5), (2.0, -1.0, 2.00001, 0.5),
+             (4.0, 1.0, 7.0, 0.5), (4.0, -1.0, 9.0, 0.5), (40.0, -1.0, 5.0, 0.3), (2.0, 1.0, 0.5, 0.125)]
+    for x, sigma, kappa, h in cases:
+        u = np.linspace(-h, h, 400001)
+        exact = x * np.trapezoid(np.exp(-sigma * kappa * u - x * (u + h)), u)
+        expected = 1.0 if x * h < 1e-4 else exact / (1.0 - np.exp(-2.0 * x * h))
+        got = float(SlabAverage(mi.Float(x), sigma, mi.Float(h)).factor(mi.Float(kappa))[0])
+        assert got == pytest.approx(expected, rel=2e-4), (x, sigma, kappa, h)

@@ -48,6 +48,7 @@ above the point (the zenith light volume) as diffuse light: the same layer at th
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from .light import LightVolume, LookupFrame
@@ -236,26 +237,29 @@ class SlabAverage:
         self.dr, self.x, self.sigma, self.h = dr, x, sigma, h
         xh = x * h
         self.thin = xh < 1e-4
-        # log of x exp(-x h) / (1 - exp(-2 x h)), guarded where thin (the factor is then 1)
-        self.base = dr.log(dr.maximum(x, 1e-30)) - xh - dr.log(dr.maximum(1.0 - dr.exp(-2.0 * xh), 1e-30))
+        self.e2 = dr.exp(-2.0 * xh)                          # exp(-2 x h), shared by every factor
+        self.norm = x / dr.maximum(1.0 - self.e2, 1e-30)    # x / (1 - exp(-2 x h))
 
     def mean_offset(self):
         """The eye-weighted mean position in the segment, in slice units from the sample: u_bar with
         weights exp(-x (u + h)) on [-h, h], = 1/x - 2 h exp(-2 x h) / (1 - exp(-2 x h)) - h (0 for a thin
         segment, -h + 1/x for a thick one: one optical depth past the face the eye enters by)."""
-        dr, x, h = self.dr, self.x, self.h
-        e = dr.exp(-2.0 * x * h)
+        dr, x, h, e = self.dr, self.x, self.h, self.e2
         thick = 1.0 / dr.maximum(x, 1e-30) - 2.0 * h * e / dr.maximum(1.0 - e, 1e-30) - h
         return dr.select(x * h < 1e-3, -x * h * h / 3.0, thick)
 
     def factor(self, kappa):
-        dr = self.dr
+        """factor(kappa) = x (exp((q - x) h) - exp(-(q + x) h)) / (q (1 - exp(-2 x h))), the class
+        docstring's expression with exp(-x h) 2 sinh(q h) written as two exponentials (the first <= e^30),
+        -> x 2 h exp(-x h) / (1 - exp(-2 x h)) as q h -> 0; at most e^30."""
+        dr, h = self.dr, self.h
         q = dr.abs(self.x + self.sigma * kappa)
-        qh = q * self.h
-        # log of 2 sinh(q h) / q = q h + log((1 - exp(-2 q h)) / q), -> log(2 h) as q h -> 0
-        s = dr.select(qh < 1e-4, dr.log(dr.maximum(2.0 * self.h, 1e-30)),
-                      qh + dr.log(dr.maximum(1.0 - dr.exp(-2.0 * qh), 1e-30)) - dr.log(dr.maximum(q, 1e-30)))
-        return dr.select(self.thin, 1.0, dr.exp(dr.minimum(self.base + s, 30.0)))
+        grow = dr.exp(dr.minimum((q - self.x) * h, 30.0))   # exp((q - x) h)
+        two_sinh = dr.select(q * h < 1e-4, 2.0 * h * grow, (grow - dr.exp(-(q + self.x) * h)) / dr.maximum(q, 1e-30))
+        return dr.select(self.thin, 1.0, dr.minimum(self.norm * two_sinh, FACTOR_CAP))
+
+
+FACTOR_CAP = math.exp(30.0)  # SlabAverage.factor's largest value
 
 
 def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
