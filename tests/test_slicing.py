@@ -438,5 +438,8 @@ def test_the_slab_average_of_exponentially_varying_light():
         u = np.linspace(-h, h, 400001)
         exact = x * np.trapezoid(np.exp(-sigma * kappa * u - x * (u + h)), u)
         expected = 1.0 if x * h < 1e-4 else exact / (1.0 - np.exp(-2.0 * x * h))
-        got = float(SlabAverage(mi.Float(x), sigma, mi.Float(h)).factor(mi.Float(kappa))[0])
+        slab = SlabAverage(mi.Float(x), sigma, mi.Float(h))
+        got = float(slab.factor(mi.Float(kappa))[0])
         assert got == pytest.approx(expected, rel=2e-4), (x, sigma, kappa, h)
+        light = float(slab.mean_light(mi.Float(math.log(0.3)), mi.Float(kappa))[0])  # the same, times light 0.3
+        assert light == pytest.approx(0.3 * expected, rel=2e-4), (x, sigma, kappa, h)

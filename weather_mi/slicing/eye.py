@@ -97,8 +97,8 @@ class LightModel:
         elif self.log_forward:  # translucent: the decay rates straight from the interpolated logarithms
             (log_d, log_f), (log_d_prev, log_f_prev) = self.sun.lookup(p, with_previous=True, log_forward=True,
                                                                        logs=True, active=active)
-            d_avg = dr.exp(log_d) * slab.factor(dr.maximum(log_d_prev - log_d, 0.0))  # one slice's depth, direct
-            forward = dr.exp(log_f) * slab.factor(dr.maximum(log_f_prev - log_f, 0.0))  # and all forward light
+            d_avg = slab.mean_light(log_d, dr.maximum(log_d_prev - log_d, 0.0))  # one slice's depth, direct
+            forward = slab.mean_light(log_f, dr.maximum(log_f_prev - log_f, 0.0))  # and all forward light
             return d_avg, dr.maximum(forward - d_avg, 0.0), 1.0
         else:
             (direct, indirect), (d_prev, i_prev) = self.sun.lookup(p, with_previous=True, log_direct=log,
@@ -257,6 +257,17 @@ class SlabAverage:
         grow = dr.exp(dr.minimum((q - self.x) * h, 30.0))   # exp((q - x) h)
         two_sinh = dr.select(q * h < 1e-4, 2.0 * h * grow, (grow - dr.exp(-(q + self.x) * h)) / dr.maximum(q, 1e-30))
         return dr.select(self.thin, 1.0, dr.minimum(self.norm * two_sinh, FACTOR_CAP))
+
+    def mean_light(self, log_light, kappa):
+        """exp(log_light) x factor(kappa) with the light's exponential folded into factor's two (one
+        exponential fewer), uncapped (the larger exponential is at most e^30 for light <= 1)."""
+        dr, h = self.dr, self.h
+        q = dr.abs(self.x + self.sigma * kappa)
+        grow = dr.exp(log_light + dr.select(self.thin, 0.0, dr.minimum((q - self.x) * h, 30.0)))
+        small = self.thin | (q * h < 1e-4)
+        two_sinh = dr.select(small, 2.0 * h * grow,
+                             (grow - dr.exp(log_light - (q + self.x) * h)) / dr.maximum(q, 1e-30))
+        return dr.select(self.thin, grow, self.norm * two_sinh)
 
 
 FACTOR_CAP = math.exp(30.0)  # SlabAverage.factor's largest value
