@@ -249,16 +249,17 @@ def test_uniform_translucent_light_reads_extinction_alone_where_albedos_agree(mo
 
 
 def test_blur_weights_have_the_requested_variance():
-    """The 9 taps sum to 1, are >= 0, have the variance asked for and, above 2/3 texels^2, a Gaussian's
-    fourth moment 3 var^2; beyond MAX_TEXEL_VARIANCE they clamp."""
-    from weather_mi.slicing.blur import MAX_TEXEL_VARIANCE, blur_weights
-    offsets = np.arange(-4, 5)
-    for v in (0.0, 0.01, 0.2, 1 / 3, 0.7, 1.2, 2.0, MAX_TEXEL_VARIANCE, 4.0):
+    """The taps sum to 1, are >= 0, have the variance asked for and, above 1/3 texels^2 per fold, a
+    Gaussian's fourth moment 3 var^2; beyond MAX_TEXEL_VARIANCE they clamp."""
+    from weather_mi.slicing.blur import BLUR_FOLDS, MAX_TEXEL_VARIANCE, blur_weights
+    for v in (0.0, 0.01, 0.2, 1 / 3, 0.7, 1.2, 2.0, MAX_TEXEL_VARIANCE, MAX_TEXEL_VARIANCE + 1.0):
         c = [float(x) for x in blur_weights(np, np.float64(v))]
+        assert len(c) == 2 * BLUR_FOLDS + 1
+        offsets = np.arange(1 - len(c), len(c))
         w = np.array([c[abs(o)] for o in offsets])
         assert w.min() >= 0 and w.sum() == pytest.approx(1.0)
         assert (w * offsets ** 2).sum() == pytest.approx(min(v, MAX_TEXEL_VARIANCE), abs=1e-12)
-        if 2 / 3 <= v <= MAX_TEXEL_VARIANCE:
+        if 1 / 3 <= v / BLUR_FOLDS and v <= MAX_TEXEL_VARIANCE:
             assert (w * offsets ** 4).sum() == pytest.approx(3 * v * v, rel=1e-12)
 
 

@@ -1,6 +1,6 @@
 """The translucency blur of the light pass: forward-scattered light spreads sideways like a diffusion,
 a Gaussian whose variance grows by ``variance_per_metre`` (m^2 per metre of light path); the light pass
-applies it by operator splitting, every few slabs, with 9 x 9 separable taps of exactly the variance
+applies it by operator splitting, every few slabs, with separable taps (BLUR_FOLDS) of exactly the variance
 accumulated since the last step (light.py)."""
 from __future__ import annotations
 
@@ -8,17 +8,28 @@ import math
 
 from ..jitarrays import kernel_scalar
 
-# largest blur variance per step, in texels^2, that the 9-tap kernel reproduces with weights >= 0
-MAX_TEXEL_VARIANCE = 8.0 / 3.0
+# the blur kernel: the 5-tap kernel of ``_five_tap`` convolved with itself BLUR_FOLDS - 1 times
+# (4 BLUR_FOLDS + 1 taps per axis), and the largest variance per step, in texels^2, that it reproduces
+# with weights >= 0
+BLUR_FOLDS = 3
+MAX_TEXEL_VARIANCE = BLUR_FOLDS * 4.0 / 3.0
+
 
 def blur_weights(dr, var):
-    """Weights (c0, c1, c2, c3, c4) of the symmetric 9-tap kernel [c4, .., c1, c0, c1, .., c4] whose
-    variance is ``var`` texels^2 (exact up to MAX_TEXEL_VARIANCE, clamped beyond): the 5-tap kernel of
-    ``_five_tap`` at var / 2 convolved with itself, so that above 2/3 its fourth moment is a Gaussian's
-    (3 var^2; the fourth cumulants of the two halves are zero)."""
-    w0, w1, w2 = _five_tap(dr, 0.5 * dr.clip(var, 0.0, MAX_TEXEL_VARIANCE))
-    return (w0 * w0 + 2.0 * (w1 * w1 + w2 * w2), 2.0 * w1 * (w0 + w2), 2.0 * w0 * w2 + w1 * w1, 2.0 * w1 * w2,
-            w2 * w2)
+    """Weights (c0, c1, .., c_2F) of the symmetric kernel [c_2F, .., c1, c0, c1, .., c_2F] (F =
+    BLUR_FOLDS) whose variance is ``var`` texels^2 (exact up to MAX_TEXEL_VARIANCE, clamped beyond): the
+    5-tap kernel of ``_five_tap`` at var / F convolved F times, so that above 1/3 per fold its fourth
+    moment is a Gaussian's (3 var^2: the folds' fourth cumulants are zero)."""
+    w0, w1, w2 = _five_tap(dr, dr.clip(var, 0.0, MAX_TEXEL_VARIANCE) * (1.0 / BLUR_FOLDS))
+    one = [w2, w1, w0, w1, w2]
+    kernel = one
+    for _ in range(BLUR_FOLDS - 1):  # polynomial product: taps at offsets -2F .. 2F
+        out = [0.0] * (len(kernel) + 4)
+        for i, a in enumerate(kernel):
+            for j, b in enumerate(one):
+                out[i + j] = out[i + j] + a * b
+        kernel = out
+    return tuple(kernel[len(kernel) // 2:])
 
 
 def _five_tap(dr, v):
@@ -30,9 +41,9 @@ def _five_tap(dr, v):
 
 
 def _blur(mi, dr, buf, R, wx, wy):
-    """Separable 9 x 9 convolution of an R x R buffer with per-axis weights (c0, .., c4) (see
-    ``blur_weights``); edges clamped. Two passes: along x (evaluated), then along y (left to the kernel
-    that reads it): 18 reads per texel instead of 81."""
+    """Separable convolution of an R x R buffer with per-axis weights (c0, c1, ..) of the taps at offsets
+    0, +-1, .. (see ``blur_weights``); edges clamped. Two passes: along x (evaluated), then along y (left to
+    the kernel that reads it)."""
     lane = dr.arange(mi.UInt32, R * R)
     yi = mi.Int32(lane // R)
     xi = mi.Int32(lane) - yi * R
