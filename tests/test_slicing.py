@@ -222,30 +222,35 @@ def test_forward_light_through_a_thick_layer_is_exact_for_any_slice_count(slices
     np.testing.assert_allclose(direct + indirect, np.exp(-(1 - omega * f) * tau), rtol=0.02)
 
 
-def test_uniform_translucent_light_reads_extinction_alone_where_albedos_agree(monkeypatch):
+def test_uniform_modes_read_extinction_alone_where_albedos_agree(monkeypatch):
     """One phase function and albedos within UNIFORM_ALBEDO_SPREAD (the five physical species at 550 nm
-    agree within 1e-4): the light pass reads beta alone, with beta_f = f omega_bar beta, and its light
-    agrees with the pass that reads (beta, beta_f) per voxel to the albedos' spread; a wider spread keeps
-    the two channels."""
+    agree within 1e-4): the light pass reads beta alone, with beta_f = f omega_bar beta, and the eye pass
+    too, with beta_sca = omega_bar beta; light and image agree with the passes that read (beta, beta_f)
+    and (beta, beta_sca) per voxel to the albedos' spread. A wider spread keeps the channels, and so do
+    per-species phase functions."""
     from weather_mi.slicing import renderer as renderer_module
     vol = wm.optical_volume(wm.synthetic.supercell(shape=(20, 40, 40), spacing_m=(1000.0, 2000.0, 2000.0)),
                             species="physical")
     spec = wm.scene.default_spec(vol, 16, 12)
     points = np.stack(np.meshgrid(np.linspace(-30e3, 30e3, 7), np.linspace(-30e3, 30e3, 7),
                                   np.linspace(1e3, 14e3, 6)), axis=-1).reshape(-1, 3)
-    light = {}
+    light, image = {}, {}
     for spread in (renderer_module.UNIFORM_ALBEDO_SPREAD, 1e-6):
         monkeypatch.setattr(renderer_module, "UNIFORM_ALBEDO_SPREAD", spread)
         r = SliceRenderer(vol, SliceMode("uniform", "translucent"), slices=32, light_res=32)
-        assert r.light_channels == (1 if spread > 1e-5 else 2)
-        r.frame(spec, SliceParams(forward_fraction=0.6))
-        light[r.light_channels] = np.stack(r.light_at(points))
-    one, two = light[1], light[2]
+        channels = (r.light_channels, r.tex_eye.tensor().shape[-1])
+        assert channels == ((1, 1) if spread > 1e-5 else (2, 2))
+        image[channels] = r.frame(spec, SliceParams(forward_fraction=0.6)).radiance
+        light[channels] = np.stack(r.light_at(points))
+    one, two = light[(1, 1)], light[(2, 2)]
     assert (two[1] > 0.01).sum() >= 10 and (two[0] < 0.5).sum() >= 10  # points in and below the storm
     lit = two > 1e-3
     np.testing.assert_allclose(one[lit], two[lit], rtol=1e-3)
-    # per-species phase functions: two channels, whatever the albedos
-    assert SliceRenderer(vol, SliceMode("per_species", "translucent"), slices=8, light_res=8).light_channels == 2
+    cloud = r.transmittance < 0.9
+    assert cloud.sum() >= 10
+    np.testing.assert_allclose(image[(1, 1)][cloud], image[(2, 2)][cloud], rtol=1e-3)
+    r = SliceRenderer(vol, SliceMode("per_species", "translucent"), slices=8, light_res=8)
+    assert r.light_channels == 2 and r.tex_eye.tensor().shape[-1] > 2
 
 
 def test_blur_weights_have_the_requested_variance():

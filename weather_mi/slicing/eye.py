@@ -274,7 +274,7 @@ FACTOR_CAP = math.exp(30.0)  # SlabAverage.factor's largest value
 
 
 def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
-              ambient, ground, differentiable: bool = False, offset=None):
+              ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None):
     """Radiance (mi.Color3f) and transmittance of every pixel ray through the slices of ``f`` (the sun's
     light volume's frame: the slice planes of the frame's geometry).
 
@@ -286,6 +286,7 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
     offset         : None, or each ray's slab offset j in slice units (mi.Float, |j| <= 1/2, see jitter.py):
                      its slabs are [k + j - 1/2, k + j + 1/2] instead of [k - 1/2, k + 1/2], so that the
                      terraces the slab planes leave on lit faces fall at a different depth in every pixel
+    sca_ratio      : None, or beta_sca / beta of the one group where ``tex_eye`` holds beta alone
     """
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
@@ -340,7 +341,7 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
         src = mi.Color3f(0.0)
         sca = mi.Float(0.0)
         for gi in range(G):
-            bs = dr.maximum(vals[1 + gi], 0.0)
+            bs = ext * sca_ratio if sca_ratio is not None else dr.maximum(vals[1 + gi], 0.0)
             sca += bs
             src += bs * (phase_colour[gi] * A + diffuse_colour[gi] * B)
         C = C + w * (src + (sca * occ) * ambient)

@@ -133,14 +133,7 @@ class SliceRenderer:
         self.albedo_rgb, self.colors = _species_albedo_and_colour(vol)                  # (S, 3) each
         self.groups = _scatter_groups(self.tables, self.colors if mode.species_colors else
                                       self.albedo_rgb / np.maximum(self.albedo_rgb.mean(axis=1, keepdims=True), 1e-12))
-        self.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (1 + len(self.groups),), np.float32)),
-                                    use_accel=False)
-        # the light pass's source: (beta, beta_f), or beta alone where no light is scattered forward or
-        # where beta_f is one fraction of beta (``forward_keep``)
-        self.uniform_forward = mode.light == "translucent" and _one_forward_fraction(mode, self.albedo_rgb)
-        self.light_channels = 2 if mode.light == "translucent" and not self.uniform_forward else 1
-        self.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (self.light_channels,), np.float32)),
-                                          use_accel=False)
+        self._make_textures(mode)
         # light and eye rays read the medium only between their first and last occupied block (occupancy.py)
         self.occupancy = OccupancyMap(mi, vol.beta_total, self.grid_box, vol.spacing)
         # the "multiple" model's parameters act in the eye pass only: its light pass is not differentiated
@@ -166,6 +159,21 @@ class SliceRenderer:
         # (dr.freeze; FROZEN_FRAMES False or SliceRenderer.frozen = False: traced every frame)
         self.frozen = FROZEN_FRAMES
         self._frozen_kernels = _freeze(weakref.ref(self))
+
+    def _make_textures(self, mode: SliceMode):
+        """The eye's texture (beta and beta_sca per group) and the light pass's source ((beta, beta_f), or
+        beta alone where no light is scattered forward). One phase function and albedos that agree within
+        UNIFORM_ALBEDO_SPREAD make beta_sca / beta and beta_f / beta one number each over the medium
+        (``mean_albedo``): both textures then hold beta alone (the eye's where there is one group)."""
+        mi = self.mi
+        uniform = mode.phase == "uniform" and _albedos_agree(self.albedo_rgb)
+        self.one_scattering_ratio = uniform and len(self.groups) == 1  # beta_sca = omega_bar beta
+        self.uniform_forward = mode.light == "translucent" and uniform  # beta_f = f omega_bar beta
+        self.light_channels = 2 if mode.light == "translucent" and not self.uniform_forward else 1
+        eye_channels = 1 if self.one_scattering_ratio else 1 + len(self.groups)
+        self.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (eye_channels,), np.float32)), use_accel=False)
+        self.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (self.light_channels,), np.float32)),
+                                          use_accel=False)
 
     # ------------------------------------------------------------------ per-frame volume data
     def _species_vectors(self, params: SliceParams):
@@ -208,15 +216,14 @@ class SliceRenderer:
         self._last[name] = (key, value)
         return value
 
-    def forward_keep(self, scale, omega, fwd):
-        """(beta - beta_f) / beta of a medium whose species share one forward fraction f (``uniform_forward``):
-        1 - f omega_bar, omega_bar the species' albedos weighted by their extinction over the volume (a
-        Dr.Jit Float: f may carry gradients). The light pass then reads beta alone. The albedos of such a
-        medium agree within UNIFORM_ALBEDO_SPREAD (cloud, ice, rain, snow, graupel at 550 nm: 1e-4), and
-        so does beta_f / beta everywhere. ``scale, omega, fwd``: of ``_species_vectors``."""
+    def mean_albedo(self, scale, omega):
+        """omega_bar: the species' albedos weighted by their extinction over the volume (a kernel scalar),
+        which a medium whose albedos agree within UNIFORM_ALBEDO_SPREAD (cloud, ice, rain, snow, graupel at
+        550 nm: within 1e-4) has everywhere, to that spread: beta_sca = omega_bar beta and, with one forward
+        fraction f, beta - beta_f = (1 - f omega_bar) beta. ``scale, omega``: of ``_species_vectors``."""
         w = np.asarray(scale, dtype=np.float64) * self.beta_sum_s
         w = w / max(float(w.sum()), 1e-30)
-        return 1.0 - kernel_scalar(self.mi, fwd[0]) * float(np.dot(w, omega))
+        return kernel_scalar(self.mi, float(np.dot(w, omega)))
 
     def _detail_amplitudes(self, params: SliceParams) -> list[float]:
         from .modes import DEFAULT_DETAIL
@@ -249,7 +256,8 @@ class SliceRenderer:
             for si in members[1:]:
                 g_sca = g_sca + sca[si]
             grouped.append(g_sca)
-        d["tex_eye"].set_tensor(mi.TensorXf(_interleave(mi, [ext] + grouped), shape=self.shape + (1 + len(self.groups),)))
+        eye = [ext] if self.one_scattering_ratio else [ext] + grouped
+        d["tex_eye"].set_tensor(mi.TensorXf(_interleave(mi, eye), shape=self.shape + (len(eye),)))
         light = [ext, beta_fwd][:self.light_channels]
         d["tex_light"].set_tensor(mi.TensorXf(_interleave(mi, light), shape=self.shape + (len(light),)))
 
@@ -294,8 +302,9 @@ class SliceRenderer:
         forward, to_sun = np.asarray(spec.camera.forward, float), np.asarray(spec.sun.to_sun, float)
         g = self._reuse("geometry", (tuple(forward), tuple(to_sun), self.slices),
                         lambda: slice_geometry(forward, to_sun, self.box, self.slices))
-        keep = self.forward_keep(scale, omega, fwd) if self.uniform_forward else None
-        inputs = self._frame_inputs(g, spec, params, tint, rebuilt, keep)
+        omega_bar = self.mean_albedo(scale, omega) if self.uniform_forward or self.one_scattering_ratio else None
+        keep = 1.0 - kernel_scalar(mi, fwd[0]) * omega_bar if self.uniform_forward else None  # f may carry gradients
+        inputs = self._frame_inputs(g, spec, params, tint, rebuilt, keep, omega_bar)
         if rebuilt:  # built by the frame's kernels, from opaque values
             inputs["build"] = [[kernel_scalar(mi, v) for v in x] for x in (scale, omega, fwd, detail or [])]
         if return_arrays or self.differentiable or not self.frozen:
@@ -328,10 +337,12 @@ class SliceRenderer:
                 "forward_fraction_per_species": [None if dr.is_array_v(v) else float(v) for v in fwd]}
         return Image(rgb, np.zeros_like(rgb), meta)
 
-    def _frame_inputs(self, g, spec: SceneSpec, params: SliceParams, tint, rebuilt: bool, keep=None) -> dict:
+    def _frame_inputs(self, g, spec: SceneSpec, params: SliceParams, tint, rebuilt: bool, keep=None,
+                      omega_bar=None) -> dict:
         """Everything the frame's kernels read, as a Dr.Jit PyTree (arrays, opaque scalars, textures; the
         plain ints and flags in it set the kernels' structure): the light passes' plans, the eye pass's
-        per-pixel and per-frame values. ``keep``: ``forward_keep`` where the light source is beta alone."""
+        per-pixel and per-frame values. ``keep``: (beta - beta_f) / beta where the light source is beta alone;
+        ``omega_bar``: ``mean_albedo`` where the eye's texture is beta alone."""
         mi = self.mi
         translucent = self.mode.light == "translucent"
         blur = params.blur_length_m if params.blur_length_m is not None else self.voxel_m
@@ -350,7 +361,8 @@ class SliceRenderer:
             else:
                 sky_store, sky_frame = self.sky_light.store, self.sky_light.frame
         return {**self._texture_data(), "build": None, "sun": sun, "sky": sky,
-                "sky_store": sky_store, "sky_frame": sky_frame, "eye": self._eye_inputs(spec, params, tint)}
+                "sky_store": sky_store, "sky_frame": sky_frame,
+                "eye": self._eye_inputs(spec, params, tint, omega_bar if self.one_scattering_ratio else None)}
 
     def _kernels(self, inputs: dict, timed: bool = False):
         """The frame's kernels from ``_frame_inputs``: (radiance, transmittance, sun store, zenith store).
@@ -373,8 +385,9 @@ class SliceRenderer:
         out, transmittance = self._eye_pass(inputs["tex_eye"], inputs["eye"])
         return out, transmittance, store, sky_store
 
-    def _eye_inputs(self, spec: SceneSpec, params: SliceParams, tint) -> dict:
-        """The eye pass's inputs (see ``_frame_inputs``)."""
+    def _eye_inputs(self, spec: SceneSpec, params: SliceParams, tint, sca_ratio=None) -> dict:
+        """The eye pass's inputs (see ``_frame_inputs``); ``sca_ratio``: beta_sca / beta where the eye's
+        texture is beta alone."""
         mi = self.mi
         import drjit as dr
         rays = self.views.get(mi, spec)
@@ -409,7 +422,8 @@ class SliceRenderer:
                 mi.Vector3f(*(op(1.0 / (h - l)) for l, h in zip(*self.grid_box))))
         return {"rays": ray_arrays, "n": rays.n, "tex_light": self.tex_light_src, "grid": grid, "phase_colour": phase_colour, "diffuse_colour": diffuse_colour, "model": model,
                 "ambient": _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), "ground": ground,
-                "jitter": kernel_scalar(mi, params.slab_jitter), "jitter_rotation": kernel_scalar(mi, jitter_rotation(params.jitter_frame))}
+                "jitter": kernel_scalar(mi, params.slab_jitter), "jitter_rotation": kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
+                "sca_ratio": sca_ratio}
 
     def _eye_pass(self, tex_eye, e: dict):
         mi = self.mi
@@ -425,7 +439,8 @@ class SliceRenderer:
         rays = SimpleNamespace(**r, n=e["n"])
         offset = slab_offsets(dr, r["pattern"], e["jitter"], e["jitter_rotation"])
         return composite(mi, self.light.frame, self.light.n_slices, rays, tex_eye, self.grid_box, e["phase_colour"],
-                         e["diffuse_colour"], model, e["ambient"], e["ground"], self.differentiable, offset)
+                         e["diffuse_colour"], model, e["ambient"], e["ground"], self.differentiable, offset,
+                         e["sca_ratio"])
 
 
 FROZEN_FRAMES = True
@@ -454,16 +469,15 @@ def _species_albedo_and_colour(vol) -> tuple[np.ndarray, np.ndarray]:
     return np.broadcast_to(mean_alb, (S, 3)).copy(), np.ones((S, 3))
 
 
-# a "uniform" medium's light pass reads beta alone (beta_f = f omega_bar beta) where the species' albedos
-# agree within this; otherwise it reads (beta, beta_f)
+# a "uniform" medium's textures hold beta alone (beta_sca = omega_bar beta, beta_f = f omega_bar beta) where
+# the species' albedos agree within this; otherwise beta_sca and beta_f per voxel
 UNIFORM_ALBEDO_SPREAD = 1e-3
 
 
-def _one_forward_fraction(mode, albedo_rgb) -> bool:
-    """Whether beta_f / beta is one number over the medium: one phase function (so one forward fraction
-    f) and albedos that agree within UNIFORM_ALBEDO_SPREAD."""
+def _albedos_agree(albedo_rgb) -> bool:
+    """Whether the species' (mean) albedos agree within UNIFORM_ALBEDO_SPREAD."""
     omega = np.asarray(albedo_rgb, dtype=np.float64).mean(axis=1)
-    return mode.phase == "uniform" and float(omega.max() - omega.min()) <= UNIFORM_ALBEDO_SPREAD
+    return float(omega.max() - omega.min()) <= UNIFORM_ALBEDO_SPREAD
 
 
 def _number(value) -> float:
