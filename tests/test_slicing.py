@@ -449,3 +449,37 @@ def test_the_slab_average_of_exponentially_varying_light():
         assert got == pytest.approx(expected, rel=2e-4), (x, sigma, kappa, h)
         light = float(slab.mean_light(mi.Float(math.log(0.3)), mi.Float(kappa))[0])  # the same, times light 0.3
         assert light == pytest.approx(0.3 * expected, rel=2e-4), (x, sigma, kappa, h)
+
+
+def test_the_sky_and_the_ground_light_a_layer_through_the_columns_above_and_below():
+    """In a homogeneous layer (extinction beta between z0 and z1) the "multiple" model's skylight is
+    occluded by exp(-k beta (z1 - z)), the optical depth above, and the light of the lit ground below by
+    exp(-k beta (z - z0)), the optical depth below (k: ``sky_extinction``); the ground's light is its
+    radiance rho / pi (E_sun mu0 + E_sky), and none without a ground."""
+    import mitsuba as mi
+    from weather_mi.slicing.eye import LightModel
+    beta, z0, z1, k = 2e-3, 1000.0, 2000.0, 0.3
+    vol = slab(beta=beta, size=(16, 8, 8))
+    sky = wm.Sky("sunsky")
+    spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=180, elevation=10, fov=40), sun=wm.Sun(170, 30),
+                        sky=sky, ground=wm.Ground(albedo=0.2), width=16, height=12)
+    r = SliceRenderer(vol, SliceMode("per_species", "multiple"), slices=64, light_res=16)
+    r.frame(spec, SliceParams(sky_extinction=k))
+    z = np.linspace(z0 + 50.0, z1 - 50.0, 9)
+    p = mi.Point3f(mi.Float(np.zeros(9)), mi.Float(np.zeros(9)), mi.Float(z))
+    model = LightModel(r.light, r.sky_light, 4, 0.1, 0.2, 0.5, mi.Float(k), below=True)
+    _, _, occ, occ_below = model.terms(p)
+    np.testing.assert_allclose(np.asarray(occ), np.exp(-k * beta * (z1 - z)), rtol=0.02)
+    np.testing.assert_allclose(np.asarray(occ_below), np.exp(-k * beta * (z - z0)), rtol=0.02)
+    from weather_mi.slicing.background import sky_irradiance_horizontal
+    from weather_mi.slicing.renderer import ground_radiance
+    e_sky = sky_irradiance_horizontal(spec)
+    expected = 0.2 / math.pi * (np.asarray(spec.sun.irradiance) * math.sin(math.radians(30.0)) + e_sky)
+    np.testing.assert_allclose(ground_radiance(spec, e_sky), expected, rtol=1e-12)
+    # the ground's light adds to the image, and no ground adds none
+    gain = SliceParams(sky_extinction=k)
+    lit = r.frame(spec, gain).radiance
+    dark = r.frame(wm.SceneSpec(camera=spec.camera, sun=spec.sun, sky=sky, ground=wm.Ground(albedo=0.0),
+                                width=16, height=12), gain).radiance
+    cloud = r.transmittance < 0.5
+    assert cloud.sum() > 10 and np.all(lit[cloud] > dark[cloud])

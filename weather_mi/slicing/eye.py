@@ -75,9 +75,10 @@ class LightModel:
     log_forward: bool = False  # translucent light: all forward light, interpolated as its logarithm
     leak_gain: object = 0.0    # the diffused light a finite cloud loses through its sides ("multiple")
     leak_rate: object = 1.0
+    below: bool = False        # the lit ground lights the medium from below, through the column under it
 
     def terms(self, p, slab=None, ext=None, active=True):
-        """(A, B, occlusion of the sky) at world points p (mi.Point3f), inside a kernel. With ``slab``
+        """(A, B, occlusion of the sky, occlusion of the ground below) at world points p (mi.Point3f), inside a kernel. With ``slab``
         (a ``SlabAverage``), the light at the sample becomes its average over the eye's segment, with
         decay rates read from the light volume one slice further towards the sun, or, with ``carry``,
         the light carried from the plane before p and the local extinction ``ext`` (1/m) at p.
@@ -99,7 +100,7 @@ class LightModel:
                                                                        logs=True, active=active)
             d_avg = slab.mean_light(log_d, dr.maximum(log_d_prev - log_d, 0.0))  # one slice's depth, direct
             forward = slab.mean_light(log_f, dr.maximum(log_f_prev - log_f, 0.0))  # and all forward light
-            return d_avg, dr.maximum(forward - d_avg, 0.0), 1.0
+            return d_avg, dr.maximum(forward - d_avg, 0.0), 1.0, 0.0
         else:
             (direct, indirect), (d_prev, i_prev) = self.sun.lookup(p, with_previous=True, log_direct=log,
                                                                    log_forward=self.log_forward, active=active)
@@ -109,8 +110,8 @@ class LightModel:
         if self.octaves is None:
             d_avg = direct * factor(k_d)
             if not self.log_forward:  # low-albedo light: no forward-scattered light (I = 0)
-                return d_avg, 0.0, 1.0
-            return d_avg, dr.maximum((direct + indirect) * factor(k_f) - d_avg, 0.0), 1.0
+                return d_avg, 0.0, 1.0, 0.0
+            return d_avg, dr.maximum((direct + indirect) * factor(k_f) - d_avg, 0.0), 1.0, 0.0
         log_d = dr.log(dr.maximum(direct, 1e-30))      # -tau
         A, B = 0.0 * direct, 0.0 * direct
         ai, bi, ci = 1.0, 1.0, 1.0
@@ -129,18 +130,23 @@ class LightModel:
             tau = dr.clip(tau + slab.sigma * k_d * slab.mean_offset(), 0.0, tau_col)  # at the mean position
         B = (1.0 - column) * B + self.diffusion_gain * diffusion_profile(dr, tau, tau_col, self.diffusion_scale) \
             + self.leak_gain * leaking_diffusion(dr, tau, tau_col, self.diffusion_scale, self.leak_rate)
-        occ = 1.0
-        if self.sky is not None:
+        occ, occ_below = 1.0, 0.0
+        if self.sky is not None:  # the sky through the column above p, the lit ground through the column below
             up, _ = self.sky.lookup(p, log_direct=True, active=active)
-            occ = dr.exp(self.sky_extinction * dr.log(dr.maximum(up, 1e-30)))
-        return A, B, occ
+            log_up = dr.log(dr.maximum(up, 1e-30))
+            occ = dr.exp(self.sky_extinction * log_up)
+            if self.below:
+                through, _ = self.sky.lookup(p, exit_plane=True, log_direct=True, active=active)
+                log_down = dr.minimum(dr.log(dr.maximum(through, 1e-30)) - log_up, 0.0)  # -(optical depth below)
+                occ_below = dr.exp(self.sky_extinction * log_down)
+        return A, B, occ, occ_below
 
 
     def ground_light(self, p):
         """(sunlight factor, sky occlusion) on the ground at world points p: A + B for the paper's modes,
         the column's delta-Eddington transmission for the "multiple" model."""
         import drjit as dr
-        A, B, occ = self.terms(p)
+        A, B, occ, _ = self.terms(p)
         if self.octaves is None:
             return A + B, occ
         direct, _ = self.sun.lookup(p, log_direct=True)
@@ -274,7 +280,7 @@ FACTOR_CAP = math.exp(30.0)  # SlabAverage.factor's largest value
 
 
 def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
-              ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None):
+              ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None, ambient_below=None):
     """Radiance (mi.Color3f) and transmittance of every pixel ray through the slices of ``f`` (the sun's
     light volume's frame: the slice planes of the frame's geometry).
 
@@ -287,6 +293,7 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
                      its slabs are [k + j - 1/2, k + j + 1/2] instead of [k - 1/2, k + 1/2], so that the
                      terraces the slab planes leave on lit faces fall at a different depth in every pixel
     sca_ratio      : None, or beta_sca / beta of the one group where ``tex_eye`` holds beta alone
+    ambient_below  : None, or mi.Color3f: the light from the ground below, before occlusion ("multiple")
     """
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
@@ -335,7 +342,7 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
         split = ~sub & (ext * de * (b - a) > EYE_SPLIT_DEPTH)
         # the light is read where it is scattered towards the eye (not in clear air, nor to decide a split)
         slab = SlabAverage(ext * de, k_step, 0.5 * (b - a))
-        A, B, occ = model.terms(p, slab, ext, (ext > 0) & ~split)
+        A, B, occ, occ_below = model.terms(p, slab, ext, (ext > 0) & ~split)
         alpha = dr.select(split, 0.0, 1.0 - slab.e2)    # 1 - exp(-ext de (b - a))
         w = dr.select(ext > 0, T * alpha / dr.maximum(ext, 1e-30), 0.0)
         src = mi.Color3f(0.0)
@@ -344,7 +351,8 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
             bs = ext * sca_ratio if sca_ratio is not None else dr.maximum(vals[1 + gi], 0.0)
             sca += bs
             src += bs * (phase_colour[gi] * A + diffuse_colour[gi] * B)
-        C = C + w * (src + (sca * occ) * ambient)
+        amb = occ * ambient if ambient_below is None else occ * ambient + occ_below * ambient_below
+        C = C + w * (src + sca * amb)
         T = T * (1.0 - alpha)
         done = ~split & (~sub | (part == M))        # the slab is done: on to the next
         i = dr.select(done, i + 1, i)

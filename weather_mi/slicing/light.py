@@ -20,7 +20,7 @@ given distance is the same for any number of slices.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -166,17 +166,23 @@ class LightVolume:
         ``keep``: None, or the ratio (beta - beta_f) / beta (a Dr.Jit Float) of translucent light whose
         ``source`` holds beta alone (one forward fraction over the whole medium)."""
         mi = self.mi
-        dl = kernel_scalar(mi, g.light_step_m)
-        chunk, var, inv_du2, inv_dv2 = g.n_slices, None, None, None
-        if translucent:
-            chunk, var, du, dv = self._blur_plan(g, variance_per_m, reference_variance_per_m, dl)
-            inv_du2, inv_dv2 = kernel_scalar(mi, 1.0 / du ** 2), kernel_scalar(mi, 1.0 / dv ** 2)
         key = (g.axis.tobytes(), g.to_light.tobytes(), g.d_first, g.spacing, g.n_slices, g.u_range, g.v_range,
                tuple(np.asarray(grid_box, dtype=np.float64).ravel()))
-        if self._rays_key != key:  # a slider move keeps the light rays (numpy work) of the last frame
-            self._rays, self._rays_key = self._light_rays(g, grid_box), key
-        q0, qs, kin, kout, span = self._rays
-        return SweepPlan(q0, qs, kin, kout, dl, var, inv_du2, inv_dv2, lookup_frame(mi, g, self.res, jitter),
+        if self._rays_key != key:  # a slider move keeps the light rays and the geometry's kernel scalars
+            du = (g.u_range[1] - g.u_range[0]) / self.res
+            dv = (g.v_range[1] - g.v_range[0]) / self.res
+            self._rays = (self._light_rays(g, grid_box), lookup_frame(mi, g, self.res),
+                          kernel_scalar(mi, g.light_step_m), kernel_scalar(mi, 1.0 / du ** 2), kernel_scalar(mi, 1.0 / dv ** 2))
+            self._rays_key = key
+        (q0, qs, kin, kout, span), frame, dl, inv_du2, inv_dv2 = self._rays
+        if jitter is not None:
+            frame = replace(frame, jitter=jitter[0], rotation=jitter[1])
+        chunk, var = g.n_slices, None
+        if translucent:
+            chunk, var = self._blur_plan(g, variance_per_m, reference_variance_per_m, dl)
+        else:
+            inv_du2 = inv_dv2 = None
+        return SweepPlan(q0, qs, kin, kout, dl, var, inv_du2, inv_dv2, frame,
                          g.n_slices, int(chunk), bool(translucent), *span, keep=keep)
 
     def run(self, plan: "SweepPlan", source):
@@ -257,7 +263,7 @@ class LightVolume:
         return q0, qs, F(k_in), F(k_out), span
 
     def _blur_plan(self, g: SliceGeometry, variance_per_m, reference_variance_per_m, dl):
-        """(slabs per chunk, variance per slab (m^2), texel sizes du, dv (m)) of the operator splitting.
+        """(slabs per chunk, variance per slab (m^2)) of the operator splitting.
 
         Slabs run in chunks (one kernel each: light rays are independent within a chunk), and the
         sideways diffusion of the chunk's path is applied at the start of the next one; a chunk spans the
@@ -266,14 +272,13 @@ class LightVolume:
         mi = self.mi
         import drjit as dr
         R = self.res
-        du = (g.u_range[1] - g.u_range[0]) / R
-        dv = (g.v_range[1] - g.v_range[0]) / R
+        texel = min(g.u_range[1] - g.u_range[0], g.v_range[1] - g.v_range[0]) / R   # m
         var = kernel_scalar(mi, variance_per_m) * dl                 # m^2 per slab
         ref = float(dr.detach(kernel_scalar(mi, variance_per_m))[0]) if reference_variance_per_m is None \
             else float(reference_variance_per_m)
-        per_slab = ref * g.light_step_m / min(du, dv) ** 2   # texels^2 per slab at the reference
+        per_slab = ref * g.light_step_m / texel ** 2   # texels^2 per slab at the reference
         chunk = int(np.clip(BLUR_STEP_VARIANCE / max(per_slab, 1e-12), 1, g.n_slices))
-        return chunk, var, du, dv
+        return chunk, var
 
     def _through_slabs(self, through_slab, state, k0: int, k1: int, lane, store, translucent: bool = False):
         """Carry the light's ``state`` ((D, I), or (log D, log(D + I)) for translucent light) through slabs

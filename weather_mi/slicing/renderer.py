@@ -210,7 +210,7 @@ class SliceRenderer:
         identity, or plain values by equality): a slider move does not redo the numpy work of the
         sun, the camera or the cone angle."""
         last = self._last.get(name)
-        if last is not None and (last[0] is key or (isinstance(key, (tuple, float)) and last[0] == key)):
+        if last is not None and (last[0] is key or (isinstance(key, (tuple, float, str)) and last[0] == key)):
             return last[1]
         value = make()
         self._last[name] = (key, value)
@@ -393,7 +393,7 @@ class SliceRenderer:
         rays = self.views.get(mi, spec)
         sun = np.asarray(spec.sun.irradiance, dtype=np.float64)
         F = lambda a: aligned_float(mi, a)  # noqa: E731
-        phase_colour, diffuse_colour = [], []
+        phase_colour, colours = [], []
         for gi, members in enumerate(self.groups):
             colour = self.colors[members[0]] if self.mode.species_colors else np.mean(tint[members], axis=0)
             key = (gi, tuple(colour * sun))  # per view (and sun): a slider move reuses the uploaded array
@@ -401,7 +401,8 @@ class SliceRenderer:
                 k = self.tables[members[0]].eval_cos(rays.cos_to_light) * (colour * sun)[None]
                 rays.phase_colour[key] = mi.Color3f(*(F(k[:, c]) for c in range(3)))
             phase_colour.append(rays.phase_colour[key])
-            diffuse_colour.append(_colour(mi, colour * sun / (4 * np.pi)))
+            colours.append(tuple(colour * sun / (4 * np.pi)))
+        diffuse_colour = self._reuse("diffuse", tuple(colours), lambda: [_colour(mi, c) for c in colours])
         e_sky = sky_irradiance_horizontal(spec, cache=self.views.sky)
         model = None
         if self.mode.light == "multiple":
@@ -415,15 +416,18 @@ class SliceRenderer:
         if spec.ground is not None:  # over a terrain the rays carry its albedo and slope (ViewRays.ground_sun/_sky)
             rho = np.asarray(spec.ground.albedo, dtype=np.float64) if rays.ground_sun is None else np.ones(3)
             ground = (_colour(mi, rho / np.pi * sun * max(float(spec.sun.to_sun[2]), 0.0)), _colour(mi, rho / np.pi * e_sky))
+        below = None  # "multiple": the lit ground's radiance, which lights the medium from below
+        if model is not None and self.sky_light is not None and spec.ground is not None and LIGHT_FROM_BELOW:
+            below = _colour(mi, ground_radiance(spec, e_sky)) * kernel_scalar(mi, gain)
         names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern", "span_a", "span_b")
         ray_arrays = {k: getattr(rays, k) for k in names + (("ground_sun", "ground_sky") if rays.ground_sun is not None else ())}
         op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
-        grid = (mi.Point3f(*(op(c) for c in self.grid_box[0])),
-                mi.Vector3f(*(op(1.0 / (h - l)) for l, h in zip(*self.grid_box))))
+        grid = self._reuse("grid", "grid", lambda: (mi.Point3f(*(op(c) for c in self.grid_box[0])),
+                                                    mi.Vector3f(*(op(1.0 / (h - l)) for l, h in zip(*self.grid_box)))))
         return {"rays": ray_arrays, "n": rays.n, "tex_light": self.tex_light_src, "grid": grid, "phase_colour": phase_colour, "diffuse_colour": diffuse_colour, "model": model,
                 "ambient": _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), "ground": ground,
                 "jitter": kernel_scalar(mi, params.slab_jitter), "jitter_rotation": kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
-                "sca_ratio": sca_ratio}
+                "sca_ratio": sca_ratio, "below": below}
 
     def _eye_pass(self, tex_eye, e: dict):
         mi = self.mi
@@ -432,7 +436,7 @@ class SliceRenderer:
             a, b, c, sky_ext, gain, scale, mu0, leak_gain, leak_rate = e["model"]
             model = LightModel(self.light, self.sky_light, self.mode.octaves, a, b, c, sky_ext, gain, scale,
                                g=self.g_scattering, mu0=mu0, carry=(e["tex_light"], e["grid"]), leak_gain=leak_gain,
-                               leak_rate=leak_rate)
+                               leak_rate=leak_rate, below=e["below"] is not None)
         else:
             model = LightModel(self.light, log_forward=self.mode.light == "translucent")
         r = e["rays"]
@@ -440,9 +444,10 @@ class SliceRenderer:
         offset = slab_offsets(dr, r["pattern"], e["jitter"], e["jitter_rotation"])
         return composite(mi, self.light.frame, self.light.n_slices, rays, tex_eye, self.grid_box, e["phase_colour"],
                          e["diffuse_colour"], model, e["ambient"], e["ground"], self.differentiable, offset,
-                         e["sca_ratio"])
+                         e["sca_ratio"], e["below"])
 
 
+LIGHT_FROM_BELOW = True
 FROZEN_FRAMES = True
 FREEZE_LIMIT = 8  # recordings kept per renderer (slice counts of the viewer's drafts, rebuilt or not, ...)
 
@@ -456,6 +461,14 @@ def _freeze(renderer_ref):
     def kernels(inputs):
         return renderer_ref()._kernels(inputs)
     return dr.freeze(kernels, limit=FREEZE_LIMIT, warn_after=4 * FREEZE_LIMIT)
+
+
+def ground_radiance(spec: SceneSpec, e_sky) -> np.ndarray:
+    """RGB radiance (W/m^2/sr) of ``spec``'s flat Lambertian ground in the open: rho / pi (E_sun mu0 + E_sky),
+    E_sky the sky's irradiance on a horizontal plane (``sky_irradiance_horizontal``)."""
+    rho = np.asarray(spec.ground.albedo, dtype=np.float64)
+    sun = np.asarray(spec.sun.irradiance, dtype=np.float64) * max(float(spec.sun.to_sun[2]), 0.0)
+    return rho / np.pi * (sun + np.asarray(e_sky, dtype=np.float64))
 
 
 def _species_albedo_and_colour(vol) -> tuple[np.ndarray, np.ndarray]:
