@@ -452,13 +452,14 @@ def test_the_slab_average_of_exponentially_varying_light():
 
 
 def test_the_sky_and_the_ground_light_a_layer_through_the_columns_above_and_below():
-    """In a homogeneous layer (extinction beta between z0 and z1) the "multiple" model's skylight is
-    occluded by exp(-k beta (z1 - z)), the optical depth above, and the light of the lit ground below by
-    exp(-k beta (z - z0)), the optical depth below (k: ``sky_extinction``); the ground's light is its
-    radiance rho / pi (E_sun mu0 + E_sky), and none without a ground."""
+    """In a homogeneous layer (extinction beta between z0 and z1) the "multiple" model's skylight passes
+    the optical depth above, beta (z1 - z), as diffuse light (``ground_transmission`` at the diffusivity
+    cosine, tests/test_slicing_ground.py checks it against DISORT), and the light of the lit ground the
+    optical depth below, beta (z - z0), both scaled by k (``sky_extinction``); the ground's light is its
+    radiance rho / pi (E_sun mu0 + E_sky), it adds to the image, and a black ground adds none."""
     import mitsuba as mi
     from weather_mi.slicing.eye import LightModel
-    beta, z0, z1, k = 2e-3, 1000.0, 2000.0, 0.3
+    beta, z0, z1, k = 20e-3, 1000.0, 2000.0, 0.5
     vol = slab(beta=beta, size=(16, 8, 8))
     sky = wm.Sky("sunsky")
     spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=180, elevation=10, fov=40), sun=wm.Sun(170, 30),
@@ -467,10 +468,14 @@ def test_the_sky_and_the_ground_light_a_layer_through_the_columns_above_and_belo
     r.frame(spec, SliceParams(sky_extinction=k))
     z = np.linspace(z0 + 50.0, z1 - 50.0, 9)
     p = mi.Point3f(mi.Float(np.zeros(9)), mi.Float(np.zeros(9)), mi.Float(z))
-    model = LightModel(r.light, r.sky_light, 4, 0.1, 0.2, 0.5, mi.Float(k), below=True)
+    from weather_mi.slicing.eye import DIFFUSE_MU, ground_transmission
+    model = LightModel(r.light, r.sky_light, 4, 0.1, 0.2, 0.5, mi.Float(k), below=True, g=0.85)
     _, _, occ, occ_below = model.terms(p)
-    np.testing.assert_allclose(np.asarray(occ), np.exp(-k * beta * (z1 - z)), rtol=0.02)
-    np.testing.assert_allclose(np.asarray(occ_below), np.exp(-k * beta * (z - z0)), rtol=0.02)
+    above, below = ground_transmission(np, k * beta * (z1 - z), DIFFUSE_MU, 0.85), \
+        ground_transmission(np, k * beta * (z - z0), DIFFUSE_MU, 0.85)
+    assert above[0] < 0.95 * above[-1] and below[-1] < 0.95 * below[0]  # the layer occludes, both ways
+    np.testing.assert_allclose(np.asarray(occ), above, rtol=0.01)
+    np.testing.assert_allclose(np.asarray(occ_below), below, rtol=0.01)
     from weather_mi.slicing.background import sky_irradiance_horizontal
     from weather_mi.slicing.renderer import ground_radiance
     e_sky = sky_irradiance_horizontal(spec)

@@ -32,9 +32,14 @@ sunlight carried from the plane before the sample through the medium (``LightVol
 lit face between two planes lies where it is) and the decay rate from the local extinction. The paper's
 translucent light interpolates all forward light as its logarithm (``lookup(log_forward=True)``). Slabs
 that are optically thick along the eye ray are composited in sub-segments (``EYE_SPLIT``). L_amb is the
-sky's mean radiance times
-``ambient`` (paper modes, unshadowed) or ``sky_gain`` x exp(-sky_extinction x the optical depth towards the
-zenith) ("multiple").
+sky's mean radiance times ``ambient`` (paper modes, unshadowed). The "multiple" model's diffuse light is
+``sky_gain`` x [the sky's mean radiance x T(k tau_up) + the lit ground's radiance rho / pi (E_sun mu0 + E_sky) x
+T(k tau_down)], tau_up the optical depth towards the zenith (the zenith light volume), tau_down the column
+below (that volume's whole column less tau_up), T the delta-Eddington transmission of diffuse light
+(``ground_transmission`` at the diffusivity cosine) and k = ``sky_extinction``: the sky lights a cloud from
+above and the ground from below (cloud bases), and inside a cloud both dim as diffuse light does, slowly in
+the optical depth (an exponential exp(-k tau) was refitted to k ~ 0.006, no occlusion at all). Held-out
+median CIEDE2000 4.72 -> 4.31 with it, refitted (validation/calibrate_slicer.py).
 
 The ground: rho / pi x (E_sun mu0 x sunlight factor + E_sky x occlusion). The paper's modes take A + B
 there too. The "multiple" model takes the total (direct + diffuse) transmission of the cloud column
@@ -43,8 +48,7 @@ depth (``ground_transmission``): the octaves describe light scattered towards th
 leave a cloud's shadow on the ground far too bright (tau = 50: octaves ~0.4 of the sunlight, a layer
 0.1); the layer is checked against DISORT in tests/test_slicing_ground.py. Its skylight passes the column
 above the point (the zenith light volume) as diffuse light: the same layer at the diffusivity cosine
-1/1.66 (within 4% of DISORT's transmission of isotropic light for tau 0.5-60), not the in-cloud
-``sky_extinction``, which the fits drive towards 0.
+1/1.66 (within 4% of DISORT's transmission of isotropic light for tau 0.5-60).
 """
 from __future__ import annotations
 
@@ -133,12 +137,12 @@ class LightModel:
         occ, occ_below = 1.0, 0.0
         if self.sky is not None:  # the sky through the column above p, the lit ground through the column below
             up, _ = self.sky.lookup(p, log_direct=True, active=active)
-            log_up = dr.log(dr.maximum(up, 1e-30))
-            occ = dr.exp(self.sky_extinction * log_up)
+            tau_up = -dr.log(dr.maximum(up, 1e-30))
+            occ = ground_transmission(dr, self.sky_extinction * tau_up, DIFFUSE_MU, self.g)
             if self.below:
                 through, _ = self.sky.lookup(p, exit_plane=True, log_direct=True, active=active)
-                log_down = dr.minimum(dr.log(dr.maximum(through, 1e-30)) - log_up, 0.0)  # -(optical depth below)
-                occ_below = dr.exp(self.sky_extinction * log_down)
+                tau_down = dr.maximum(-dr.log(dr.maximum(through, 1e-30)) - tau_up, 0.0)
+                occ_below = ground_transmission(dr, self.sky_extinction * tau_down, DIFFUSE_MU, self.g)
         return A, B, occ, occ_below
 
 

@@ -67,9 +67,9 @@ MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple"
 # of 128 spp), with the forward peaks within 3 deg as unscattered light in both renderers; judged on the
 # real WRF supercell, WRF plateau, BOMEX and RICO storms against references of 2-5% cloud RSE (README,
 # "The slicer").
-MULTIPLE_DEFAULTS = {"ms_extinction": 0.1271, "ms_contribution": 0.2245, "ms_eccentricity": 0.5304,
-                     "sky_gain": 0.6405, "sky_extinction": 0.0061, "diffusion_gain": 1.2184,
-                     "diffusion_scale": 0.3073, "leak_gain": 0.5536, "leak_rate": 0.6525}
+MULTIPLE_DEFAULTS = {"ms_extinction": 0.095, "ms_contribution": 0.2151, "ms_eccentricity": 0.8201,
+                     "sky_gain": 0.4424, "sky_extinction": 0.0218, "diffusion_gain": 1.0823,
+                     "diffusion_scale": 0.369, "leak_gain": 0.6084, "leak_rate": 0.8373}
 
 
 DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail field, detail.field(amplitude=0.5))
@@ -109,10 +109,11 @@ class SliceParams:
         In [0, 1]: octave i's phase function is blended towards isotropic,
         ms_eccentricity^i p + (1 - ms_eccentricity^i) / (4 pi).
     sky_gain : float, default MULTIPLE_DEFAULTS["sky_gain"]
-        "multiple" light, >= 0: skylight in-scattering, sky_gain x the sky's mean radiance x
-        exp(-sky_extinction x optical depth towards the zenith).
+        "multiple" light, >= 0: in-scattering of diffuse light, sky_gain x [the sky's mean radiance x
+        T(sky_extinction x the optical depth above) + the lit ground's radiance x T(sky_extinction x the
+        optical depth below)], T: a delta-Eddington layer's transmission of diffuse light (eye.py).
     sky_extinction : float, default MULTIPLE_DEFAULTS["sky_extinction"]
-        >= 0: the skylight's optical-depth factor above.
+        >= 0: the factor on the optical depths above and below that the diffuse light crosses.
     diffusion_gain : float, default MULTIPLE_DEFAULTS["diffusion_gain"]
         "multiple" light, >= 0: isotropic in-scattering of diffused sunlight, diffusion_gain x
         E_sun / (4 pi) x the 1-D diffusion profile of the cloud column along the sun ray

@@ -417,7 +417,7 @@ class SliceRenderer:
             rho = np.asarray(spec.ground.albedo, dtype=np.float64) if rays.ground_sun is None else np.ones(3)
             ground = (_colour(mi, rho / np.pi * sun * max(float(spec.sun.to_sun[2]), 0.0)), _colour(mi, rho / np.pi * e_sky))
         below = None  # "multiple": the lit ground's radiance, which lights the medium from below
-        if model is not None and self.sky_light is not None and spec.ground is not None and LIGHT_FROM_BELOW:
+        if model is not None and self.sky_light is not None and spec.ground is not None:
             below = _colour(mi, ground_radiance(spec, e_sky)) * kernel_scalar(mi, gain)
         names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern", "span_a", "span_b")
         ray_arrays = {k: getattr(rays, k) for k in names + (("ground_sun", "ground_sky") if rays.ground_sun is not None else ())}
@@ -447,7 +447,6 @@ class SliceRenderer:
                          e["sca_ratio"], e["below"])
 
 
-LIGHT_FROM_BELOW = True
 FROZEN_FRAMES = True
 FREEZE_LIMIT = 8  # recordings kept per renderer (slice counts of the viewer's drafts, rebuilt or not, ...)
 
