@@ -2,12 +2,15 @@
 round after round, so that the shared cores' load falls on both alike.
 
     .venv/bin/python benchmarks/slicing_vs_commit.py [--commit c73a480] [--rounds 3] [--size 300x300]
-                                                     [--slices 128] [--frames 5]
+                                                     [--slices 128] [--frames 5] [--fixed]
 
 The earlier commit is checked out into a temporary git worktree (its plugins linked in, as
 validation/bit_identity.py does); each round runs, in a fresh process per tree, the frames-per-second
 measurement of benchmarks/slicing.py (frozen frames, every frame changing a scaling as a slider drag
-does) on the demo supercell. Prints the median over rounds per mode and tree and their ratio.
+does) on the demo supercell. Prints the median over rounds per mode and tree and their ratio. With
+``--fixed``: the fixed cost per frame instead, in ms (a 64 x 48 frame, 8 slices, an 8 x 8 light buffer:
+kernels with almost nothing to do), for a change of the light parameters and of a scaling (which rebuilds
+the textures over the whole grid), in each tree's own default (traced, or recorded where it has dr.freeze).
 """
 from __future__ import annotations
 
@@ -33,9 +36,30 @@ for name, mode in MODES.items():
     print("FPS", name, 1.0 / seconds_per_frame(r, spec, {frames}), flush=True)
 """
 
+FIXED = """
+import time, statistics, weather_mi as wm
+from weather_mi.slicing import MODES, SliceParams, SliceRenderer
+wm.set_variant(None)
+vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
+spec = wm.scene.default_spec(vol, 64, 48)
+for name in ("per-species/translucent", "per-species/multiple"):
+    r = SliceRenderer(vol, MODES[name], slices=8, light_res=8)
+    for change in ("parameter", "scaling"):
+        t = []
+        for i in range(5 + {frames}):
+            p = SliceParams(scale={{"ice": 1.0 + 0.1 * i}}) if change == "scaling" else \\
+                SliceParams(ms_contribution=0.1 + 0.01 * i, blur_length_m=100.0 + i)
+            t0 = time.perf_counter()
+            r.frame(spec, p)
+            if i >= 5:  # after the warm-up (compiling, recording)
+                t.append(time.perf_counter() - t0)
+        print("FPS", name + ":" + change, 1e3 * statistics.median(t), flush=True)
+"""
 
-def measure(tree: Path, w: int, h: int, slices: int, frames: int) -> dict:
-    code = MEASURE.format(bench=str(ROOT / "benchmarks"), w=w, h=h, slices=slices, frames=frames)
+
+def measure(tree: Path, w: int, h: int, slices: int, frames: int, fixed: bool = False) -> dict:
+    code = (FIXED if fixed else MEASURE).format(bench=str(ROOT / "benchmarks"), w=w, h=h, slices=slices,
+                                                frames=frames)
     env = {**os.environ, "PYTHONPATH": str(tree)}
     out = subprocess.run([sys.executable, "-c", code], cwd=tree, capture_output=True, text=True, env=env,
                          check=True).stdout
@@ -49,6 +73,7 @@ def main() -> int:
     ap.add_argument("--size", default="300x300")
     ap.add_argument("--slices", type=int, default=128)
     ap.add_argument("--frames", type=int, default=5)
+    ap.add_argument("--fixed", action="store_true", help="the fixed cost per frame (ms, 64 x 48) instead of fps")
     args = ap.parse_args()
     w, h = (int(v) for v in args.size.lower().split("x"))
     with tempfile.TemporaryDirectory() as tmp:
@@ -61,16 +86,20 @@ def main() -> int:
             fps = {"old": [], "new": []}
             for k in range(args.rounds):
                 for label, tree in (("old", old), ("new", ROOT)):
-                    fps[label].append(measure(tree, w, h, args.slices, args.frames))
+                    fps[label].append(measure(tree, w, h, args.slices, 4 * args.frames if args.fixed else args.frames,
+                                              args.fixed))
                 print(f"round {k + 1}/{args.rounds} done", flush=True)
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(old)], capture_output=True)
-    print(f"\n{w} x {h}, {args.slices} slices, frames per second (median of {args.rounds} rounds)")
-    print(f"{'mode':<34}{args.commit:>10}{'now':>10}{'ratio':>8}")
+    what = "fixed cost per frame, ms (64 x 48, 8 slices, 8^2 light buffer)" if args.fixed else \
+        f"{w} x {h}, {args.slices} slices, frames per second"
+    print(f"\n{what} (median of {args.rounds} rounds)")
+    print(f"{'mode' + (': change' if args.fixed else ''):<34}{args.commit:>10}{'now':>10}{'ratio':>8}")
     for name in fps["new"][0]:
         a = statistics.median(r[name] for r in fps["old"] if name in r)
         b = statistics.median(r[name] for r in fps["new"])
-        print(f"{name:<34}{a:>10.2f}{b:>10.2f}{b / a:>7.2f}x")
+        ratio = a / b if args.fixed else b / a  # how many times faster now
+        print(f"{name:<34}{a:>10.2f}{b:>10.2f}{ratio:>7.2f}x")
     return 0
 
 
