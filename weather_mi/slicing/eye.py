@@ -82,11 +82,11 @@ class LightModel:
     below: bool = False        # the lit ground lights the medium from below, through the column under it
 
     def terms(self, p, slab=None, ext=None, active=True):
-        """(A, B, occlusion of the sky, occlusion of the ground below) at world points p (mi.Point3f), inside a kernel. With ``slab``
-        (a ``SlabAverage``), the light at the sample becomes its average over the eye's segment, with
-        decay rates read from the light volume one slice further towards the sun, or, with ``carry``,
-        the light carried from the plane before p and the local extinction ``ext`` (1/m) at p.
-        ``active``: lanes whose light is used (the others read nothing)."""
+        """(A, B, occlusion of the sky, occlusion of the ground below) at world points p (mi.Point3f),
+        inside a kernel. With ``slab`` (a ``SlabAverage``), the light at the sample becomes its average over
+        the eye's segment, with decay rates read from the light volume one slice further towards the sun,
+        or, with ``carry``, the light carried from the plane before p and the local extinction ``ext``
+        (1/m) at p. ``active``: lanes whose light is used (the others read nothing)."""
         import drjit as dr
         factor, k_d, k_f, cap = (lambda kappa: 1.0), 0.0, 0.0, None  # noqa: E731
         # the "multiple" model reads optical depths, translucent light its forward light's: interpolated as such
