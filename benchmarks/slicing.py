@@ -44,6 +44,14 @@ def seconds_per_frame(r: SliceRenderer, spec, frames: int) -> float:
     return statistics.median(t)
 
 
+def change(kind: str, i: int) -> SliceParams:
+    """The parameters of frame i of a fixed-cost run: the light parameters change ("parameter": the textures
+    are kept), or a scaling ("scaling": the textures are rebuilt over the whole grid)."""
+    if kind == "scaling":
+        return SliceParams(scale={"ice": 1.0 + 0.1 * i})
+    return SliceParams(ms_contribution=0.1 + 0.01 * i, blur_length_m=100.0 + i)
+
+
 def fixed_cost(vol, frames):
     """[(mode, change, ms traced, ms frozen, CPU ms traced, CPU ms frozen)] for a 64 x 48 frame with 8 slices and an 8 x 8 light buffer
     (kernels with almost nothing to do), traced and frozen renderers alternating frame by frame (the
@@ -55,20 +63,17 @@ def fixed_cost(vol, frames):
     for name in ("per-species/translucent", "per-species/multiple"):
         rs = [SliceRenderer(vol, MODES[name], slices=8, light_res=8) for _ in range(2)]
         rs[0].frozen = False
-        for change in ("parameter", "scaling"):
+        for kind in ("parameter", "scaling"):
             t, c = [[], []], [[], []]
             for i in range(frames + 3):
-                if change == "scaling":
-                    p, s = SliceParams(scale={"ice": 1.0 + 0.1 * i}), spec
-                else:
-                    p, s = SliceParams(ms_contribution=0.1 + 0.01 * i, blur_length_m=100.0 + i), spec
+                p = change(kind, i)
                 for j, r in enumerate(rs):
                     t0, c0 = time.perf_counter(), time.process_time()
-                    r.frame(s, p)
+                    r.frame(spec, p)
                     if i >= 3:  # after the warm-up (compiling, recording)
                         t[j].append(time.perf_counter() - t0)
                         c[j].append(time.process_time() - c0)
-            rows.append((name, change, *(1e3 * statistics.median(x) for x in (t[0], t[1], c[0], c[1]))))
+            rows.append((name, kind, *(1e3 * statistics.median(x) for x in (t[0], t[1], c[0], c[1]))))
     return rows
 
 
@@ -101,8 +106,8 @@ def main():
     print("\nfixed cost: 64 x 48, 8 slices, 8^2 light buffer (ms per frame, median)")
     print(f"{'mode':<28}{'change':<12}{'traced':>9}{'frozen':>9}{'ratio':>8}{'CPU traced':>12}{'CPU frozen':>12}"
           f"{'ratio':>8}")
-    for name, change, a, b, ca, cb in fixed_cost(vol, max(frames, 10)):
-        print(f"{name:<28}{change:<12}{a:>9.1f}{b:>9.1f}{a / b:>7.2f}x{ca:>12.1f}{cb:>12.1f}{ca / cb:>7.2f}x")
+    for name, kind, a, b, ca, cb in fixed_cost(vol, max(frames, 10)):
+        print(f"{name:<28}{kind:<12}{a:>9.1f}{b:>9.1f}{a / b:>7.2f}x{ca:>12.1f}{cb:>12.1f}{ca / cb:>7.2f}x")
     configs = [(300, 300, 128)] if args.quick else [(300, 300, 128), (1024, 768, 256)]
     for w, h, slices in configs:
         print(f"\n{w} x {h}, {slices} slices (frames per second)")

@@ -37,23 +37,23 @@ for name, mode in MODES.items():
 """
 
 FIXED = """
-import time, statistics, weather_mi as wm
-from weather_mi.slicing import MODES, SliceParams, SliceRenderer
+import sys, time, statistics, weather_mi as wm
+from weather_mi.slicing import MODES, SliceRenderer
+sys.path.insert(0, {bench!r})
+from slicing import change
 wm.set_variant(None)
 vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
 spec = wm.scene.default_spec(vol, 64, 48)
 for name in ("per-species/translucent", "per-species/multiple"):
     r = SliceRenderer(vol, MODES[name], slices=8, light_res=8)
-    for change in ("parameter", "scaling"):
+    for kind in ("parameter", "scaling"):
         t = []
         for i in range(5 + {frames}):
-            p = SliceParams(scale={{"ice": 1.0 + 0.1 * i}}) if change == "scaling" else \\
-                SliceParams(ms_contribution=0.1 + 0.01 * i, blur_length_m=100.0 + i)
             t0 = time.perf_counter()
-            r.frame(spec, p)
+            r.frame(spec, change(kind, i))
             if i >= 5:  # after the warm-up (compiling, recording)
                 t.append(time.perf_counter() - t0)
-        print("FPS", name + ":" + change, 1e3 * statistics.median(t), flush=True)
+        print("FPS", name + ":" + kind, 1e3 * statistics.median(t), flush=True)
 """
 
 

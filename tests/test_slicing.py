@@ -456,7 +456,7 @@ def test_the_sky_and_the_ground_light_a_layer_through_the_columns_above_and_belo
     the optical depth above, beta (z1 - z), as diffuse light (``ground_transmission`` at the diffusivity
     cosine, tests/test_slicing_ground.py checks it against DISORT), and the light of the lit ground the
     optical depth below, beta (z - z0), both scaled by k (``sky_extinction``); the ground's light is its
-    radiance rho / pi (E_sun mu0 + E_sky), it adds to the image, and a black ground adds none."""
+    radiance rho / pi E_sun mu0 + rho / pi E_sky, and it brightens every cloud pixel over a black ground's."""
     import mitsuba as mi
     from weather_mi.slicing.eye import LightModel
     beta, z0, z1, k = 20e-3, 1000.0, 2000.0, 0.5
@@ -479,9 +479,12 @@ def test_the_sky_and_the_ground_light_a_layer_through_the_columns_above_and_belo
     from weather_mi.slicing.background import sky_irradiance_horizontal
     from weather_mi.slicing.renderer import ground_radiance
     e_sky = sky_irradiance_horizontal(spec)
-    expected = 0.2 / math.pi * (np.asarray(spec.sun.irradiance) * math.sin(math.radians(30.0)) + e_sky)
-    np.testing.assert_allclose(ground_radiance(spec, e_sky), expected, rtol=1e-12)
-    # the ground's light adds to the image, and no ground adds none
+    from_sun, from_sky = ground_radiance(spec, e_sky)
+    np.testing.assert_allclose(from_sun, 0.2 / math.pi * np.asarray(spec.sun.irradiance) * math.sin(math.radians(30.0)),
+                               rtol=1e-12)
+    np.testing.assert_allclose(from_sky, 0.2 / math.pi * np.asarray(e_sky), rtol=1e-12)
+    np.testing.assert_allclose(ground_radiance(spec, e_sky, np.ones(3))[1], np.asarray(e_sky) / math.pi, rtol=1e-12)
+    # the ground's light adds to the image
     gain = SliceParams(sky_extinction=k)
     lit = r.frame(spec, gain).radiance
     dark = r.frame(wm.SceneSpec(camera=spec.camera, sun=spec.sun, sky=sky, ground=wm.Ground(albedo=0.0),

@@ -14,7 +14,7 @@ which is exact for a homogeneous slab, so that thick slabs are handled and the l
 the slice count (a per-slice survival factor omega f would compound once per slice). In translucent mode
 I also spreads sideways like a diffusion: a Gaussian whose variance grows by ``variance_per_m`` (m^2 per
 metre of light path), applied by operator splitting (slabs in chunks, then the chunk's accumulated
-variance with 9 x 9 taps of exactly that variance: no bilinear-tap diffusion), so the spread after a
+variance with separable taps of exactly that variance, blur.py: no bilinear-tap diffusion), so the spread after a
 given distance is the same for any number of slices.
 """
 from __future__ import annotations
@@ -205,15 +205,19 @@ class LightVolume:
         else:  # (D, I = 0)
             state = (dr.full(mi.Float, 1.0, R * R), dr.zeros(mi.Float, R * R))
         starts = list(range(0, N, plan.chunk))
+        weights = {}  # per step length (all steps but the last have the same): the blur's weights per axis
         for j, k0 in enumerate(starts):
             k1 = min(k0 + plan.chunk, N)
             if plan.translucent and j > 0:  # the blur step spreads I = F - D
-                n_prev = dr.opaque(mi.Float, float(k0 - starts[j - 1]))
+                n_prev = k0 - starts[j - 1]
+                if n_prev not in weights:
+                    var = plan.var * dr.opaque(mi.Float, float(n_prev))
+                    weights[n_prev] = (blur_weights(dr, var * plan.inv_du2), blur_weights(dr, var * plan.inv_dv2))
                 D = dr.exp(state[0])
-                blurred = _blur(mi, dr, state[2], R, blur_weights(dr, plan.var * n_prev * plan.inv_du2),
-                                blur_weights(dr, plan.var * n_prev * plan.inv_dv2))
+                blurred = _blur(mi, dr, state[2], R, *weights[n_prev])
                 state = (state[0], dr.log(dr.maximum(D + blurred, 1e-30)))
-            state = self._through_slabs(through_slab, state, k0, k1, lane, store, plan.translucent)
+            state = self._through_slabs(through_slab, state, k0, k1, lane, store,
+                                        plan.translucent and k1 < N)  # I for the next blur step
         at = (lane + dr.opaque(mi.UInt32, N * R * R)) * C
         if plan.translucent:
             D, I = (dr.maximum(v, LOG_FLOOR) for v in state[:2])
@@ -280,10 +284,11 @@ class LightVolume:
         chunk = int(np.clip(BLUR_STEP_VARIANCE / max(per_slab, 1e-12), 1, g.n_slices))
         return chunk, var
 
-    def _through_slabs(self, through_slab, state, k0: int, k1: int, lane, store, translucent: bool = False):
+    def _through_slabs(self, through_slab, state, k0: int, k1: int, lane, store, forward: bool = False):
         """Carry the light's ``state`` ((D, I), or (log D, log(D + I)) for translucent light) through slabs
-        k0 .. k1 - 1: one loop kernel, or slab by slab when differentiable. Translucent light comes back
-        with I = (D + I) - D as a third value, for the next blur step (evaluated in the same kernel)."""
+        k0 .. k1 - 1: one loop kernel, or slab by slab when differentiable. With ``forward`` (translucent
+        light before a blur step) the state comes back with I = (D + I) - D as a third value, evaluated in
+        the same kernel."""
         mi = self.mi
         import drjit as dr
         if self.differentiable:
@@ -303,7 +308,7 @@ class LightVolume:
             out = dr.while_loop((dr.zeros(mi.UInt32, self.res * self.res) + dr.opaque(mi.UInt32, k0), *state),
                                 lambda k, *st: k < stop, body)
             state = tuple(out[1:])
-        if translucent:
+        if forward:
             state = (*state, dr.exp(state[1]) - dr.exp(state[0]))
         dr.eval(*state, store)
         return state

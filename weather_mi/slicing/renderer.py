@@ -3,7 +3,7 @@ the glue between the modules that do the work:
 
 geometry.py  the half-angle axis and the slice planes (visited from the light's side)
 light.py     ``LightVolume``: the light pass and the one light lookup
-blur.py      the translucency blur of the light pass (9-tap weights of an exact variance)
+blur.py      the translucency blur of the light pass (separable taps of an exact variance)
 eye.py       the eye pass: composite along camera rays (Eq. 8/9), the ground
 view.py      camera rays and background per view, in a bounded cache
 
@@ -116,6 +116,9 @@ class SliceRenderer:
         self.beta_s = [mi.Float(np.ascontiguousarray(beta_s[..., si]).ravel()) for si in range(self.n_species)]  # (z, y, x) each
         self.beta_sum_s = beta_s.reshape(-1, self.n_species).sum(axis=0, dtype=np.float64)  # 1/m, over all voxels
         self.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
+        # the grid as kernel vectors (lo corner, 1 / span), for the light carried through the medium
+        self._grid_scalars = (mi.Point3f(*(kernel_scalar(mi, c) for c in self.grid_box[0])),
+                              mi.Vector3f(*(kernel_scalar(mi, 1.0 / (h - l)) for l, h in zip(*self.grid_box))))
         self.voxel_m = float(np.mean(vol.spacing))
         tables = list(vol.require_phase_tables())
         if mode.phase == "uniform":
@@ -210,7 +213,7 @@ class SliceRenderer:
         identity, or plain values by equality): a slider move does not redo the numpy work of the
         sun, the camera or the cone angle."""
         last = self._last.get(name)
-        if last is not None and (last[0] is key or (isinstance(key, (tuple, float, str)) and last[0] == key)):
+        if last is not None and (last[0] is key or (isinstance(key, (tuple, float)) and last[0] == key)):
             return last[1]
         value = make()
         self._last[name] = (key, value)
@@ -412,19 +415,15 @@ class SliceRenderer:
             gain = params.sky_gain
         else:
             gain = params.ambient
-        ground = None
+        ground, below = None, None
         if spec.ground is not None:  # over a terrain the rays carry its albedo and slope (ViewRays.ground_sun/_sky)
-            rho = np.asarray(spec.ground.albedo, dtype=np.float64) if rays.ground_sun is None else np.ones(3)
-            ground = (_colour(mi, rho / np.pi * sun * max(float(spec.sun.to_sun[2]), 0.0)), _colour(mi, rho / np.pi * e_sky))
-        below = None  # "multiple": the lit ground's radiance, which lights the medium from below
-        if model is not None and self.sky_light is not None and spec.ground is not None:
-            below = _colour(mi, ground_radiance(spec, e_sky)) * kernel_scalar(mi, gain)
+            from_sun, from_sky = ground_radiance(spec, e_sky, None if rays.ground_sun is None else np.ones(3))
+            ground = (_colour(mi, from_sun), _colour(mi, from_sky))
+            if model is not None and self.sky_light is not None:  # "multiple": it lights the medium from below
+                below = _colour(mi, sum(ground_radiance(spec, e_sky))) * kernel_scalar(mi, gain)
         names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern", "span_a", "span_b")
         ray_arrays = {k: getattr(rays, k) for k in names + (("ground_sun", "ground_sky") if rays.ground_sun is not None else ())}
-        op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
-        grid = self._reuse("grid", "grid", lambda: (mi.Point3f(*(op(c) for c in self.grid_box[0])),
-                                                    mi.Vector3f(*(op(1.0 / (h - l)) for l, h in zip(*self.grid_box)))))
-        return {"rays": ray_arrays, "n": rays.n, "tex_light": self.tex_light_src, "grid": grid, "phase_colour": phase_colour, "diffuse_colour": diffuse_colour, "model": model,
+        return {"rays": ray_arrays, "n": rays.n, "tex_light": self.tex_light_src, "grid": self._grid_scalars, "phase_colour": phase_colour, "diffuse_colour": diffuse_colour, "model": model,
                 "ambient": _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), "ground": ground,
                 "jitter": kernel_scalar(mi, params.slab_jitter), "jitter_rotation": kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
                 "sca_ratio": sca_ratio, "below": below}
@@ -462,12 +461,13 @@ def _freeze(renderer_ref):
     return dr.freeze(kernels, limit=FREEZE_LIMIT, warn_after=4 * FREEZE_LIMIT)
 
 
-def ground_radiance(spec: SceneSpec, e_sky) -> np.ndarray:
-    """RGB radiance (W/m^2/sr) of ``spec``'s flat Lambertian ground in the open: rho / pi (E_sun mu0 + E_sky),
-    E_sky the sky's irradiance on a horizontal plane (``sky_irradiance_horizontal``)."""
-    rho = np.asarray(spec.ground.albedo, dtype=np.float64)
+def ground_radiance(spec: SceneSpec, e_sky, albedo=None) -> tuple[np.ndarray, np.ndarray]:
+    """RGB radiance (W/m^2/sr) of ``spec``'s Lambertian ground in the open, from the sun and from the sky:
+    rho / pi E_sun mu0 and rho / pi E_sky, E_sky the sky's irradiance on a horizontal plane
+    (``sky_irradiance_horizontal``); rho the ground's albedo, or ``albedo``."""
+    rho = np.asarray(spec.ground.albedo if albedo is None else albedo, dtype=np.float64)
     sun = np.asarray(spec.sun.irradiance, dtype=np.float64) * max(float(spec.sun.to_sun[2]), 0.0)
-    return rho / np.pi * (sun + np.asarray(e_sky, dtype=np.float64))
+    return rho / np.pi * sun, rho / np.pi * np.asarray(e_sky, dtype=np.float64)
 
 
 def _species_albedo_and_colour(vol) -> tuple[np.ndarray, np.ndarray]:
