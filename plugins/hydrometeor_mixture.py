@@ -7,9 +7,15 @@ set (the union of the tables' angle grids, so forward peaks, halos and rainbows 
 RGB channel, and normalised so that 2 pi * integral p dv = 1 exactly in that representation. The
 versine keeps float32 resolution near forward (a 1 mm raindrop's diffraction peak is ~0.02 deg
 wide; cos(Theta) cannot tell those angles apart in float32); in ``eval_pdf`` it is computed as
-|wo + wi|^2 / 2, which is exact there too. The weights w_s(x) are a
-grid (z, y, x, S) on the medium's bounding box, looked up trilinearly (texel centres at (i + 0.5)/N,
-as Mitsuba's ``gridvolume``, clamped at the edges).
+|wo + wi|^2 / 2, which is exact there too. The weights come from a grid (z, y, x, S) on the medium's
+bounding box of the species' scattering coefficients beta_sca,s (any common scale), looked up trilinearly
+(texel centres at (i + 0.5)/N, as Mitsuba's ``gridvolume``, clamped at the edges) and then normalised:
+w_s(x) = beta_sca,s(x) / sum_s' beta_sca,s'(x), Eq. 8 of the medium whose species' coefficients are
+trilinear, as its extinction (the sum of theirs) is. Interpolating normalised weights instead mixes the
+phase functions of two voxels half and half wherever they meet, however unequal their scattering: on the
+WRF plateau's 30 km x 585 m grid a thin ice layer's weights reached into the dense water deck beside it,
+and the side-lit view's single scattering came out 1.55 times what a 4x finer grid of the same fields
+gives (1.04 times with coefficients).
 
 Sampling: pick species s with probability w_s(x), then draw v from that species' channel-mean
 table: its node segment from a Walker alias table (the coin is what is left of the uniform that
@@ -23,18 +29,15 @@ Layout for speed (every scattering event costs one ``sample`` and one ``eval_pdf
   logarithmic beyond) bounds it, and at most ``guide_steps`` (<= 3 for the shipped tables) bisection
   steps find it; ``sample`` needs no search at all (alias table). Both replaced binary searches of
   11 dependent loads each.
-- The weights are held as S - 1 channels packed four to a 16-byte texel, the last species being
-  1 - the sum of the others, so a trilinear lookup is 8 packet loads per 4 species
-  (``mi.Texture3f`` loads every channel of every corner separately). For that, voxels where nothing
-  scatters (all weights 0) next to one that scatters take that neighbour's weights (where a
-  renormalised lookup of the raw grid would ignore them), so that every texel sums to 1 and the
-  interpolated weights need no renormalisation (:func:`pack_weights`).
+- The coefficients are held as S channels packed four to a 16-byte texel, so a trilinear lookup is 8
+  packet loads per 4 species (``mi.Texture3f`` loads every channel of every corner separately);
+  :func:`pack_weights`.
 - The table rows of all species at one node are adjacent (N x S x 4: R, G, B and channel-mean pdf,
   which is also what ``sample`` inverts), so one lookup touches two or three cache lines.
 - Every table sits in 64-byte aligned memory, see :func:`_storage`.
 
 Properties (Python dict scenes): ``nodes`` (TensorXf, N ascending versines 1 - cos in [0, 2]), ``values``
-(TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S) and ``to_world`` (the bounding box
+(TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S: beta_sca,s per voxel, >= 0) and ``to_world`` (the bounding box
 as a transform of the unit cube). From XML: ``filename``, an ``.npz`` written by
 :func:`save_npz` with the same arrays plus ``bbox``.
 """
@@ -146,29 +149,14 @@ def guide_table(v: np.ndarray, max_steps: int = 3, theta0: float = GUIDE_THETA0)
 
 
 def pack_weights(weights: np.ndarray) -> np.ndarray:
-    """(z, y, x, ceil((S - 1) / 4), 4) float32: the first S - 1 weights of every voxel (renormalised to
-    sum to 1, zero-padded to whole packets of 4).
-
-    Voxels whose weights are all 0 (nothing scatters there) but that touch a voxel with weight (in
-    its 3 x 3 x 3 neighbourhood) take the weights of such a neighbour: they are the only empty voxels
-    a trilinear lookup at a scattering point can reach. Empty voxels farther away get equal weights
-    1/S. Every texel then sums to 1, so interpolated weights need no renormalisation."""
+    """(z, y, x, ceil(S / 4), 4) float32: every voxel's S scattering coefficients (negative values as 0),
+    zero-padded to whole packets of 4. A voxel where nothing scatters holds zeros, and a trilinear lookup
+    weighs it by nothing, as the medium's extinction does."""
     w = np.clip(np.asarray(weights, np.float32), 0.0, None)
     n_species = w.shape[3]
-    total = w.sum(axis=3)
-    full = total > 0.0
-    w /= np.where(full, total, 1.0)[..., None]
-    for axis in range(3):  # fill along z, then y, then x: reaches the whole 3 x 3 x 3 neighbourhood
-        for dst, src in ((slice(1, None), slice(None, -1)), (slice(None, -1), slice(1, None))):
-            d = (slice(None),) * axis + (dst,)
-            s_ = (slice(None),) * axis + (src,)
-            take = ~full[d] & full[s_]  # empty voxel whose neighbour (one step along axis) has weight
-            w[d][take] = w[s_][take]
-            full[d] |= take
-    w[~full] = 1.0 / n_species
-    n_packets = max(1, -(-(n_species - 1) // 4))
+    n_packets = max(1, -(-n_species // 4))
     out = np.zeros(w.shape[:3] + (n_packets * 4,), np.float32)
-    out[..., : n_species - 1] = w[..., : n_species - 1]
+    out[..., :n_species] = w
     return out.reshape(w.shape[:3] + (n_packets, 4))
 
 
@@ -282,8 +270,8 @@ class HydrometeorMixture:
 
     # ------------------------------------------------------------ helpers
     def _weights_at(self, mei):
-        """w_s(x) for s = 0..S-1, trilinear on the bbox grid (texel centres at (i + 0.5) / n, clamped
-        at the edges), from the S - 1 packed channels; the last is 1 - the sum of the others."""
+        """w_s(x) for s = 0..S-1: the coefficients trilinear on the bbox grid (texel centres at
+        (i + 0.5) / n, clamped at the edges), normalised to sum to 1 (1/S each where none scatters)."""
         if self.n_species == 1:
             return [mi.Float(1.0)]  # renormalised weights of one species are 1: no lookup
         p = self.to_local @ mei.p
@@ -312,11 +300,13 @@ class HydrometeorMixture:
             c11 = lerp(texel(z1, y1, x0), texel(z1, y1, x1), fx)
             v = lerp(lerp(c00, c01, fy), lerp(c10, c11, fy), fz)
             w += [dr.maximum(v[c], 0.0) for c in range(4)]
-        w = w[: self.n_species - 1]
-        rest = 1.0 - w[0]
+        w = w[: self.n_species]
+        total = w[0]
         for wi in w[1:]:
-            rest = rest - wi
-        return w + [dr.maximum(rest, 0.0)]
+            total = total + wi
+        scattering = total > 0.0
+        inv = dr.rcp(dr.select(scattering, total, 1.0))
+        return [dr.select(scattering, wi * inv, 1.0 / self.n_species) for wi in w]
 
     def _segment(self, v):
         """Node index i with v_i <= v < v_i+1 and the linear weight t in [0, 1]: the guide bucket of
@@ -425,7 +415,7 @@ class HydrometeorMixture:
         if w.ndim != 4 or w.shape[3] != self.n_species:
             raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {self.n_species}; "
                              f"got {w.shape}")
-        self._set_weights(w)  # repacked (S - 1 per texel, empty voxels filled)
+        self._set_weights(w)  # repacked
 
     def to_string(self):
         return (f"HydrometeorMixture[species={self.n_species}, nodes={self.n_nodes}, "

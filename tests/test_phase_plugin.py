@@ -198,6 +198,28 @@ def test_weights_vary_in_space_trilinearly(tmp_path):
     assert mid[0] == pytest.approx(0.5 * (a + b), rel=2e-3)
 
 
+def test_the_mixture_weighs_the_interpolated_scattering_coefficients(tmp_path):
+    """Eq. 8 of a medium whose species' coefficients are trilinear: species 0 (HG 0.85) scattering 3 /km in
+    the west cell, species 1 (isotropic) 1 /km in the east cell; a quarter of the way from the west
+    centre the coefficients are 2.25 and 0.25 /km, the weights 0.9 and 0.1 (normalised weights
+    interpolated instead: 0.75 and 0.25); at the midpoint 0.75 and 0.25 (they: 0.5 and 0.5). A cell
+    where nothing scatters adds nothing."""
+    weights = np.zeros((1, 1, 3, 2), np.float32)
+    weights[0, 0, 0] = (3e-3, 0.0)
+    weights[0, 0, 1] = (0.0, 1e-3)
+    nodes, values = hm.prepare_tables([hg_table(0.85), hg_table(0.0)])
+    phase = mi.load_dict({"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]),
+                          "values": mi.TensorXf(values), "weights": mi.TensorXf(weights),
+                          "to_world": hm.bbox_transform(((0, 0, 0), (3000, 10, 10)))})
+    a, b = hg(0.85, np.arccos(0.3)), 1 / (4 * np.pi)
+    quarter = eval_at(phase, [0.3], p=(750.0, 5.0, 5.0))[1][0]
+    mid = eval_at(phase, [0.3], p=(1000.0, 5.0, 5.0))[1][0]
+    east = eval_at(phase, [0.3], p=(2000.0, 5.0, 5.0))[1][0]  # halfway to the empty cell: still species 1
+    assert quarter == pytest.approx(0.9 * a + 0.1 * b, rel=2e-3)
+    assert mid == pytest.approx(0.75 * a + 0.25 * b, rel=2e-3)
+    assert east == pytest.approx(b, rel=2e-3)
+
+
 def slab_scene(phase):
     """A cube of medium lit from above, seen from the side: exercises multiple scattering."""
     return mi.load_dict({
@@ -309,23 +331,14 @@ for variant in ("llvm_ad_rgb", "scalar_rgb", "llvm_ad_rgb"):
     assert rows[0, 6] == pytest.approx(rows[0, 7], rel=1e-5)  # sample's pdf is eval_pdf's
 
 
-def test_packed_weights_fill_the_empty_neighbours_of_scattering_voxels():
-    w = np.zeros((1, 1, 6, 3), np.float32)
-    w[0, 0, 0] = (2.0, 1.0, 1.0)  # not normalised: packing renormalises
-    w[0, 0, 3] = (0.0, 0.0, 5.0)
+def test_packed_weights_hold_the_coefficients_in_packets_of_four():
+    w = np.zeros((1, 1, 3, 3), np.float32)
+    w[0, 0, 0] = (2.0, 1.0, 1.0)
+    w[0, 0, 2] = (0.0, -1.0, 5.0)   # negative as 0
     packed = hm.pack_weights(w)
-    assert packed.shape == (1, 1, 6, 1, 4)
-    # voxels 1 and 2 touch voxels 0 and 3, voxel 4 touches 3, voxel 5 touches nothing: 1/S
-    np.testing.assert_allclose(packed[0, 0, :, 0, :2],
-                               [[0.5, 0.25], [0.5, 0.25], [0, 0], [0, 0], [0, 0], [1 / 3, 1 / 3]], rtol=1e-6)
-    assert np.all(packed[..., 2:] == 0)  # S - 1 = 2 channels stored, the rest is padding
-    # diagonal neighbours count too (3 x 3 x 3 neighbourhood)
-    d = np.zeros((3, 3, 3, 2), np.float32)
-    d[0, 0, 0] = (0.25, 0.75)
-    np.testing.assert_allclose(hm.pack_weights(d)[1, 1, 1, 0, 0], 0.25)
-    assert hm.pack_weights(d)[2, 2, 2, 0, 0] == pytest.approx(0.5)  # two steps away
-    np.testing.assert_allclose(hm.pack_weights(np.zeros((2, 2, 2, 5)))[..., 0, :], 0.2)  # nothing scatters
-    assert hm.pack_weights(np.ones((1, 1, 1, 9))).shape == (1, 1, 1, 2, 4)  # 8 stored weights: 2 packets
+    assert packed.shape == (1, 1, 3, 1, 4)
+    np.testing.assert_array_equal(packed[0, 0, :, 0], [[2, 1, 1, 0], [0, 0, 0, 0], [0, 0, 5, 0]])
+    assert hm.pack_weights(np.ones((1, 1, 1, 5))).shape == (1, 1, 1, 2, 4)  # 5 coefficients: 2 packets
 
 
 def test_guide_table_bounds_every_node_segment():

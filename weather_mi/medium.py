@@ -9,10 +9,13 @@ from .variant import ensure_registered
 
 
 def phase_arrays(vol: OpticalVolume):
-    """(nodes v = 1 - cos (N,), values (S, N, 3), weights (z, y, x, S)) as the plugin takes them."""
+    """(nodes v = 1 - cos (N,), values (S, N, 3), weights (z, y, x, S)) as the plugin takes them: the
+    species' scattering coefficients beta_sca,s = w_s beta omega (1/m; w_s the Eq. 8 weights, beta omega the
+    voxel's scattering coefficient, channel mean), which the plugin interpolates and then normalises."""
     from .plugins.hydrometeor_mixture import prepare_tables
     nodes, values = prepare_tables(vol.require_phase_tables())
-    weights = np.ascontiguousarray(np.moveaxis(vol.weights, 0, -1), dtype=np.float32)
+    sca = np.asarray(vol.beta_total, np.float32) * np.asarray(vol.albedo, np.float32).mean(axis=-1)
+    weights = np.ascontiguousarray(np.moveaxis(vol.weights * sca[None], 0, -1), dtype=np.float32)
     return nodes, values, weights
 
 
