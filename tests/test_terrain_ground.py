@@ -160,3 +160,41 @@ def test_slicer_ground_is_the_terrain_as_the_reference_sees_it():
     rel = np.abs(sl / ref - 1.0)
     assert np.median(rel) < 0.002 and np.mean(rel < 0.005) > 0.75, (np.median(rel), np.mean(rel < 0.005))
     assert abs(sl.mean() / ref.mean() - 1.0) < 0.01
+
+
+def test_slicer_rays_meet_the_reference_ground_beyond_the_domain():
+    """``Terrain.scene_hits`` against Mitsuba's intersection of the reference's whole ground
+    (``terrain_ground_dicts``: the mesh with its apron and skirt, the surround beyond): rays from a camera
+    250 km south of a plateau, over the domain, the apron and the surround out to the horizon, meet the
+    same surfaces at the same distances, with the same normals and albedos. (The terrain's level
+    continuation without apron and surround put the far ground at the edge's albedo: a dark wedge beyond
+    the WRF plateau's domain, CIEDE2000 20.)"""
+    from weather_mi.mitsuba_scene import terrain_ground_dicts
+    hyd = hydrometeors(relief(), np.linspace(0.1, 0.4, NX)[None, :] * np.ones((NY, 1)))
+    terrain = Terrain.of(hyd)
+    wm.set_variant("llvm_ad_rgb")
+    vol = volume(hyd)
+    grounds = terrain_ground_dicts(terrain, {"type": "homogeneous", "sigma_t": 0.0, "albedo": 0.0}, vol.bbox)
+    scene = mi.load_dict({"type": "scene", **grounds})
+    rng = np.random.default_rng(7)
+    n = 4000
+    o = np.tile([terrain.x.mean(), terrain.y.mean() - 250e3, 40e3], (n, 1))
+    d = np.stack([rng.uniform(-0.6, 0.6, n), np.ones(n), -rng.uniform(0.02, 0.3, n)], 1)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    from weather_mi.mitsuba_scene import terrain_floor_m, terrain_gap_m
+    floor = terrain_floor_m(terrain) - 2.0 * terrain_gap_m(terrain, vol.bbox)  # the scene's surround, not recentred
+    t, albedo, normal = terrain.scene_hits(o, d, floor_m=floor)
+    si = scene.ray_intersect(mi.Ray3f(mi.Point3f(*(mi.Float(o[:, k]) for k in range(3))),
+                                      mi.Vector3f(*(mi.Float(d[:, k]) for k in range(3)))))
+    t_ref = np.array(si.t)
+    hit = np.isfinite(t_ref) & np.isfinite(t)
+    assert np.array_equal(np.isfinite(t), np.isfinite(t_ref))
+    x = o[:, 0] + t * d[:, 0]
+    beyond = hit & (np.abs(x - terrain.x.mean()) > 150e3)
+    on_skirt = hit & (np.abs(normal[:, 2]) < 1e-6)
+    assert beyond.sum() > 200 and on_skirt.sum() > 5 and (hit & ~beyond & ~on_skirt).sum() > 200
+    np.testing.assert_allclose(t[hit], t_ref[hit], rtol=2e-5, atol=1.0)
+    n_ref = np.array(si.n).T
+    np.testing.assert_allclose(normal[hit], n_ref[hit] * np.sign(np.sum(n_ref[hit] * normal[hit], 1))[:, None], atol=1e-3)
+    assert np.all(np.sum(n_ref[hit] * -d[hit], 1) > 0)  # every surface met faces the ray
+    np.testing.assert_allclose(albedo[beyond], terrain.edge_albedo(), rtol=1e-6)

@@ -9,6 +9,7 @@ import numpy as np
 from .medium import medium_dict
 from .optics import OpticalVolume
 from .scene import Camera, SceneSpec, Sky, Sun
+from .terrain import TERRAIN_APRON_M  # the ground continues level this far past a terrain grid's edge
 from .variant import ensure_registered
 
 FAR_CLIP_M = 1e8
@@ -119,7 +120,6 @@ def ground_dict(spec: SceneSpec, vol_bbox) -> dict:
 
 
 _PLY_DIR = None
-TERRAIN_APRON_M = 100e3  # the ground continues level this far past a terrain grid's edge
 
 
 def _terrain_ply(terrain, skirt_floor_m: float) -> str:
@@ -158,6 +158,15 @@ def _terrain_ply(terrain, skirt_floor_m: float) -> str:
 def terrain_floor_m(terrain) -> float:
     """The lowest height of a terrain (m)."""
     return float(np.min(terrain.height_m))
+
+
+def terrain_surround_m(vol: OpticalVolume) -> float:
+    """The height (m) of the level ground beyond the terrain's apron in ``scene_dict``'s scene of ``vol``
+    (``terrain_ground_dicts`` on the recentred volume: the lowest height less two ``terrain_gap_m``)."""
+    lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
+    c = (lo + hi) / 2
+    terrain = replace(vol.terrain, x=vol.terrain.x - c[0], y=vol.terrain.y - c[1])
+    return terrain_floor_m(terrain) - 2.0 * terrain_gap_m(terrain, (lo - [c[0], c[1], 0.0], hi - [c[0], c[1], 0.0]))
 
 
 def terrain_gap_m(terrain, bbox) -> float:

@@ -16,6 +16,7 @@ import numpy as np
 LAND_ALBEDO = 0.20   # WRF run/LANDUSE.TBL, table LW12, class 1 'Land' (ALBD 20 %)
 WATER_ALBEDO = 0.08  # WRF run/LANDUSE.TBL, table LW12, class 2 'Water' (ALBD 8 %; the USGS 'Water Bodies' too)
 COORDS = ("terrain_height", "land", "surface_albedo")
+TERRAIN_APRON_M = 100e3  # a rendered ground continues level this far past the grid's edge (``scene_hits``)
 
 
 @dataclass(frozen=True)
@@ -148,6 +149,42 @@ class Terrain:
             if rows.size == 0:
                 break
         return t_hit
+
+    def scene_hits(self, origins, dirs, apron_m: float = TERRAIN_APRON_M, floor_m: float | None = None):
+        """The first hit of each ray (N, 3) with the ground a rendered scene has over this terrain, the
+        path tracer's (``mitsuba_scene.terrain_ground_dicts``): the mesh, level for ``apron_m`` past the grid's
+        edge (``with_apron``), a vertical skirt from the apron's edge down to the lowest height (``skirt``),
+        and beyond it a level surround at ``floor_m`` (default: the lowest height; the path tracer's is a
+        few ray offsets below it) with the edge albedo (``edge_albedo``). Returns (distance (N,), inf where
+        none; albedo (N,); unit normal (N, 3))."""
+        o, d = np.asarray(origins, float), np.asarray(dirs, float)
+        lo_xy = np.array([self.x[0] - apron_m, self.y[0] - apron_m])
+        hi_xy = np.array([self.x[-1] + apron_m, self.y[-1] + apron_m])
+        floor = float(self.height_m.min()) if floor_m is None else float(floor_m)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ta, tb = (lo_xy - o[:, :2]) / d[:, :2], (hi_xy - o[:, :2]) / d[:, :2]
+            near = np.nan_to_num(np.minimum(ta, tb), nan=-np.inf)
+            t_in, t_out = near.max(axis=1), np.nan_to_num(np.maximum(ta, tb), nan=np.inf).min(axis=1)
+            t_floor = np.where(d[:, 2] < 0, (floor - o[:, 2]) / d[:, 2], np.inf)
+        crosses = t_out > np.maximum(t_in, 0.0)                # the ray passes over the apron's rectangle
+        t_mesh = self.ray_hits(o, d)                           # (level beyond the grid: kept inside the rectangle)
+        t_mesh = np.where(crosses & (t_mesh >= t_in - 1e-6) & (t_mesh <= t_out + 1e-6), t_mesh, np.inf)
+        entry = o + np.maximum(t_in, 0.0)[:, None] * d          # where it enters the rectangle from outside
+        skirt = crosses & (t_in > 0) & (entry[:, 2] < self.height_at(entry[:, 0], entry[:, 1])) & (entry[:, 2] >= floor)
+        t_skirt = np.where(skirt, t_in, np.inf)
+        pf = o + np.where(np.isfinite(t_floor), t_floor, 0.0)[:, None] * d
+        outside = np.any((pf[:, :2] < lo_xy) | (pf[:, :2] > hi_xy), axis=1)
+        t_surround = np.where(outside & (t_floor > 0), t_floor, np.inf)
+        t = np.minimum(np.minimum(t_mesh, t_skirt), t_surround)
+        p = o + np.where(np.isfinite(t), t, 0.0)[:, None] * d
+        _, albedo, normal = self.surface_at(p[:, 0], p[:, 1])
+        wall = np.zeros_like(normal)                           # the skirt faces outwards, towards the ray
+        axis = np.argmax(near, axis=1)
+        wall[np.arange(len(o)), axis] = -np.sign(d[np.arange(len(o)), axis])
+        on_skirt, on_surround = np.isfinite(t) & (t == t_skirt), np.isfinite(t) & (t == t_surround) & (t < t_skirt)
+        normal = np.where(on_skirt[:, None], wall, np.where(on_surround[:, None], [0.0, 0.0, 1.0], normal))
+        albedo = np.where(on_surround & ~on_skirt, self.edge_albedo(), albedo)
+        return t, albedo, normal
 
     def with_apron(self, distance_m: float) -> "Terrain":
         """This terrain with one more ring of columns ``distance_m`` (m) beyond its edge, at the edge's

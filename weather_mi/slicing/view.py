@@ -15,6 +15,7 @@ from .geometry import camera_rays, ray_box
 from .jitter import offset_pattern
 
 
+
 class BoundedCache(OrderedDict):
     """A dict that keeps its ``maxsize`` most recently used entries (least recently used evicted)."""
 
@@ -67,9 +68,10 @@ class ViewCache:
     """Camera rays and background radiance for the most recent views (``maxsize`` of each: an orbiting
     camera or a moving sun does not grow memory), and the sky emitters they were made with."""
 
-    def __init__(self, box, maxsize: int = 4, terrain=None, occupancy=None):
+    def __init__(self, box, maxsize: int = 4, terrain=None, occupancy=None, surround_m=None):
         self.box = tuple(np.asarray(p, dtype=np.float64) for p in box)
         self.terrain = terrain  # weather_mi.terrain.Terrain: the ground is its surface, not the flat plane
+        self.surround_m = surround_m  # over a terrain: the height of the ground beyond its apron (m)
         self.occupancy = occupancy  # occupancy.OccupancyMap of the medium: each ray's occupied span
         self.rays = BoundedCache(maxsize)
         self.backgrounds = BoundedCache(maxsize)
@@ -82,11 +84,11 @@ class ViewCache:
             o, d = origins.reshape(-1, 3), dirs.reshape(-1, 3)
             t0, t1 = ray_box(o, d, self.box)
             terrain = None if spec.ground is None else self.terrain
-            tg = ground_hits(spec, o, d) if terrain is None else terrain.ray_hits(o, d)
             surface = None  # over a terrain: albedo and normal where the rays meet it (per view, not per sun)
-            if terrain is not None:
-                pg = o + np.where(np.isfinite(tg), tg, 0.0)[:, None] * d
-                surface = terrain.surface_at(pg[:, 0], pg[:, 1])[1:]
+            if terrain is None:
+                tg = ground_hits(spec, o, d)
+            else:  # the path tracer's ground: the mesh, its apron and skirt, the surround beyond
+                tg, *surface = terrain.scene_hits(o, d, floor_m=self.surround_m)
             self.rays[ray_key] = (o, d, t0, np.minimum(t1, tg), tg, surface, self._spans(mi, o, d, t0, np.minimum(t1, tg)))
         o, d, t0, t1, tg, surface, spans = self.rays[ray_key]
         hit = np.isfinite(tg)
