@@ -491,3 +491,26 @@ def test_the_sky_and_the_ground_light_a_layer_through_the_columns_above_and_belo
                                 width=16, height=12), gain).radiance
     cloud = r.transmittance < 0.5
     assert cloud.sum() > 10 and np.all(lit[cloud] > dark[cloud])
+
+
+def test_supersampled_pixels_average_their_footprint():
+    """A slab's edge (x = 20 km, tau = 1 through it) on the middle line of a pixel column: that pixel's
+    footprint average, which the path tracer's box filter estimates, is (1 + exp(-1)) / 2; 2 x 2 and 4 x 4
+    points per pixel give it exactly, every other pixel exp(-1) or 1, and the differentiable arrays agree."""
+    vol = slab(beta=1e-3)
+    cam = wm.Camera.orthographic(center=(19e3, 0.0, 5000.0), direction=(0, 0, -1), width=16e3, height=8e3)
+    spec = wm.SceneSpec(camera=cam, sun=wm.Sun(180.0, 60.0), sky=None, ground=None, width=8, height=4)
+    r = SliceRenderer(vol, SliceMode("uniform", "low_albedo"), slices=16, light_res=16)
+    for n in (2, 4):
+        img = r.frame(spec, supersample=n)
+        t = r.transmittance
+        assert img.radiance.shape == (4, 8, 3) and t.shape == (4, 8)
+        edge = np.abs(t - (1 + math.exp(-1)) / 2) < 1e-4
+        assert np.array_equal(edge.sum(axis=1), [1, 1, 1, 1]), t
+        assert np.allclose(t[~edge], np.where(t[~edge] > 0.7, 1.0, math.exp(-1)), atol=1e-4)
+        assert {round(float(v), 3) for v in t[~edge]} == {1.0, round(math.exp(-1), 3)}
+        out, t_arr = r.frame(spec, return_arrays=True, supersample=n)
+        np.testing.assert_allclose(np.asarray(t_arr).reshape(4, 8), t, atol=1e-6)
+        np.testing.assert_allclose(np.asarray(dr.ravel(out)).reshape(4, 8, 3), img.radiance, atol=1e-6)
+    with pytest.raises(ValueError, match="supersample"):
+        r.frame(spec, supersample=0)

@@ -92,7 +92,7 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
     return (views, seconds) if second_seed else views
 
 
-def evaluate(views, fitted, slices, out=None, second=None):
+def evaluate(views, fitted, slices, out=None, second=None, supersample=1):
     """Rows of CIEDE2000 / FLIP per view and mode (and of a second reference: the noise floor)."""
     rows, renderers = [], {}
     candidates = [(name, mode, SliceParams()) for name, mode in MODES.items() if mode.light != "multiple"]
@@ -114,7 +114,7 @@ def evaluate(views, fitted, slices, out=None, second=None):
                     from weather_mi.detail import field
                     detail = field(v.vol.shape, seed=0, amplitude=0.5, spacing_m=v.vol.spacing)
                 renderers[key] = SliceRenderer(v.vol, mode, slices=slices, detail_field=detail)
-            img = renderers[key].frame(v.spec, params)
+            img = renderers[key].frame(v.spec, params, supersample=supersample)
             m = metrics.compare(v.reference, img, mask=v.mask if v.mask.any() else "all")
             row[name] = (m["ciede2000"], m["flip"])
             imgs[name] = img
@@ -160,6 +160,9 @@ def main(argv=None) -> int:
     ap.add_argument("--learning-rate", type=float, default=0.15)
     ap.add_argument("--slices", type=int, default=128)
     ap.add_argument("--references-only", action="store_true")
+    ap.add_argument("--supersample", type=int, default=2,
+                    help="the slicer's frames (fit and evaluation) with n x n points per pixel, as the references' "
+                         "box-filtered pixels; 1: pixel centres")
     ap.add_argument("--no-fit", action="store_true", help="evaluate the shipped defaults only")
     ap.add_argument("--noise-floor", action="store_true",
                     help="also render a second reference (seed 1) of each held-out view and report its error")
@@ -179,7 +182,8 @@ def main(argv=None) -> int:
     if not args.no_fit:
         t = time.perf_counter()
         fitted, history = calibrate(list(train.values()), start=FIT_START, iterations=args.iterations, slices=64,
-                                    light_res=64, learning_rate=args.learning_rate, progress=True)
+                                    light_res=64, learning_rate=args.learning_rate, progress=True,
+                                    supersample=args.supersample)
         fit = {n: round(float(getattr(fitted, n)), 4) for n in MULTIPLE_PARAMS}
         head = (f"Fitted on {len(train)} training views in {time.perf_counter() - t:.0f} s: `{json.dumps(fit)}`; "
                 f"loss {history[0]:.4g} -> {history[-1]:.4g} in {len(history)} iterations.")
@@ -188,10 +192,11 @@ def main(argv=None) -> int:
     held = load_views(HELD_OUT, out, cfg, args.data, args.spp, second_seed=args.noise_floor,
                       target_rse=args.target_rse, max_seconds=args.max_seconds, noise=noise)
     held, second = held if args.noise_floor else (held, None)
-    rows_t, names_t = evaluate(train, fitted, args.slices)
-    rows_h, names_h = evaluate(held, fitted, args.slices, out, second)
+    rows_t, names_t = evaluate(train, fitted, args.slices, supersample=args.supersample)
+    rows_h, names_h = evaluate(held, fitted, args.slices, out, second, supersample=args.supersample)
     text = "\n\n".join([f"# Slicer calibration ({width} x {height}; references: training {args.spp} spp, held-out to a "
-                         f"cloud RSE of {args.target_rse:g} or {args.max_seconds:g} s)", head,
+                         f"cloud RSE of {args.target_rse:g} or {args.max_seconds:g} s; slicer frames with "
+                         f"{args.supersample} x {args.supersample} points per pixel)", head,
                          table(rows_t, names_t, "Training views", noise),
                          table(rows_h, names_h, "Held-out views", noise)])
     (out / "calibration.md").write_text(text + "\n")

@@ -49,9 +49,11 @@ def _from_free(dr, x, kind: str):
 
 def calibrate(views: list[TrainingView], mode: SliceMode = MODES["per-species/multiple"],
               start: SliceParams = FIT_START, names: dict = MULTIPLE_PARAMS, iterations: int = 40,
-              learning_rate: float = 0.1, slices: int = 64, light_res: int = 64, progress: bool = False):
-    """Fit the parameters ``names`` (name -> "unit" | "positive") of ``mode`` to the views. Returns
-    (fitted SliceParams, loss per iteration)."""
+              learning_rate: float = 0.1, slices: int = 64, light_res: int = 64, progress: bool = False,
+              supersample: int = 1):
+    """Fit the parameters ``names`` (name -> "unit" | "positive") of ``mode`` to the views, their frames
+    with ``supersample`` x ``supersample`` points per pixel (``SliceRenderer.frame``). Returns (fitted
+    SliceParams, loss per iteration)."""
     import drjit as dr
     import mitsuba as mi
     from tqdm.auto import tqdm
@@ -77,7 +79,7 @@ def calibrate(views: list[TrainingView], mode: SliceMode = MODES["per-species/mu
             for xi in x:
                 dr.enable_grad(xi)
             params = start.updated(**{n: _from_free(dr, xi, k) for xi, (n, k) in zip(x, names.items())})
-            out, _ = renderers[id(v.vol)].frame(v.spec, params, return_arrays=True)
+            out, _ = renderers[id(v.vol)].frame(v.spec, params, return_arrays=True, supersample=supersample)
             disp = dr.sqrt(dr.minimum(dr.maximum(out * e, 0.0), 1.0) + 1e-6)
             diff = disp - tgt
             loss = dr.sum(w * (diff[0] * diff[0] + diff[1] * diff[1] + diff[2] * diff[2])) * norm

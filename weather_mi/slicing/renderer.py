@@ -23,6 +23,7 @@ import numpy as np
 from ..forward_peak import DEFAULT_CONE_DEG, check_cone_deg, peak_tables
 from ..imageio import Image
 from ..jitarrays import aligned_float, kernel_scalar
+from ..mitsuba_scene import terrain_surround_m
 from ..optics import OpticalVolume
 from ..scene import SceneSpec
 from .background import sky_irradiance_horizontal
@@ -33,6 +34,7 @@ from .jitter import jitter_rotation, slab_offsets
 from .light import LightVolume, auto_light_res
 from .modes import SliceMode, SliceParams
 from .occupancy import OccupancyMap
+from .supersample import block_mean, block_mean_jit, fine_spec
 from .view import ViewCache
 
 # the cone angle whose spread sets the light pass's blur steps (independent of the interactive cone angle)
@@ -148,7 +150,9 @@ class SliceRenderer:
             self.sky_light = LightVolume(mi, self.box, min(SKY_RES, self.light_res), occupancy=self.occupancy)
             self._sky_geometry = slice_geometry(np.array([0.0, 0.0, -1.0]), np.array([0.0, 0.0, 1.0]), self.box,
                                                 min(SKY_SLICES, self.slices))
-        self.views = ViewCache(self.box, terrain=getattr(vol, "terrain", None), occupancy=self.occupancy)
+        terrain = getattr(vol, "terrain", None)
+        self.views = ViewCache(self.box, terrain=terrain, occupancy=self.occupancy,
+                               surround_m=None if terrain is None else terrain_surround_m(vol))
         # the cloud's asymmetry parameter for the ground's transmission: species weighted by their scattering
         sca = np.array([float(np.sum(vol.beta_ext[si])) * float(np.mean(self.albedo_rgb[si]))
                         for si in range(self.n_species)]) * (1.0 - self.peak_fraction)
@@ -276,7 +280,8 @@ class SliceRenderer:
         (N, 3), read from the last frame's light volume (points between the sun and the volume: 1, 0)."""
         return self.light.light_at(points)
 
-    def frame(self, spec: SceneSpec, params: SliceParams = SliceParams(), return_arrays: bool = False):
+    def frame(self, spec: SceneSpec, params: SliceParams = SliceParams(), return_arrays: bool = False,
+              supersample: int = 1):
         """Render one frame.
 
         Parameters
@@ -287,6 +292,10 @@ class SliceRenderer:
             Interactive parameters; changing them recompiles nothing.
         return_arrays : bool, default False
             Return the Dr.Jit (radiance, transmittance) arrays instead of an Image, for differentiation.
+        supersample : int, default 1
+            n >= 1: each pixel the mean over n x n stratified points of its footprint, as the path-traced
+            reference's box-filtered pixels are (supersample.py; n^2 times the eye pass's work); 1: the
+            pixel centres.
 
         Returns
         -------
@@ -294,6 +303,8 @@ class SliceRenderer:
             An Image of radiance (W/m^2/sr, RGB) with the frame's metadata; or, with ``return_arrays``,
             the Dr.Jit (radiance, transmittance).
         """
+        if supersample != 1:
+            return self._supersampled(spec, params, return_arrays, supersample)
         mi = self.mi
         import drjit as dr
         t_start = time.perf_counter()
@@ -339,6 +350,20 @@ class SliceRenderer:
                 "species_preset": self.vol.attrs.get("species_preset"), "source": self.vol.attrs.get("source"),
                 "forward_fraction_per_species": [None if dr.is_array_v(v) else float(v) for v in fwd]}
         return Image(rgb, np.zeros_like(rgb), meta)
+
+    def _supersampled(self, spec: SceneSpec, params: SliceParams, return_arrays: bool, n):
+        """``frame`` with each pixel averaged over n x n stratified points (supersample.py)."""
+        import drjit as dr
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"supersample must be an integer >= 1, got {n!r}")
+        fine = fine_spec(spec, int(n))
+        if return_arrays:
+            return tuple(block_mean_jit(dr, v, spec.width, spec.height, int(n))
+                         for v in self.frame(fine, params, return_arrays=True))
+        img = self.frame(fine, params)
+        self.transmittance = block_mean(self.transmittance, int(n))
+        rgb = block_mean(img.radiance, int(n)).astype(np.float32)
+        return Image(rgb, np.zeros_like(rgb), dict(img.metadata, supersample=int(n), scene=spec.to_dict()))
 
     def _frame_inputs(self, g, spec: SceneSpec, params: SliceParams, tint, rebuilt: bool, keep=None,
                       omega_bar=None) -> dict:
