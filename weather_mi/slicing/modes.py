@@ -64,12 +64,13 @@ MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple"
 # Defaults of the "multiple" light model: fitted by validation/calibrate_slicer.py (Adam through Dr.Jit
 # reverse-mode AD, weather_mi.slicing.calibrate; 50 iterations from calibrate.FIT_START) on the demo
 # supercell, the demo cumulus and the thin demo cumulus, front-, side- and back-lit (64 x 48, references
-# of 128 spp), with the forward peaks within 3 deg as unscattered light in both renderers; judged on the
-# real WRF supercell, WRF plateau, BOMEX and RICO storms against references of 2-5% cloud RSE (README,
-# "The slicer").
-MULTIPLE_DEFAULTS = {"ms_extinction": 0.095, "ms_contribution": 0.2151, "ms_eccentricity": 0.8201,
-                     "sky_gain": 0.4424, "sky_extinction": 0.0218, "diffusion_gain": 1.0823,
-                     "diffusion_scale": 0.369, "leak_gain": 0.6084, "leak_rate": 0.8373}
+# of 128 spp), in the frames the evaluation renders (128 slices, the automatic light buffer, 2 x 2 points
+# per pixel, slab jitter 1), with the forward peaks within 3 deg as unscattered light in both renderers;
+# judged on the real WRF supercell, WRF plateau, BOMEX and RICO storms against references of 2% cloud RSE
+# (README, "The slicer").
+MULTIPLE_DEFAULTS = {"ms_extinction": 0.1016, "ms_contribution": 0.1941, "ms_eccentricity": 0.8321,
+                     "sky_gain": 0.4503, "sky_extinction": 0.023, "diffusion_gain": 1.1045,
+                     "diffusion_scale": 0.3963, "leak_gain": 0.5146, "leak_rate": 0.6663}
 
 
 DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail field, detail.field(amplitude=0.5))
