@@ -3,10 +3,11 @@
 Requests are views (``ViewState`` plus the client input number they answer); the newest request wins,
 older ones are dropped unrendered. While the user drags (requests closer together than ``IDLE_S``), a
 request is rendered as a draft; once the input has been idle for ``IDLE_S``, the same view is refined at
-full quality. Drafts adapt to the machine: the loop keeps the finest of ``DRAFT_LEVELS`` (pixels per side
-divided by, slices) whose frames take at most ``DRAFT_BUDGET_S``, so that dragging stays above 10 frames
-a second where the cores are shared (with the browser, on a laptop) and sharp where they are not. Frames go out as JPEG data URLs
-through ``publish(frame)`` (the app hands them to the page on its event loop).
+full quality (all slices, each pixel the mean of REFINE_SUPERSAMPLE^2 points with slab jitter, state.py).
+Drafts adapt to the machine: the loop keeps the finest of ``DRAFT_LEVELS`` (pixels per side divided by,
+slices) whose frames take at most ``DRAFT_BUDGET_S``, so that dragging stays above 10 frames a second where
+the cores are shared (with the browser, on a laptop) and sharp where they are not. Frames go out as JPEG
+data URLs through ``publish(frame)`` (the app hands them to the page on its event loop).
 
 Storms (one OpticalVolume per time of the input) and SliceRenderers (one per time, mode and quality)
 are kept in small LRU caches: scrubbing the time slider back and forth does not rebuild them.
@@ -23,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..imageio import auto_exposure, to_srgb8
-from .state import ViewState
+from .state import REFINE_JITTER, REFINE_SUPERSAMPLE, ViewState
 
 DRAFT_LEVELS = ((2, 32), (3, 24), (4, 16))  # (divisor of the width and height, slices), finest first
 DRAFT_BUDGET_S = 0.07
@@ -243,7 +244,11 @@ class FrameLoop:
         div = DRAFT_LEVELS[self.draft_level][0] if draft else 1
         w, h = max(state.width // div, 8), max(state.height // div, 8)
         spec = state.spec(self.storm.frame, self.storm.ground_m, w, h)
-        img = r.frame(spec, state.slice_params())
+        params = state.slice_params()
+        if draft:
+            img = r.frame(spec, params)
+        else:
+            img = r.frame(spec, params.updated(slab_jitter=REFINE_JITTER), supersample=REFINE_SUPERSAMPLE)
         if self.exposure is None:
             self.exposure = auto_exposure(img.radiance)
         exposure = self.exposure * 2.0 ** state.exposure_ev

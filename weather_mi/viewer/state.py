@@ -19,6 +19,11 @@ from ..scene import Camera, Ground, SceneSpec, Sky, Sun
 from ..sources import kind
 from ..slicing.modes import MODES, SliceMode, SliceParams
 
+# the viewer's refined frame (once input stops): each pixel the mean of REFINE_SUPERSAMPLE^2 points with slab
+# jitter REFINE_JITTER, the setting whose accuracy validation/calibrate_slicer.py measures against the path
+# tracer's box-filtered pixels (drafts: pixel centres, aligned slabs)
+REFINE_SUPERSAMPLE, REFINE_JITTER = 2, 1.0
+
 DEFAULT_MODE = "per-species/multiple"  # the calibrated light model beyond the paper (issue 12)
 DRAG_DEG_PER_PX = 0.4          # camera turn per pixel of mouse drag
 WHEEL_ZOOM_PER_100 = 1.1       # distance factor per 100 units of wheel
@@ -165,7 +170,7 @@ def python_snippet(state: ViewState, recipe, spec: SceneSpec, times: list[str] |
         load = f"hyd = wm.io.time_steps(wm.open_wrf({recipe.path!r}, time=\"all\"))[{state.time}]  # {times[state.time]}"
     else:
         load = f"hyd = wm.open_wrf({recipe.path!r})"
-    params = state.slice_params()
+    params = state.slice_params().updated(slab_jitter=REFINE_JITTER)  # the refined frame's
     changed = {k: v for k, v in params.__dict__.items() if v != getattr(SliceParams(), k)}
     mode = state.slice_mode()
     mode_expr = f"MODES[{state.mode!r}]" if mode == MODES[state.mode] else \
@@ -185,7 +190,7 @@ vol = wm.optical_volume(hyd, species={recipe.preset!r}, phase={recipe.phase!r})
 spec = wm.SceneSpec.from_dict({json.dumps(spec.to_dict())})
 params = SliceParams(**{changed!r})
 {detail_line}renderer = SliceRenderer(vol, {mode_expr}, slices={state.slices}{", detail_noise=detail" if mode.detail else ""})
-image = renderer.frame(spec, params)
+image = renderer.frame(spec, params, supersample={REFINE_SUPERSAMPLE})  # as the viewer's refined frame
 
 
 def ground_truth(spp=16, target_rse=0.02, max_seconds=600):
