@@ -3,14 +3,15 @@ faces, cloud bases, thin edges, ice anvils, the ground in and out of cloud shado
 
     .venv/bin/python validation/slicer_residuals.py [-o out/slicer_calibration] [--views train|held-out|all]
         [--target-rse 0.02] [--max-seconds 300] [--size 64x48] [--slices 128] [--params fitted.json]
-        [--modes per-species/multiple,per-species/translucent]
+        [--modes per-species/multiple,per-species/translucent] [--supersample 2] [--slab-jitter 1]
 
 References: the views of validation/calibrate_slicer.py (the same cache folder and file names), rendered
 to --target-rse (mean relative standard error over cloud pixels) or --max-seconds each. Prints, per mode
 and region, pooled over the views: pixels, bias (mean signed luminance error / the reference's mean
 luminance there; > 0: the slicer is brighter), relative RMS luminance error and mean CIEDE2000; then the
 views' own worst regions. --params: a JSON of SliceParams fields for the "multiple" model (default: the
-shipped defaults).
+shipped defaults). --supersample / --slab-jitter: the frames as validation/calibrate_slicer.py renders them
+(each pixel the mean of n x n points with slab jitter; 1 and 0: pixel centres, aligned slabs).
 """
 from __future__ import annotations
 
@@ -56,6 +57,8 @@ def main(argv=None) -> int:
     ap.add_argument("--slices", type=int, default=128)
     ap.add_argument("--params", default=None)
     ap.add_argument("--modes", default="per-species/multiple,per-species/translucent")
+    ap.add_argument("--supersample", type=int, default=2)
+    ap.add_argument("--slab-jitter", type=float, default=1.0)
     args = ap.parse_args(argv)
     width, height = (int(v) for v in args.size.lower().split("x"))
     out = Path(args.output)
@@ -80,7 +83,8 @@ def main(argv=None) -> int:
             if (scene, m) not in renderers:  # one per storm and mode: its lightings reuse textures and kernels
                 renderers[(scene, m)] = SliceRenderer(vol, MODES[m], slices=args.slices)
             r = renderers[(scene, m)]
-            img = r.frame(spec, fitted if MODES[m].light == "multiple" else SliceParams()).radiance
+            params = fitted if MODES[m].light == "multiple" else SliceParams()
+            img = r.frame(spec, params.updated(slab_jitter=args.slab_jitter), supersample=args.supersample).radiance
             rows = region_residuals(ref, img, pixel_regions(r, spec))
             per_mode[m].append(rows)
             big = max((x for x in rows if x["pixels"] >= 20), key=lambda x: x["ciede2000"], default=None)
