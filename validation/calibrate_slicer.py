@@ -16,7 +16,8 @@ beside the paper's Table IV modes.
    held-out: the real WRF supercell, the WRF Tibetan Plateau file, BOMEX and RICO (from --data),
    front- and side-lit.
 2. Fit the model's parameters with Dr.Jit reverse-mode AD on the training views
-   (weather_mi.slicing.calibrate), starting near single scattering.
+   (weather_mi.slicing.calibrate), starting near single scattering, in the frames it judges (--slices, the
+   automatic light buffer; 810 s on 2 cores at the defaults).
    The slicer's frames, in the fit and the evaluation, average each pixel over --supersample^2 points
    (SliceRenderer.frame(supersample=)) with slab offsets --slab-jitter: the references' pixels are
    box-filtered footprint averages, and a pixel-centre sample differs from them at every edge (held-out
