@@ -15,7 +15,7 @@ trilinear, as its extinction (the sum of theirs) is. Interpolating normalised we
 phase functions of two voxels half and half wherever they meet, however unequal their scattering: on the
 WRF plateau's 30 km x 585 m grid a thin ice layer's weights reached into the dense water deck beside it,
 and the side-lit view's single scattering came out 1.55 times what a 4x finer grid of the same fields
-gives (1.04 times with coefficients).
+gives (1.004 times with coefficients).
 
 Sampling: pick species s with probability w_s(x), then draw v from that species' channel-mean
 table: its node segment from a Walker alias table (the coin is what is left of the uniform that

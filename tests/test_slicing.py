@@ -507,8 +507,9 @@ def test_supersampled_pixels_average_their_footprint():
         assert img.radiance.shape == (4, 8, 3) and t.shape == (4, 8)
         edge = np.abs(t - (1 + math.exp(-1)) / 2) < 1e-4
         assert np.array_equal(edge.sum(axis=1), [1, 1, 1, 1]), t
-        assert np.allclose(t[~edge], np.where(t[~edge] > 0.7, 1.0, math.exp(-1)), atol=1e-4)
-        assert {round(float(v), 3) for v in t[~edge]} == {1.0, round(math.exp(-1), 3)}
+        inside = t[~edge] < 0.7
+        assert inside.any() and (~inside).any()
+        np.testing.assert_allclose(t[~edge], np.where(inside, math.exp(-1), 1.0), atol=1e-4)
         out, t_arr = r.frame(spec, return_arrays=True, supersample=n)
         np.testing.assert_allclose(np.asarray(t_arr).reshape(4, 8), t, atol=1e-6)
         np.testing.assert_allclose(np.asarray(dr.ravel(out)).reshape(4, 8, 3), img.radiance, atol=1e-6)

@@ -181,8 +181,7 @@ def test_slicer_rays_meet_the_reference_ground_beyond_the_domain():
     o = np.tile([terrain.x.mean(), terrain.y.mean() - 250e3, 40e3], (n, 1))
     d = np.stack([rng.uniform(-0.6, 0.6, n), np.ones(n), -rng.uniform(0.02, 0.3, n)], 1)
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    from weather_mi.mitsuba_scene import terrain_floor_m, terrain_gap_m
-    floor = terrain_floor_m(terrain) - 2.0 * terrain_gap_m(terrain, vol.bbox)  # the scene's surround, not recentred
+    floor = float(np.array(grounds["ground"]["to_world"].matrix)[2, 3])  # the scene's surround rectangle
     t, albedo, normal = terrain.scene_hits(o, d, floor_m=floor)
     si = scene.ray_intersect(mi.Ray3f(mi.Point3f(*(mi.Float(o[:, k]) for k in range(3))),
                                       mi.Vector3f(*(mi.Float(d[:, k]) for k in range(3)))))
@@ -198,3 +197,8 @@ def test_slicer_rays_meet_the_reference_ground_beyond_the_domain():
     np.testing.assert_allclose(normal[hit], n_ref[hit] * np.sign(np.sum(n_ref[hit] * normal[hit], 1))[:, None], atol=1e-3)
     assert np.all(np.sum(n_ref[hit] * -d[hit], 1) > 0)  # every surface met faces the ray
     np.testing.assert_allclose(albedo[beyond], terrain.edge_albedo(), rtol=1e-6)
+    # the slicer's surround height (terrain_surround_m) is that of the recentred scene the reference renders
+    from weather_mi.mitsuba_scene import recentred_volume, terrain_surround_m
+    vol2, _ = recentred_volume(vol)
+    rendered = terrain_ground_dicts(vol2.terrain, {"type": "homogeneous", "sigma_t": 0.0, "albedo": 0.0}, vol2.bbox)
+    assert terrain_surround_m(vol) == pytest.approx(float(np.array(rendered["ground"]["to_world"].matrix)[2, 3]), abs=1e-3)

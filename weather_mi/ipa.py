@@ -110,10 +110,10 @@ def columns_of(vol: OpticalVolume, x_m, y_m):
 
 def bare_surface(vol: OpticalVolume, spec, x_m, y_m) -> np.ndarray:
     """Reflectance of the bare Lambertian surface at points outside the grid: its albedo (the ground's, or
-    the terrain's apron within ``mitsuba_scene.TERRAIN_APRON_M`` of the grid, the surround beyond it)."""
+    the terrain's apron within ``terrain.TERRAIN_APRON_M`` of the grid, the surround beyond it)."""
     if vol.terrain is None:
         return np.full(np.shape(x_m), float(np.mean(spec.ground.albedo)))
-    from .mitsuba_scene import TERRAIN_APRON_M
+    from .terrain import TERRAIN_APRON_M
     t = vol.terrain
     x, y = np.asarray(x_m), np.asarray(y_m)
     near = ((x > t.x[0] - TERRAIN_APRON_M) & (x < t.x[-1] + TERRAIN_APRON_M)

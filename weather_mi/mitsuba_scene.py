@@ -19,16 +19,23 @@ RAY_EPSILON = 8.9e-5  # Mitsuba's math::RayEpsilon (float32): spawned rays skip 
 def recentred(spec: SceneSpec, vol: OpticalVolume):
     """The scene translated so that the volume's bbox centre is the origin (float32 precision and
     Mitsuba's ray offsets scale with |p|). Returns (spec, vol, offset) with world = shifted + offset."""
+    vol2, c = recentred_volume(vol)
+    cam = replace(spec.camera, origin=tuple(np.asarray(spec.camera.origin) - c),
+                  target=tuple(np.asarray(spec.camera.target) - c))
+    rays = None if spec.rays is None else spec.rays.shifted(-c)
+    return replace(spec, camera=cam, rays=rays), vol2, c
+
+
+def recentred_volume(vol: OpticalVolume):
+    """``vol`` (and its terrain) translated so that its bbox centre is the origin horizontally:
+    (volume, offset), world = shifted + offset (``recentred``)."""
     lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
     c = (lo + hi) / 2
     c[2] = 0.0  # keep heights: the ground plane and z-dependent quantities stay readable
-    cam = replace(spec.camera, origin=tuple(np.asarray(spec.camera.origin) - c),
-                  target=tuple(np.asarray(spec.camera.target) - c))
     vol2 = replace(vol, bbox=(tuple(lo - c), tuple(hi - c)))
     if getattr(vol, "terrain", None) is not None:  # the ground mesh moves with the volume
         vol2 = replace(vol2, terrain=replace(vol.terrain, x=vol.terrain.x - c[0], y=vol.terrain.y - c[1]))
-    rays = None if spec.rays is None else spec.rays.shifted(-c)
-    return replace(spec, camera=cam, rays=rays), vol2, c
+    return vol2, c
 
 
 def _look_at(camera: Camera):
@@ -163,10 +170,8 @@ def terrain_floor_m(terrain) -> float:
 def terrain_surround_m(vol: OpticalVolume) -> float:
     """The height (m) of the level ground beyond the terrain's apron in ``scene_dict``'s scene of ``vol``
     (``terrain_ground_dicts`` on the recentred volume: the lowest height less two ``terrain_gap_m``)."""
-    lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
-    c = (lo + hi) / 2
-    terrain = replace(vol.terrain, x=vol.terrain.x - c[0], y=vol.terrain.y - c[1])
-    return terrain_floor_m(terrain) - 2.0 * terrain_gap_m(terrain, (lo - [c[0], c[1], 0.0], hi - [c[0], c[1], 0.0]))
+    vol2, _ = recentred_volume(vol)
+    return terrain_floor_m(vol2.terrain) - 2.0 * terrain_gap_m(vol2.terrain, vol2.bbox)
 
 
 def terrain_gap_m(terrain, bbox) -> float:

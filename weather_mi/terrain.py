@@ -181,9 +181,10 @@ class Terrain:
         wall = np.zeros_like(normal)                           # the skirt faces outwards, towards the ray
         axis = np.argmax(near, axis=1)
         wall[np.arange(len(o)), axis] = -np.sign(d[np.arange(len(o)), axis])
-        on_skirt, on_surround = np.isfinite(t) & (t == t_skirt), np.isfinite(t) & (t == t_surround) & (t < t_skirt)
+        on_skirt = np.isfinite(t) & (t == t_skirt)
+        on_surround = np.isfinite(t) & (t == t_surround) & ~on_skirt
         normal = np.where(on_skirt[:, None], wall, np.where(on_surround[:, None], [0.0, 0.0, 1.0], normal))
-        albedo = np.where(on_surround & ~on_skirt, self.edge_albedo(), albedo)
+        albedo = np.where(on_surround, self.edge_albedo(), albedo)
         return t, albedo, normal
 
     def with_apron(self, distance_m: float) -> "Terrain":

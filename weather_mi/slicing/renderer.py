@@ -358,7 +358,7 @@ class SliceRenderer:
             raise ValueError(f"supersample must be an integer >= 1, got {n!r}")
         fine = fine_spec(spec, int(n))
         if return_arrays:
-            return tuple(block_mean_jit(dr, v, spec.width, spec.height, int(n))
+            return tuple(block_mean_jit(dr, self.mi.UInt32, v, spec.width, spec.height, int(n))
                          for v in self.frame(fine, params, return_arrays=True))
         img = self.frame(fine, params)
         self.transmittance = block_mean(self.transmittance, int(n))

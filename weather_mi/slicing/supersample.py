@@ -26,11 +26,11 @@ def block_mean(array: np.ndarray, n: int) -> np.ndarray:
     return array.reshape((h, n, w, n) + array.shape[2:]).mean(axis=(1, 3))
 
 
-def block_mean_jit(dr, value, width: int, height: int, n: int):
+def block_mean_jit(dr, index_type, value, width: int, height: int, n: int):
     """``block_mean`` of a Dr.Jit array of (n height) x (n width) pixels in row-major order (any Dr.Jit
-    type, differentiable: a sum of n^2 gathers), as width x height pixels."""
+    type, differentiable: a sum of n^2 gathers with indices of ``index_type``, e.g. mi.UInt32), as
+    width x height pixels."""
     y, x = np.divmod(np.arange(width * height, dtype=np.int64), width)
-    index_type = dr.uint32_array_t(type(value)) if dr.depth_v(value) == 1 else dr.uint32_array_t(dr.value_t(value))
     total = None
     for a in range(n):
         for b in range(n):
