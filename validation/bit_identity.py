@@ -1,5 +1,5 @@
 """Bit-identity of the two renderers across a refactor: render a fixed set of reference passes and slicer
-frames, save them (``--save DIR``) and compare a later checkout's images with them (``--check DIR``).
+frames and a satellite view, save them (``--save DIR``) and compare a later checkout's images with them (``--check DIR``).
 
     .venv/bin/python validation/bit_identity.py --save /tmp/bits-before     # on the old commit
     .venv/bin/python validation/bit_identity.py --check /tmp/bits-before    # on the new one
@@ -72,11 +72,21 @@ def slicer_cases(wm, storms):
     return cases
 
 
+def satellite_cases(wm):
+    """The satellite view (rays from a table, reflectance, Rayleigh) of the demo cumulus placed over the sea."""
+    from weather_mi.place import assume_place
+    from weather_mi.satellite_image import render_satellite, satellite_scene
+    hyd = assume_place(wm.synthetic.cumulus(), lat=20.0, lon=-60.0, date="2024-07-01T15:00:00Z")
+    vol = wm.optical_volume(hyd)
+    scene = satellite_scene(hyd, vol, "goes-east", "0.64", resolution_km=2.0, rayleigh=True)
+    return [("satellite/goes-east/0.64", lambda: render_satellite(scene, spp=4, progress=False)[1])]
+
+
 def render_all() -> dict[str, np.ndarray]:
     import weather_mi as wm
     storms = _storms()
     out = {}
-    for name, thunk in reference_cases(wm, storms) + slicer_cases(wm, storms):
+    for name, thunk in reference_cases(wm, storms) + slicer_cases(wm, storms) + satellite_cases(wm):
         t0 = time.perf_counter()
         img = thunk()
         out[name + "/radiance"] = np.asarray(img.radiance)
