@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 import weather_mi as wm
-from weather_mi.imageio import auto_exposure, write_png
+from weather_mi.io.image import auto_exposure, write_png
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer
 from weather_mi.slicing.geometry import slice_geometry
 from weather_mi.study.regions import eye_surface
@@ -135,7 +135,7 @@ def main():
     variant = wm.set_variant(args.variant)
     width, height = (int(v) for v in args.size.lower().split("x"))
     vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
-    spec = wm.scene.default_spec(vol, width, height)
+    spec = wm.scene.spec.default_spec(vol, width, height)
     print(f"variant {variant}; demo supercell {vol.shape}; banding energy in (mean luminance)^2 (see docstring)")
     for name in args.modes.split(","):
         run_mode(vol, name, spec, args.slices, args.ref_slices, Path(args.out))

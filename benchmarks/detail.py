@@ -1,4 +1,4 @@
-"""Time of the turbulent-detail noise (weather_mi.detail) per grid size, against a baseline run in the
+"""Time of the turbulent-detail noise (weather_mi.optics.detail) per grid size, against a baseline run in the
 same process.
 
     .venv/bin/python benchmarks/detail.py [--repeat 5]
@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 import weather_mi as wm
-from weather_mi import detail
+from weather_mi.optics import detail
 
 SHAPES = [(64, 64, 64), (128, 128, 128), (64, 256, 256)]  # (z, y, x); the last is 256 x 256 x 64
 
@@ -40,7 +40,7 @@ def main():
     ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args()
     r = args.repeat
-    print(f"weather_mi.detail: spectral synthesis, float32, scipy.fft on {os.cpu_count()} CPU threads; "
+    print(f"weather_mi.optics.detail: spectral synthesis, float32, scipy.fft on {os.cpu_count()} CPU threads; "
           f"median of {r} runs (ms)")
     print(f"{'grid (z, y, x)':<18}{'baseline':>10}{'noise cold':>12}{'noise warm':>12}{'field':>9}"
           f"{'add_detail':>12}{'noise/base':>12}")

@@ -6,7 +6,7 @@ render in this process, at equal spp, and a projection to a cluster.
                                                [--bandwidth-gbit 10]
 
 Volume: the last time of ``--wrf`` (default the shared supercell when present, else the demo
-supercell), physical species; scene ``weather_mi.scene.default_spec``. The spp is chosen from a short
+supercell), physical species; scene ``weather_mi.scene.spec.default_spec``. The spp is chosen from a short
 calibration render so that the in-process render lasts about ``--seconds``. Then, with the same seed
 and spp: in process; LocalCluster(1 worker x 2 threads); LocalCluster(2 workers x 1 thread). Each
 cluster first renders a 1-spp warm-up (worker start, imports, kernel compilation: a cost paid once per
@@ -60,7 +60,7 @@ def scheduler_task_cost_s(client, n: int = 400) -> float:
 
 def merge_cost_s(width: int = 1024, height: int = 768, repeats: int = 5) -> float:
     """Seconds of the client's Welford update of one (H, W, 3) pass (render_reference's)."""
-    from weather_mi.estimates import welford_update
+    from weather_mi.reference.estimates import welford_update
     rng = np.random.default_rng(0)
     mean, m2 = np.zeros((height, width, 3)), np.zeros((height, width, 3))
     raw = rng.random((height, width, 3), dtype=np.float32)
@@ -96,9 +96,9 @@ def main():
     ap.add_argument("--wrf", default=str(DEFAULT_WRF))
     ap.add_argument("--bandwidth-gbit", type=float, default=10.0, help="network into the client (projection)")
     args = ap.parse_args()
-    from weather_mi import cluster
-    from weather_mi.reference import render_reference
-    from weather_mi.scene import default_spec
+    from weather_mi.reference import cluster
+    from weather_mi.reference.render import render_reference
+    from weather_mi.scene.spec import default_spec
     w, h = (int(v) for v in args.size.split("x"))
     vol, source = _volume(args.wrf)
     spec = default_spec(vol, width=w, height=h)

@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/gpu.py [--quick] [--out table.md]
     .venv/bin/python benchmarks/gpu.py --dry-run     # the same code on the CPU: LLVM as both variants, tiny
 
-Without a usable CUDA device (``weather_mi.variant.cuda_usable``: a test kernel must run) it prints one
+Without a usable CUDA device (``weather_mi.kernel.variant.cuda_usable``: a test kernel must run) it prints one
 line saying so and exits 0. With one, on the demo supercell (``species="physical"``):
 
 1. **Reference** (``render_reference``, ``majorant_volpath``, ``default_spec``; 16 passes): first render
@@ -73,7 +73,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import weather_mi as wm  # noqa: E402
-from weather_mi.variant import cuda_usable, llvm_usable  # noqa: E402
+from weather_mi.kernel.variant import cuda_usable, llvm_usable  # noqa: E402
 
 VARIANTS = ("llvm_ad_rgb", "cuda_ad_rgb")
 SLICER_SIZES = [(300, 300, 128), (1024, 768, 256)]
@@ -105,7 +105,7 @@ def z_scores(a, b) -> np.ndarray:
 
 
 def ref_spec(vol, width: int, height: int, seed: int):
-    return wm.scene.default_spec(vol, width, height, seed=seed)
+    return wm.scene.spec.default_spec(vol, width, height, seed=seed)
 
 
 def render_ref(vol, v: str, width: int, height: int, spp: int, seed: int = 1):
@@ -171,7 +171,7 @@ def reference_section(vol, width: int, height: int, spp: int, llvm_here: bool, s
 def slicer_frames(vol, mode_name: str, w: int, h: int, slices: int, frames: int, accel: bool = False):
     """(median seconds per frame, last frame's radiance) of one mode in the current variant."""
     import mitsuba as mi
-    from weather_mi import detail
+    from weather_mi.optics import detail
     from weather_mi.slicing import MODES, SliceParams, SliceRenderer
     mode = MODES[mode_name]
     field = detail.field(vol.shape, seed=0, spacing_m=vol.spacing) if mode.detail else None
@@ -179,7 +179,7 @@ def slicer_frames(vol, mode_name: str, w: int, h: int, slices: int, frames: int,
     if accel:  # the texture units' 8-bit interpolation weights, for the comparison only
         r.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(r.tex_eye.shape, np.float32)), use_accel=True)
         r.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(r.tex_light_src.shape, np.float32)), use_accel=True)
-    spec = wm.scene.default_spec(vol, w, h)
+    spec = wm.scene.spec.default_spec(vol, w, h)
     img = r.frame(spec)  # warm-up: compiles the frame ...
     img = r.frame(spec, SliceParams(scale={"ice": 0.9}))  # ... and the rebuild of the textures after a change
     t = []

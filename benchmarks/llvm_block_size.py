@@ -31,9 +31,9 @@ def main():
     ap.add_argument("--rounds", type=int, default=2)
     args = ap.parse_args()
     import weather_mi as wm
-    import weather_mi.passes as P
-    from weather_mi.forward_peak import DEFAULT_CONE_DEG
-    from weather_mi.variant import LLVM_BLOCK_SIZE, llvm_block_size, tune_llvm
+    import weather_mi.reference.passes as P
+    from weather_mi.optics.forward_peak import DEFAULT_CONE_DEG
+    from weather_mi.kernel.variant import LLVM_BLOCK_SIZE, llvm_block_size, tune_llvm
     w, h = (int(v) for v in args.size.split("x"))
     vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
     spec = wm.SceneSpec(camera=wm.Camera.ground_view(vol, aspect=w / h), sun=wm.Sun(290, 35), width=w, height=h)

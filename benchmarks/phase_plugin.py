@@ -12,7 +12,7 @@ phase ``sample`` and one ``eval_pdf``), box pixel filter, black background.
 
   (a) hg        built-in Henyey-Greenstein, g = 0.85
   (b) tabphase  built-in table of the same HG, ``--tab-size`` values uniform in cos(theta)
-  (c) plugin-1  ``hydrometeor_mixture`` with one species: ``weather_mi.phase.henyey_greenstein(0.85)``
+  (c) plugin-1  ``hydrometeor_mixture`` with one species: ``weather_mi.optics.phase.henyey_greenstein(0.85)``
                 (the default angle grid), weights grid 16^3 x 1
   (d) plugin-5  five species, each holding that same HG 0.85 table, with spatially varying weights on
                 a 16^3 x 5 grid, every weight >= ~1e-3 everywhere (the worst case: no species is
@@ -109,7 +109,7 @@ def hg_values(g, mu):
 
 
 def plugin_phase(tables, weights):
-    from weather_mi.plugins import hydrometeor_mixture as hm
+    from weather_mi.kernel.plugins import hydrometeor_mixture as hm
     nodes, values = hm.prepare_tables(tables)
     return {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
             "weights": mi.TensorXf(weights), "to_world": hm.bbox_transform(((-1, -1, -1), (1, 1, 1)))}, nodes.size
@@ -159,7 +159,7 @@ def call_costs(phase, n=1 << 18, repeats=15):
     """Nanoseconds of CPU per lane for one eval_pdf, one sample and both, on one Dr.Jit thread: random
     positions in the box [-1, 1]^3 and random directions, median over ``repeats`` after a warm-up.
     The inputs sit in aligned memory (``aligned_float``), as unaligned ones slow the loads at random."""
-    from weather_mi.jitarrays import aligned_float
+    from weather_mi.kernel.jitarrays import aligned_float
     threads = dr.thread_count()
     dr.set_thread_count(1)
     ctx = mi.PhaseFunctionContext(None)
@@ -207,7 +207,7 @@ def call_costs(phase, n=1 << 18, repeats=15):
 def events_per_path(phase_dict, sigma_t, size, max_depth, spp=4):
     """Mean number of phase-function samples (scattering events) per camera path, counted by a
     subclass of the plugin with an atomic counter (a separate, untimed render)."""
-    from weather_mi.plugins.hydrometeor_mixture import mixture_class
+    from weather_mi.kernel.plugins.hydrometeor_mixture import mixture_class
 
     class Counting(mixture_class()):
         def __init__(self, props):
@@ -228,7 +228,7 @@ def events_per_path(phase_dict, sigma_t, size, max_depth, spp=4):
 def worker(args) -> dict:
     """Render one case (warm-up + args.renders timed renders) in this process; a JSON-able dict."""
     variant = wm.set_variant(args.variant)
-    from weather_mi import phase
+    from weather_mi.optics import phase
     name = CASES[args.worker]
     note = ""
     if name == "(a) hg":

@@ -28,7 +28,7 @@ def main():
     args = ap.parse_args()
     folder = args.cache or tempfile.mkdtemp(prefix="weather-mi-phase-")
     os.environ["WEATHER_MI_CACHE"] = folder
-    from weather_mi import phase  # after setting the cache folder
+    from weather_mi.optics import phase  # after setting the cache folder
 
     q = args.quality
     builds = [

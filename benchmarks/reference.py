@@ -8,7 +8,7 @@
 
 Volume: ``wm.optical_volume(wm.synthetic.supercell())`` (the demo supercell), or with ``--wrf PATH``
 one time (``--time``, default the last) of a wrfout file through ``wm.open_wrf``. Scene:
-``weather_mi.scene.default_spec`` (orbit camera south-south-west, low; sun in the south-west; sunsky;
+``weather_mi.scene.spec.default_spec`` (orbit camera south-south-west, low; sun in the south-west; sunsky;
 ground), rendered by ``render_reference`` itself (its passes, seeds and per-pixel standard errors),
 square images of ``--size`` pixels. ``--cells 2 4 8 16`` measures the majorant tracker once per
 coarse-cell size (fine voxels per majorant cell along each axis).
@@ -58,8 +58,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import mitsuba as mi  # noqa: E402
 import weather_mi as wm  # noqa: E402
-from weather_mi.plugins.majorant_volpath import DEFAULT_CELL  # noqa: E402
-from weather_mi.scene import default_spec  # noqa: E402
+from weather_mi.kernel.plugins.majorant_volpath import DEFAULT_CELL  # noqa: E402
+from weather_mi.scene.spec import default_spec  # noqa: E402
 
 wm.set_variant()  # selects the default variant (registers the plugins with it)
 

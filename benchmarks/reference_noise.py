@@ -31,7 +31,7 @@ Sections (all by default):
             of the texel grid, exact transmittance and persistent lanes), with the differences in
             combined standard errors (the heavy-tailed estimators' standard errors are themselves unreliable, and with
             the full tables both read low: validation/forward_peak_slabs.py).
---mvnee     multiple-vertex NEE (plugins/mvnee.py, render_reference(mvnee=...)) against today's estimator
+--mvnee     multiple-vertex NEE (weather_mi/kernel/plugins/mvnee.py, render_reference(mvnee=...)) against today's estimator
             on the six views (--mvnee-size, --mvnee-spp, 16 passes). Configurations: EPS:K (chains of
             K vertices launched with probability EPS), aureole:EPS (the aureole estimator), today
             (today's estimator again, another seed: the spread of these figures). Seconds, RMS
@@ -61,7 +61,7 @@ import mitsuba as mi  # noqa: E402
 import weather_mi as wm  # noqa: E402
 
 wm.set_variant()  # selects the default variant (registers the plugins with it)
-CPU_WIDTH = wm.variant.llvm_vector_width() or wm.variant.PATH_TRACING_VECTOR_WIDTH  # Dr.Jit's default: the CPU's
+CPU_WIDTH = wm.kernel.variant.llvm_vector_width() or wm.kernel.variant.PATH_TRACING_VECTOR_WIDTH  # Dr.Jit's default: the CPU's
 
 VIEWS = {"front": (200.0, 35.0), "side": (290.0, 35.0), "back": (20.0, 20.0)}
 
@@ -81,7 +81,7 @@ PREVIOUS = {"DEFAULT_TRACKING_GRID": "coarse", "DEFAULT_TRANSMITTANCE": "ratio",
 def plugin_defaults(values, module=None):
     """Module constants (of ``majorant_volpath`` unless ``module`` is given) set to ``values`` for a while."""
     if module is None:
-        from weather_mi.plugins import majorant_volpath as module
+        from weather_mi.kernel.plugins import majorant_volpath as module
     saved = {k: getattr(module, k) for k in values}
     for k, v in values.items():
         setattr(module, k, v)
@@ -99,7 +99,7 @@ def render(spec, vol, spp, which, passes=None, **kw):
     (``PREVIOUS``); "last", the new estimator as the last stop rendered (one pass per launch, before
     ``render_passes``: ``passes.BATCH_SAMPLES`` = 0); "new". All but "new" at the CPU's SIMD width
     (before ``variant.PATH_TRACING_VECTOR_WIDTH``)."""
-    from weather_mi.variant import DRJIT_DEFAULT_BLOCK_SIZE, LLVM_BLOCK_SIZE, tune_llvm
+    from weather_mi.kernel.variant import DRJIT_DEFAULT_BLOCK_SIZE, LLVM_BLOCK_SIZE, tune_llvm
     wm.set_variant()  # selects the variant (and our block size) before the old one is put back
     old = which == "old"
     if old:
@@ -107,8 +107,8 @@ def render(spec, vol, spp, which, passes=None, **kw):
         tune_llvm(DRJIT_DEFAULT_BLOCK_SIZE)
     try:
         with plugin_defaults(PREVIOUS if which == "prev" else {}), \
-                plugin_defaults({"BATCH_SAMPLES": 0} if which == "last" else {}, module=wm.passes), \
-                plugin_defaults({"PATH_TRACING_VECTOR_WIDTH": CPU_WIDTH} if which != "new" else {}, module=wm.variant):
+                plugin_defaults({"BATCH_SAMPLES": 0} if which == "last" else {}, module=wm.reference.passes), \
+                plugin_defaults({"PATH_TRACING_VECTOR_WIDTH": CPU_WIDTH} if which != "new" else {}, module=wm.kernel.variant):
             return wm.render_reference(spec, vol, spp=spp, passes=passes, progress=False, legacy=old, **kw)
     finally:
         tune_llvm(LLVM_BLOCK_SIZE)
@@ -195,7 +195,7 @@ def bias(vols, args):
     for preset, vol in vols.items():
         for view in VIEWS:
             spec = spec_for(vol, view, 48, 36, 0.0, seed=7)
-            cloud = wm.estimates.cloud_mask(spec, vol)
+            cloud = wm.reference.estimates.cloud_mask(spec, vol)
             means = []
             for which, kw in (("old", {}), ("new", {"forward_peak_deg": 0.0}), ("new", {}), ("prev", {})):
                 img = render(spec, vol, args.bias_spp, which, **kw)
@@ -239,7 +239,7 @@ def cpu_timed(fn):
 
 
 def mvnee_rows(vols, args):
-    from weather_mi.plugins import mvnee
+    from weather_mi.kernel.plugins import mvnee
     w, h = args.mvnee_size
     print(f"\n## multiple-vertex NEE against today's estimator, six views, {w} x {h}, {args.mvnee_spp} spp "
           "(16 passes); cpu x: CPU seconds over today's; eff = (rms^2 t_cpu)_today / (rms^2 t_cpu), eff RSE the same "
@@ -249,7 +249,7 @@ def mvnee_rows(vols, args):
     for preset, vol in vols.items():
         for view in VIEWS:
             spec = spec_for(vol, view, w, h, 0.53, seed=3)
-            cloud = wm.estimates.cloud_mask(spec, vol)
+            cloud = wm.reference.estimates.cloud_mask(spec, vol)
             render(replace(spec, width=8, height=8), vol, 1, "new", passes=1)
             base = cpu_timed(lambda: render(spec, vol, args.mvnee_spp, "new"))
             nb, tb = base.metadata["noise"], base.metadata["cpu_seconds"]
@@ -305,9 +305,9 @@ def profile(vol, args):
         ("free flights over the coarse grid (cell 2)", toggled(spec, vol, args, DEFAULT_TRACKING_GRID="coarse")),
         ("shadow rays by ratio tracking", toggled(spec, vol, args, DEFAULT_TRANSMITTANCE="ratio")),
         ("passes by mi.render (no persistent lanes)", toggled(spec, vol, args, DEFAULT_PERSISTENT_LANES=False)),
-        ("one pass per launch", toggled(spec, vol, args, module=wm.passes, BATCH_SAMPLES=0)),
-        (f"SIMD width {CPU_WIDTH} (the CPU's) instead of {wm.variant.PATH_TRACING_VECTOR_WIDTH}",
-         toggled(spec, vol, args, module=wm.variant, PATH_TRACING_VECTOR_WIDTH=CPU_WIDTH)),
+        ("one pass per launch", toggled(spec, vol, args, module=wm.reference.passes, BATCH_SAMPLES=0)),
+        (f"SIMD width {CPU_WIDTH} (the CPU's) instead of {wm.kernel.variant.PATH_TRACING_VECTOR_WIDTH}",
+         toggled(spec, vol, args, module=wm.kernel.variant, PATH_TRACING_VECTOR_WIDTH=CPU_WIDTH)),
         ("eye rays only (max_depth 1)", warm(spec, vol, max_depth=1)),
     ]
     print(f"{'case':40s} {'seconds':>8s} {'vs full':>8s}")

@@ -38,8 +38,8 @@ def main(argv=None) -> int:
     ap.add_argument("--workers-projection", type=int, default=16)
     args = ap.parse_args(argv)
     import weather_mi as wm
-    from weather_mi.place import assume_place
-    from weather_mi.satellite_image import render_satellite, satellite_scene
+    from weather_mi.scene.place import assume_place
+    from weather_mi.satellite.imagery import render_satellite, satellite_scene
     wm.set_variant("llvm_ad_rgb")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)

@@ -28,8 +28,8 @@ PAPER_FPS = {"uniform/low-albedo": 5.1, "uniform/translucent": 4.3, "per-species
 
 
 def detail_field(vol, seed=0):
-    """The simulated turbulent detail of weather_mi.detail (a mean-one multiplier on the grid)."""
-    from weather_mi import detail
+    """The simulated turbulent detail of weather_mi.optics.detail (a mean-one multiplier on the grid)."""
+    from weather_mi.optics import detail
     return detail.field(vol.shape, seed=seed, spacing_m=vol.spacing)
 
 
@@ -58,7 +58,7 @@ def fixed_cost(vol, frames):
     2 shared cores' load falls on both alike); the change between frames: light parameters
     (textures kept), or a scaling (textures rebuilt: kernels over the grid). CPU ms: the process's CPU
     time (all threads) per frame, which other users of the cores do not inflate."""
-    spec = wm.scene.default_spec(vol, 64, 48)
+    spec = wm.scene.spec.default_spec(vol, 64, 48)
     rows = []
     for name in ("per-species/translucent", "per-species/multiple"):
         rs = [SliceRenderer(vol, MODES[name], slices=8, light_res=8) for _ in range(2)]
@@ -79,7 +79,7 @@ def fixed_cost(vol, frames):
 
 def bench(vol, width, height, slices, light_res, frames):
     """[(mode, seconds traced, seconds frozen)]."""
-    spec = wm.scene.default_spec(vol, width, height)
+    spec = wm.scene.spec.default_spec(vol, width, height)
     rows = []
     for name, mode in MODES.items():
         r = SliceRenderer(vol, mode, slices=slices, light_res=light_res,

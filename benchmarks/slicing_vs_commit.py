@@ -30,7 +30,7 @@ sys.path.insert(0, {bench!r})
 from slicing import detail_field, seconds_per_frame
 wm.set_variant(None)
 vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
-spec = wm.scene.default_spec(vol, {w}, {h})
+spec = wm.scene.spec.default_spec(vol, {w}, {h})
 for name, mode in MODES.items():
     r = SliceRenderer(vol, mode, slices={slices}, light_res=128, detail_field=detail_field(vol) if mode.detail else None)
     print("FPS", name, 1.0 / seconds_per_frame(r, spec, {frames}), flush=True)
@@ -43,7 +43,7 @@ sys.path.insert(0, {bench!r})
 from slicing import change
 wm.set_variant(None)
 vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
-spec = wm.scene.default_spec(vol, 64, 48)
+spec = wm.scene.spec.default_spec(vol, 64, 48)
 for name in ("per-species/translucent", "per-species/multiple"):
     r = SliceRenderer(vol, MODES[name], slices=8, light_res=8)
     for kind in ("parameter", "scaling"):

@@ -34,5 +34,5 @@ ref.save_png(out / "supercell_reference.png")
 
 approx = wm.render_slices(spec, vol, wm.SliceMode(phase="per_species", light="multiple"), slices=128)  # beyond the paper
 approx.save(out / "supercell_slices.exr")
-approx.save_png(out / "supercell_slices.png", exposure=wm.imageio.auto_exposure(ref.radiance))
+approx.save_png(out / "supercell_slices.png", exposure=wm.io.image.auto_exposure(ref.radiance))
 print(f"reference {ref.metadata['seconds']:.1f} s, slicer {approx.metadata['seconds']:.2f} s")

@@ -14,7 +14,7 @@ ap.add_argument("-o", "--out", default="out")
 args = ap.parse_args()
 
 hyd = wm.open_wrf(args.file, time=-1)                 # destaggered, regridded onto a uniform height grid
-print(wm.cli.info_text(hyd, "physical"))
+print(wm.cli.commands.info_text(hyd, "physical"))
 vol = wm.optical_volume(hyd, species="physical")      # WRF-consistent radii (the paper's make anvils too thin)
 spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=160, elevation=10), sun=wm.Sun(250, 30),
                     sky=wm.Sky("sunsky"), ground=wm.Ground(0.15), width=320, height=240)

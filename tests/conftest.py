@@ -11,7 +11,7 @@ import weather_mi
 # tests call Mitsuba directly; importing weather_mi selects no variant. LLVM wherever it runs, also on a GPU
 # machine: the bit-for-bit tests assume it (CUDA's film adds samples with atomics); tests/test_gpu.py selects
 # cuda_ad_rgb itself
-weather_mi.set_variant("llvm_ad_rgb" if weather_mi.variant.llvm_usable() else None)
+weather_mi.set_variant("llvm_ad_rgb" if weather_mi.kernel.variant.llvm_usable() else None)
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 WRF_SUPERCELL = SHARED_DATA / "wrf" / "wrfout_quarter_ss_0130.nc"

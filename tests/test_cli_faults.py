@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi import cli
-from weather_mi import reference as reference_module
-from weather_mi.imageio import Image, read_exr
+from weather_mi.cli import commands as cli
+from weather_mi.reference import render as reference_module
+from weather_mi.io.image import Image, read_exr
 
 
 @pytest.fixture
@@ -73,10 +73,10 @@ def test_file_and_demo_together_or_neither_are_refused(tmp_path, capsys, no_rend
 def no_loading(monkeypatch):
     """Fail the test if the input is read (the scene options are checked first)."""
     import weather_mi.io
-    import weather_mi.sources
+    import weather_mi.io.sources
     fail = lambda *a, **k: pytest.fail("the input was read despite a bad scene option")  # noqa: E731
     monkeypatch.setattr(cli, "open_source", fail)
-    monkeypatch.setattr(weather_mi.sources, "open_times", fail)
+    monkeypatch.setattr(weather_mi.io.sources, "open_times", fail)
     monkeypatch.setattr(weather_mi.io, "open_wrf", fail)
 
 
@@ -303,7 +303,7 @@ def test_full_disk_when_the_image_is_written_names_it_and_resumes_without_render
     assert not [p for p in tmp_path.iterdir() if ".tmp" in p.name]
     monkeypatch.undo()
     for name in ("render_pass", "render_passes"):
-        monkeypatch.setattr(wm.passes, name, lambda *a, **k: pytest.fail("rendered although every pass is done"))
+        monkeypatch.setattr(wm.reference.passes, name, lambda *a, **k: pytest.fail("rendered although every pass is done"))
     rc, _, err = run(["--spp", "4", "--resume", "-o", str(out)], capsys)
     assert rc == 0, err
     assert out.exists() and (tmp_path / "a.png").exists() and not ckpt.exists()

@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi import cluster
-from weather_mi.passes import pass_seed
+from weather_mi.reference import cluster
+from weather_mi.reference.passes import pass_seed
 
 from test_reference import cloud_volume, spec
 
@@ -31,7 +31,7 @@ SLOW_PASSES = f"""
 import time
 
 def dask_setup(worker):
-    import weather_mi.passes as passes
+    import weather_mi.reference.passes as passes
     real = passes.render_pass
 
     def slow(*args, **kwargs):
@@ -77,7 +77,7 @@ def test_passes_on_two_workers_give_the_in_process_image_bit_for_bit(client, vol
     assert same(local, remote)
     d = remote.metadata["dask"]
     assert d["workers"] == 2 and sum(d["passes_by_worker"].values()) == 8
-    assert d["variants"] == [wm.passes.current_or_default_variant()]
+    assert d["variants"] == [wm.reference.passes.current_or_default_variant()]
     assert remote.metadata["passes"] == 8 and remote.metadata["spp"] == 16
 
 
@@ -94,7 +94,7 @@ def test_resumed_distributed_render_computes_only_the_missing_passes(client, vol
     sp = spec(seed=9)
     full = render(sp, vol)
     ckpt = tmp_path / "run.ckpt.npz"
-    from weather_mi import passes
+    from weather_mi.reference import passes
     real, calls = passes.render_pass, []
     monkeypatch.setattr(passes, "BATCH_SAMPLES", 0)  # local passes one by one, through render_pass
 
@@ -116,7 +116,7 @@ def test_resumed_distributed_render_computes_only_the_missing_passes(client, vol
 def test_ctrl_c_cancels_the_tasks_and_leaves_a_valid_checkpoint(client, vol, tmp_path, monkeypatch):
     """Ctrl-C arrives in the client's main thread just after the second checkpoint was written (raised from
     there, so that the test does not race a fast render on a loaded machine)."""
-    import weather_mi.checkpoints as checkpoints
+    import weather_mi.reference.checkpoints as checkpoints
     sp = spec(seed=10)
     ckpt = tmp_path / "run.ckpt.npz"
     save, calls = checkpoints.save_checkpoint, []
@@ -142,7 +142,7 @@ def test_ctrl_c_cancels_the_tasks_and_leaves_a_valid_checkpoint(client, vol, tmp
 def test_merged_passes_are_released_on_the_scheduler(client, vol, tmp_path, monkeypatch):
     """A long render (target_rse: up to thousands of passes) must not keep every pass image in the
     workers' memory: once merged here, a pass's task is gone from the scheduler."""
-    import weather_mi.checkpoints as checkpoints
+    import weather_mi.reference.checkpoints as checkpoints
     save, looked = checkpoints.save_checkpoint, []
 
     def merged_passes_left():
@@ -167,7 +167,7 @@ def test_merged_passes_are_released_on_the_scheduler(client, vol, tmp_path, monk
 
 
 def test_cli_render_with_a_scheduler_writes_the_in_process_image(client, tmp_path):
-    from weather_mi import cli
+    from weather_mi.cli import commands as cli
     args = ["render", "--demo", "cumulus", "--size", "16x12", "--spp", "4", "--sky", "constant"]
     assert cli.main(args + ["-o", str(tmp_path / "local.exr")]) == 0
     assert cli.main(args + ["--scheduler", client.scheduler.address, "-o", str(tmp_path / "dask.exr")]) == 0
@@ -176,7 +176,7 @@ def test_cli_render_with_a_scheduler_writes_the_in_process_image(client, tmp_pat
 
 
 def test_cli_unreachable_scheduler_exits_with_a_message(tmp_path, capsys):
-    from weather_mi import cli
+    from weather_mi.cli import commands as cli
     rc = cli.main(["render", "--demo", "cumulus", "--size", "16x12", "--spp", "4", "--scheduler", "127.0.0.1:9",
                    "-o", str(tmp_path / "x.exr")])
     assert rc == 2 and "no Dask scheduler reachable at tcp://127.0.0.1:9" in capsys.readouterr().err
@@ -205,12 +205,12 @@ def test_auto_worker_variant_is_probed_and_recorded(client, vol):
     whether the image is the in-process one bit for bit."""
     sp = spec(seed=5)
     remote = render(sp, vol, client, worker_variant="auto")
-    gpu = wm.variant.cuda_usable()[0]
+    gpu = wm.kernel.variant.cuda_usable()[0]
     expected = "cuda_ad_rgb" if gpu else "llvm_ad_rgb"
     m = remote.metadata
     assert m["dask"]["variants"] == [expected] and m["variant"] == expected
     assert m["passes_by_variant"] == {expected: 8}
-    if expected == wm.passes.current_or_default_variant():
+    if expected == wm.reference.passes.current_or_default_variant():
         assert m["agreement"] == "bit-identical to the in-process render"
         if expected.startswith("llvm"):  # (CUDA's film accumulates with atomics: its bits may vary run to run)
             assert same(remote, render(sp, vol))
@@ -258,7 +258,7 @@ def test_a_worker_killed_mid_render_loses_nothing(client, vol, tmp_path, monkeyp
     """Last of the tests on the shared cluster: the nanny restarts the killed worker, the other one goes
     on. The kill happens when the first checkpoint has been written (23 passes to go), from the client's
     thread, so that it cannot come after a fast render has finished."""
-    import weather_mi.checkpoints as checkpoints
+    import weather_mi.reference.checkpoints as checkpoints
     sp = spec(seed=12)
     pids = client.run(os.getpid)
     ckpt = tmp_path / "run.ckpt.npz"
@@ -283,7 +283,7 @@ def test_a_worker_killed_mid_render_loses_nothing(client, vol, tmp_path, monkeyp
 @pytest.fixture
 def no_rendering(monkeypatch):
     import mitsuba as mi
-    from weather_mi import passes
+    from weather_mi.reference import passes
     monkeypatch.setattr(mi, "render", lambda *a, **k: pytest.fail("rendered although the setup is invalid"))
     for name in ("render_pass", "render_passes"):
         monkeypatch.setattr(passes, name, lambda *a, **k: pytest.fail("rendered although the setup is invalid"))

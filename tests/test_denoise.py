@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi import cli, metrics
-from weather_mi import reference as reference_module
-from weather_mi.denoise import AUX, denoise_image, denoise_radiance, display_label
-from weather_mi.imageio import Image, auto_exposure, to_srgb8
+from weather_mi.cli import commands as cli
+from weather_mi.display import metrics
+from weather_mi.reference import render as reference_module
+from weather_mi.display.denoise import AUX, denoise_image, denoise_radiance, display_label
+from weather_mi.io.image import Image, auto_exposure, to_srgb8
 
 pytest.importorskip("pyoidn")
 
@@ -80,8 +81,8 @@ def _box_view(beta, albedo=0.8, width=24, height=18):
 def test_the_albedo_feature_is_the_single_scattering_fraction_of_a_homogeneous_box():
     """Homogeneous box, no sky, no ground: the eye-ray first-scattering albedo is omega (1 - e^-tau)
     with tau the eye-ray optical depth (a sum that telescopes: exact for any step)."""
-    from weather_mi.denoise_features import view_features
-    from weather_mi.estimates import view_optical_depth
+    from weather_mi.display.denoise_features import view_features
+    from weather_mi.reference.estimates import view_optical_depth
     vol, spec = _box_view(np.full((8, 8, 8), 2e-3, np.float32), albedo=0.8)
     f = view_features(spec, vol, exposure=1.0)
     tau = view_optical_depth(spec, vol)
@@ -92,11 +93,11 @@ def test_the_albedo_feature_is_the_single_scattering_fraction_of_a_homogeneous_b
 
 def test_the_normal_feature_faces_down_the_extinction_gradient():
     """Extinction rising along +x: the normal-like feature is -x (world) in camera coordinates."""
-    from weather_mi.denoise_features import camera_frame, view_features
+    from weather_mi.display.denoise_features import camera_frame, view_features
     x = np.linspace(0.5, 4.0, 16, dtype=np.float32) * 1e-3
     vol, spec = _box_view(np.broadcast_to(x, (16, 16, 16)).copy())
     f = view_features(spec, vol, exposure=1.0)
-    from weather_mi.mitsuba_scene import recentred
+    from weather_mi.kernel.scene_dict import recentred
     want = camera_frame(recentred(spec, vol)[0]) @ np.array([-1.0, 0.0, 0.0])
     hit = f.transmittance < np.exp(-1.5)
     assert hit.sum() > 30

@@ -1,4 +1,4 @@
-"""Simulated turbulent detail (weather_mi.detail): tileable fractal noise and its use on Hydrometeors."""
+"""Simulated turbulent detail (weather_mi.optics.detail): tileable fractal noise and its use on Hydrometeors."""
 from __future__ import annotations
 
 import json
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi import detail
-from weather_mi.hydrometeors import SPECIES_NAMES, spacing_of, validate
+from weather_mi.optics import detail
+from weather_mi.io.hydrometeors import SPECIES_NAMES, spacing_of, validate
 
 
 def _seam_ratio(n: np.ndarray, axis: int) -> float:

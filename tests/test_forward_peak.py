@@ -1,4 +1,4 @@
-"""Forward peaks counted as unscattered light (delta-M, weather_mi.forward_peak) and the aureole
+"""Forward peaks counted as unscattered light (delta-M, weather_mi.optics.forward_peak) and the aureole
 estimator of majorant_volpath (``aureole_nee``).
 
 Reference numbers: a phase function built as f x (a narrow lobe) + (1 - f) x isotropic, whose peak
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi.forward_peak import check_cone_deg, delta_scaled, peak_excess, truncated_table
+from weather_mi.optics.forward_peak import check_cone_deg, delta_scaled, peak_excess, truncated_table
 
 LOBE_DEG = 0.02
 F_PEAK = 0.4
@@ -91,7 +91,7 @@ def test_delta_m_slab_equals_the_full_phase_function_under_a_uniform_sky():
     is the delta-M one): under a uniform sky, where the estimator with the full table converges,
     both must agree. (Under a point sun they do not at practical spp: the forward-scattered sun beam
     is reached only by rare paths aimed within the lobe's 0.02 deg, so the full table reads ~22% low
-    here; that is the fireflies' mechanism, see the module doc of weather_mi.forward_peak.)"""
+    here; that is the fireflies' mechanism, see the module doc of weather_mi.optics.forward_peak.)"""
     full, se_f = _slab_mean(sky=True, forward_peak_deg=0.0)
     delta, se_d = _slab_mean(sky=True, forward_peak_deg=0.5, seed=1)
     assert abs(full - delta) < 4 * np.hypot(se_f, se_d), (full, se_f, delta, se_d)

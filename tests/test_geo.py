@@ -12,10 +12,10 @@ import pytest
 import xarray as xr
 
 import weather_mi as wm
-from weather_mi import cli
-from weather_mi.geo import EARTH_RADIUS_M, grid_georeference
+from weather_mi.cli import commands as cli
+from weather_mi.io.projection import EARTH_RADIUS_M, grid_georeference
 from weather_mi.io.series import time_steps
-from weather_mi.place import assume_place, place_of
+from weather_mi.scene.place import assume_place, place_of
 from conftest import SHARED_DATA, WRF_SUPERCELL, WRF_THOMPSON, shared_file, write_wrfout
 
 GEO = SHARED_DATA / "geo"

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import pyproj
 
-from weather_mi import geostationary as gs
+from weather_mi.satellite import geostationary as gs
 
 EAST = gs.satellite("goes-east")
 

@@ -21,8 +21,9 @@ import pytest
 
 import mitsuba as mi
 import weather_mi as wm
-from weather_mi import cluster, jit_settings, passes, variant
-from weather_mi.plugins import lanes
+from weather_mi.reference import cluster, passes
+from weather_mi.kernel import jit_settings, variant
+from weather_mi.kernel.plugins import lanes
 
 from test_reference import cloud_volume, spec
 
@@ -206,7 +207,7 @@ def _uses_drjit_llvm(path: Path) -> bool:
 
 
 def test_llvm_only_settings_are_called_only_from_the_guarded_places():
-    """A tripwire: the library calls the LLVM-only settings from variant.py (is_llvm) and plugins/lanes.py
+    """A tripwire: the library calls the LLVM-only settings from variant.py (is_llvm) and weather_mi/kernel/plugins/lanes.py
     (default_lanes, LLVM only) and nowhere else, and never imports drjit.llvm: a new call site must get
     a guard (and be added here)."""
     callers = {}
@@ -217,9 +218,9 @@ def test_llvm_only_settings_are_called_only_from_the_guarded_places():
         if found:
             callers[str(path.relative_to(ROOT))] = found
         assert not _uses_drjit_llvm(path), path
-    assert callers == {"weather_mi/variant.py": {"tune_llvm", "llvm_block_size", "llvm_vector_width",
+    assert callers == {"weather_mi/kernel/variant.py": {"tune_llvm", "llvm_block_size", "llvm_vector_width",
                                                  "set_llvm_vector_width"},
-                       "plugins/lanes.py": {"llvm_block_size"}}
+                       "weather_mi/kernel/plugins/lanes.py": {"llvm_block_size"}}
 
 
 # ------------------------------------------------------------------ on a GPU
@@ -235,7 +236,7 @@ def _phase_values(vol) -> np.ndarray:
     """The Eq. 8 plugin of ``vol`` (current variant): eval_pdf's value (3 channels) and pdf at 64 angles
     and 4 points of the box, and sample's (direction, weight, pdf) for 16 fixed random numbers."""
     import drjit as dr
-    from weather_mi.medium import phase_dict
+    from weather_mi.kernel.medium import phase_dict
     phase = mi.load_dict(phase_dict(vol))
     lo, hi = (np.asarray(b, np.float64) for b in vol.bbox)
     pts = lo + (hi - lo) * np.array([[0.1, 0.2, 0.3], [0.5, 0.5, 0.5], [0.9, 0.4, 0.2], [0.3, 0.8, 0.7]])
@@ -254,7 +255,7 @@ def _phase_values(vol) -> np.ndarray:
 
 @needs_gpu
 def test_plugins_load_and_render_under_cuda_without_llvm_settings(monkeypatch):
-    from weather_mi.mitsuba_scene import integrator_dict
+    from weather_mi.kernel.scene_dict import integrator_dict
     vol = cloud_volume()
     before = mi.variant()
     llvm_calls_fail = forbid_llvm_calls(monkeypatch)
@@ -310,7 +311,7 @@ def test_slicer_frame_on_cuda_agrees_with_llvm():
     vol = cloud_volume()
     # a constant sky: Mitsuba's sunsky may read textures in hardware on CUDA (not the slicer's kernels);
     # benchmarks/gpu.py shows the difference with the sunsky
-    sp = wm.scene.default_spec(vol, 64, 48, sky=wm.Sky("constant"))
+    sp = wm.scene.spec.default_spec(vol, 64, 48, sky=wm.Sky("constant"))
     mode = wm.SliceMode(phase="per_species", light="multiple")
     frames, before = {}, mi.variant()
     for v in ("llvm_ad_rgb", "cuda_ad_rgb"):

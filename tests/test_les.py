@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from weather_mi.atmosphere import standard_density
+from weather_mi.io.standard_atmosphere import standard_density
 from weather_mi.errors import WeatherDataError
-from weather_mi.hydrometeors import SPECIES_NAMES
+from weather_mi.io.hydrometeors import SPECIES_NAMES
 from weather_mi.io.les import open_les
 
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"

@@ -16,9 +16,9 @@ import drjit as dr
 import mitsuba as mi
 
 import weather_mi  # noqa: F401  (variant + plugins)
-from weather_mi.plugins import majorant_volpath as mv
-from weather_mi.plugins.trackers import exact_transmittance
-from weather_mi.plugins.hydrometeor_mixture import bbox_transform
+from weather_mi.kernel.plugins import majorant_volpath as mv
+from weather_mi.kernel.plugins.trackers import exact_transmittance
+from weather_mi.kernel.plugins.hydrometeor_mixture import bbox_transform
 
 mv.register()
 

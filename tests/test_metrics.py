@@ -1,11 +1,11 @@
-"""Image metrics (weather_mi.metrics) on pairs with known answers."""
+"""Image metrics (weather_mi.display.metrics) on pairs with known answers."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from weather_mi import metrics
-from weather_mi.imageio import Image, auto_exposure
+from weather_mi.display import metrics
+from weather_mi.io.image import Image, auto_exposure
 
 KEYS = ("rmse", "rel_mse", "ssim", "ciede2000", "flip", "noise_floor", "exposure", "n_pixels")
 
@@ -100,7 +100,7 @@ def test_cloud_mask_of_a_reference_comes_with_it_also_through_its_exr(tmp_path):
     ref = wm.render_reference(sp, vol, spp=4, passes=2, progress=False)
     t = ref.transmittance
     assert t.shape == ref.shape and t.dtype == np.float32 and np.all((t > 0) & (t <= 1))
-    cloud = wm.estimates.cloud_mask(sp, vol)
+    cloud = wm.reference.estimates.cloud_mask(sp, vol)
     assert np.array_equal(t < 0.5, cloud) and 0.2 < cloud.mean() < 0.8
     assert ref.metadata["noise"]["cloud_pixels"] == int(np.count_nonzero(cloud & (ref.radiance.mean(axis=2) > 0)))
     approx = ref.radiance * np.float32(1.1)
@@ -177,7 +177,7 @@ def test_error_map_png_is_written(tmp_path):
 
 def test_display_conversion_matches_project_png():
     """The metrics' display colour is imageio.to_srgb8 without the 8-bit rounding."""
-    from weather_mi.imageio import to_srgb8
+    from weather_mi.io.image import to_srgb8
     ref = _smooth_image(16, 16) * 3
     e = auto_exposure(ref)
     srgb = metrics.display_srgb(ref, e)

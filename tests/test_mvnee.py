@@ -1,4 +1,4 @@
-"""Multiple-vertex next-event estimation (``plugins/mvnee.py``, ``render_reference(mvnee=...)``).
+"""Multiple-vertex next-event estimation (``weather_mi/kernel/plugins/mvnee.py``, ``render_reference(mvnee=...)``).
 
 Reference numbers that did not come from our code: DISORT (``disortpp``) radiances of homogeneous HG
 slabs (the estimator with chains must reproduce them: the chains and the path's own sun NEE share the
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi import fluxes
+from weather_mi.plane_parallel import slab as fluxes
 
 disortpp = pytest.importorskip("disortpp")
 
@@ -50,7 +50,7 @@ def test_slab_with_chains_against_disort(g, albedo, tau, mu0, view):
 
 def test_a_wrong_weight_is_caught(monkeypatch):
     """The path's own sun NEE at full weight (the chains' share counted twice) reads high by many se."""
-    from weather_mi.plugins import mvnee
+    from weather_mi.kernel.plugins import mvnee
     g, albedo, tau, mu0, view = CASES[0]
     ref = fluxes.disort_slab(tau, albedo, g, mu0)["L_zenith"]
     monkeypatch.setattr(mvnee, "path_weight", lambda r: r[0] * 0.0 + 1.0)
@@ -62,7 +62,7 @@ def test_a_wrong_weight_is_caught(monkeypatch):
 def test_chain_lengths_and_a_disk_sun_leave_the_estimate_unchanged(length, monkeypatch):
     """Against the estimator without chains, in the same slab (z-test), for chain lengths 1 and 4 and a
     5-degree disk (half the chain's directions uniform in the disk)."""
-    from weather_mi.plugins import mvnee
+    from weather_mi.kernel.plugins import mvnee
     monkeypatch.setattr(mvnee, "DEFAULT_LENGTH", length)
     args = (4.0, 0.99, 0.85, 0.5, "zenith")
     plain, se_p = _slab(*args, spp=512, seed=1, diameter=5.0)
@@ -85,8 +85,8 @@ def test_bad_probabilities_are_refused(value, message):
 def test_bad_chain_lengths_are_refused(length):
     import mitsuba as mi
     wm.set_variant()
-    from weather_mi.plugins import majorant_volpath  # noqa: F401 (registers)
-    wm.mitsuba_scene.ensure_registered()
+    from weather_mi.kernel.plugins import majorant_volpath  # noqa: F401 (registers)
+    wm.kernel.scene_dict.ensure_registered()
     with pytest.raises(Exception, match="mvnee_length"):
         mi.load_dict({"type": "majorant_volpath", "sun_direction": [0, 0, 1], "mvnee": 0.5, "mvnee_length": length})
 
@@ -99,7 +99,7 @@ def test_chain_direction_density_is_normalised(diameter):
     import drjit as dr
     import mitsuba as mi
     wm.set_variant()
-    from weather_mi.plugins import sun as sun_mod
+    from weather_mi.kernel.plugins import sun as sun_mod
     vmax, _ = sun_mod.sun_disk(diameter, 1.0)
 
     class Sun:

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi.species import preset
+from weather_mi.optics.species import preset
 
 
 def hyd_one_point(name, q=1e-3, rho=1.0):

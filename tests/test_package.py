@@ -26,7 +26,7 @@ def readme_names() -> list[str]:
 
 def test_readme_finds_names():
     names = readme_names()
-    assert "metrics.compare" in names and "synthetic.supercell" in names and "estimates.cloud_mask" in names
+    assert "metrics.compare" in names and "synthetic.supercell" in names and "reference.cloud_mask" in names
 
 
 def test_every_name_the_readme_uses_is_reachable_from_import_weather_mi():
@@ -48,7 +48,7 @@ print("missing:", missing)
 
 
 def test_import_selects_no_variant_and_imports_no_cli():
-    out = _run("import sys, weather_mi, mitsuba as mi; print(mi.variant(), 'weather_mi.cli' in sys.modules)")
+    out = _run("import sys, weather_mi, mitsuba as mi; print(mi.variant(), 'weather_mi.cli.commands' in sys.modules)")
     assert out.returncode == 0, out.stderr[-3000:]
     assert out.stdout.split() == ["None", "False"]
 
@@ -155,11 +155,11 @@ def test_dependencies_are_ranges_and_the_exact_pins_live_in_constraints():
 
 def test_every_package_and_data_folder_is_declared():
     """setuptools warns about (and would drop) folders of the package that the configuration omits:
-    weather_mi.phase.data (the shipped phase tables) and weather_mi.study (``weather-mi validate``)."""
+    weather_mi.optics.phase.data (the shipped phase tables) and weather_mi.study (``weather-mi validate``)."""
     tool = _pyproject()["tool"]["setuptools"]
     declared = set(tool["packages"])
     found = {".".join(p.relative_to(ROOT).parts) for p in (ROOT / "weather_mi").rglob("*")
              if p.is_dir() and p.name != "__pycache__" and any(f.is_file() for f in p.iterdir())}
-    assert found | {"weather_mi", "weather_mi.plugins"} == declared
-    assert tool["package-dir"]["weather_mi.plugins"] == "plugins"
-    assert tool["package-data"]["weather_mi.phase.data"] == ["*.npz"]
+    assert found | {"weather_mi"} == declared
+    assert "package-dir" not in tool  # the plugins are inside the package (weather_mi/kernel/plugins)
+    assert tool["package-data"]["weather_mi.optics.phase.data"] == ["*.npz"]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi.plugins import hydrometeor_mixture as hm
+from weather_mi.kernel.plugins import hydrometeor_mixture as hm
 
 
 def hg(g, theta):

@@ -1,4 +1,4 @@
-"""Phase-function tables (weather_mi.phase): normalisation, moments and cone fractions against closed
+"""Phase-function tables (weather_mi.optics.phase): normalisation, moments and cone fractions against closed
 forms, Mie cloud values against published numbers (optics-notes), rainbow and halo angles against
 geometric optics (Descartes, minimum deviation), sampling against the pdf (chi-square), Legendre
 moments through DISORT against van de Hulst's tables, and the disk cache.
@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
-from weather_mi import phase
-from weather_mi.phase import cache as phase_cache
-from weather_mi.phase import ice as phase_ice
-from weather_mi.phase.table import PhaseTable, angle_grid, mixture
+from weather_mi.optics import phase
+from weather_mi.optics.phase import cache as phase_cache
+from weather_mi.optics.phase import ice as phase_ice
+from weather_mi.optics.phase.table import PhaseTable, angle_grid, mixture
 
 DEG = np.pi / 180
 N_ICE = {0: 1.3080, 1: 1.3110, 2: 1.3157}    # Warren & Brandt 2008 at 650 / 550 / 450 nm

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi import fluxes
+from weather_mi.plane_parallel import slab as fluxes
 
 disortpp = pytest.importorskip("disortpp")
 
@@ -46,7 +46,7 @@ def test_disort_intensity_correction_is_active_and_converged():
 def plugin_asymmetry(table) -> float:
     """Mean cosine of a table as the ``hydrometeor_mixture`` plugin represents it: piecewise linear in
     the versine v = 1 - cos theta on its node set (so also linear in mu), exact integral of mu p."""
-    from weather_mi.plugins.hydrometeor_mixture import prepare_tables
+    from weather_mi.kernel.plugins.hydrometeor_mixture import prepare_tables
     nodes, values = prepare_tables([table])
     mu = (1.0 - nodes.astype(np.float64))[::-1]
     p = values[0].astype(np.float64).mean(axis=1)[::-1]

@@ -1,4 +1,4 @@
-"""The ``raytable`` sensor (plugins/raytable_sensor.py): each pixel's rays from a table of corner rays.
+"""The ``raytable`` sensor (weather_mi/kernel/plugins/raytable_sensor.py): each pixel's rays from a table of corner rays.
 
 Checked against geometry by hand: rays tilted by theta from nadir, starting at height H, meet the ground
 H tan(theta) further along, so a glowing half-plane x < 0 seen through them lights exactly the pixels
@@ -12,7 +12,7 @@ import weather_mi as wm
 
 def _scene(origins, directions, width, height):
     import mitsuba as mi
-    from weather_mi.plugins.raytable_sensor import sensor_dict
+    from weather_mi.kernel.plugins.raytable_sensor import sensor_dict
     film = {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"},
             "pixel_format": "rgb", "component_format": "float32"}
     glow = mi.ScalarTransform4f().translate([-5000.0, 0.0, 0.0]).scale([5000.0, 5000.0, 1.0])
@@ -57,9 +57,9 @@ def test_majorant_volpath_through_the_table_matches_the_orthographic_camera():
     """The path tracer's persistent lanes take the table's rays: nadir rays over a uniform slab give the
     orthographic camera's radiance (the same sun, medium and seeds; within 4 combined standard errors)."""
     import mitsuba as mi
-    from weather_mi.mitsuba_scene import integrator_dict, recentred, scene_dict
-    from weather_mi.passes import render_pass
-    from weather_mi.plugins.raytable_sensor import sensor_dict
+    from weather_mi.kernel.scene_dict import integrator_dict, recentred, scene_dict
+    from weather_mi.reference.passes import render_pass
+    from weather_mi.kernel.plugins.raytable_sensor import sensor_dict
     wm.set_variant("llvm_ad_rgb")
     beta = np.full((8, 16, 16), 0.004, np.float32)  # tau 3.2 over 800 m
     vol = wm.OpticalVolume.from_arrays(beta, np.ones_like(beta), wm.phase.henyey_greenstein(0.5),

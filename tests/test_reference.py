@@ -14,7 +14,7 @@ import pytest
 import mitsuba as mi
 
 import weather_mi as wm
-from weather_mi import cli
+from weather_mi.cli import commands as cli
 
 W, H = 16, 12
 BBOX = ((0.0, 0.0, 1000.0), (1000.0, 1000.0, 2000.0))
@@ -57,14 +57,14 @@ def no_rendering(monkeypatch):
     ``passes.render_passes``)."""
     def forbidden(*args, **kwargs):
         pytest.fail("a pass was rendered although the input is invalid")
-    monkeypatch.setattr(wm.passes, "render_pass", forbidden)
-    monkeypatch.setattr(wm.passes, "render_passes", forbidden)
+    monkeypatch.setattr(wm.reference.passes, "render_pass", forbidden)
+    monkeypatch.setattr(wm.reference.passes, "render_passes", forbidden)
     monkeypatch.setattr(mi, "render", forbidden)
 
 
 def one_pass_per_launch(monkeypatch):
     """Local passes one at a time, each through ``passes.render_pass`` (which tests intercept)."""
-    monkeypatch.setattr(wm.passes, "BATCH_SAMPLES", 0)
+    monkeypatch.setattr(wm.reference.passes, "BATCH_SAMPLES", 0)
 
 
 # ---------------------------------------------------------------- passes and standard error
@@ -94,14 +94,14 @@ def test_estimate_is_the_mean_of_the_passes_with_their_standard_error(vol, monke
     """Record what every pass returns: the image is their mean, the error their sample standard
     deviation over sqrt(passes), the passes use distinct seeds and ``spp`` is split over them."""
     one_pass_per_launch(monkeypatch)
-    real = wm.passes.render_pass
+    real = wm.reference.passes.render_pass
     passes = []
 
     def recording(scene, spp, seed, **kwargs):
         out = real(scene, spp, seed, **kwargs)
         passes.append((seed, spp, np.array(out, np.float64)[..., :3]))
         return out
-    monkeypatch.setattr(wm.passes, "render_pass", recording)
+    monkeypatch.setattr(wm.reference.passes, "render_pass", recording)
     img = render(spec(seed=11), vol, spp=22, passes=5)
     seeds, spps, imgs = zip(*passes)
     assert len(set(seeds)) == 5 and sorted(spps, reverse=True) == [5, 5, 4, 4, 4]
@@ -146,7 +146,7 @@ class Interrupted(Exception):
 def _interrupt_after(monkeypatch, k):
     """Make the (k+1)-th pass raise, as if the process were killed during pass k+1."""
     one_pass_per_launch(monkeypatch)
-    real = wm.passes.render_pass
+    real = wm.reference.passes.render_pass
     calls = []
 
     def render_k(scene, spp, seed, **kwargs):
@@ -154,7 +154,7 @@ def _interrupt_after(monkeypatch, k):
             raise Interrupted
         calls.append(seed)
         return real(scene, spp, seed, **kwargs)
-    monkeypatch.setattr(wm.passes, "render_pass", render_k)
+    monkeypatch.setattr(wm.reference.passes, "render_pass", render_k)
     return real
 
 
@@ -164,7 +164,7 @@ def _count_renders(monkeypatch, real):
     def counting(scene, spp, seed, **kwargs):
         calls.append(seed)
         return real(scene, spp, seed, **kwargs)
-    monkeypatch.setattr(wm.passes, "render_pass", counting)
+    monkeypatch.setattr(wm.reference.passes, "render_pass", counting)
     return calls
 
 
@@ -198,14 +198,14 @@ WIDE_VIEW = wm.Camera.orthographic(center=(500.0, -1000.0, 1500.0), direction=(0
 def _recording(monkeypatch):
     """Record (scene, pixels asked for, image) of every pass."""
     one_pass_per_launch(monkeypatch)
-    real = wm.passes.render_pass
+    real = wm.reference.passes.render_pass
     passes = []
 
     def recording(scene, spp, seed, **kwargs):
         out = real(scene, spp, seed, **kwargs)
         passes.append((scene, kwargs.get("pixels"), np.array(out, np.float64)[..., :3]))
         return out
-    monkeypatch.setattr(wm.passes, "render_pass", recording)
+    monkeypatch.setattr(wm.reference.passes, "render_pass", recording)
     return real, passes
 
 
@@ -214,9 +214,9 @@ def test_render_to_a_target_adds_passes_over_the_cloud_pixels_only(vol, monkeypa
     is the mean over every pass, elsewhere over the planned ones, each with its own standard error;
     a pass over some pixels gives them the values of the pass over all."""
     sp = spec(seed=2, camera=WIDE_VIEW)
-    cloud = wm.estimates.cloud_mask(sp, vol)
+    cloud = wm.reference.estimates.cloud_mask(sp, vol)
     assert 0.2 < cloud.mean() < 0.8
-    monkeypatch.setattr(wm.reference, "MAX_TARGET_PASSES", 7)  # an unreachable target: 4 planned + 3 more
+    monkeypatch.setattr(wm.reference.render, "MAX_TARGET_PASSES", 7)  # an unreachable target: 4 planned + 3 more
     real, passes = _recording(monkeypatch)
     img = render(sp, vol, spp=8, passes=4, target_rse=1e-6)
     scenes, pixels, imgs = zip(*passes)
@@ -244,7 +244,7 @@ def test_render_to_a_target_adds_passes_over_the_cloud_pixels_only(vol, monkeypa
 def test_render_to_a_target_resumes_bit_for_bit(vol, tmp_path, monkeypatch):
     """Interrupted among the passes over the cloud pixels, a render to a target resumes to the same image."""
     sp = spec(seed=8, camera=WIDE_VIEW)
-    monkeypatch.setattr(wm.reference, "MAX_TARGET_PASSES", 6)
+    monkeypatch.setattr(wm.reference.render, "MAX_TARGET_PASSES", 6)
     full = render(sp, vol, spp=8, passes=4, target_rse=1e-6)
     ckpt = tmp_path / "t.npz"
     real = _interrupt_after(monkeypatch, 5)
@@ -261,16 +261,16 @@ def test_passes_rendered_together_equal_passes_rendered_one_by_one(vol, monkeypa
     """Local passes are rendered in shared launches (``render_passes``): the image is bit-identical to
     the one rendered a pass per launch, for planned passes and a render to a target alike."""
     sp = spec(seed=4, camera=WIDE_VIEW)
-    monkeypatch.setattr(wm.reference, "MAX_TARGET_PASSES", 9)
-    real, launches = wm.passes.render_passes, []
+    monkeypatch.setattr(wm.reference.render, "MAX_TARGET_PASSES", 9)
+    real, launches = wm.reference.passes.render_passes, []
 
     def counting(scene, passes, **kwargs):
         launches.append(len(passes))
         return real(scene, passes, **kwargs)
-    monkeypatch.setattr(wm.passes, "render_passes", counting)
+    monkeypatch.setattr(wm.reference.passes, "render_passes", counting)
     together = [render(sp, vol, spp=24, passes=6), render(sp, vol, spp=8, passes=4, target_rse=1e-6)]
     assert launches == [6, 4, 5]  # the planned passes in one launch, then the passes over the cloud pixels
-    monkeypatch.setattr(wm.passes, "BATCH_SAMPLES", 0)
+    monkeypatch.setattr(wm.reference.passes, "BATCH_SAMPLES", 0)
     launches.clear()
     alone = [render(sp, vol, spp=24, passes=6), render(sp, vol, spp=8, passes=4, target_rse=1e-6)]
     assert launches == [1] * 15
@@ -282,17 +282,17 @@ def test_passes_run_at_the_path_tracing_simd_width_and_the_width_is_put_back(vol
     """Passes are rendered with packets of PATH_TRACING_VECTOR_WIDTH lanes (the scene built there too:
     Embree's packets follow the width) and the CPU's width is back afterwards; an image at the CPU's
     width estimates the same radiance."""
-    from weather_mi import variant
+    from weather_mi.kernel import variant
     if not mi.variant().startswith("llvm") or variant.llvm_vector_width() is None:
         pytest.skip("an LLVM variant with Dr.Jit's target setters")
     before = variant.llvm_vector_width()
     one_pass_per_launch(monkeypatch)
-    real, widths = wm.passes.render_pass, []
+    real, widths = wm.reference.passes.render_pass, []
 
     def spying(scene, spp, seed, **kwargs):
         widths.append(variant.llvm_vector_width())
         return real(scene, spp, seed, **kwargs)
-    monkeypatch.setattr(wm.passes, "render_pass", spying)
+    monkeypatch.setattr(wm.reference.passes, "render_pass", spying)
     narrow = render(spec(seed=12), vol, spp=256, passes=8)
     assert set(widths) == {variant.PATH_TRACING_VECTOR_WIDTH} and variant.llvm_vector_width() == before
     widths.clear()
@@ -311,7 +311,7 @@ def test_checkpoint_of_another_scene_is_refused(vol, tmp_path, monkeypatch):
     denser = wm.OpticalVolume.from_arrays(beta_ext=vol.beta_total * 1.01, albedo=0.99,
                                           phase=wm.phase.henyey_greenstein(0.85), bbox=BBOX)
     for name in ("render_pass", "render_passes"):
-        monkeypatch.setattr(wm.passes, name, lambda *a, **k: pytest.fail("rendered despite a foreign checkpoint"))
+        monkeypatch.setattr(wm.reference.passes, name, lambda *a, **k: pytest.fail("rendered despite a foreign checkpoint"))
     others = [
         (spec(seed=6), denser, {}),                                  # another volume
         (spec(seed=6), cloud_volume(g=0.5), {}),                     # another phase function
@@ -401,7 +401,7 @@ def test_metadata_describes_the_render():
     assert m["normalize"] is None and m["sun"] == "scene emitter"
     assert img.radiance.max() > 0
     noise = m["noise"]  # the noise figures over cloud pixels, recomputed here from the image
-    cloud = wm.estimates.cloud_mask(sp, vol)
+    cloud = wm.reference.estimates.cloud_mask(sp, vol)
     lum, se = img.radiance.mean(axis=2), img.stderr.mean(axis=2)
     ok = cloud & (lum > 0)
     assert noise["cloud_pixels"] == ok.sum() > 0

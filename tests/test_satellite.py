@@ -1,4 +1,4 @@
-"""``weather-mi satellite`` (weather_mi/satellite_image.py, weather_mi/ipa.py): the 1-D solver's geometry
+"""``weather-mi satellite`` (weather_mi/satellite/imagery.py, weather_mi/plane_parallel/ipa.py): the 1-D solver's geometry
 against the single-scattering closed form, the satellite view of a uniform layer against DISORT, per-pixel
 solar angles against NREL SPA, the command's outputs and its refusals before rendering."""
 from __future__ import annotations
@@ -11,8 +11,8 @@ import pytest
 import xarray as xr
 
 import weather_mi as wm
-from weather_mi import cli
-from weather_mi.ipa import disort_reflectance, scattering_geometry
+from weather_mi.cli import commands as cli
+from weather_mi.plane_parallel.ipa import disort_reflectance, scattering_geometry
 from conftest import WRF_THOMPSON, shared_file
 
 pytest.importorskip("disortpp")
@@ -32,10 +32,10 @@ def test_disort_geometry_in_the_single_scattering_limit(phi_deg):
 
 def test_scattering_geometry_of_sun_and_sensor_vectors():
     sun = wm.Sun(120.0, 40.0).to_sun
-    sensor = wm.scene.direction_from_angles(300.0, 60.0)  # the sensor opposite the sun: forward scattering
+    sensor = wm.scene.spec.direction_from_angles(300.0, 60.0)  # the sensor opposite the sun: forward scattering
     mu0, mu, phi = scattering_geometry(sun, sensor)
     assert (mu0, mu, phi) == pytest.approx((np.sin(np.radians(40)), np.sin(np.radians(60)), 0.0), abs=1e-6)
-    _, _, phi = scattering_geometry(sun, wm.scene.direction_from_angles(120.0, 60.0))  # towards the sun
+    _, _, phi = scattering_geometry(sun, wm.scene.spec.direction_from_angles(120.0, 60.0))  # towards the sun
     assert phi == pytest.approx(180.0)
 
 
@@ -53,7 +53,7 @@ def test_satellite_view_of_a_uniform_layer_matches_disort():
 
 def test_per_pixel_sun_is_the_spa_sun_there():
     """One SPA evaluation at the centre carried to points 1000 km away: within 0.01 deg of SPA there."""
-    from weather_mi.solar import solar_position, sun_angles_at
+    from weather_mi.scene.solar import solar_position, sun_angles_at
     t = "2005-09-21T03:00:00Z"
     centre = solar_position(t, 30.0, 87.0)
     lat, lon = np.array([38.0, 22.0, 30.5]), np.array([95.0, 80.0, 98.0])

@@ -1,15 +1,15 @@
-"""Optics of a satellite band (weather_mi/bands.py, phase/mie.py at one wavelength) and of the molecular
-atmosphere (weather_mi/rayleigh.py), against closed forms and published values."""
+"""Optics of a satellite band (weather_mi/satellite/bands.py, phase/mie.py at one wavelength) and of the molecular
+atmosphere (weather_mi/optics/rayleigh.py), against closed forms and published values."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi import rayleigh
-from weather_mi.atmosphere import standard_density
-from weather_mi.bands import band, band_volume
-from weather_mi.phase.mie import mie_cloud, water_index
+from weather_mi.optics import rayleigh
+from weather_mi.io.standard_atmosphere import standard_density
+from weather_mi.satellite.bands import band, band_volume
+from weather_mi.optics.phase.mie import mie_cloud, water_index
 
 
 @pytest.mark.parametrize("wavelength_nm", [450.0, 550.0, 640.0, 865.0])

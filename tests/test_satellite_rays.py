@@ -1,4 +1,4 @@
-"""The satellite's view in a domain's frame (weather_mi/satellite_rays.py): the rays of a fixed-grid view
+"""The satellite's view in a domain's frame (weather_mi/satellite/rays.py): the rays of a fixed-grid view
 checked against the geometry on the ellipsoid (geostationary.apparent_ground_point, an independent
 intersection of the line of sight with WGS84) and against the parallax h tan(VZA)."""
 from __future__ import annotations
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi.geostationary import apparent_ground_point, satellite, view_angles
-from weather_mi.place import assume_place, place_of
-from weather_mi.satellite_rays import corner_rays, model_xy, satellite_view
+from weather_mi.satellite.geostationary import apparent_ground_point, satellite, view_angles
+from weather_mi.scene.place import assume_place, place_of
+from weather_mi.satellite.rays import corner_rays, model_xy, satellite_view
 from conftest import WRF_SUPERCELL, WRF_THOMPSON, shared_file
 
 
@@ -62,8 +62,8 @@ def test_view_covers_the_domain_and_its_angles_are_the_satellites():
     # each corner ray's zenith angle is the view zenith angle of a spherical earth's closed form at the
     # corner (WGS84 vs sphere: < 0.05 deg, tests/test_geostationary.py) and its direction is away from
     # the satellite, whose azimuth (closed form) is turned into the grid by the meridian convergence
-    from weather_mi.geostationary import pixel_lonlat, view_angles_sphere
-    from weather_mi.satellite_rays import _edges
+    from weather_mi.satellite.geostationary import pixel_lonlat, view_angles_sphere
+    from weather_mi.satellite.rays import _edges
     clon, clat = pixel_lonlat(sat, *np.meshgrid(_edges(view.x_rad), _edges(view.y_rad)))
     vza_s, vaa_s = view_angles_sphere(sat, clat, clon)
     d = -view.rays.directions
@@ -98,7 +98,7 @@ def test_lines_of_sight_through_the_box():
     """``crosses_box``: rays tilted 45 deg towards +x from 20 km, over a box 0-10 km wide and 0-5 km tall,
     meeting the ground at x_g: between z = 5 km and the floor a ray spans x_g - 5 km to x_g, so it crosses
     the box iff 0 < x_g < 15 km (and its y is inside)."""
-    from weather_mi.satellite_rays import crosses_box
+    from weather_mi.satellite.rays import crosses_box
     cx = np.arange(-3.0, 18.5, 1.0) * 1e3 + 0.25e3  # corners; pixel centres at x_g = -2.25 ... 17.75 km
     for y, inside_y in ((5e3, True), (12e3, False)):
         gx, gy = np.meshgrid(cx, [y - 500.0, y + 500.0])

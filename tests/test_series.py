@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi import cli
+from weather_mi.cli import commands as cli
 from weather_mi.errors import WeatherDataError
 from weather_mi.io.series import time_steps
 
@@ -100,7 +100,7 @@ def test_animate_the_supercell_series_with_the_slicer_on_two_workers(tmp_path, c
 
 
 def test_animate_refuses_an_unknown_slicer_mode(tmp_path):
-    from weather_mi.animate import animate
+    from weather_mi.display.animate import animate
     vol = wm.optical_volume(wm.synthetic.cumulus(shape=(8, 8, 8), spacing_m=(100.0, 100.0, 100.0)))
     spec = wm.SceneSpec(camera=wm.Camera.orbit(vol), sun=wm.Sun(290, 35), width=8, height=6)
     with pytest.raises(ValueError, match="slicer mode must be one of"):
@@ -114,7 +114,7 @@ def test_animate_with_the_reference_renderer(tmp_path):
     vols = [wm.optical_volume(h, species="physical") for h in hyds]
     spec = wm.SceneSpec(camera=wm.Camera.orbit(vols[-1], azimuth=200, elevation=20), sun=wm.Sun(290, 35),
                         width=16, height=12, sky=wm.Sky("constant"))
-    from weather_mi.animate import animate
+    from weather_mi.display.animate import animate
     anim = animate(vols, spec, tmp_path / "ref", renderer="reference", labels=[h.attrs["time"] for h in hyds],
                    reference_kw={"spp": 4, "passes": 2}, progress=False)
     assert len(anim.frames) == 2 and all(im.metadata["renderer"] == "reference" for im in anim.images)

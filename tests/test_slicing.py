@@ -231,7 +231,7 @@ def test_uniform_modes_read_extinction_alone_where_albedos_agree(monkeypatch):
     from weather_mi.slicing import renderer as renderer_module
     vol = wm.optical_volume(wm.synthetic.supercell(shape=(20, 40, 40), spacing_m=(1000.0, 2000.0, 2000.0)),
                             species="physical")
-    spec = wm.scene.default_spec(vol, 16, 12)
+    spec = wm.scene.spec.default_spec(vol, 16, 12)
     points = np.stack(np.meshgrid(np.linspace(-30e3, 30e3, 7), np.linspace(-30e3, 30e3, 7),
                                   np.linspace(1e3, 14e3, 6)), axis=-1).reshape(-1, 3)
     light, image = {}, {}
@@ -273,8 +273,8 @@ def test_translucent_image_converges_in_the_slice_count():
     to 128 changes the image by little (CIEDE2000 <= 1 over cloud pixels, mean radiance within 3%),
     which fails with a blur radius and a survival factor per slice (the image then darkens with every
     doubling)."""
-    from weather_mi import metrics
-    from weather_mi.imageio import auto_exposure
+    from weather_mi.display import metrics
+    from weather_mi.io.image import auto_exposure
     vol = blob_volume()
     spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=180, elevation=10, fov=40), sun=wm.Sun(150, 30),
                         sky=None, ground=None, width=40, height=30)
@@ -348,7 +348,7 @@ def peaked_table(peak=0.4, width_deg=0.5):
 
 
 def test_the_multiple_model_counts_forward_peaks_as_unscattered_light():
-    """As the path-traced reference does (delta-M, weather_mi.forward_peak): a conservative slab whose
+    """As the path-traced reference does (delta-M, weather_mi.optics.forward_peak): a conservative slab whose
     phase function puts 40% of its light in a 0.5 degree lobe is seen, and shades, with the optical depth
     (1 - 0.4) tau; the paper's modes keep the full tau; and a thin slab's single scattering outside the
     peak is unchanged (omega' p' tau' = omega p tau)."""

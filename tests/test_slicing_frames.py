@@ -20,7 +20,7 @@ def vol():
 
 
 def spec_at(vol, i, w=40, h=30):
-    spec = wm.scene.default_spec(vol, w, h, camera_azimuth=200.0 + 9.0 * i)
+    spec = wm.scene.spec.default_spec(vol, w, h, camera_azimuth=200.0 + 9.0 * i)
     return wm.SceneSpec(camera=spec.camera, sun=wm.Sun(200.0 + 10.0 * i, 30.0 + 4.0 * i), sky=spec.sky,
                         ground=spec.ground, width=w, height=h)
 
@@ -114,7 +114,7 @@ def test_offsets_reduce_the_banding_metric_on_the_tower(vol):
     spec_mod = importlib.util.spec_from_file_location("banding", spec_file)
     banding = importlib.util.module_from_spec(spec_mod)
     spec_mod.loader.exec_module(banding)
-    spec = wm.scene.default_spec(vol, 160, 120)
+    spec = wm.scene.spec.default_spec(vol, 160, 120)
     mode = MODES["per-species/translucent"]  # ("multiple" carries its light: little banding to remove)
     ref_r = SliceRenderer(vol, mode, slices=256)
     ref = ref_r.frame(spec).radiance

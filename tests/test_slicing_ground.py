@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi.fluxes import disort_slab
+from weather_mi.plane_parallel.slab import disort_slab
 from weather_mi.slicing import MODES, SliceRenderer
 from weather_mi.slicing.eye import ground_transmission
 

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi import cli
-from weather_mi.geo import EARTH_RADIUS_M, haversine_m
-from weather_mi.imageio import Image, read_exr
-from weather_mi.place import assume_place, place_of, sun_from_time
-from weather_mi.solar import solar_position, sun_across_domain
+from weather_mi.cli import commands as cli
+from weather_mi.io.projection import EARTH_RADIUS_M, haversine_m
+from weather_mi.io.image import Image, read_exr
+from weather_mi.scene.place import assume_place, place_of, sun_from_time
+from weather_mi.scene.solar import solar_position, sun_across_domain
 from conftest import WRF_THOMPSON, shared_file, write_wrfout
 
 
@@ -106,7 +106,7 @@ def test_sun_from_time_needs_a_place_and_day(tmp_path):
 def test_render_sun_from_time_writes_it(tmp_path, monkeypatch, capsys):
     """``render --sun-from-time``: the scene's sun is the data's, the EXR keeps where, when and the one
     sun's error; at night it refuses before rendering."""
-    from weather_mi import reference as reference_module
+    from weather_mi.reference import render as reference_module
     seen = {}
 
     def render(spec, vol, **kw):

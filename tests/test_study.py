@@ -6,7 +6,7 @@ import re
 import pytest
 from PIL import Image as PILImage
 
-from weather_mi.cli import main
+from weather_mi.cli.commands import main
 from weather_mi.study import CONFIGS, METRIC_KEYS, load_scene, run
 
 

@@ -13,8 +13,8 @@ import pytest
 import mitsuba as mi
 
 import weather_mi as wm
-from weather_mi.mitsuba_scene import integrator_dict
-from weather_mi.mitsuba_scene import recentred, scene_dict
+from weather_mi.kernel.scene_dict import integrator_dict
+from weather_mi.kernel.scene_dict import recentred, scene_dict
 
 BBOX = ((0.0, 0.0, 1000.0), (1000.0, 1000.0, 1400.0))
 DOWN = wm.Camera.orthographic(center=(500.0, 500.0, 3000.0), direction=(0.0, 0.0, -1.0), width=600, height=600)
@@ -70,7 +70,7 @@ def test_nee_only_phase_only_and_mis_agree_under_a_disk_sun():
 def chromatic_table():
     """HG with g = 0.9 / 0.5 / 0 in R / G / B: sampled by channel mean, each event multiplies a channel's
     weight by p_c / mean_c p_c, up to 3."""
-    from weather_mi.phase.analytic import hg_value
+    from weather_mi.optics.phase.analytic import hg_value
     th = wm.phase.henyey_greenstein(0.5).theta
     return wm.phase.PhaseTable(th, np.stack([hg_value(g, np.cos(th)) for g in (0.9, 0.5, 0.0)], axis=1))
 
@@ -106,7 +106,7 @@ def test_bad_sun_diameters_are_refused(diameter):
 
 def test_a_disk_sun_needs_the_majorant_integrator(monkeypatch):
     for name in ("render_pass", "render_passes"):
-        monkeypatch.setattr(wm.passes, name, lambda *a, **k: pytest.fail("rendered"))
+        monkeypatch.setattr(wm.reference.passes, name, lambda *a, **k: pytest.fail("rendered"))
     spec = wm.SceneSpec(camera=DOWN, sun=wm.Sun(200.0, 40.0), width=4, height=4)
     with pytest.raises(ValueError, match="angular_diameter_deg=0"):
         wm.render_reference(spec, slab(), spp=4, integrator="volpath", progress=False)

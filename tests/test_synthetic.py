@@ -1,4 +1,4 @@
-"""Procedural demo storms (weather_mi.synthetic): determinism, the Hydrometeors contract, the
+"""Procedural demo storms (weather_mi.io.synthetic): determinism, the Hydrometeors contract, the
 1976 standard-atmosphere density, storm anatomy (anvil, updraft, graupel, rain, overshooting top,
 cumulus shape) and orders of magnitude against the real WRF supercell in ../shared/data.
 
@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from weather_mi import synthetic
+from weather_mi.io import synthetic
 from weather_mi.errors import WeatherDataError
-from weather_mi.hydrometeors import SPECIES_NAMES, validate
+from weather_mi.io.hydrometeors import SPECIES_NAMES, validate
 
 WRF_SUPERCELL = Path(__file__).resolve().parents[2] / "shared" / "data" / "wrf" / "wrfout_quarter_ss_0130.nc"
 WRF_VARS = {"cloud": "QCLOUD", "rain": "QRAIN", "ice": "QICE", "snow": "QSNOW", "graupel": "QGRAUP"}

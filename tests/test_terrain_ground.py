@@ -8,8 +8,8 @@ import pytest
 import mitsuba as mi
 
 import weather_mi as wm
-from weather_mi.mitsuba_scene import integrator_dict, recentred, scene_dict
-from weather_mi.terrain import Terrain
+from weather_mi.kernel.scene_dict import integrator_dict, recentred, scene_dict
+from weather_mi.io.terrain import Terrain
 
 NZ, NY, NX, D = 4, 6, 7, 1000.0  # 1 km columns
 ORIGIN = (4500.0, 20000.0, -30000.0)  # (z0, y0, x0) cell centres: off the origin, so recentring shows
@@ -123,7 +123,7 @@ def test_skirt_faces_outwards_and_hides_the_mesh_underside():
 def test_height_field_rays_meet_the_reference_mesh():
     """The slicer's ray-height-field intersection (``Terrain.ray_hits`` on ``Terrain.surface_at``) against
     Mitsuba's intersection of the reference's PLY mesh: the same points for slanted rays over the relief."""
-    from weather_mi.mitsuba_scene import _terrain_ply
+    from weather_mi.kernel.scene_dict import _terrain_ply
     terrain = Terrain.of(hydrometeors(relief(), 0.3))
     wm.set_variant("llvm_ad_rgb")
     scene = mi.load_dict({"type": "scene", "t": {"type": "ply", "filename": _terrain_ply(terrain, 2000.0)}})
@@ -169,7 +169,7 @@ def test_slicer_rays_meet_the_reference_ground_beyond_the_domain():
     same surfaces at the same distances, with the same normals and albedos. (The terrain's level
     continuation without apron and surround put the far ground at the edge's albedo: a dark wedge beyond
     the WRF plateau's domain, CIEDE2000 20.)"""
-    from weather_mi.mitsuba_scene import terrain_ground_dicts
+    from weather_mi.kernel.scene_dict import terrain_ground_dicts
     hyd = hydrometeors(relief(), np.linspace(0.1, 0.4, NX)[None, :] * np.ones((NY, 1)))
     terrain = Terrain.of(hyd)
     wm.set_variant("llvm_ad_rgb")
@@ -198,7 +198,7 @@ def test_slicer_rays_meet_the_reference_ground_beyond_the_domain():
     assert np.all(np.sum(n_ref[hit] * -d[hit], 1) > 0)  # every surface met faces the ray
     np.testing.assert_allclose(albedo[beyond], terrain.edge_albedo(), rtol=1e-6)
     # the slicer's surround height (terrain_surround_m) is that of the recentred scene the reference renders
-    from weather_mi.mitsuba_scene import recentred_volume, terrain_surround_m
+    from weather_mi.kernel.scene_dict import recentred_volume, terrain_surround_m
     vol2, _ = recentred_volume(vol)
     rendered = terrain_ground_dicts(vol2.terrain, {"type": "homogeneous", "sigma_t": 0.0, "albedo": 0.0}, vol2.bbox)
     assert terrain_surround_m(vol) == pytest.approx(float(np.array(rendered["ground"]["to_world"].matrix)[2, 3]), abs=1e-3)

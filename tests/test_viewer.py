@@ -87,8 +87,8 @@ def test_keyframes_turn_the_short_way_and_zoom_geometrically():
 # ---------------------------------------------------------------------- per-species detail
 def test_per_species_detail_is_the_log_normal_multiplier_of_the_noise(cumulus_storm):
     """SliceParams.detail with a detail_noise renderer equals the slicer with the multiplier
-    exp(a n - a^2/2) computed by numpy (weather_mi.detail.field without its exact-mean rescaling)."""
-    from weather_mi.detail import field
+    exp(a n - a^2/2) computed by numpy (weather_mi.optics.detail.field without its exact-mean rescaling)."""
+    from weather_mi.optics.detail import field
     vol = cumulus_storm.volume(cumulus_storm.first_time)
     s = small_state(cumulus_storm, mode="per-species/translucent/detail")
     spec = s.spec(cumulus_storm.frame, cumulus_storm.ground_m)
@@ -165,7 +165,7 @@ def test_a_taken_port_is_said_clearly():
 
 
 def test_bad_input_exits_2_before_serving(tmp_path, capsys):
-    from weather_mi.cli import main
+    from weather_mi.cli.commands import main
     bad = tmp_path / "wrfout_broken.nc"
     bad.write_text("not a netcdf file")
     t0 = time.perf_counter()
@@ -254,7 +254,7 @@ def test_the_b_view_offers_the_denoised_reference_and_the_metrics_keep_the_radia
 
     from PIL import Image as PILImage
 
-    from weather_mi.imageio import Image
+    from weather_mi.io.image import Image
     from weather_mi.viewer.comparison import SHOW_CHOICES, ReferencePanel
     pytest.importorskip("pyoidn")
     session = SimpleNamespace(loop=SimpleNamespace(last_frame=SimpleNamespace(exposure=1.0)), refresh_canvas=lambda: None)

@@ -158,7 +158,7 @@ def test_png_and_exr_export_are_the_view(page):
     assert img.shape == (120, 160, 3) and img.std() > 5
     with page.expect_download() as d:
         page.get_by_role("button", name="EXR").click()
-    from weather_mi.imageio import read_exr
+    from weather_mi.io.image import read_exr
     exr = Path(d.value.path()).with_suffix(".exr")
     Path(d.value.path()).rename(exr)
     radiance, _, meta = read_exr(exr)

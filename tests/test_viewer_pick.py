@@ -151,7 +151,7 @@ def test_the_ground_hides_what_is_below_it(storm):
     wm.Camera.orthographic(center=(18.0, -30.0, 7.0), direction=(0.2, 1.0, -0.1), width=900.0, height=500.0),
 ], ids=["perspective", "wide-up", "orthographic"])
 def test_pixel_rays_are_mitsubas_sensor_rays(camera):
-    from weather_mi.mitsuba_scene import sensor_dict
+    from weather_mi.kernel.scene_dict import sensor_dict
     spec = wm.SceneSpec(camera=camera, width=40, height=30)
     sensor = mi.load_dict(sensor_dict(spec))
     for px, py in [(0.0, 0.0), (40.0, 30.0), (3.25, 27.5), (20.0, 15.0), (39.5, 0.5)]:

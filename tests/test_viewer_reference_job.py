@@ -102,7 +102,7 @@ def test_updates_arrive_progressively_and_end_with_the_in_process_image():
     # Past its two planned passes a render to a target renders the cloud pixels only: the other pixels
     # are those of the two planned passes
     vol = CUMULUS.volume()
-    cloud = wm.reference.cloud_mask(spec, vol)
+    cloud = wm.reference.render.cloud_mask(spec, vol)
     ref = wm.render_reference(spec, vol, spp=final.spp, passes=final.passes, progress=False)
     assert np.array_equal(ref.radiance[cloud], final.image.radiance[cloud])
     np.testing.assert_allclose(ref.stderr[cloud], final.image.stderr[cloud], rtol=1e-6, atol=0)

@@ -71,7 +71,7 @@ def test_regional_domain_gets_an_aerial_view_by_default():
     300 km (a regional wrfout) is seen from above at 50 degrees, the weather in the picture, not the sky."""
     import numpy as np
     import weather_mi as wm
-    from weather_mi.framing import scene_spec
+    from weather_mi.scene.framing import scene_spec
     beta = np.full((4, 8, 8), 1e-3, np.float32)
     wide = wm.OpticalVolume.from_arrays(beta, 1.0, wm.phase.isotropic(), ((0, 0, 0), (480e3, 480e3, 16e3)))
     small = wm.OpticalVolume.from_arrays(beta, 1.0, wm.phase.isotropic(), ((0, 0, 0), (80e3, 80e3, 16e3)))

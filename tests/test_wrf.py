@@ -7,7 +7,7 @@ import pytest
 import xarray as xr
 
 import weather_mi as wm
-from weather_mi.atmosphere import standard_density
+from weather_mi.io.standard_atmosphere import standard_density
 from weather_mi.io import vertical
 from conftest import WRF_SUPERCELL, WRF_THOMPSON, shared_file, write_wrfout
 
@@ -211,7 +211,7 @@ def test_mismatched_shapes(tmp_path):
 
 
 def test_cli_reports_error_without_traceback(tmp_path, capsys):
-    from weather_mi.cli import main
+    from weather_mi.cli.commands import main
     assert main(["info", str(tmp_path / "missing.nc")]) == 2
     err = capsys.readouterr().err
     assert "missing.nc" in err and "Traceback" not in err

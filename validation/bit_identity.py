@@ -74,8 +74,8 @@ def slicer_cases(wm, storms):
 
 def satellite_cases(wm):
     """The satellite view (rays from a table, reflectance, Rayleigh) of the demo cumulus placed over the sea."""
-    from weather_mi.place import assume_place
-    from weather_mi.satellite_image import render_satellite, satellite_scene
+    from weather_mi.scene.place import assume_place
+    from weather_mi.satellite.imagery import render_satellite, satellite_scene
     hyd = assume_place(wm.synthetic.cumulus(), lat=20.0, lon=-60.0, date="2024-07-01T15:00:00Z")
     vol = wm.optical_volume(hyd)
     scene = satellite_scene(hyd, vol, "goes-east", "0.64", resolution_km=2.0, rayleigh=True)

@@ -43,8 +43,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np  # noqa: E402
 
 import weather_mi as wm  # noqa: E402
-from weather_mi import metrics  # noqa: E402
-from weather_mi.imageio import Image, auto_exposure  # noqa: E402
+from weather_mi.display import metrics  # noqa: E402
+from weather_mi.io.image import Image, auto_exposure  # noqa: E402
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
 from weather_mi.slicing.calibrate import FIT_START, MULTIPLE_PARAMS, TrainingView, calibrate  # noqa: E402
 from weather_mi.study.report import side_by_side  # noqa: E402
@@ -118,7 +118,7 @@ def evaluate(views, fitted, slices, out=None, second=None, supersample=1, slab_j
             if key not in renderers:
                 detail = None
                 if mode.detail:
-                    from weather_mi.detail import field
+                    from weather_mi.optics.detail import field
                     detail = field(v.vol.shape, seed=0, amplitude=0.5, spacing_m=v.vol.spacing)
                 renderers[key] = SliceRenderer(v.vol, mode, slices=slices, detail_field=detail)
             img = renderers[key].frame(v.spec, params, supersample=supersample)

@@ -1,6 +1,6 @@
 """The denoised display layer's bias (issue 24, items 1-2): on views of the validation study's storms,
 raw and OIDN-denoised path-traced images at 64/128/256 spp against a long reference of the same view
-(rendered to a target cloud RSE), for every auxiliary choice (``weather_mi.denoise.AUX``); where the
+(rendered to a target cloud RSE), for every auxiliary choice (``weather_mi.display.denoise.AUX``); where the
 denoiser fails (thin edges, the darkest and brightest cloud pixels) with crops in out/denoiser_bias/.
 
     .venv/bin/python validation/denoiser_bias.py [--size 64x48] [--target-rse 0.025] [--views ...]
@@ -21,9 +21,9 @@ from pathlib import Path
 import numpy as np
 
 import weather_mi as wm
-from weather_mi.denoise import AUX
-from weather_mi.estimates import view_optical_depth
-from weather_mi.imageio import auto_exposure, to_srgb8
+from weather_mi.display.denoise import AUX
+from weather_mi.reference.estimates import view_optical_depth
+from weather_mi.io.image import auto_exposure, to_srgb8
 from weather_mi.study.denoiser import KEYS, bias_rows, error_figures
 from weather_mi.study.report import _table
 from weather_mi.study.runs import CONFIGS, load_scene, view
@@ -67,8 +67,8 @@ def noise_ciede(ref, mask: np.ndarray, seed: int = 0) -> float:
 def demo(ref_spp: int, out: Path) -> None:
     """The README demo (``weather-mi render --demo supercell``: 320 x 240, its default spp) raw and denoised
     against a longer reference of the same view (seed 7), over cloud pixels; crops of both PNGs."""
-    from weather_mi.cli import build_parser, scene_spec
-    from weather_mi.denoise import auxiliaries, denoise_radiance
+    from weather_mi.cli.commands import build_parser, scene_spec
+    from weather_mi.display.denoise import auxiliaries, denoise_radiance
     args = build_parser().parse_args(["render", "--demo", "supercell"])
     vol = wm.optical_volume(wm.open_source(None, "supercell"), species=args.preset, phase=args.phase)
     spec = scene_spec(args, vol)

@@ -1,5 +1,5 @@
 """How large a forward-peak cone the reference may count as unscattered light (delta-M,
-``weather_mi.forward_peak``), judged against DISORT (``disortpp``) on slabs of the real hydrometeor
+``weather_mi.optics.forward_peak``), judged against DISORT (``disortpp``) on slabs of the real hydrometeor
 phase tables.
 
     .venv/bin/python validation/forward_peak_slabs.py [--tau 4] [--mu0 0.5] [--species cloud ice snow]
@@ -30,9 +30,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import weather_mi as wm  # noqa: E402
-from weather_mi.fluxes import disort_slab, slab_fluxes, slab_radiance  # noqa: E402
-from weather_mi.forward_peak import peak_tables  # noqa: E402
-from weather_mi.phase.species import table_for  # noqa: E402
+from weather_mi.plane_parallel.slab import disort_slab, slab_fluxes, slab_radiance  # noqa: E402
+from weather_mi.optics.forward_peak import peak_tables  # noqa: E402
+from weather_mi.optics.phase.species_tables import table_for  # noqa: E402
 
 
 def _cell(mc, se, ref):

@@ -1,4 +1,4 @@
-"""Plots and a summary of the phase tables that ``weather_mi.phase`` provides for the species presets.
+"""Plots and a summary of the phase tables that ``weather_mi.optics.phase`` provides for the species presets.
 
     python validation/phase_tables.py [-o out/phase_tables] [--no-plates] [--plate-quality default]
 
@@ -11,7 +11,7 @@ primary rainbow for rain. ``tables.md`` in the same folder lists g and F(5), F(1
 table and channel, which preset / mode / species uses it, and a check of the two closed-form
 tables (HG, Cornette-Shanks) against their exact g and cone fractions.
 
-Tables: every table ``weather_mi.phase.for_species`` builds for the "paper" and "physical" presets
+Tables: every table ``weather_mi.optics.phase.for_species`` builds for the "paper" and "physical" presets
 in both modes ("per_species": Mie cloud, Mie rain at each preset's rain radius, ice columns,
 snow, graupel; "paper": Mie cloud and ice columns), all shipped with the package at default quality
 (no computation); plus ice plates (the other pristine habit; not used by a preset, not shipped:
@@ -42,7 +42,7 @@ def slug(text: str) -> str:
 
 def closed_forms():
     """(constructor, g, exact mean cosine, exact cone fraction F(g, theta0)) of the analytic tables."""
-    from weather_mi import phase
+    from weather_mi.optics import phase
     return ((phase.cornette_shanks, 0.825, phase.cornette_shanks_mean_cosine, phase.cornette_shanks_cone_fraction),
             (phase.henyey_greenstein, 0.85, lambda g: g, phase.hg_cone_fraction))
 
@@ -56,8 +56,8 @@ def _kind(name: str, sp) -> str:
 
 def collect(plates: bool, plate_quality: str):
     """[(key, title, table, kind, used_by)] in display order; kind in {"water", "rain", "ice", "analytic"}."""
-    from weather_mi import phase, species
-    from weather_mi.phase.species import MODES, table_for
+    from weather_mi.optics import phase, species
+    from weather_mi.optics.phase.species_tables import MODES, table_for
 
     found = {}  # table name -> [key, title, table, kind, used_by]
     for preset in species.PRESETS:
@@ -137,7 +137,7 @@ def triple(values, fmt="{:.4f}") -> str:
 
 
 def markdown(rows) -> str:
-    lines = ["# Phase tables (weather_mi.phase)", "",
+    lines = ["# Phase tables (weather_mi.optics.phase)", "",
              "Per channel R / G / B (650 / 550 / 450 nm). g = asymmetry parameter <cos theta>; "
              "F(x) = fraction of the scattered energy within x deg of forward.", "",
              "| table | angles | g | F(5\u00b0) | F(10\u00b0) | F(20\u00b0) | used by |",

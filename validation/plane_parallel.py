@@ -4,7 +4,7 @@
                                         [--no-zenith] [--edge-check] [--json out.json]
 
 A homogeneous slab 1000 x as wide as it is thick (Henyey-Greenstein phase, black surface, sun of
-irradiance 1 at zenith cosine mu0, no sky) is rendered with Mitsuba (weather_mi.fluxes: flux
+irradiance 1 at zenith cosine mu0, no sky) is rendered with Mitsuba (weather_mi.plane_parallel.slab: flux
 reflectance R and total transmittance T with the direct beam, nadir reflected radiance and, unless
 --no-zenith, zenith diffuse transmitted radiance, all normalised by mu0 E; radiances as
 pi L / (mu0 E)) and solved with DISORT (disortpp, 64 streams, delta-M, Nakajima-Tanaka intensity
@@ -45,7 +45,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 # the estimator is checked with the phase functions as they are: with mu0 = 1 the zenith view looks
-# into the sun, where render_reference's default delta-M (3 deg, weather_mi.forward_peak) folds the
+# into the sun, where render_reference's default delta-M (3 deg, weather_mi.optics.forward_peak) folds the
 # light scattered within 3 deg into the sun's beam by design (HG 0.85: 7.77 against DISORT's 8.81)
 FORWARD_PEAK_DEG = 0.0
 VDH = {"tau": 2.0, "albedo": 0.9, "g": 0.75, "mu0": 1.0, "R": 0.09739, "T": 0.66096}
@@ -62,7 +62,7 @@ def tolerance(ref: float, radiance: bool) -> float:
 
 
 def check(mc: float, se: float, ref: float, radiance: bool = False) -> bool:
-    from weather_mi.fluxes import agrees
+    from weather_mi.plane_parallel.slab import agrees
     return agrees(mc, se, ref, abs_tol=tolerance(ref, radiance))
 
 
@@ -70,8 +70,8 @@ def run_case(g, albedo, tau, mu0, spp, integrator, seed, zenith=True, published=
              rr_depth=None) -> dict:
     """MC and DISORT numbers for one slab; ``published`` (dict with R, T) replaces DISORT as the
     flux reference when given (DISORT is still computed and reported)."""
-    from weather_mi.fluxes import disort_slab, slab_fluxes, slab_radiance
-    from weather_mi.phase import henyey_greenstein
+    from weather_mi.plane_parallel.slab import disort_slab, slab_fluxes, slab_radiance
+    from weather_mi.optics.phase import henyey_greenstein
     table = henyey_greenstein(g)
     paths = spp * PIXELS * PIXELS
     t0 = time.perf_counter()
@@ -153,14 +153,14 @@ def main(argv=None) -> int:
         ap.error("--seed must be >= 0")
 
     import weather_mi  # noqa: F401  (registers the plugins)
-    from weather_mi.fluxes import disort_slab
-    from weather_mi.variant import set_variant
+    from weather_mi.plane_parallel.slab import disort_slab
+    from weather_mi.kernel.variant import set_variant
     variant = set_variant(args.variant)
     if args.integrator == "majorant":
         try:
-            from weather_mi.plugins import majorant_volpath  # noqa: F401
+            from weather_mi.kernel.plugins import majorant_volpath  # noqa: F401
         except ImportError as exc:
-            print(f"--integrator majorant needs plugins/majorant_volpath.py: {exc}", file=sys.stderr)
+            print(f"--integrator majorant needs weather_mi/kernel/plugins/majorant_volpath.py: {exc}", file=sys.stderr)
             return 2
     if args.rr_depth == "mitsuba":
         rr_depth = None

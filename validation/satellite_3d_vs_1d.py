@@ -1,5 +1,5 @@
 """3-D against 1-D: synthetic satellite images by the path tracer beside the independent-pixel approximation
-(every column a plane-parallel stack solved by DISORT, ``weather_mi.ipa``), on real model output.
+(every column a plane-parallel stack solved by DISORT, ``weather_mi.plane_parallel.ipa``), on real model output.
 
     .venv/bin/python validation/satellite_3d_vs_1d.py [--spp N] [--quick] [--out docs/images] [--json out.json]
 
@@ -39,7 +39,7 @@ CASES = [  # (label, file, time index, place or None, satellite, resolution km, 
 
 def open_case(file, time_index, place):
     import weather_mi as wm
-    from weather_mi.place import assume_place
+    from weather_mi.scene.place import assume_place
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         hyd = wm.open_wrf(DATA / file, **({} if time_index is None else {"time": time_index}))
@@ -48,8 +48,8 @@ def open_case(file, time_index, place):
 
 def run_case(case, spp: int, resolution_scale: float = 1.0) -> tuple[dict, dict]:
     import weather_mi as wm
-    from weather_mi.ipa import ipa_reflectance
-    from weather_mi.satellite_image import render_satellite, satellite_scene
+    from weather_mi.plane_parallel.ipa import ipa_reflectance
+    from weather_mi.satellite.imagery import render_satellite, satellite_scene
     label, file, t_index, place, sat, res, sun_time = case
     hyd = open_case(file, t_index, place)
     vol = wm.optical_volume(hyd, species="physical")

@@ -7,7 +7,7 @@ Rayleigh) is placed where a GOES-East pixel sees it at three view zenith angles 
 rendered by the ``satellite`` pipeline (fixed-grid pixels of 10 km, ``satellite_scene`` +
 ``render_satellite``: the table's rays, the 0.64 um band's Mie table, reflectance pi L / (E0 mu0)). The
 mean reflectance of the pixels whose ground point lies within 50 km of the centre (far from the layer's
-edges) is compared with DISORT (``weather_mi.ipa.disort_reflectance``: 64 streams, delta-M,
+edges) is compared with DISORT (``weather_mi.plane_parallel.ipa.disort_reflectance``: 64 streams, delta-M,
 Nakajima-Tanaka with 2048 Legendre moments of the same table), solved for every one of those pixels with
 its own sun and view directions in the domain's frame and averaged alike.
 
@@ -40,8 +40,8 @@ PIXEL_KM = 10.0
 def layer(tau: float, lat: float, lon: float):
     """Hydrometeors of the uniform layer (tau over 1 km of cloud water), placed at (lat, lon) on 2024-06-21."""
     import weather_mi as wm
-    from weather_mi.place import assume_place
-    from weather_mi.species import preset
+    from weather_mi.scene.place import assume_place
+    from weather_mi.optics.species import preset
     nz, n, dz, dx = 12, 40, 100.0, 10000.0
     rho = 1.0
     r = preset("physical")["cloud"].radius_m
@@ -54,8 +54,8 @@ def layer(tau: float, lat: float, lon: float):
 
 def run_case(tau, geometry, spp, seed=1) -> dict:
     import weather_mi as wm
-    from weather_mi.ipa import disort_reflectance, pixel_directions, scattering_geometry
-    from weather_mi.satellite_image import render_satellite, satellite_scene
+    from weather_mi.plane_parallel.ipa import disort_reflectance, pixel_directions, scattering_geometry
+    from weather_mi.satellite.imagery import render_satellite, satellite_scene
     label, lat, lon, sun_az, sun_el = geometry
     hyd = layer(tau, lat, lon)
     vol = wm.optical_volume(hyd, species="physical")

@@ -19,8 +19,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import weather_mi as wm  # noqa: E402
-from weather_mi import metrics, study  # noqa: E402
-from weather_mi.imageio import Image, auto_exposure  # noqa: E402
+from weather_mi.display import metrics
+from weather_mi import study  # noqa: E402
+from weather_mi.io.image import Image, auto_exposure  # noqa: E402
 from weather_mi.slicing import MODES, SliceRenderer  # noqa: E402
 
 

@@ -15,8 +15,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from weather_mi import metrics  # noqa: E402
-from weather_mi.imageio import auto_exposure  # noqa: E402
+from weather_mi.display import metrics  # noqa: E402
+from weather_mi.io.image import auto_exposure  # noqa: E402
 from weather_mi.slicing import MODES, SliceRenderer  # noqa: E402
 from weather_mi.study.runs import StudyConfig, load_scene, view  # noqa: E402
 
@@ -71,7 +71,7 @@ def main(argv=None) -> int:
                 mode = MODES[name]
                 detail = None
                 if mode.detail:
-                    from weather_mi.detail import field
+                    from weather_mi.optics.detail import field
                     detail = field(vol.shape, seed=0, amplitude=0.5, spacing_m=vol.spacing)
                 imgs, mask = convergence(vol, spec, mode, slices, args.light_res, detail)
                 pw = pairwise(imgs, mask)

@@ -20,7 +20,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import weather_mi as wm  # noqa: E402
-from weather_mi.scene import direction_from_angles  # noqa: E402
+from weather_mi.scene.spec import direction_from_angles  # noqa: E402
 
 SUN_AZ, SUN_EL = 180.0, 40.0
 

@@ -8,35 +8,39 @@
 """
 from __future__ import annotations
 
-from . import atmosphere, hydrometeors, species, synthetic
 from .errors import WeatherDataError
-from .hydrometeors import SPECIES_NAMES, from_arrays, validate
-from .io import open_les, open_wrf
-from .sources import open_source, open_times
-from .optics import OpticalVolume, optical_volume
-from .variant import ensure_registered, register_lazily, set_variant
-from .medium import medium_dict, phase_dict
-from .scene import Camera, Ground, RayTable, SceneSpec, Sky, Sun
-from .imageio import Image
-from .reference import render_reference, render_transmittance
+from .io import hydrometeors, open_les, open_wrf, synthetic
+from .io.hydrometeors import SPECIES_NAMES, from_arrays, validate
+from .io.sources import open_source, open_times
+from .io.image import Image
+from .optics import species
+from .optics.volume import OpticalVolume, optical_volume
+from .kernel.variant import ensure_registered, register_lazily, set_variant
+from .kernel.medium import medium_dict, phase_dict
+from .scene.spec import Camera, Ground, RayTable, SceneSpec, Sky, Sun
+from .reference.render import render_reference, render_transmittance
 from .slicing import SliceMode, SliceParams, SliceRenderer, render_slices
-from . import imageio, scene
 
 register_lazily()  # the plugins usable from dict and XML scenes in any variant selected, now or later
 
 __version__ = "0.1.0"
 
 __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les", "open_source",
-           "open_times", "sources",
-           "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
+           "open_times", "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
            "Camera", "Ground", "RayTable", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "render_transmittance",
-           "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "species", "synthetic", "hydrometeors",
-           "atmosphere", "phase", "metrics", "reference", "slicing", "io", "imageio", "scene", "view"]
+           "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "view",
+           # the subpackages, one per concept along the data flow
+           "io", "optics", "scene", "kernel", "reference", "slicing", "plane_parallel", "satellite", "display",
+           "study", "viewer", "cli",
+           # modules a script reaches for, by their short names
+           "hydrometeors", "sources", "synthetic", "species", "phase", "detail", "terrain", "place", "metrics", "denoise"]
 
-# submodules imported on first use (the phase tables pull in miepython/numba, the metrics FLIP)
-_LAZY_SUBMODULES = ("phase", "metrics", "study", "cli", "detail", "fluxes", "forward_peak", "mitsuba_scene",
-                    "framing", "summary", "animate", "dask_passes", "cluster", "geo", "solar", "place", "terrain",
-                    "denoise")
+# subpackages and modules imported on first use (the phase tables pull in miepython/numba, the metrics FLIP)
+_LAZY = {"optics": "optics", "scene": "scene", "kernel": "kernel", "reference": "reference",
+         "plane_parallel": "plane_parallel", "satellite": "satellite", "display": "display", "study": "study",
+         "viewer": "viewer", "cli": "cli",
+         "sources": "io.sources", "phase": "optics.phase", "detail": "optics.detail", "terrain": "io.terrain",
+         "place": "scene.place", "metrics": "display.metrics", "denoise": "display.denoise"}
 
 
 def view(source, **kw):
@@ -48,6 +52,6 @@ def view(source, **kw):
 
 def __getattr__(name):
     import importlib
-    if name in _LAZY_SUBMODULES:
-        return importlib.import_module(f".{name}", __name__)
+    if name in _LAZY:
+        return importlib.import_module(f".{_LAZY[name]}", __name__)
     raise AttributeError(f"module 'weather_mi' has no attribute {name!r}")

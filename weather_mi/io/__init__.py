@@ -1,4 +1,4 @@
-"""Readers that turn model output into the Hydrometeors contract (see weather_mi.hydrometeors)."""
+"""Readers that turn model output into the Hydrometeors contract (see weather_mi.io.hydrometeors)."""
 from .les import open_les
 from .series import time_steps
 from .wrf import open_wrf

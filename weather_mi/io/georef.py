@@ -1,17 +1,17 @@
 """Where and when one time of a wrfout file is: the valid time, the latitude/longitude of every column and
-the map projection they lie on (``weather_mi.geo``, checked against the file's XLAT/XLONG), and the ground
-(``weather_mi.terrain``: HGT, land/water, albedo), as coordinates and attributes of its Hydrometeors.
+the map projection they lie on (``weather_mi.io.projection``, checked against the file's XLAT/XLONG), and the ground
+(``weather_mi.io.terrain``: HGT, land/water, albedo), as coordinates and attributes of its Hydrometeors.
 
 Ideal cases (MAP_PROJ 0, or XLAT/XLONG all zero, or a time before 1900 such as WRF's 0001-01-01) have no
-place and no valid time: ``weather_mi.place.assume_place`` gives them one.
+place and no valid time: ``weather_mi.scene.place.assume_place`` gives them one.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ..errors import WeatherDataError
-from ..geo import domain_georeference, grid_georeference, proj_string
-from ..terrain import surface_fields
+from .projection import domain_georeference, grid_georeference, proj_string
+from .terrain import surface_fields
 
 
 def valid_time_iso(stamp: str, map_proj: int) -> str | None:

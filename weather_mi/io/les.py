@@ -39,9 +39,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from ..atmosphere import standard_density
+from .standard_atmosphere import standard_density
 from ..errors import WeatherDataError
-from ..hydrometeors import DIMS, from_arrays
+from .hydrometeors import DIMS, from_arrays
 
 LIQUID_SPECIES = ("cloud", "rain")
 UNIFORM_RTOL = 1e-4          # levels' distance from a straight line allowed for float rounding, of the mean spacing
@@ -544,7 +544,7 @@ def open_les(path, rho_air=None, *, species: str = "cloud") -> xr.Dataset:
     Returns
     -------
     xarray.Dataset
-        Hydrometeors following :mod:`weather_mi.hydrometeors`: x = i dx, y = j dy, z = the level
+        Hydrometeors following :mod:`weather_mi.io.hydrometeors`: x = i dx, y = j dy, z = the level
         altitudes, in metres; ``r_eff_<species>`` (m) and, when the file has it, ``v_eff_<species>``
         (dimensionless). Levels that are not uniform are regridded (attribute ``vertical_regrid``).
 

@@ -1,4 +1,4 @@
-"""One time of an open wrfout Dataset -> Hydrometeors (see weather_mi.hydrometeors for the contract):
+"""One time of an open wrfout Dataset -> Hydrometeors (see weather_mi.io.hydrometeors for the contract):
 the conversion both ``open_wrf`` (one time) and ``open_wrf_series`` (several, on one grid) are made of.
 
 Steps: an optional horizontal sub-box; heights of the w-levels z_w = (PH + PHB) / g and of the mass
@@ -24,7 +24,7 @@ import numpy as np
 import xarray as xr
 
 from ..errors import WeatherDataError
-from ..hydrometeors import from_arrays, validate, warn_clipped
+from .hydrometeors import from_arrays, validate, warn_clipped
 from . import vertical
 from .georef import place_coords
 from .map_factors import horizontal_spacing

@@ -29,7 +29,7 @@ def render_slices(spec, vol, mode: SliceMode = SliceMode(), slices: int = 128, l
     params : SliceParams, optional
         Interactive parameters; default ``SliceParams(**param_kw)``.
     detail_field : numpy.ndarray, optional
-        (z, y, x) multiplier of the extinction for ``mode.detail`` (:func:`weather_mi.detail.field`).
+        (z, y, x) multiplier of the extinction for ``mode.detail`` (:func:`weather_mi.optics.detail.field`).
     uniform_phase : phase table, optional
         The one phase function of ``phase="uniform"`` modes (default the first species' table).
     forward_peak_deg : float, optional

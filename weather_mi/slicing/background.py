@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..scene import SceneSpec
+from ..scene.spec import SceneSpec
 
 
 def _sky_emitter(spec: SceneSpec, cache: dict | None):
     """Mitsuba's sky emitter for this spec. With a ``cache`` (a renderer's), one instance per variant
     and sky is kept and updated in place (sun direction, scale), so a moving sun recompiles nothing."""
     import mitsuba as mi
-    from ..mitsuba_scene import sky_dict
+    from ..kernel.scene_dict import sky_dict
     d = sky_dict(spec.sky, spec.sun)
     cache = {} if cache is None else cache
     key = (mi.variant(), spec.sky.turbidity, spec.sky.ground_albedo)
@@ -38,7 +38,7 @@ def sky_radiance(spec: SceneSpec, dirs: np.ndarray, cache: dict | None = None) -
     import mitsuba as mi
     emitter, scale = _sky_emitter(spec, cache)
     si = dr.zeros(mi.SurfaceInteraction3f, dirs.shape[0])
-    from ..jitarrays import aligned_float
+    from ..kernel.jitarrays import aligned_float
     si.wi = -mi.Vector3f(*(aligned_float(mi, dirs[:, i]) for i in range(3)))
     return scale * np.asarray(emitter.eval(si), dtype=np.float64).T.reshape(-1, 3)
 

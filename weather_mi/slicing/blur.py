@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from ..jitarrays import kernel_scalar
+from ..kernel.jitarrays import kernel_scalar
 
 # the blur kernel: the 5-tap kernel of ``_five_tap`` convolved with itself BLUR_FOLDS - 1 times
 # (4 BLUR_FOLDS + 1 taps per axis), and the largest variance per step, in texels^2, that it reproduces

@@ -63,7 +63,7 @@ def calibrate(views: list[TrainingView], mode: SliceMode = MODES["per-species/mu
             renderers[id(v.vol)] = SliceRenderer(v.vol, mode, slices=slices, light_res=light_res, differentiable=True)
     targets = []
     for v in views:
-        from ..imageio import auto_exposure
+        from ..io.image import auto_exposure
         e = auto_exposure(v.reference)
         w = v.mask.reshape(-1).astype(np.float32)
         ref = np.sqrt(np.minimum(v.reference.reshape(-1, 3) * e, 1.0)).astype(np.float32)

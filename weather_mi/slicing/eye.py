@@ -24,7 +24,7 @@ and it is brighter just inside a sunlit face than at it), while thin clouds get 
 in shadowed parts, which the 1-D profile of an infinite slab is not (residuals by region on the training
 storms, validation/slicer_residuals.py: the sunlit faces' luminance bias went from -19% to -11% with it,
 refitted). The medium is the one the path tracer renders: phase-function peaks within 3 deg count as
-unscattered light (delta-M, ``weather_mi.forward_peak``; ``SliceRenderer(forward_peak_deg=)``). The model reads optical depths from the
+unscattered light (delta-M, ``weather_mi.optics.forward_peak``; ``SliceRenderer(forward_peak_deg=)``). The model reads optical depths from the
 light volumes interpolated as depths (``LightVolume.lookup(log_direct=True)``: linear between two planes of a
 homogeneous slab, where the light is not), and takes the diffusion profile, which is linear in depth, at the
 eye-weighted mean position of the eye's segment (``SlabAverage.mean_offset``); in the eye pass it takes the

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import Camera, SceneSpec
+from ..scene.spec import Camera, SceneSpec
 
 
 def camera_rays(spec: SceneSpec) -> tuple[np.ndarray, np.ndarray]:

@@ -24,7 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..jitarrays import aligned_float, kernel_scalar
+from ..kernel.jitarrays import aligned_float, kernel_scalar
 from .blur import _blur, blur_weights
 from .geometry import SliceGeometry, ray_box
 from .jitter import texel_offsets

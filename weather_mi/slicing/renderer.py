@@ -20,12 +20,12 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..forward_peak import DEFAULT_CONE_DEG, check_cone_deg, peak_tables
-from ..imageio import Image
-from ..jitarrays import aligned_float, kernel_scalar
-from ..mitsuba_scene import terrain_surround_m
-from ..optics import OpticalVolume
-from ..scene import SceneSpec
+from ..optics.forward_peak import DEFAULT_CONE_DEG, check_cone_deg, peak_tables
+from ..io.image import Image
+from ..kernel.jitarrays import aligned_float, kernel_scalar
+from ..kernel.scene_dict import terrain_surround_m
+from ..optics.volume import OpticalVolume
+from ..scene.spec import SceneSpec
 from .background import sky_irradiance_horizontal
 from .blur import variance_per_metre
 from .eye import LightModel, composite
@@ -58,14 +58,14 @@ class SliceRenderer:
     light_res : int, optional
         Texels per side of the light buffer, >= 4 (None: ``light.auto_light_res``, 128 for most storms).
     detail_field : numpy.ndarray, optional
-        (z, y, x) multiplier of the extinction (:func:`weather_mi.detail.field`), used with
+        (z, y, x) multiplier of the extinction (:func:`weather_mi.optics.detail.field`), used with
         ``mode.detail``.
     uniform_phase : phase table, optional
         The one phase function of ``phase="uniform"`` modes (default the first species' table).
     differentiable : bool, default False
         Build the frame so that Dr.Jit can differentiate it (``frame(..., return_arrays=True)``).
     detail_noise : numpy.ndarray, optional
-        (z, y, x) unit-variance noise (:func:`weather_mi.detail.noise`) for ``mode.detail``: species s's
+        (z, y, x) unit-variance noise (:func:`weather_mi.optics.detail.noise`) for ``mode.detail``: species s's
         extinction is multiplied by exp(a_s n - a_s^2 / 2), a_s from ``SliceParams.detail``. Not with
         ``detail_field``.
     forward_peak_deg : float, optional
@@ -83,7 +83,7 @@ class SliceRenderer:
                  light_res: int | None = None, detail_field: np.ndarray | None = None, uniform_phase=None,
                  differentiable: bool = False, detail_noise: np.ndarray | None = None,
                  forward_peak_deg: float | None = None):
-        from ..variant import ensure_registered
+        from ..kernel.variant import ensure_registered
         ensure_registered()
         import mitsuba as mi
         self.mi = mi
@@ -94,8 +94,8 @@ class SliceRenderer:
             raise ValueError(f"need at least 2 slices and a 4 x 4 light buffer, got {slices}, {light_res}")
         if mode.detail and detail_field is None and detail_noise is None:
             raise ValueError("SliceMode(detail=True) needs a detail_field (a (z, y, x) multiplier of the "
-                             "extinction, weather_mi.detail.field) or a detail_noise (unit-variance noise, "
-                             "weather_mi.detail.noise, amplitudes per species in SliceParams.detail)")
+                             "extinction, weather_mi.optics.detail.field) or a detail_noise (unit-variance noise, "
+                             "weather_mi.optics.detail.noise, amplitudes per species in SliceParams.detail)")
         if detail_field is not None and detail_noise is not None:
             raise ValueError("give a detail_field or a detail_noise, not both")
         self.vol, self.mode = vol, mode

@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..jitarrays import aligned_float
-from ..scene import SceneSpec
+from ..kernel.jitarrays import aligned_float
+from ..scene.spec import SceneSpec
 from .background import ground_hits, sky_radiance
 from .geometry import camera_rays, ray_box
 from .jitter import offset_pattern
@@ -70,7 +70,7 @@ class ViewCache:
 
     def __init__(self, box, maxsize: int = 4, terrain=None, occupancy=None, surround_m=None):
         self.box = tuple(np.asarray(p, dtype=np.float64) for p in box)
-        self.terrain = terrain  # weather_mi.terrain.Terrain: the ground is its surface, not the flat plane
+        self.terrain = terrain  # weather_mi.io.terrain.Terrain: the ground is its surface, not the flat plane
         self.surround_m = surround_m  # over a terrain: the height of the ground beyond its apron (m)
         self.occupancy = occupancy  # occupancy.OccupancyMap of the medium: each ray's occupied span
         self.rays = BoundedCache(maxsize)

@@ -1,4 +1,4 @@
-"""The denoised display layer's bias against a reference (``weather_mi.denoise``): per view, raw and
+"""The denoised display layer's bias against a reference (``weather_mi.display.denoise``): per view, raw and
 denoised images at a few spp (independent seeds) against a reference of the same view, over the
 reference's cloud pixels (its eye-ray transmittance below 1/2):
 
@@ -16,7 +16,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .. import metrics
+from ..display import metrics
 
 KEYS = ["scene", "lighting", "spp", "image", "ciede2000", "rel_bias", "rel_rms", "spp_equiv"]
 
@@ -52,11 +52,11 @@ def bias_rows(scene: str, lighting: str, spec, vol, ref, spp_list, aux=None, raw
               integrator: str = "majorant", seed: int = 1, slicer_frame=None) -> list[dict]:
     """Rows (``KEYS`` and ``aux``) of raw and denoised images of ``spec``'s view at each of ``spp_list``
     (raw also at ``raw_spp``, for the CIEDE2000 curve) against ``ref``, denoised with each of ``aux``
-    (default: ``weather_mi.denoise.DEFAULT_AUX``); images with seeds from ``seed``
+    (default: ``weather_mi.display.denoise.DEFAULT_AUX``); images with seeds from ``seed``
     on, independent of the reference's. Returns (rows, {spp: (raw Image, {aux: denoised radiance})})."""
-    from ..denoise import auxiliaries, denoise_radiance
-    from ..denoise import DEFAULT_AUX
-    from ..reference import render_reference
+    from ..display.denoise import auxiliaries, denoise_radiance
+    from ..display.denoise import DEFAULT_AUX
+    from ..reference.render import render_reference
     aux = (DEFAULT_AUX,) if aux is None else tuple(aux)
     mask = np.asarray(ref.transmittance) < 0.5
     if not mask.any():

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import metrics
-from ..imageio import auto_exposure
+from ..display import metrics
+from ..io.image import auto_exposure
 
 REGIONS = ("thin edge", "ice anvil", "cloud base", "sunlit face", "shaded face", "ground in shadow", "ground in sun")
 ICE_SPECIES = ("ice", "snow", "graupel")

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..imageio import Image, to_srgb8
+from ..io.image import Image, to_srgb8
 from .denoiser import KEYS as DENOISER_KEYS
 
 METRIC_KEYS = ("rmse", "rel_mse", "ssim", "ciede2000", "flip", "noise_floor", "n_pixels")

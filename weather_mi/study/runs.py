@@ -19,10 +19,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import metrics, sources
-from ..imageio import auto_exposure
-from ..optics import optical_volume
-from ..scene import Camera, Ground, SceneSpec, Sky, Sun
+from ..display import metrics
+from ..io import sources
+from ..io.image import auto_exposure
+from ..optics.volume import optical_volume
+from ..scene.spec import Camera, Ground, SceneSpec, Sky, Sun
 from ..slicing import MODES, SliceMode, SliceParams, SliceRenderer
 from .report import METRIC_KEYS
 
@@ -61,7 +62,7 @@ CONFIGS = {
 
 # ---------------------------------------------------------------- scenes and views
 
-# real model output: scene name -> (path under the data folder, description); ``weather_mi.sources``
+# real model output: scene name -> (path under the data folder, description); ``weather_mi.io.sources``
 # opens it (a WRF or LES file by its suffix)
 DATA_SCENES = {
     "wrf-supercell": ("wrf/wrfout_quarter_ss_0130.nc", "real WRF supercell (em_quarter_ss, WSM6, 1 km, 01:30)"),
@@ -165,7 +166,7 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True, data
     demo storms are studied."""
     from tqdm.auto import tqdm
 
-    from ..reference import render_reference
+    from ..reference.render import render_reference
     from .report import plot_convergence, side_by_side, write_csv, write_report
     cfg = CONFIGS[config] if isinstance(config, str) else config
     scenes, skipped = load_scenes(cfg, data_dir)
@@ -200,7 +201,7 @@ def run(outdir, config: str | StudyConfig = "quick", progress: bool = True, data
                 settings.append(("paper-ff-0.9", SliceParams(forward_fraction=0.9)))
             detail = None
             if mode.detail:
-                from ..detail import field as detail_field
+                from ..optics.detail import field as detail_field
                 detail = detail_field(vol.shape, seed=0, amplitude=0.5, spacing_m=vol.spacing)
             r = SliceRenderer(vol, mode, slices=cfg.slices, light_res=cfg.light_res, detail_field=detail)
             r.frame(spec)  # warm-up (compilation)
@@ -284,7 +285,7 @@ def _calibration(refs, scenes, cfg: StudyConfig, out: Path, progress: bool):
 
 def paper_figure_pairs(scenes, cfg: StudyConfig, out: Path, progress: bool) -> list[dict]:
     """The paper's figure pairs, each rendered by both renderers on the first scene, side-lit."""
-    from ..reference import render_reference
+    from ..reference.render import render_reference
     from .report import image_grid
     if not scenes:
         return []
@@ -324,7 +325,7 @@ def paper_figure_pairs(scenes, cfg: StudyConfig, out: Path, progress: bool) -> l
 
 def _single_field_volume(vol, cfg):
     """The paper's Fig. 3 'incorrect extinction': every species' mass as cloud droplets."""
-    from ..hydrometeors import SPECIES_NAMES
+    from ..io.hydrometeors import SPECIES_NAMES
     sp = vol.species_set
     if sp is None:
         return vol

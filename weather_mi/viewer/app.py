@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import panel as pn
 
-from ..sources import DEMOS
+from ..io.sources import DEMOS
 from .serve import prepare
 from .session import ViewerSession, default_distance_km  # noqa: F401  (the viewer's entry points)
 from .state import ViewState

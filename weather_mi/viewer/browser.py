@@ -34,7 +34,7 @@ class ViewerProcess:
         self.args = list(args)
         self.lines: list[str] = []
         self.url = None
-        cmd = [sys.executable, "-m", "weather_mi.cli", "view", *self.args, "--no-browser"]
+        cmd = [sys.executable, "-m", "weather_mi.cli.commands", "view", *self.args, "--no-browser"]
         if "--port" not in self.args:
             cmd += ["--port", "0"]
         self.t_start = time.perf_counter()

@@ -11,7 +11,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import panel as pn
 
-from ..imageio import auto_exposure, to_srgb8
+from ..io.image import auto_exposure, to_srgb8
 from .frames import jpeg_url
 from .state import ViewState
 
@@ -103,7 +103,7 @@ class ReferencePanel:
 
     def _update_metrics(self, ref_img, state):
         """Metrics of the slicer's full-quality frame of this view against the reference (metrics thread)."""
-        from ..metrics import compare
+        from ..display.metrics import compare
         loop = self.session.loop
         try:
             f = loop.last_frame
@@ -141,7 +141,7 @@ class ReferencePanel:
         return jpeg_url(to_srgb8(self.image.radiance, f.exposure if f else None))
 
     def _denoised_url(self) -> str:
-        """B denoised (``weather_mi.denoise``, once per reference update): for the eye; the metrics and the
+        """B denoised (``weather_mi.display.denoise``, once per reference update): for the eye; the metrics and the
         difference map stay on the unbiased radiance."""
         f = self.session.loop.last_frame
         rad = self.denoised()
@@ -150,14 +150,14 @@ class ReferencePanel:
     def denoised(self) -> np.ndarray:
         """The reference's denoised radiance, computed once per reference update (not per exposure or
         export)."""
-        from ..denoise import denoise_radiance
+        from ..display.denoise import denoise_radiance
         if self._denoised is None or self._denoised[0] is not self.image:
             self._denoised = (self.image, denoise_radiance(np.nan_to_num(self.image.radiance)))
         return self._denoised[1]
 
     def _difference_url(self) -> str:
         from matplotlib import colormaps
-        from ..metrics import ciede2000_map, display_lab, display_srgb
+        from ..display.metrics import ciede2000_map, display_lab, display_srgb
         f = self.session.loop.last_frame
         full = self.metrics[1] if self.metrics else f
         if full is None or full.radiance.shape != self.image.radiance.shape:

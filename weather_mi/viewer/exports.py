@@ -14,7 +14,7 @@ import numpy as np
 
 import panel as pn
 
-from ..imageio import to_srgb8, write_exr, write_png
+from ..io.image import to_srgb8, write_exr, write_png
 from .keyframes import path as keyframe_path
 from .state import ViewState, python_snippet
 
@@ -121,7 +121,7 @@ class Exports:
 
     def render_mp4(self, fps: float = 12.0):
         """Render the path at full quality in the background, then offer it for download."""
-        from ..movie import write_mp4
+        from ..display.movie import write_mp4
         if len(self.keys) < 2:
             self.key_text.object = "Keyframes: add at least two to render a path"
             return

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..imageio import auto_exposure, to_srgb8
+from ..io.image import auto_exposure, to_srgb8
 from .state import REFINE_JITTER, REFINE_SUPERSAMPLE, ViewState
 
 DRAFT_LEVELS = ((2, 32), (3, 24), (4, 16))  # (divisor of the width and height, slices), finest first
@@ -124,7 +124,7 @@ class Storm:
         """Unit-variance turbulent noise on the grid (isotropic in metres), built once."""
         with self._lock:
             if self._noise is None:
-                from ..detail import noise
+                from ..optics.detail import noise
                 self._noise = noise(self.shape, self.spacing, seed=0)
             return self._noise
 

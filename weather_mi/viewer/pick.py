@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..hydrometeors import SPECIES_NAMES
-from ..scene import SceneSpec
+from ..io.hydrometeors import SPECIES_NAMES
+from ..scene.spec import SceneSpec
 from ..slicing.geometry import film_rays
 
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Mapping
 
-from .. import sources
+from ..io import sources
 
 
 @dataclass(frozen=True)
@@ -54,7 +54,7 @@ class VolumeRecipe:
 
     def volume(self, scale: Mapping[str, float] | None = None, hyd=None):
         """The OpticalVolume (Eq. 1-6, 8) of the (scaled) storm; ``hyd``: its Hydrometeors if already read."""
-        from ..optics import optical_volume
+        from ..optics.volume import optical_volume
         hyd = self.hydrometeors() if hyd is None else hyd
         return optical_volume(hyd, species=self.preset, scale=dict(scale or {}) or None, phase=self.phase)
 

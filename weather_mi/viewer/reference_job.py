@@ -25,8 +25,8 @@ import time
 from dataclasses import dataclass
 from typing import Mapping
 
-from ..imageio import Image
-from ..scene import SceneSpec
+from ..io.image import Image
+from ..scene.spec import SceneSpec
 from .recipe import VolumeRecipe
 
 JOIN_TIMEOUT_S = 2.0          # cancel: SIGTERM, then SIGKILL if the child is still alive after this long
@@ -131,8 +131,8 @@ def _child_main(conn, parent_pid: int, recipe: VolumeRecipe, spec: SceneSpec, sc
         import drjit as dr
         if threads is not None:
             dr.set_thread_count(int(threads))
-        from ..reference import render_reference
-        from ..variant import set_variant
+        from ..reference.render import render_reference
+        from ..kernel.variant import set_variant
         set_variant(variant)
         vol = recipe.volume(scale)
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import panel as pn
 
-from ..framing import default_ground_distance_km
+from ..scene.framing import default_ground_distance_km
 from .canvas import FrameCanvas
 from .comparison import ReferencePanel
 from .exports import Exports

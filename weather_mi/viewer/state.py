@@ -15,8 +15,8 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from ..scene import Camera, Ground, SceneSpec, Sky, Sun
-from ..sources import kind
+from ..scene.spec import Camera, Ground, SceneSpec, Sky, Sun
+from ..io.sources import kind
 from ..slicing.modes import MODES, SliceMode, SliceParams
 
 # the viewer's refined frame (once input stops): each pixel the mean of REFINE_SUPERSAMPLE^2 points with slab

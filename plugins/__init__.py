@@ -1,4 +1,0 @@
-"""Mitsuba 3 plugins of weather-mi, shipped as ``weather_mi.plugins``.
-
-Each module registers one plugin with Mitsuba (``mi.register_phase`` ...) when imported.
-"""

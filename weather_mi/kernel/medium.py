@@ -1,0 +1,50 @@
+"""Mitsuba dictionaries for an OpticalVolume: the ``heterogeneous`` medium (extinction grid, albedo
+grid) with the ``hydrometeor_mixture`` phase function (Eq. 8) on the volume's bounding box."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..optics.volume import OpticalVolume
+from .variant import ensure_registered
+
+
+def phase_arrays(vol: OpticalVolume):
+    """(nodes v = 1 - cos (N,), values (S, N, 3), weights (z, y, x, S)) as the plugin takes them: the
+    species' scattering coefficients beta_sca,s = w_s beta omega (1/m; w_s the Eq. 8 weights, beta omega the
+    voxel's scattering coefficient, channel mean), which the plugin interpolates and then normalises."""
+    from .plugins.hydrometeor_mixture import prepare_tables
+    nodes, values = prepare_tables(vol.require_phase_tables())
+    sca = np.asarray(vol.beta_total, np.float32) * np.asarray(vol.albedo, np.float32).mean(axis=-1)
+    weights = np.ascontiguousarray(np.moveaxis(vol.weights * sca[None], 0, -1), dtype=np.float32)
+    return nodes, values, weights
+
+
+def phase_dict(vol: OpticalVolume) -> dict:
+    """``hydrometeor_mixture`` phase function for ``vol``."""
+    import mitsuba as mi
+    from .plugins.hydrometeor_mixture import bbox_transform
+    ensure_registered()
+    nodes, values, weights = phase_arrays(vol)
+    return {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
+            "weights": mi.TensorXf(weights), "to_world": bbox_transform(vol.bbox)}
+
+
+def medium_dict(vol: OpticalVolume) -> dict:
+    """``heterogeneous`` medium: sigma_t = beta_total (1/m, grey), RGB albedo, mixture phase, all on
+    the volume's bounding box (grids indexed [z, y, x, channel], last axis world x)."""
+    import mitsuba as mi
+    from .plugins.hydrometeor_mixture import bbox_transform
+    to_world = bbox_transform(vol.bbox)
+    # accel False: on CUDA the grids' hardware texture units interpolate with 8-bit weights, while
+    # majorant_volpath's trackers interpolate the same texels in float32 (weather_mi/kernel/plugins/dda.py): one medium for
+    # both only in software. LLVM has no texture units: no effect there.
+    return {
+        "type": "heterogeneous",
+        "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(vol.beta_total[..., None]),
+                    "to_world": to_world, "filter_type": "trilinear", "accel": False},
+        "albedo": {"type": "gridvolume", "data": mi.TensorXf(vol.albedo), "to_world": to_world,
+                   "filter_type": "trilinear", "accel": False},
+        "scale": 1.0,
+        "has_spectral_extinction": False,
+        "phase": phase_dict(vol),
+    }

@@ -1,0 +1,323 @@
+"""SceneSpec + OpticalVolume -> Mitsuba 3 scene dictionary (the kernel side of scene.py)."""
+from __future__ import annotations
+
+import functools
+from dataclasses import replace
+
+import numpy as np
+
+from .medium import medium_dict
+from ..optics.volume import OpticalVolume
+from ..scene.spec import Camera, SceneSpec, Sky, Sun
+from ..io.terrain import TERRAIN_APRON_M  # the ground continues level this far past a terrain grid's edge
+from .variant import ensure_registered
+
+FAR_CLIP_M = 1e8
+RAY_EPSILON = 8.9e-5  # Mitsuba's math::RayEpsilon (float32): spawned rays skip (1 + max|p|) x this
+
+
+def recentred(spec: SceneSpec, vol: OpticalVolume):
+    """The scene translated so that the volume's bbox centre is the origin (float32 precision and
+    Mitsuba's ray offsets scale with |p|). Returns (spec, vol, offset) with world = shifted + offset."""
+    vol2, c = recentred_volume(vol)
+    cam = replace(spec.camera, origin=tuple(np.asarray(spec.camera.origin) - c),
+                  target=tuple(np.asarray(spec.camera.target) - c))
+    rays = None if spec.rays is None else spec.rays.shifted(-c)
+    return replace(spec, camera=cam, rays=rays), vol2, c
+
+
+def recentred_volume(vol: OpticalVolume):
+    """``vol`` (and its terrain) translated so that its bbox centre is the origin horizontally:
+    (volume, offset), world = shifted + offset (``recentred``)."""
+    lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
+    c = (lo + hi) / 2
+    c[2] = 0.0  # keep heights: the ground plane and z-dependent quantities stay readable
+    vol2 = replace(vol, bbox=(tuple(lo - c), tuple(hi - c)))
+    if getattr(vol, "terrain", None) is not None:  # the ground mesh moves with the volume
+        vol2 = replace(vol2, terrain=replace(vol.terrain, x=vol.terrain.x - c[0], y=vol.terrain.y - c[1]))
+    return vol2, c
+
+
+def _look_at(camera: Camera):
+    import mitsuba as mi
+    return mi.ScalarTransform4f().look_at(origin=list(camera.origin), target=list(camera.target), up=list(camera.up))
+
+
+def sensor_dict(spec: SceneSpec) -> dict:
+    """Perspective (horizontal fov) or orthographic sensor, or the ``raytable`` sensor of ``spec.rays``, with
+    a box filter (independent pixels)."""
+    import mitsuba as mi
+    cam = spec.camera
+    film = {"type": "hdrfilm", "width": int(spec.width), "height": int(spec.height),
+            "rfilter": {"type": "box"}, "pixel_format": "rgb", "component_format": "float32"}
+    if spec.rays is not None:
+        from .plugins.raytable_sensor import sensor_dict as raytable_dict
+        return raytable_dict(spec.rays.origins_m, spec.rays.directions, film)
+    if cam.kind == "orthographic":
+        # Mitsuba's orthographic film spans [-1, 1] horizontally and [-1/aspect, 1/aspect] vertically
+        aspect = spec.width / spec.height
+        to_world = _look_at(cam) @ mi.ScalarTransform4f().scale([cam.ortho_width / 2, cam.ortho_height / 2 * aspect, 1.0])
+        return {"type": "orthographic", "to_world": to_world, "film": film,
+                "near_clip": 1e-3, "far_clip": FAR_CLIP_M}
+    return {"type": "perspective", "fov": float(cam.fov), "fov_axis": "x", "to_world": _look_at(cam),
+            "film": film, "near_clip": 1.0, "far_clip": FAR_CLIP_M}
+
+
+def sun_dict(sun: Sun) -> dict:
+    return {"type": "directional", "direction": (-sun.to_sun).tolist(),
+            "irradiance": {"type": "rgb", "value": list(sun.irradiance)}}
+
+
+_SUNSKY_SUN_IRRADIANCE: dict = {}
+
+
+@functools.lru_cache(maxsize=None)
+def _sun_only_sunsky(variant: str, turbidity: float):
+    """One sun-only ``sunsky`` per variant and turbidity, its sun moved through ``traverse``: a new
+    emitter per sun position would bake the position into a new kernel (a recompilation whenever
+    the sun moves)."""
+    import mitsuba as mi
+    return mi.load_dict({"type": "sunsky", "sun_direction": [0.0, 0.0, 1.0], "sky_scale": 0.0,
+                         "turbidity": turbidity})
+
+
+def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
+    """RGB irradiance normal to the beam of the Hosek-Wilkie sun of Mitsuba's ``sunsky`` for this sun
+    position (Monte Carlo over its disc, cached): used to scale its sky to our sun's irradiance."""
+    import drjit as dr
+    import mitsuba as mi
+    key = (mi.variant(), round(sun.elevation, 3), round(float(turbidity), 3))
+    if key not in _SUNSKY_SUN_IRRADIANCE:
+        emitter = _sun_only_sunsky(mi.variant(), round(float(turbidity), 3))
+        params = mi.traverse(emitter)
+        params["sun_direction"] = mi.Vector3f(*(float(v) for v in sun.to_sun))
+        params.update()
+        n = 1 << 16
+        it = dr.zeros(mi.Interaction3f, n)
+        rng = np.random.default_rng(1)
+        from .jitarrays import aligned_float
+        sample = mi.Point2f(*(aligned_float(mi, u) for u in rng.random((2, n))))
+        ds, weight = emitter.sample_direction(it, sample)
+        cos = dr.dot(ds.d, mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in sun.to_sun)))  # no literals
+        e = np.array(weight * cos)
+        _SUNSKY_SUN_IRRADIANCE[key] = np.asarray(e).reshape(3, -1).mean(axis=1) if e.ndim > 1 else np.full(3, e.mean())
+    return _SUNSKY_SUN_IRRADIANCE[key]
+
+
+def sky_dict(sky: Sky, sun: Sun) -> dict:
+    """Constant sky, or Hosek-Wilkie sky (sun part off: the sun is the ``directional`` emitter) with
+    the physical sky-to-sun ratio kept: sky_scale = our sun irradiance / the model sun's irradiance."""
+    if sky.kind == "constant":
+        return {"type": "constant", "radiance": {"type": "rgb", "value": list(sky.radiance)}}
+    model_sun = sunsky_sun_irradiance(sun, sky.turbidity)
+    scale = float(np.mean(sun.irradiance) / max(float(np.mean(model_sun)), 1e-30))
+    return {"type": "sunsky", "sun_direction": sun.to_sun.tolist(), "sun_scale": 0.0, "sky_scale": scale,
+            "turbidity": float(sky.turbidity), "albedo": float(sky.ground_albedo)}
+
+
+def ground_dict(spec: SceneSpec, vol_bbox) -> dict:
+    """A Lambertian rectangle at the ground height, wide enough to reach the horizon."""
+    import mitsuba as mi
+    (x0, y0, _), (x1, y1, _) = vol_bbox
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    half = 1e7  # 10,000 km: the ground reaches the horizon within a fraction of a pixel
+    to_world = mi.ScalarTransform4f().translate([cx, cy, spec.ground.height]).scale([half, half, 1.0])
+    return {"type": "rectangle", "to_world": to_world,
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(spec.ground.albedo)}}}
+
+
+_PLY_DIR = None
+
+
+def _terrain_ply(terrain, skirt_floor_m: float) -> str:
+    """A binary PLY of ``Terrain.mesh`` with an apron (``Terrain.with_apron``, ``TERRAIN_APRON_M``: the edge's
+    heights continued past the domain) and its ``Terrain.skirt`` down to ``skirt_floor_m`` (below the
+    surround: no gap for a grazing ray to pass under the wall) (float32 x, y, z and r, g, b = the albedo,
+    grey) in a directory
+    of this process removed at exit, named by its content (the same terrain: the same file)."""
+    import hashlib
+    import tempfile
+    global _PLY_DIR
+    terrain = terrain.with_apron(TERRAIN_APRON_M)
+    v, f, albedo = terrain.mesh()
+    sv, sf, salbedo = terrain.skirt(skirt_floor_m)  # the apron's edge a cliff, not the mesh's underside
+    v, f, albedo = np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.r_[albedo, salbedo]
+    vert = np.empty(len(v), dtype=[(n, "<f4") for n in ("x", "y", "z", "r", "g", "b")])
+    for i, n in enumerate("xyz"):
+        vert[n] = v[:, i]
+    for n in "rgb":
+        vert[n] = np.clip(albedo, 0.0, 1.0)
+    faces = np.empty(len(f), dtype=[("n", "u1"), ("i", "<i4", (3,))])
+    faces["n"], faces["i"] = 3, f
+    header = ("ply\nformat binary_little_endian 1.0\n"
+              f"element vertex {len(v)}\n" + "".join(f"property float {n}\n" for n in "xyzrgb")
+              + f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n").encode()
+    data = header + vert.tobytes() + faces.tobytes()
+    if _PLY_DIR is None:
+        _PLY_DIR = tempfile.TemporaryDirectory(prefix="weather_mi_terrain_")
+    from pathlib import Path
+    path = Path(_PLY_DIR.name) / f"terrain_{hashlib.sha256(data).hexdigest()[:20]}.ply"
+    if not path.is_file():
+        path.write_bytes(data)
+    return str(path)
+
+
+def terrain_floor_m(terrain) -> float:
+    """The lowest height of a terrain (m)."""
+    return float(np.min(terrain.height_m))
+
+
+def terrain_surround_m(vol: OpticalVolume) -> float:
+    """The height (m) of the level ground beyond the terrain's apron in ``scene_dict``'s scene of ``vol``
+    (``terrain_ground_dicts`` on the recentred volume: the lowest height less two ``terrain_gap_m``)."""
+    vol2, _ = recentred_volume(vol)
+    return terrain_floor_m(vol2.terrain) - 2.0 * terrain_gap_m(vol2.terrain, vol2.bbox)
+
+
+def terrain_gap_m(terrain, bbox) -> float:
+    """Three times Mitsuba's ray offset at the scene's largest coordinate (the volume's box, the terrain's
+    columns and its apron): the spacing kept between the medium box's floor, the terrain mesh, the
+    surround and the skirt's foot (closer faces make spawned rays skip one of them)."""
+    extent = max(float(np.max(np.abs(np.asarray(bbox, np.float64)))),
+                 float(np.max(np.abs(np.r_[terrain.x, terrain.y]))) + TERRAIN_APRON_M)
+    return 3.0 * RAY_EPSILON * (1.0 + extent)
+
+
+def terrain_ground_dicts(terrain, medium_ref: dict, bbox) -> dict:
+    """The ground over a terrain: the height-field mesh through the column centres (``Terrain.mesh``) with
+    its apron and skirt (``_terrain_ply``), Lambertian with the per-vertex albedo (grey RGB, a
+    ``mesh_attribute`` texture), the medium above it (``exterior``: rays it reflects go on in the cloud's
+    medium), and around it out to the horizon a flat rectangle below the medium box's floor (below every
+    part of the mesh, so it never shows through a valley; it shows beyond the apron), with the mean albedo
+    of the grid's edge columns. Heights, from the lowest terrain height lo down (``terrain_gap_m`` g): the
+    box's floor lo - g (the whole mesh inside the box), the surround lo - 2 g, the skirt's foot lo - 3 g."""
+    import mitsuba as mi
+    cx, cy = float(np.mean(terrain.x)), float(np.mean(terrain.y))
+    lo, gap = terrain_floor_m(terrain), terrain_gap_m(terrain, bbox)
+    half = 1e7
+    surround = {"type": "rectangle",
+                "to_world": mi.ScalarTransform4f().translate([cx, cy, lo - 2.0 * gap]).scale([half, half, 1.0]),
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [terrain.edge_albedo()] * 3}}}
+    mesh = {"type": "ply", "filename": _terrain_ply(terrain, lo - 3.0 * gap), "face_normals": True,
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "mesh_attribute", "name": "vertex_color"}},
+            "exterior": medium_ref}
+    return {"terrain": mesh, "ground": surround}
+
+
+def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) of the box that holds the medium: the volume's bbox, starting above a ground at
+    ``floor_m`` by three times Mitsuba's ray offset (coincident or too close faces of the box and the
+    ground make rays skip the ground); with a ground over a terrain (``vol.terrain``; ``floor_m`` then
+    unused) from ``terrain_gap_m`` below its lowest height (the whole mesh inside the box). The grids keep
+    the full bbox."""
+    lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
+    terrain = getattr(vol, "terrain", None)
+    if floor_m is not None and terrain is not None:
+        lo[2] = terrain_floor_m(terrain) - terrain_gap_m(terrain, vol.bbox)
+    elif floor_m is not None:
+        gap = 3.0 * RAY_EPSILON * (1.0 + float(np.max(np.abs(np.r_[lo, hi]))))
+        lo[2] = max(lo[2], floor_m + gap)
+        if lo[2] >= hi[2]:
+            raise ValueError(f"the volume lies entirely below the ground at {floor_m} m")
+    return lo, hi
+
+
+def medium_shape_dict(vol: OpticalVolume, floor_m: float | None = None) -> dict:
+    """The medium's box (:func:`medium_box`) as a ``cube`` with a null BSDF holding the medium."""
+    import mitsuba as mi
+    lo, hi = medium_box(vol, floor_m)
+    to_world = mi.ScalarTransform4f().translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist())
+    return {"type": "cube", "to_world": to_world, "bsdf": {"type": "null"}, "interior": medium_dict(vol)}
+
+
+def integrator_sun(sun: Sun, guiding: float = 0.0, aureole: float = 0.0, mvnee: float = 0.0) -> dict:
+    """Properties of ``majorant_volpath`` that make the sun the integrator's own light (a disk with
+    MIS, or a point), sampled at every vertex instead of being one of the scene's emitters, with sun
+    guiding, aureole or multiple-vertex next-event estimation (probabilities; ``mvnee`` only where > 0)."""
+    return {"sun_direction": sun.to_sun.tolist(), "sun_irradiance": list(sun.irradiance),
+            "sun_angular_diameter": float(sun.angular_diameter_deg), "sun_guiding": float(guiding),
+            "aureole_nee": float(aureole), **({"mvnee": float(mvnee)} if mvnee > 0 else {})}
+
+
+def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_depth: int | None = None,
+                    cell: int | None = None, sun: Sun | None = None, sun_guiding: float = 0.0, legacy: bool = False,
+                    aureole_nee: float = 0.0, mvnee: float = 0.0) -> dict:
+    """Mitsuba integrator dict: stock ``volpath`` or ``majorant_volpath``.
+
+    Parameters
+    ----------
+    vol : OpticalVolume
+        The volume rendered (kernel-side coordinates): ``majorant_volpath``'s majorant grid is built from
+        its extinction (1/m) and placed on its bbox (m).
+    integrator : str
+        "volpath" or "majorant" (``majorant_volpath``).
+    max_depth : int
+        Longest path (-1: unbounded).
+    rr_depth : int or None
+        Depth at which Russian roulette starts (None: the integrators' default, 5; a huge value turns it off).
+    cell : int or None
+        Fine voxels per coarse majorant cell, ``cell``^3 ("majorant"; None: the plugin's ``DEFAULT_CELL``).
+    sun : Sun or None
+        A sun that ``majorant_volpath`` samples itself at every vertex (a disk with MIS, or a point);
+        None: the sun is a scene emitter.
+    sun_guiding, aureole_nee, mvnee : float
+        Probabilities of sun guiding, of the aureole estimator and of multiple-vertex NEE (with ``sun``;
+        see ``render_reference``).
+    legacy : bool
+        The estimator before issue 10 ("majorant"; see ``render_reference``).
+
+    Returns
+    -------
+    dict
+        The integrator's Mitsuba dict (``mi.load_dict``-ready inside a scene dict).
+    """
+    if integrator == "volpath":
+        d = {"type": "volpath", "max_depth": int(max_depth)}
+    else:
+        import mitsuba as mi
+        from .plugins.hydrometeor_mixture import bbox_transform
+        from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid
+        ensure_registered()
+        cell = DEFAULT_CELL if cell is None else cell
+        d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
+             "majorant": mi.TensorXf(majorant_grid(vol.beta_total, cell=int(cell))),
+             "to_world": bbox_transform(vol.bbox)}
+        if sun is not None:
+            d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
+        if legacy:  # the estimator before issue 10 (see render_reference)
+            d.update({"rr_mode": "volpath", "phase_channels": "mean", "emitter_nee": 1.0, "tracking_grid": "coarse",
+                      "transmittance": "ratio", "persistent_lanes": False})
+    if rr_depth is not None:
+        d["rr_depth"] = int(rr_depth)
+    return d
+
+
+def _inside(p, box) -> bool:
+    lo, hi = box
+    return bool(np.all(np.asarray(p) > lo) and np.all(np.asarray(p) < hi))
+
+
+def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
+    """The whole Mitsuba scene: camera, sun, sky, ground, the medium in its box, the integrator.
+    The sun is a ``directional`` emitter unless the integrator carries it (``integrator_sun``). A
+    camera inside the medium's box carries the medium (its rays start in it)."""
+    ensure_registered()
+    terrain = getattr(vol, "terrain", None) if spec.ground is not None else None
+    floor = None if spec.ground is None else spec.ground.height  # over a terrain medium_box uses the terrain
+    box = medium_shape_dict(vol, floor)
+    sensor = sensor_dict(spec)
+    d = {"type": "scene", "integrator": integrator, "sensor": sensor, "medium_box": box}
+    if "sun_direction" not in integrator:
+        d["sun"] = sun_dict(spec.sun)
+    if terrain is not None or _inside(spec.camera.origin, medium_box(vol, floor)):
+        d["weather_medium"] = box["interior"]
+        box["interior"] = {"type": "ref", "id": "weather_medium"}
+        if _inside(spec.camera.origin, medium_box(vol, floor)):
+            sensor["medium"] = {"type": "ref", "id": "weather_medium"}
+    if spec.sky is not None:
+        d["sky"] = sky_dict(spec.sky, spec.sun)
+    if terrain is not None:  # the terrain mesh and a flat surround (Ground.height unused; its albedo too)
+        d.update(terrain_ground_dicts(terrain, {"type": "ref", "id": "weather_medium"}, vol.bbox))
+    elif spec.ground is not None:
+        d["ground"] = ground_dict(spec, vol.bbox)
+    return d

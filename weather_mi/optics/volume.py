@@ -1,0 +1,270 @@
+"""Optics of a Hydrometeors dataset: the paper's Eq. 1-6 and the Eq. 8 mixture weights.
+
+Eq. 1  sigma_ext = 2 pi R^2                       (extinction efficiency 2 for large particles)
+Eq. 2  eta = rho_air q / (rho_particle V),  V = 4/3 pi R^3
+Eq. 3  beta_ext = sigma_ext eta
+Eq. 4  beta_ext = 3 rho_air q / (2 rho_particle R)  (1/m; what this module computes)
+Eq. 5  omega = beta_sca / beta_ext
+Eq. 6  beta_ext = sum over species
+Eq. 8  P(Theta, s) = sum_s P_s(Theta) beta_sca,s(s) / sum_s beta_sca,s(s)  ->  weights w_s
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import xarray as xr
+
+from ..errors import WeatherDataError
+from ..io.hydrometeors import DIMS, SPECIES_NAMES, bbox_of, check_species_name, validate
+from .species import SpeciesSet, preset
+from ..io.terrain import Terrain
+
+
+@dataclass(frozen=True)
+class OpticalVolume:
+    """Everything both renderers consume (docs/design.md). All grids are float32, indexed [z, y, x].
+
+    Complete and read-only once built: the fields cannot be reassigned and the grids are read-only views
+    (the arrays given stay the caller's); ``dataclasses.replace`` makes a changed copy.
+
+    Attributes
+    ----------
+    species : tuple of str
+        Species names, in the order of the first axis of ``beta_ext`` and ``weights``.
+    beta_ext : numpy.ndarray
+        Per-species extinction (S, z, y, x) in 1/m (Eq. 4).
+    beta_total : numpy.ndarray
+        Total extinction (z, y, x) in 1/m (Eq. 6).
+    albedo : numpy.ndarray
+        Mixture single-scattering albedo (z, y, x, 3) (Eq. 5).
+    weights : numpy.ndarray
+        Eq. 8 scattering weights (S, z, y, x); zero where nothing scatters.
+    bbox : tuple of 2 tuple of 3 float
+        World box ((x0, y0, z0), (x1, y1, z1)) in metres.
+    species_set : SpeciesSet or None
+        The species the optics came from (None for raw optics).
+    phase_mode : str
+        "per_species", "paper" or "given".
+    phase_quality : str
+        "default", "high" or "test": the quality of the tables built at construction.
+    attrs : dict
+        Attributes (those of the hydrometeors, plus ``species_preset`` and ``model_radii``).
+    phase_tables : tuple or None
+        One phase table per species, built at construction from ``species_set`` and ``phase_mode``
+        when not given; None only for raw optics without a phase function.
+    terrain : Terrain or None
+        The ground under the grid (:class:`weather_mi.io.terrain.Terrain`, the hydrometeors' terrain
+        coordinates; None where they have none): the reference's ground is then a height-field mesh.
+    """
+
+    species: tuple[str, ...]
+    beta_ext: np.ndarray
+    beta_total: np.ndarray
+    albedo: np.ndarray
+    weights: np.ndarray
+    bbox: tuple[tuple[float, float, float], tuple[float, float, float]]
+    species_set: SpeciesSet | None = None
+    phase_mode: str = "per_species"
+    phase_quality: str = "default"
+    attrs: dict = field(default_factory=dict)
+    phase_tables: tuple | None = field(default=None, repr=False)
+    terrain: Terrain | None = field(default=None, repr=False)
+
+    def __post_init__(self):
+        for name in ("beta_ext", "beta_total", "albedo", "weights"):
+            view = np.asarray(getattr(self, name)).view()
+            view.flags.writeable = False
+            object.__setattr__(self, name, view)
+        tables = self.phase_tables
+        if tables is None and self.species_set is not None:
+            from . import phase
+            tables = phase.for_species(list(self.species_set), mode=self.phase_mode, quality=self.phase_quality)
+        if tables is not None:
+            tables = tuple(tables)
+            if len(tables) != len(self.species):
+                raise WeatherDataError("OpticalVolume", "phase_tables",
+                                       f"one table per species ({len(self.species)})", f"{len(tables)} tables")
+        object.__setattr__(self, "phase_tables", tables)
+        object.__setattr__(self, "attrs", dict(self.attrs))
+
+    def require_phase_tables(self) -> tuple:
+        """The phase tables, or WeatherDataError when this volume was built without any."""
+        if self.phase_tables is None:
+            raise WeatherDataError(str(self.attrs.get("source", "OpticalVolume")), "phase_tables",
+                                   "one phase table per species to render (OpticalVolume.from_arrays(..., phase=...))",
+                                   "none")
+        return self.phase_tables
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return tuple(self.beta_total.shape)
+
+    @property
+    def spacing(self) -> tuple[float, float, float]:
+        """(dz, dy, dx) in metres."""
+        (x0, y0, z0), (x1, y1, z1) = self.bbox
+        nz, ny, nx = self.shape
+        return ((z1 - z0) / nz, (y1 - y0) / ny, (x1 - x0) / nx)
+
+    def occupied_bbox(self, threshold_per_m: float = 0.0):
+        """World box ((x0, y0, z0), (x1, y1, z1)) of the cells whose extinction exceeds the threshold
+        (the whole bbox when none does)."""
+        occ = self.beta_total > threshold_per_m
+        if not occ.any():
+            return self.bbox
+        (x0, y0, z0), (x1, y1, z1) = self.bbox
+        dz, dy, dx = self.spacing
+        lo, hi = [], []
+        for axis, start, step in ((2, x0, dx), (1, y0, dy), (0, z0, dz)):
+            idx = np.nonzero(occ.any(axis=tuple(a for a in range(3) if a != axis)))[0]
+            lo.append(start + idx[0] * step)
+            hi.append(start + (idx[-1] + 1) * step)
+        return tuple(lo), tuple(hi)
+
+    def optical_depth_z(self) -> np.ndarray:
+        """Vertical optical depth of every column (y, x): sum of beta_total dz."""
+        return self.beta_total.sum(axis=0, dtype=np.float64) * self.spacing[0]
+
+    @classmethod
+    def from_arrays(cls, beta_ext, albedo=1.0, phase=None, bbox=((0, 0, 0), (1, 1, 1)),
+                    name: str = "medium") -> "OpticalVolume":
+        """Raw optics: one medium with given extinction, albedo and phase function.
+
+        Parameters
+        ----------
+        beta_ext : array_like
+            (z, y, x) extinction grid (1/m), finite and >= 0.
+        albedo : float or array_like, default 1.0
+            Single-scattering albedo in [0, 1]: a number, (z, y, x) or (z, y, x, 3).
+        phase : phase table, optional
+            The one phase table of the medium (None: optics without a phase function, not renderable).
+        bbox : tuple of 2 tuple of 3 float, default ((0, 0, 0), (1, 1, 1))
+            Bounding box ((x0, y0, z0), (x1, y1, z1)) in metres.
+        name : str, default "medium"
+            The one species name.
+
+        Returns
+        -------
+        OpticalVolume
+
+        Raises
+        ------
+        WeatherDataError
+            For a grid that is not 3-D, negative or non-finite values, an albedo of the wrong shape or
+            outside [0, 1], or an empty box.
+        """
+        src = "OpticalVolume.from_arrays"
+        beta = np.ascontiguousarray(beta_ext, dtype=np.float32)
+        if beta.ndim != 3:
+            raise WeatherDataError(src, "beta_ext", "a (z, y, x) array in 1/m", f"shape {beta.shape}")
+        if not np.all(np.isfinite(beta)) or np.any(beta < 0):
+            raise WeatherDataError(src, "beta_ext", "finite extinction >= 0 (1/m)")
+        alb = np.asarray(albedo, dtype=np.float32)
+        if alb.ndim == 3:
+            alb = alb[..., None]
+        try:
+            alb = np.ascontiguousarray(np.broadcast_to(alb, beta.shape + (3,)), dtype=np.float32)
+        except ValueError as exc:
+            raise WeatherDataError(src, "albedo", "a number, (z, y, x) or (z, y, x, 3) array",
+                                   f"shape {np.shape(albedo)}") from exc
+        if np.any(alb < 0) or np.any(alb > 1) or not np.all(np.isfinite(alb)):
+            raise WeatherDataError(src, "albedo", "single-scattering albedo in [0, 1]")
+        lo, hi = (tuple(float(v) for v in p) for p in bbox)
+        if not all(h > l for l, h in zip(lo, hi)):
+            raise WeatherDataError(src, "bbox", "((x0, y0, z0), (x1, y1, z1)) with x1 > x0, y1 > y0, z1 > z0")
+        weights = (beta > 0).astype(np.float32)[None]
+        return cls((name,), beta[None], beta, alb, weights, (lo, hi), None, "given", attrs={"source": src},
+                   phase_tables=None if phase is None else (phase,))
+
+
+def _radius_field(hyd: xr.Dataset, name: str, default_m: float, use_model: bool):
+    """Per-voxel equivalent radius (m): the model's effective radius where given (> 0), else the species'."""
+    var = f"r_eff_{name}"
+    if use_model and var in hyd:
+        r = hyd[var].values.astype(np.float32)
+        return np.where(r > 0, r, np.float32(default_m))
+    return default_m
+
+
+def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
+                   scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
+                   phase_tables: Sequence | None = None, model_radii: bool | None = None,
+                   phase_quality: str = "default") -> OpticalVolume:
+    """Optics of ``hyd`` (Eq. 1-6, 8).
+
+    Parameters
+    ----------
+    hyd : xarray.Dataset
+        Hydrometeors (:mod:`weather_mi.io.hydrometeors`).
+    species : SpeciesSet or str, default "paper"
+        A SpeciesSet or a preset name ("paper", "physical").
+    scale : mapping of str to float, optional
+        Per-species scaling factors, e.g. {"ice": 2.0} (multiplies that species' mass).
+    phase : {"per_species", "paper"}, default "per_species"
+        "per_species" (five tables) or "paper" (one water and one ice table), built with the volume.
+    phase_tables : sequence, optional
+        One phase table per species, used instead of building them.
+    model_radii : bool, optional
+        Use the model's effective radii (``r_eff_<species>``, m) where present; default True except for
+        the "paper" preset, which reproduces the paper's fixed radii.
+    phase_quality : {"default", "high", "test"}, default "default"
+        Quality of the tables built with the volume ("test": small, fast tables).
+
+    Returns
+    -------
+    OpticalVolume
+        Extinction (1/m), albedo and Eq. 8 weights on the hydrometeors' grid, with its world box (m).
+
+    Raises
+    ------
+    WeatherDataError
+        For invalid hydrometeors, an unknown species in ``scale`` or an unknown ``phase``.
+    """
+    validate(hyd)
+    sp = preset(species) if isinstance(species, str) else species
+    for name in scale or {}:
+        check_species_name(name, "optical_volume", f"scale[{name!r}]")
+    sp = sp.with_overrides(scale={n: sp[n].scale * f for n, f in (scale or {}).items()})
+    if phase not in ("per_species", "paper"):
+        raise WeatherDataError("optical_volume", "phase", '"per_species" or "paper"', repr(phase))
+    use_model = (sp.preset_name != "paper") if model_radii is None else bool(model_radii)
+
+    rho = hyd["rho_air"].values.astype(np.float32)
+    shape = rho.shape
+    n_s = len(SPECIES_NAMES)
+    beta_ext = np.empty((n_s,) + shape, np.float32)
+    weights = np.empty((n_s,) + shape, np.float32)
+    albedo_sum = np.zeros(shape + (3,), np.float32)
+    for i, s in enumerate(sp):
+        r = _radius_field(hyd, s.name, s.radius_m, use_model)
+        q = hyd[f"q_{s.name}"].values
+        beta_ext[i] = s.beta_ext_per_m(rho, q.astype(np.float32, copy=False), r)  # Eq. 4
+        albedo_sum += beta_ext[i][..., None] * np.asarray(s.albedo_rgb, np.float32)  # sum omega beta (Eq. 5)
+    beta_total = beta_ext.sum(axis=0)  # Eq. 6
+    # Eq. 8 weights from scattering coefficients beta_sca,s = omega_s beta_s (channel-mean albedo;
+    # the channels differ by < 1e-3 for every hydrometeor)
+    for i, s in enumerate(sp):
+        np.multiply(beta_ext[i], np.float32(np.mean(s.albedo_rgb)), out=weights[i])
+    sca_total = weights.sum(axis=0)
+    nonzero = sca_total > 0
+    np.divide(weights, sca_total, out=weights, where=nonzero)
+    weights[:, ~nonzero] = 0.0
+    # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
+    # trilinear interpolation at cloud edges does not blend in a dark value
+    albedo = np.empty_like(albedo_sum)
+    has_ext = beta_total > 0
+    np.divide(albedo_sum, beta_total[..., None], out=albedo, where=has_ext[..., None])
+    total_ext = float(beta_total.sum(dtype=np.float64))
+    fill = (albedo_sum.reshape(-1, 3).sum(axis=0, dtype=np.float64) / total_ext) if total_ext > 0 \
+        else np.mean([s.albedo_rgb for s in sp], axis=0)
+    albedo[~has_ext] = fill.astype(np.float32)
+    np.clip(albedo, 0.0, 1.0, out=albedo)
+
+    attrs = {k: v for k, v in hyd.attrs.items()}
+    attrs["species_preset"] = sp.preset_name
+    attrs["model_radii"] = use_model
+    return OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
+                         phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
+                         Terrain.of(hyd))

@@ -1,0 +1,188 @@
+"""Synthetic geostationary imagery: a domain path-traced as a satellite's imager sees it (every pixel from
+the satellite's real position, ``satellite_rays``), in one band (``bands``), over its surface, optionally
+under a molecular atmosphere (``rayleigh``), as a bidirectional reflectance factor on the fixed grid.
+
+Reflectance R = pi L / (E0 cos theta0) with theta0 the solar zenith angle of the one sun that lit the
+render (the domain's centre at the valid time, ``place.sun_from_time``); the dataset also carries each
+pixel's own solar angles (``solar.sun_angles_at``) and the largest angle between that one sun and a
+column's own (``one_sun_max_error_deg``). Top of the atmosphere: no sky emitter (the sky's light is the
+molecular scattering, present only with ``rayleigh``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .bands import Band, band, band_volume
+from .geostationary import Satellite, satellite
+from ..optics.volume import OpticalVolume
+from .rays import SatelliteView, satellite_view
+from ..scene.spec import Camera, Ground, SceneSpec, Sun
+
+RAY_START_ABOVE_M = 10.0  # rays start this far above the medium's top
+
+
+@dataclass(frozen=True)
+class SatelliteScene:
+    """What ``render_satellite`` renders: the scene (rays from ``view``), the band's volume, the sun's
+    metadata (``place.sun_from_time``), the satellite and band."""
+
+    spec: SceneSpec
+    vol: OpticalVolume
+    view: SatelliteView
+    satellite: Satellite
+    band: Band
+    sun_meta: dict = field(default_factory=dict)
+
+
+def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east", band_name: str = "0.64",
+                    resolution_km: float = 1.0, *, rayleigh: bool = False, ground_albedo: float = 0.06,
+                    seed: int = 0, max_vza_deg: float = 80.0, sun_time=None) -> SatelliteScene:
+    """The satellite's view of ``hyd`` (its place and valid time) with ``vol``'s optics in the band;
+    ``sun_time`` (UTC): the sun of another time over the same clouds (a study of the sun's elevation).
+
+    Raises
+    ------
+    ValueError
+        Where ``hyd`` has no latitude/longitude or valid time (an ideal case without --lat/--lon/--date), the
+        sun is below the horizon, or a column is seen at more than ``max_vza_deg`` (named with the angle).
+    """
+    from ..scene.place import place_of, sun_from_time
+    source = str(hyd.attrs.get("source", "input"))
+    if sun_time is not None:
+        from ..scene.solar import as_utc
+        hyd = hyd.copy()
+        hyd.attrs["valid_time"] = as_utc(sun_time).strftime("%Y-%m-%dT%H:%M:%SZ")
+    place = place_of(hyd)
+    if place is None:
+        raise ValueError(f"{source}: a satellite view needs the domain's latitude/longitude; the file has none "
+                         "(an ideal case: give --lat and --lon, and --date for the sun)")
+    sat = satellite(sat) if isinstance(sat, str) else sat
+    b = band(band_name)
+    top = float(vol.bbox[1][2]) + RAY_START_ABOVE_M
+    view = satellite_view(place, sat, resolution_km, top, max_vza_deg, source)
+    azimuth, elevation, sun_meta = sun_from_time(hyd)
+    bvol = band_volume(vol, b)
+    if rayleigh:
+        from ..optics.rayleigh import with_rayleigh
+        bvol = with_rayleigh(bvol, b.wavelength_m, hyd["rho_air"].values)
+    (x0, y0, _), (x1, y1, _) = vol.bbox
+    extent = max(x1 - x0, y1 - y0)
+    cam = Camera.orthographic(center=((x0 + x1) / 2, (y0 + y1) / 2, top + 1000.0), direction=(0.0, 0.0, -1.0),
+                              width=extent, height=extent)  # nominal: the rays come from the table
+    w, h = view.size
+    spec = SceneSpec(camera=cam, sun=Sun(azimuth, elevation, (1.0, 1.0, 1.0)), sky=None,
+                     ground=Ground(albedo=ground_albedo), width=w, height=h, seed=seed, rays=view.rays)
+    return SatelliteScene(spec, bvol, view, sat, b, sun_meta)
+
+
+def render_satellite(scene: SatelliteScene, spp: int = 64, **reference_kw):
+    """Path-trace ``scene`` (``render_reference`` with ``normalize="reflectance"``: its passes, checkpoints,
+    ``target_rse`` and Dask ``client`` apply). Returns (``xarray.Dataset`` of ``satellite_dataset``, Image)."""
+    from ..reference.render import render_reference
+    img = render_reference(scene.spec, scene.vol, spp=spp, normalize="reflectance", **reference_kw)
+    return satellite_dataset(scene, img), img
+
+
+def _grid_mapping(sat: Satellite) -> dict:
+    """CF ``geostationary`` grid mapping of the fixed grid (attributes as GOES-R ABI's
+    ``goes_imager_projection``)."""
+    from .geostationary import WGS84_A_M, WGS84_B_M
+    return {"grid_mapping_name": "geostationary", "perspective_point_height": sat.height_m,
+            "semi_major_axis": WGS84_A_M, "semi_minor_axis": WGS84_B_M,
+            "longitude_of_projection_origin": sat.sub_lon_deg, "latitude_of_projection_origin": 0.0,
+            "sweep_angle_axis": sat.sweep, "proj4": sat.proj_string()}
+
+
+def satellite_dataset(scene: SatelliteScene, img):
+    """A CF-1.8 dataset of a satellite render: reflectance and its standard error, solar and view angles,
+    latitude/longitude, the cloud and in-domain masks, on the fixed grid (x, y scan angles in radians)."""
+    import xarray as xr
+    from ..scene.solar import SolarPosition, sun_angles_at
+    v, m = scene.view, scene.sun_meta
+    refl = np.asarray(img.radiance, np.float64).mean(axis=2)
+    se = np.asarray(img.stderr, np.float64).mean(axis=2) if img.stderr is not None else np.full_like(refl, np.nan)
+    centre = SolarPosition(m["solar_zenith_deg"], m["solar_zenith_geometric_deg"], m["solar_azimuth_true_deg"])
+    sza, saa = sun_angles_at(centre, m["centre_lat"], m["centre_lon"], v.lat, v.lon)
+    from .rays import crosses_box
+    inside = crosses_box(v.rays, scene.vol.bbox)
+    cloud = np.zeros_like(inside) if img.transmittance is None else np.asarray(img.transmittance) < 0.5
+    dims = ("y", "x")
+    gm = "fixed_grid_projection"
+
+    def var(values, long_name, units, **attrs):
+        return (dims, np.asarray(values, np.float32),
+                {"long_name": long_name, "units": units, "grid_mapping": gm, "coordinates": "lat lon", **attrs})
+
+    ds = xr.Dataset(
+        {"reflectance": var(refl, f"bidirectional reflectance factor pi L / (E0 cos theta0), {scene.band.name} um",
+                            "1", standard_name="toa_bidirectional_reflectance"),
+         "reflectance_standard_error": var(se, "standard error of the reflectance (Monte Carlo)", "1"),
+         "solar_zenith_angle": var(sza, "solar zenith angle at the pixel", "degree", standard_name="solar_zenith_angle"),
+         "solar_azimuth_angle": var(saa, "solar azimuth angle at the pixel, clockwise from north", "degree",
+                                    standard_name="solar_azimuth_angle"),
+         "sensor_zenith_angle": var(v.view_zenith_deg, "view zenith angle", "degree", standard_name="sensor_zenith_angle"),
+         "sensor_azimuth_angle": var(v.view_azimuth_deg, "view azimuth angle (towards the satellite), clockwise from north",
+                                     "degree", standard_name="sensor_azimuth_angle"),
+         "cloud": (dims, cloud.astype(np.int8), {"long_name": "cloud pixel: eye-ray transmittance below 1/2",
+                                                 "flag_values": [0, 1], "grid_mapping": gm}),
+         "in_domain": (dims, inside.astype(np.int8), {"long_name": "line of sight through the model domain's box",
+                                                      "flag_values": [0, 1], "grid_mapping": gm}),
+         gm: ((), np.int32(0), _grid_mapping(scene.satellite))},
+        coords={"x": ("x", v.x_rad, {"standard_name": "projection_x_coordinate", "units": "rad",
+                                     "long_name": "fixed grid east-west scan angle"}),
+                "y": ("y", v.y_rad, {"standard_name": "projection_y_coordinate", "units": "rad",
+                                     "long_name": "fixed grid north-south scan angle"}),
+                "lat": (dims, v.lat, {"standard_name": "latitude", "units": "degrees_north"}),
+                "lon": (dims, v.lon, {"standard_name": "longitude", "units": "degrees_east"})})
+    meta = img.metadata
+    ds.attrs = {"Conventions": "CF-1.8", "title": f"weather-mi synthetic {scene.satellite.name} {scene.band.name} um image",
+                "source": str(scene.vol.attrs.get("source", "")), "satellite": scene.satellite.name,
+                "sub_satellite_longitude_deg": scene.satellite.sub_lon_deg, "band_um": scene.band.name,
+                "band_wavelength_m": scene.band.wavelength_m, "resolution_km": v.resolution_km,
+                "valid_time": str(m.get("valid_time")), "rayleigh": int("rayleigh" in scene.vol.species),
+                "rendered_solar_zenith_deg": 90.0 - scene.spec.sun.elevation,
+                "one_sun_max_error_deg": float(m.get("one_sun_max_error_deg", np.nan)),
+                "spp": int(meta.get("spp", 0)), "seconds": float(meta.get("seconds", np.nan)),
+                "cloud_rse_mean": float((meta.get("noise") or {}).get("rse_mean", np.nan)),
+                "history": "weather-mi satellite (3-D path tracing, majorant_volpath)"}
+    return ds
+
+
+def parse_resolution_km(text) -> float:
+    """A pixel size "1km", "0.5 km", "500m" or "2" (km) in km; a ValueError naming the option otherwise."""
+    t = str(text).strip().lower().replace(" ", "")
+    scale = 1e-3 if t.endswith("m") and not t.endswith("km") else 1.0
+    try:
+        value = float(t.removesuffix("km").removesuffix("m")) * scale
+    except ValueError:
+        value = float("nan")
+    if not (value > 0 and np.isfinite(value)):
+        raise ValueError(f"--resolution {text!r}: expected a pixel size such as 1km, 0.5km or 500m")
+    return value
+
+
+def satellite_outputs(output):
+    """(NetCDF, EXR, PNG, checkpoint) of ``-o`` (a .nc name; ValueError otherwise): OUT.nc and ``render``'s
+    OUT.exr, OUT.png, OUT.exr.ckpt.npz (``output_paths.render_outputs``)."""
+    from pathlib import Path
+    from ..io.output_paths import render_outputs
+    out = Path(output)
+    if out.suffix.lower() != ".nc":
+        raise ValueError(f"-o {output}: a satellite image is written as NetCDF: expected a name ending in .nc")
+    return (out, *render_outputs(out.with_suffix(".exr")))
+
+
+def write_satellite(ds, img, nc_path, exr_path, png_path) -> None:
+    """The dataset as NetCDF (written under a temporary name, then renamed), the image as EXR (reflectance in
+    R, G, B, its standard error, the metadata) and a PNG (reflectance 0-1, sRGB-encoded)."""
+    from ..io.output_paths import written_atomically
+    with written_atomically(nc_path, "NetCDF file") as tmp:
+        ds.to_netcdf(tmp)
+    img.save(exr_path)
+    img.save_png(png_path, exposure=1.0)
+
+
+__all__ = ["SatelliteScene", "satellite_scene", "render_satellite", "satellite_dataset", "parse_resolution_km",
+           "satellite_outputs", "write_satellite"]
