@@ -33,6 +33,7 @@ def main():
     import weather_mi as wm
     import weather_mi.reference.passes as P
     from weather_mi.optics.forward_peak import DEFAULT_CONE_DEG
+    from weather_mi.reference.options import ReferenceOptions
     from weather_mi.kernel.variant import LLVM_BLOCK_SIZE, llvm_block_size, tune_llvm
     w, h = (int(v) for v in args.size.split("x"))
     vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
@@ -40,11 +41,11 @@ def main():
     wm.set_variant("llvm_ad_rgb")
     scenes = {}
     for name, legacy in (("issue 10", False), ("legacy", True)):
-        job = P.PassScene(spec, vol, P.PassOptions(integrator="majorant", max_depth=-1, rr_depth=None, cell=None,
-                                                   own_sun=not legacy, sun_guiding=P.DEFAULT_SUN_GUIDING,
-                                                   aureole_nee=0.0 if legacy else P.DEFAULT_AUREOLE_NEE, legacy=legacy,
-                                                   forward_peak_deg=0.0 if legacy else DEFAULT_CONE_DEG, planned=1),
-                          name)
+        # resolved by hand (not ReferenceOptions.resolved, which refuses legacy with this disk sun)
+        estimator = ReferenceOptions(legacy=legacy, sun_guiding=P.DEFAULT_SUN_GUIDING, mvnee=0.0,
+                                     aureole_nee=0.0 if legacy else P.DEFAULT_AUREOLE_NEE,
+                                     forward_peak_deg=0.0 if legacy else DEFAULT_CONE_DEG)
+        job = P.PassScene(spec, vol, P.PassOptions(estimator, planned=1), name)
         scenes[name] = job.build()
         P.render_pass(scenes[name], args.spp, 1)  # compile
     sizes = [16384, 4096, LLVM_BLOCK_SIZE, 256]

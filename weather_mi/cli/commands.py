@@ -15,8 +15,12 @@ from pathlib import Path
 
 from ..errors import OutputWriteError, WeatherDataError
 from ..io.times import parse_time, parse_times
+from ..reference.options import ReferenceOptions, add_flags, flag_values
 from ..io.sources import DEMOS, check_time, open_source
 from .summary import info_text
+
+SATELLITE_ESTIMATOR = ("spp", "target_rse", "max_seconds")  # the rest: render_satellite's (reflectance)
+
 
 def _parse_scale(items: list[str]) -> dict[str, float]:
     out = {}
@@ -83,10 +87,8 @@ def _render(args, out, png_path, ckpt) -> Path:
         spec, sun_meta = _sun_from_time(spec, hyd)
     from ..reference.cluster import session
     with session(args.scheduler, args.workers) as client:
-        img = render_reference(spec, vol, spp=args.spp, integrator=args.integrator, checkpoint=ckpt,
-                               resume=ckpt if args.resume else None, target_rse=args.target_rse,
-                               max_seconds=args.max_seconds, sun_guiding=args.sun_guiding,
-                               forward_peak_deg=args.forward_peak, aureole_nee=args.aureole_nee, client=client)
+        img = render_reference(spec, vol, options=ReferenceOptions(**flag_values(args)), checkpoint=ckpt,
+                               resume=ckpt if args.resume else None, client=client)
     if sun_meta:
         img.metadata["sun_from_time"] = sun_meta
     if args.denoise:
@@ -156,8 +158,8 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
           f"centre ({scene.sun_meta['valid_time']}; one sun, up to {scene.sun_meta['one_sun_max_error_deg']:.2f} deg "
           "from a column's own)")
     with session(args.scheduler, args.workers) as client:
-        ds, img = si.render_satellite(scene, spp=args.spp, checkpoint=ckpt, resume=ckpt if args.resume else None,
-                                      target_rse=args.target_rse, max_seconds=args.max_seconds, client=client)
+        ds, img = si.render_satellite(scene, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
+                                      resume=ckpt if args.resume else None, client=client)
     si.write_satellite(ds, img, nc, exr, png)
     ckpt.unlink(missing_ok=True)
     print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s; cloud pixels "
@@ -260,26 +262,14 @@ def _add_render_parser(sub) -> None:
     render = sub.add_parser("render", help="path-trace the ground-truth image (EXR + PNG)")
     _add_source(render)
     add_scene_options(render)
-    # 64: the README demo's denoised PNG at RMS relative error 0.050 over cloud pixels (48: 0.053) in 42 s
-    render.add_argument("--spp", type=int, default=64,
-                        help="samples per pixel (with --target-rse: of the first estimate)")
-    render.add_argument("--target-rse", type=float, default=None,
-                        help="add passes until the mean relative standard error over cloud pixels is this")
-    render.add_argument("--max-seconds", type=float, default=None, help="with --target-rse: time limit")
+    # the estimator's flags (--spp, --integrator, --target-rse, --max-seconds, --sun-guiding, --forward-peak,
+    # --aureole-nee): declared with its options (weather_mi.reference.options)
+    add_flags(render.add_argument_group("reference estimator"))
     add_place_options(render)
     render.add_argument("--sun-from-time", action="store_true",
                         help="the sun where and when the data is (its centre, its valid time; NREL SPA), instead "
                              "of --sun-azimuth/--sun-elevation")
-    render.add_argument("--sun-guiding", type=float, default=None,
-                        help="probability of sun-guided scattering directions (default: the renderer's)")
-    render.add_argument("--forward-peak", type=float, default=None, metavar="DEG",
-                        help="count scattering by less than DEG degrees (the forward peaks of the phase "
-                             "functions) as unscattered light, delta-M (default: the renderer's, 3; 0: off)")
-    render.add_argument("--aureole-nee", type=float, default=None, metavar="P",
-                        help="probability of the aureole estimator (sun light reaching a vertex through one more "
-                             "forward scattering) at each scattering (default: the renderer's, 0: off)")
     render.add_argument("--seed", type=int, default=0)
-    render.add_argument("--integrator", default="majorant", choices=("majorant", "volpath"))
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")
     render.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
                         help="the PNG shows the OIDN-denoised image (an extra EXR layer, denoised.R/G/B; the "
@@ -306,9 +296,7 @@ def _add_satellite_parser(sub) -> None:
     sat.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
     sat.add_argument("--ground-albedo", type=float, default=0.06,
                      help="surface albedo where the file has none (default 0.06, the sea)")
-    sat.add_argument("--spp", type=int, default=64, help="samples per pixel (with --target-rse: the first estimate)")
-    sat.add_argument("--target-rse", type=float, default=None, help="add passes until this cloud RSE")
-    sat.add_argument("--max-seconds", type=float, default=None, help="with --target-rse: time limit")
+    add_flags(sat, SATELLITE_ESTIMATOR)
     sat.add_argument("--seed", type=int, default=0)
     sat.add_argument("--resume", action="store_true", help="continue from OUTPUT.exr.ckpt.npz")
     add_dask_options(sat)

@@ -71,50 +71,23 @@ def current_or_default_variant() -> str:
 
 @dataclass(frozen=True)
 class PassOptions:
-    """The estimator options every pass of a ``render_reference`` call shares (resolved: no None left
-    where ``render_reference`` has a default).
+    """The estimator options every pass of a ``render_reference`` call shares.
 
     Attributes
     ----------
-    integrator : str
-        "majorant" (``majorant_volpath``) or "volpath" (Mitsuba's own).
-    max_depth : int
-        Longest path (-1: unbounded).
-    rr_depth : int or None
-        Depth at which Russian roulette starts (None: the integrator's default, 5).
-    cell : int or None
-        Fine voxels per coarse majorant cell ("majorant" only; None: the plugin's default).
-    own_sun : bool
-        ``majorant_volpath`` samples the sun itself (a disk or a point); False: the sun is a scene emitter.
-    sun_guiding : float
-        Probability of a scattering direction drawn about the sun, in [0, 1).
-    aureole_nee : float
-        Probability of the aureole estimator at a scattering vertex, in [0, 1].
-    legacy : bool
-        The estimator before issue 10 (benchmarks).
-    forward_peak_deg : float
-        Scattering by less than this many degrees counted as unscattered light (delta-M; 0: off).
+    estimator : ReferenceOptions
+        The call's estimator options, resolved (``ReferenceOptions.resolved``: no None left where
+        ``render_reference`` has a default); ``PassScene.build`` hands the kernel's to ``integrator_dict``.
     planned : int
         Number of planned passes (over every pixel).
     target_pixels : ndarray of int or None
         Flat (row-major) indices of the pixels the passes past the planned ones render (a render to a
         target: its cloud pixels); None: there are no such passes.
-    mvnee : float
-        Probability of a multiple-vertex NEE chain at a scattering vertex, in [0, 1].
     """
 
-    integrator: str
-    max_depth: int
-    rr_depth: int | None
-    cell: int | None
-    own_sun: bool
-    sun_guiding: float
-    aureole_nee: float
-    legacy: bool
-    forward_peak_deg: float
+    estimator: ReferenceOptions  # noqa: F821 (weather_mi.reference.options, which imports this module)
     planned: int
     target_pixels: np.ndarray | None = None
-    mvnee: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -139,13 +112,10 @@ class PassScene:
     def build(self):
         """The Mitsuba scene (current variant) in kernel-side coordinates: the bbox centred on the origin."""
         import mitsuba as mi
-        o = self.options
+        o = self.options.estimator
         spec_k, vol_k, _ = recentred(self.spec, self.vol)
         vol_render = delta_scaled(vol_k, o.forward_peak_deg)
-        integ = integrator_dict(vol_render, o.integrator, o.max_depth, o.rr_depth, o.cell,
-                                sun=self.spec.sun if o.own_sun else None, sun_guiding=o.sun_guiding,
-                                aureole_nee=o.aureole_nee, mvnee=o.mvnee,
-                                legacy=o.legacy and o.integrator == "majorant")
+        integ = integrator_dict(vol_render, sun=self.spec.sun if o.own_sun else None, **o.kernel_options())
         return mi.load_dict(scene_dict(spec_k, vol_render, integ))
 
 

@@ -22,25 +22,19 @@ from .dask_passes import RemotePasses
 from ..errors import WeatherDataError
 from .estimates import CLOUD_TAU, noise_stats, pass_counts, pass_stderr, view_optical_depth, welford_update
 from .estimates import cloud_mask  # noqa: F401  (re-exported: wm.reference.render.cloud_mask, the README's name)
-from ..optics.forward_peak import DEFAULT_CONE_DEG, check_cone_deg
 from ..io.image import Image
 from ..optics.volume import OpticalVolume
-from .passes import (DEFAULT_AUREOLE_NEE, DEFAULT_MVNEE, DEFAULT_SUN_GUIDING, PassOptions, PassScene, current_or_default_variant,
-                     local_passes, plan_passes)
+from .passes import PassOptions, PassScene, current_or_default_variant, local_passes, plan_passes
+from .options import INTEGRATORS, ReferenceOptions, takes_options  # noqa: F401 (INTEGRATORS re-exported)
 from ..scene.spec import SceneSpec
 
-INTEGRATORS = ("majorant", "volpath")
 MAX_TARGET_PASSES = 1 << 14
 
 
-def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_depth: int = -1, *,
-                     integrator: str = "majorant", passes: int | None = None, normalize: str | None = None,
+@takes_options
+def render_reference(spec: SceneSpec, vol: OpticalVolume, *args, options: ReferenceOptions | None = None,
                      checkpoint=None, resume=None, progress: bool = True, variant: str | None = None,
-                     rr_depth: int | None = None, cell: int | None = None, target_rse: float | None = None,
-                     max_seconds: float | None = None, sun_guiding: float | None = None,
-                     forward_peak_deg: float | None = None, aureole_nee: float | None = None,
-                     legacy: bool = False, client=None, worker_variant=None, on_pass=None,
-                     mvnee: float | None = None) -> Image:
+                     client=None, worker_variant=None, on_pass=None, **estimator) -> Image:
     """Path-trace ``vol`` as seen by ``spec`` (Mitsuba ``volpath`` or our local-majorant tracker).
 
     Parameters
@@ -49,19 +43,10 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         Camera, sun, sky, ground, image size (pixels) and seed.
     vol : OpticalVolume
         Extinction (1/m), albedo and phase functions on the grid, its bbox in m.
-    spp : int
-        Samples per pixel in total, split into passes (``passes``, default ``passes.MIN_PASSES`` = 16
-        batches when spp >= 16). With ``target_rse``: the samples of the first estimate; passes of the
-        same size are then added until the target is met.
-    max_depth : int
-        Longest path in scattering events (-1: unbounded).
-    integrator : {"majorant", "volpath"}
-        "majorant" (delta tracking over a coarse majorant grid; default) or "volpath" (Mitsuba's own,
-        one global majorant: the reference's reference; point sun only).
-    passes : int, optional
-        Number of passes (batches) the ``spp`` samples are split into.
-    normalize : {None, "reflectance"}
-        None (radiance, W/m^2/sr) or "reflectance" (pi L / (mu0 E) per channel).
+    <ReferenceOptions fields>
+    options : ReferenceOptions, optional
+        The estimator options above as one object (``weather_mi.reference.options``); the ones also given
+        by position or keyword replace its fields.
     checkpoint : path, optional
         A .npz written after every pass (a file already there is kept aside, unless resumed from).
     resume : path or True, optional
@@ -70,38 +55,6 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         Show a progress bar (with the noise over the cloud pixels).
     variant : str, optional
         Mitsuba variant (None: the one selected, or the default).
-    rr_depth : int, optional
-        Depth at which Russian roulette starts (None: the integrators' default, 5).
-    cell : int, optional
-        Fine voxels per coarse cell of the majorant grid ("majorant" only; None: the default).
-    target_rse : float, optional
-        Keep adding passes until the mean relative standard error over cloud pixels (eye-ray
-        transmittance < 1/2) is at most this, or ``max_seconds`` of rendering have passed. The added
-        passes render the cloud pixels only (with persistent lanes; ``mi.render`` renders every pixel
-        and the others' values are dropped): the other pixels keep the planned passes (metadata
-        ``spp_background``). On the side-lit supercell at 256 x 256 its 6% of cloud pixels take 60% of
-        a full pass's time.
-    max_seconds : float, optional
-        With ``target_rse``: the time limit of the rendering, in s.
-    sun_guiding : float, optional
-        Probability of drawing a scattering direction from the phase function centred on the sun
-        ("majorant" only; None: ``passes.DEFAULT_SUN_GUIDING``).
-    forward_peak_deg : float, optional
-        Scattering by less than this many degrees (the diffraction peaks of rain, snow and graupel)
-        counted as unscattered light, delta-M scaling (``weather_mi.optics.forward_peak``; None:
-        DEFAULT_CONE_DEG = 3 deg, 0 with ``legacy``; 0: the tables as they are, which reads low at
-        practical spp, see ``validation/forward_peak_slabs.py``).
-    aureole_nee : float, optional
-        Probability of the aureole estimator at a scattering vertex ("majorant" only; sun light through
-        one more, forward, scattering sampled about the sun; None: ``passes.DEFAULT_AUREOLE_NEE``, 0
-        where sun guiding is asked for: the two are exclusive).
-    mvnee : float, optional
-        Probability of a multiple-vertex next-event estimation chain towards the sun at a scattering
-        vertex ("majorant" with its own sun; ``weather_mi/kernel/plugins/mvnee.py``; None: ``passes.DEFAULT_MVNEE``, off;
-        exclusive with sun guiding and the aureole estimator).
-    legacy : bool
-        The estimator before issue 10, for benchmarks: the sun one of the scene's emitters (point sun
-        only), Russian roulette as Mitsuba's volpath, phase sampling by channel mean.
     client : Client or str, optional
         None (render in this process), a ``dask.distributed.Client`` or a scheduler address
         ("tcp://host:8786"): the passes become Dask tasks (``weather_mi.reference.dask_passes``), merged here in
@@ -135,27 +88,19 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, spp: int = 256, max_de
         whole, and resuming from it continues the render.
     """
     from ..kernel.variant import path_tracing_width, set_variant
-    _check_inputs(spec, vol, spp, normalize, integrator, variant)
-    sun_guiding, aureole_nee, forward_peak_deg = _estimator_defaults(spec, integrator, target_rse, max_seconds,
-                                                                     sun_guiding, aureole_nee, forward_peak_deg,
-                                                                     legacy)
+    o = ReferenceOptions.of_call(options, args, estimator).resolved(spec)  # defaults filled in, checked
+    _check_inputs(spec, vol, o.integrator, variant)
     set_variant(variant if variant is not None else current_or_default_variant())
     with path_tracing_width():  # the scene is built and its passes rendered at the path tracer's SIMD width
-        spp_list = plan_passes(spec, int(spp), passes)
+        spp_list = plan_passes(spec, o.spp, o.passes)
         cloud, transmittance = _cloud_pixels(spec, vol)
         # render to a target: the passes past the planned ones cover the cloud pixels only
-        target = cloud if target_rse is not None else None
-        options = PassOptions(integrator=integrator, max_depth=max_depth, rr_depth=rr_depth, cell=cell,
-                              own_sun=integrator == "majorant" and not legacy, sun_guiding=sun_guiding,
-                              aureole_nee=aureole_nee, legacy=legacy, forward_peak_deg=forward_peak_deg,
-                              planned=len(spp_list),
-                              target_pixels=None if target is None else np.flatnonzero(target.ravel()),
-                              mvnee=_mvnee_option(mvnee, integrator, legacy, sun_guiding, aureole_nee))
-        key = _render_key(spec, vol, spp_list, options, normalize, target_rse,
-                          worker_variant if client is not None else None)
-        run = _Run(PassScene(spec, vol, options, key), spp_list, cloud, transmittance, normalize, target_rse,
-                   max_seconds, _scale(spec, normalize), mean=np.zeros((spec.height, spec.width, 3)),
-                   m2=np.zeros((spec.height, spec.width, 3)))
+        target = cloud if o.target_rse is not None else None
+        pass_options = PassOptions(o, planned=len(spp_list),
+                                   target_pixels=None if target is None else np.flatnonzero(target.ravel()))
+        key = _render_key(spec, vol, spp_list, o, worker_variant if client is not None else None)
+        run = _Run(PassScene(spec, vol, pass_options, key), spp_list, cloud, transmittance, _scale(spec, o.normalize),
+                   mean=np.zeros((spec.height, spec.width, 3)), m2=np.zeros((spec.height, spec.width, 3)))
         _open_checkpoint(run, checkpoint, resume)
         remote = _merge_passes(run, client, worker_variant, progress, on_pass)
         image = run.image(run.done, run.stats(run.done))
@@ -177,9 +122,6 @@ class _Run:
     spp_list: list
     cloud: np.ndarray
     transmittance: np.ndarray | None
-    normalize: str | None
-    target_rse: float | None
-    max_seconds: float | None
     scale: object           # 1.0, or the (3,) reflectance factors pi / (mu0 E)
     mean: np.ndarray
     m2: np.ndarray
@@ -191,6 +133,14 @@ class _Run:
     @property
     def planned(self) -> int:
         return self.job.options.planned
+
+    @property
+    def target_rse(self) -> float | None:
+        return self.job.options.estimator.target_rse
+
+    @property
+    def max_seconds(self) -> float | None:
+        return self.job.options.estimator.max_seconds
 
     @property
     def target(self) -> np.ndarray | None:
@@ -245,43 +195,17 @@ class _Run:
 
     def metadata(self, n: int, noise: dict | None) -> dict:
         import mitsuba as mi
-        o, spec, vol = self.job.options, self.job.spec, self.job.vol
+        o, spec, vol = self.job.options.estimator, self.job.spec, self.job.vol
         background = sum(self.spp_list[:min(n, self.planned)]) if self.target is not None else self.spp_done
-        return {"renderer": "reference", "integrator": o.integrator, "variant": mi.variant(),
+        # the estimator options (None where unused), then this render's figures: spp and passes done
+        return {"renderer": "reference", "variant": mi.variant(), **o.metadata(),
                 "spp": int(self.spp_done), "spp_background": int(background),
-                "passes": n, "max_depth": int(o.max_depth), "rr_depth": o.rr_depth, "seconds": self.seconds,
-                "normalize": self.normalize, "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
+                "passes": n, "seconds": self.seconds,
+                "scene": spec.to_dict(), "species_preset": vol.attrs.get("species_preset"),
                 "source": vol.attrs.get("source"), "time": vol.attrs.get("time"),
                 "phase_mode": vol.phase_mode, "sun": ("scene emitter" if not o.own_sun else
                                                       ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
-                "sun_guiding": o.sun_guiding if o.own_sun else None, "target_rse": self.target_rse,
-                "forward_peak_deg": o.forward_peak_deg, "aureole_nee": o.aureole_nee if o.own_sun else None,
-                "mvnee": o.mvnee if o.own_sun else None,
                 "noise": noise}
-
-
-def _mvnee_option(mvnee, integrator, legacy, sun_guiding, aureole_nee) -> float:
-    """The multiple-vertex NEE probability (default ``DEFAULT_MVNEE``), checked against the other options."""
-    if mvnee is None:
-        return DEFAULT_MVNEE if not (legacy or sun_guiding or aureole_nee or integrator != "majorant") else 0.0
-    mvnee = float(mvnee)
-    if not 0.0 <= mvnee <= 1.0:
-        raise ValueError(f"mvnee must be a probability in [0, 1], got {mvnee}")
-    if mvnee > 0 and (integrator != "majorant" or legacy or sun_guiding or aureole_nee):
-        raise ValueError("mvnee needs integrator='majorant' (not legacy), no sun guiding and no aureole estimator")
-    return mvnee
-
-
-def _estimator_defaults(spec, integrator, target_rse, max_seconds, sun_guiding, aureole_nee, forward_peak_deg,
-                        legacy):
-    """(sun_guiding, aureole_nee, forward_peak_deg) with their defaults, checked with the sun options."""
-    sun_guiding = DEFAULT_SUN_GUIDING if sun_guiding is None else sun_guiding
-    if aureole_nee is None:  # the two are exclusive: sun guiding given, no aureole estimator
-        aureole_nee = DEFAULT_AUREOLE_NEE if sun_guiding == 0 and not legacy else 0.0
-    _check_sun_options(spec, integrator, target_rse, max_seconds, sun_guiding, legacy)
-    forward_peak_deg = check_cone_deg((0.0 if legacy else DEFAULT_CONE_DEG) if forward_peak_deg is None
-                                      else forward_peak_deg)
-    return sun_guiding, aureole_nee, forward_peak_deg
 
 
 def _cloud_pixels(spec: SceneSpec, vol: OpticalVolume):
@@ -294,19 +218,15 @@ def _cloud_pixels(spec: SceneSpec, vol: OpticalVolume):
     return tau > CLOUD_TAU, np.exp(-tau).astype(np.float32)
 
 
-def _render_key(spec, vol, spp_list, o: PassOptions, normalize, target_rse, worker_variant) -> str:
-    """The fingerprint of a render (``checkpoints.fingerprint``): what its images depend on."""
+def _render_key(spec, vol, spp_list, o: ReferenceOptions, worker_variant) -> str:
+    """The fingerprint of a render (``checkpoints.fingerprint``): what its images depend on: the scene, the
+    volume, the sample plan, every estimator option of the resolved ``o`` (``ReferenceOptions.key_items``:
+    all but those declared out of it, with the reason), the variant and the workers'."""
     import mitsuba as mi
-    options = [o.integrator, o.max_depth, normalize, mi.variant(), o.rr_depth]
-    if o.forward_peak_deg > 0:
-        options.append(["forward peak", o.forward_peak_deg])
-    if o.own_sun:
-        options.append(["integrator sun", o.sun_guiding] + ([o.aureole_nee] if o.aureole_nee else [])
-                       + ([["mvnee", o.mvnee]] if o.mvnee else []))
+    options = [["estimator", o.key_items()], mi.variant()]
     if worker_variant is not None:  # other variants: the same image within noise only
         options.append(["worker variant", worker_variant])
-    plan = ["target", spp_list[0], "cloud passes"] if target_rse is not None else spp_list
-    return checkpoints.fingerprint(spec, vol, plan, *options)  # cell: speed only
+    return checkpoints.fingerprint(spec, vol, spp_list, *options)
 
 
 def _scale(spec: SceneSpec, normalize):
@@ -366,16 +286,9 @@ def _merge_passes(run: _Run, client, worker_variant, progress: bool, on_pass):
     return remote
 
 
-def _check_inputs(spec: SceneSpec, vol: OpticalVolume, spp: int, normalize, integrator: str, variant):
-    if not isinstance(spp, (int, np.integer)) or spp < 1:
-        raise ValueError(f"spp must be a positive integer, got {spp!r}")
-    if integrator not in INTEGRATORS:
-        raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
-    if normalize not in (None, "reflectance"):
-        raise ValueError(f"normalize must be None or 'reflectance', got {normalize!r}")
-    if normalize == "reflectance" and min(spec.sun.irradiance) <= 0:
-        raise ValueError(f"normalize='reflectance' divides by the sun's irradiance: every channel must be > 0, "
-                         f"got {spec.sun.irradiance}")
+def _check_inputs(spec: SceneSpec, vol: OpticalVolume, integrator: str, variant):
+    """The arguments besides the estimator options (``ReferenceOptions.resolved`` checks those): the variant
+    (with the integrator) and the volume."""
     if variant is not None:
         import mitsuba as mi
         if variant not in mi.variants():
@@ -390,21 +303,6 @@ def _check_inputs(spec: SceneSpec, vol: OpticalVolume, spp: int, normalize, inte
             raise WeatherDataError(src, name, "finite values in the optical volume", "NaN or infinite values")
     if np.any(vol.beta_total < 0):
         raise WeatherDataError(src, "beta_total", "extinction >= 0 (1/m)")
-
-
-def _check_sun_options(spec, integrator, target_rse, max_seconds, sun_guiding, legacy):
-    disk = spec.sun.angular_diameter_deg > 0
-    if disk and (integrator == "volpath" or legacy):
-        what = "integrator='volpath'" if integrator == "volpath" else "legacy=True"
-        raise ValueError(f"{what} renders the sun as a point (Mitsuba's 'directional' emitter): give "
-                         f"Sun(..., angular_diameter_deg=0), or use integrator='majorant' for a sun disk "
-                         f"of {spec.sun.angular_diameter_deg} deg")
-    if target_rse is not None and not (isinstance(target_rse, (int, float)) and 0 < target_rse < 1):
-        raise ValueError(f"target_rse must be a relative standard error in (0, 1), got {target_rse!r}")
-    if max_seconds is not None and not (isinstance(max_seconds, (int, float)) and max_seconds > 0):
-        raise ValueError(f"max_seconds must be a positive number of seconds, got {max_seconds!r}")
-    if not (isinstance(sun_guiding, (int, float)) and 0.0 <= sun_guiding < 1.0):
-        raise ValueError(f"sun_guiding must be a probability in [0, 1), got {sun_guiding!r}")
 
 
 def render_transmittance(spec: SceneSpec, vol: OpticalVolume, spp: int = 32, **kw) -> np.ndarray:
