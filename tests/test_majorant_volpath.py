@@ -433,3 +433,51 @@ def test_exact_transmittance_with_roulette_is_unbiased():
     assert 0.0 < (draws > 0).mean() < 0.5  # the roulette did kill most walks
     mean, se = draws.mean(axis=1), draws.std(axis=1, ddof=1) / np.sqrt(reps)
     assert np.all(np.abs(mean - exact) < 4 * se + 3e-3 * exact), (mean, exact, se)
+
+
+# ---------------------------------------------------------------- the path loop's stages
+
+def _vertex_fields(fn, methods, seen=()):
+    """(fields set, fields read) of the loop's vertex ``v`` in PathLoop method ``fn`` and in the PathLoop
+    methods it passes ``v`` on to."""
+    import ast
+    sets, reads = set(), set()
+    for node in ast.walk(fn):
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "v":
+            (sets if isinstance(node.ctx, ast.Store) else reads).add(node.attr)
+        if isinstance(node, ast.AugAssign) and isinstance(node.target, ast.Attribute) \
+                and isinstance(node.target.value, ast.Name) and node.target.value.id == "v":
+            reads.add(node.target.attr)  # v.x &= ...: read, then set
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and isinstance(node.func.value, ast.Name) \
+                and node.func.value.id == "self" and node.func.attr in methods and node.func.attr not in seen \
+                and any(isinstance(a, ast.Name) and a.id == "v" for a in node.args):
+            s, r = _vertex_fields(methods[node.func.attr], methods, (*seen, fn.name))
+            sets, reads = sets | s, reads | r
+    return sets, reads
+
+
+def test_the_path_loops_stages_set_the_vertex_in_the_declared_order():
+    """``path_state.Vertex`` declares its fields and the stage that sets each, in ``PathLoop.body``'s order:
+    the stages set exactly those and read only what they or an earlier stage set; an undeclared field
+    cannot be set, an unset one cannot be read."""
+    import ast
+    from pathlib import Path
+    from weather_mi.kernel.plugins.path_state import Vertex
+    tree = ast.parse(Path(mv.__file__).read_text())
+    loop = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "PathLoop")
+    methods = {f.name: f for f in loop.body if isinstance(f, ast.FunctionDef)}
+    calls = [c for st in methods["body"].body for c in ast.walk(st) if isinstance(c, ast.Call)]  # one a statement
+    stages = [c.func.attr for c in calls if c.func.attr != "roulette"]
+    assert stages == [stage for stage, _ in Vertex.STAGES]
+    assert set(Vertex.__slots__) == set(Vertex.__annotations__) == {f for _, fs in Vertex.STAGES for f in fs}
+    ready = set()
+    for stage, declared in Vertex.STAGES:
+        sets, reads = _vertex_fields(methods[stage], methods)
+        assert sets == set(declared), (stage, sets)
+        assert reads <= ready | sets, (stage, reads - ready - sets)
+        ready |= sets
+    v = Vertex()
+    with pytest.raises(AttributeError):
+        v.eps
+    with pytest.raises(AttributeError):
+        v.undeclared = mi.Float(0.0)

@@ -234,6 +234,11 @@ class LightVolume:
         self.store, self.frame, self.n_slices = store, plan.frame, plan.n_slices
         self.log_store = plan.translucent
 
+    def unbind(self):
+        """Forget the bound light: lookups fail until the next ``bind`` (a frame's kernels bind the light
+        of their own inputs; none reads the last frame's)."""
+        self.store, self.frame, self.n_slices = None, None, 0
+
     def _light_rays(self, g: SliceGeometry, grid_box):
         """One light ray per buffer texel: (q0, qs, kin, kout), its point on plane 0 and its step to the
         next plane in texture coordinates of ``grid_box``, and where it is inside the slicing box, in

@@ -9,14 +9,14 @@ view.py      camera rays and background per view, in a bounded cache
 
 Everything that changes between frames (scalings, sun, camera, albedo, cone angle, forward fraction,
 the light model's parameters) enters kernels as opaque values or data, so frames after the first
-compile nothing.
+compile nothing: the frame's kernels read ``frame_inputs.FrameInputs`` and the renderer's declared
+constants alone (``frame_inputs.KernelConstants``; anything else raises).
 """
 from __future__ import annotations
 
 import math
 import time
 import weakref
-from types import SimpleNamespace
 
 import numpy as np
 
@@ -29,6 +29,7 @@ from ..scene.spec import SceneSpec
 from .background import sky_irradiance_horizontal
 from .blur import variance_per_metre
 from .eye import LightModel, composite
+from .frame_inputs import EyeInputs, EyeRays, FrameInputs, KernelConstants, MultipleLight, TextureBuild
 from .geometry import slice_geometry, slicing_box
 from .jitter import jitter_rotation, slab_offsets
 from .light import LightVolume, auto_light_res
@@ -166,6 +167,8 @@ class SliceRenderer:
         # (dr.freeze; FROZEN_FRAMES False or SliceRenderer.frozen = False: traced every frame)
         self.frozen = FROZEN_FRAMES
         self._frozen_kernels = _freeze(weakref.ref(self))
+        self._recording_error = None  # what the kernels raised while being recorded (see _freeze)
+        self._constants = KernelConstants(self)  # all of the renderer that its frame's kernels see
 
     def _make_textures(self, mode: SliceMode):
         """The eye's texture (beta and beta_sca per group) and the light pass's source ((beta, beta_f), or
@@ -239,19 +242,18 @@ class SliceRenderer:
                 raise ValueError(f"unknown species {n!r} in detail; expected one of {self.vol.species}")
         return [float(params.detail.get(n, DEFAULT_DETAIL)) for n in self.vol.species]
 
-    def _build_textures(self, scale, omega, fwd, detail=None, data: dict | None = None):
-        """Eye texture [beta_ext, beta_sca per group] and light source [beta_ext, beta_forward] (1/m);
-        ``data``: the arrays read and written (default the renderer's; see ``_texture_data``)."""
+    def _build_textures(self, build: TextureBuild, d: FrameInputs):
+        """Eye texture [beta_ext, beta_sca per group] and light source [beta_ext, beta_forward] (1/m) from
+        ``build``; ``d``: the frame's inputs (the arrays read, the textures written)."""
         mi = self.mi
         import drjit as dr
-        d = data or self._texture_data()
         S = self.n_species
-        sc, om, fw = ([kernel_scalar(mi, v) for v in x] for x in (scale, omega, fwd))
+        sc, om, fw = ([kernel_scalar(mi, v) for v in x] for x in (build.scale, build.omega, build.fwd))
         ext, beta_fwd, sca = mi.Float(0.0), mi.Float(0.0), []
-        noise = d["noise"]
-        amp = None if noise is None else [kernel_scalar(mi, a) for a in detail]
+        noise = d.noise
+        amp = None if noise is None else [kernel_scalar(mi, a) for a in build.detail]
         for s in range(S):
-            b = d["beta_s"][s] * sc[s]
+            b = d.beta_s[s] * sc[s]
             if noise is not None:  # the amount of detail per species (paper section 5.4), log-normal, mean one
                 b = b * dr.exp(amp[s] * noise - 0.5 * amp[s] * amp[s])
             ext += b
@@ -264,15 +266,9 @@ class SliceRenderer:
                 g_sca = g_sca + sca[si]
             grouped.append(g_sca)
         eye = [ext] if self.one_scattering_ratio else [ext] + grouped
-        d["tex_eye"].set_tensor(mi.TensorXf(_interleave(mi, eye), shape=self.shape + (len(eye),)))
+        d.tex_eye.set_tensor(mi.TensorXf(_interleave(mi, eye), shape=self.shape + (len(eye),)))
         light = [ext, beta_fwd][:self.light_channels]
-        d["tex_light"].set_tensor(mi.TensorXf(_interleave(mi, light), shape=self.shape + (len(light),)))
-
-    def _texture_data(self) -> dict:
-        """The arrays ``_build_textures`` reads (the species' extinction, the detail noise) and the
-        textures it writes."""
-        return {"beta_s": self.beta_s, "noise": self.detail_noise, "tex_eye": self.tex_eye,
-                "tex_light": self.tex_light_src}
+        d.tex_light.set_tensor(mi.TensorXf(_interleave(mi, light), shape=self.shape + (len(light),)))
 
     # ------------------------------------------------------------------ public
     def light_at(self, points) -> tuple[np.ndarray, np.ndarray]:
@@ -320,16 +316,23 @@ class SliceRenderer:
         keep = 1.0 - kernel_scalar(mi, fwd[0]) * omega_bar if self.uniform_forward else None  # f may carry gradients
         inputs = self._frame_inputs(g, spec, params, tint, rebuilt, keep, omega_bar)
         if rebuilt:  # built by the frame's kernels, from opaque values
-            inputs["build"] = [[kernel_scalar(mi, v) for v in x] for x in (scale, omega, fwd, detail or [])]
+            inputs.build = TextureBuild(*([kernel_scalar(mi, v) for v in x] for x in (scale, omega, fwd, detail or [])))
+        self._constants.check(self)
         if return_arrays or self.differentiable or not self.frozen:
-            out, transmittance, store, sky_store = self._kernels(inputs, timed=not return_arrays)
+            out, transmittance, store, sky_store = self._constants._kernels(
+                inputs, None if return_arrays else self._light_done)
             if return_arrays:
                 return out, transmittance
         else:  # the recorded kernels (re-recorded when the structure of the inputs changes)
-            out, transmittance, store, sky_store = self._frozen_kernels(inputs)
-        self.light.bind(inputs["sun"], store)  # the arrays outside the recording
+            result = self._frozen_kernels(inputs)
+            if result is None:  # the kernels raised while being recorded: drop the recording, raise here
+                self._frozen_kernels.clear()
+                error, self._recording_error = self._recording_error, None
+                raise error
+            out, transmittance, store, sky_store = result
+        self.light.bind(inputs.sun, store)  # the arrays outside the recording
         if self.sky_light is not None:
-            self.sky_light.store, self.sky_light.frame = sky_store, inputs["sky_frame"]
+            self.sky_light.store, self.sky_light.frame = sky_store, inputs.sky_frame
         t_launch = time.perf_counter()
         dr.eval(out, transmittance)
         dr.sync_thread()
@@ -366,11 +369,12 @@ class SliceRenderer:
         return Image(rgb, np.zeros_like(rgb), dict(img.metadata, supersample=int(n), scene=spec.to_dict()))
 
     def _frame_inputs(self, g, spec: SceneSpec, params: SliceParams, tint, rebuilt: bool, keep=None,
-                      omega_bar=None) -> dict:
-        """Everything the frame's kernels read, as a Dr.Jit PyTree (arrays, opaque scalars, textures; the
-        plain ints and flags in it set the kernels' structure): the light passes' plans, the eye pass's
-        per-pixel and per-frame values. ``keep``: (beta - beta_f) / beta where the light source is beta alone;
-        ``omega_bar``: ``mean_albedo`` where the eye's texture is beta alone."""
+                      omega_bar=None) -> FrameInputs:
+        """Everything the frame's kernels read but the renderer's constants (``FrameInputs``, a Dr.Jit
+        PyTree: arrays, opaque scalars, textures; the plain ints and flags in it set the kernels' structure):
+        the light passes' plans, the eye pass's per-pixel and per-frame values (``build`` unset). ``keep``:
+        (beta - beta_f) / beta where the light source is beta alone; ``omega_bar``: ``mean_albedo`` where the
+        eye's texture is beta alone."""
         mi = self.mi
         translucent = self.mode.light == "translucent"
         blur = params.blur_length_m if params.blur_length_m is not None else self.voxel_m
@@ -388,32 +392,39 @@ class SliceRenderer:
                 sky_frame = sky.frame
             else:
                 sky_store, sky_frame = self.sky_light.store, self.sky_light.frame
-        return {**self._texture_data(), "build": None, "sun": sun, "sky": sky,
-                "sky_store": sky_store, "sky_frame": sky_frame,
-                "eye": self._eye_inputs(spec, params, tint, omega_bar if self.one_scattering_ratio else None)}
+        return FrameInputs(self.beta_s, self.detail_noise, self.tex_eye, self.tex_light_src, None, sun, sky,
+                           sky_store, sky_frame,
+                           self._eye_inputs(spec, params, tint, omega_bar if self.one_scattering_ratio else None))
 
-    def _kernels(self, inputs: dict, timed: bool = False):
+    def _kernels(self, inputs: FrameInputs, light_done=None):
         """The frame's kernels from ``_frame_inputs``: (radiance, transmittance, sun store, zenith store).
-        Reads nothing but ``inputs`` and constants of the renderer (``dr.freeze`` records it)."""
+        Runs with ``self`` the renderer's ``KernelConstants`` (``dr.freeze`` records it): reads nothing but
+        ``inputs`` and the renderer's declared constants. ``light_done``: None, or called once the light
+        passes have run (a traced frame's timing)."""
         import drjit as dr
-        if inputs["build"] is not None:
-            scale, omega, fwd, detail = inputs["build"]
-            self._build_textures(scale, omega, fwd, detail, data=inputs)
-        store = self.light.run(inputs["sun"], inputs["tex_light"])
-        sky_store = inputs["sky_store"]
-        if inputs["sky"] is not None:
-            sky_store = self.sky_light.run(inputs["sky"], inputs["tex_light"])
-        self.light.bind(inputs["sun"], store)
+        for volume in (self.light, self.sky_light):  # their lookups read this frame's light alone
+            if volume is not None:
+                volume.unbind()
+        if inputs.build is not None:
+            self._build_textures(inputs.build, inputs)
+        store = self.light.run(inputs.sun, inputs.tex_light)
+        sky_store = inputs.sky_store
+        if inputs.sky is not None:
+            sky_store = self.sky_light.run(inputs.sky, inputs.tex_light)
+        self.light.bind(inputs.sun, store)
         if self.sky_light is not None:
-            self.sky_light.store, self.sky_light.frame = sky_store, inputs["sky_frame"]
+            self.sky_light.store, self.sky_light.frame = sky_store, inputs.sky_frame
             self.sky_light.n_slices = self._sky_geometry.n_slices
-        if timed:
+        if light_done is not None:
             dr.sync_thread()  # kernels run asynchronously: wait before reading the clock
-            self._t_light = time.perf_counter()
-        out, transmittance = self._eye_pass(inputs["tex_eye"], inputs["eye"])
+            light_done()
+        out, transmittance = self._eye_pass(inputs)
         return out, transmittance, store, sky_store
 
-    def _eye_inputs(self, spec: SceneSpec, params: SliceParams, tint, sca_ratio=None) -> dict:
+    def _light_done(self):
+        self._t_light = time.perf_counter()
+
+    def _eye_inputs(self, spec: SceneSpec, params: SliceParams, tint, sca_ratio=None) -> EyeInputs:
         """The eye pass's inputs (see ``_frame_inputs``); ``sca_ratio``: beta_sca / beta where the eye's
         texture is beta alone."""
         mi = self.mi
@@ -434,9 +445,10 @@ class SliceRenderer:
         e_sky = sky_irradiance_horizontal(spec, cache=self.views.sky)
         model = None
         if self.mode.light == "multiple":
-            model = [kernel_scalar(mi, v) for v in (params.ms_extinction, params.ms_contribution, params.ms_eccentricity,
-                                            params.sky_extinction, params.diffusion_gain, params.diffusion_scale,
-                                            max(float(spec.sun.to_sun[2]), 1e-3), params.leak_gain, params.leak_rate)]
+            model = MultipleLight(*(kernel_scalar(mi, v) for v in (
+                params.ms_extinction, params.ms_contribution, params.ms_eccentricity, params.sky_extinction,
+                params.diffusion_gain, params.diffusion_scale, max(float(spec.sun.to_sun[2]), 1e-3), params.leak_gain,
+                params.leak_rate)))
             gain = params.sky_gain
         else:
             gain = params.ambient
@@ -446,29 +458,29 @@ class SliceRenderer:
             ground = (_colour(mi, from_sun), _colour(mi, from_sky))
             if model is not None and self.sky_light is not None:  # "multiple": it lights the medium from below
                 below = _colour(mi, sum(ground_radiance(spec, e_sky))) * kernel_scalar(mi, gain)
-        names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern", "span_a", "span_b")
-        ray_arrays = {k: getattr(rays, k) for k in names + (("ground_sun", "ground_sky") if rays.ground_sun is not None else ())}
-        return {"rays": ray_arrays, "n": rays.n, "tex_light": self.tex_light_src, "grid": self._grid_scalars, "phase_colour": phase_colour, "diffuse_colour": diffuse_colour, "model": model,
-                "ambient": _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), "ground": ground,
-                "jitter": kernel_scalar(mi, params.slab_jitter), "jitter_rotation": kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
-                "sca_ratio": sca_ratio, "below": below}
+        names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern", "span_a",
+                 "span_b", "n", "ground_sun", "ground_sky")
+        return EyeInputs(EyeRays(**{k: getattr(rays, k) for k in names}), self._grid_scalars, phase_colour,
+                         diffuse_colour, model, _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), ground,
+                         kernel_scalar(mi, params.slab_jitter), kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
+                         sca_ratio, below)
 
-    def _eye_pass(self, tex_eye, e: dict):
+    def _eye_pass(self, inputs: FrameInputs):
         mi = self.mi
         import drjit as dr
-        if e["model"] is not None:
-            a, b, c, sky_ext, gain, scale, mu0, leak_gain, leak_rate = e["model"]
-            model = LightModel(self.light, self.sky_light, self.mode.octaves, a, b, c, sky_ext, gain, scale,
-                               g=self.g_scattering, mu0=mu0, carry=(e["tex_light"], e["grid"]), leak_gain=leak_gain,
-                               leak_rate=leak_rate, below=e["below"] is not None)
+        e = inputs.eye
+        if e.model is not None:
+            m = e.model
+            model = LightModel(self.light, self.sky_light, self.mode.octaves, m.a, m.b, m.c, m.sky_extinction,
+                               m.diffusion_gain, m.diffusion_scale, g=self.g_scattering, mu0=m.mu0,
+                               carry=(inputs.tex_light, e.grid), leak_gain=m.leak_gain, leak_rate=m.leak_rate,
+                               below=e.below is not None)
         else:
             model = LightModel(self.light, log_forward=self.mode.light == "translucent")
-        r = e["rays"]
-        rays = SimpleNamespace(**r, n=e["n"])
-        offset = slab_offsets(dr, r["pattern"], e["jitter"], e["jitter_rotation"])
-        return composite(mi, self.light.frame, self.light.n_slices, rays, tex_eye, self.grid_box, e["phase_colour"],
-                         e["diffuse_colour"], model, e["ambient"], e["ground"], self.differentiable, offset,
-                         e["sca_ratio"], e["below"])
+        offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
+        return composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
+                         e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
+                         e.sca_ratio, e.below)
 
 
 FROZEN_FRAMES = True
@@ -478,11 +490,19 @@ FREEZE_LIMIT = 8  # recordings kept per renderer (slice counts of the viewer's d
 def _freeze(renderer_ref):
     """The renderer's ``_kernels`` recorded by ``dr.freeze`` (one recording per structure of its inputs,
     the last FREEZE_LIMIT kept). Through a weak reference: a frozen function that held its renderer would
-    make a reference cycle, and Dr.Jit aborts when the garbage collector frees recordings."""
+    make a reference cycle, and Dr.Jit aborts when the garbage collector frees recordings. An exception
+    raised out of this recording aborts the process too (Dr.Jit 1.5: "enqueue_host_func(): this function
+    cannot be recorded"): the kernels' exception is kept on the renderer and the recording returns None
+    (``frame`` drops the recordings and raises it)."""
     import drjit as dr
 
     def kernels(inputs):
-        return renderer_ref()._kernels(inputs)
+        renderer = renderer_ref()
+        try:
+            return renderer._constants._kernels(inputs)
+        except Exception as error:  # (raised out of a recording, it would abort the process: see frame)
+            renderer._recording_error = error
+            return None
     return dr.freeze(kernels, limit=FREEZE_LIMIT, warn_after=4 * FREEZE_LIMIT)
 
 

@@ -44,7 +44,7 @@ from . import mvnee, sun
 from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
 from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401 (re-exported)
 from .medium_setup import GridCache, MediumSetup, Tracking, phase_ctx, scattering_event, unit_cube_to_world, volume_data
-from .path_state import path_state_class
+from .path_state import Vertex, path_state_class
 from .properties import check as _check, choice as _choice, majorant_property as _majorant_property
 from .trackers import delta_tracking, shadow_transmittance
 from .variant_class import variant_class
@@ -265,18 +265,12 @@ class MajorantVolpath:
 
 # ---------------------------------------------------------------- the path loop
 
-class _Vertex:
-    """What the stages of one loop iteration pass on (not loop state): ``act_scatter`` (a real
-    collision), ``active_surface`` (a surface interaction), ``mei``, ``bsdf``, ``act_e_surf`` / ``act_e``
-    (emitter sampling at a surface / at any vertex), ``ref`` (the vertex), ``alpha`` (channel
-    probabilities), ``eps`` / ``eps_a`` (probabilities of a sun-guided draw and of the aureole estimator)."""
-
-
 class PathLoop:
     """The path loop of ``majorant_volpath`` over one scene: :meth:`initial` is the :func:`path_state_class`
     state of paths starting with a ray, :meth:`body` advances every alive path by one event (a scattering,
     a surface or the escape) in stages: :meth:`roulette`, :meth:`free_flight`, :meth:`emitters_hit`,
-    :meth:`vertex`, :meth:`nee`, :meth:`aureole_nee`, :meth:`sample_phase`, :meth:`sample_bsdf`.
+    :meth:`vertex`, :meth:`nee`, :meth:`aureole_nee`, :meth:`sample_phase`, :meth:`sample_bsdf`, which pass
+    a :class:`.path_state.Vertex` on (its fields, and the order in which the stages set them, declared there).
     Structure and estimators: the module docstring."""
 
     def __init__(self, integ, scene, medium):
@@ -359,10 +353,10 @@ class PathLoop:
         p.throughput = dr.select(perform_rr, p.throughput * dr.rcp(q), p.throughput)
         p.active &= p.depth < self.max_depth
 
-    def free_flight(self, sampler, p) -> _Vertex:
+    def free_flight(self, sampler, p) -> Vertex:
         """The next surface, and in the medium the free flight (delta tracking) to a real collision, with
         the absorption weight (throughput *= sigma_s / sigma_t)."""
-        v = _Vertex()
+        v = Vertex()
         isect = p.active & p.needs_isect
         p.si = dr.select(isect, self.scene.ray_intersect(p.ray, isect), p.si)
         p.needs_isect &= ~p.active

@@ -1,5 +1,6 @@
 """The loop state of a path of ``majorant_volpath`` (a ``DRJIT_STRUCT`` with named fields), one class
-per Mitsuba variant (its field types are the variant's).
+per Mitsuba variant (its field types are the variant's), and ``Vertex``, what the stages of one
+iteration of its path loop pass on to the later ones.
 """
 from __future__ import annotations
 
@@ -38,3 +39,48 @@ def path_state_class() -> type:
         PathState.__doc__ = path_state_class.__doc__
         _STATE_CLASSES[key] = PathState
     return _STATE_CLASSES[key]
+
+
+class Vertex:
+    """What the stages of one iteration of the path loop (``majorant_volpath.PathLoop.body``) pass on to
+    the later ones: made anew by every iteration (``free_flight``), not loop state, so a plain class, its
+    fields declared in ``__slots__``: a field not declared here cannot be set, and one that no stage has set
+    yet cannot be read (AttributeError while tracing). Dr.Jit types of the variant, one lane per path.
+
+    The stages set the fields in this order (``STAGES``; a stage reads only what it or an earlier one set):
+
+    ============  ============================================  ===============================================
+    stage         sets                                          reads
+    ============  ============================================  ===============================================
+    free_flight   act_scatter, active_surface, mei              (its own)
+    emitters_hit  active_surface (&= a valid surface), bsdf     active_surface
+    vertex        act_e_surf, act_e, ref, eps (0), alpha        active_surface, bsdf, act_scatter, mei
+    nee           eps (sun guiding)                             act_e, act_e_surf, act_scatter, ref, bsdf, mei,
+                                                                alpha, eps
+    aureole_nee   eps_a                                         act_scatter, mei, alpha (``mvnee.chain``: mei)
+    sample_phase  act_scatter (&= a phase pdf > 0)              act_scatter, mei, alpha, eps, eps_a
+    sample_bsdf   --                                            active_surface, bsdf, act_scatter
+    ============  ============================================  ===============================================
+    """
+
+    __slots__ = ("act_scatter", "active_surface", "mei", "bsdf", "act_e_surf", "act_e", "ref", "eps", "alpha",
+                 "eps_a")
+    act_scatter: mi.Bool                 # a real collision in the medium where the path scatters (phase sampling)
+    active_surface: mi.Bool              # the path reaches p.si (or escapes; emitters_hit keeps valid surfaces)
+    mei: mi.MediumInteraction3f          # the collision: t (m along the ray), p (m, world), sigma_t (1/m), ...
+    bsdf: mi.BSDFPtr                     # the BSDF of the surface interaction ``p.si``
+    act_e_surf: mi.Bool                  # emitter sampling at a smooth surface
+    act_e: mi.Bool                       # emitter sampling at this vertex (a smooth surface or a collision)
+    ref: mi.Interaction3f                # the vertex's position (m, world) for emitter sampling
+    eps: mi.Float                        # probability of a sun-guided continuation here (0 without guiding)
+    alpha: mi.Spectrum | None            # channel probabilities (throughput / its sum); None: no channel sampling
+    eps_a: mi.Float                      # probability of the aureole estimator here (0 without it)
+
+    # (stage, the fields it sets), in the order PathLoop.body runs the stages
+    STAGES = (("free_flight", ("act_scatter", "active_surface", "mei")),
+              ("emitters_hit", ("active_surface", "bsdf")),
+              ("vertex", ("act_e_surf", "act_e", "ref", "eps", "alpha")),
+              ("nee", ("eps",)),
+              ("aureole_nee", ("eps_a",)),
+              ("sample_phase", ("act_scatter",)),
+              ("sample_bsdf", ()))
