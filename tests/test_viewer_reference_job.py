@@ -1,7 +1,8 @@
 """``weather_mi.viewer.reference_job.ReferenceJob``: the progressive path-traced reference in a background
 process. A 32 x 24 view of the demo cumulus (passes of 1 spp, ~0.1 s each): updates arrive in order
-and end with the in-process ``render_reference`` image of the same passes; cancel ends the process at
-once; a child's error arrives as text; the child does not outlive its parent.
+and end with the in-process ``render_reference`` image of the same passes; the child exits by itself
+after its final update, however slow its interpreter's teardown; cancel ends the process at once; a
+child's error arrives as text; the child does not outlive its parent.
 """
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ import pytest
 
 import weather_mi as wm
 from weather_mi.viewer.recipe import VolumeRecipe
-from weather_mi.viewer.reference_job import ReferenceJob, ReferenceUpdate
+from weather_mi.viewer.reference_job import JOIN_TIMEOUT_S, ReferenceJob, ReferenceUpdate
 
 W, H = 32, 24
 CUMULUS = VolumeRecipe(demo="cumulus")
@@ -110,6 +111,27 @@ def test_updates_arrive_progressively_and_end_with_the_in_process_image():
     planned = wm.render_reference(spec, vol, spp=2, passes=2, progress=False)
     assert np.array_equal(planned.radiance[~cloud], final.image.radiance[~cloud])
     assert final.image.metadata["spp_background"] == 2
+
+
+class SlowTeardownRecipe(VolumeRecipe):
+    """A recipe whose process (the reference's child) would take longer than JOIN_TIMEOUT_S to end its
+    interpreter (an atexit handler that sleeps): what Dr.Jit's and Mitsuba's teardown take at nice 10 on a
+    busy machine."""
+
+    def volume(self, scale=None, hyd=None):
+        import atexit
+        atexit.register(time.sleep, JOIN_TIMEOUT_S + 5.0)
+        return super().volume(scale, hyd)
+
+
+def test_the_child_exits_by_itself_after_its_final_update():
+    """After its final update the child exits at once (no interpreter teardown), with exit code 0: the
+    parent's poll, which reaps it, does not wait past JOIN_TIMEOUT_S and terminate it (exit code -15)."""
+    with ReferenceJob(SlowTeardownRecipe(demo="cumulus"), side_view(), target_rse=None) as job:
+        job.start()
+        (*_, final) = wait_for(job, 90.0)
+        assert final.error is None and final.passes == 2
+        assert job._proc.exitcode == 0
 
 
 def test_cancel_ends_the_process_at_once():
