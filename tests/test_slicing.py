@@ -34,7 +34,7 @@ def test_empty_volume_returns_exactly_the_background():
         spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=30, elevation=20), sun=wm.Sun(120, 40, (1.0, 2.0, 3.0)),
                             sky=sky, ground=ground, width=24, height=16)
         img = render_slices(spec, vol, SliceMode("uniform", "translucent"), slices=16, light_res=16)
-        from weather_mi.slicing.background import ground_hits
+        from weather_mi.scene.spec import ground_hits
         from weather_mi.slicing.geometry import camera_rays
         o, d = camera_rays(spec)
         hit = np.isfinite(ground_hits(spec, o, d))
@@ -476,7 +476,7 @@ def test_the_sky_and_the_ground_light_a_layer_through_the_columns_above_and_belo
     assert above[0] < 0.95 * above[-1] and below[-1] < 0.95 * below[0]  # the layer occludes, both ways
     np.testing.assert_allclose(np.asarray(occ), above, rtol=0.01)
     np.testing.assert_allclose(np.asarray(occ_below), below, rtol=0.01)
-    from weather_mi.slicing.background import sky_irradiance_horizontal
+    from weather_mi.kernel.sky import sky_irradiance_horizontal
     from weather_mi.slicing.renderer import ground_radiance
     e_sky = sky_irradiance_horizontal(spec)
     from_sun, from_sky = ground_radiance(spec, e_sky)

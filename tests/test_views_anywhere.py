@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi.slicing.background import sky_radiance
+from weather_mi.kernel.sky import sky_radiance
 
 
 @pytest.fixture(scope="module")

@@ -69,7 +69,8 @@ def view_features(spec: SceneSpec, vol: OpticalVolume, exposure: float, steps: i
 
 
 def _background_albedo(spec: SceneSpec, o: np.ndarray, d: np.ndarray, exposure: float) -> np.ndarray:
-    from ..slicing.background import ground_hits, sky_radiance
+    from ..kernel.sky import sky_radiance
+    from ..scene.spec import ground_hits
     t = ground_hits(spec, o, d)
     out = np.clip(sky_radiance(spec, d) * exposure, 0.0, 1.0)
     if spec.ground is not None:

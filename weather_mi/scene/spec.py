@@ -519,3 +519,13 @@ def default_spec(vol, width: int = 300, height: int = 300, **kw) -> SceneSpec:
                                          elevation=kw.pop("camera_elevation", 8.0),
                                          distance=kw.pop("distance", None), fov=kw.pop("fov", 45.0)),
                      width=width, height=height, **kw)
+
+
+def ground_hits(spec: SceneSpec, origins: np.ndarray, dirs: np.ndarray):
+    """Distance along each ray to the ground plane (inf where it does not hit)."""
+    if spec.ground is None:
+        return np.full(origins.shape[:-1], np.inf)
+    dz = dirs[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (spec.ground.height - origins[..., 2]) / dz
+    return np.where((dz < 0) & (t > 0), t, np.inf)

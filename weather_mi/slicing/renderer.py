@@ -26,7 +26,7 @@ from ..kernel.jitarrays import aligned_float, kernel_scalar
 from ..kernel.scene_dict import terrain_surround_m
 from ..optics.volume import OpticalVolume
 from ..scene.spec import SceneSpec
-from .background import sky_irradiance_horizontal
+from ..kernel.sky import sky_irradiance_horizontal
 from .blur import variance_per_metre
 from .eye import LightModel, composite
 from .frame_inputs import EyeInputs, EyeRays, FrameInputs, KernelConstants, MultipleLight, TextureBuild

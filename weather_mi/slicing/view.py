@@ -10,7 +10,8 @@ import numpy as np
 
 from ..kernel.jitarrays import aligned_float
 from ..scene.spec import SceneSpec
-from .background import ground_hits, sky_radiance
+from ..kernel.sky import sky_radiance
+from ..scene.spec import ground_hits
 from .geometry import camera_rays, ray_box
 from .jitter import offset_pattern
 
@@ -75,7 +76,7 @@ class ViewCache:
         self.occupancy = occupancy  # occupancy.OccupancyMap of the medium: each ray's occupied span
         self.rays = BoundedCache(maxsize)
         self.backgrounds = BoundedCache(maxsize)
-        self.sky = BoundedCache(4 * maxsize)  # sky emitters and sky irradiance (background.py)
+        self.sky = BoundedCache(4 * maxsize)  # sky emitters and sky irradiance (kernel/sky.py)
 
     def get(self, mi, spec: SceneSpec) -> ViewRays:
         ray_key = (spec.camera, spec.width, spec.height, spec.ground)

@@ -1,5 +1,6 @@
-"""The slicer's background, the same as the reference's: sky radiance along each pixel ray, and a lit
-Lambertian ground (sun attenuated by the cloud's light buffer, plus skylight)."""
+"""The sky as Mitsuba's emitter gives it, for what renders outside Mitsuba's path loop (the slicer's
+background and ground light, the denoiser's features): radiance along rays and irradiance on a horizontal
+surface, the same as the reference's sky."""
 from __future__ import annotations
 
 import numpy as np
@@ -11,7 +12,7 @@ def _sky_emitter(spec: SceneSpec, cache: dict | None):
     """Mitsuba's sky emitter for this spec. With a ``cache`` (a renderer's), one instance per variant
     and sky is kept and updated in place (sun direction, scale), so a moving sun recompiles nothing."""
     import mitsuba as mi
-    from ..kernel.scene_dict import sky_dict
+    from .scene_dict import sky_dict
     d = sky_dict(spec.sky, spec.sun)
     cache = {} if cache is None else cache
     key = (mi.variant(), spec.sky.turbidity, spec.sky.ground_albedo)
@@ -38,7 +39,7 @@ def sky_radiance(spec: SceneSpec, dirs: np.ndarray, cache: dict | None = None) -
     import mitsuba as mi
     emitter, scale = _sky_emitter(spec, cache)
     si = dr.zeros(mi.SurfaceInteraction3f, dirs.shape[0])
-    from ..kernel.jitarrays import aligned_float
+    from .jitarrays import aligned_float
     si.wi = -mi.Vector3f(*(aligned_float(mi, dirs[:, i]) for i in range(3)))
     return scale * np.asarray(emitter.eval(si), dtype=np.float64).T.reshape(-1, 3)
 
@@ -61,13 +62,3 @@ def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | N
     if cache is not None:
         cache[memo] = e
     return e
-
-
-def ground_hits(spec: SceneSpec, origins: np.ndarray, dirs: np.ndarray):
-    """Distance along each ray to the ground plane (inf where it does not hit)."""
-    if spec.ground is None:
-        return np.full(origins.shape[:-1], np.inf)
-    dz = dirs[..., 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (spec.ground.height - origins[..., 2]) / dz
-    return np.where((dz < 0) & (t > 0), t, np.inf)
