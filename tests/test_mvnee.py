@@ -14,18 +14,18 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi.plane_parallel import slab as fluxes
+from weather_mi.plane_parallel import slab
 
 disortpp = pytest.importorskip("disortpp")
 
 
 def _slab(tau, albedo, g, mu0, view, spp, seed, diameter=0.0, **kw):
-    """pi L / (mu0 E) of the slab's centre (as ``fluxes.slab_radiance``) by ``majorant_volpath`` with its
+    """pi L / (mu0 E) of the slab's centre (as ``slab.slab_radiance``) by ``majorant_volpath`` with its
     own sun: (mean, standard error)."""
-    vol = fluxes.slab_volume(tau, albedo, wm.phase.henyey_greenstein(g))
-    z, d = ((1.0 + 10 * fluxes.GAP), -1.0) if view == "nadir" else (-10 * fluxes.GAP, 1.0)
+    vol = slab.slab_volume(tau, albedo, wm.phase.henyey_greenstein(g))
+    z, d = ((1.0 + 10 * slab.GAP), -1.0) if view == "nadir" else (-10 * slab.GAP, 1.0)
     cam = wm.Camera.orthographic(center=(0.0, 0.0, z), direction=(0.0, 0.0, d), width=0.01, height=0.01)
-    sun = fluxes.sun_for(mu0)
+    sun = slab.sun_for(mu0)
     if diameter:
         sun = wm.Sun(azimuth=sun.azimuth, elevation=sun.elevation, angular_diameter_deg=diameter)
     spec = wm.SceneSpec(camera=cam, sun=sun, sky=None, ground=None, width=8, height=8, seed=seed)
@@ -43,16 +43,16 @@ CASES = [(0.85, 0.99, 4.0, 0.5, "zenith"), (0.85, 0.99, 4.0, 0.5, "nadir")]
 
 @pytest.mark.parametrize("g, albedo, tau, mu0, view", CASES)
 def test_slab_with_chains_against_disort(g, albedo, tau, mu0, view):
-    ref = fluxes.disort_slab(tau, albedo, g, mu0)["L_zenith" if view == "zenith" else "L_nadir"]
+    ref = slab.disort_slab(tau, albedo, g, mu0)["L_zenith" if view == "zenith" else "L_nadir"]
     mc, se = _slab(tau, albedo, g, mu0, view, spp=1024, seed=5, mvnee=0.5)
-    assert se > 0 and fluxes.agrees(mc, se, ref, abs_tol=0.01), (mc, se, ref)  # <= 3 se and <= 0.01
+    assert se > 0 and slab.agrees(mc, se, ref, abs_tol=0.01), (mc, se, ref)  # <= 3 se and <= 0.01
 
 
 def test_a_wrong_weight_is_caught(monkeypatch):
     """The path's own sun NEE at full weight (the chains' share counted twice) reads high by many se."""
     from weather_mi.kernel.plugins import mvnee
     g, albedo, tau, mu0, view = CASES[0]
-    ref = fluxes.disort_slab(tau, albedo, g, mu0)["L_zenith"]
+    ref = slab.disort_slab(tau, albedo, g, mu0)["L_zenith"]
     monkeypatch.setattr(mvnee, "path_weight", lambda r: r[0] * 0.0 + 1.0)
     mc, se = _slab(tau, albedo, g, mu0, view, spp=1024, seed=5, mvnee=0.5)
     assert mc - ref > 6 * se and mc - ref > 0.02, (mc, se, ref)
@@ -76,8 +76,8 @@ def test_bad_probabilities_are_refused(value, message):
     with pytest.raises(ValueError, match="mvnee"):
         wm.render_reference(wm.SceneSpec(camera=wm.Camera.orthographic(center=(0, 0, 2), direction=(0, 0, -1),
                                                                        width=0.01, height=0.01),
-                                         sun=fluxes.sun_for(0.5), sky=None, ground=None, width=2, height=2),
-                            fluxes.slab_volume(1.0, 0.9, wm.phase.henyey_greenstein(0.5)), spp=1,
+                                         sun=slab.sun_for(0.5), sky=None, ground=None, width=2, height=2),
+                            slab.slab_volume(1.0, 0.9, wm.phase.henyey_greenstein(0.5)), spp=1,
                             progress=False, mvnee=value)
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
-from weather_mi.plane_parallel import slab as fluxes
+from weather_mi.plane_parallel import slab
 
 disortpp = pytest.importorskip("disortpp")
 
@@ -22,12 +22,12 @@ NO_RR = 1 << 30
 
 def assert_agrees(name, mc, se, ref, abs_tol=0.01):
     assert np.isfinite(se) and se > 0, f"{name}: standard error {se}"
-    assert fluxes.agrees(mc, se, ref, abs_tol=abs_tol), \
+    assert slab.agrees(mc, se, ref, abs_tol=abs_tol), \
         f"{name}: MC {mc:.5f} +- {se:.5f} vs reference {ref:.5f} (diff {mc - ref:+.5f} = {(mc - ref) / se:+.1f} se)"
 
 
 def test_disort_reproduces_van_de_hulst():
-    d = fluxes.disort_slab(**VDH)
+    d = slab.disort_slab(**VDH)
     assert d["R"] == pytest.approx(VDH_R, abs=1e-5)
     assert d["T"] == pytest.approx(VDH_T, abs=1e-5)
     assert d["T_direct"] == pytest.approx(math.exp(-2.0), rel=1e-9)
@@ -36,8 +36,8 @@ def test_disort_reproduces_van_de_hulst():
 def test_disort_intensity_correction_is_active_and_converged():
     """The Nakajima-Tanaka correction needs both intensity flags in disortpp; with it, 64 streams are
     converged for the forward-peaked radiances the validation compares."""
-    a = fluxes.disort_slab(1.0, 1.0, 0.85, 1.0, n_streams=64)
-    b = fluxes.disort_slab(1.0, 1.0, 0.85, 1.0, n_streams=128)
+    a = slab.disort_slab(1.0, 1.0, 0.85, 1.0, n_streams=64)
+    b = slab.disort_slab(1.0, 1.0, 0.85, 1.0, n_streams=128)
     assert a["L_zenith"] == pytest.approx(b["L_zenith"], rel=1e-4)
     assert a["L_nadir"] == pytest.approx(b["L_nadir"], rel=1e-3)
     assert a["R"] + a["T"] == pytest.approx(1.0, abs=1e-6)  # conservative scattering
@@ -57,8 +57,8 @@ def plugin_asymmetry(table) -> float:
 def test_disort_takes_a_phase_tables_own_moments():
     """A tabulated HG phase function's Legendre moments (PhaseTable.legendre) give DISORT the same
     fluxes and corrected intensities as its own HG moments g^l."""
-    own = fluxes.disort_slab(2.0, 0.99, 0.8, 0.5)
-    tab = fluxes.disort_slab(2.0, 0.99, wm.phase.henyey_greenstein(0.8), 0.5)
+    own = slab.disort_slab(2.0, 0.99, 0.8, 0.5)
+    tab = slab.disort_slab(2.0, 0.99, wm.phase.henyey_greenstein(0.8), 0.5)
     for key in ("R", "T", "L_nadir", "L_zenith"):
         assert tab[key] == pytest.approx(own[key], rel=1e-4), key
 
@@ -77,9 +77,9 @@ def test_van_de_hulst_rendered_direct_beam_included():
     """R and T (direct beam included) against the published values. The irradiancemeter sees only the
     diffuse transmitted light (it never reaches the directional sun); the white-patch measurement
     adds the direct beam exp(-tau / mu0) by emitter sampling."""
-    f = fluxes.slab_fluxes(VDH["tau"], VDH["albedo"], wm.phase.henyey_greenstein(VDH["g"]), VDH["mu0"], spp=1 << 19,
+    f = slab.slab_fluxes(VDH["tau"], VDH["albedo"], wm.phase.henyey_greenstein(VDH["g"]), VDH["mu0"], spp=1 << 19,
                            passes=16, seed=11, transmittance_method="both", rr_depth=NO_RR)
-    d = fluxes.disort_slab(**VDH)
+    d = slab.disort_slab(**VDH)
     assert_agrees("R", f["R"], f["R_stderr"], VDH_R)
     assert_agrees("T", f["T"], f["T_stderr"], VDH_T)
     assert_agrees("T_diffuse (irradiancemeter)", f["T_diffuse"], f["T_diffuse_stderr"], d["T_diffuse"])
@@ -93,11 +93,11 @@ def test_van_de_hulst_rendered_direct_beam_included():
 ])
 def test_slab_against_disort(g, albedo, tau, mu0, paths, rr_depth):
     table = wm.phase.henyey_greenstein(g)
-    d = fluxes.disort_slab(tau, albedo, g, mu0)
-    f = fluxes.slab_fluxes(tau, albedo, table, mu0, spp=paths, passes=16, seed=21, rr_depth=rr_depth)
+    d = slab.disort_slab(tau, albedo, g, mu0)
+    f = slab.slab_fluxes(tau, albedo, table, mu0, spp=paths, passes=16, seed=21, rr_depth=rr_depth)
     assert_agrees("R", f["R"], f["R_stderr"], d["R"])
     assert_agrees("T", f["T"], f["T_stderr"], d["T"])
-    rad, se = fluxes.slab_radiance(tau, albedo, table, mu0, spp=paths // 256, view="nadir", pixels=16, passes=16,
+    rad, se = slab.slab_radiance(tau, albedo, table, mu0, spp=paths // 256, view="nadir", pixels=16, passes=16,
                                    seed=23, rr_depth=rr_depth)
     assert_agrees("nadir radiance", rad, se, d["L_nadir"])
 

@@ -11,19 +11,9 @@ from weather_mi.slicing import MODES, SliceParams, SliceRenderer
 from weather_mi.slicing import frame_inputs
 from weather_mi.slicing.frame_inputs import KERNEL_CONSTANTS, FrameInputError
 
+from test_slicing_frames import spec_at, vol  # noqa: F401  (the module's storm and views)
+
 MODE = MODES["per-species/multiple"]
-
-
-@pytest.fixture(scope="module")
-def vol():
-    wm.set_variant(None)
-    return wm.optical_volume(wm.synthetic.supercell(), species="physical")
-
-
-def spec_at(vol, i, w=40, h=30):
-    spec = wm.scene.spec.default_spec(vol, w, h, camera_azimuth=200.0 + 9.0 * i)
-    return wm.SceneSpec(camera=spec.camera, sun=wm.Sun(200.0 + 10.0 * i, 30.0 + 4.0 * i), sky=spec.sky,
-                        ground=spec.ground, width=w, height=h)
 
 
 EYE_PASS = SliceRenderer._eye_pass

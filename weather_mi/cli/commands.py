@@ -130,7 +130,7 @@ def _sun_from_time(spec, hyd):
 
 
 def satellite_command(args) -> Path:
-    """A synthetic geostationary image (``satellite_image``): checked (outputs, an unfinished render, place,
+    """A synthetic geostationary image (``satellite.imagery``): checked (outputs, an unfinished render, place,
     visibility) before rendering, written as NetCDF + EXR + PNG."""
     from ..io.output_paths import OutputLock, check_writable_folder
     from ..satellite import imagery as si

@@ -152,7 +152,7 @@ class Terrain:
 
     def scene_hits(self, origins, dirs, apron_m: float = TERRAIN_APRON_M, floor_m: float | None = None):
         """The first hit of each ray (N, 3) with the ground a rendered scene has over this terrain, the
-        path tracer's (``mitsuba_scene.terrain_ground_dicts``): the mesh, level for ``apron_m`` past the grid's
+        path tracer's (``kernel.scene_dict.terrain_ground_dicts``): the mesh, level for ``apron_m`` past the grid's
         edge (``with_apron``), a vertical skirt from the apron's edge down to the lowest height (``skirt``),
         and beyond it a level surround at ``floor_m`` (default: the lowest height; the path tracer's is a
         few ray offsets below it) with the edge albedo (``edge_albedo``). Returns (distance (N,), inf where

@@ -1,6 +1,6 @@
 """DISORT (``disortpp``) as weather-mi sets it up: one function that builds the configuration (Lambertian
 surface, user polar angles, optical depths and azimuths, sun flux F0 = 1, delta-M, the Nakajima-Tanaka
-intensity correction) and solves it, for the plane-parallel validation (``fluxes.disort_slab``) and the
+intensity correction) and solves it, for the plane-parallel validation (``slab.disort_slab``) and the
 independent-pixel approximation (``ipa.disort_reflectance``).
 
 The Nakajima-Tanaka (TMS/IMS) correction is only active in DisORT++ when BOTH ``intensity_corr_buras`` (the

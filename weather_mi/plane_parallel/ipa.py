@@ -122,7 +122,7 @@ def bare_surface(vol: OpticalVolume, spec, x_m, y_m) -> np.ndarray:
 
 
 def ipa_reflectance(scene, n_streams: int = 16, n_moments: int = 256, progress: bool = True) -> np.ndarray:
-    """The 1-D counterpart (H, W) of a ``satellite_image.SatelliteScene``: at each pixel, DISORT's reflectance
+    """The 1-D counterpart (H, W) of a ``satellite.imagery.SatelliteScene``: at each pixel, DISORT's reflectance
     of the column where the pixel's line of sight meets the surface (``surface_points``: the terrain's
     parallax kept, the clouds' not), under the rendered sun and the pixel's view direction, over that
     column's surface albedo (the terrain's, else the ground's); pixels whose line of sight meets the

@@ -2,7 +2,7 @@
 
 Each field is declared (``option``) with its default, its documentation (units), its check and where it
 goes: its flag on the command line (``Flag``), whether the kernel takes it (the keyword of the same name
-of ``mitsuba_scene.integrator_dict``), what enters the checkpoint fingerprint (its resolved value, unless
+of ``kernel.scene_dict.integrator_dict``), what enters the checkpoint fingerprint (its resolved value, unless
 a reason says otherwise) and when the estimator uses it (the image metadata records None otherwise).
 Derived from the declarations:
 

@@ -1,5 +1,5 @@
 """Synthetic geostationary imagery: a domain path-traced as a satellite's imager sees it (every pixel from
-the satellite's real position, ``satellite_rays``), in one band (``bands``), over its surface, optionally
+the satellite's real position, ``rays``), in one band (``bands``), over its surface, optionally
 under a molecular atmosphere (``rayleigh``), as a bidirectional reflectance factor on the fixed grid.
 
 Reflectance R = pi L / (E0 cos theta0) with theta0 the solar zenith angle of the one sun that lit the

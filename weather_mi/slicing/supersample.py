@@ -1,7 +1,7 @@
 """Pixel footprints: a slicer frame averaged over n x n stratified points of each pixel.
 
 A plain frame samples each pixel at its centre. The path-traced reference's pixels are averages over
-their square footprint (Mitsuba's box reconstruction filter, ``mitsuba_scene``), so at coarse resolutions
+their square footprint (Mitsuba's box reconstruction filter, ``kernel.scene_dict``), so at coarse resolutions
 the two differ wherever the picture varies within a pixel (a cloud's edge, an anvil's thin margin) by
 more than the light model does: the held-out views of validation/calibrate_slicer.py at 64 x 48 read
 median CIEDE2000 4.31 centre-sampled and 4.07 with 2 x 2 points (4.03 with 4 x 4), the same shipped
