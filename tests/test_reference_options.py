@@ -228,6 +228,18 @@ def test_satellite_flags_come_from_the_declarations():
     assert not {"--integrator", "--forward-peak", "--aureole-nee", "--sun-guiding"} & set(actions)
 
 
+def test_animate_flags_come_from_the_declarations_with_its_own_spp():
+    parser = _subparser("animate")
+    actions = {a.option_strings[0]: a for a in parser._actions if a.option_strings}
+    fields = dict(declared())
+    for flag, name in (("--spp", "spp"), ("--target-rse", "target_rse"), ("--max-seconds", "max_seconds")):
+        d = next(d for f, d in fields.items() if f.name == name)
+        assert actions[flag].dest == name and actions[flag].help == d.flag.help
+    assert actions["--spp"].default == 16 and actions["--spp"].type is int  # a frame of a loop: fewer samples
+    args = parser.parse_args(["a.nc", "--renderer", "reference", "--spp", "4", "--target-rse", "0.2"])
+    assert flag_values(args, cli.ANIMATE_ESTIMATOR) == {"spp": 4, "target_rse": 0.2, "max_seconds": None}
+
+
 def test_render_passes_the_flags_to_render_reference(tmp_path, monkeypatch, capsys):
     """``weather-mi render`` hands render_reference the options of its flags."""
     from weather_mi.io.image import Image

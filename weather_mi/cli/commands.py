@@ -20,6 +20,7 @@ from ..io.sources import DEMOS, check_time, open_source
 from .summary import info_text
 
 SATELLITE_ESTIMATOR = ("spp", "target_rse", "max_seconds")  # the rest: render_satellite's (reflectance)
+ANIMATE_ESTIMATOR = ("spp", "target_rse", "max_seconds")  # per frame, with --renderer reference
 
 
 def _parse_scale(items: list[str]) -> dict[str, float]:
@@ -232,7 +233,7 @@ def animate_command(args) -> Path:
     hyds = open_times(args.inputs, time=parse_times(args.time))
     vols = [optical_volume(h, species=args.preset, scale=scale, phase=args.phase) for h in hyds]
     spec = scene_spec(args, largest(vols))  # frame the largest storm
-    reference_kw = {"spp": args.spp, "target_rse": args.target_rse, "max_seconds": args.max_seconds}
+    reference_kw = flag_values(args, ANIMATE_ESTIMATOR)
     with session(args.scheduler, args.workers) as client:
         anim = animate(vols, spec, args.output, renderer=args.renderer, labels=[h.attrs["time"] for h in hyds],
                        orbit_deg=args.orbit, client=client, fps=args.fps, exposure=args.exposure,
@@ -309,9 +310,8 @@ def _add_animate_parser(sub) -> None:
     anim.add_argument("--time", default="all", help='"all", START:STOP[:STEP] or a comma list of indices or timestamps')
     anim.add_argument("--renderer", default="slices", choices=("slices", "reference"))
     add_scene_options(anim)
-    anim.add_argument("--spp", type=int, default=16, help="reference: samples per pixel (with --target-rse: the first estimate)")
-    anim.add_argument("--target-rse", type=float, default=None, help="reference: add passes until this cloud RSE")
-    anim.add_argument("--max-seconds", type=float, default=None, help="reference, with --target-rse: time limit per frame")
+    add_flags(anim.add_argument_group("reference estimator (--renderer reference), per frame"), ANIMATE_ESTIMATOR,
+              defaults={"spp": 16})
     anim.add_argument("--slices", type=int, default=128, help="slicer: number of slices")
     anim.add_argument("--mode", default="per-species/multiple", choices=list(_slicer_modes()),
                       help="slicer: the light/phase mode (Table IV modes or the multiple-scattering model)")

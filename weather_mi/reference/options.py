@@ -383,14 +383,17 @@ def _flagged(names) -> list:
     return [by_name[n] for n in names]
 
 
-def add_flags(parser, names=None) -> None:
+def add_flags(parser, names=None, defaults: dict | None = None) -> None:
     """The flags of the fields ``names`` (None: every field declaring one) on the argparse ``parser``:
     the flag's name, help and metavar; the field's name as destination, its type (its choices; a bool: a
-    switch) and its default (or the flag's)."""
+    switch) and its default (the command's own from ``defaults``, else the flag's, else the field's)."""
     hints = typing.get_type_hints(ReferenceOptions)
+    defaults = defaults or {}
     for f, d in _flagged(names):
         fl = d.flag
         kw = {"dest": f.name, "default": f.default if fl.default == FIELD_DEFAULT else fl.default}
+        if f.name in defaults:
+            kw["default"] = defaults[f.name]
         base = [t for t in (typing.get_args(hints[f.name]) or (hints[f.name],)) if t is not type(None)][0]
         if d.choices is not None:
             kw["choices"] = tuple(c for c in d.choices if c is not None)
