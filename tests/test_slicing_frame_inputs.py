@@ -59,6 +59,26 @@ def test_a_frame_that_reads_a_value_not_among_its_inputs_fails(vol, monkeypatch,
                                   SliceRenderer(vol, MODE, slices=24, light_res=16).frame(spec).radiance)
 
 
+def test_a_frame_that_failed_while_recorded_leaves_no_cycle(vol, monkeypatch):
+    """The renderer of a frame whose recording raised is freed by reference counting, not left in cyclic
+    garbage: a garbage collection that frees recordings inside another recording aborts the process."""
+    import gc
+    import weakref
+    eye_pass_reads(monkeypatch, "gain")
+    r = SliceRenderer(vol, MODE, slices=24, light_res=16)
+    r.gain = 2.0
+    gc.collect()
+    gc.disable()
+    try:
+        with pytest.raises(FrameInputError) as info:
+            r.frame(spec_at(vol, 0))
+        alive = weakref.ref(r)
+        del r, info
+        assert alive() is None, "the renderer of a failed recording is kept alive by a reference cycle"
+    finally:
+        gc.enable()
+
+
 def test_without_the_guard_a_recorded_frame_replays_a_per_frame_value_stale(vol, monkeypatch):
     """The premise of the guard (Dr.Jit 1.5's dr.freeze): should this fail, Dr.Jit catches such reads."""
     eye_pass_reads(monkeypatch, "gain")

@@ -324,11 +324,10 @@ class SliceRenderer:
             if return_arrays:
                 return out, transmittance
         else:  # the recorded kernels (re-recorded when the structure of the inputs changes)
-            result = self._frozen_kernels(inputs)
+            result = _without_gc(self._frozen_kernels, inputs)
             if result is None:  # the kernels raised while being recorded: drop the recording, raise here
                 self._frozen_kernels.clear()
-                error, self._recording_error = self._recording_error, None
-                raise error
+                _raise_without_cycle(self)
             out, transmittance, store, sky_store = result
         self.light.bind(inputs.sun, store)  # the arrays outside the recording
         if self.sky_light is not None:
@@ -485,6 +484,31 @@ class SliceRenderer:
 
 FROZEN_FRAMES = True
 FREEZE_LIMIT = 8  # recordings kept per renderer (slice counts of the viewer's drafts, rebuilt or not, ...)
+
+
+def _without_gc(func, *args):
+    """``func(*args)`` with Python's cyclic garbage collector held off: a collection that ran inside a
+    ``dr.freeze`` recording and freed another renderer's recordings (cyclic garbage left by an earlier
+    frame or test) would abort the process (Dr.Jit 1.5)."""
+    import gc
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return func(*args)
+    finally:
+        if was_enabled:
+            gc.enable()
+
+
+def _raise_without_cycle(renderer):
+    """Raise the error the kernels raised while being recorded. Its traceback holds this frame; had the
+    frame kept the error in a local, error -> traceback -> frame -> error would be a cycle holding the
+    renderer (and its recordings) until a garbage collection, which may come inside another recording."""
+    error, renderer._recording_error = renderer._recording_error, None
+    try:
+        raise error
+    finally:
+        del error
 
 
 def _freeze(renderer_ref):
