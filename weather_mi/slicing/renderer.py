@@ -29,6 +29,7 @@ from ..scene.spec import SceneSpec
 from ..kernel.sky import sky_irradiance_horizontal
 from .blur import variance_per_metre
 from .eye import LightModel, composite
+from .recording import freeze_kernels, raise_recording_error, without_gc
 from .frame_inputs import EyeInputs, EyeRays, FrameInputs, KernelConstants, MultipleLight, TextureBuild
 from .geometry import slice_geometry, slicing_box
 from .jitter import jitter_rotation, slab_offsets
@@ -166,8 +167,8 @@ class SliceRenderer:
         # frames whose inputs keep their structure launch the recorded kernels without tracing Python
         # (dr.freeze; FROZEN_FRAMES False or SliceRenderer.frozen = False: traced every frame)
         self.frozen = FROZEN_FRAMES
-        self._frozen_kernels = _freeze(weakref.ref(self))
-        self._recording_error = None  # what the kernels raised while being recorded (see _freeze)
+        self._frozen_kernels = freeze_kernels(weakref.ref(self))
+        self._recording_error = None  # what the kernels raised while being recorded (see recording.freeze_kernels)
         self._constants = KernelConstants(self)  # all of the renderer that its frame's kernels see
 
     def _make_textures(self, mode: SliceMode):
@@ -324,10 +325,10 @@ class SliceRenderer:
             if return_arrays:
                 return out, transmittance
         else:  # the recorded kernels (re-recorded when the structure of the inputs changes)
-            result = _without_gc(self._frozen_kernels, inputs)
+            result = without_gc(self._frozen_kernels, inputs)
             if result is None:  # the kernels raised while being recorded: drop the recording, raise here
                 self._frozen_kernels.clear()
-                _raise_without_cycle(self)
+                raise_recording_error(self)
             out, transmittance, store, sky_store = result
         self.light.bind(inputs.sun, store)  # the arrays outside the recording
         if self.sky_light is not None:
@@ -483,53 +484,6 @@ class SliceRenderer:
 
 
 FROZEN_FRAMES = True
-FREEZE_LIMIT = 8  # recordings kept per renderer (slice counts of the viewer's drafts, rebuilt or not, ...)
-
-
-def _without_gc(func, *args):
-    """``func(*args)`` with Python's cyclic garbage collector held off: a collection that ran inside a
-    ``dr.freeze`` recording and freed another renderer's recordings (cyclic garbage left by an earlier
-    frame or test) would abort the process (Dr.Jit 1.5)."""
-    import gc
-    was_enabled = gc.isenabled()
-    gc.disable()
-    try:
-        return func(*args)
-    finally:
-        if was_enabled:
-            gc.enable()
-
-
-def _raise_without_cycle(renderer):
-    """Raise the error the kernels raised while being recorded. Its traceback holds this frame; had the
-    frame kept the error in a local, error -> traceback -> frame -> error would be a cycle holding the
-    renderer (and its recordings) until a garbage collection, which may come inside another recording."""
-    error, renderer._recording_error = renderer._recording_error, None
-    try:
-        raise error
-    finally:
-        del error
-
-
-def _freeze(renderer_ref):
-    """The renderer's ``_kernels`` recorded by ``dr.freeze`` (one recording per structure of its inputs,
-    the last FREEZE_LIMIT kept). Through a weak reference: a frozen function that held its renderer would
-    make a reference cycle, and Dr.Jit aborts when the garbage collector frees recordings. An exception
-    raised out of this recording aborts the process too (Dr.Jit 1.5: "enqueue_host_func(): this function
-    cannot be recorded"): the kernels' exception is kept on the renderer and the recording returns None
-    (``frame`` drops the recordings and raises it)."""
-    import drjit as dr
-
-    def kernels(inputs):
-        renderer = renderer_ref()
-        try:
-            return renderer._constants._kernels(inputs)
-        except Exception as error:  # (raised out of a recording, it would abort the process: see frame)
-            renderer._recording_error = error
-            return None
-    return dr.freeze(kernels, limit=FREEZE_LIMIT, warn_after=4 * FREEZE_LIMIT)
-
-
 def ground_radiance(spec: SceneSpec, e_sky, albedo=None) -> tuple[np.ndarray, np.ndarray]:
     """RGB radiance (W/m^2/sr) of ``spec``'s Lambertian ground in the open, from the sun and from the sky:
     rho / pi E_sun mu0 and rho / pi E_sky, E_sky the sky's irradiance on a horizontal plane
