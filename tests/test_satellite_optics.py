@@ -92,5 +92,5 @@ def test_band_volume_is_grey():
     np.testing.assert_array_equal(bv.albedo[..., 0], vol.albedo[..., 0])  # the nearest channel, 650 nm
     for t in bv.phase_tables:
         np.testing.assert_array_equal(t.values[:, 0], t.values[:, 1])
-    with pytest.raises(ValueError, match="0.47, 0.64, 0.86"):
+    with pytest.raises(ValueError, match="0.47, 0.51, 0.64, 0.86"):
         band("1.6")

@@ -2,7 +2,7 @@
 
     weather-mi info FILE | --demo supercell|cumulus|stratocumulus [--lat LAT --lon LON --date UTC]
     weather-mi render FILE | --demo supercell|cumulus|stratocumulus [options] [--scheduler ADDR | --workers N] -o out.exr
-    weather-mi satellite FILE | --demo NAME [--satellite goes-east|goes-west|himawari|meteosat] [--band 0.64]
+    weather-mi satellite FILE | --demo NAME [--satellite goes-east|goes-west|himawari|meteosat] [--band 0.64 | --rgb]
                [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC] -o out/sat.nc
     weather-mi animate WRFOUT... [--renderer slices|reference] [options] [--scheduler ADDR | --workers N] -o DIR
     weather-mi validate -o DIR [--quick]
@@ -137,11 +137,30 @@ def satellite_command(args) -> Path:
     from ..satellite import imagery as si
     resolution = si.parse_resolution_km(args.resolution)
     nc, exr, png, ckpt = si.satellite_outputs(args.output)
+    check_satellite_bands(args)
     check_time(args.file, args.demo, args.time)
     check_writable_folder(nc)
     with OutputLock(nc):
         check_unfinished(ckpt, args.resume)
         return _satellite(args, resolution, nc, exr, png, ckpt)
+
+
+def check_satellite_bands(args) -> None:
+    """The band options against the satellite, before the input is read: ``--rgb`` or one ``--band`` (not
+    both), a band the satellite's imager has; ``--resume`` not with ``--rgb --rayleigh`` (no checkpoints)."""
+    from ..satellite.bands import band, check_band_on, true_color_bands
+    from ..satellite.geostationary import satellite
+    sat = satellite(args.satellite)
+    if args.rgb and args.band is not None:
+        raise ValueError(f"--rgb renders the true-colour bands ({', '.join(b.name for b in true_color_bands(sat))} "
+                         f"um on {sat.name}) in one run: drop --band {args.band}, or drop --rgb for one band")
+    if args.rgb:
+        true_color_bands(sat)
+        if args.rayleigh and args.resume:
+            raise ValueError("--rgb --rayleigh renders the bands one at a time without checkpoints: --resume "
+                             "does not apply")
+    else:
+        check_band_on(band(args.band or "0.64"), sat)
 
 
 def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
@@ -150,8 +169,11 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     from ..optics.volume import optical_volume
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, phase=args.phase)
-    scene = si.satellite_scene(hyd, vol, args.satellite, args.band, resolution, rayleigh=args.rayleigh,
-                               ground_albedo=args.ground_albedo, seed=args.seed)
+    if args.rgb:
+        return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
+    scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
+                               ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
+                               seed=args.seed)
     w, h = scene.view.size
     print(f"{scene.satellite.name} (sub-satellite longitude {scene.satellite.sub_lon_deg}), band {scene.band.name} um: "
           f"{w} x {h} pixels of {resolution:g} km, view zenith {scene.view.view_zenith_deg.min():.1f}-"
@@ -166,6 +188,38 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s; cloud pixels "
           f"{int(ds.cloud.sum())}, mean relative standard error {ds.attrs['cloud_rse_mean']:.3f}; reflectance "
           f"{float(ds.reflectance.where(ds.in_domain == 1).mean()):.3f} mean over the domain)")
+    return nc
+
+
+def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt) -> Path:
+    """``satellite --rgb``: the true-colour bands in one render (per band with --rayleigh), the NetCDF with a
+    band dimension, the EXR (the bands in R, G, B) and the PNG of the operational recipe
+    (``satellite.truecolor``)."""
+    from ..satellite import truecolor as tc
+    from ..reference.cluster import session
+    scenes = tc.true_color_scenes(hyd, vol, args.satellite, resolution, rayleigh=args.rayleigh,
+                                  ground_albedo=args.ground_albedo, seed=args.seed)
+    s = scenes[0]
+    w, h = s.view.size
+    names = ", ".join(sc.band.name for sc in scenes) if len(scenes) > 1 else ", ".join(b.name for b in s.bands)
+    how = "one render per band (the air's extinction differs)" if len(scenes) > 1 else "one render, one band per channel"
+    print(f"{s.satellite.name} (sub-satellite longitude {s.satellite.sub_lon_deg}), true colour from {names} um, "
+          f"{how}: {w} x {h} pixels of {resolution:g} km, solar zenith {90 - s.spec.sun.elevation:.2f} deg at the "
+          f"centre ({s.sun_meta['valid_time']})")
+    with session(args.scheduler, args.workers) as client:
+        ds, img = tc.render_true_color(scenes, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
+                                       resume=ckpt if args.resume else None, client=client)
+    from ..io.output_paths import written_atomically
+    with written_atomically(nc, "NetCDF file") as tmp:
+        ds.to_netcdf(tmp)
+    img.save(exr)
+    tc.write_true_color_png(ds, png)
+    ckpt.unlink(missing_ok=True)
+    means = ", ".join(f"{b} {float(ds.reflectance.sel(band=b).where(ds.in_domain == 1).mean()):.3f}"
+                      for b in ds.band.values)
+    print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s; cloud pixels "
+          f"{int(ds.cloud.sum())}; reflectance over the domain {means}; the PNG: sun-zenith"
+          f"{', Rayleigh' if args.rayleigh else ''} corrected, CIRA-stretched true colour)")
     return nc
 
 
@@ -289,14 +343,18 @@ def _add_satellite_parser(sub) -> None:
     _add_source(sat)
     add_place_options(sat)
     sat.add_argument("--satellite", default="goes-east", choices=tuple(SATELLITES))
-    sat.add_argument("--band", default="0.64", choices=tuple(BANDS), help="central wavelength (um), rendered "
-                                                                         "monochromatically")
+    sat.add_argument("--band", default=None, choices=tuple(BANDS), help="central wavelength (um), rendered "
+                                                                      "monochromatically (default 0.64)")
+    sat.add_argument("--rgb", action="store_true",
+                     help="true colour: the 0.47, 0.64, 0.86 um bands (himawari: 0.47, 0.51, 0.64) in one render, "
+                          "a NetCDF with a band dimension and the operational products' RGB as the PNG")
     sat.add_argument("--resolution", default="1km", help="pixel size at the sub-satellite point (e.g. 1km, 500m)")
     sat.add_argument("--rayleigh", action="store_true", help="molecular scattering of the air in the domain")
     sat.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
     sat.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
-    sat.add_argument("--ground-albedo", type=float, default=0.06,
-                     help="surface albedo where the file has none (default 0.06, the sea)")
+    sat.add_argument("--ground-albedo", type=float, default=None,
+                     help="surface albedo where the file has none (default 0.06, the sea; with --rgb the sea "
+                          "per band, 0.06 at 0.47 um to 0.02 at 0.86 um)")
     add_flags(sat, SATELLITE_ESTIMATOR)
     sat.add_argument("--seed", type=int, default=0)
     sat.add_argument("--resume", action="store_true", help="continue from OUTPUT.exr.ckpt.npz")

@@ -12,6 +12,11 @@ Per species: water (cloud, rain) phase functions by Mie theory at the band's wav
 Hale & Querry water); ice species from the table channel nearest the band
 (``weather_mi.optics.phase.species_tables.nearest_channel``); single-scattering albedos from the volume's nearest
 channel (1 - omega < 1e-4 for cloud drops at 0.47-0.86 um).
+
+True colour (``rgb_volume``): three bands in one render, each band's single-wavelength optics in one of the
+renderers' channels (its phase tables and albedo there), one path set for all three. The extinction is
+geometric (Q_ext = 2) and so the same in every band; the molecules' is not (lambda^-4), which one render with
+one extinction cannot hold: ``satellite.truecolor`` renders the bands one at a time where the air is in.
 """
 from __future__ import annotations
 
@@ -47,6 +52,7 @@ class Band:
 # GOES-R ABI (PUG vol. 3, Table 3.3.1), Himawari AHI (JMA), MSG SEVIRI (EUMETSAT) visible channels
 BANDS = {
     "0.47": Band("0.47", 470e-9, {"abi": "C01", "ahi": "B01"}, {"abi": 1.0, "ahi": 1.0}),
+    "0.51": Band("0.51", 510e-9, {"ahi": "B02"}, {"ahi": 1.0}),
     "0.64": Band("0.64", 640e-9, {"abi": "C02", "ahi": "B03", "seviri": "VIS0.6"},
                  {"abi": 0.5, "ahi": 0.5, "seviri": 3.0}),
     "0.86": Band("0.86", 865e-9, {"abi": "C03", "ahi": "B04", "seviri": "VIS0.8"},
@@ -61,6 +67,35 @@ def band(name) -> Band:
         if key == k or _float(key) == float(k):
             return BANDS[k]
     raise ValueError(f"--band {name!r}: expected one of {', '.join(BANDS)} (micrometres)")
+
+
+# The true-colour bands of an imager in the order of the render's channels (red, green, blue): ABI has no green
+# band, its green is made from 0.47, 0.64 and 0.86 (``truecolor.simulated_green``); AHI has one, B02 at 0.51 um
+# The sea under a true-colour render where neither the file nor --ground-albedo gives the ground: a Lambertian
+# stand-in, grey 0.02 of surface reflection plus the light from the water, which pure water's absorption
+# (Pope & Fry 1997: 0.01/m at 0.47 um, 0.3/m at 0.64 um, several per metre at 0.86 um) leaves only in the blue;
+# values chosen, not fitted (the single-band default, 0.06, is kept at 0.47 um)
+SEA_ALBEDO = {"0.47": 0.06, "0.51": 0.05, "0.64": 0.03, "0.86": 0.02}
+IMAGERS = {"abi": "GOES-R ABI", "ahi": "Himawari AHI", "seviri": "MSG SEVIRI"}
+TRUE_COLOR = {"abi": ("0.64", "0.86", "0.47"), "ahi": ("0.64", "0.51", "0.47")}
+
+
+def check_band_on(b: Band, sat) -> None:
+    """A ValueError where ``sat``'s imager has no channel at band ``b`` (SEVIRI has no 0.47 um band, ABI no 0.51)."""
+    if sat.imager not in b.channels:
+        have = ", ".join(k for k, v in BANDS.items() if sat.imager in v.channels)
+        raise ValueError(f"--band {b.name}: {sat.name}'s imager ({IMAGERS[sat.imager]}) has no {b.name} um band; "
+                         f"it has {have}")
+
+
+def true_color_bands(sat) -> tuple:
+    """The (red, green, blue) channel bands of a true-colour render from ``sat``; a ValueError where its imager
+    has no blue band (SEVIRI)."""
+    if sat.imager not in TRUE_COLOR:
+        have = ", ".join(k for k, v in BANDS.items() if sat.imager in v.channels)
+        raise ValueError(f"--rgb: {sat.name}'s imager ({IMAGERS[sat.imager]}) has no 0.47 um (blue) band, only "
+                         f"{have}: true colour needs goes-east, goes-west or himawari")
+    return tuple(BANDS[k] for k in TRUE_COLOR[sat.imager])
 
 
 def _float(text: str):
@@ -85,4 +120,22 @@ def band_volume(vol: OpticalVolume, b: Band) -> OpticalVolume:
     return replace(vol, albedo=albedo, phase_tables=tuple(tables), attrs=attrs)
 
 
-__all__ = ["Band", "BANDS", "band", "band_volume"]
+def rgb_volume(vol: OpticalVolume, bands) -> OpticalVolume:
+    """``vol``'s optics with band ``bands[c]``'s (``band_volume``) in channel c: its phase tables there (on the
+    union of the bands' angle grids, exact for piecewise-linear tables) and its albedo."""
+    from ..optics.phase.table import PhaseTable
+    bvols = [band_volume(vol, b) for b in bands]
+    albedo = np.stack([np.asarray(bv.albedo)[..., c] for c, bv in enumerate(bvols)], axis=-1)
+    tables = []
+    for s in range(len(vol.species)):
+        per = [bv.phase_tables[s] for bv in bvols]
+        theta = np.unique(np.concatenate([t.theta for t in per]))
+        values = np.stack([t.eval(theta)[:, c] for c, t in enumerate(per)], axis=-1)
+        tables.append(PhaseTable(theta, values, tuple(b.wavelength_m for b in bands), f"{per[0].name} (true colour)"))
+    attrs = {**vol.attrs, "band": " ".join(b.name for b in bands),
+             "band_wavelength_m": [b.wavelength_m for b in bands]}
+    return replace(vol, albedo=albedo.astype(np.float32), phase_tables=tuple(tables), attrs=attrs)
+
+
+__all__ = ["Band", "BANDS", "IMAGERS", "TRUE_COLOR", "band", "band_volume", "check_band_on", "true_color_bands", "SEA_ALBEDO",
+           "rgb_volume"]

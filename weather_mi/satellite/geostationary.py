@@ -38,12 +38,15 @@ class Satellite:
         Height above the ellipsoid's equator (metres).
     sweep : str
         PROJ ``sweep`` axis: "x" for GOES ABI, "y" for Himawari AHI and Meteosat SEVIRI.
+    imager : str
+        Its imager, a key of ``bands.Band.channels``: "abi", "ahi" or "seviri".
     """
 
     name: str
     sub_lon_deg: float
     height_m: float = GOES_HEIGHT_M
     sweep: str = "x"
+    imager: str = "abi"
 
     def proj_string(self) -> str:
         """PROJ definition of the fixed grid on the WGS84 ellipsoid; its x/y are scan angle (rad) x h."""
@@ -62,8 +65,8 @@ class Satellite:
 SATELLITES = {
     "goes-east": Satellite("goes-east", -75.2, sweep="x"),
     "goes-west": Satellite("goes-west", -137.2, sweep="x"),
-    "himawari": Satellite("himawari", 140.7, sweep="y"),
-    "meteosat": Satellite("meteosat", 0.0, sweep="y"),
+    "himawari": Satellite("himawari", 140.7, sweep="y", imager="ahi"),
+    "meteosat": Satellite("meteosat", 0.0, sweep="y", imager="seviri"),
 }
 
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .bands import Band, band, band_volume
+from .bands import Band, band, band_volume, check_band_on, rgb_volume, true_color_bands
 from .geostationary import Satellite, satellite
 from ..optics.volume import OpticalVolume
 from .rays import SatelliteView, satellite_view
@@ -26,7 +26,8 @@ RAY_START_ABOVE_M = 10.0  # rays start this far above the medium's top
 @dataclass(frozen=True)
 class SatelliteScene:
     """What ``render_satellite`` renders: the scene (rays from ``view``), the band's volume, the sun's
-    metadata (``place.sun_from_time``), the satellite and band."""
+    metadata (``place.sun_from_time``), the satellite and band; ``bands``: the band of each of the render's
+    channels in a true-colour render (``bands.rgb_volume``), else empty."""
 
     spec: SceneSpec
     vol: OpticalVolume
@@ -34,13 +35,16 @@ class SatelliteScene:
     satellite: Satellite
     band: Band
     sun_meta: dict = field(default_factory=dict)
+    bands: tuple = ()
 
 
 def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east", band_name: str = "0.64",
-                    resolution_km: float = 1.0, *, rayleigh: bool = False, ground_albedo: float = 0.06,
-                    seed: int = 0, max_vza_deg: float = 80.0, sun_time=None) -> SatelliteScene:
+                    resolution_km: float = 1.0, *, rayleigh: bool = False, ground_albedo=0.06,
+                    seed: int = 0, max_vza_deg: float = 80.0, sun_time=None, rgb: bool = False) -> SatelliteScene:
     """The satellite's view of ``hyd`` (its place and valid time) with ``vol``'s optics in the band;
-    ``sun_time`` (UTC): the sun of another time over the same clouds (a study of the sun's elevation).
+    ``sun_time`` (UTC): the sun of another time over the same clouds (a study of the sun's elevation);
+    ``rgb``: the satellite's true-colour bands in one render (``bands.rgb_volume``; ``band_name`` unused;
+    ``ground_albedo`` one value or one per channel), without molecules (their extinction is not grey).
 
     Raises
     ------
@@ -59,11 +63,16 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
         raise ValueError(f"{source}: a satellite view needs the domain's latitude/longitude; the file has none "
                          "(an ideal case: give --lat and --lon, and --date for the sun)")
     sat = satellite(sat) if isinstance(sat, str) else sat
-    b = band(band_name)
+    bands = true_color_bands(sat) if rgb else ()
+    b = bands[0] if rgb else band(band_name)
+    check_band_on(b, sat)
+    if rgb and rayleigh:
+        raise ValueError("a true-colour render holds no molecules (one extinction for the three bands): render "
+                         "the bands one at a time (satellite.truecolor)")
     top = float(vol.bbox[1][2]) + RAY_START_ABOVE_M
     view = satellite_view(place, sat, resolution_km, top, max_vza_deg, source)
     azimuth, elevation, sun_meta = sun_from_time(hyd)
-    bvol = band_volume(vol, b)
+    bvol = rgb_volume(vol, bands) if rgb else band_volume(vol, b)
     if rayleigh:
         from ..optics.rayleigh import with_rayleigh
         bvol = with_rayleigh(bvol, b.wavelength_m, hyd["rho_air"].values)
@@ -74,7 +83,7 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     w, h = view.size
     spec = SceneSpec(camera=cam, sun=Sun(azimuth, elevation, (1.0, 1.0, 1.0)), sky=None,
                      ground=Ground(albedo=ground_albedo), width=w, height=h, seed=seed, rays=view.rays)
-    return SatelliteScene(spec, bvol, view, sat, b, sun_meta)
+    return SatelliteScene(spec, bvol, view, sat, b, sun_meta, bands)
 
 
 def render_satellite(scene: SatelliteScene, spp: int = 64, **reference_kw):
@@ -95,14 +104,18 @@ def _grid_mapping(sat: Satellite) -> dict:
             "sweep_angle_axis": sat.sweep, "proj4": sat.proj_string()}
 
 
-def satellite_dataset(scene: SatelliteScene, img):
+def satellite_dataset(scene: SatelliteScene, img, channel: int | None = None):
     """A CF-1.8 dataset of a satellite render: reflectance and its standard error, solar and view angles,
-    latitude/longitude, the cloud and in-domain masks, on the fixed grid (x, y scan angles in radians)."""
+    latitude/longitude, the cloud and in-domain masks, on the fixed grid (x, y scan angles in radians).
+    ``channel``: the reflectance of that channel of the image (a true-colour render's band), else their mean."""
     import xarray as xr
     from ..scene.solar import SolarPosition, sun_angles_at
     v, m = scene.view, scene.sun_meta
-    refl = np.asarray(img.radiance, np.float64).mean(axis=2)
-    se = np.asarray(img.stderr, np.float64).mean(axis=2) if img.stderr is not None else np.full_like(refl, np.nan)
+    b = scene.bands[channel] if channel is not None and scene.bands else scene.band
+    pick = slice(None) if channel is None else slice(channel, channel + 1)
+    refl = np.asarray(img.radiance, np.float64)[..., pick].mean(axis=2)
+    se = np.asarray(img.stderr, np.float64)[..., pick].mean(axis=2) if img.stderr is not None \
+        else np.full_like(refl, np.nan)
     centre = SolarPosition(m["solar_zenith_deg"], m["solar_zenith_geometric_deg"], m["solar_azimuth_true_deg"])
     sza, saa = sun_angles_at(centre, m["centre_lat"], m["centre_lon"], v.lat, v.lon)
     from .rays import crosses_box
@@ -116,7 +129,7 @@ def satellite_dataset(scene: SatelliteScene, img):
                 {"long_name": long_name, "units": units, "grid_mapping": gm, "coordinates": "lat lon", **attrs})
 
     ds = xr.Dataset(
-        {"reflectance": var(refl, f"bidirectional reflectance factor pi L / (E0 cos theta0), {scene.band.name} um",
+        {"reflectance": var(refl, f"bidirectional reflectance factor pi L / (E0 cos theta0), {b.name} um",
                             "1", standard_name="toa_bidirectional_reflectance"),
          "reflectance_standard_error": var(se, "standard error of the reflectance (Monte Carlo)", "1"),
          "solar_zenith_angle": var(sza, "solar zenith angle at the pixel", "degree", standard_name="solar_zenith_angle"),
@@ -137,10 +150,10 @@ def satellite_dataset(scene: SatelliteScene, img):
                 "lat": (dims, v.lat, {"standard_name": "latitude", "units": "degrees_north"}),
                 "lon": (dims, v.lon, {"standard_name": "longitude", "units": "degrees_east"})})
     meta = img.metadata
-    ds.attrs = {"Conventions": "CF-1.8", "title": f"weather-mi synthetic {scene.satellite.name} {scene.band.name} um image",
+    ds.attrs = {"Conventions": "CF-1.8", "title": f"weather-mi synthetic {scene.satellite.name} {b.name} um image",
                 "source": str(scene.vol.attrs.get("source", "")), "satellite": scene.satellite.name,
-                "sub_satellite_longitude_deg": scene.satellite.sub_lon_deg, "band_um": scene.band.name,
-                "band_wavelength_m": scene.band.wavelength_m, "resolution_km": v.resolution_km,
+                "sub_satellite_longitude_deg": scene.satellite.sub_lon_deg, "band_um": b.name,
+                "band_wavelength_m": b.wavelength_m, "resolution_km": v.resolution_km,
                 "valid_time": str(m.get("valid_time")), "rayleigh": int("rayleigh" in scene.vol.species),
                 "rendered_solar_zenith_deg": 90.0 - scene.spec.sun.elevation,
                 "one_sun_max_error_deg": float(m.get("one_sun_max_error_deg", np.nan)),
