@@ -136,3 +136,27 @@ def test_satellite_keeps_an_unfinished_render(tmp_path, capsys):
         warnings.simplefilter("ignore", UserWarning)
         assert cli.main(_plateau_args(tmp_path)) == 2
     assert "--resume" in capsys.readouterr().err and ckpt.read_bytes() == b"earlier passes"
+
+
+def test_the_netcdf_carries_what_the_ecosystem_reads(tmp_path):
+    """platform, sensor, times and the band's wavelength as satpy-like tools read them, and a grid mapping
+    from which pyresample (an independent reader of CF) rebuilds the fixed grid: its AreaDefinition's
+    longitudes and latitudes are the dataset's own, pixel by pixel."""
+    pytest.importorskip("pyresample")
+    from pyresample.utils.cf import load_cf_area
+    from weather_mi.scene.place import assume_place
+    from weather_mi.satellite.imagery import render_satellite, satellite_scene
+    hyd = assume_place(wm.synthetic.cumulus(), lat=20.0, lon=-60.0, date="2024-07-01T15:00:00Z")
+    scene = satellite_scene(hyd, wm.optical_volume(hyd), "goes-east", "0.64", resolution_km=4.0)
+    ds, _ = render_satellite(scene, spp=2, progress=False)
+    assert ds.attrs["platform_name"] == "GOES-East" and ds.attrs["sensor"] == "abi"
+    assert ds.attrs["start_time"] == ds.attrs["end_time"] == "2024-07-01T15:00:00Z"
+    r = ds["reflectance"].attrs
+    assert r["standard_name"] == "toa_bidirectional_reflectance" and r["wavelength"] == pytest.approx(0.64)
+    assert r["channel"] == "C02"
+    ds.to_netcdf(tmp_path / "sat.nc")
+    area, info = load_cf_area(str(tmp_path / "sat.nc"), variable="reflectance")
+    assert info["type_of_grid_mapping"] == "geostationary" and area.shape == ds["reflectance"].shape
+    lons, lats = area.get_lonlats()
+    np.testing.assert_allclose(lons, ds["lon"].values, atol=1e-6)
+    np.testing.assert_allclose(lats, ds["lat"].values, atol=1e-6)

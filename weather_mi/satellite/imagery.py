@@ -159,8 +159,24 @@ def satellite_dataset(scene: SatelliteScene, img, channel: int | None = None):
                 "one_sun_max_error_deg": float(m.get("one_sun_max_error_deg", np.nan)),
                 "spp": int(meta.get("spp", 0)), "seconds": float(meta.get("seconds", np.nan)),
                 "cloud_rse_mean": float((meta.get("noise") or {}).get("rse_mean", np.nan)),
-                "history": "weather-mi satellite (3-D path tracing, majorant_volpath)"}
+                "history": "weather-mi satellite (3-D path tracing, majorant_volpath)",
+                **_ecosystem_attrs(scene.satellite, m.get("valid_time"))}
+    ds["reflectance"].attrs.update(wavelength=b.wavelength_m * 1e6, wavelength_units="um",
+                                   channel=b.channels.get(scene.satellite.imager, ""))
     return ds
+
+
+# the names the Pytroll ecosystem (satpy's readers and writers, pyspectral) gives the imagers and the
+# satellites at these positions; the image is synthetic, so the platform is named by its position
+PLATFORM_NAMES = {"goes-east": "GOES-East", "goes-west": "GOES-West", "himawari": "Himawari", "meteosat": "Meteosat"}
+
+
+def _ecosystem_attrs(sat: Satellite, valid_time) -> dict:
+    """Global attributes satpy-like tools read: ``platform_name``, ``sensor`` (lower case, as satpy's
+    ``abi``/``ahi``/``seviri``), ``start_time``/``end_time`` (ISO 8601 UTC; a model time is an instant)."""
+    t = "" if valid_time in (None, "None") else str(valid_time)
+    return {"platform_name": PLATFORM_NAMES.get(sat.name, sat.name), "sensor": sat.imager,
+            "start_time": t, "end_time": t}
 
 
 def parse_resolution_km(text) -> float:

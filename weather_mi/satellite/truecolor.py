@@ -194,7 +194,8 @@ def rgb_dataset(parts):
                           wavelength=("band", np.asarray(wl_um), {"standard_name": "radiation_wavelength",
                                                                   "units": "um", "long_name": "central wavelength"}))
     ds["reflectance"].attrs.update(long_name="bidirectional reflectance factor pi L / (E0 cos theta0) per band",
-                                   wavelength=wl_um, coordinates="lat lon wavelength")
+                                   wavelength=wl_um, coordinates="lat lon wavelength",
+                                   channel=[str(d["reflectance"].attrs.get("channel", "")) for d in parts])
     if "rayleigh_reflectance" in ds:
         ds["rayleigh_optical_depth"] = ("band", np.asarray([d.attrs["rayleigh_optical_depth"] for d in parts]),
                                         {"long_name": "the domain's molecular optical depth (column mean)", "units": "1"})
