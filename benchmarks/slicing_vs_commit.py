@@ -3,11 +3,13 @@ round after round, so that the shared cores' load falls on both alike.
 
     .venv/bin/python benchmarks/slicing_vs_commit.py [--commit c73a480] [--rounds 3] [--size 300x300]
                                                      [--slices 128] [--frames 5] [--fixed]
+                                                     [--case scaling camera sun drag]
 
-The earlier commit is checked out into a temporary git worktree (its plugins linked in, as
+The earlier commit is extracted into a temporary directory (``git archive``; its plugins linked in, as
 validation/bit_identity.py does); each round runs, in a fresh process per tree, the frames-per-second
 measurement of benchmarks/slicing.py (frozen frames, every frame changing a scaling as a slider drag
-does) on the demo supercell. Prints the median over rounds per mode and tree and their ratio. With
+does; ``--case``: the camera, the sun or both moving every frame instead, ``moving_view``) on the demo
+supercell. Prints the median over rounds per mode and tree and their ratio. With
 ``--fixed``: the fixed cost per frame instead, in ms (a 64 x 48 frame, 8 slices, an 8 x 8 light buffer:
 kernels with almost nothing to do), for a change of the light parameters and of a scaling (which rebuilds
 the textures over the whole grid), in each tree's own default (traced, or recorded where it has dr.freeze).
@@ -33,7 +35,9 @@ vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
 spec = wm.scene.spec.default_spec(vol, {w}, {h})
 for name, mode in MODES.items():
     r = SliceRenderer(vol, mode, slices={slices}, light_res=128, detail_field=detail_field(vol) if mode.detail else None)
-    print("FPS", name, 1.0 / seconds_per_frame(r, spec, {frames}), flush=True)
+    for case in {cases!r}:
+        print("FPS", name + ("" if case == "scaling" else ":" + case),
+              1.0 / seconds_per_frame(r, spec, {frames}, case, vol, start={start}), flush=True)
 """
 
 FIXED = """
@@ -57,9 +61,10 @@ for name in ("per-species/translucent", "per-species/multiple"):
 """
 
 
-def measure(tree: Path, w: int, h: int, slices: int, frames: int, fixed: bool = False) -> dict:
+def measure(tree: Path, w: int, h: int, slices: int, frames: int, fixed: bool = False, cases=("scaling",),
+            start: int = 0) -> dict:
     code = (FIXED if fixed else MEASURE).format(bench=str(ROOT / "benchmarks"), w=w, h=h, slices=slices,
-                                                frames=frames)
+                                                frames=frames, cases=tuple(cases), start=start)
     env = {**os.environ, "PYTHONPATH": str(tree)}
     out = subprocess.run([sys.executable, "-c", code], cwd=tree, capture_output=True, text=True, env=env,
                          check=True).stdout
@@ -74,23 +79,24 @@ def main() -> int:
     ap.add_argument("--slices", type=int, default=128)
     ap.add_argument("--frames", type=int, default=5)
     ap.add_argument("--fixed", action="store_true", help="the fixed cost per frame (ms, 64 x 48) instead of fps")
+    ap.add_argument("--case", nargs="+", default=["scaling"], choices=("scaling", "camera", "sun", "drag"),
+                    help="what changes every frame (benchmarks/slicing.py moving_view): a scaling (default), the "
+                         "camera, the sun, or both (drag)")
     args = ap.parse_args()
     w, h = (int(v) for v in args.size.lower().split("x"))
     with tempfile.TemporaryDirectory() as tmp:
         old = Path(tmp) / "old"
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(old), args.commit], check=True,
-                       capture_output=True)
-        try:
-            if not (old / "weather_mi" / "plugins").exists():  # as the editable install maps them
-                (old / "weather_mi" / "plugins").symlink_to("../plugins")
-            fps = {"old": [], "new": []}
-            for k in range(args.rounds):
-                for label, tree in (("old", old), ("new", ROOT)):
-                    fps[label].append(measure(tree, w, h, args.slices, 4 * args.frames if args.fixed else args.frames,
-                                              args.fixed))
-                print(f"round {k + 1}/{args.rounds} done", flush=True)
-        finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(old)], capture_output=True)
+        old.mkdir()  # the earlier tree as files (git archive: no worktree to add or remove)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.commit], check=True, capture_output=True)
+        subprocess.run(["tar", "-x", "-C", str(old)], input=archive.stdout, check=True)
+        if not (old / "weather_mi" / "plugins").exists():  # as the editable install maps them
+            (old / "weather_mi" / "plugins").symlink_to("../plugins")
+        fps = {"old": [], "new": []}
+        for k in range(args.rounds):
+            for label, tree in (("old", old), ("new", ROOT)):
+                fps[label].append(measure(tree, w, h, args.slices, 4 * args.frames if args.fixed else args.frames,
+                                          args.fixed, args.case, start=1000 * k))
+            print(f"round {k + 1}/{args.rounds} done", flush=True)
     what = "fixed cost per frame, ms (64 x 48, 8 slices, 8^2 light buffer)" if args.fixed else \
         f"{w} x {h}, {args.slices} slices, frames per second"
     print(f"\n{what} (median of {args.rounds} rounds)")

@@ -44,6 +44,27 @@ def sky_radiance(spec: SceneSpec, dirs: np.ndarray, cache: dict | None = None) -
     return scale * np.asarray(emitter.eval(si), dtype=np.float64).T.reshape(-1, 3)
 
 
+def sky_radiance_arrays(spec: SceneSpec, dirs, cache: dict | None = None):
+    """``sky_radiance`` as a kernel's mi.Color3f (float32, as ``jitarrays.aligned_float`` rounds it) along
+    unit directions given as a mi.Vector3f (float32): no round trip through numpy."""
+    import drjit as dr
+    import mitsuba as mi
+    n = dr.width(dirs)
+    if spec.sky is None:
+        return dr.zeros(mi.Color3f, n)
+    if spec.sky.kind == "constant":
+        return mi.Color3f(*(dr.opaque(mi.Float, float(v)) for v in spec.sky.radiance)) + dr.zeros(mi.Color3f, n)
+    dr.eval(dirs)
+    emitter, scale = _sky_emitter(spec, cache)
+    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    # a copy made after the emitter's update, as sky_radiance's upload is: the kernel's inputs come in the
+    # same order every frame (the same kernel, none compiled anew)
+    si.wi = -dr.copy(dirs)
+    value = emitter.eval(si)
+    k = dr.opaque(mi.Float64, float(scale))
+    return mi.Color3f(*(mi.Float(mi.Float64(value[c]) * k) for c in range(3)))
+
+
 def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | None = None) -> np.ndarray:
     """Irradiance (W/m^2, RGB) of the sky on a horizontal surface: pi L for a constant sky; for the
     Hosek-Wilkie sky, pi x the mean radiance over cosine-distributed directions (stratified)."""
