@@ -42,15 +42,20 @@ CASES = ("drag", "scaling", "camera", "sun")  # the headline first
 
 def moving_view(vol, width: int, height: int, case: str, i: int, start: int = 0):
     """(SceneSpec, SliceParams) of frame ``i`` of a drag ``case``: "scaling" (a species' scaling changes,
-    the view is kept: the textures are rebuilt), "camera" (the camera orbits 0.7 deg a frame), "sun" (the
-    sun turns 1.1 deg a frame in azimuth and 0.3 deg in elevation), "drag" (camera and sun both). Views
-    never repeat within a run (``start``: the first frame's index), as in a real drag."""
+    the view is kept: the textures are rebuilt), "camera" (the camera swings back and forth around the
+    default view, up to 8 deg in azimuth and 3 deg in elevation, a few degrees a frame), "sun" (the sun
+    likewise around azimuth 240, elevation 35), "drag" (camera and sun both). The moves stay near the view of
+    the scaling case, so the cases compare the same kind of picture; views never repeat within a run
+    (``start``: the first frame's index)."""
+    import math
     import weather_mi as wm
     k = start + i
-    cam = case in ("camera", "drag")
-    sun = case in ("sun", "drag")
-    spec = wm.scene.spec.default_spec(vol, width, height, camera_azimuth=200.0 + (0.7 * k if cam else 0.0))
-    sun_dir = wm.Sun(240.0 + 1.1 * k, 35.0 + 0.3 * (k % 20)) if sun else wm.Sun(240.0, 35.0)
+    swing = lambda rate, phase: math.sin(rate * k + phase)  # noqa: E731  (incommensurate rates: no repeats)
+    cam, sun = case in ("camera", "drag"), case in ("sun", "drag")
+    spec = wm.scene.spec.default_spec(vol, width, height,
+                                      camera_azimuth=200.0 + (8.0 * swing(0.31, 0.0) if cam else 0.0),
+                                      camera_elevation=8.0 + (3.0 * swing(0.23, 1.0) if cam else 0.0))
+    sun_dir = wm.Sun(240.0 + 8.0 * swing(0.27, 2.0), 35.0 + 3.0 * swing(0.19, 3.0)) if sun else wm.Sun(240.0, 35.0)
     spec = wm.SceneSpec(camera=spec.camera, sun=sun_dir, sky=spec.sky, ground=spec.ground, width=width,
                         height=height)
     params = SliceParams(scale={"ice": 1.0 + 0.1 * (k % 97 + 1)}) if case == "scaling" else SliceParams()

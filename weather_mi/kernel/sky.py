@@ -56,25 +56,38 @@ def _eval_numpy(spec: SceneSpec, upload, cache):
     return scale * np.asarray(emitter.eval(si), dtype=np.float64).T.reshape(-1, 3)
 
 
-def sky_radiance_arrays(spec: SceneSpec, dirs, cache: dict | None = None):
+def sky_radiance_arrays(spec: SceneSpec, dirs, cache: dict | None = None, active=None):
     """``sky_radiance`` as a kernel's mi.Color3f (float32, as ``jitarrays.aligned_float`` rounds it) along
-    unit directions given as a mi.Vector3f (float32): no round trip through numpy."""
+    unit directions given as a mi.Vector3f (float32): no round trip through numpy. ``active``: None, or a
+    mi.Bool of the lanes that need the sky (the emitter is evaluated on those alone; 0 elsewhere)."""
     import drjit as dr
     import mitsuba as mi
     n = dr.width(dirs)
     if spec.sky is None:
         return dr.zeros(mi.Color3f, n)
     if spec.sky.kind == "constant":
-        return mi.Color3f(*(dr.opaque(mi.Float, float(v)) for v in spec.sky.radiance)) + dr.zeros(mi.Color3f, n)
+        value = mi.Color3f(*(dr.opaque(mi.Float, float(v)) for v in spec.sky.radiance)) + dr.zeros(mi.Color3f, n)
+        return value if active is None else dr.select(active, value, 0.0)
+    index = None
+    if active is not None:  # the lanes that see the sky, packed (the emitter's model is costly)
+        index = dr.compress(active)
+        if dr.width(index) == 0:  # Mitsuba cannot evaluate 0 lanes
+            return dr.zeros(mi.Color3f, n)
+        dirs = dr.gather(mi.Vector3f, dirs, index)
     dr.eval(dirs)
     emitter, scale = _sky_emitter(spec, cache)
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    si = dr.zeros(mi.SurfaceInteraction3f, dr.width(dirs))
     # a copy made after the emitter's update, as sky_radiance's upload is: the kernel's inputs come in the
     # same order every frame (the same kernel, none compiled anew)
     si.wi = -dr.copy(dirs)
     value = emitter.eval(si)
     k = dr.opaque(mi.Float64, float(scale))
-    return mi.Color3f(*(mi.Float(mi.Float64(value[c]) * k) for c in range(3)))
+    value = mi.Color3f(*(mi.Float(mi.Float64(value[c]) * k) for c in range(3)))
+    if index is None:
+        return value
+    out = dr.zeros(mi.Color3f, n)
+    dr.scatter(out, value, index)
+    return out
 
 
 def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | None = None) -> np.ndarray:

@@ -92,7 +92,7 @@ class ViewCache:
         if bg_key not in self.backgrounds:
             import drjit as dr
             direction = mi.Vector3f(*(f32(mi, v) for v in d))
-            sky = sky_radiance_arrays(spec, direction, self.sky)
+            sky = sky_radiance_arrays(spec, direction, self.sky, active=~hit)
             dr.eval(sky)  # (a kernel of its own, as Mitsuba's emitter gives it: the same kernel every frame)
             s = rays.Scalars(mi, s=spec.sun.to_sun)  # (new values compile nothing)
             cos = (d[0] * s["s0"] + d[1] * s["s1"]) + d[2] * s["s2"]
