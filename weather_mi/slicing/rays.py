@@ -62,8 +62,8 @@ def camera_rays(mi, spec):
     half = (cam.ortho_width / 2, cam.ortho_height / 2) if ortho else (tan_x, tan_x * h / w)
     sc = Scalars(mi, w=w, h=h, half_x=half[0], half_y=half[1], fwd=fwd, left=left, up=up, origin=cam.origin)
     idx = dr.arange(mi.UInt32, w * h)
-    row = idx // dr.opaque(mi.UInt32, w)
-    col = idx - row * dr.opaque(mi.UInt32, w)
+    row = idx // w  # (a literal divisor: a multiplication; the image size is part of the kernel anyway)
+    col = idx - row * w
     gx = 1.0 - 2.0 * (mi.Float64(col) + 0.5) / sc["w"]
     gy = 1.0 - 2.0 * (mi.Float64(row) + 0.5) / sc["h"]
     a, b = gx * sc["half_x"], gy * sc["half_y"]
@@ -126,8 +126,8 @@ def light_rays(mi, g, res: int, grid_box, box):
                  dv=g.v_range[1] - g.v_range[0], e1=g.e1, e2=g.e2, s=s, l=l, d_first=g.d_first, s_dot_l=s_dot_l,
                  glo=glo, span=span, step=step)
     lane = dr.arange(mi.UInt32, R * R)
-    y = lane // dr.opaque(mi.UInt32, R)
-    x = lane - y * dr.opaque(mi.UInt32, R)
+    y = lane // R  # (a literal divisor: the buffer's size is the renderer's)
+    x = lane - y * R
     su = lambda i: (mi.Float64(i) + 0.5) / sc["R"]  # noqa: E731
     uu = sc["u0"] + su(x) * sc["du"]
     vv = sc["v0"] + su(y) * sc["dv"]
