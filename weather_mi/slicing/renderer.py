@@ -6,6 +6,8 @@ light.py     ``LightVolume``: the light pass and the one light lookup
 blur.py      the translucency blur of the light pass (separable taps of an exact variance)
 eye.py       the eye pass: composite along camera rays (Eq. 8/9), the ground
 view.py      camera rays and background per view, in a bounded cache
+rays.py      the per-view arrays (camera and light rays, box and ground hits, phase functions) as float64
+             kernels, the same floats as numpy's: a drag of the camera or the sun redoes them every frame
 
 Everything that changes between frames (scalings, sun, camera, albedo, cone angle, forward fraction,
 the light model's parameters) enters kernels as opaque values or data, so frames after the first

@@ -1,6 +1,8 @@
 """What the eye pass needs from a view that does not depend on the volume's data: the camera rays
 (clipped to the slicing box and the ground) and the background along each of them (sky radiance where
-the ray misses the ground), kept for the last few views in a bounded cache."""
+the ray misses the ground), kept for the last few views in a bounded cache. Over the flat ground they are
+computed by kernels (rays.py: float64, numpy's floats), not in numpy: a dragged camera or sun asks for a
+new view every frame."""
 from __future__ import annotations
 
 import math
