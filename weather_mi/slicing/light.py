@@ -26,7 +26,7 @@ import numpy as np
 
 from ..kernel.jitarrays import aligned_float, kernel_scalar
 from .blur import _blur, blur_weights
-from .geometry import SliceGeometry, ray_box
+from .geometry import SliceGeometry
 from .jitter import texel_offsets
 from .rays import f32, light_rays
 

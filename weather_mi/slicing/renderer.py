@@ -24,7 +24,7 @@ import numpy as np
 
 from ..optics.forward_peak import DEFAULT_CONE_DEG, check_cone_deg, peak_tables
 from ..io.image import Image
-from ..kernel.jitarrays import aligned_float, kernel_scalar
+from ..kernel.jitarrays import kernel_scalar
 from ..kernel.scene_dict import terrain_surround_m
 from ..optics.volume import OpticalVolume
 from ..scene.spec import SceneSpec

@@ -104,15 +104,15 @@ class ViewCache:
                     mi, offset_pattern(spec.width, spec.height))
             weights = (None, None) if surface is None else \
                 _terrain_weights(lambda a: aligned_float(mi, a), spec, surface, np.asarray(hit))
-            rays_ = ViewRays(
+            view = ViewRays(
                 mi.Point3f(*(f32(mi, v) for v in o)), direction, f32(mi, t0),
                 f32(mi, dr.select(dr.isfinite(t1), t1, t0)), hit, mi.Point3f(*(f32(mi, v) for v in ground)),
                 dr.select(hit, mi.Color3f(0.0), sky), cos, dr.width(t0), pattern, *weights, *spans)
-            rays_.theta = dr.acos(dr.clip(cos, -1.0, 1.0))  # the scattering angle, for the phase functions
+            view.theta = dr.acos(dr.clip(cos, -1.0, 1.0))  # the scattering angle, for the phase functions
             # evaluated here, whatever the caches kept: the same kernels every frame (none compiled anew)
-            dr.eval(rays_.origin, rays_.direction, rays_.t0, rays_.t1, rays_.hit_ground, rays_.ground,
-                    rays_.background, rays_.theta)
-            self.backgrounds[bg_key] = rays_
+            dr.eval(view.origin, view.direction, view.t0, view.t1, view.hit_ground, view.ground,
+                    view.background, view.theta)
+            self.backgrounds[bg_key] = view
         return self.backgrounds[bg_key]
 
     def _rays(self, mi, spec: SceneSpec):
