@@ -1,16 +1,20 @@
-"""Frames per second of the half-angle slicer on the demo supercell, per mode, with every frame traced
-in Python ("traced") and with the frame's recorded kernels launched (``dr.freeze``, "frozen", the
-default), in one process.
+"""Frames per second of the half-angle slicer on the demo supercell, per mode, as the user drags: the
+headline table moves the camera AND the sun every frame (the half-angle changes, so slice planes, light
+rays, eye rays, occupied spans and the background are all redone); beside it the scaling-only case (a
+slider: the textures are rebuilt every frame, the view kept), camera-only and sun-only, and the ratio of
+the drag to the paper's rates on a 2003 GeForce FX 5800 (Table IV: 5.1 / 4.3 / 1.7 / 1.2 fps at 300 x 300,
+128 slices; the "multiple" light model beyond the paper is held to the per-species translucent rate).
 
-    .venv/bin/python benchmarks/slicing.py [--quick] [--variant cuda_ad_rgb] [--frames 5]
+    .venv/bin/python benchmarks/slicing.py [--quick] [--rounds 3] [--frames 12] [--variant cuda_ad_rgb]
+                                           [--traced] [--fixed] [--large]
 
-Prints: the fixed cost per frame (``fixed_cost``: a 64 x 48 frame with 8 slices and an 8 x 8 light
-buffer, where the kernels have almost nothing to do), then frames
-per second at 300 x 300 with 128 slices and 1024 x 768 with 256 slices, and the ratio to the paper's
-rates on a 2003 GeForce FX 5800 (Table IV: 5.1 / 4.3 / 1.7 / 1.2 fps at 300 x 300, 128 slices; the
-"multiple" light model beyond the paper is held to the per-species translucent rate). Medians over
-``--frames`` frames after two warm-up frames (compilation and recording excluded); every frame changes
-a scaling, as a slider drag does (the textures are rebuilt each frame).
+Medians over ``--frames`` frames after three warm-up frames (compilation and recording excluded) per case,
+the cases taking turns round after round (``--rounds``; the median over rounds is printed), frames
+recorded by ``dr.freeze`` (``--traced``: also every frame traced in Python, "traced" against "frozen").
+``--fixed``: the fixed cost per frame (a 64 x 48 frame with 8 slices and an 8 x 8 light buffer, where the
+kernels have almost nothing to do), traced vs recorded. ``--large``: 1024 x 768 with 256 slices too.
+The rates before issue 41's drag work are recorded in benchmarks/README.md; measure them again in one
+run with ``benchmarks/slicing_vs_commit.py --commit 831c980 --case drag`` (the two trees in turn).
 """
 from __future__ import annotations
 
@@ -33,13 +37,45 @@ def detail_field(vol, seed=0):
     return detail.field(vol.shape, seed=seed, spacing_m=vol.spacing)
 
 
-def seconds_per_frame(r: SliceRenderer, spec, frames: int) -> float:
-    for i in range(2):  # warm-up: compiles, records
-        r.frame(spec, SliceParams(scale={"ice": 1.0 + 0.01 * i}))
+CASES = ("drag", "scaling", "camera", "sun")  # the headline first
+
+
+def moving_view(vol, width: int, height: int, case: str, i: int, start: int = 0):
+    """(SceneSpec, SliceParams) of frame ``i`` of a drag ``case``: "scaling" (a species' scaling changes,
+    the view is kept: the textures are rebuilt), "camera" (the camera swings back and forth around the
+    default view, up to 8 deg in azimuth and 3 deg in elevation, a few degrees a frame), "sun" (the sun
+    likewise around azimuth 240, elevation 35), "drag" (camera and sun both). The moves stay near the view of
+    the scaling case, so the cases compare the same kind of picture; views never repeat within a run
+    (``start``: the first frame's index)."""
+    import math
+    import weather_mi as wm
+    k = start + i
+    swing = lambda rate, phase: math.sin(rate * k + phase)  # noqa: E731  (incommensurate rates: no repeats)
+    cam, sun = case in ("camera", "drag"), case in ("sun", "drag")
+    spec = wm.scene.spec.default_spec(vol, width, height,
+                                      camera_azimuth=200.0 + (8.0 * swing(0.31, 0.0) if cam else 0.0),
+                                      camera_elevation=8.0 + (3.0 * swing(0.23, 1.0) if cam else 0.0))
+    sun_dir = wm.Sun(240.0 + 8.0 * swing(0.27, 2.0), 35.0 + 3.0 * swing(0.19, 3.0)) if sun else wm.Sun(240.0, 35.0)
+    spec = wm.SceneSpec(camera=spec.camera, sun=sun_dir, sky=spec.sky, ground=spec.ground, width=width,
+                        height=height)
+    params = SliceParams(scale={"ice": 1.0 + 0.1 * (k % 97 + 1)}) if case == "scaling" else SliceParams()
+    return spec, params
+
+
+def seconds_per_frame(r: SliceRenderer, spec, frames: int, case: str = "scaling", vol=None, start: int = 0) -> float:
+    """Median seconds per frame of ``case`` (``moving_view``) after three warm-up frames; ``spec``: the
+    view's size (and, for "scaling", the view)."""
+    def view(i):
+        if case == "scaling" and vol is None:
+            return spec, SliceParams(scale={"ice": 1.0 + 0.1 * (start + i + 1)})
+        return moving_view(vol, spec.width, spec.height, case, i, start)
+    for i in range(3):  # warm-up: compiles, records
+        r.frame(*view(i))
     t = []
-    for i in range(frames):
+    for i in range(3, 3 + frames):
+        s, p = view(i)
         t0 = time.perf_counter()
-        r.frame(spec, SliceParams(scale={"ice": 1.0 + 0.1 * (i + 1)}))
+        r.frame(s, p)
         t.append(time.perf_counter() - t0)
     return statistics.median(t)
 
@@ -77,44 +113,63 @@ def fixed_cost(vol, frames):
     return rows
 
 
-def bench(vol, width, height, slices, light_res, frames):
-    """[(mode, seconds traced, seconds frozen)]."""
+def bench(vol, width, height, slices, light_res, frames, rounds=1, traced=False):
+    """{mode: {(case, frozen): seconds per frame}}: the median over ``rounds`` of each case's median
+    (``seconds_per_frame``), the cases (and traced / frozen) taking turns round after round."""
     spec = wm.scene.spec.default_spec(vol, width, height)
-    rows = []
+    out = {}
     for name, mode in MODES.items():
         r = SliceRenderer(vol, mode, slices=slices, light_res=light_res,
                           detail_field=detail_field(vol) if mode.detail else None)
-        out = []
-        for frozen in (False, True):
-            r.frozen = frozen
-            out.append(seconds_per_frame(r, spec, frames))
-        rows.append((name, *out))
-    return rows
+        t = {}
+        for k in range(rounds):
+            for case in CASES:
+                for frozen in ((False, True) if traced else (True,)):
+                    r.frozen = frozen
+                    t.setdefault((case, frozen), []).append(
+                        seconds_per_frame(r, spec, frames, case, vol, start=1000 * k))
+        out[name] = {key: statistics.median(v) for key, v in t.items()}
+    return out
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--quick", action="store_true", help="no 1024 x 768, 3 frames")
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="one round of 5 frames")
     ap.add_argument("--variant", default=None)
     ap.add_argument("--light-res", type=int, default=128)
-    ap.add_argument("--frames", type=int, default=5)
+    ap.add_argument("--frames", type=int, default=12)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--traced", action="store_true", help="also frames traced in Python every frame")
+    ap.add_argument("--fixed", action="store_true", help="also the fixed cost per frame (64 x 48, 8 slices)")
+    ap.add_argument("--large", action="store_true", help="also 1024 x 768 with 256 slices")
     args = ap.parse_args()
     variant = wm.set_variant(args.variant)
     vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
-    frames = 3 if args.quick else args.frames
+    frames, rounds = (5, 1) if args.quick else (args.frames, args.rounds)
     print(f"variant {variant}; demo supercell {vol.shape}; light buffer {args.light_res}^2 unless stated")
-    print("\nfixed cost: 64 x 48, 8 slices, 8^2 light buffer (ms per frame, median)")
-    print(f"{'mode':<28}{'change':<12}{'traced':>9}{'frozen':>9}{'ratio':>8}{'CPU traced':>12}{'CPU frozen':>12}"
-          f"{'ratio':>8}")
-    for name, kind, a, b, ca, cb in fixed_cost(vol, max(frames, 10)):
-        print(f"{name:<28}{kind:<12}{a:>9.1f}{b:>9.1f}{a / b:>7.2f}x{ca:>12.1f}{cb:>12.1f}{ca / cb:>7.2f}x")
-    configs = [(300, 300, 128)] if args.quick else [(300, 300, 128), (1024, 768, 256)]
+    if args.fixed:
+        print("\nfixed cost: 64 x 48, 8 slices, 8^2 light buffer (ms per frame, median)")
+        print(f"{'mode':<28}{'change':<12}{'traced':>9}{'frozen':>9}{'ratio':>8}{'CPU traced':>12}{'CPU frozen':>12}"
+              f"{'ratio':>8}")
+        for name, kind, a, b, ca, cb in fixed_cost(vol, max(frames, 10)):
+            print(f"{name:<28}{kind:<12}{a:>9.1f}{b:>9.1f}{a / b:>7.2f}x{ca:>12.1f}{cb:>12.1f}{ca / cb:>7.2f}x")
+    configs = [(300, 300, 128)] + ([(1024, 768, 256)] if args.large else [])
     for w, h, slices in configs:
-        print(f"\n{w} x {h}, {slices} slices (frames per second)")
-        print(f"{'mode':<32}{'traced':>9}{'frozen':>9}{'ratio':>8}{'frozen vs paper':>17}")
-        for name, a, b in bench(vol, w, h, slices, args.light_res, frames):
-            ratio = f"{1.0 / b / PAPER_FPS[name]:.2f}x" if (w, h) == (300, 300) else "-"
-            print(f"{name:<32}{1.0 / a:>9.2f}{1.0 / b:>9.2f}{a / b:>7.2f}x{ratio:>17}")
+        paper = (w, h, slices) == (300, 300, 128)
+        print(f"\n{w} x {h}, {slices} slices, frames per second (frozen; median of {rounds} rounds of "
+              f"{frames}-frame medians)")
+        print(f"{'mode':<32}{'drag':>8}{'scaling':>9}{'camera':>8}{'sun':>8}{'drag vs paper':>15}{'target':>8}")
+        rows = bench(vol, w, h, slices, args.light_res, frames, rounds, args.traced)
+        for name, t in rows.items():
+            fps = {c: 1.0 / t[(c, True)] for c in CASES}
+            ratio = f"{fps['drag'] / PAPER_FPS[name]:.1f}x" if paper else "-"
+            target = f"{10 * PAPER_FPS[name]:.0f}" if paper else "-"
+            print(f"{name:<32}{fps['drag']:>8.1f}{fps['scaling']:>9.1f}{fps['camera']:>8.1f}{fps['sun']:>8.1f}"
+                  f"{ratio:>15}{target:>8}")
+        if args.traced:
+            print(f"\ntraced every frame (fps): {'mode':<32}" + "".join(f"{c:>9}" for c in CASES))
+            for name, t in rows.items():
+                print(f"{'':<26}{name:<32}" + "".join(f"{1.0 / t[(c, False)]:>9.1f}" for c in CASES))
 
 
 if __name__ == "__main__":

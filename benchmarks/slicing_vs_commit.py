@@ -1,13 +1,17 @@
 """The slicer's frame rate now against an earlier commit, measured in one run: the two trees take turns,
-round after round, so that the shared cores' load falls on both alike.
+case after case, round after round, so that the shared cores' load falls on both alike.
 
     .venv/bin/python benchmarks/slicing_vs_commit.py [--commit c73a480] [--rounds 3] [--size 300x300]
                                                      [--slices 128] [--frames 5] [--fixed]
+                                                     [--case scaling camera sun drag]
 
-The earlier commit is checked out into a temporary git worktree (its plugins linked in, as
-validation/bit_identity.py does); each round runs, in a fresh process per tree, the frames-per-second
-measurement of benchmarks/slicing.py (frozen frames, every frame changing a scaling as a slider drag
-does) on the demo supercell. Prints the median over rounds per mode and tree and their ratio. With
+The earlier commit is extracted into a temporary directory (``git archive``; its plugins linked in, as
+validation/bit_identity.py does); one measuring process per tree, kept for the run, renders the frames of
+each mode and case in turn with the other (frozen frames after three warm-up frames; every frame changes
+a scaling as a slider drag does, or with ``--case`` the camera, the sun or both move every frame,
+benchmarks/slicing.py's ``moving_view``) on the demo supercell. Prints the median over rounds per mode,
+case and tree, their ratio, and the same for frames per second of the process's CPU time (all threads:
+less sensitive to the other users of the shared cores than the wall clock). With
 ``--fixed``: the fixed cost per frame instead, in ms (a 64 x 48 frame, 8 slices, an 8 x 8 light buffer:
 kernels with almost nothing to do), for a change of the light parameters and of a scaling (which rebuilds
 the textures over the whole grid), in each tree's own default (traced, or recorded where it has dr.freeze).
@@ -24,16 +28,29 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 MEASURE = """
-import sys, weather_mi as wm
+import sys, time, statistics, weather_mi as wm
 from weather_mi.slicing import MODES, SliceRenderer
 sys.path.insert(0, {bench!r})
-from slicing import detail_field, seconds_per_frame
+from slicing import detail_field, moving_view
 wm.set_variant(None)
 vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
-spec = wm.scene.spec.default_spec(vol, {w}, {h})
-for name, mode in MODES.items():
-    r = SliceRenderer(vol, mode, slices={slices}, light_res=128, detail_field=detail_field(vol) if mode.detail else None)
-    print("FPS", name, 1.0 / seconds_per_frame(r, spec, {frames}), flush=True)
+renderers = {{}}
+print("READY", flush=True)
+for line in sys.stdin:  # "mode case start": frames of one case, answered with wall and CPU medians
+    name, case, start = line.split()
+    if name not in renderers:
+        mode = MODES[name]
+        renderers[name] = SliceRenderer(vol, mode, slices={slices}, light_res=128,
+                                        detail_field=detail_field(vol) if mode.detail else None)
+    r, t, c = renderers[name], [], []
+    for i in range(3 + {frames}):
+        spec, params = moving_view(vol, {w}, {h}, case, i, int(start))
+        t0, c0 = time.perf_counter(), time.process_time()
+        r.frame(spec, params)
+        if i >= 3:  # after the warm-up (compiling, recording)
+            t.append(time.perf_counter() - t0)
+            c.append(time.process_time() - c0)
+    print("FPS", 1.0 / statistics.median(t), 1.0 / statistics.median(c), flush=True)
 """
 
 FIXED = """
@@ -58,12 +75,51 @@ for name in ("per-species/translucent", "per-species/multiple"):
 
 
 def measure(tree: Path, w: int, h: int, slices: int, frames: int, fixed: bool = False) -> dict:
-    code = (FIXED if fixed else MEASURE).format(bench=str(ROOT / "benchmarks"), w=w, h=h, slices=slices,
-                                                frames=frames)
+    """The fixed cost per frame (``--fixed``), in a fresh process on ``tree``."""
+    code = FIXED.format(bench=str(ROOT / "benchmarks"), w=w, h=h, slices=slices, frames=frames)
     env = {**os.environ, "PYTHONPATH": str(tree)}
     out = subprocess.run([sys.executable, "-c", code], cwd=tree, capture_output=True, text=True, env=env,
                          check=True).stdout
     return {line.split()[1]: float(line.split()[2]) for line in out.splitlines() if line.startswith("FPS ")}
+
+
+class Tree:
+    """A measuring process on one tree (``MEASURE``), kept for the whole run: the two trees answer case by
+    case, so that a change of the shared cores' load falls on both alike."""
+
+    def __init__(self, tree: Path, w: int, h: int, slices: int, frames: int):
+        code = MEASURE.format(bench=str(ROOT / "benchmarks"), w=w, h=h, slices=slices, frames=frames)
+        self.proc = subprocess.Popen([sys.executable, "-c", code], cwd=tree, stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, text=True, env={**os.environ, "PYTHONPATH": str(tree)})
+        assert self.proc.stdout.readline().startswith("READY")
+
+    def fps(self, name: str, case: str, start: int) -> tuple[float, float]:
+        """(frames per second, frames per CPU second of the process) of ``case`` for mode ``name``."""
+        self.proc.stdin.write(f"{name} {case} {start}\n")
+        self.proc.stdin.flush()
+        line = self.proc.stdout.readline()
+        if not line.startswith("FPS"):
+            raise RuntimeError(f"the measuring process stopped: {line!r}")
+        return float(line.split()[1]), float(line.split()[2])
+
+    def close(self):
+        self.proc.stdin.close()
+        self.proc.wait()
+
+
+def fixed_costs(args, old: Path, w: int, h: int) -> None:
+    """``--fixed``: the fixed cost per frame (ms) in fresh processes, the trees in turn, round by round."""
+    ms = {"old": [], "new": []}
+    for k in range(args.rounds):
+        for label, tree in (("old", old), ("new", ROOT)):
+            ms[label].append(measure(tree, w, h, args.slices, 4 * args.frames, True))
+        print(f"round {k + 1}/{args.rounds} done", flush=True)
+    print(f"\nfixed cost per frame, ms (64 x 48, 8 slices, 8^2 light buffer) (median of {args.rounds} rounds)")
+    print(f"{'mode: change':<34}{args.commit:>10}{'now':>10}{'ratio':>8}")
+    for name in ms["new"][0]:
+        a = statistics.median(r[name] for r in ms["old"] if name in r)
+        b = statistics.median(r[name] for r in ms["new"])
+        print(f"{name:<34}{a:>10.2f}{b:>10.2f}{a / b:>7.2f}x")  # how many times faster now
 
 
 def main() -> int:
@@ -74,32 +130,44 @@ def main() -> int:
     ap.add_argument("--slices", type=int, default=128)
     ap.add_argument("--frames", type=int, default=5)
     ap.add_argument("--fixed", action="store_true", help="the fixed cost per frame (ms, 64 x 48) instead of fps")
+    ap.add_argument("--case", nargs="+", default=["scaling"], choices=("scaling", "camera", "sun", "drag"),
+                    help="what changes every frame (benchmarks/slicing.py moving_view): a scaling (default), the "
+                         "camera, the sun, or both (drag)")
     args = ap.parse_args()
     w, h = (int(v) for v in args.size.lower().split("x"))
     with tempfile.TemporaryDirectory() as tmp:
         old = Path(tmp) / "old"
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(old), args.commit], check=True,
-                       capture_output=True)
+        old.mkdir()  # the earlier tree as files (git archive: no worktree to add or remove)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.commit], check=True, capture_output=True)
+        subprocess.run(["tar", "-x", "-C", str(old)], input=archive.stdout, check=True)
+        if not (old / "weather_mi" / "plugins").exists():  # as the editable install maps them
+            (old / "weather_mi" / "plugins").symlink_to("../plugins")
+        if args.fixed:
+            fixed_costs(args, old, w, h)
+            return 0
+        from weather_mi.slicing import MODES
+        trees = {"old": Tree(old, w, h, args.slices, args.frames), "new": Tree(ROOT, w, h, args.slices, args.frames)}
+        fps = {}  # (mode, case, tree) -> [(fps, CPU fps)] per round
         try:
-            if not (old / "weather_mi" / "plugins").exists():  # as the editable install maps them
-                (old / "weather_mi" / "plugins").symlink_to("../plugins")
-            fps = {"old": [], "new": []}
             for k in range(args.rounds):
-                for label, tree in (("old", old), ("new", ROOT)):
-                    fps[label].append(measure(tree, w, h, args.slices, 4 * args.frames if args.fixed else args.frames,
-                                              args.fixed))
+                for name in MODES:
+                    for case in args.case:
+                        for label in (("old", "new") if k % 2 == 0 else ("new", "old")):
+                            fps.setdefault((name, case, label), []).append(trees[label].fps(name, case, 1000 * k))
                 print(f"round {k + 1}/{args.rounds} done", flush=True)
         finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(old)], capture_output=True)
-    what = "fixed cost per frame, ms (64 x 48, 8 slices, 8^2 light buffer)" if args.fixed else \
-        f"{w} x {h}, {args.slices} slices, frames per second"
-    print(f"\n{what} (median of {args.rounds} rounds)")
-    print(f"{'mode' + (': change' if args.fixed else ''):<34}{args.commit:>10}{'now':>10}{'ratio':>8}")
-    for name in fps["new"][0]:
-        a = statistics.median(r[name] for r in fps["old"] if name in r)
-        b = statistics.median(r[name] for r in fps["new"])
-        ratio = a / b if args.fixed else b / a  # how many times faster now
-        print(f"{name:<34}{a:>10.2f}{b:>10.2f}{ratio:>7.2f}x")
+            for t in trees.values():
+                t.close()
+    print(f"\n{w} x {h}, {args.slices} slices, frames per second (median of {args.rounds} rounds of "
+          f"{args.frames}-frame medians; CPU: frames per second of the process's CPU time, all threads)")
+    print(f"{'mode':<32}{'case':<9}{args.commit:>9}{'now':>9}{'ratio':>8}{'CPU ' + args.commit:>13}{'CPU now':>9}"
+          f"{'ratio':>8}")
+    for name in MODES:
+        for case in args.case:
+            a = [statistics.median(v[i] for v in fps[(name, case, "old")]) for i in (0, 1)]
+            b = [statistics.median(v[i] for v in fps[(name, case, "new")]) for i in (0, 1)]
+            print(f"{name:<32}{case:<9}{a[0]:>9.2f}{b[0]:>9.2f}{b[0] / a[0]:>7.2f}x{a[1]:>13.2f}{b[1]:>9.2f}"
+                  f"{b[1] / a[1]:>7.2f}x")
     return 0
 
 

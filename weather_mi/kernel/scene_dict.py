@@ -81,6 +81,16 @@ def _sun_only_sunsky(variant: str, turbidity: float):
                          "turbidity": turbidity})
 
 
+@functools.lru_cache(maxsize=4)
+def _disc_samples(variant: str, n: int):
+    """The (seeded) sample points of ``sunsky_sun_irradiance``, uploaded once: the same for every sun (a
+    dragged sun asks for a new elevation every frame)."""
+    import mitsuba as mi
+    from .jitarrays import aligned_float
+    rng = np.random.default_rng(1)
+    return mi.Point2f(*(aligned_float(mi, u) for u in rng.random((2, n))))
+
+
 def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
     """RGB irradiance normal to the beam of the Hosek-Wilkie sun of Mitsuba's ``sunsky`` for this sun
     position (Monte Carlo over its disc, cached): used to scale its sky to our sun's irradiance."""
@@ -94,10 +104,7 @@ def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
         params.update()
         n = 1 << 16
         it = dr.zeros(mi.Interaction3f, n)
-        rng = np.random.default_rng(1)
-        from .jitarrays import aligned_float
-        sample = mi.Point2f(*(aligned_float(mi, u) for u in rng.random((2, n))))
-        ds, weight = emitter.sample_direction(it, sample)
+        ds, weight = emitter.sample_direction(it, _disc_samples(mi.variant(), n))
         cos = dr.dot(ds.d, mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in sun.to_sun)))  # no literals
         e = np.array(weight * cos)
         _SUNSKY_SUN_IRRADIANCE[key] = np.asarray(e).reshape(3, -1).mean(axis=1) if e.ndim > 1 else np.full(3, e.mean())

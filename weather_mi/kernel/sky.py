@@ -13,8 +13,11 @@ def _sky_emitter(spec: SceneSpec, cache: dict | None):
     and sky is kept and updated in place (sun direction, scale), so a moving sun recompiles nothing."""
     import mitsuba as mi
     from .scene_dict import sky_dict
-    d = sky_dict(spec.sky, spec.sun)
     cache = {} if cache is None else cache
+    last = cache.get("last")  # (the sky and sun of the last call: a camera move keeps them)
+    if last is not None and last[0] == (mi.variant(), spec.sky, spec.sun):
+        return last[1], last[2]
+    d = sky_dict(spec.sky, spec.sun)
     key = (mi.variant(), spec.sky.turbidity, spec.sky.ground_albedo)
     if key not in cache:
         cache[key] = mi.load_dict({**d, "sky_scale": 1.0})  # the scale is applied outside: it is a
@@ -25,6 +28,7 @@ def _sky_emitter(spec: SceneSpec, cache: dict | None):
         params["sun_direction"] = mi.Vector3f(*d["sun_direction"])
         params.update()
         cache[sun_key] = tuple(d["sun_direction"])
+    cache["last"] = ((mi.variant(), spec.sky, spec.sun), emitter, d["sky_scale"])
     return emitter, d["sky_scale"]
 
 
@@ -35,13 +39,55 @@ def sky_radiance(spec: SceneSpec, dirs: np.ndarray, cache: dict | None = None) -
         return np.zeros_like(dirs)
     if spec.sky.kind == "constant":
         return np.broadcast_to(np.asarray(spec.sky.radiance), dirs.shape).copy()
+    import mitsuba as mi
+    from .jitarrays import aligned_float
+    return _eval_numpy(spec, lambda: mi.Vector3f(*(aligned_float(mi, dirs[:, i]) for i in range(3))), cache)
+
+
+def _eval_numpy(spec: SceneSpec, upload, cache):
+    """``sky_radiance`` of a sky emitter along the directions that ``upload()`` gives as a mi.Vector3f
+    (called after the emitter's update: its kernel's inputs in the same order every call)."""
     import drjit as dr
     import mitsuba as mi
     emitter, scale = _sky_emitter(spec, cache)
-    si = dr.zeros(mi.SurfaceInteraction3f, dirs.shape[0])
-    from .jitarrays import aligned_float
-    si.wi = -mi.Vector3f(*(aligned_float(mi, dirs[:, i]) for i in range(3)))
+    dirs = upload()
+    si = dr.zeros(mi.SurfaceInteraction3f, dr.width(dirs))
+    si.wi = -dirs
     return scale * np.asarray(emitter.eval(si), dtype=np.float64).T.reshape(-1, 3)
+
+
+def sky_radiance_arrays(spec: SceneSpec, dirs, cache: dict | None = None, active=None):
+    """``sky_radiance`` as a kernel's mi.Color3f (float32, as ``jitarrays.aligned_float`` rounds it) along
+    unit directions given as a mi.Vector3f (float32): no round trip through numpy. ``active``: None, or a
+    mi.Bool of the lanes that need the sky (the emitter is evaluated on those alone; 0 elsewhere)."""
+    import drjit as dr
+    import mitsuba as mi
+    n = dr.width(dirs)
+    if spec.sky is None:
+        return dr.zeros(mi.Color3f, n)
+    if spec.sky.kind == "constant":
+        value = mi.Color3f(*(dr.opaque(mi.Float, float(v)) for v in spec.sky.radiance)) + dr.zeros(mi.Color3f, n)
+        return value if active is None else dr.select(active, value, 0.0)
+    index = None
+    if active is not None:  # the lanes that see the sky, packed (the emitter's model is costly)
+        index = dr.compress(active)
+        if dr.width(index) == 0:  # Mitsuba cannot evaluate 0 lanes
+            return dr.zeros(mi.Color3f, n)
+        dirs = dr.gather(mi.Vector3f, dirs, index)
+    dr.eval(dirs)
+    emitter, scale = _sky_emitter(spec, cache)
+    si = dr.zeros(mi.SurfaceInteraction3f, dr.width(dirs))
+    # a copy made after the emitter's update, as sky_radiance's upload is: the kernel's inputs come in the
+    # same order every frame (the same kernel, none compiled anew)
+    si.wi = -dr.copy(dirs)
+    value = emitter.eval(si)
+    k = dr.opaque(mi.Float64, float(scale))
+    value = mi.Color3f(*(mi.Float(mi.Float64(value[c]) * k) for c in range(3)))
+    if index is None:
+        return value
+    out = dr.zeros(mi.Color3f, n)
+    dr.scatter(out, value, index)
+    return out
 
 
 def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | None = None) -> np.ndarray:
@@ -54,11 +100,20 @@ def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | N
     memo = (spec.sky, spec.sun, n)
     if cache is not None and memo in cache:
         return cache[memo]
-    side = int(np.sqrt(n))
-    u, v = np.meshgrid((np.arange(side) + 0.5) / side, (np.arange(side) + 0.5) / side)
-    r, phi = np.sqrt(u.ravel()), 2 * np.pi * v.ravel()
-    dirs = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(1 - r * r, 0))], axis=1)
-    e = np.pi * sky_radiance(spec, dirs, cache).mean(axis=0)
+    import drjit as dr
+    import mitsuba as mi
+    dirs_key = ("horizontal directions", mi.variant(), n)
+    uploaded = None if cache is None else cache.get(dirs_key)
+    if uploaded is None:  # the directions are the same for every sun: uploaded once per cache
+        from .jitarrays import aligned_float
+        side = int(np.sqrt(n))
+        u, v = np.meshgrid((np.arange(side) + 0.5) / side, (np.arange(side) + 0.5) / side)
+        r, phi = np.sqrt(u.ravel()), 2 * np.pi * v.ravel()
+        dirs = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(1 - r * r, 0))], axis=1)
+        uploaded = mi.Vector3f(*(aligned_float(mi, dirs[:, i]) for i in range(3)))
+        if cache is not None:
+            cache[dirs_key] = uploaded
+    e = np.pi * _eval_numpy(spec, lambda: dr.copy(uploaded), cache).mean(axis=0)
     if cache is not None:
         cache[memo] = e
     return e

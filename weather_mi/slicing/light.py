@@ -26,8 +26,9 @@ import numpy as np
 
 from ..kernel.jitarrays import aligned_float, kernel_scalar
 from .blur import _blur, blur_weights
-from .geometry import SliceGeometry, ray_box
+from .geometry import SliceGeometry
 from .jitter import texel_offsets
+from .rays import f32, light_rays
 
 # variance (texels^2) that forward-scattered light accumulates between two blur steps at the reference
 # spread (see LightVolume.sweep); larger spreads up to MAX_TEXEL_VARIANCE / BLUR_STEP_VARIANCE times the
@@ -245,31 +246,20 @@ class LightVolume:
         slice units: k in [kin, kout]."""
         mi = self.mi
         import drjit as dr
-        R = self.res
-        s, l = g.axis, g.to_light
-        su = (np.arange(R) + 0.5) / R
-        uu, vv = np.meshgrid(g.u_range[0] + su * (g.u_range[1] - g.u_range[0]),
-                             g.v_range[0] + su * (g.v_range[1] - g.v_range[0]))
-        base = uu.ravel()[:, None] * g.e1 + vv.ravel()[:, None] * g.e2          # points on the buffer plane
-        s_dot_l = float(s @ l)
-        p0 = base + ((g.d_first - base @ s) / s_dot_l)[:, None] * l             # on plane 0
-        step = -g.spacing / s_dot_l * l                                         # to the next plane
-        glo, ghi = (np.asarray(p, dtype=np.float64) for p in grid_box)
-        span = ghi - glo
-        q0, qs = (p0 - glo) / span, step / span
-        k_in, k_out = ray_box(p0, np.broadcast_to(step, p0.shape), (self.lo, self.hi), clamp_start=False)
-        F = lambda a: aligned_float(mi, a)  # noqa: E731
-        q0 = mi.Point3f(F(q0[:, 0]), F(q0[:, 1]), F(q0[:, 2]))
-        qs = mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in qs))
+        p0, step, q0, k_in, k_out = light_rays(mi, g, self.res, grid_box, (self.lo, self.hi))  # float64 kernels
+        span = np.asarray(grid_box[1], dtype=np.float64) - np.asarray(grid_box[0], dtype=np.float64)
+        qs = mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in step / span))
+        q0 = mi.Point3f(*(f32(mi, v) for v in q0))
         span = (None, None)
         if self.occupancy is not None:  # the occupied part of each light ray, in slice units
             L = float(np.linalg.norm(step))
-            o = mi.Point3f(*(F(p0[:, i]) for i in range(3)))
+            o = mi.Point3f(*(f32(mi, v) for v in p0))
             direction = mi.Vector3f(*(dr.opaque(mi.Float, float(c) / L) for c in step))
-            ta, tb = self.occupancy.spans(o, direction, F(k_in * L), F(k_out * L))
+            L64 = dr.opaque(mi.Float64, L)
+            ta, tb = self.occupancy.spans(o, direction, f32(mi, k_in * L64), f32(mi, k_out * L64))
             inv_L = dr.opaque(mi.Float, 1.0 / L)
             span = (ta * inv_L, tb * inv_L)
-        return q0, qs, F(k_in), F(k_out), span
+        return q0, qs, f32(mi, k_in), f32(mi, k_out), span
 
     def _blur_plan(self, g: SliceGeometry, variance_per_m, reference_variance_per_m, dl):
         """(slabs per chunk, variance per slab (m^2)) of the operator splitting.

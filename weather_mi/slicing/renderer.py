@@ -6,6 +6,8 @@ light.py     ``LightVolume``: the light pass and the one light lookup
 blur.py      the translucency blur of the light pass (separable taps of an exact variance)
 eye.py       the eye pass: composite along camera rays (Eq. 8/9), the ground
 view.py      camera rays and background per view, in a bounded cache
+rays.py      the per-view arrays (camera and light rays, box and ground hits, phase functions) as float64
+             kernels, the same floats as numpy's: a drag of the camera or the sun redoes them every frame
 
 Everything that changes between frames (scalings, sun, camera, albedo, cone angle, forward fraction,
 the light model's parameters) enters kernels as opaque values or data, so frames after the first
@@ -22,7 +24,7 @@ import numpy as np
 
 from ..optics.forward_peak import DEFAULT_CONE_DEG, check_cone_deg, peak_tables
 from ..io.image import Image
-from ..kernel.jitarrays import aligned_float, kernel_scalar
+from ..kernel.jitarrays import kernel_scalar
 from ..kernel.scene_dict import terrain_surround_m
 from ..optics.volume import OpticalVolume
 from ..scene.spec import SceneSpec
@@ -36,6 +38,7 @@ from .jitter import jitter_rotation, slab_offsets
 from .light import LightVolume, auto_light_res
 from .modes import SliceMode, SliceParams
 from .occupancy import OccupancyMap
+from .rays import Scalars, f32, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
 from .view import ViewCache
 
@@ -431,14 +434,17 @@ class SliceRenderer:
         import drjit as dr
         rays = self.views.get(mi, spec)
         sun = np.asarray(spec.sun.irradiance, dtype=np.float64)
-        F = lambda a: aligned_float(mi, a)  # noqa: E731
         phase_colour, colours = [], []
         for gi, members in enumerate(self.groups):
             colour = self.colors[members[0]] if self.mode.species_colors else np.mean(tint[members], axis=0)
             key = (gi, tuple(colour * sun))  # per view (and sun): a slider move reuses the uploaded array
-            if key not in rays.phase_colour:
-                k = self.tables[members[0]].eval_cos(rays.cos_to_light) * (colour * sun)[None]
-                rays.phase_colour[key] = mi.Color3f(*(F(k[:, c]) for c in range(3)))
+            if key not in rays.phase_colour:  # P(Theta) colour E_sun, in kernels (rays.py: numpy's floats)
+                table = self.tables[members[0]]  # (its arrays uploaded once: kept while it is the group's table)
+                p = phase_values(mi, self._reuse(f"phase {gi}", table, lambda: phase_table(mi, table)),
+                                 rays.theta)
+                k = Scalars(mi, k=colour * sun)
+                rays.phase_colour[key] = mi.Color3f(*(f32(mi, p[c] * k[f"k{c}"]) for c in range(3)))
+                dr.eval(rays.phase_colour[key])
             phase_colour.append(rays.phase_colour[key])
             colours.append(tuple(colour * sun / (4 * np.pi)))
         diffuse_colour = self._reuse("diffuse", tuple(colours), lambda: [_colour(mi, c) for c in colours])

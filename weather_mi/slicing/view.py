@@ -1,8 +1,11 @@
 """What the eye pass needs from a view that does not depend on the volume's data: the camera rays
 (clipped to the slicing box and the ground) and the background along each of them (sky radiance where
-the ray misses the ground), kept for the last few views in a bounded cache."""
+the ray misses the ground), kept for the last few views in a bounded cache. Over the flat ground they are
+computed by kernels (rays.py: float64, numpy's floats), not in numpy: a dragged camera or sun asks for a
+new view every frame."""
 from __future__ import annotations
 
+import math
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
@@ -10,10 +13,11 @@ import numpy as np
 
 from ..kernel.jitarrays import aligned_float
 from ..scene.spec import SceneSpec
-from ..kernel.sky import sky_radiance
-from ..scene.spec import ground_hits
+from ..kernel.sky import sky_radiance_arrays
+from . import rays
 from .geometry import camera_rays, ray_box
 from .jitter import offset_pattern
+from .rays import f32
 
 
 
@@ -55,13 +59,14 @@ class ViewRays:
     hit_ground: object   # mi.Bool
     ground: object       # mi.Point3f
     background: object   # mi.Color3f
-    cos_to_light: np.ndarray  # (N,) numpy, for the phase functions
+    cos_to_light: object      # mi.Float64 (N): cosine of the angle between the ray and the sun, for the phase functions
     n: int
     pattern: object = None    # mi.Float
     ground_sun: object = None  # mi.Float over a terrain: albedo max(n . s, 0) / mu0 at the ground point
     ground_sky: object = None  # mi.Float over a terrain: albedo (1 + n_z) / 2 (a tilted plane's share of the sky)
     span_a: object = None      # mi.Float: where each ray's occupied span begins and ends (occupancy.py; the
     span_b: object = None      # whole [t0, t1] without an occupancy map)
+    theta: object = None       # mi.Float64 (N): the angle between the ray and the direction to the sun (radians)
     phase_colour: dict = field(default_factory=lambda: BoundedCache(8))  # per-pixel phase colours by (group, colour)
 
 
@@ -77,44 +82,78 @@ class ViewCache:
         self.rays = BoundedCache(maxsize)
         self.backgrounds = BoundedCache(maxsize)
         self.sky = BoundedCache(4 * maxsize)  # sky emitters and sky irradiance (kernel/sky.py)
+        self.patterns = BoundedCache(maxsize)  # the slab-offset pattern per image size
 
     def get(self, mi, spec: SceneSpec) -> ViewRays:
         ray_key = (spec.camera, spec.width, spec.height, spec.ground)
+        terrain = None if spec.ground is None else self.terrain
         if ray_key not in self.rays:
-            origins, dirs = camera_rays(spec)
-            o, d = origins.reshape(-1, 3), dirs.reshape(-1, 3)
-            t0, t1 = ray_box(o, d, self.box)
-            terrain = None if spec.ground is None else self.terrain
-            surface = None  # over a terrain: albedo and normal where the rays meet it (per view, not per sun)
-            if terrain is None:
-                tg = ground_hits(spec, o, d)
-            else:  # the path tracer's ground: the mesh, its apron and skirt, the surround beyond
-                tg, *surface = terrain.scene_hits(o, d, floor_m=self.surround_m)
-            self.rays[ray_key] = (o, d, t0, np.minimum(t1, tg), tg, surface, self._spans(mi, o, d, t0, np.minimum(t1, tg)))
-        o, d, t0, t1, tg, surface, spans = self.rays[ray_key]
-        hit = np.isfinite(tg)
+            self.rays[ray_key] = self._rays(mi, spec) if terrain is None else self._terrain_rays(mi, spec, terrain)
+        o, d, t0, t1, hit, ground, surface, spans = self.rays[ray_key]
         bg_key = ray_key + (spec.sun.azimuth, spec.sun.elevation, spec.sun.irradiance, spec.sky)
         if bg_key not in self.backgrounds:
-            F = lambda a: aligned_float(mi, a)  # noqa: E731
-            bg = np.zeros_like(d)
-            bg[~hit] = sky_radiance(spec, d[~hit], self.sky)
-            pg = o + np.where(hit, tg, 0.0)[:, None] * d
-            self.backgrounds[bg_key] = ViewRays(
-                mi.Point3f(*(F(o[:, i]) for i in range(3))), mi.Vector3f(*(F(d[:, i]) for i in range(3))),
-                F(t0), F(np.where(np.isfinite(t1), t1, t0)), F(hit) > 0.5,
-                mi.Point3f(*(F(pg[:, i]) for i in range(3))), mi.Color3f(*(F(bg[:, i]) for i in range(3))),
-                d @ spec.sun.to_sun, o.shape[0], F(offset_pattern(spec.width, spec.height)),
-                *_terrain_weights(F, spec, surface, hit), *spans)
+            import drjit as dr
+            direction = mi.Vector3f(*(f32(mi, v) for v in d))
+            sky = sky_radiance_arrays(spec, direction, self.sky, active=~hit)
+            dr.eval(sky)  # (a kernel of its own, as Mitsuba's emitter gives it: the same kernel every frame)
+            s = rays.Scalars(mi, s=spec.sun.to_sun)  # (new values compile nothing)
+            cos = (d[0] * s["s0"] + d[1] * s["s1"]) + d[2] * s["s2"]
+            pattern = self.patterns.get((spec.width, spec.height))
+            if pattern is None:
+                pattern = self.patterns[(spec.width, spec.height)] = aligned_float(
+                    mi, offset_pattern(spec.width, spec.height))
+            weights = (None, None) if surface is None else \
+                _terrain_weights(lambda a: aligned_float(mi, a), spec, surface, np.asarray(hit))
+            view = ViewRays(
+                mi.Point3f(*(f32(mi, v) for v in o)), direction, f32(mi, t0),
+                f32(mi, dr.select(dr.isfinite(t1), t1, t0)), hit, mi.Point3f(*(f32(mi, v) for v in ground)),
+                dr.select(hit, mi.Color3f(0.0), sky), cos, dr.width(t0), pattern, *weights, *spans)
+            view.theta = dr.acos(dr.clip(cos, -1.0, 1.0))  # the scattering angle, for the phase functions
+            # evaluated here, whatever the caches kept: the same kernels every frame (none compiled anew)
+            dr.eval(view.origin, view.direction, view.t0, view.t1, view.hit_ground, view.ground,
+                    view.background, view.theta)
+            self.backgrounds[bg_key] = view
         return self.backgrounds[bg_key]
 
+    def _rays(self, mi, spec: SceneSpec):
+        """(origin, direction, t0, t1, hit, ground point, None, spans) of a view over the flat ground (or
+        none), computed by kernels (rays.py; float64 as numpy's)."""
+        import drjit as dr
+        o, d = rays.camera_rays(mi, spec)
+        t0, t1 = rays.ray_box(mi, o, d, self.box)
+        tg = rays.ground_hits(mi, spec, o, d)
+        t1 = dr.select(tg < t1, tg, t1)  # (np.minimum: tg is never NaN)
+        hit = tg < math.inf
+        at = dr.select(hit, tg, 0.0)
+        ground = [o[c] + at * d[c] for c in range(3)]
+        dr.eval(o, d, t0, t1, hit, ground)  # once: the spans, the sky and the frame's arrays read them
+        return o, d, t0, t1, hit, ground, None, self._spans(mi, o, d, t0, t1)
+
+    def _terrain_rays(self, mi, spec: SceneSpec, terrain):
+        """``_rays`` over a terrain: the path tracer's ground (the mesh, its apron and skirt, the surround
+        beyond) in numpy, with its albedo and normal where the rays meet it (per view, not per sun)."""
+        origins, dirs = camera_rays(spec)
+        o, d = origins.reshape(-1, 3), dirs.reshape(-1, 3)
+        t0, t1 = ray_box(o, d, self.box)
+        tg, *surface = terrain.scene_hits(o, d, floor_m=self.surround_m)
+        t1 = np.minimum(t1, tg)
+        hit = np.isfinite(tg)
+        pg = o + np.where(hit, tg, 0.0)[:, None] * d
+        F64 = lambda a: mi.Float64(np.ascontiguousarray(a))  # noqa: E731
+        cols = lambda a: [F64(a[:, c]) for c in range(3)]  # noqa: E731
+        o64, d64, t0_64, t1_64 = cols(o), cols(d), F64(t0), F64(t1)
+        return (o64, d64, t0_64, t1_64, mi.Bool(hit), cols(pg), surface,
+                self._spans(mi, o64, d64, t0_64, t1_64))
+
     def _spans(self, mi, o, d, t0, t1):
-        """(span_a, span_b) of ``ViewRays`` (once per view, not per sun)."""
-        F = lambda a: aligned_float(mi, a)  # noqa: E731
-        t1 = np.where(np.isfinite(t1), t1, t0)
+        """(span_a, span_b) of ``ViewRays`` (once per view, not per sun) from Float64 rays."""
+        import drjit as dr
+        t1 = f32(mi, dr.select(dr.isfinite(t1), t1, t0))
+        t0 = f32(mi, t0)
         if self.occupancy is None:
-            return F(t0), F(t1)
-        return self.occupancy.spans(mi.Point3f(*(F(o[:, i]) for i in range(3))),
-                                    mi.Vector3f(*(F(d[:, i]) for i in range(3))), F(t0), F(t1))
+            return t0, t1
+        return self.occupancy.spans(mi.Point3f(*(f32(mi, v) for v in o)), mi.Vector3f(*(f32(mi, v) for v in d)),
+                                    t0, t1)
 
 
 def _terrain_weights(F, spec: SceneSpec, surface, hit: np.ndarray):
