@@ -83,6 +83,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..reference.render import render_reference
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase)
+    hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     spec, sun_meta = scene_spec(args, vol), None
     if args.sun_from_time:
         spec, sun_meta = _sun_from_time(spec, hyd)
@@ -150,6 +151,7 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     from ..optics.volume import optical_volume
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, phase=args.phase)
+    hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band, resolution, rayleigh=args.rayleigh,
                                ground_albedo=args.ground_albedo, seed=args.seed)
     w, h = scene.view.size

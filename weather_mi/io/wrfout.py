@@ -25,7 +25,7 @@ import xarray as xr
 
 from ..errors import WeatherDataError
 from .hydrometeors import from_arrays, validate, warn_clipped
-from . import vertical
+from . import budget, vertical
 from .georef import place_coords
 from .map_factors import horizontal_spacing
 from .schemes import MP_SCHEMES, SCHEME_VARS
@@ -104,8 +104,10 @@ def convert(ds, path, it: int, stamp: str, x, y, dz, top, bottom) -> xr.Dataset:
     attrs = {"source": path, "model": str(ds.attrs.get("TITLE", "WRF")).strip(), "time": stamp,
              "time_index": it, "microphysics": scheme, "mp_physics": mp}
     present = _species_present(ds, path, scheme, mp, attrs)
+    budget.check_fits(path, _native_shape(ds, sel), "reading")  # before reading anything
     shape, z_w, rho = _air(ds, path, it, sel, attrs)
     dz, z_lo, edges = _height_grid(path, z_w, shape, dz, top, bottom)
+    budget.check_fits(path, (len(edges) - 1,) + shape[1:], "reading")  # the target grid, before regridding
     plan = vertical.VerticalPlan(z_w, edges)
     rho_above = _air_above(plan, z_w, rho, edges)
     q_new, r_eff, negatives = _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present)
@@ -124,6 +126,13 @@ def convert(ds, path, it: int, stamp: str, x, y, dz, top, bottom) -> xr.Dataset:
     hyd = hyd.assign_coords(coords)
     hyd.attrs.update(place_attrs)
     return validate(hyd)
+
+
+def _native_shape(ds, sel) -> tuple[int, int, int]:
+    """(bottom_top, south_north, west_east) of the mass grid on the sub-box ``sel``, from the file's dimensions."""
+    dims = ("bottom_top", "south_north", "west_east")
+    n = {d: int(ds.sizes.get(d, 1)) for d in dims}
+    return tuple(len(range(*sel[d].indices(n[d]))) if d in sel else n[d] for d in dims)
 
 
 def _sub_box(path, x, y) -> dict:
