@@ -372,7 +372,22 @@ COMMANDS = {"info": info_command, "render": render_command, "satellite": satelli
             "animate": animate_command, "view": view_command, "validate": validate_command}
 
 
+def release_freed_memory(threshold: int = 1 << 20) -> None:
+    """Large blocks freed go back to the system at once (glibc: a fixed mmap threshold). By default glibc
+    raises its threshold to the largest block freed (up to 32 MiB), after which the regridding's and the
+    optics' blocks come from the heap and their memory stays with the process; the peak of ``info`` and
+    ``render`` grew by about 0.5 GB on a 400 x 400 x 51 grid. Nothing where the C library is not glibc."""
+    import ctypes
+    import ctypes.util
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        libc.mallopt(-3, int(threshold))  # M_MMAP_THRESHOLD
+    except (OSError, AttributeError):
+        pass
+
+
 def main(argv: list[str] | None = None) -> int:
+    release_freed_memory()
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command in ("info", "render", "satellite", "view") and (args.file is None) == (args.demo is None):
