@@ -224,15 +224,21 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
     n_s = len(SPECIES_NAMES)
     beta_ext = np.empty((n_s,) + shape, np.float32)
     weights = np.empty((n_s,) + shape, np.float32)
-    albedo = np.zeros(shape + (3,), np.float32)  # first sum omega beta (Eq. 5), then over beta_total
     for i, s in enumerate(sp):
         r = _radius_field(hyd, s.name, s.radius_m, use_model)
         q = hyd[f"q_{s.name}"].values
         beta_ext[i] = s.beta_ext_per_m(rho, q.astype(np.float32, copy=False), r)  # Eq. 4
         del r
-        for c, a in enumerate(np.asarray(s.albedo_rgb, np.float32)):  # a channel at a time: no (z, y, x, 3) temporary
-            albedo[..., c] += beta_ext[i] * a
     beta_total = beta_ext.sum(axis=0)  # Eq. 6
+    albedo = np.empty(shape + (3,), np.float32)  # first sum omega beta (Eq. 5), then over beta_total
+    rgb = np.asarray([s.albedo_rgb for s in sp], np.float32)
+    acc, term = np.empty(shape, np.float32), np.empty(shape, np.float32)
+    for c in range(3):  # a channel at a time, contiguous: no (z, y, x, 3) temporary
+        np.multiply(beta_ext[0], rgb[0, c], out=acc)
+        for i in range(1, n_s):
+            acc += np.multiply(beta_ext[i], rgb[i, c], out=term)
+        albedo[..., c] = acc
+    del acc, term
     # Eq. 8 weights from scattering coefficients beta_sca,s = omega_s beta_s (channel-mean albedo;
     # the channels differ by < 1e-3 for every hydrometeor)
     for i, s in enumerate(sp):
