@@ -217,49 +217,38 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
 
 
 def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
-    """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32, computed in place:
-    beyond its outputs (56 bytes per cell) this takes one or two float32 grids of temporaries."""
-    rho = np.asarray(hyd["rho_air"].values, np.float32)
+    """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32: beyond its
+    outputs (56 bytes per cell) this takes one or two float32 grids of temporaries (Eq. 4's)."""
+    rho = np.ascontiguousarray(hyd["rho_air"].values, np.float32)
     shape = rho.shape
     n_s = len(SPECIES_NAMES)
     beta_ext = np.empty((n_s,) + shape, np.float32)
     weights = np.empty((n_s,) + shape, np.float32)
+    from .mixture_kernels import eq4, finish_albedo, mix
     for i, s in enumerate(sp):
         r = _radius_field(hyd, s.name, s.radius_m, use_model)
-        q = hyd[f"q_{s.name}"].values
-        beta_ext[i] = s.beta_ext_per_m(rho, q.astype(np.float32, copy=False), r)  # Eq. 4
+        q = np.ascontiguousarray(hyd[f"q_{s.name}"].values, np.float32)
+        if np.ndim(r) == 0:  # one radius: one pass (the same float32 operations as beta_ext_per_m)
+            eq4(rho.reshape(-1), q.reshape(-1), np.float32(s.scale * 3.0),
+                np.float32(2.0 * s.density_kg_m3 * float(r)), beta_ext[i].reshape(-1))
+        else:
+            beta_ext[i] = s.beta_ext_per_m(rho, q, r)  # Eq. 4
         del r
-    beta_total = beta_ext.sum(axis=0)  # Eq. 6
-    albedo = np.empty(shape + (3,), np.float32)  # first sum omega beta (Eq. 5), then over beta_total
+    # Eq. 6, Eq. 5's numerator sum omega_s beta_s and the Eq. 8 weights from the scattering coefficients
+    # beta_sca,s = omega_s beta_s (channel-mean albedo; the channels differ by < 1e-3 for every hydrometeor),
+    # in one pass (optics.mixture_kernels)
     rgb = np.asarray([s.albedo_rgb for s in sp], np.float32)
-    acc, term = np.empty(shape, np.float32), np.empty(shape, np.float32)
-    for c in range(3):  # a channel at a time, contiguous: no (z, y, x, 3) temporary
-        np.multiply(beta_ext[0], rgb[0, c], out=acc)
-        for i in range(1, n_s):
-            acc += np.multiply(beta_ext[i], rgb[i, c], out=term)
-        albedo[..., c] = acc
-    del acc, term
-    # Eq. 8 weights from scattering coefficients beta_sca,s = omega_s beta_s (channel-mean albedo;
-    # the channels differ by < 1e-3 for every hydrometeor)
-    for i, s in enumerate(sp):
-        np.multiply(beta_ext[i], np.float32(np.mean(s.albedo_rgb)), out=weights[i])
-    sca_total = weights.sum(axis=0)
-    nonzero = sca_total > 0
-    np.divide(weights, sca_total, out=weights, where=nonzero)
-    del sca_total
-    np.logical_not(nonzero, out=nonzero)
-    weights[:, nonzero] = 0.0
-    del nonzero
+    mean_albedo = np.asarray([np.float32(np.mean(s.albedo_rgb)) for s in sp], np.float32)
+    beta_total = np.empty(shape, np.float32)
+    albedo = np.empty(shape + (3,), np.float32)
+    mix(beta_ext.reshape(n_s, -1), rgb, mean_albedo, beta_total.reshape(-1), albedo.reshape(-1, 3),
+        weights.reshape(n_s, -1))
     # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
     # trilinear interpolation at cloud edges does not blend in a dark value
     total_ext = float(beta_total.sum(dtype=np.float64))
     fill = (albedo.reshape(-1, 3).sum(axis=0, dtype=np.float64) / total_ext) if total_ext > 0 \
         else np.mean([s.albedo_rgb for s in sp], axis=0)
-    has_ext = beta_total > 0
-    np.divide(albedo, beta_total[..., None], out=albedo, where=has_ext[..., None])
-    np.logical_not(has_ext, out=has_ext)
-    albedo[has_ext] = fill.astype(np.float32)
-    np.clip(albedo, 0.0, 1.0, out=albedo)
+    finish_albedo(albedo.reshape(-1, 3), beta_total.reshape(-1), fill.astype(np.float32))
     return beta_ext, beta_total, albedo, weights
 
 
