@@ -152,3 +152,45 @@ def test_wrf_bad_map_factors_are_an_error(tmp_path):
     path = write_wrfout(tmp_path / "w.nc", override={"MAPFAC_M": np.zeros((1, 4, 5))})
     with pytest.raises(wm.WeatherDataError, match=r"w\.nc.*MAPFAC_M.*positive"):
         wm.open_wrf(path)
+
+
+def _huge_wrfout(path: Path, nz: int, ny: int, nx: int) -> Path:
+    """A wrfout whose fields are declared (nz, ny, nx) but never written: chunked NetCDF-4, a few KB on disk."""
+    import netCDF4
+    with netCDF4.Dataset(path, "w") as nc:
+        for name, size in (("Time", None), ("DateStrLen", 19), ("bottom_top", nz), ("bottom_top_stag", nz + 1),
+                           ("south_north", ny), ("west_east", nx)):
+            nc.createDimension(name, size)
+        nc.setncatts({"MP_PHYSICS": 6, "DX": 1000.0, "DY": 1000.0})
+        for name in ("P", "PB", "T", "QVAPOR", "QCLOUD", "QRAIN", "QICE", "QSNOW", "QGRAUP", "PH", "PHB"):
+            z = "bottom_top_stag" if name in ("PH", "PHB") else "bottom_top"
+            nc.createVariable(name, "f4", ("Time", z, "south_north", "west_east"), chunksizes=(1, 1, 256, 256))
+        t = nc.createVariable("Times", "S1", ("Time", "DateStrLen"))
+        t[0] = netCDF4.stringtochar(np.array(["2024-05-20_21:00:00"], "S19"))
+    return path
+
+
+def test_a_domain_too_large_for_memory_fails_fast_before_allocating(tmp_path):
+    import time
+    import tracemalloc
+    path = _huge_wrfout(tmp_path / "huge.nc", 100, 200_000, 200_000)  # 4e12 cells: 190 TB at 48 bytes per cell
+    tracemalloc.start()
+    t0 = time.perf_counter()
+    with pytest.raises(wm.errors.DomainTooLargeError) as info:
+        wm.open_wrf(path)
+    seconds, peak = time.perf_counter() - t0, tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    msg = str(info.value)
+    assert "100 x 200000 x 200000" in msg and " TB" not in msg and "GB more at peak" in msg
+    assert "sub-box" in msg and "coarser levels" in msg and "tiles on a cluster" in msg
+    assert info.value.needed > 1e14 and isinstance(info.value, MemoryError)
+    assert seconds < 5 and peak < 50e6  # nothing of the grid was read or allocated
+
+
+def test_optical_volume_checks_the_memory_before_allocating(monkeypatch):
+    hyd = wm.synthetic.cumulus()
+    monkeypatch.setenv("WEATHER_MI_MAX_MEMORY_GB", "0.001")
+    with pytest.raises(wm.errors.DomainTooLargeError, match="needs about .* GB more at peak and 0.0 GB"):
+        wm.optical_volume(hyd)
+    monkeypatch.setenv("WEATHER_MI_MAX_MEMORY_GB", "100")
+    assert wm.optical_volume(hyd, phase_quality="test").shape == tuple(hyd.rho_air.shape)

@@ -35,3 +35,17 @@ class OutputWriteError(OSError):
 
     def __reduce__(self):
         return type(self), (self.path, self.what, self.errno, self.reason, self.advice)
+
+
+class DomainTooLargeError(WeatherDataError, MemoryError):
+    """A domain whose grids would not fit in memory, raised before anything is allocated: names the input,
+    the grid, the estimate in GB against what is available, and what to do (``weather_mi.io.budget``)."""
+
+    def __init__(self, source: str, grid: tuple[int, ...], step: str, needed: float, available: float):
+        self.grid, self.step, self.needed, self.available = tuple(grid), step, float(needed), float(available)
+        super().__init__(source, None, f"a domain that fits in memory for {step}: the {' x '.join(map(str, grid))} "
+                         f"(z, y, x) grid needs about {needed / 1e9:.1f} GB more at peak and {available / 1e9:.1f} GB are "
+                         "available",
+                         "too large; read a sub-box (open_wrf(..., x=slice(i0, i1), y=slice(j0, j1))), coarser levels "
+                         "(open_wrf(..., dz=...), top=... or bottom=...), or render it in tiles on a cluster "
+                         "(the environment variable WEATHER_MI_MAX_MEMORY_GB sets the memory to plan for)")

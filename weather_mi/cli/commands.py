@@ -83,6 +83,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..reference.render import render_reference
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase)
+    hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     spec, sun_meta = scene_spec(args, vol), None
     if args.sun_from_time:
         spec, sun_meta = _sun_from_time(spec, hyd)
@@ -169,6 +170,7 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     from ..optics.volume import optical_volume
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, phase=args.phase)
+    hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
     if args.rgb:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
@@ -428,7 +430,22 @@ COMMANDS = {"info": info_command, "render": render_command, "satellite": satelli
             "animate": animate_command, "view": view_command, "validate": validate_command}
 
 
+def release_freed_memory(threshold: int = 1 << 20) -> None:
+    """Large blocks freed go back to the system at once (glibc: a fixed mmap threshold). By default glibc
+    raises its threshold to the largest block freed (up to 32 MiB), after which the regridding's and the
+    optics' blocks come from the heap and their memory stays with the process; the peak of ``info`` and
+    ``render`` grew by about 0.5 GB on a 400 x 400 x 51 grid. Nothing where the C library is not glibc."""
+    import ctypes
+    import ctypes.util
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        libc.mallopt(-3, int(threshold))  # M_MMAP_THRESHOLD
+    except (OSError, AttributeError):
+        pass
+
+
 def main(argv: list[str] | None = None) -> int:
+    release_freed_memory()
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command in ("info", "render", "satellite", "view") and (args.file is None) == (args.demo is None):

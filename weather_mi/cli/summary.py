@@ -12,11 +12,12 @@ from ..io.hydrometeors import SPECIES_NAMES, spacing_of
 def info_text(hyd, species: str = "paper") -> str:
     """Dimensions, spacing (m), per-species max/mean mixing ratio (g/kg), max extinction (1/km) and the
     densest column's vertical optical depth of ``hyd`` with the species table ``species``."""
-    from ..optics.volume import optical_volume
-    vol = optical_volume(hyd, species=species)
+    from ..optics.volume import extinction  # not a whole OpticalVolume: the extinction is all it prints
+    from ..io.hydrometeors import bbox_of
+    beta_total, largest = extinction(hyd, species=species)
     dz, dy, dx = spacing_of(hyd)
-    nz, ny, nx = vol.shape
-    (x0, y0, z0), (x1, y1, z1) = vol.bbox
+    nz, ny, nx = beta_total.shape
+    (x0, y0, z0), (x1, y1, z1) = bbox_of(hyd)
     lines = [f"source      : {hyd.attrs.get('source', '?')}",
              f"time        : {hyd.attrs.get('time', '-')}    microphysics: {hyd.attrs.get('microphysics', '-')}",
              f"grid (z,y,x): {nz} x {ny} x {nx}    spacing dz, dy, dx = {dz:.1f}, {dy:.1f}, {dx:.1f} m",
@@ -25,13 +26,13 @@ def info_text(hyd, species: str = "paper") -> str:
              *place_lines(hyd),
              f"species preset: {species}",
              f"{'species':<9}{'max q (g/kg)':>14}{'mean q (g/kg)':>15}{'max beta (1/km)':>17}"]
-    for i, name in enumerate(SPECIES_NAMES):
+    for name in SPECIES_NAMES:
         q = hyd[f"q_{name}"].values
         lines.append(f"{name:<9}{1e3 * float(q.max()):>14.4g}{1e3 * float(q.mean()):>15.4g}"
-                     f"{1e3 * float(vol.beta_ext[i].max()):>17.4g}")
-    tau = vol.optical_depth_z()
+                     f"{1e3 * largest[name]:>17.4g}")
+    tau = beta_total.sum(axis=0, dtype=np.float64) * ((z1 - z0) / nz)  # OpticalVolume.optical_depth_z
     j, i = np.unravel_index(int(np.argmax(tau)), tau.shape)
-    lines.append(f"max extinction: {1e3 * float(vol.beta_total.max()):.4g} 1/km")
+    lines.append(f"max extinction: {1e3 * float(beta_total.max()):.4g} 1/km")
     lines.append(f"vertical optical depth through the densest column (x={float(hyd.x[i]) / 1e3:.1f} km, "
                  f"y={float(hyd.y[j]) / 1e3:.1f} km): {float(tau[j, i]):.4g}")
     if hyd.attrs.get("n_negative_clipped"):

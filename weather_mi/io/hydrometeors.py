@@ -35,28 +35,37 @@ def check_species_name(name: str, source: str = "input", variable: str | None = 
     return name
 
 
-def _as_field(a, shape, source, variable, *, allow_profile=False, allow_scalar=False) -> np.ndarray:
-    """A finite float32 (z, y, x) field from an array, a z-profile or a scalar, with clear errors."""
-    arr = np.asarray(a, dtype=np.float64)
+def _as_field(a, shape, source, variable, *, allow_profile=False, allow_scalar=False, copy=True) -> np.ndarray:
+    """A finite float32 (z, y, x) field from an array, a z-profile or a scalar, with clear errors: a new
+    array, or with ``copy=False`` a float32 C-contiguous ``a`` itself (no float64 copy in either case)."""
+    arr = np.asarray(a)
     if arr.ndim == 0 and allow_scalar:
-        arr = np.full(shape, float(arr))
+        arr = np.full(shape, float(arr), np.float32)
     elif arr.ndim == 1 and allow_profile:
         if arr.shape[0] != shape[0]:
             raise WeatherDataError(source, variable, f"a vertical profile of length {shape[0]} (nz)",
                                    f"length {arr.shape[0]}")
-        arr = np.broadcast_to(arr[:, None, None], shape)
+        arr = np.broadcast_to(arr.astype(np.float32)[:, None, None], shape)
     if arr.shape != tuple(shape):
         raise WeatherDataError(source, variable, f"an array of shape (z, y, x) = {tuple(shape)}",
                                f"shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        n = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
+    if not np.issubdtype(arr.dtype, np.number):
+        raise WeatherDataError(source, variable, "numbers", f"dtype {arr.dtype}")
+    out = np.array(arr, dtype=np.float32, order="C", copy=True if copy else None)
+    if not _all_finite(out):
+        n = int(np.size(out) - np.count_nonzero(np.isfinite(out)))
         raise WeatherDataError(source, variable, "finite values everywhere", f"{n} NaN or infinite values")
-    return np.ascontiguousarray(arr, dtype=np.float32)
+    return out
+
+
+def _all_finite(a: np.ndarray) -> bool:
+    """Whether every value of ``a`` is finite, level by level (no whole-grid temporary)."""
+    return all(bool(np.isfinite(level).all()) for level in a)
 
 
 def from_arrays(q: Mapping[str, np.ndarray], rho_air, spacing, origin=(0.0, 0.0, 0.0), *,
                 r_eff: Mapping[str, np.ndarray] | None = None, attrs: Mapping | None = None,
-                source: str = "arrays") -> xr.Dataset:
+                source: str = "arrays", copy: bool = True) -> xr.Dataset:
     """Hydrometeors from plain arrays.
 
     Parameters
@@ -77,6 +86,9 @@ def from_arrays(q: Mapping[str, np.ndarray], rho_air, spacing, origin=(0.0, 0.0,
         Dataset attributes added to ``source`` and ``n_negative_clipped``.
     source : str, default "arrays"
         Names the input in attributes and error messages.
+    copy : bool, default True
+        False: float32 C-contiguous arrays become the dataset's fields as they are (negatives clipped in
+        place), without a copy: for readers handing over arrays they made.
 
     Returns
     -------
@@ -112,11 +124,11 @@ def from_arrays(q: Mapping[str, np.ndarray], rho_air, spacing, origin=(0.0, 0.0,
     for name in SPECIES_NAMES:
         var = f"q_{name}"
         if name in q:
-            field = _as_field(q[name], shape, source, var)
+            field = _as_field(q[name], shape, source, var, copy=copy)
             n_neg = int(np.count_nonzero(field < 0))
             if n_neg:
                 minima[var] = (n_neg, float(field.min()))
-            np.maximum(field, 0, out=field)
+                np.maximum(field, 0, out=field)
         else:
             field, n_neg = np.zeros(shape, np.float32), 0
         clipped_total += n_neg
@@ -124,14 +136,14 @@ def from_arrays(q: Mapping[str, np.ndarray], rho_air, spacing, origin=(0.0, 0.0,
                                         "n_negative_clipped": n_neg})
     if minima:
         warn_clipped(source, minima, stacklevel=2)
-    rho = _as_field(rho_air, shape, source, "rho_air", allow_profile=True, allow_scalar=True)
+    rho = _as_field(rho_air, shape, source, "rho_air", allow_profile=True, allow_scalar=True, copy=copy)
     if np.any(rho <= 0):
         raise WeatherDataError(source, "rho_air", "a positive dry-air density (kg/m^3)",
                                f"minimum {float(rho.min()):.4g}")
     data_vars["rho_air"] = (DIMS, rho, {"units": "kg m-3", "long_name": "dry-air density"})
     for name, a in (r_eff or {}).items():
         check_species_name(name, source, f"r_eff[{name!r}]")
-        field = _as_field(a, shape, source, f"r_eff_{name}")
+        field = _as_field(a, shape, source, f"r_eff_{name}", copy=copy)
         if np.any(field < 0):
             raise WeatherDataError(source, f"r_eff_{name}", "effective radii >= 0 m")
         data_vars[f"r_eff_{name}"] = (DIMS, field, {"units": "m", "long_name": f"{name} effective radius"})

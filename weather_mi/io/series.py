@@ -54,11 +54,11 @@ def open_wrf_series(paths, time="all", *, x: slice | None = None, y: slice | Non
         chosen = [timeline[k] for k in select_times([e[2] for e in timeline], time, where, stamped=stamped)]
         lows, highs = [], []
         for p, it, _ in chosen:  # one grid for all: from the heights of every selected time
-            z_w = wrfout.w_level_heights(opened[p], it, sel, p)
+            z_w = wrfout.w_level_heights(opened[p], it, sel, p, np.float32)  # as convert reads them
             lows.append(float(np.min(z_w[0])))
             highs.append(float(np.max(z_w[-1])))
             if dz is None:  # the first time's mean layer depth
-                dz = float(np.mean(z_w[-1] - z_w[0]) / (z_w.shape[0] - 1))
+                dz = float(np.mean(z_w[-1] - z_w[0], dtype=np.float64) / (z_w.shape[0] - 1))
         bottom = min(lows) if bottom is None else bottom
         top = max(highs) if top is None else top
         frames = [wrfout.convert(opened[p], p, it, stamp, x, y, dz, top, bottom) for p, it, stamp in chosen]

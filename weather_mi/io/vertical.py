@@ -6,17 +6,17 @@ model top, and zero outside [surface, top]. A target cell [e_j, e_j+1] receives 
 reconstruction over the cell: F(e_j+1) - F(e_j) over dz, with F the cumulative integral. Column
 integrals are therefore conserved exactly (for the reconstruction) and linear profiles are reproduced
 exactly; cells entirely below the terrain are zero.
+
+Memory and time: a :class:`VerticalPlan` finds, once for every field, the node segment of each target
+edge in each column (1 byte per target cell, and its offset in the segment, 4 bytes for float32 heights); each field is then
+regridded in blocks of rows (float64 inside a block only), into a float32 output by default. A field
+costs its input, its output and a block's temporaries, never a float64 copy of the whole field.
 """
 from __future__ import annotations
 
 import numpy as np
 
-
-def _augmented(z_mass: np.ndarray, z_w: np.ndarray, f: np.ndarray):
-    """Nodes (n+2, ...) and values of the reconstruction: [surface, mass levels..., top]."""
-    nodes = np.concatenate([z_w[:1], z_mass, z_w[-1:]], axis=0)
-    vals = np.concatenate([f[:1], f, f[-1:]], axis=0)
-    return nodes, vals
+BLOCK_VALUES = 1 << 21  # node values per block of rows (float64 temporaries of ~16 MiB each)
 
 
 def _cumulative(nodes: np.ndarray, vals: np.ndarray) -> np.ndarray:
@@ -25,20 +25,72 @@ def _cumulative(nodes: np.ndarray, vals: np.ndarray) -> np.ndarray:
     return np.concatenate([np.zeros_like(seg[:1]), np.cumsum(seg, axis=0)], axis=0)
 
 
-def _integral_to(e: float, nodes, vals, cum) -> np.ndarray:
-    """F(e) = integral of the reconstruction from the surface up to height e, per column."""
-    n = nodes.shape[0]
-    k = np.clip((nodes <= e).sum(axis=0) - 1, 0, n - 2)[None]
-    z0 = np.take_along_axis(nodes, k, 0)[0]
-    z1 = np.take_along_axis(nodes, k + 1, 0)[0]
-    f0 = np.take_along_axis(vals, k, 0)[0]
-    f1 = np.take_along_axis(vals, k + 1, 0)[0]
-    c0 = np.take_along_axis(cum, k, 0)[0]
-    t = np.clip(e - z0, 0.0, z1 - z0)
-    slope = np.divide(f1 - f0, z1 - z0, out=np.zeros_like(f0), where=(z1 > z0))
-    out = c0 + t * (f0 + 0.5 * slope * t)
-    out = np.where(e <= nodes[0], 0.0, out)
-    return out
+class VerticalPlan:
+    """Where each target edge falls in each column of the w-level heights ``z_w`` ((n+1, ny, nx), m): shared
+    by every field regridded onto ``edges`` ((m+1,), m, increasing). ``z_mass`` (n, ny, nx): the mass-level
+    heights, default the mid-points of ``z_w``."""
+
+    def __init__(self, z_w: np.ndarray, edges: np.ndarray, z_mass: np.ndarray | None = None):
+        self.z_w, self.z_mass = z_w, z_mass
+        self.edges = np.asarray(edges, np.float64)
+        n, cols = z_w.shape[0] - 1, z_w.shape[1:]
+        rows = z_w.shape[1] if z_w.ndim > 1 else 1
+        per_row = (n + 2) * int(np.prod(cols[1:], dtype=np.int64)) if z_w.ndim > 2 else n + 2
+        self.block = max(1, min(rows, BLOCK_VALUES // max(per_row, 1)))
+        kind = np.uint8 if n + 1 < 256 else np.uint16
+        self.k = np.empty((len(self.edges),) + cols, kind)   # segment [nodes[k], nodes[k+1]] holding the edge
+        self.t = np.empty((len(self.edges),) + cols, np.result_type(z_w.dtype, np.float32))  # the edge's height above nodes[k], clipped
+        for sl in self._blocks():
+            nodes = self._nodes(sl)
+            for j, e in enumerate(self.edges):
+                k = np.clip((nodes <= e).sum(axis=0) - 1, 0, n)
+                z0 = np.take_along_axis(nodes, k[None], 0)[0]
+                z1 = np.take_along_axis(nodes, k[None] + 1, 0)[0]
+                self.k[(j,) + sl] = k
+                self.t[(j,) + sl] = np.clip(e - z0, 0.0, z1 - z0)  # 0 below the surface: F = 0 there
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Shape of a regridded field: (m,) + the columns' shape."""
+        return (len(self.edges) - 1,) + self.z_w.shape[1:]
+
+    def _blocks(self):
+        if self.z_w.ndim == 1:
+            yield ()
+            return
+        for r0 in range(0, self.z_w.shape[1], self.block):
+            yield (slice(r0, r0 + self.block),)
+
+    def _nodes(self, sl) -> np.ndarray:
+        z_w = np.asarray(self.z_w[(slice(None),) + sl], np.float64)
+        z_mass = 0.5 * (z_w[1:] + z_w[:-1]) if self.z_mass is None else self.z_mass[(slice(None),) + sl]
+        return np.concatenate([z_w[:1], z_mass, z_w[-1:]], axis=0, dtype=np.float64)
+
+    def average(self, f: np.ndarray, out: np.ndarray | None = None, dtype=np.float32) -> np.ndarray:
+        """Average of each column's reconstruction of ``f`` ((n, ny, nx) on the mass levels) over the target
+        cells: (m, ny, nx), written into ``out`` (new, of ``dtype``, when None)."""
+        out = np.empty(self.shape, dtype) if out is None else out
+        dz = np.diff(self.edges)
+        for sl in self._blocks():
+            nodes = self._nodes(sl)
+            fb = f[(slice(None),) + sl]
+            vals = np.concatenate([fb[:1], fb, fb[-1:]], axis=0, dtype=np.float64)
+            slope = np.diff(vals, axis=0)
+            h = np.diff(nodes, axis=0)
+            np.divide(slope, h, out=slope, where=h > 0)
+            slope[h <= 0] = 0.0
+            cum = _cumulative(nodes, vals)
+            prev = None
+            for j in range(len(self.edges)):
+                k = self.k[(j,) + sl][None].astype(np.intp)
+                t = self.t[(j,) + sl].astype(np.float64)
+                f0 = np.take_along_axis(vals, k, 0)[0]
+                s = np.take_along_axis(slope, k, 0)[0]
+                nxt = np.take_along_axis(cum, k, 0)[0] + t * (f0 + 0.5 * s * t)
+                if prev is not None:
+                    out[(j - 1,) + sl] = (nxt - prev) / dz[j - 1]
+                prev = nxt
+        return out
 
 
 def column_integral(z_w: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -50,21 +102,19 @@ def cell_averages(z_mass: np.ndarray, z_w: np.ndarray, f: np.ndarray, edges: np.
     """Average of each column's reconstruction over target cells [edges[j], edges[j+1]] (per column).
 
     z_mass, f : (n, ...) mass-level heights (m) and values; z_w : (n+1, ...) w-level heights (m);
-    edges     : (m+1,) uniform target cell edges (m). Returns (m, ...) float64.
+    edges     : (m+1,) uniform target cell edges (m). Returns (m, ...) float64 (one field: a reader with
+    several fields on one grid shares a :class:`VerticalPlan`).
     """
-    nodes, vals = _augmented(z_mass.astype(np.float64), z_w.astype(np.float64), f.astype(np.float64))
-    cum = _cumulative(nodes, vals)
-    prev = _integral_to(float(edges[0]), nodes, vals, cum)
-    out = np.empty((len(edges) - 1,) + f.shape[1:], np.float64)
+    return VerticalPlan(z_w, edges, z_mass).average(f, dtype=np.float64)
+
+
+def above_ground_fraction(z_w: np.ndarray, edges: np.ndarray, dtype=np.float32) -> np.ndarray:
+    """Fraction (m, ...) of each target cell that lies between the surface and the model top (level by level:
+    no float64 copy of the whole grid)."""
+    surface, top = z_w[0], z_w[-1]
+    out = np.empty((len(edges) - 1,) + surface.shape, dtype)
     for j in range(len(edges) - 1):
-        nxt = _integral_to(float(edges[j + 1]), nodes, vals, cum)
-        out[j] = (nxt - prev) / (edges[j + 1] - edges[j])
-        prev = nxt
+        lo = np.maximum(edges[j], surface)
+        hi = np.minimum(edges[j + 1], top)
+        out[j] = np.clip(hi - lo, 0.0, None) / (edges[j + 1] - edges[j])
     return out
-
-
-def above_ground_fraction(z_w: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """Fraction (m, ...) of each target cell that lies between the surface and the model top."""
-    lo = np.maximum(edges[:-1, None, None], z_w[0][None])
-    hi = np.minimum(edges[1:, None, None], z_w[-1][None])
-    return np.clip(hi - lo, 0.0, None) / np.diff(edges)[:, None, None]

@@ -25,7 +25,7 @@ import xarray as xr
 
 from ..errors import WeatherDataError
 from .hydrometeors import from_arrays, validate, warn_clipped
-from . import vertical
+from . import budget, vertical
 from .georef import place_coords
 from .map_factors import horizontal_spacing
 from .schemes import MP_SCHEMES, SCHEME_VARS
@@ -42,33 +42,46 @@ REQUIRED = ("P", "PB", "T", "PH", "PHB")
 MAP_FACTOR_VARS = ("MAPFAC_M", "MAPFAC_MX", "MAPFAC_MY")
 
 
+CHUNK_CACHE_BYTES = 4 << 20  # per variable: each variable is read whole, once; netCDF's default 64 MiB
+# of chunk cache for every variable read stayed allocated while the file was open (0.25 GB on 400 x 400 x 50)
+
+
 def open_dataset(path: str) -> xr.Dataset:
-    """The wrfout NetCDF file at ``path``, lazily (a WeatherDataError naming it where it is no NetCDF)."""
+    """The wrfout NetCDF file at ``path``, lazily (a WeatherDataError naming it where it is no NetCDF), with
+    a small chunk cache per variable (``CHUNK_CACHE_BYTES``)."""
+    import netCDF4
+    before = netCDF4.get_chunk_cache()
+    netCDF4.set_chunk_cache(CHUNK_CACHE_BYTES, before[1], before[2])
     try:
         return xr.open_dataset(path, decode_times=False, mask_and_scale=True, cache=False)
     except Exception as exc:  # netCDF4/h5py raise many types for non-NetCDF input
         raise WeatherDataError(path, None, "a NetCDF (wrfout) file", f"{type(exc).__name__}: {exc}") from exc
+    finally:
+        netCDF4.set_chunk_cache(*before)
 
 
-def read(ds, name, it, sel, path, shape=None) -> np.ndarray:
-    """Variable ``name`` at time index ``it`` on the sub-box ``sel`` as float64, checked for ``shape``
-    and for finite values."""
+def read(ds, name, it, sel, path, shape=None, dtype=np.float64) -> np.ndarray:
+    """Variable ``name`` at time index ``it`` on the sub-box ``sel`` (as ``dtype``: the 3-D fields are read
+    as float32, as written), checked for ``shape`` and for finite values."""
     da = ds[name]
     if "Time" in da.dims:
         da = da.isel(Time=it)
     da = da.isel({k: v for k, v in sel.items() if k in da.dims})
-    a = np.asarray(da.values, dtype=np.float64)
+    a = np.asarray(da.values, dtype=dtype)
     if shape is not None and a.shape != shape:
         raise WeatherDataError(path, name, f"shape {shape} (bottom_top, south_north, west_east)", f"shape {a.shape}")
-    if not np.all(np.isfinite(a)):
+    if not np.isfinite(a).all():
         n = int(a.size - np.count_nonzero(np.isfinite(a)))
         raise WeatherDataError(path, name, "finite values", f"{n} NaN or infinite values")
     return a
 
 
-def w_level_heights(ds, it, sel, path) -> np.ndarray:
+def w_level_heights(ds, it, sel, path, dtype=np.float64) -> np.ndarray:
     """Heights of the w-levels z_w = (PH + PHB) / g (m above MSL), (bottom_top_stag, south_north, west_east)."""
-    return (read(ds, "PH", it, sel, path) + read(ds, "PHB", it, sel, path)) / G
+    z_w = read(ds, "PH", it, sel, path, dtype=dtype)
+    z_w += read(ds, "PHB", it, sel, path, dtype=dtype)
+    z_w /= z_w.dtype.type(G)
+    return z_w
 
 
 def dry_air_density(p_pa, theta_k, qv):
@@ -89,30 +102,47 @@ def convert(ds, path, it: int, stamp: str, x, y, dz, top, bottom) -> xr.Dataset:
 
     x, y : slices of mass-point indices (west_east, south_north) or None. dz : vertical spacing (m), None:
     the native mean layer depth. bottom, top : the height grid's extent (m above MSL), None: lowest terrain
-    to highest model top."""
+    to highest model top.
+
+    Memory: float32 fields, the species read and regridded one at a time through one shared
+    ``vertical.VerticalPlan``; the peak is the output (one field per species and the density) and a few
+    native fields."""
     check_required(ds, path)
     sel = _sub_box(path, x, y)
     mp = int(ds.attrs.get("MP_PHYSICS", -1))
     scheme = MP_SCHEMES.get(mp, f"MP_PHYSICS={mp}" if mp >= 0 else "unknown scheme")
     attrs = {"source": path, "model": str(ds.attrs.get("TITLE", "WRF")).strip(), "time": stamp,
              "time_index": it, "microphysics": scheme, "mp_physics": mp}
+    present = _species_present(ds, path, scheme, mp, attrs)
+    budget.check_fits(path, _native_shape(ds, sel), "reading")  # before reading anything
     shape, z_w, rho = _air(ds, path, it, sel, attrs)
-    fields, negatives = _species(ds, path, it, sel, shape, scheme, mp, attrs)
     dz, z_lo, edges = _height_grid(path, z_w, shape, dz, top, bottom)
-    q_new, r_eff, rho_above = _regrid(ds, path, it, sel, shape, z_w, rho, fields, edges)
+    budget.check_fits(path, (len(edges) - 1,) + shape[1:], "reading")  # the target grid, before regridding
+    plan = vertical.VerticalPlan(z_w, edges)
+    rho_above = _air_above(plan, z_w, rho, edges)
+    q_new, r_eff, negatives = _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present)
+    del plan, rho
     dx, dy, grid_attrs = _spacing(ds, path, it, sel, shape)
     i0 = (x.start or 0) if x is not None else 0
     j0 = (y.start or 0) if y is not None else 0
     attrs.update({"n_negative_clipped_native": int(sum(negatives.values())), "dz_native_mean": dz,
                   "map_proj": int(ds.attrs.get("MAP_PROJ", 0)), **grid_attrs})
     attrs.update({f"n_negative_clipped_{k}": v for k, v in negatives.items()})
-    hyd = from_arrays(q_new, np.maximum(rho_above, 1e-6), (dz, dy, dx),
-                      (z_lo + dz / 2, j0 * dy, i0 * dx), r_eff=r_eff, attrs=attrs, source=path)
+    hyd = from_arrays(q_new, rho_above, (dz, dy, dx), (z_lo + dz / 2, j0 * dy, i0 * dx), r_eff=r_eff,
+                      attrs=attrs, source=path, copy=False)
+    del q_new, r_eff, rho_above
     hyd.attrs["n_negative_clipped"] = int(sum(negatives.values()))
-    coords, place_attrs = place_coords(ds, path, it, stamp, sel, z_w[0])
+    coords, place_attrs = place_coords(ds, path, it, stamp, sel, z_w[0].astype(np.float64))
     hyd = hyd.assign_coords(coords)
     hyd.attrs.update(place_attrs)
     return validate(hyd)
+
+
+def _native_shape(ds, sel) -> tuple[int, int, int]:
+    """(bottom_top, south_north, west_east) of the mass grid on the sub-box ``sel``, from the file's dimensions."""
+    dims = ("bottom_top", "south_north", "west_east")
+    n = {d: int(ds.sizes.get(d, 1)) for d in dims}
+    return tuple(len(range(*sel[d].indices(n[d]))) if d in sel else n[d] for d in dims)
 
 
 def _sub_box(path, x, y) -> dict:
@@ -126,27 +156,33 @@ def _sub_box(path, x, y) -> dict:
 
 
 def _air(ds, path, it, sel, attrs):
-    """(shape of the mass grid, z_w (m), dry-air density (kg/m^3) on the mass points); ``attrs`` gets the
-    ALT cross-check."""
-    p = read(ds, "P", it, sel, path) + read(ds, "PB", it, sel, path)
+    """(shape of the mass grid, z_w (m), dry-air density (kg/m^3) on the mass points), float32; ``attrs`` gets
+    the ALT cross-check."""
+    p = read(ds, "P", it, sel, path, dtype=np.float32)
     shape = p.shape
     if len(shape) != 3 or min(shape) < 1:
         raise WeatherDataError(path, "P", "a (bottom_top, south_north, west_east) field", f"shape {shape}")
-    theta = read(ds, "T", it, sel, path, shape) + THETA0
-    z_w = w_level_heights(ds, it, sel, path)
+    p += read(ds, "PB", it, sel, path, shape, np.float32)
+    theta = read(ds, "T", it, sel, path, shape, np.float32)
+    theta += np.float32(THETA0)
+    z_w = w_level_heights(ds, it, sel, path, np.float32)
     if z_w.shape != (shape[0] + 1,) + shape[1:]:
         raise WeatherDataError(path, "PH", f"shape {(shape[0] + 1,) + shape[1:]} on bottom_top_stag", f"shape {z_w.shape}")
-    if not np.all(np.diff(z_w, axis=0) > 0):
+    if not all(bool((z_w[k + 1] > z_w[k]).all()) for k in range(shape[0])):
         raise WeatherDataError(path, "PH+PHB", "geopotential heights increasing upward in every column")
     if "QVAPOR" in ds:
-        qv = np.maximum(read(ds, "QVAPOR", it, sel, path, shape), 0.0)
+        qv = np.maximum(read(ds, "QVAPOR", it, sel, path, shape, np.float32), 0.0)
     else:
         warnings.warn(f"{path}: no QVAPOR; dry-air density computed without the vapour correction", stacklevel=4)
-        qv = np.zeros(shape)
+        qv = np.zeros(shape, np.float32)
     rho = dry_air_density(p, theta, qv)
+    del p, theta, qv
     if "ALT" in ds:
-        alt = read(ds, "ALT", it, sel, path, shape)
-        rel = float(np.max(np.abs(rho * alt - 1.0)))
+        alt = read(ds, "ALT", it, sel, path, shape, np.float32)
+        alt *= rho
+        alt -= np.float32(1.0)
+        rel = float(np.max(np.abs(alt)))
+        del alt
         attrs["alt_max_rel_diff"] = rel
         if rel > 0.01:
             warnings.warn(f"{path}: dry-air density from P, PB, T, QVAPOR differs from 1/ALT by up to "
@@ -154,39 +190,28 @@ def _air(ds, path, it, sel, attrs):
     return shape, z_w, rho
 
 
-def _species(ds, path, it, sel, shape, scheme, mp, attrs):
-    """({species: mixing ratio (kg/kg) clipped at 0}, {species: count of negatives clipped})."""
+def _species_present(ds, path, scheme, mp, attrs) -> list[str]:
+    """The species whose mixing ratio the file has (a WeatherDataError where the scheme writes one the file
+    lacks, or where there is none; a warning naming those the scheme does not carry)."""
     written = SCHEME_VARS.get(mp, ())
     damaged = [v for v in written if v not in ds]
     if damaged:
         raise WeatherDataError(path, ", ".join(damaged), f"the mixing ratios that {scheme} microphysics "
                                f"(MP_PHYSICS={mp}) writes: {', '.join(written)}", "missing from the file")
-    fields, lacking, negatives, minima = {}, [], {}, {}
-    for name, var in SPECIES_VARS.items():
-        if var not in ds:
-            lacking.append(var)
-            continue
-        q = read(ds, var, it, sel, path, shape)
-        if name == "graupel" and "QHAIL" in ds:  # hail is the dense end of the rimed-ice spectrum
-            q = q + read(ds, "QHAIL", it, sel, path, shape)
-        negatives[name] = int(np.count_nonzero(q < 0))
-        if negatives[name]:
-            minima[var] = (negatives[name], float(q.min()))
-        fields[name] = np.maximum(q, 0.0)
-    if minima:
-        warn_clipped(path, minima, stacklevel=4)
-    if not fields:
+    present = [name for name, var in SPECIES_VARS.items() if var in ds]
+    lacking = [var for var in SPECIES_VARS.values() if var not in ds]
+    if not present:
         raise WeatherDataError(path, "QCLOUD", "at least one hydrometeor mixing ratio (QCLOUD, QRAIN, ...)", "none")
     if lacking:
         warnings.warn(f"{path}: microphysics scheme {scheme} does not provide {', '.join(lacking)}; "
                       "those species are zero", stacklevel=4)
         attrs["species_missing"] = ", ".join(lacking)
-    return fields, negatives
+    return present
 
 
 def _height_grid(path, z_w, shape, dz, top, bottom):
     """(dz (m), the grid's bottom (m above MSL), its nz + 1 cell edges (m))."""
-    dz = float(dz) if dz is not None else float(np.mean(z_w[-1] - z_w[0]) / shape[0])
+    dz = float(dz) if dz is not None else float(np.mean(z_w[-1] - z_w[0], dtype=np.float64) / shape[0])
     z_lo = float(np.min(z_w[0])) if bottom is None else float(bottom)
     z_hi = float(np.max(z_w[-1])) if top is None else float(top)
     if not (dz > 0 and z_hi > z_lo):
@@ -195,26 +220,46 @@ def _height_grid(path, z_w, shape, dz, top, bottom):
     return dz, z_lo, z_lo + dz * np.arange(nz + 1)
 
 
-def _regrid(ds, path, it, sel, shape, z_w, rho, fields, edges):
-    """The species' mixing ratios (mass conserved), their effective radii (mass-weighted) and the dry-air
-    density of each cell's part above ground, on the uniform height grid ``edges``."""
-    z_mass = 0.5 * (z_w[1:] + z_w[:-1])  # destagger
+def _air_above(plan, z_w, rho, edges) -> np.ndarray:
+    """The dry-air density of each target cell's part above ground (kg/m^3, float32, at least 1e-6): the
+    cell's air over its open fraction, the lowest mass level's air where the cell is all below ground."""
     frac = vertical.above_ground_fraction(z_w, edges)
-    rho_cell = vertical.cell_averages(z_mass, z_w, rho, edges)
-    rho_above = np.where(frac > 0, rho_cell / np.maximum(frac, 1e-12), rho[0][None])  # air in the cell's open part
-    q_new = {}
-    for name, q in fields.items():
-        mass = vertical.cell_averages(z_mass, z_w, rho * q, edges)  # kg/m^3 of this species, conserved
-        q_new[name] = np.maximum(mass, 0.0) / rho_above
-    r_eff = {}
-    for name, var in RADIUS_VARS.items():
-        if var in ds:
-            r = np.maximum(read(ds, var, it, sel, path, shape), 0.0)
-            if name in fields:  # mass-weighted cell average of the radius
-                num = vertical.cell_averages(z_mass, z_w, rho * fields[name] * r, edges)
-                den = vertical.cell_averages(z_mass, z_w, rho * fields[name], edges)
-                r_eff[name] = np.divide(num, den, out=np.zeros_like(num), where=den > 0)
-    return q_new, r_eff, rho_above
+    out = plan.average(rho)
+    np.divide(out, np.maximum(frac, np.float32(1e-12)), out=out, where=frac > 0)
+    np.copyto(out, np.broadcast_to(rho[0], out.shape), where=frac <= 0)
+    np.maximum(out, np.float32(1e-6), out=out)
+    return out
+
+
+def _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present):
+    """({species: mixing ratio on the target grid (kg/kg, mass conserved)}, {species: effective radius,
+    mass-weighted (m)}, {species: negatives clipped}), one species read and regridded at a time."""
+    q_new, r_eff, negatives, minima = {}, {}, {}, {}
+    for name in present:
+        var = SPECIES_VARS[name]
+        q = read(ds, var, it, sel, path, shape, np.float32)
+        if name == "graupel" and "QHAIL" in ds:  # hail is the dense end of the rimed-ice spectrum
+            q += read(ds, "QHAIL", it, sel, path, shape, np.float32)
+        negatives[name] = int(np.count_nonzero(q < 0))
+        if negatives[name]:
+            minima[var] = (negatives[name], float(q.min()))
+        np.maximum(q, 0.0, out=q)
+        q *= rho  # kg/m^3 of this species, conserved by the regridding
+        mass = plan.average(q)
+        np.maximum(mass, 0.0, out=mass)
+        if RADIUS_VARS.get(name) in ds:  # mass-weighted cell average of the radius
+            r = np.maximum(read(ds, RADIUS_VARS[name], it, sel, path, shape, np.float32), 0.0)
+            r *= q
+            num = plan.average(r)
+            del r
+            r_eff[name] = np.divide(num, mass, out=np.zeros_like(num), where=mass > 0)
+            del num
+        del q
+        mass /= rho_above
+        q_new[name] = mass
+    if minima:
+        warn_clipped(path, minima, stacklevel=4)
+    return q_new, r_eff, negatives
 
 
 def _spacing(ds, path, it, sel, shape):

@@ -3,17 +3,23 @@ from __future__ import annotations
 
 import numpy as np
 
+CHUNK = 1 << 20  # values converted at a time
+
 
 def aligned_float(mi, a) -> "mi.Float":
     """A Dr.Jit Float from numpy data held in 64-byte aligned memory. (The LLVM backend may use host
     memory in place, and a kernel's IR records the alignment it sees: unaligned arrays one frame and
     aligned ones the next would compile a new kernel.)"""
     big = np.finfo(np.float32).max
-    a = np.clip(np.asarray(a, dtype=np.float64), -big, big).astype(np.float32).ravel()
+    a = np.asarray(a).ravel()
     buf = np.empty(a.size + 16, dtype=np.float32)
     off = (-buf.ctypes.data % 64) // 4
     out = buf[off:off + a.size]
-    out[:] = a
+    if a.dtype == np.float32:  # clipped where it lands: no float64 copy of a large grid
+        np.clip(a, -big, big, out=out)
+    else:  # beyond float32's range -> its largest value, in chunks
+        for i in range(0, a.size, CHUNK):
+            out[i:i + CHUNK] = np.clip(np.asarray(a[i:i + CHUNK], dtype=np.float64), -big, big)
     return mi.Float(out)
 
 

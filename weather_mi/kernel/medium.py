@@ -14,8 +14,11 @@ def phase_arrays(vol: OpticalVolume):
     voxel's scattering coefficient, channel mean), which the plugin interpolates and then normalises."""
     from .plugins.hydrometeor_mixture import prepare_tables
     nodes, values = prepare_tables(vol.require_phase_tables())
-    sca = np.asarray(vol.beta_total, np.float32) * np.asarray(vol.albedo, np.float32).mean(axis=-1)
-    weights = np.ascontiguousarray(np.moveaxis(vol.weights * sca[None], 0, -1), dtype=np.float32)
+    sca = np.asarray(vol.albedo, np.float32).mean(axis=-1)
+    sca *= np.asarray(vol.beta_total, np.float32)
+    weights = np.empty(sca.shape + (len(vol.weights),), np.float32)  # written a species at a time: no temporaries
+    for s, w in enumerate(vol.weights):
+        np.multiply(w, sca, out=weights[..., s])
     return nodes, values, weights
 
 

@@ -20,6 +20,7 @@ from ..errors import WeatherDataError
 from ..io.hydrometeors import DIMS, SPECIES_NAMES, bbox_of, check_species_name, validate
 from .species import SpeciesSet, preset
 from ..io.terrain import Terrain
+from ..io.budget import check_fits
 
 
 @dataclass(frozen=True)
@@ -188,6 +189,69 @@ def _radius_field(hyd: xr.Dataset, name: str, default_m: float, use_model: bool)
     return default_m
 
 
+def _species_setup(species, scale, model_radii) -> tuple[SpeciesSet, bool]:
+    """(the SpeciesSet with the scalings, whether the model's radii are used) of ``optical_volume``'s arguments."""
+    sp = preset(species) if isinstance(species, str) else species
+    for name in scale or {}:
+        check_species_name(name, "optical_volume", f"scale[{name!r}]")
+    sp = sp.with_overrides(scale={n: sp[n].scale * f for n, f in (scale or {}).items()})
+    use_model = (sp.preset_name != "paper") if model_radii is None else bool(model_radii)
+    return sp, use_model
+
+
+def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapping[str, float] | None = None, *,
+               model_radii: bool | None = None) -> tuple[np.ndarray, dict[str, float]]:
+    """The total extinction (Eq. 4, 6; (z, y, x) float32, 1/m) of ``hyd`` and each species' largest extinction
+    (1/m), as ``optical_volume`` computes them (same arguments), a species at a time and without the rest of a
+    volume (albedo, weights, phase tables): what a summary needs, in 4 bytes per cell and one temporary."""
+    validate(hyd)
+    sp, use_model = _species_setup(species, scale, model_radii)
+    rho = np.asarray(hyd["rho_air"].values, np.float32)
+    total, largest = None, {}
+    for s in sp:
+        q = hyd[f"q_{s.name}"].values.astype(np.float32, copy=False)
+        beta = s.beta_ext_per_m(rho, q, _radius_field(hyd, s.name, s.radius_m, use_model))
+        largest[s.name] = float(beta.max())
+        total = beta if total is None else np.add(total, beta, out=total)
+    return total, largest
+
+
+def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
+    """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32: beyond its
+    outputs (56 bytes per cell) this takes one or two float32 grids of temporaries (Eq. 4's)."""
+    rho = np.ascontiguousarray(hyd["rho_air"].values, np.float32)
+    shape = rho.shape
+    n_s = len(SPECIES_NAMES)
+    beta_ext = np.empty((n_s,) + shape, np.float32)
+    weights = np.empty((n_s,) + shape, np.float32)
+    from .mixture_kernels import eq4, finish_albedo, mix
+    for i, s in enumerate(sp):
+        r = _radius_field(hyd, s.name, s.radius_m, use_model)
+        q = np.ascontiguousarray(hyd[f"q_{s.name}"].values, np.float32)
+        if np.ndim(r) == 0:  # one radius: one pass (the same float32 operations as beta_ext_per_m)
+            eq4(rho.reshape(-1), q.reshape(-1), np.float32(s.scale * 3.0),
+                np.float32(2.0 * s.density_kg_m3 * float(r)), beta_ext[i].reshape(-1))
+        else:
+            beta_ext[i] = s.beta_ext_per_m(rho, q, r)  # Eq. 4
+        del r
+    # Eq. 6, Eq. 5's numerator sum omega_s beta_s and the Eq. 8 weights from the scattering coefficients
+    # beta_sca,s = omega_s beta_s (channel-mean albedo; the channels differ by < 1e-3 for every hydrometeor),
+    # in one pass (optics.mixture_kernels)
+    rgb = np.asarray([s.albedo_rgb for s in sp], np.float32)
+    mean_albedo = np.asarray([np.float32(np.mean(s.albedo_rgb)) for s in sp], np.float32)
+    beta_total = np.empty(shape, np.float32)
+    albedo = np.empty(shape + (3,), np.float32)
+    mix(beta_ext.reshape(n_s, -1), rgb, mean_albedo, beta_total.reshape(-1), albedo.reshape(-1, 3),
+        weights.reshape(n_s, -1))
+    # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
+    # trilinear interpolation at cloud edges does not blend in a dark value
+    total_ext = float(beta_total.sum(dtype=np.float64))
+    fill = (albedo.reshape(-1, 3).sum(axis=0, dtype=np.float64) / total_ext) if total_ext > 0 \
+        else np.mean([s.albedo_rgb for s in sp], axis=0)
+    finish_albedo(albedo.reshape(-1, 3), beta_total.reshape(-1), fill.astype(np.float32))
+    return beta_ext, beta_total, albedo, weights
+
+
 def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
                    phase_tables: Sequence | None = None, model_radii: bool | None = None,
@@ -223,45 +287,12 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
         For invalid hydrometeors, an unknown species in ``scale`` or an unknown ``phase``.
     """
     validate(hyd)
-    sp = preset(species) if isinstance(species, str) else species
-    for name in scale or {}:
-        check_species_name(name, "optical_volume", f"scale[{name!r}]")
-    sp = sp.with_overrides(scale={n: sp[n].scale * f for n, f in (scale or {}).items()})
     if phase not in ("per_species", "paper"):
         raise WeatherDataError("optical_volume", "phase", '"per_species" or "paper"', repr(phase))
-    use_model = (sp.preset_name != "paper") if model_radii is None else bool(model_radii)
+    sp, use_model = _species_setup(species, scale, model_radii)
 
-    rho = hyd["rho_air"].values.astype(np.float32)
-    shape = rho.shape
-    n_s = len(SPECIES_NAMES)
-    beta_ext = np.empty((n_s,) + shape, np.float32)
-    weights = np.empty((n_s,) + shape, np.float32)
-    albedo_sum = np.zeros(shape + (3,), np.float32)
-    for i, s in enumerate(sp):
-        r = _radius_field(hyd, s.name, s.radius_m, use_model)
-        q = hyd[f"q_{s.name}"].values
-        beta_ext[i] = s.beta_ext_per_m(rho, q.astype(np.float32, copy=False), r)  # Eq. 4
-        albedo_sum += beta_ext[i][..., None] * np.asarray(s.albedo_rgb, np.float32)  # sum omega beta (Eq. 5)
-    beta_total = beta_ext.sum(axis=0)  # Eq. 6
-    # Eq. 8 weights from scattering coefficients beta_sca,s = omega_s beta_s (channel-mean albedo;
-    # the channels differ by < 1e-3 for every hydrometeor)
-    for i, s in enumerate(sp):
-        np.multiply(beta_ext[i], np.float32(np.mean(s.albedo_rgb)), out=weights[i])
-    sca_total = weights.sum(axis=0)
-    nonzero = sca_total > 0
-    np.divide(weights, sca_total, out=weights, where=nonzero)
-    weights[:, ~nonzero] = 0.0
-    # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
-    # trilinear interpolation at cloud edges does not blend in a dark value
-    albedo = np.empty_like(albedo_sum)
-    has_ext = beta_total > 0
-    np.divide(albedo_sum, beta_total[..., None], out=albedo, where=has_ext[..., None])
-    total_ext = float(beta_total.sum(dtype=np.float64))
-    fill = (albedo_sum.reshape(-1, 3).sum(axis=0, dtype=np.float64) / total_ext) if total_ext > 0 \
-        else np.mean([s.albedo_rgb for s in sp], axis=0)
-    albedo[~has_ext] = fill.astype(np.float32)
-    np.clip(albedo, 0.0, 1.0, out=albedo)
-
+    check_fits(str(hyd.attrs.get("source", "hydrometeors")), hyd["rho_air"].shape, "optics")  # before allocating
+    beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model)
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model

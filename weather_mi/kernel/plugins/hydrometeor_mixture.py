@@ -152,11 +152,11 @@ def pack_weights(weights: np.ndarray) -> np.ndarray:
     """(z, y, x, ceil(S / 4), 4) float32: every voxel's S scattering coefficients (negative values as 0),
     zero-padded to whole packets of 4. A voxel where nothing scatters holds zeros, and a trilinear lookup
     weighs it by nothing, as the medium's extinction does."""
-    w = np.clip(np.asarray(weights, np.float32), 0.0, None)
+    w = np.asarray(weights, np.float32)
     n_species = w.shape[3]
     n_packets = max(1, -(-n_species // 4))
     out = np.zeros(w.shape[:3] + (n_packets * 4,), np.float32)
-    out[..., :n_species] = w
+    np.clip(w, 0.0, None, out=out[..., :n_species])  # no temporary copy of the weights
     return out.reshape(w.shape[:3] + (n_packets, 4))
 
 
@@ -228,14 +228,14 @@ class HydrometeorMixture:
         else:
             nodes = np.asarray(props["nodes"], np.float32).ravel()
             values = np.asarray(props["values"], np.float32)
-            weights = np.asarray(props["weights"], np.float32)
+            weights = props["weights"]  # a TensorXf in dict scenes: kept as it is, not copied
             to_world = props["to_world"] if "to_world" in props else mi.ScalarTransform4f()
         if values.ndim != 3 or values.shape[1] != nodes.size or values.shape[2] != 3:
             raise ValueError(f"{PLUGIN_NAME}: 'values' must be S x N x 3 with N = len(nodes) = {nodes.size}; "
                              f"got {values.shape}")
-        if weights.ndim != 4 or weights.shape[3] != values.shape[0]:
+        if len(weights.shape) != 4 or weights.shape[3] != values.shape[0]:
             raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {values.shape[0]}; "
-                             f"got {weights.shape}")
+                             f"got {tuple(weights.shape)}")
         self.n_species, self.n_nodes = int(values.shape[0]), int(nodes.size)
         inverse = np.linalg.inv(np.array(to_world.matrix, dtype=np.float64).reshape(4, 4))
         self.to_local = mi.Transform4f(mi.ScalarTransform4f(inverse.astype(np.float32).tolist()))
@@ -261,8 +261,9 @@ class HydrometeorMixture:
         self.inv_warp_norm = float(1.0 / np.arcsinh(np.pi / GUIDE_THETA0))
 
     def _set_weights(self, weights):
-        weights = np.asarray(weights, np.float32)
-        self.weights = mi.TensorXf(weights)  # z x y x x x S as given: the ``weights`` parameter
+        if not isinstance(weights, mi.TensorXf):
+            weights = mi.TensorXf(np.asarray(weights, np.float32))
+        self.weights = weights  # z x y x x x S as given: the ``weights`` parameter
         self.grid_shape = tuple(int(n) for n in weights.shape[:3])
         packed = pack_weights(weights)
         self.n_packets = int(packed.shape[3])

@@ -48,8 +48,8 @@ def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: flo
     cell = int(cell)
     if cell < 1:
         raise ValueError(f"majorant_grid: cell must be >= 1, got {cell}")
-    a = np.asarray(a, np.float64)
-    if not np.all(np.isfinite(a)):
+    a = np.asarray(a, np.float32 if a.dtype.itemsize <= 4 else np.float64)  # maxima are exact in either
+    if not all(bool(np.isfinite(level).all()) for level in a):
         raise ValueError("majorant_grid: sigma_t contains non-finite values")
     d = a
     for axis in range(3):  # 3-tap running maximum per axis == dilation by one voxel (edge clamped)
@@ -57,12 +57,12 @@ def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: flo
         hi = [slice(None)] * 3
         lo[axis], hi[axis] = slice(0, -1), slice(1, None)
         e = d.copy()
-        e[tuple(hi)] = np.maximum(e[tuple(hi)], d[tuple(lo)])
-        e[tuple(lo)] = np.maximum(e[tuple(lo)], d[tuple(hi)])
+        np.maximum(e[tuple(hi)], d[tuple(lo)], out=e[tuple(hi)])
+        np.maximum(e[tuple(lo)], d[tuple(hi)], out=e[tuple(lo)])
         d = e
     for axis in range(3):  # block maxima, partial last blocks included
         d = np.maximum.reduceat(d, np.arange(0, d.shape[axis], cell), axis=axis)
-    return (np.maximum(d, 0.0) * float(safety)).astype(np.float32)
+    return (np.maximum(d, 0.0).astype(np.float64) * float(safety)).astype(np.float32)
 
 
 def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.ndarray:
@@ -84,14 +84,19 @@ def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.n
         gridvolume clamps). The trilinear interpolant is one trilinear polynomial in such a cell, so
         ``safety`` x the maximum of its 8 texels bounds it there, tightly.
     """
-    a = np.asarray(sigma_t_zyx, np.float64)
+    a = np.asarray(sigma_t_zyx)
+    a = np.asarray(a, np.float32 if a.dtype.itemsize <= 4 else np.float64)  # maxima are exact in either
     a = a.max(axis=3) if a.ndim == 4 else a
-    if a.ndim != 3 or min(a.shape) < 1 or not np.all(np.isfinite(a)):
+    if a.ndim != 3 or min(a.shape) < 1 or not all(bool(np.isfinite(level).all()) for level in a):
         raise ValueError(f"texel_majorant_grid: expected a finite (nz, ny, nx) or (nz, ny, nx, C) array, got shape {a.shape}")
-    a = np.pad(np.maximum(a, 0.0), 1, mode="edge")  # clamped borders
+    a = np.pad(a, 1, mode="edge")  # clamped borders
+    np.maximum(a, 0.0, out=a)
     for axis in range(3):  # the larger of the two texels on either side, per axis
         a = np.maximum(a[(slice(None),) * axis + (slice(0, -1),)], a[(slice(None),) * axis + (slice(1, None),)])
-    return (a * float(safety)).astype(np.float32)
+    out = np.empty(a.shape, np.float32)
+    for k, level in enumerate(a):  # safety x in float64, a level at a time (no float64 copy of the grid)
+        out[k] = level.astype(np.float64) * float(safety)
+    return out
 
 
 def empty_space_radius(majorant: np.ndarray) -> np.ndarray:
@@ -114,5 +119,9 @@ def empty_space_radius(majorant: np.ndarray) -> np.ndarray:
     occupied = np.asarray(majorant) > 0.0
     if not occupied.any():
         return np.full(occupied.shape, max(occupied.shape), np.int32)
-    d = distance_transform_cdt(~occupied, metric="chessboard")  # distance to the nearest occupied cell
-    return np.maximum(d - 1, 0).astype(np.int32)
+    np.logical_not(occupied, out=occupied)
+    d = distance_transform_cdt(occupied, metric="chessboard")  # distance to the nearest occupied cell
+    del occupied
+    d -= 1
+    np.maximum(d, 0, out=d)
+    return d.astype(np.int32, copy=False)
