@@ -2,7 +2,7 @@
 
     weather-mi info FILE | --demo supercell|cumulus|stratocumulus [--lat LAT --lon LON --date UTC]
     weather-mi render FILE | --demo supercell|cumulus|stratocumulus [options] [--scheduler ADDR | --workers N] -o out.exr
-    weather-mi satellite FILE | --demo NAME [--satellite goes-east|goes-west|himawari|meteosat] [--band 0.64 | --rgb]
+    weather-mi satellite FILE... | --demo NAME [--time all|A:B|I,J] [--satellite goes-east|goes-west|himawari|meteosat] [--band 0.64 | --rgb]
                [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC] -o out/sat.nc
     weather-mi animate WRFOUT... [--renderer slices|reference] [options] [--scheduler ADDR | --workers N] -o DIR
     weather-mi validate -o DIR [--quick]
@@ -139,6 +139,11 @@ def satellite_command(args) -> Path:
     resolution = si.parse_resolution_km(args.resolution)
     nc, exr, png, ckpt = si.satellite_outputs(args.output)
     check_satellite_bands(args)
+    from .satellite_loop import satellite_loop_command, wants_loop
+    if wants_loop(args):  # several times: one NetCDF with a time dimension, a PNG per time, an MP4
+        check_writable_folder(nc)
+        with OutputLock(nc):
+            return satellite_loop_command(args, resolution, nc, flag_values(args, SATELLITE_ESTIMATOR))
     check_time(args.file, args.demo, args.time)
     check_writable_folder(nc)
     with OutputLock(nc):
@@ -342,7 +347,12 @@ def _add_satellite_parser(sub) -> None:
     from ..satellite.geostationary import SATELLITES
     sat = sub.add_parser("satellite", help="synthetic geostationary imagery: reflectance on the satellite's fixed "
                                            "grid, 3-D path-traced (NetCDF + EXR + PNG)")
-    _add_source(sat)
+    sat.add_argument("file", nargs="*", help="wrfout NetCDF or LES text file; several wrfout files: a loop of "
+                                             "their times in order")
+    sat.add_argument("--demo", choices=DEMOS, help="a built-in demo storm")
+    sat.add_argument("--time", default=None, help="time index or timestamp (WRF files; default the last); "
+                     '"all", START:STOP[:STEP] or a comma list: a loop (a time dimension, a PNG per time, an MP4)')
+    sat.add_argument("--fps", type=float, default=4.0, help="a loop's MP4: frames per second")
     add_place_options(sat)
     sat.add_argument("--satellite", default="goes-east", choices=tuple(SATELLITES))
     sat.add_argument("--band", default=None, choices=tuple(BANDS), help="central wavelength (um), rendered "
@@ -448,6 +458,8 @@ def main(argv: list[str] | None = None) -> int:
     release_freed_memory()
     parser = build_parser()
     args = parser.parse_args(argv)
+    if isinstance(getattr(args, "file", None), list):  # satellite: none, one or several files
+        args.file = args.file[0] if len(args.file) == 1 else (args.file or None)
     if args.command in ("info", "render", "satellite", "view") and (args.file is None) == (args.demo is None):
         parser.commands[args.command].error("give a data FILE or --demo NAME (one of them)")
     try:
@@ -485,6 +497,9 @@ def _resume_hint(args) -> str:
         ckpt = (render_outputs(args.output) if args.command == "render" else satellite_outputs(args.output))[-1]
     except ValueError:
         return ""
+    from ..display.satellite_loop import parts_folder
+    if args.command == "satellite" and parts_folder(args.output).is_dir():
+        return "; the finished times are kept: run the same command with --resume to continue"
     if not ckpt.is_file():
         return " before the first pass was finished (no checkpoint to resume from)"
     return f"; the finished passes are in {ckpt}: run the same command with --resume to continue"
