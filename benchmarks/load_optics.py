@@ -1,5 +1,7 @@
 """Time and peak memory of loading the real WRF supercell and of optical_volume on a 500 x 500 x 100
-grid (the size of the Hurricane Isabel data set), each with a baseline run in the same process.
+grid (the size of the Hurricane Isabel data set), each with a baseline run in the same process, and the
+peak per grid cell of the result (bytes per cell: issue 39's measure; the whole CLI's, by peak RSS on tiled
+domains, is ``benchmarks/cli_memory.py``).
 
     .venv/bin/python benchmarks/load_optics.py [--shape 100 500 500]
 
@@ -23,8 +25,8 @@ WRF = Path(__file__).resolve().parents[2] / "shared" / "data" / "wrf" / "wrfout_
 
 
 def measure(fn, repeat=3):
-    """(best wall time in s, peak traced memory in MiB) of fn()."""
-    times, peak = [], 0
+    """(best wall time in s, peak traced memory in MiB, grid cells of the result) of fn()."""
+    times, peak, cells = [], 0, 0
     for _ in range(repeat):
         gc.collect()
         tracemalloc.start()
@@ -33,8 +35,20 @@ def measure(fn, repeat=3):
         times.append(time.perf_counter() - t0)
         peak = max(peak, tracemalloc.get_traced_memory()[1])
         tracemalloc.stop()
+        cells = grid_cells(out)
         del out
-    return min(times), peak / 2 ** 20
+    return min(times), peak / 2 ** 20, cells
+
+
+def grid_cells(out) -> int:
+    """The (z, y, x) cells of a result: a Hydrometeors Dataset, an OpticalVolume, an array or arrays."""
+    if hasattr(out, "beta_total"):
+        return int(np.asarray(out.beta_total).size)
+    if hasattr(out, "data_vars"):
+        return int(out["q_cloud"].size)
+    if isinstance(out, (list, tuple)):
+        return max(grid_cells(o) for o in out)
+    return int(np.asarray(out).size)
 
 
 def raw_read():
@@ -69,9 +83,9 @@ def main():
     rows.append((f"Eq. 4 for one species on {label} (baseline)", *base, 1.0, 1.0))
     rows.append((f"wm.optical_volume on {label}", *opt, opt[0] / base[0], opt[1] / base[1]))
 
-    print(f"{'case':<52}{'time (s)':>10}{'peak (MiB)':>12}{'time ratio':>12}{'mem ratio':>11}")
-    for name, t, m, rt, rm in rows:
-        print(f"{name:<52}{t:>10.3f}{m:>12.1f}{rt:>12.2f}{rm:>11.2f}")
+    print(f"{'case':<52}{'time (s)':>10}{'peak (MiB)':>12}{'B/cell':>8}{'time ratio':>12}{'mem ratio':>11}")
+    for name, t, m, cells, rt, rm in rows:
+        print(f"{name:<52}{t:>10.3f}{m:>12.1f}{m * 2 ** 20 / max(cells, 1):>8.0f}{rt:>12.2f}{rm:>11.2f}")
     import resource
     print(f"process max RSS: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
 
