@@ -163,3 +163,15 @@ def test_every_package_and_data_folder_is_declared():
     assert found | {"weather_mi"} == declared
     assert "package-dir" not in tool  # the plugins are inside the package (weather_mi/kernel/plugins)
     assert tool["package-data"]["weather_mi.optics.phase.data"] == ["*.npz"]
+
+
+def test_every_public_name_is_reachable_and_the_short_names_are_their_modules():
+    """``wm.__all__`` resolves in a fresh interpreter (the lazy subpackages and short names included), and each
+    short name is the module it names: a module moved without its short name fails here."""
+    out = _run("import weather_mi as wm\n"
+               "missing = [n for n in wm.__all__ if not hasattr(wm, n)]\n"
+               "wrong = [n for n, m in wm.SHORT_NAMES.items() if getattr(wm, n).__name__ != 'weather_mi.' + m]\n"
+               "print(missing, wrong, sorted(wm.SUBPACKAGES))")
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert out.stdout.split("\n")[0] == ("[] [] ['cli', 'display', 'io', 'kernel', 'optics', 'plane_parallel', "
+                                         "'reference', 'satellite', 'scene', 'slicing', 'study', 'viewer']")

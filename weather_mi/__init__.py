@@ -25,22 +25,21 @@ register_lazily()  # the plugins usable from dict and XML scenes in any variant 
 
 __version__ = "0.1.0"
 
+# the subpackages, one per concept along the data flow, and the modules a script reaches for by short names
+SUBPACKAGES = ("io", "optics", "scene", "kernel", "reference", "slicing", "plane_parallel", "satellite", "display",
+               "study", "viewer", "cli")
+SHORT_NAMES = {"hydrometeors": "io.hydrometeors", "sources": "io.sources", "synthetic": "io.synthetic",
+               "species": "optics.species", "phase": "optics.phase", "detail": "optics.detail",
+               "terrain": "io.terrain", "place": "scene.place", "metrics": "display.metrics",
+               "denoise": "display.denoise"}
+
 __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les", "open_source",
            "open_times", "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
            "Camera", "Ground", "RayTable", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "render_transmittance",
-           "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "view",
-           # the subpackages, one per concept along the data flow
-           "io", "optics", "scene", "kernel", "reference", "slicing", "plane_parallel", "satellite", "display",
-           "study", "viewer", "cli",
-           # modules a script reaches for, by their short names
-           "hydrometeors", "sources", "synthetic", "species", "phase", "detail", "terrain", "place", "metrics", "denoise"]
+           "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "view", *SUBPACKAGES, *SHORT_NAMES]
 
-# subpackages and modules imported on first use (the phase tables pull in miepython/numba, the metrics FLIP)
-_LAZY = {"optics": "optics", "scene": "scene", "kernel": "kernel", "reference": "reference",
-         "plane_parallel": "plane_parallel", "satellite": "satellite", "display": "display", "study": "study",
-         "viewer": "viewer", "cli": "cli",
-         "sources": "io.sources", "phase": "optics.phase", "detail": "optics.detail", "terrain": "io.terrain",
-         "place": "scene.place", "metrics": "display.metrics", "denoise": "display.denoise"}
+# imported on first use (the phase tables pull in miepython/numba, the metrics FLIP)
+_LAZY = {**{name: name for name in SUBPACKAGES}, **SHORT_NAMES}
 
 
 def view(source, **kw):

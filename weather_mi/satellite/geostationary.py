@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..io.projection import enu_vectors  # noqa: F401  (re-exported for the satellite's users)
+from ..io.projection import enu_vectors
 
 WGS84_A_M = 6378137.0
 WGS84_F = 1.0 / 298.257223563
