@@ -40,6 +40,12 @@ def detail_field(vol, seed=0):
 CASES = ("drag", "scaling", "camera", "sun")  # the headline first
 
 
+def default_spec(vol, width: int, height: int, **kw):
+    """``weather_mi.scene.spec.default_spec``, or ``weather_mi.scene.default_spec`` in trees from before the
+    package's layout (benchmarks/slicing_vs_commit.py runs this module on an earlier commit too)."""
+    return getattr(wm.scene, "spec", wm.scene).default_spec(vol, width, height, **kw)
+
+
 def moving_view(vol, width: int, height: int, case: str, i: int, start: int = 0):
     """(SceneSpec, SliceParams) of frame ``i`` of a drag ``case``: "scaling" (a species' scaling changes,
     the view is kept: the textures are rebuilt), "camera" (the camera swings back and forth around the
@@ -48,13 +54,11 @@ def moving_view(vol, width: int, height: int, case: str, i: int, start: int = 0)
     the scaling case, so the cases compare the same kind of picture; views never repeat within a run
     (``start``: the first frame's index)."""
     import math
-    import weather_mi as wm
     k = start + i
     swing = lambda rate, phase: math.sin(rate * k + phase)  # noqa: E731  (incommensurate rates: no repeats)
     cam, sun = case in ("camera", "drag"), case in ("sun", "drag")
-    spec = wm.scene.spec.default_spec(vol, width, height,
-                                      camera_azimuth=200.0 + (8.0 * swing(0.31, 0.0) if cam else 0.0),
-                                      camera_elevation=8.0 + (3.0 * swing(0.23, 1.0) if cam else 0.0))
+    spec = default_spec(vol, width, height, camera_azimuth=200.0 + (8.0 * swing(0.31, 0.0) if cam else 0.0),
+                        camera_elevation=8.0 + (3.0 * swing(0.23, 1.0) if cam else 0.0))
     sun_dir = wm.Sun(240.0 + 8.0 * swing(0.27, 2.0), 35.0 + 3.0 * swing(0.19, 3.0)) if sun else wm.Sun(240.0, 35.0)
     spec = wm.SceneSpec(camera=spec.camera, sun=sun_dir, sky=spec.sky, ground=spec.ground, width=width,
                         height=height)
@@ -94,7 +98,7 @@ def fixed_cost(vol, frames):
     2 shared cores' load falls on both alike); the change between frames: light parameters
     (textures kept), or a scaling (textures rebuilt: kernels over the grid). CPU ms: the process's CPU
     time (all threads) per frame, which other users of the cores do not inflate."""
-    spec = wm.scene.spec.default_spec(vol, 64, 48)
+    spec = default_spec(vol, 64, 48)
     rows = []
     for name in ("per-species/translucent", "per-species/multiple"):
         rs = [SliceRenderer(vol, MODES[name], slices=8, light_res=8) for _ in range(2)]
@@ -116,7 +120,7 @@ def fixed_cost(vol, frames):
 def bench(vol, width, height, slices, light_res, frames, rounds=1, traced=False):
     """{mode: {(case, frozen): seconds per frame}}: the median over ``rounds`` of each case's median
     (``seconds_per_frame``), the cases (and traced / frozen) taking turns round after round."""
-    spec = wm.scene.spec.default_spec(vol, width, height)
+    spec = default_spec(vol, width, height)
     out = {}
     for name, mode in MODES.items():
         r = SliceRenderer(vol, mode, slices=slices, light_res=light_res,

@@ -5,8 +5,10 @@ case after case, round after round, so that the shared cores' load falls on both
                                                      [--slices 128] [--frames 5] [--fixed]
                                                      [--case scaling camera sun drag]
 
-The earlier commit is extracted into a temporary directory (``git archive``; its plugins linked in, as
-validation/bit_identity.py does); one measuring process per tree, kept for the run, renders the frames of
+The earlier commit is extracted into a temporary directory (``git archive``; where its pyproject.toml maps a
+package to another directory, as trees before the package layout mapped ``weather_mi.plugins`` to a top-level
+``plugins/``, that directory is linked in place, ``link_mapped_packages``; later trees keep their plugins in
+``weather_mi/kernel/plugins`` and need nothing); one measuring process per tree, kept for the run, renders the frames of
 each mode and case in turn with the other (frozen frames after three warm-up frames; every frame changes
 a scaling as a slider drag does, or with ``--case`` the camera, the sun or both move every frame,
 benchmarks/slicing.py's ``moving_view``) on the demo supercell. Prints the median over rounds per mode,
@@ -57,10 +59,10 @@ FIXED = """
 import sys, time, statistics, weather_mi as wm
 from weather_mi.slicing import MODES, SliceRenderer
 sys.path.insert(0, {bench!r})
-from slicing import change
+from slicing import change, default_spec
 wm.set_variant(None)
 vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
-spec = wm.scene.spec.default_spec(vol, 64, 48)
+spec = default_spec(vol, 64, 48)
 for name in ("per-species/translucent", "per-species/multiple"):
     r = SliceRenderer(vol, MODES[name], slices=8, light_res=8)
     for kind in ("parameter", "scaling"):
@@ -72,6 +74,26 @@ for name in ("per-species/translucent", "per-species/multiple"):
                 t.append(time.perf_counter() - t0)
         print("FPS", name + ":" + kind, 1e3 * statistics.median(t), flush=True)
 """
+
+
+def link_mapped_packages(tree: Path) -> list[str]:
+    """Link the packages that ``tree``'s pyproject.toml maps to other directories
+    (``[tool.setuptools.package-dir]``, e.g. ``"weather_mi.plugins" = "plugins"`` before the package layout)
+    where the import system looks for them, as its editable install would map them: the packages linked."""
+    import tomllib
+    pyproject = tree / "pyproject.toml"
+    mapped = {}
+    if pyproject.is_file():
+        mapped = tomllib.loads(pyproject.read_text()).get("tool", {}).get("setuptools", {}).get("package-dir", {})
+    linked = []
+    for package, directory in mapped.items():
+        if not package:  # ("": a source root, not a package)
+            continue
+        target, link = tree / directory, tree.joinpath(*package.split("."))
+        if target.is_dir() and not link.exists() and not link.is_symlink():
+            link.symlink_to(target.resolve(), target_is_directory=True)
+            linked.append(package)
+    return linked
 
 
 def measure(tree: Path, w: int, h: int, slices: int, frames: int, fixed: bool = False) -> dict:
@@ -140,8 +162,7 @@ def main() -> int:
         old.mkdir()  # the earlier tree as files (git archive: no worktree to add or remove)
         archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.commit], check=True, capture_output=True)
         subprocess.run(["tar", "-x", "-C", str(old)], input=archive.stdout, check=True)
-        if not (old / "weather_mi" / "plugins").exists():  # as the editable install maps them
-            (old / "weather_mi" / "plugins").symlink_to("../plugins")
+        link_mapped_packages(old)  # (trees before the package layout: weather_mi.plugins -> plugins/)
         if args.fixed:
             fixed_costs(args, old, w, h)
             return 0

@@ -30,10 +30,7 @@ def film_rays(spec: SceneSpec, px, py) -> tuple[np.ndarray, np.ndarray]:
     picture: x to the right, y down, origin at the top-left corner (pixel centres at half-integers)."""
     cam: Camera = spec.camera
     w, h = int(spec.width), int(spec.height)
-    fwd = cam.forward
-    left = np.cross(np.asarray(cam.up, float), fwd)
-    left /= np.linalg.norm(left)
-    up = np.cross(fwd, left)
+    fwd, left, up = camera_basis(cam)
     gx = 1.0 - 2.0 * np.asarray(px, float) / w           # +1 at the left edge (Mitsuba's camera x axis: left)
     gy = 1.0 - 2.0 * np.asarray(py, float) / h           # +1 at the top edge
     if cam.kind == "orthographic":
@@ -45,6 +42,14 @@ def film_rays(spec: SceneSpec, px, py) -> tuple[np.ndarray, np.ndarray]:
     dirs = fwd + gx[..., None] * tan_x * left + gy[..., None] * tan_y * up
     dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
     return np.broadcast_to(np.asarray(cam.origin, float), dirs.shape).copy(), dirs
+
+
+def camera_basis(cam: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(forward, left, up) unit vectors of the camera (Mitsuba's camera frame: x to the left)."""
+    fwd = cam.forward
+    left = np.cross(np.asarray(cam.up, float), fwd)
+    left /= np.linalg.norm(left)
+    return fwd, left, np.cross(fwd, left)
 
 
 def orthonormal_frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -246,9 +246,8 @@ class LightVolume:
         slice units: k in [kin, kout]."""
         mi = self.mi
         import drjit as dr
-        p0, step, q0, k_in, k_out = light_rays(mi, g, self.res, grid_box, (self.lo, self.hi))  # float64 kernels
-        span = np.asarray(grid_box[1], dtype=np.float64) - np.asarray(grid_box[0], dtype=np.float64)
-        qs = mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in step / span))
+        p0, step, q0, q_step, k_in, k_out = light_rays(mi, g, self.res, grid_box, (self.lo, self.hi))  # float64 kernels
+        qs = mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in q_step))
         q0 = mi.Point3f(*(f32(mi, v) for v in q0))
         span = (None, None)
         if self.occupancy is not None:  # the occupied part of each light ray, in slice units

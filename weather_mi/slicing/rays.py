@@ -18,6 +18,8 @@ import math
 
 import numpy as np
 
+from .geometry import camera_basis
+
 FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
@@ -53,10 +55,7 @@ def camera_rays(mi, spec):
     import drjit as dr
     cam = spec.camera
     w, h = int(spec.width), int(spec.height)
-    fwd = cam.forward
-    left = np.cross(np.asarray(cam.up, float), fwd)
-    left /= np.linalg.norm(left)
-    up = np.cross(fwd, left)
+    fwd, left, up = camera_basis(cam)
     ortho = cam.kind == "orthographic"
     tan_x = 0.0 if ortho else math.tan(math.radians(cam.fov) / 2)
     half = (cam.ortho_width / 2, cam.ortho_height / 2) if ortho else (tan_x, tan_x * h / w)
@@ -112,9 +111,10 @@ def ground_hits(mi, spec, origin, direction):
 
 
 def light_rays(mi, g, res: int, grid_box, box):
-    """The light buffer's rays of ``LightVolume._light_rays``: (p0, step, q0, k_in, k_out), p0 each texel's
-    point on plane 0 (3 Float64), step the way to the next plane (numpy (3,)), q0 p0 in texture coordinates
-    of ``grid_box`` (3 Float64) and where the ray is inside the slicing ``box`` in slice units (Float64)."""
+    """The light buffer's rays of ``LightVolume._light_rays``: (p0, step, q0, q_step, k_in, k_out), p0 each
+    texel's point on plane 0 (3 Float64), step the way to the next plane (numpy (3,)), q0 and q_step p0 and
+    step in texture coordinates of ``grid_box`` (3 Float64, numpy (3,)) and where the ray is inside the
+    slicing ``box`` in slice units (Float64)."""
     import drjit as dr
     R = int(res)
     s, l = g.axis, g.to_light
@@ -137,7 +137,7 @@ def light_rays(mi, g, res: int, grid_box, box):
     q0 = [(p0[c] - sc[f"glo{c}"]) / sc[f"span{c}"] for c in range(3)]
     k_in, k_out = ray_box(mi, p0, [sc[f"step{c}"] + dr.zeros(mi.Float64, R * R) for c in range(3)], box,
                           clamp_start=False)
-    return p0, step, q0, k_in, k_out
+    return p0, step, q0, step / span, k_in, k_out
 
 
 def phase_table(mi, table):

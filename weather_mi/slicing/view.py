@@ -59,14 +59,13 @@ class ViewRays:
     hit_ground: object   # mi.Bool
     ground: object       # mi.Point3f
     background: object   # mi.Color3f
-    cos_to_light: object      # mi.Float64 (N): cosine of the angle between the ray and the sun, for the phase functions
+    theta: object        # mi.Float64 (N): the angle between the ray and the direction to the sun (radians)
     n: int
     pattern: object = None    # mi.Float
     ground_sun: object = None  # mi.Float over a terrain: albedo max(n . s, 0) / mu0 at the ground point
     ground_sky: object = None  # mi.Float over a terrain: albedo (1 + n_z) / 2 (a tilted plane's share of the sky)
     span_a: object = None      # mi.Float: where each ray's occupied span begins and ends (occupancy.py; the
     span_b: object = None      # whole [t0, t1] without an occupancy map)
-    theta: object = None       # mi.Float64 (N): the angle between the ray and the direction to the sun (radians)
     phase_colour: dict = field(default_factory=lambda: BoundedCache(8))  # per-pixel phase colours by (group, colour)
 
 
@@ -89,12 +88,11 @@ class ViewCache:
         terrain = None if spec.ground is None else self.terrain
         if ray_key not in self.rays:
             self.rays[ray_key] = self._rays(mi, spec) if terrain is None else self._terrain_rays(mi, spec, terrain)
-        o, d, t0, t1, hit, ground, surface, spans = self.rays[ray_key]
+        d, hit, surface, fixed = self.rays[ray_key]
         bg_key = ray_key + (spec.sun.azimuth, spec.sun.elevation, spec.sun.irradiance, spec.sky)
         if bg_key not in self.backgrounds:
             import drjit as dr
-            direction = mi.Vector3f(*(f32(mi, v) for v in d))
-            sky = sky_radiance_arrays(spec, direction, self.sky, active=~hit)
+            sky = sky_radiance_arrays(spec, fixed["direction"], self.sky, active=~hit)
             dr.eval(sky)  # (a kernel of its own, as Mitsuba's emitter gives it: the same kernel every frame)
             s = rays.Scalars(mi, s=spec.sun.to_sun)  # (new values compile nothing)
             cos = (d[0] * s["s0"] + d[1] * s["s1"]) + d[2] * s["s2"]
@@ -104,20 +102,17 @@ class ViewCache:
                     mi, offset_pattern(spec.width, spec.height))
             weights = (None, None) if surface is None else \
                 _terrain_weights(lambda a: aligned_float(mi, a), spec, surface, np.asarray(hit))
-            view = ViewRays(
-                mi.Point3f(*(f32(mi, v) for v in o)), direction, f32(mi, t0),
-                f32(mi, dr.select(dr.isfinite(t1), t1, t0)), hit, mi.Point3f(*(f32(mi, v) for v in ground)),
-                dr.select(hit, mi.Color3f(0.0), sky), cos, dr.width(t0), pattern, *weights, *spans)
-            view.theta = dr.acos(dr.clip(cos, -1.0, 1.0))  # the scattering angle, for the phase functions
+            view = ViewRays(**fixed, background=dr.select(hit, mi.Color3f(0.0), sky),
+                            theta=dr.acos(dr.clip(cos, -1.0, 1.0)),  # the scattering angle, for the phase functions
+                            pattern=pattern, ground_sun=weights[0], ground_sky=weights[1])
             # evaluated here, whatever the caches kept: the same kernels every frame (none compiled anew)
-            dr.eval(view.origin, view.direction, view.t0, view.t1, view.hit_ground, view.ground,
-                    view.background, view.theta)
+            dr.eval(view.background, view.theta)
             self.backgrounds[bg_key] = view
         return self.backgrounds[bg_key]
 
     def _rays(self, mi, spec: SceneSpec):
-        """(origin, direction, t0, t1, hit, ground point, None, spans) of a view over the flat ground (or
-        none), computed by kernels (rays.py; float64 as numpy's)."""
+        """``_view_arrays`` of a view over the flat ground (or none), computed by kernels (rays.py; float64
+        as numpy's)."""
         import drjit as dr
         o, d = rays.camera_rays(mi, spec)
         t0, t1 = rays.ray_box(mi, o, d, self.box)
@@ -127,7 +122,7 @@ class ViewCache:
         at = dr.select(hit, tg, 0.0)
         ground = [o[c] + at * d[c] for c in range(3)]
         dr.eval(o, d, t0, t1, hit, ground)  # once: the spans, the sky and the frame's arrays read them
-        return o, d, t0, t1, hit, ground, None, self._spans(mi, o, d, t0, t1)
+        return self._view_arrays(mi, o, d, t0, t1, hit, ground, None)
 
     def _terrain_rays(self, mi, spec: SceneSpec, terrain):
         """``_rays`` over a terrain: the path tracer's ground (the mesh, its apron and skirt, the surround
@@ -141,19 +136,22 @@ class ViewCache:
         pg = o + np.where(hit, tg, 0.0)[:, None] * d
         F64 = lambda a: mi.Float64(np.ascontiguousarray(a))  # noqa: E731
         cols = lambda a: [F64(a[:, c]) for c in range(3)]  # noqa: E731
-        o64, d64, t0_64, t1_64 = cols(o), cols(d), F64(t0), F64(t1)
-        return (o64, d64, t0_64, t1_64, mi.Bool(hit), cols(pg), surface,
-                self._spans(mi, o64, d64, t0_64, t1_64))
+        return self._view_arrays(mi, cols(o), cols(d), F64(t0), F64(t1), mi.Bool(hit), cols(pg), surface)
 
-    def _spans(self, mi, o, d, t0, t1):
-        """(span_a, span_b) of ``ViewRays`` (once per view, not per sun) from Float64 rays."""
+    def _view_arrays(self, mi, o, d, t0, t1, hit, ground, surface):
+        """What a view keeps whatever the sun: (d, hit, surface, fixed), ``d`` the directions (3 Float64,
+        for the phase functions' angles), ``hit`` the rays that meet the ground (mi.Bool), ``surface`` the
+        terrain's (albedo, normal) there or None, ``fixed`` the ``ViewRays`` fields of the view in float32
+        (rounded once per view, not per sun), the occupied spans (``span_a``, ``span_b``) among them."""
         import drjit as dr
+        P = lambda v: [f32(mi, c) for c in v]  # noqa: E731
         t1 = f32(mi, dr.select(dr.isfinite(t1), t1, t0))
-        t0 = f32(mi, t0)
-        if self.occupancy is None:
-            return t0, t1
-        return self.occupancy.spans(mi.Point3f(*(f32(mi, v) for v in o)), mi.Vector3f(*(f32(mi, v) for v in d)),
-                                    t0, t1)
+        fixed = dict(origin=mi.Point3f(*P(o)), direction=mi.Vector3f(*P(d)), t0=f32(mi, t0), t1=t1,
+                     hit_ground=hit, ground=mi.Point3f(*P(ground)), n=dr.width(t0))
+        dr.eval(fixed["origin"], fixed["direction"], fixed["t0"], fixed["t1"], fixed["ground"])
+        fixed["span_a"], fixed["span_b"] = (fixed["t0"], t1) if self.occupancy is None else \
+            self.occupancy.spans(fixed["origin"], fixed["direction"], fixed["t0"], t1)
+        return d, hit, surface, fixed
 
 
 def _terrain_weights(F, spec: SceneSpec, surface, hit: np.ndarray):
