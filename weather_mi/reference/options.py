@@ -35,19 +35,18 @@ from .passes import DEFAULT_AUREOLE_NEE, DEFAULT_MVNEE, DEFAULT_SUN_GUIDING, pla
 INTEGRATORS = ("majorant", "volpath")
 NORMALIZE = (None, "reflectance")
 VALUE = "value"  # ``key``: the resolved value enters the checkpoint fingerprint
-FIELD_DEFAULT = "<the field's default>"  # ``Flag.default``: the command's default is the renderer's
 
 
 @dataclass(frozen=True)
 class Flag:
     """A field's flag on the command line: its name, help and metavar, and the commands' default where it
-    differs from the renderer's (FIELD_DEFAULT: the field's). Its type comes from the field (its choices; a
+    differs from the renderer's (None: the field's). Its type comes from the field (its choices; a
     bool: a switch) and its destination is the field's name."""
 
     name: str
     help: str | None = None
     metavar: str | None = None
-    default: Any = FIELD_DEFAULT
+    default: Any = None
 
 
 @dataclass(frozen=True)
@@ -255,22 +254,20 @@ class ReferenceOptions:
         return self.integrator == "majorant" and not self.legacy
 
     @classmethod
-    def of_call(cls, options: ReferenceOptions | None, args: tuple, keywords: dict,
-                caller: str = "render_reference") -> ReferenceOptions:
-        """The options of a call ``caller(spec, vol, *args, options=options, **keywords)``: ``options`` (None:
+    def of_call(cls, options: ReferenceOptions | None, args: tuple, keywords: dict) -> ReferenceOptions:
+        """The options of a call ``render_reference(spec, vol, *args, options=options, **keywords)``: ``options`` (None:
         the defaults) with the positional fields ``args`` and the fields named by ``keywords`` replaced
         (TypeError, as Python's, for another keyword or a field given twice)."""
-        positional = [f.name for f, d in declared(cls) if d.positional]
+        positional = [f.name for f, d in DECLARED if d.positional]
         if len(args) > len(positional):
-            raise TypeError(f"{caller}() takes at most {len(positional)} positional options "
+            raise TypeError(f"render_reference() takes at most {len(positional)} positional options "
                             f"({', '.join(positional)}) after spec and vol, {len(args)} were given")
         given = dict(zip(positional, args))
-        names = {f.name for f, _ in declared(cls)}
         for name, value in keywords.items():
-            if name not in names:
-                raise TypeError(f"{caller}() got an unexpected keyword argument {name!r}")
+            if name not in _BY_NAME:
+                raise TypeError(f"render_reference() got an unexpected keyword argument {name!r}")
             if name in given:
-                raise TypeError(f"{caller}() got multiple values for argument {name!r}")
+                raise TypeError(f"render_reference() got multiple values for argument {name!r}")
             given[name] = value
         if options is None:
             return cls(**given)
@@ -283,7 +280,7 @@ class ReferenceOptions:
         default (which may depend on the fields before it and on ``spec``, the SceneSpec), then checked and
         converted (ValueError naming the option)."""
         o = self
-        for f, d in declared(type(self)):
+        for f, d in DECLARED:
             v = getattr(o, f.name)
             if v is None and d.none_means is not None:
                 v = d.none_means(o, spec)
@@ -294,13 +291,13 @@ class ReferenceOptions:
 
     def kernel_options(self) -> dict:
         """The keywords of ``integrator_dict`` (the fields declared ``kernel``)."""
-        return {f.name: getattr(self, f.name) for f, d in declared(type(self)) if d.kernel}
+        return {f.name: getattr(self, f.name) for f, d in DECLARED if d.kernel}
 
     def key_items(self) -> dict:
         """What of these (resolved) options enters the checkpoint fingerprint: {field: its value, or what its
         ``key`` makes of it}, every field but those whose declared ``key`` is None (a reason given)."""
         out = {}
-        for f, d in declared(type(self)):
+        for f, d in DECLARED:
             if d.key is None:
                 continue
             v = getattr(self, f.name)
@@ -310,18 +307,15 @@ class ReferenceOptions:
     def metadata(self) -> dict:
         """{field: its value (None where the estimator does not use it)} for the image's metadata."""
         return {f.name: getattr(self, f.name) if d.applies is None or d.applies(self) else None
-                for f, d in declared(type(self))}
+                for f, d in DECLARED}
 
 
-def declared(cls=ReferenceOptions) -> list:
-    """[(dataclasses.Field, Declared)] of the fields of ``cls``, in declaration order."""
-    return [(f, f.metadata["declared"]) for f in dataclasses.fields(cls)]
-
-
-def unexplained_keys(cls=ReferenceOptions) -> list[str]:
-    """The fields whose declared ``key`` lets their value out of the checkpoint fingerprint (not VALUE)
-    without a ``key_reason``: a resumed render would mix two renders that differ there."""
-    return [f.name for f, d in declared(cls) if d.key != VALUE and not d.key_reason.strip()]
+# ((dataclasses.Field, Declared), ...) of the fields, in declaration order, and by name; each field's type without
+# its None (``int | None``: int), for the flags' types
+DECLARED = tuple((f, f.metadata["declared"]) for f in dataclasses.fields(ReferenceOptions))
+_BY_NAME = {f.name: (f, d) for f, d in DECLARED}
+BASE_TYPES = {name: next(t for t in (typing.get_args(hint) or (hint,)) if t is not type(None))
+              for name, hint in typing.get_type_hints(ReferenceOptions).items()}
 
 
 # ------------------------------------------------------------------------------------------ documentation
@@ -334,10 +328,10 @@ def _doc_type(f: dataclasses.Field, d: Declared) -> str:
     return base + (", optional" if "None" in parts else "")
 
 
-def fields_doc(indent: str = "    ", cls=ReferenceOptions) -> str:
+def fields_doc(indent: str = "    ") -> str:
     """The numpydoc entries of the fields (``name : type`` and the documentation below it)."""
     out = []
-    for f, d in declared(cls):
+    for f, d in DECLARED:
         out.append(f"{indent}{f.name} : {_doc_type(f, d)}")
         out.append(textwrap.indent(textwrap.fill(" ".join(d.doc.split()), 100 - len(indent) - 4),
                                    indent + "    "))
@@ -354,7 +348,7 @@ def takes_options(func):
     parameters: ``*args`` become the positional fields (``spp``, ``max_depth``), ``**estimator`` the others
     (keyword-only), in its signature (``inspect.signature``, ``help``) and in its docstring (the line
     ``<ReferenceOptions fields>`` of its Parameters). ``func`` gets them through ``ReferenceOptions.of_call``."""
-    fields = declared()
+    fields = DECLARED
     params = []
     for p in inspect.signature(func).parameters.values():
         if p.kind is p.VAR_POSITIONAL:
@@ -373,28 +367,23 @@ def takes_options(func):
 # ------------------------------------------------------------------------------------------ command line
 
 def _flagged(names) -> list:
-    fields = [(f, d) for f, d in declared() if d.flag is not None]
     if names is None:
-        return fields
-    by_name = {f.name: (f, d) for f, d in fields}
-    unknown = [n for n in names if n not in by_name]
+        return [(f, d) for f, d in DECLARED if d.flag is not None]
+    unknown = [n for n in names if n not in _BY_NAME or _BY_NAME[n][1].flag is None]
     if unknown:
         raise ValueError(f"no flag is declared for {unknown}")
-    return [by_name[n] for n in names]
+    return [_BY_NAME[n] for n in names]
 
 
 def add_flags(parser, names=None, defaults: dict | None = None) -> None:
     """The flags of the fields ``names`` (None: every field declaring one) on the argparse ``parser``:
     the flag's name, help and metavar; the field's name as destination, its type (its choices; a bool: a
     switch) and its default (the command's own from ``defaults``, else the flag's, else the field's)."""
-    hints = typing.get_type_hints(ReferenceOptions)
     defaults = defaults or {}
     for f, d in _flagged(names):
         fl = d.flag
-        kw = {"dest": f.name, "default": f.default if fl.default == FIELD_DEFAULT else fl.default}
-        if f.name in defaults:
-            kw["default"] = defaults[f.name]
-        base = [t for t in (typing.get_args(hints[f.name]) or (hints[f.name],)) if t is not type(None)][0]
+        kw = {"dest": f.name, "default": defaults.get(f.name, f.default if fl.default is None else fl.default)}
+        base = BASE_TYPES[f.name]
         if d.choices is not None:
             kw["choices"] = tuple(c for c in d.choices if c is not None)
         elif base is bool:

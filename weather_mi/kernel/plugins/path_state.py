@@ -44,7 +44,7 @@ def path_state_class() -> type:
 class Vertex:
     """What the stages of one iteration of the path loop (``majorant_volpath.PathLoop.body``) pass on to
     the later ones: made anew by every iteration (``free_flight``), not loop state, so a plain class, its
-    fields declared in ``__slots__``: a field not declared here cannot be set, and one that no stage has set
+    fields declared as its annotations (its ``__slots__``): a field not declared here cannot be set, and one that no stage has set
     yet cannot be read (AttributeError while tracing). Dr.Jit types of the variant, one lane per path.
 
     The stages set the fields in this order (``STAGES``; a stage reads only what it or an earlier one set):
@@ -63,8 +63,6 @@ class Vertex:
     ============  ============================================  ===============================================
     """
 
-    __slots__ = ("act_scatter", "active_surface", "mei", "bsdf", "act_e_surf", "act_e", "ref", "eps", "alpha",
-                 "eps_a")
     act_scatter: mi.Bool                 # a real collision in the medium where the path scatters (phase sampling)
     active_surface: mi.Bool              # the path reaches p.si (or escapes; emitters_hit keeps valid surfaces)
     mei: mi.MediumInteraction3f          # the collision: t (m along the ray), p (m, world), sigma_t (1/m), ...
@@ -75,6 +73,7 @@ class Vertex:
     eps: mi.Float                        # probability of a sun-guided continuation here (0 without guiding)
     alpha: mi.Spectrum | None            # channel probabilities (throughput / its sum); None: no channel sampling
     eps_a: mi.Float                      # probability of the aureole estimator here (0 without it)
+    __slots__ = tuple(__annotations__)
 
     # (stage, the fields it sets), in the order PathLoop.body runs the stages
     STAGES = (("free_flight", ("act_scatter", "active_surface", "mei")),
