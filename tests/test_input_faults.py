@@ -170,8 +170,9 @@ def _huge_wrfout(path: Path, nz: int, ny: int, nx: int) -> Path:
     return path
 
 
-def test_a_domain_too_large_for_memory_fails_fast_before_allocating(tmp_path):
+def test_a_domain_too_large_for_memory_fails_fast_before_allocating(tmp_path, monkeypatch):
     import time
+    monkeypatch.delenv("WEATHER_MI_MAX_MEMORY_GB", raising=False)  # the machine's own memory, not an override
     import tracemalloc
     path = _huge_wrfout(tmp_path / "huge.nc", 100, 200_000, 200_000)  # 4e12 cells: 190 TB at 48 bytes per cell
     tracemalloc.start()
@@ -194,3 +195,34 @@ def test_optical_volume_checks_the_memory_before_allocating(monkeypatch):
         wm.optical_volume(hyd)
     monkeypatch.setenv("WEATHER_MI_MAX_MEMORY_GB", "100")
     assert wm.optical_volume(hyd, phase_quality="test").shape == tuple(hyd.rho_air.shape)
+
+
+def _tree(root: Path, files: dict) -> Path:
+    for rel, text in files.items():
+        (root / rel).parent.mkdir(parents=True, exist_ok=True)
+        (root / rel).write_text(text)
+    return root
+
+
+@pytest.mark.parametrize("version", ["v1", "v2"])
+def test_available_memory_is_the_tightest_of_meminfo_and_every_cgroup_limit(tmp_path, monkeypatch, version):
+    from weather_mi.io.budget import available_bytes
+    monkeypatch.delenv("WEATHER_MI_MAX_MEMORY_GB", raising=False)
+    gb, unlimited = 1 << 30, "9223372036854771712" if version == "v1" else "max"
+    limit, usage, base = (("memory.limit_in_bytes", "memory.usage_in_bytes", "memory/") if version == "v1"
+                          else ("memory.max", "memory.current", ""))
+    own = "4:memory:/jobs/run7\n" if version == "v1" else "0::/jobs/run7\n"
+    proc = _tree(tmp_path / "proc", {"meminfo": "MemTotal: 67108864 kB\nMemAvailable: 33554432 kB\n",
+                                     "self/cgroup": "1:cpu:/\n" + own})  # 32 GiB available
+    cg = tmp_path / "cg"
+    _tree(cg, {f"{base}{limit}": unlimited, f"{base}{usage}": str(50 * gb),
+               f"{base}jobs/{limit}": str(12 * gb), f"{base}jobs/{usage}": str(4 * gb),          # 8 GiB left
+               f"{base}jobs/run7/{limit}": str(10 * gb), f"{base}jobs/run7/{usage}": str(1 * gb)})  # 9 GiB
+    assert available_bytes(str(proc), str(cg)) == 8 * gb  # the parent's room, under its child's and meminfo
+    (cg / f"{base}jobs/{limit}").write_text(unlimited)
+    assert available_bytes(str(proc), str(cg)) == 9 * gb
+    (cg / f"{base}jobs/run7/{limit}").write_text(unlimited)
+    assert available_bytes(str(proc), str(cg)) == 32 * gb  # no limit anywhere: MemAvailable
+    assert available_bytes(str(tmp_path / "none"), str(tmp_path / "none")) == float("inf")
+    monkeypatch.setenv("WEATHER_MI_MAX_MEMORY_GB", "2.5")
+    assert available_bytes(str(proc), str(cg)) == 2.5e9

@@ -5,9 +5,9 @@ The estimates are peak bytes per cell of the (z, y, x) grid, measured on the rea
 800 x 800 x 51 (``benchmarks/cli_memory.py``): reading a wrfout (the float32 Hydrometeors, 24 bytes per
 cell, and the reader's working set), and building an OpticalVolume beside the Hydrometeors (its grids,
 56 bytes per cell, and two grids of temporaries); the memory already in use (the interpreter, the
-libraries, the Hydrometeors) is not counted, as the memory available excludes it. The memory available is the environment's
-``WEATHER_MI_MAX_MEMORY_GB`` where set, else the smaller of the system's available memory and the
-cgroup's limit.
+libraries, the Hydrometeors) is not counted, as the memory available excludes it. The memory available is
+the environment's ``WEATHER_MI_MAX_MEMORY_GB`` where set, else the smaller of the system's available memory
+and the room left under the memory limits of the process's cgroup (v1 or v2) and its ancestors.
 """
 from __future__ import annotations
 
@@ -19,32 +19,61 @@ from ..errors import DomainTooLargeError
 BYTES_PER_CELL = {"reading": 48, "optics": 64}  # beyond what is allocated before the step (the Hydrometeors for optics)
 
 
-def available_bytes() -> float:
-    """The memory this process may plan for (bytes): ``WEATHER_MI_MAX_MEMORY_GB``, else the system's available
-    memory, capped by a cgroup (v2) limit."""
+UNLIMITED = 1 << 60  # cgroup v1 writes "no limit" as a page-rounded 2^63 - 1; v2 writes "max"
+
+
+def available_bytes(proc: str = "/proc", cgroup_root: str = "/sys/fs/cgroup") -> float:
+    """The memory this process may plan for (bytes): ``WEATHER_MI_MAX_MEMORY_GB``, else the system's
+    available memory (``MemAvailable``), capped by the room left under every memory limit of the process's
+    cgroup and its ancestors (v2 ``memory.max`` - ``memory.current``, v1 ``memory.limit_in_bytes`` -
+    ``memory.usage_in_bytes``); unreadable files are skipped, and infinity where nothing is known."""
     env = os.environ.get("WEATHER_MI_MAX_MEMORY_GB")
     if env:
         return float(env) * 1e9
-    sizes = []
+    sizes = [kb * 1024.0 for kb in _meminfo_kb(Path(proc) / "meminfo", "MemAvailable")]
+    sizes += _cgroup_room(Path(proc) / "self" / "cgroup", Path(cgroup_root))
+    return max(min(sizes), 0.0) if sizes else float("inf")
+
+
+def _read(path: Path) -> str | None:
     try:
-        for line in Path("/proc/meminfo").read_text().splitlines():
-            if line.startswith("MemAvailable:"):
-                sizes.append(int(line.split()[1]) * 1024.0)
-    except OSError:
-        pass
-    try:
-        limit = Path("/sys/fs/cgroup/memory.max").read_text().strip()
-        if limit != "max":
-            used = float(Path("/sys/fs/cgroup/memory.current").read_text())
-            sizes.append(float(limit) - used)
-    except (OSError, ValueError):
-        pass
-    if not sizes:
-        try:
-            sizes.append(float(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")))
-        except (ValueError, OSError, AttributeError):
-            return float("inf")
-    return max(min(sizes), 0.0)
+        return path.read_text()
+    except (OSError, UnicodeDecodeError):
+        return None
+
+
+def _meminfo_kb(path: Path, key: str) -> list[float]:
+    for line in (_read(path) or "").splitlines():
+        if line.startswith(key + ":"):
+            try:
+                return [float(line.split()[1])]
+            except (IndexError, ValueError):
+                return []
+    return []
+
+
+def _cgroup_room(self_cgroup: Path, root: Path) -> list[float]:
+    """limit - usage of each memory-limited cgroup from the process's own up to the hierarchy's root."""
+    rooms = []
+    for line in (_read(self_cgroup) or "").splitlines():
+        parts = line.strip().split(":", 2)
+        if len(parts) != 3:
+            continue
+        if parts[0] == "0" and parts[1] == "":  # v2 unified hierarchy
+            base, limit_file, usage_file = root, "memory.max", "memory.current"
+        elif "memory" in parts[1].split(","):  # v1 memory controller
+            base, limit_file, usage_file = root / "memory", "memory.limit_in_bytes", "memory.usage_in_bytes"
+        else:
+            continue
+        rel = Path(parts[2].lstrip("/"))
+        for d in [base / rel, *[base / p for p in rel.parents]]:
+            limit, usage = _read(d / limit_file), _read(d / usage_file)
+            try:
+                if limit is not None and usage is not None and float(limit) < UNLIMITED:
+                    rooms.append(float(limit) - float(usage))
+            except ValueError:  # "max"
+                pass
+    return rooms
 
 
 def estimate_bytes(shape, step: str) -> float:

@@ -44,10 +44,3 @@ def finish_albedo(albedo, beta_total, fill):  # pragma: no cover - compiled
             a = albedo[v, c] / t if t > 0 else fill[c]
             albedo[v, c] = min(max(a, np.float32(0.0)), np.float32(1.0))
 
-
-@njit(parallel=True, cache=True)
-def eq4(rho, q, factor, denominator, out):  # pragma: no cover - compiled
-    """out = factor rho q / denominator (Eq. 4 with one radius: ``Species.beta_ext_per_m``'s float32
-    operations, ``factor`` = scale x 3 and ``denominator`` = 2 rho_particle R as float32), flat arrays."""
-    for v in prange(out.shape[0]):
-        out[v] = factor * rho[v] * q[v] / denominator

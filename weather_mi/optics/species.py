@@ -73,10 +73,18 @@ class Species:
         if not (self.scale >= 0 and np.isfinite(self.scale)):
             raise WeatherDataError(src, "scale", "a scaling factor >= 0", repr(self.scale))
 
-    def beta_ext_per_m(self, rho_air_kg_m3, q_kg_per_kg, radius_m=None):
-        """Eq. 4: beta = 3 rho_air q / (2 rho_particle R), times the species scaling (1/m)."""
+    def beta_ext_per_m(self, rho_air_kg_m3, q_kg_per_kg, radius_m=None, out=None):
+        """Eq. 4: beta = 3 rho_air q / (2 rho_particle R), times the species scaling (1/m). With float32 grids,
+        ``out`` (a float32 grid of their shape) receives it in place, in three passes without temporaries
+        (a radius grid is used as the denominator's scratch: give a copy)."""
         r = self.radius_m if radius_m is None else radius_m
-        return self.scale * 3.0 * rho_air_kg_m3 * q_kg_per_kg / (2.0 * self.density_kg_m3 * r)
+        if out is None:
+            return self.scale * 3.0 * rho_air_kg_m3 * q_kg_per_kg / (2.0 * self.density_kg_m3 * r)
+        np.multiply(rho_air_kg_m3, self.scale * 3.0, out=out)  # the expression's float32 operations, in order
+        np.multiply(out, q_kg_per_kg, out=out)
+        if np.ndim(r) == 0:
+            return np.divide(out, 2.0 * self.density_kg_m3 * r, out=out)
+        return np.divide(out, np.multiply(r, 2.0 * self.density_kg_m3, out=r), out=out)
 
 
 @dataclass(frozen=True)

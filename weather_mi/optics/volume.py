@@ -210,7 +210,8 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
     total, largest = None, {}
     for s in sp:
         q = hyd[f"q_{s.name}"].values.astype(np.float32, copy=False)
-        beta = s.beta_ext_per_m(rho, q, _radius_field(hyd, s.name, s.radius_m, use_model))
+        beta = s.beta_ext_per_m(rho, q, _radius_field(hyd, s.name, s.radius_m, use_model),
+                                out=np.empty(rho.shape, np.float32))
         largest[s.name] = float(beta.max())
         total = beta if total is None else np.add(total, beta, out=total)
     return total, largest
@@ -224,16 +225,10 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
     n_s = len(SPECIES_NAMES)
     beta_ext = np.empty((n_s,) + shape, np.float32)
     weights = np.empty((n_s,) + shape, np.float32)
-    from .mixture_kernels import eq4, finish_albedo, mix
+    from .mixture_kernels import finish_albedo, mix
     for i, s in enumerate(sp):
-        r = _radius_field(hyd, s.name, s.radius_m, use_model)
         q = np.ascontiguousarray(hyd[f"q_{s.name}"].values, np.float32)
-        if np.ndim(r) == 0:  # one radius: one pass (the same float32 operations as beta_ext_per_m)
-            eq4(rho.reshape(-1), q.reshape(-1), np.float32(s.scale * 3.0),
-                np.float32(2.0 * s.density_kg_m3 * float(r)), beta_ext[i].reshape(-1))
-        else:
-            beta_ext[i] = s.beta_ext_per_m(rho, q, r)  # Eq. 4
-        del r
+        s.beta_ext_per_m(rho, q, _radius_field(hyd, s.name, s.radius_m, use_model), out=beta_ext[i])  # Eq. 4
     # Eq. 6, Eq. 5's numerator sum omega_s beta_s and the Eq. 8 weights from the scattering coefficients
     # beta_sca,s = omega_s beta_s (channel-mean albedo; the channels differ by < 1e-3 for every hydrometeor),
     # in one pass (optics.mixture_kernels)
