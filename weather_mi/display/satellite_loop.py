@@ -59,19 +59,11 @@ def frame_of(ds) -> np.ndarray:
     """The 8-bit (H, W, 3) picture of one time's dataset: the true-colour recipe where it has a band
     dimension, else the reflectance at exposure 1 (sRGB-encoded, grey)."""
     if "band" in ds.dims:
-        from ..satellite.truecolor import true_color
-        return np.round(true_color(ds) * 255.0).astype(np.uint8)
+        from ..satellite.truecolor import true_color8
+        return true_color8(ds)
     from ..io.image import to_srgb8
     refl = np.asarray(ds["reflectance"].values, np.float64)
     return to_srgb8(np.repeat(refl[..., None], 3, axis=2), 1.0)
-
-
-def _write_png(path: Path, frame: np.ndarray) -> Path:
-    from PIL import Image as PILImage
-    from ..io.output_paths import written_atomically
-    with written_atomically(path, "PNG image") as tmp:
-        PILImage.fromarray(frame).save(tmp, format="PNG")
-    return path
 
 
 def satellite_loop(hyds: list, render_time, nc, *, resume: bool = False, fps: float = 4.0,
@@ -85,6 +77,7 @@ def satellite_loop(hyds: list, render_time, nc, *, resume: bool = False, fps: fl
     resume      : read back the finished times from OUT.nc.parts, resume the unfinished one's checkpoint.
     """
     import xarray as xr
+    from ..io.image import write_png8
     from ..io.output_paths import written_atomically
     from .movie import write_mp4
     nc = Path(nc)
@@ -111,7 +104,7 @@ def satellite_loop(hyds: list, render_time, nc, *, resume: bool = False, fps: fl
             rendered += 1
             report(f"time {k + 1}/{len(hyds)} ({tag}): {img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s")
         frame = frame_of(ds)
-        pngs.append(_write_png(nc.with_name(f"{nc.stem}_{tag}.png"), frame))
+        pngs.append(write_png8(nc.with_name(f"{nc.stem}_{tag}.png"), frame))
         parts.append(ds)
         frames.append(frame)
     loop = loop_dataset(parts)

@@ -177,10 +177,16 @@ def to_srgb8(radiance: np.ndarray, exposure: float | None = None) -> np.ndarray:
 def write_png(path, radiance: np.ndarray, exposure: float | None = None) -> Path:
     """Write the sRGB preview (:func:`to_srgb8`) of ``radiance`` as an 8-bit RGB PNG; ``OutputWriteError``
     naming the file when it cannot be written (a full disk)."""
+    return write_png8(path, to_srgb8(radiance, exposure))
+
+
+def write_png8(path, frame: np.ndarray) -> Path:
+    """Write 8-bit (H, W, 3) display values as an RGB PNG, as it is (no transfer function); an
+    ``OutputWriteError`` naming the file when it cannot be written."""
     from PIL import Image as PILImage
     path = Path(path)
     with written_atomically(path, "PNG image") as tmp:
-        PILImage.fromarray(to_srgb8(radiance, exposure)).save(tmp, format="PNG")
+        PILImage.fromarray(np.ascontiguousarray(frame, np.uint8)).save(tmp, format="PNG")
     return path
 
 

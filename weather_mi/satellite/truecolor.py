@@ -93,15 +93,15 @@ def true_color(ds) -> np.ndarray:
     return np.stack([cira_stretch(r["0.64"]), cira_stretch(green), cira_stretch(r["0.47"])], axis=-1)
 
 
+def true_color8(ds) -> np.ndarray:
+    """``true_color(ds)`` as 8-bit values (x 255, no transfer function: the stretch is the display's)."""
+    return np.round(true_color(ds) * 255.0).astype(np.uint8)
+
+
 def write_true_color_png(ds, path):
-    """``true_color(ds)`` as an 8-bit RGB PNG (values x 255, no transfer function: the stretch is the
-    display's)."""
-    from PIL import Image as PILImage
-    from ..io.output_paths import written_atomically
-    rgb = np.round(true_color(ds) * 255.0).astype(np.uint8)
-    with written_atomically(path, "PNG image") as tmp:
-        PILImage.fromarray(rgb).save(tmp, format="PNG")
-    return path
+    """``true_color8(ds)`` as an 8-bit RGB PNG."""
+    from ..io.image import write_png8
+    return write_png8(path, true_color8(ds))
 
 
 def true_color_scenes(hyd, vol, sat, resolution_km: float, *, rayleigh: bool = False, ground_albedo=None,
@@ -158,23 +158,36 @@ def _with_rayleigh_column(ds, scene):
     return ds
 
 
-def rayleigh_reflectance(tau: float, sza, vza, saa, vaa, where=None, n_streams: int = 16) -> np.ndarray:
+def rayleigh_reflectance(tau: float, sza, vza, saa, vaa, where=None, n_streams: int = 16,
+                         nodes: int = 9) -> np.ndarray:
     """Reflectance factor pi I / (mu0 F0) of a conservative Rayleigh layer of optical depth ``tau`` over a black
     surface (DISORT; Chandrasekhar's phase function with depolarisation, Legendre moments 1, 0,
     (1 - gamma) / (10 (1 + 2 gamma))), at each pixel's solar and view zenith and azimuth (deg, the view
-    azimuth towards the satellite); NaN outside ``where``."""
+    azimuth towards the satellite); NaN outside ``where``.
+
+    As pyspectral's look-up table: DISORT solved at ``nodes`` solar zeniths spanning the pixels' (one solve
+    each, all its view zeniths and azimuths at once, on ``nodes`` x ``nodes`` spanning theirs), the pixels
+    interpolated linearly in that (SZA, VZA, relative azimuth) table; not one solve per pixel."""
+    from scipy.interpolate import RegularGridInterpolator
     from ..optics.rayleigh import DEPOLARISATION
-    from ..plane_parallel.ipa import disort_reflectance
+    from ..plane_parallel.disort import solve
     gamma = DEPOLARISATION / (2.0 - DEPOLARISATION)
     moments = np.zeros((1, n_streams + 1))
     moments[0, 0], moments[0, 2] = 1.0, (1.0 - gamma) / (10.0 * (1.0 + 2.0 * gamma))
     sza, vza = np.asarray(sza, np.float64), np.asarray(vza, np.float64)
     phi = np.mod(np.asarray(vaa, np.float64) - np.asarray(saa, np.float64) - 180.0, 360.0)  # 0: forward
     out = np.full(sza.shape, np.nan)
-    mask = np.ones(sza.shape, bool) if where is None else np.asarray(where, bool)
-    for idx in zip(*np.nonzero(mask & (sza < 90.0))):
-        out[idx] = disort_reflectance([tau], [1.0 - 1e-7], moments, np.cos(np.radians(sza[idx])),
-                                      np.cos(np.radians(vza[idx])), float(phi[idx]), n_streams=n_streams)
+    mask = (np.ones(sza.shape, bool) if where is None else np.asarray(where, bool)) & (sza < 90.0)
+    if not mask.any():
+        return out
+    pts = np.stack([sza[mask], vza[mask], phi[mask]], axis=-1)
+    axes = [np.linspace(lo, max(hi, lo + 1e-6), nodes) for lo, hi in zip(pts.min(axis=0), pts.max(axis=0))]
+    mu0s, mus = np.cos(np.radians(axes[0])), np.cos(np.radians(axes[1]))
+    table = np.empty((nodes, nodes, nodes))
+    for i, mu0 in enumerate(mu0s):
+        res = solve([tau], [1.0 - 1e-7], mu0, mus[::-1], [0.0], axes[2], moments=moments, n_streams=n_streams)
+        table[i] = [[np.pi * res.intensities(nodes - 1 - m, 0, p) / mu0 for p in range(nodes)] for m in range(nodes)]
+    out[mask] = RegularGridInterpolator(axes, table)(pts)
     return out
 
 
@@ -208,5 +221,5 @@ def rgb_dataset(parts):
 
 
 __all__ = ["ABI_GREEN", "sun_zenith_correction", "relaxed_rayleigh", "cira_stretch", "simulated_green",
-           "corrected_bands", "true_color", "write_true_color_png", "true_color_scenes", "render_true_color",
+           "corrected_bands", "true_color", "true_color8", "write_true_color_png", "true_color_scenes", "render_true_color",
            "rayleigh_reflectance", "rgb_dataset"]
