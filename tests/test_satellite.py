@@ -1,4 +1,4 @@
-"""``weather-mi satellite`` (weather_mi/satellite/imagery.py, weather_mi/plane_parallel/ipa.py): the 1-D solver's geometry
+"""``weather-mi satellite`` (weather_mi/satellite/imagery.py, weather_mi/satellite/ipa.py): the 1-D solver's geometry
 against the single-scattering closed form, the satellite view of a uniform layer against DISORT, per-pixel
 solar angles against NREL SPA, the command's outputs and its refusals before rendering."""
 from __future__ import annotations
@@ -12,7 +12,7 @@ import xarray as xr
 
 import weather_mi as wm
 from weather_mi.cli import commands as cli
-from weather_mi.plane_parallel.ipa import disort_reflectance, scattering_geometry
+from weather_mi.satellite.ipa import disort_reflectance, scattering_geometry
 from conftest import WRF_THOMPSON, shared_file
 
 pytest.importorskip("disortpp")

@@ -1,5 +1,5 @@
 """3-D against 1-D: synthetic satellite images by the path tracer beside the independent-pixel approximation
-(every column a plane-parallel stack solved by DISORT, ``weather_mi.plane_parallel.ipa``), on real model output.
+(every column a plane-parallel stack solved by DISORT, ``weather_mi.satellite.ipa``), on real model output.
 
     .venv/bin/python validation/satellite_3d_vs_1d.py [--spp N] [--quick] [--out docs/images] [--json out.json]
 
@@ -48,7 +48,7 @@ def open_case(file, time_index, place):
 
 def run_case(case, spp: int, resolution_scale: float = 1.0) -> tuple[dict, dict]:
     import weather_mi as wm
-    from weather_mi.plane_parallel.ipa import ipa_reflectance
+    from weather_mi.satellite.ipa import ipa_reflectance
     from weather_mi.satellite.imagery import render_satellite, satellite_scene
     label, file, t_index, place, sat, res, sun_time = case
     hyd = open_case(file, t_index, place)

@@ -7,7 +7,7 @@ Rayleigh) is placed where a GOES-East pixel sees it at three view zenith angles 
 rendered by the ``satellite`` pipeline (fixed-grid pixels of 10 km, ``satellite_scene`` +
 ``render_satellite``: the table's rays, the 0.64 um band's Mie table, reflectance pi L / (E0 mu0)). The
 mean reflectance of the pixels whose ground point lies within 50 km of the centre (far from the layer's
-edges) is compared with DISORT (``weather_mi.plane_parallel.ipa.disort_reflectance``: 64 streams, delta-M,
+edges) is compared with DISORT (``weather_mi.satellite.ipa.disort_reflectance``: 64 streams, delta-M,
 Nakajima-Tanaka with 2048 Legendre moments of the same table), solved for every one of those pixels with
 its own sun and view directions in the domain's frame and averaged alike.
 
@@ -54,7 +54,7 @@ def layer(tau: float, lat: float, lon: float):
 
 def run_case(tau, geometry, spp, seed=1) -> dict:
     import weather_mi as wm
-    from weather_mi.plane_parallel.ipa import disort_reflectance, pixel_directions, scattering_geometry
+    from weather_mi.satellite.ipa import disort_reflectance, pixel_directions, scattering_geometry
     from weather_mi.satellite.imagery import render_satellite, satellite_scene
     label, lat, lon, sun_az, sun_el = geometry
     hyd = layer(tau, lat, lon)
