@@ -50,10 +50,10 @@ def test_a_loop_is_interrupted_and_resumed_to_the_uninterrupted_result(tmp_path,
     assert "power cut" in capsys.readouterr().err
     parts = out.with_name("sat.nc.parts")
     assert sorted(p.name for p in parts.iterdir()) == sorted([f"{TAGS[0]}.nc", f"{TAGS[1]}.nc",
-                                                              f"{TAGS[2]}.exr.ckpt.npz"])
+                                                              f"{TAGS[2]}.exr.ckpt.npz", "options.json"])
     assert not out.exists()
     assert _main(_loop_args(out)) == 2  # without --resume: refused, the finished times kept
-    assert "--resume" in capsys.readouterr().err and len(list(parts.iterdir())) == 3
+    assert "--resume" in capsys.readouterr().err and len(list(parts.iterdir())) == 4
 
     calls.clear()
     monkeypatch.setattr(imagery, "render_satellite", lambda scene, **kw: calls.append(kw.get("resume")) or

@@ -139,6 +139,9 @@ def satellite_command(args) -> Path:
     resolution = si.parse_resolution_km(args.resolution)
     nc, exr, png, ckpt = si.satellite_outputs(args.output)
     check_satellite_bands(args)
+    if args.denoise:
+        from ..display.denoise import check_available
+        check_available()
     from .satellite_loop import satellite_loop_command, wants_loop
     if wants_loop(args):  # several times: one NetCDF with a time dimension, a PNG per time, an MP4
         check_writable_folder(nc)
@@ -147,13 +150,15 @@ def satellite_command(args) -> Path:
     check_time(args.file, args.demo, args.time)
     check_writable_folder(nc)
     with OutputLock(nc):
-        check_unfinished(ckpt, args.resume)
+        from ..satellite.truecolor import band_checkpoints
+        for c in band_checkpoints(ckpt):  # --rgb --rayleigh: a checkpoint per band
+            check_unfinished(c, args.resume)
         return _satellite(args, resolution, nc, exr, png, ckpt)
 
 
 def check_satellite_bands(args) -> None:
     """The band options against the satellite, before the input is read: ``--rgb`` or one ``--band`` (not
-    both), a band the satellite's imager has; ``--resume`` not with ``--rgb --rayleigh`` (no checkpoints)."""
+    both), a band the satellite's imager has."""
     from ..satellite.bands import band, check_band_on, true_color_bands
     from ..satellite.geostationary import satellite
     sat = satellite(args.satellite)
@@ -162,9 +167,6 @@ def check_satellite_bands(args) -> None:
                          f"um on {sat.name}) in one run: drop --band {args.band}, or drop --rgb for one band")
     if args.rgb:
         true_color_bands(sat)
-        if args.rayleigh and args.resume:
-            raise ValueError("--rgb --rayleigh renders the bands one at a time without checkpoints: --resume "
-                             "does not apply")
     else:
         check_band_on(band(args.band or "0.64"), sat)
 
@@ -190,7 +192,10 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     with session(args.scheduler, args.workers) as client:
         ds, img = si.render_satellite(scene, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
                                       resume=ckpt if args.resume else None, client=client)
-    si.write_satellite(ds, img, nc, exr, png)
+    from ..display.satellite_picture import shown_dataset, write_picture
+    shown = shown_dataset(ds, img, args.denoise)
+    si.write_satellite(ds, img, nc, exr)
+    write_picture(shown, png, denoise=False)
     ckpt.unlink(missing_ok=True)
     print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s; cloud pixels "
           f"{int(ds.cloud.sum())}, mean relative standard error {ds.attrs['cloud_rse_mean']:.3f}; reflectance "
@@ -216,12 +221,13 @@ def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt) -> Path:
     with session(args.scheduler, args.workers) as client:
         ds, img = tc.render_true_color(scenes, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
                                        resume=ckpt if args.resume else None, client=client)
-    from ..io.output_paths import written_atomically
-    with written_atomically(nc, "NetCDF file") as tmp:
-        ds.to_netcdf(tmp)
-    img.save(exr)
-    tc.write_true_color_png(ds, png)
-    ckpt.unlink(missing_ok=True)
+    from ..display.satellite_picture import shown_dataset, write_picture
+    from ..satellite.imagery import write_satellite
+    shown = shown_dataset(ds, img, args.denoise)
+    write_satellite(ds, img, nc, exr)
+    write_picture(shown, png, denoise=False)
+    for c in tc.band_checkpoints(ckpt):
+        c.unlink(missing_ok=True)
     means = ", ".join(f"{b} {float(ds.reflectance.sel(band=b).where(ds.in_domain == 1).mean()):.3f}"
                       for b in ds.band.values)
     print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s; cloud pixels "
@@ -369,7 +375,11 @@ def _add_satellite_parser(sub) -> None:
                           "per band, 0.06 at 0.47 um to 0.02 at 0.86 um)")
     add_flags(sat, SATELLITE_ESTIMATOR)
     sat.add_argument("--seed", type=int, default=0)
-    sat.add_argument("--resume", action="store_true", help="continue from OUTPUT.exr.ckpt.npz")
+    sat.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
+                     help="the PNG shows the OIDN-denoised reflectance (the EXR's denoised.R/G/B; the NetCDF and the "
+                          "EXR's R, G, B stay the unbiased reflectance); --no-denoise: the raw reflectance")
+    sat.add_argument("--resume", action="store_true", help="continue from OUTPUT.exr.ckpt.npz (--rgb --rayleigh: "
+                                                           "OUTPUT.exr.<band>.ckpt.npz)")
     add_dask_options(sat)
     sat.add_argument("-o", "--output", default="weather-mi-satellite.nc", help="output NetCDF (.nc)")
 

@@ -40,6 +40,17 @@ def open_placed_times(args) -> list:
     return hyds
 
 
+def loop_options(args, resolution: float, reference_kw: dict) -> dict:
+    """What a loop's times depend on (``display.satellite_loop.check_loop_options``): the inputs, the place,
+    the satellite, the band(s), the optics, the ground and the estimator; not --fps, --denoise, --time (a
+    time is one time whatever the selection) or where it renders."""
+    files = args.file if isinstance(args.file, list) else [args.file]
+    return {"inputs": [str(Path(f).resolve()) for f in files if f is not None], "lat": args.lat, "lon": args.lon,
+            "date": args.date, "satellite": args.satellite, "band": "rgb" if args.rgb else (args.band or "0.64"),
+            "rayleigh": bool(args.rayleigh), "resolution_km": resolution, "preset": args.preset, "phase": args.phase,
+            "ground_albedo": args.ground_albedo, "seed": args.seed, **reference_kw}
+
+
 def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict) -> Path:
     """Open and check every time, then render the loop (``display.satellite_loop``) holding a Dask session."""
     from ..display.satellite_loop import check_unfinished_loop, satellite_loop
@@ -66,7 +77,8 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
             scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution,
                                        rayleigh=args.rayleigh, ground_albedo=albedo, seed=args.seed)
             return si.render_satellite(scene, **kw)
-        loop = satellite_loop(hyds, render_time, nc, resume=args.resume, fps=args.fps)
+        loop = satellite_loop(hyds, render_time, nc, resume=args.resume, fps=args.fps, denoise=args.denoise,
+                              options=loop_options(args, resolution, reference_kw))
     print(f"wrote {loop.netcdf} ({len(hyds)} times; {loop.rendered} rendered now), {loop.mp4} and "
           f"{len(loop.pngs)} PNGs ({loop.pngs[0].name} ...)")
     return nc

@@ -2,13 +2,16 @@
 by ``satellite.imagery`` (one band) or ``satellite.truecolor`` (``--rgb``), written as one CF NetCDF with a
 ``time`` dimension, a PNG and an EXR per time (named with the valid time) and an MP4 loop.
 
-One exposure for all frames: a band's PNG shows the reflectance itself (0-1, sRGB-encoded, as the single
-image's), a true-colour PNG the operational recipe (``truecolor.true_color``): fixed scales, so that a
-brightening storm gets brighter rather than re-exposed.
+One exposure for all frames: each frame is the single image's picture (``satellite_picture.picture``: the
+denoised reflectance, a band's at exposure 1 with its colour bar, or the operational true-colour recipe;
+coastlines and graticule where the file has its own latitude/longitude): fixed scales, so that a
+brightening storm gets brighter rather than re-exposed. The NetCDF holds the raw reflectance.
 
-Resumable: while the loop runs, ``OUT.nc.parts/`` holds the dataset of every finished time and the
-checkpoint of the unfinished one; a resumed loop reads the finished times back (not rendered again), the
-unfinished one resumes from its checkpoint, and the folder goes once the loop's NetCDF and MP4 are written.
+Resumable: while the loop runs, ``OUT.nc.parts/`` holds the dataset of every finished time, the
+checkpoint(s) of the unfinished one and the options the loop was started with (``options.json``); a resumed
+loop with other options is refused before rendering (its finished times would not match), otherwise it reads
+the finished times back (not rendered again), the unfinished one resumes from its checkpoint(s), and the
+folder goes once the loop's NetCDF and MP4 are written.
 """
 from __future__ import annotations
 
@@ -55,19 +58,36 @@ def time_tag(valid_time) -> str:
     return str(valid_time).replace("-", "").replace(":", "").replace("_", "T")
 
 
-def frame_of(ds) -> np.ndarray:
-    """The 8-bit (H, W, 3) picture of one time's dataset: the true-colour recipe where it has a band
-    dimension, else the reflectance at exposure 1 (sRGB-encoded, grey)."""
-    if "band" in ds.dims:
-        from ..satellite.truecolor import true_color8
-        return true_color8(ds)
-    from ..io.image import to_srgb8
-    refl = np.asarray(ds["reflectance"].values, np.float64)
-    return to_srgb8(np.repeat(refl[..., None], 3, axis=2), 1.0)
+def frame_of(ds, denoise: bool = True) -> np.ndarray:
+    """The 8-bit picture of one time's dataset (``satellite_picture.picture``)."""
+    from .satellite_picture import picture
+    return picture(ds, denoise=denoise)
+
+
+OPTIONS_FILE = "options.json"
+
+
+def check_loop_options(work: Path, options: dict | None, resume: bool) -> None:
+    """Record ``options`` (JSON-able: what the loop's times depend on) in ``work``, or, resuming, compare
+    them with those recorded: a ValueError naming each that differs (before anything is rendered)."""
+    import json
+    if options is None:
+        return
+    options = json.loads(json.dumps(options, default=str))
+    path = work / OPTIONS_FILE
+    if resume and path.is_file():
+        before = json.loads(path.read_text())
+        diff = [f"{k} {before.get(k)!r}, now {options.get(k)!r}" for k in sorted(set(before) | set(options))
+                if before.get(k) != options.get(k)]
+        if diff:
+            raise ValueError(f"{work} holds times rendered with other options ({'; '.join(diff)}): resume with "
+                             "the same options, or delete it to render the loop afresh")
+    work.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(options, indent=1, sort_keys=True))
 
 
 def satellite_loop(hyds: list, render_time, nc, *, resume: bool = False, fps: float = 4.0,
-                   report=print) -> SatelliteLoop:
+                   report=print, denoise: bool = True, options: dict | None = None) -> SatelliteLoop:
     """Render every time of ``hyds`` (Hydrometeors, one per time, each with its ``valid_time``) and write
     the loop (see the module): ``nc`` (one NetCDF, a CF ``time`` coordinate), OUT_<time>.png and .exr per time,
     OUT.mp4.
@@ -75,17 +95,22 @@ def satellite_loop(hyds: list, render_time, nc, *, resume: bool = False, fps: fl
     render_time : callable (hyd, checkpoint path, resume: bool) -> (dataset, Image) of one time
                   (``imagery.render_satellite`` or ``truecolor.render_true_color`` with the scene of ``hyd``).
     resume      : read back the finished times from OUT.nc.parts, resume the unfinished one's checkpoint.
+    denoise     : the PNGs and the MP4 show the denoised reflectance (``satellite_picture``).
+    options     : what the times depend on (the command's options), checked against a resumed loop's
+                  (``check_loop_options``).
     """
     import xarray as xr
     from ..io.image import write_png8
     from ..io.output_paths import written_atomically
     from .movie import write_mp4
+    from .satellite_picture import picture, shown_dataset
     nc = Path(nc)
     work = parts_folder(nc)
     check_unfinished_loop(nc, resume)
     tags = [time_tag(h.attrs.get("valid_time") or h.attrs.get("time", k)) for k, h in enumerate(hyds)]
     if len(set(tags)) != len(tags):
         raise ValueError(f"the selected times are not distinct ({', '.join(tags)}): select each time once")
+    check_loop_options(work, options, resume)
     work.mkdir(parents=True, exist_ok=True)
     parts, frames, pngs, rendered = [], [], [], 0
     for k, (hyd, tag) in enumerate(zip(hyds, tags)):
@@ -95,15 +120,19 @@ def satellite_loop(hyds: list, render_time, nc, *, resume: bool = False, fps: fl
             for v in ds.variables.values():  # written again as the loop's: xarray's encoding of this file goes
                 v.encoding = {}
             report(f"time {k + 1}/{len(hyds)} ({tag}): finished before, read back from {part}")
+            frame = picture(ds, denoise=denoise)
         else:
-            ds, img = render_time(hyd, ckpt, resume and ckpt.is_file())
+            started = sorted(work.glob(f"{tag}.exr*.ckpt.npz"))  # its checkpoint, or one per band (--rayleigh)
+            ds, img = render_time(hyd, ckpt, bool(resume and started))
+            shown = shown_dataset(ds, img, denoise)
             img.save(nc.with_name(f"{nc.stem}_{tag}.exr"))
             with written_atomically(part, "NetCDF file") as tmp:
                 ds.to_netcdf(tmp)
-            ckpt.unlink(missing_ok=True)
+            for c in sorted(work.glob(f"{tag}.exr*.ckpt.npz")):
+                c.unlink(missing_ok=True)
             rendered += 1
             report(f"time {k + 1}/{len(hyds)} ({tag}): {img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s")
-        frame = frame_of(ds)
+            frame = picture(shown, denoise=False)
         pngs.append(write_png8(nc.with_name(f"{nc.stem}_{tag}.png"), frame))
         parts.append(ds)
         frames.append(frame)
@@ -140,4 +169,4 @@ def loop_dataset(parts: list):
 
 
 __all__ = ["SatelliteLoop", "satellite_loop", "loop_dataset", "check_unfinished_loop", "parts_folder",
-           "time_tag", "frame_of"]
+           "time_tag", "frame_of", "check_loop_options"]

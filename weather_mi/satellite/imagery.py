@@ -36,6 +36,7 @@ class SatelliteScene:
     band: Band
     sun_meta: dict = field(default_factory=dict)
     bands: tuple = ()
+    place_source: str = "file"  # "assumed": an ideal case placed by --lat/--lon (no coastlines drawn)
 
 
 def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east", band_name: str = "0.64",
@@ -83,7 +84,7 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     w, h = view.size
     spec = SceneSpec(camera=cam, sun=Sun(azimuth, elevation, (1.0, 1.0, 1.0)), sky=None,
                      ground=Ground(albedo=ground_albedo), width=w, height=h, seed=seed, rays=view.rays)
-    return SatelliteScene(spec, bvol, view, sat, b, sun_meta, bands)
+    return SatelliteScene(spec, bvol, view, sat, b, sun_meta, bands, place.source)
 
 
 def render_satellite(scene: SatelliteScene, spp: int = 64, **reference_kw):
@@ -154,7 +155,7 @@ def satellite_dataset(scene: SatelliteScene, img, channel: int | None = None):
                 "source": str(scene.vol.attrs.get("source", "")), "satellite": scene.satellite.name,
                 "sub_satellite_longitude_deg": scene.satellite.sub_lon_deg, "band_um": b.name,
                 "band_wavelength_m": b.wavelength_m, "resolution_km": v.resolution_km,
-                "valid_time": str(m.get("valid_time")), "rayleigh": int("rayleigh" in scene.vol.species),
+                "valid_time": str(m.get("valid_time")), "place_source": scene.place_source, "rayleigh": int("rayleigh" in scene.vol.species),
                 "rendered_solar_zenith_deg": 90.0 - scene.spec.sun.elevation,
                 "one_sun_max_error_deg": float(m.get("one_sun_max_error_deg", np.nan)),
                 "spp": int(meta.get("spp", 0)), "seconds": float(meta.get("seconds", np.nan)),
@@ -203,14 +204,16 @@ def satellite_outputs(output):
     return (out, *render_outputs(out.with_suffix(".exr")))
 
 
-def write_satellite(ds, img, nc_path, exr_path, png_path) -> None:
+def write_satellite(ds, img, nc_path, exr_path, png_path=None) -> None:
     """The dataset as NetCDF (written under a temporary name, then renamed), the image as EXR (reflectance in
-    R, G, B, its standard error, the metadata) and a PNG (reflectance 0-1, sRGB-encoded)."""
+    R, G, B, its standard error, the metadata, ``img.denoised`` where set) and, where ``png_path`` is given, a
+    raw PNG (reflectance 0-1, sRGB-encoded; the command's PNG is ``display.satellite_picture``'s)."""
     from ..io.output_paths import written_atomically
     with written_atomically(nc_path, "NetCDF file") as tmp:
         ds.to_netcdf(tmp)
     img.save(exr_path)
-    img.save_png(png_path, exposure=1.0)
+    if png_path is not None:
+        img.save_png(png_path, exposure=1.0)
 
 
 __all__ = ["SatelliteScene", "satellite_scene", "render_satellite", "satellite_dataset", "parse_resolution_km",

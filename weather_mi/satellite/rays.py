@@ -136,6 +136,14 @@ def pixel_rays(rays: RayTable) -> tuple[np.ndarray, np.ndarray]:
 def crosses_box(rays: RayTable, bbox) -> np.ndarray:
     """(H, W) whether each pixel centre's line of sight (going down) passes through the box
     ((x0, y0, z0), (x1, y1, z1), m) after its start."""
+    t0, t1, _, _ = box_segment(rays, bbox)
+    return t0 <= t1
+
+
+def box_segment(rays: RayTable, bbox):
+    """(t0, t1, origins, directions) of each pixel centre's line of sight (going down, (H, W, 3) origins and
+    unit directions ``pixel_rays``): where it enters and leaves the box ((x0, y0, z0), (x1, y1, z1), m), in
+    metres from its start; t0 > t1 where it misses the box."""
     o, d = pixel_rays(rays)
     (lo, hi) = (np.asarray(p, float) for p in bbox)
     # the rays go down: inside the box's heights between its top (or the start) and its floor
@@ -148,7 +156,8 @@ def crosses_box(rays: RayTable, bbox) -> np.ndarray:
         near = np.where(d[..., k] == 0, np.where(inside, -np.inf, np.inf), np.minimum(ta, tb))
         far = np.where(d[..., k] == 0, np.where(inside, np.inf, -np.inf), np.maximum(ta, tb))
         t0, t1 = np.maximum(t0, near), np.minimum(t1, far)
-    return t0 <= t1
+    return t0, t1, o, d
 
 
-__all__ = ["SatelliteView", "satellite_view", "corner_rays", "model_xy", "to_satellite", "pixel_rays", "crosses_box"]
+__all__ = ["SatelliteView", "satellite_view", "corner_rays", "model_xy", "to_satellite", "pixel_rays", "crosses_box",
+           "box_segment"]

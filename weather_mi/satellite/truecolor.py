@@ -13,9 +13,13 @@ The recipe (``true_color``), per pixel, in the order satpy's ``true_color`` comp
    95 deg as satpy's ``sunzen_corr_cos`` (satpy/modifiers/angles.py, limit 88, max_sza 95).
 3. Rayleigh correction, only where the render's atmosphere has molecules (``--rayleigh``, inside the domain):
    the molecular reflectance of the domain's air column over a black surface at the pixel's angles (DISORT, the
-   role of pyspectral's LUT, pyspectral/rayleigh.py ``get_reflectance``), relaxed where the red band (0.64 um,
-   sun-corrected, in percent) is bright: x (1 - (red - 20) / 80) above 20 %, clipped to 0-100 % (pyspectral's
-   ``_relax_rayleigh_refl_correction_where_cloudy``), subtracted.
+   role of pyspectral's LUT, pyspectral/rayleigh.py ``get_reflectance``), times the fraction of that column's
+   optical depth that the pixel's line of sight crosses inside the domain's box (1 where it enters through the
+   top and leaves through the floor; less where a slant line of sight enters or leaves through a side: the
+   render has air only in the box, so the full column's reflectance over-subtracted there, a black frame
+   around the domain), relaxed where the red band (0.64 um, sun-corrected, in percent) is bright:
+   x (1 - (red - 20) / 80) above 20 %, clipped to 0-100 % (pyspectral's
+   ``_relax_rayleigh_refl_correction_where_cloudy``), subtracted, the result clipped at zero.
 4. ABI's simulated green (CIMSS; Bah, Schmit, Gunshor et al. 2018, "GOES-16 Advanced Baseline Imager (ABI)
    true color imagery", AMS/CIMSS; satpy abi.yaml ``green`` with fractions [0.45, 0.45, 0.1]):
    G = 0.45 R0.47 + 0.45 R0.64 + 0.10 R0.86. AHI's green is its 0.51 um band.
@@ -25,7 +29,8 @@ The recipe (``true_color``), per pixel, in the order satpy's ``true_color`` comp
    image writers).
 
 Molecules: their extinction goes as lambda^-4, and one render has one extinction for its three channels; with
-``--rayleigh`` the bands are therefore rendered one at a time (three path sets), each with its own air.
+``--rayleigh`` the bands are therefore rendered one at a time (three path sets), each with its own air and its
+own checkpoint (``band_checkpoint``), so that an interrupted render resumes band by band.
 """
 from __future__ import annotations
 
@@ -82,7 +87,8 @@ def corrected_bands(ds) -> dict:
         red = out["0.64"]
         for b in out:
             if b != "0.86":
-                out[b] = out[b] - relaxed_rayleigh(np.nan_to_num(ds.rayleigh_reflectance.sel(band=b).values), red)
+                out[b] = np.maximum(out[b] - relaxed_rayleigh(
+                    np.nan_to_num(ds.rayleigh_reflectance.sel(band=b).values), red), 0.0)
     return out
 
 
@@ -131,8 +137,13 @@ def render_true_color(scenes, spp: int = 64, **reference_kw):
     if len(scenes) == 1:
         img = render_reference(scenes[0].spec, scenes[0].vol, spp=spp, normalize="reflectance", **reference_kw)
         return rgb_dataset([satellite_dataset(scenes[0], img, c) for c in range(3)]), img
-    reference_kw = {**reference_kw, "checkpoint": None, "resume": None}
-    imgs = [render_reference(s.spec, s.vol, spp=spp, normalize="reflectance", **reference_kw) for s in scenes]
+    ckpt, resume = reference_kw.pop("checkpoint", None), reference_kw.pop("resume", None)
+    imgs = []
+    for s in scenes:  # a checkpoint per band: finished bands are read back, the unfinished one resumed
+        own = None if ckpt is None else band_checkpoint(ckpt, s.band.name)
+        imgs.append(render_reference(s.spec, s.vol, spp=spp, normalize="reflectance", checkpoint=own,
+                                     resume=own if resume and own is not None and own.is_file() else None,
+                                     **reference_kw))
     parts = [_with_rayleigh_column(satellite_dataset(s, im), s) for s, im in zip(scenes, imgs)]
     img = imgs[0]
     img.radiance = np.stack([np.asarray(im.radiance)[..., 0] for im in imgs], axis=-1)
@@ -141,19 +152,55 @@ def render_true_color(scenes, spp: int = 64, **reference_kw):
     return rgb_dataset(parts), img
 
 
+def band_checkpoint(ckpt, band_name: str):
+    """The checkpoint of one band of a per-band (``--rayleigh``) true-colour render: OUT.exr.ckpt.npz ->
+    OUT.exr.<band>.ckpt.npz."""
+    from pathlib import Path
+    ckpt = Path(ckpt)
+    return ckpt.with_name(f"{ckpt.name.removesuffix('.ckpt.npz')}.{band_name}.ckpt.npz")
+
+
+def band_checkpoints(ckpt) -> list:
+    """``ckpt`` and every band's ``band_checkpoint`` of it (the files an unfinished render may leave)."""
+    from .bands import BANDS
+    return [ckpt] + [band_checkpoint(ckpt, name) for name in BANDS]
+
+
+def column_path_fraction(vol, rays) -> np.ndarray:
+    """(H, W) fraction of the domain's molecular column optical depth (its column-mean profile) that each
+    pixel centre's line of sight crosses inside the box (``rays.box_segment``): the slant optical depth in
+    the box over the full column's tau / mu (mu cancels): 1 through top and floor, 0 outside the box."""
+    from .rays import box_segment
+    k = list(vol.species).index("rayleigh")
+    (_, _, z0), (_, _, z1) = vol.bbox
+    profile = np.asarray(vol.beta_ext[k], np.float64).mean(axis=(1, 2))  # (nz,) 1/m, the column mean
+    edges = np.linspace(z0, z1, profile.size + 1)
+    cum = np.r_[0.0, np.cumsum(profile * np.diff(edges))]  # tau below each level edge
+    t0, t1, o, d = box_segment(rays, vol.bbox)
+    z_in, z_out = o[..., 2] + d[..., 2] * t0, o[..., 2] + d[..., 2] * np.maximum(t1, t0)
+    tau_in = np.interp(z_in, edges, cum) - np.interp(z_out, edges, cum)
+    return np.where(t0 <= t1, np.clip(tau_in / cum[-1], 0.0, 1.0), 0.0) if cum[-1] > 0 else np.zeros_like(t0)
+
+
 def _with_rayleigh_column(ds, scene):
     """``ds`` with the domain's molecular optical depth (column mean) and the molecular reflectance over a
-    black surface at each in-domain pixel's angles (``rayleigh_reflectance``)."""
+    black surface at each in-domain pixel's angles (``rayleigh_reflectance``) times the fraction of the column
+    its line of sight crosses in the box (``column_path_fraction``)."""
     vol = scene.vol
     k = list(vol.species).index("rayleigh")
     dz = (vol.bbox[1][2] - vol.bbox[0][2]) / vol.beta_total.shape[0]
     tau = float(np.asarray(vol.beta_ext[k], np.float64).sum(axis=0).mean() * dz)
+    fraction = column_path_fraction(vol, scene.view.rays)
     refl = rayleigh_reflectance(tau, ds.solar_zenith_angle.values, ds.sensor_zenith_angle.values,
                                 ds.solar_azimuth_angle.values, ds.sensor_azimuth_angle.values,
-                                ds.in_domain.values == 1)
+                                ds.in_domain.values == 1) * fraction
     ds["rayleigh_reflectance"] = (("y", "x"), refl.astype(np.float32), {
         "long_name": "reflectance factor of the domain's air alone over a black surface (DISORT), what the "
-                     "Rayleigh correction subtracts", "units": "1", "grid_mapping": "fixed_grid_projection"})
+                     "Rayleigh correction subtracts: the column's times rayleigh_path_fraction", "units": "1",
+        "grid_mapping": "fixed_grid_projection"})
+    ds["rayleigh_path_fraction"] = (("y", "x"), fraction.astype(np.float32), {
+        "long_name": "fraction of the domain's molecular column optical depth on the line of sight inside the "
+                     "domain's box", "units": "1", "grid_mapping": "fixed_grid_projection"})
     ds.attrs["rayleigh_optical_depth"] = tau
     return ds
 
@@ -222,4 +269,4 @@ def rgb_dataset(parts):
 
 __all__ = ["ABI_GREEN", "sun_zenith_correction", "relaxed_rayleigh", "cira_stretch", "simulated_green",
            "corrected_bands", "true_color", "true_color8", "write_true_color_png", "true_color_scenes", "render_true_color",
-           "rayleigh_reflectance", "rgb_dataset"]
+           "rayleigh_reflectance", "rgb_dataset", "band_checkpoint", "band_checkpoints", "column_path_fraction"]
