@@ -102,7 +102,8 @@ def test_a_true_colour_loop_has_time_and_band(tmp_path):
     assert _main(_loop_args(out, "--rgb", time="2:4")) == 0
     ds = xr.open_dataset(out)
     assert ds.reflectance.dims == ("time", "band", "y", "x") and ds.sizes["time"] == 2
-    assert len(list(tmp_path.glob("rgb_*.png"))) == 2 and out.with_suffix(".mp4").is_file()
+    assert len(list(tmp_path.glob("rgb_2*.png"))) == 2 and out.with_suffix(".mp4").is_file()
+    assert (tmp_path / "rgb_contact_sheet.png").is_file()
 
 
 def test_a_loop_over_several_files_takes_their_times_in_order(tmp_path):

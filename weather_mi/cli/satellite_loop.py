@@ -79,6 +79,6 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
             return si.render_satellite(scene, **kw)
         loop = satellite_loop(hyds, render_time, nc, resume=args.resume, fps=args.fps, denoise=args.denoise,
                               options=loop_options(args, resolution, reference_kw))
-    print(f"wrote {loop.netcdf} ({len(hyds)} times; {loop.rendered} rendered now), {loop.mp4} and "
-          f"{len(loop.pngs)} PNGs ({loop.pngs[0].name} ...)")
+    print(f"wrote {loop.netcdf} ({len(hyds)} times; {loop.rendered} rendered now), {loop.mp4}, {loop.contact_sheet} "
+          f"and {len(loop.pngs)} PNGs ({loop.pngs[0].name} ...)")
     return nc

@@ -37,6 +37,7 @@ class SatelliteLoop:
     mp4: Path
     pngs: list[Path]
     rendered: int        # times rendered by this run (the others were read back from OUT.nc.parts)
+    contact_sheet: Path | None = None  # OUT_contact_sheet.png: every time's picture, labelled
 
 
 def parts_folder(nc) -> Path:
@@ -90,7 +91,7 @@ def satellite_loop(hyds: list, render_time, nc, *, resume: bool = False, fps: fl
                    report=print, denoise: bool = True, options: dict | None = None) -> SatelliteLoop:
     """Render every time of ``hyds`` (Hydrometeors, one per time, each with its ``valid_time``) and write
     the loop (see the module): ``nc`` (one NetCDF, a CF ``time`` coordinate), OUT_<time>.png and .exr per time,
-    OUT.mp4.
+    OUT.mp4 and OUT_contact_sheet.png.
 
     render_time : callable (hyd, checkpoint path, resume: bool) -> (dataset, Image) of one time
                   (``imagery.render_satellite`` or ``truecolor.render_true_color`` with the scene of ``hyd``).
@@ -102,7 +103,7 @@ def satellite_loop(hyds: list, render_time, nc, *, resume: bool = False, fps: fl
     import xarray as xr
     from ..io.image import write_png8
     from ..io.output_paths import written_atomically
-    from .movie import write_mp4
+    from .movie import contact_sheet, write_mp4
     from .satellite_picture import picture, shown_dataset
     nc = Path(nc)
     work = parts_folder(nc)
@@ -140,8 +141,10 @@ def satellite_loop(hyds: list, render_time, nc, *, resume: bool = False, fps: fl
     with written_atomically(nc, "NetCDF file") as tmp:
         loop.to_netcdf(tmp)
     mp4 = write_mp4(nc.with_suffix(".mp4"), frames, fps=fps)
+    sheet = contact_sheet(nc.with_name(f"{nc.stem}_contact_sheet.png"), frames,
+                          [str(d.attrs.get("valid_time", t)) for d, t in zip(parts, tags)])
     shutil.rmtree(work, ignore_errors=True)
-    return SatelliteLoop(nc, mp4, pngs, rendered)
+    return SatelliteLoop(nc, mp4, pngs, rendered, sheet)
 
 
 def loop_dataset(parts: list):
