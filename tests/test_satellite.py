@@ -97,6 +97,10 @@ def test_satellite_command_writes_a_cf_netcdf_exr_and_png(tmp_path, capsys):
      r"view zenith angle 9\d\.\d deg from meteosat"),
     (["satellite", str(WRF_THOMPSON), "--time", "1", "-o", "{tmp}/a.exr"], "ending in .nc"),
     (["satellite", str(WRF_THOMPSON), "--time", "1", "--resolution", "fine", "-o", "{tmp}/a.nc"], "--resolution"),
+    (["satellite", str(WRF_THOMPSON), "--time", "9", "--satellite", "himawari", "-o", "{tmp}/a.nc"],
+     r"time index in \[-4, 3\]; found 9"),
+    (["satellite", str(WRF_THOMPSON), "--time", "2030-01-01_00:00:00", "--satellite", "himawari", "--rgb",
+      "-o", "{tmp}/a.nc"], r"expected one of the file's times"),
 ])
 def test_satellite_refuses_before_rendering(tmp_path, capsys, argv, message):
     shared_file(WRF_THOMPSON)

@@ -114,3 +114,35 @@ def test_a_loop_over_several_files_takes_their_times_in_order(tmp_path):
     assert _main(argv) == 0
     ds = xr.open_dataset(out)
     assert [str(t)[:16] for t in ds.time.values] == ["2024-05-20T21:00", "2024-05-20T22:00"]
+
+
+def test_a_true_colour_rayleigh_loop_resumes_band_by_band(tmp_path, monkeypatch):
+    """--rgb --rayleigh (a render per band, a checkpoint each): cut in the second time's second band, resumed;
+    the first time read back, the second's first band from its finished checkpoint, its second band resumed,
+    its third rendered."""
+    from weather_mi.reference import render as ref_render
+    real = ref_render.render_reference
+    calls = []
+
+    def cut(spec, vol, **kw):
+        calls.append(kw.get("resume"))
+        if len(calls) == 5 and "cut" not in calls:
+            calls.append("cut")
+
+            def stop(_img):
+                raise RuntimeError("power cut")
+            return real(spec, vol, **kw, on_pass=stop)
+        return real(spec, vol, **kw)
+
+    monkeypatch.setattr(ref_render, "render_reference", cut)
+    out = tmp_path / "rgb.nc"
+    argv = _loop_args(out, "--rgb", "--rayleigh", time="0:2")
+    assert _main(argv) == 2
+    parts = out.with_name("rgb.nc.parts")
+    assert sorted(p.name for p in parts.glob("*.ckpt.npz")) == [f"{TAGS[1]}.exr.0.64.ckpt.npz",
+                                                              f"{TAGS[1]}.exr.0.86.ckpt.npz"]
+    calls[:] = ["cut"]
+    assert _main(argv + ["--resume"]) == 0
+    assert [c is not None for c in calls[1:]] == [True, True, False]
+    ds = xr.open_dataset(out)
+    assert ds.reflectance.dims == ("time", "band", "y", "x") and ds.sizes["time"] == 2 and not parts.exists()

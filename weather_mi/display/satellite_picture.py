@@ -167,33 +167,32 @@ def _graticule(draw, ds, k: int) -> None:
     lon0, lat0, lon1, lat1 = _box(ds)
     step = graticule_step(max(lon1 - lon0, lat1 - lat0))
     font = ImageFont.load_default(size=11)
-    w, h = draw.im.size
+    size = draw.im.size  # (width, height) of the canvas
     t = np.linspace(0.0, 1.0, 200)
-    for lon in np.arange(np.ceil(lon0 / step) * step, lon1 + 1e-9, step):
+    for lon in np.arange(np.ceil(lon0 / step) * step, lon1 + 1e-9, step):  # south to north: labelled at the bottom
         pts = _to_canvas(ds, k, np.full_like(t, lon), lat0 - step + (lat1 - lat0 + 2 * step) * t)
         _polyline(draw, pts, GRID_RGB, 1)
-        _label(draw, pts, 1, h, _deg_text(lon, "E", "W"), font, first=True)
-    for lat in np.arange(np.ceil(lat0 / step) * step, lat1 + 1e-9, step):
+        _label(draw, pts, size, _deg_text(lon, "E", "W"), font, bottom=True)
+    for lat in np.arange(np.ceil(lat0 / step) * step, lat1 + 1e-9, step):  # west to east: labelled at the left
         pts = _to_canvas(ds, k, lon0 - step + (lon1 - lon0 + 2 * step) * t, np.full_like(t, lat))
         _polyline(draw, pts, GRID_RGB, 1)
-        _label(draw, pts, 0, w, _deg_text(lat, "N", "S"), font, first=True)
+        _label(draw, pts, size, _deg_text(lat, "N", "S"), font, bottom=False)
 
 
 def _deg_text(v: float, pos: str, neg: str) -> str:
     v = (v + 180.0) % 360.0 - 180.0 if pos == "E" else v
-    return f"{abs(v):.{0 if abs(v - round(v)) < 1e-6 else 2}f}\N{DEGREE SIGN}{pos if v >= 0 else neg}".replace(".00", "")
+    return f"{abs(round(v, 2)):g}\N{DEGREE SIGN}{pos if v >= 0 else neg}"
 
 
-def _label(draw, pts, axis: int, size: int, text: str, font, first: bool = False) -> None:
-    """``text`` beside the last (``first``: the first) point of ``pts`` inside the canvas along ``axis``."""
-    inside = np.all(np.isfinite(pts), axis=1) & (pts[:, axis] >= 0) & (pts[:, axis] < size)
-    other = 1 - axis
-    inside &= (pts[:, other] >= 0) & (pts[:, other] < draw.im.size[other])
+def _label(draw, pts, size, text: str, font, bottom: bool) -> None:
+    """``text`` where the line ``pts`` first enters the canvas (``size``: width, height): at the bottom edge
+    below that point (``bottom``) or at the left edge beside it."""
+    w, h = size
+    inside = np.all(np.isfinite(pts), axis=1) & (pts[:, 0] >= 0) & (pts[:, 0] < w) & (pts[:, 1] >= 0) & (pts[:, 1] < h)
     if not inside.any():
         return
-    idx = np.nonzero(inside)[0]
-    x, y = pts[idx[0] if first else idx[-1]]
-    x, y = (2.0, min(y + 1.0, draw.im.size[1] - 12)) if axis == 0 else (min(x + 2.0, draw.im.size[0] - 30), size - 13)
+    x, y = pts[np.nonzero(inside)[0][0]]
+    x, y = (min(x + 2.0, w - 30), h - 13) if bottom else (2.0, min(y + 1.0, h - 12))
     draw.text((x + 1, y + 1), text, fill=(0, 0, 0), font=font)
     draw.text((x, y), text, fill=GRID_RGB, font=font)
 
