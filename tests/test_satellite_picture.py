@@ -143,6 +143,30 @@ def test_the_png_is_denoised_and_the_netcdf_raw(tmp_path):
     assert ds.attrs["place_source"] == "file" and np.all(png[-sp.COLORBAR_PX:, 4] == 16)  # the bar's margin
 
 
+def test_the_column_fraction_of_a_line_of_sight_is_the_air_it_crosses_in_the_box():
+    """Air of scale height 8 km in a 10 x 10 x 20 km box: a vertical line of sight crosses the whole column (1);
+    one at 45 deg entering through the side at 6 km height and leaving through the floor crosses
+    (1 - exp(-6/8)) / (1 - exp(-20/8)) of it; one that passes beside the box, none."""
+    from types import SimpleNamespace
+    from weather_mi.scene.spec import RayTable
+    nz, hz = 2000, 8000.0
+    z = (np.arange(nz) + 0.5) * 20000.0 / nz
+    vol = SimpleNamespace(species=["rayleigh"], bbox=((0.0, 0.0, 0.0), (10000.0, 10000.0, 20000.0)),
+                          beta_ext=np.broadcast_to(np.exp(-z / hz)[None, :, None, None] * 1e-5, (1, nz, 2, 2)))
+
+    def table(origin, direction):  # one pixel whose four corner rays are the same ray
+        return RayTable(np.broadcast_to(np.asarray(origin, float), (2, 2, 3)),
+                        np.broadcast_to(np.asarray(direction, float), (2, 2, 3)))
+
+    d45 = np.array([-1.0, 0.0, -1.0]) / np.sqrt(2.0)
+    cases = [(table([5000.0, 5000.0, 25000.0], [0, 0, -1]), 1.0),
+             (table([10000.0 + 19000.0, 5000.0, 6000.0 + 19000.0], d45),
+              (1 - np.exp(-6 / 8)) / (1 - np.exp(-20 / 8))),
+             (table([30000.0, 30000.0, 25000.0], [0, 0, -1]), 0.0)]
+    for rays, expected in cases:
+        assert tc.column_path_fraction(vol, rays)[0, 0] == pytest.approx(expected, abs=1e-4)
+
+
 def _clear_air_scenes():
     """The demo cumulus's grid with its condensate removed (air alone) placed at 40 N 120 W, seen slant by
     GOES-East (view zenith about 60 deg): lines of sight enter or leave the box through its sides."""
