@@ -59,12 +59,6 @@ def time_tag(valid_time) -> str:
     return str(valid_time).replace("-", "").replace(":", "").replace("_", "T")
 
 
-def frame_of(ds, denoise: bool = True) -> np.ndarray:
-    """The 8-bit picture of one time's dataset (``satellite_picture.picture``)."""
-    from .satellite_picture import picture
-    return picture(ds, denoise=denoise)
-
-
 OPTIONS_FILE = "options.json"
 
 
@@ -172,4 +166,4 @@ def loop_dataset(parts: list):
 
 
 __all__ = ["SatelliteLoop", "satellite_loop", "loop_dataset", "check_unfinished_loop", "parts_folder",
-           "time_tag", "frame_of", "check_loop_options"]
+           "time_tag", "check_loop_options"]
