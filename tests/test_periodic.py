@@ -176,3 +176,37 @@ def test_les_inputs_are_periodic_by_default(tmp_path):
     assert wm.optical_volume(hyd, phase_quality="test", periodic=False).periodic is False
     assert wm.optical_volume(hyd, phase_quality="test", periodic="transport").periodic == "transport"
     assert wm.optical_volume(wm.synthetic.cumulus(), phase_quality="test").periodic is False
+
+
+# ---------------------------------------------------------------- the slicer
+
+def _slicer_frames(specs_and_volumes):
+    from weather_mi.slicing import SliceRenderer
+    return [SliceRenderer(v, slices=96).frame(spec).radiance for spec, v in specs_and_volumes]
+
+
+def test_slicer_periodic_equals_tiled_centre():
+    """The slicer's periodic frame of the tile is its frame of the 3 x 3 tiling's centre (the same slices:
+    to float rounding); ignoring the boundaries leaves the west of the tile sunlit."""
+    vol, per, tiled = _volumes()
+    spec = _spec(pixels=24)
+    plain, periodic, ref = _slicer_frames([(spec, vol), (spec, per), (spec, tiled)])
+    assert np.abs(periodic - ref).mean() < 1e-2 * ref.mean()
+    assert np.abs(plain - ref).mean() > 0.3 * ref.mean()
+    west = np.s_[:, :7]
+    assert periodic[west].mean() < 0.8 * plain[west].mean()
+
+
+def test_slicer_view_and_transport():
+    """Over 3 x 3 tiles the view sees the copies as the tiled frame does (but for the west neighbour's west
+    half, shaded from a fourth tile); "transport" sees the centre tile as the view does and no copies."""
+    vol, per, tiled = _volumes()
+    spec = _spec(width=3 * L, pixels=24, ground=0.05)
+    view, transport, ref = _slicer_frames([(spec, per), (spec, dataclasses.replace(vol, periodic="transport")),
+                                           (spec, tiled)])
+    inner = np.s_[:, 6:]
+    assert np.abs(view[inner] - ref[inner]).mean() < 1e-2 * ref[inner].mean()
+    centre = np.s_[8:16, 8:16]
+    assert np.abs(transport[centre] - view[centre]).max() < 1e-5 * view.max()
+    west_copy = np.s_[10:14, 7]  # the west neighbour's east cloud from above: its shaded ground in transport
+    assert view[west_copy].mean() > 2.0 * transport[west_copy].mean()
