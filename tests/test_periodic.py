@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import weather_mi as wm
+from weather_mi.display.metrics import agreement_in_noise
 from weather_mi.errors import WeatherDataError
 from weather_mi.kernel.plugins.majorants import empty_space_radius, texel_majorant_grid
 from weather_mi.optics.periodic import check_periodic, pad_levels, padded_bbox
@@ -40,23 +41,12 @@ def _spec(seed=0, width=L, pixels=16, elevation=40.0, ground=0.3):
                         ground=wm.Ground(albedo=ground), width=pixels, height=pixels, seed=seed)
 
 
-def _block_chi2(a, b, region=np.s_[:, :], block=4):
-    """Mean over blocks of block x block pixels of (difference of the block means / its combined standard
-    error)^2: ~1 for images that agree within noise. Blocks, because a pixel's standard error estimated from
-    a few passes is itself noisy (its t^2 has a heavy tail); a block's sums the variances of many pixels."""
-    da = (a.radiance - b.radiance)[region].mean(axis=2)
-    va = (a.stderr ** 2 + b.stderr ** 2)[region].mean(axis=2) / 3.0  # grey: the 3 channels are one estimate
-    h, w = (n // block * block for n in da.shape)
-    d = da[:h, :w].reshape(h // block, block, w // block, block).sum(axis=(1, 3))
-    v = va[:h, :w].reshape(h // block, block, w // block, block).sum(axis=(1, 3)) * 3.0
-    return float(np.mean(d ** 2 / v))
+def _block_chi2(a, b, region=np.s_[:, :]):
+    return agreement_in_noise(a, b, region)["block_chi2"]
 
 
 def _tile_mean_z(a, b):
-    """The difference of the images' means in combined standard errors (grey images: channel means)."""
-    d = (a.radiance - b.radiance).mean(axis=2)
-    v = (a.stderr ** 2 + b.stderr ** 2).mean(axis=2)
-    return float(d.mean() / (np.sqrt(v.sum()) / d.size))
+    return agreement_in_noise(a, b)["mean_z"]
 
 
 @pytest.fixture(scope="module")
