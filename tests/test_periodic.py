@@ -3,6 +3,7 @@ copies of the field tiled with numpy (periodic off), and checks that fail if the
 from __future__ import annotations
 
 import dataclasses
+import types
 
 import numpy as np
 import pytest
@@ -200,3 +201,19 @@ def test_slicer_view_and_transport():
     assert np.abs(transport[centre] - view[centre]).max() < 1e-5 * view.max()
     west_copy = np.s_[10:14, 7]  # the west neighbour's east cloud from above: its shaded ground in transport
     assert view[west_copy].mean() > 2.0 * transport[west_copy].mean()
+
+
+def test_agreement_in_noise_on_known_noise():
+    """Two images of one radiance with independent Gaussian noise of known standard error: |mean z| within 3 and
+    the block chi-square ~1; a shift of 5 standard errors of the mean is caught."""
+    rng = np.random.default_rng(7)
+    se = np.full((32, 32, 3), 0.01)
+
+    def img(shift=0.0):
+        r = 0.5 + shift + se[..., :1] * rng.standard_normal((32, 32, 1))
+        return types.SimpleNamespace(radiance=np.repeat(r, 3, axis=2), stderr=se)
+
+    a = agreement_in_noise(img(), img())
+    assert abs(a["mean_z"]) < 3 and 0.6 < a["block_chi2"] < 1.5, a
+    shift = 5 * np.sqrt(2) * 0.01 / 32  # 5 standard errors of the difference of the means
+    assert agreement_in_noise(img(shift), img())["mean_z"] > 3
