@@ -150,6 +150,15 @@ def test_padding_and_options():
     vol, per, _ = _volumes()
     with pytest.raises(WeatherDataError, match="periodic"):
         dataclasses.replace(vol, periodic="sideways")
+    from weather_mi.io.terrain import Terrain
+    from weather_mi.kernel.scene_dict import scene_dict
+    from weather_mi.slicing import SliceRenderer
+    flat = np.zeros((4, 4))
+    hilly = dataclasses.replace(per, terrain=Terrain(np.linspace(0, L, 4), np.linspace(0, L, 4), flat, flat + 1,
+                                                     flat + 0.2, "test"))
+    for render in (lambda: scene_dict(_spec(), hilly, {"type": "majorant_volpath"}), lambda: SliceRenderer(hilly)):
+        with pytest.raises(WeatherDataError, match="terrain"):  # a terrain is not periodic
+            render()
     from weather_mi.kernel.scene_dict import integrator_dict
     for kind, legacy in (("volpath", False), ("majorant", True)):  # stock volpath cannot wrap; legacy tracks coarse
         with pytest.raises(ValueError, match="periodic"):

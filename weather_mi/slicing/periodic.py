@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..optics.periodic import SLICER_TILES, extended_box, pad_levels, padded_bbox
+from ..optics.periodic import SLICER_TILES, extended_box, pad_levels, padded_bbox, require_flat_ground
 
 
 class PeriodicSlicing:
@@ -23,6 +23,7 @@ class PeriodicSlicing:
     hi) of the domain's own x and y, where the eye sees the medium)."""
 
     def __init__(self, vol, slicing_box):
+        require_flat_ground(vol, vol.periodic)
         self.mode = vol.periodic
         nz = vol.shape[0]
         lo, hi = extended_box(*vol.bbox, SLICER_TILES)

@@ -22,9 +22,8 @@ class Grid:
         self.scale = [dr.opaque(mi.Float, float(v)) for v in scale]
         self.shift, self.lo = float(shift), int(lo)
         # periodic in x and y (``reach``: periods walked beyond the grid on each side, None: not periodic): the
-        # cells of x and y run over the whole extended box and are looked up modulo dims (first cell 0)
+        # cells of x and y run over the whole extended box and are looked up modulo dims (cell 0 first)
         self.reach = reach
-        self.los = [self.lo] * 3 if reach is None else [0, 0, self.lo]
 
     def span(self, k: int):
         """(first, last) cell walked along axis k: the grid's, or for a periodic axis the extended box's
