@@ -166,13 +166,14 @@ def test_padding_and_options():
 
 
 def test_les_inputs_are_periodic_by_default(tmp_path):
-    """The LES reader marks its domains doubly periodic; ``optical_volume`` follows unless told otherwise;
-    other inputs stay isolated boxes."""
+    """The LES reader marks its domains doubly periodic; ``optical_volume`` follows ("transport": periodic
+    light, the domain's own tile seen) unless told otherwise; other inputs stay isolated boxes."""
     from weather_mi.io.les import open_les
     path = tmp_path / "tiny.txt"
     path.write_text("# tiny\n3 2 4\n0.1 0.2 1.0 1.1 1.2 1.3\n0 0 0 0.5 10.0\n2 1 3 1.5 12.0\n")
     hyd = open_les(path)
-    assert wm.optical_volume(hyd, phase_quality="test").periodic is True
+    assert wm.optical_volume(hyd, phase_quality="test").periodic == "transport"
+    assert wm.optical_volume(hyd, phase_quality="test", periodic=True).periodic is True
     assert wm.optical_volume(hyd, phase_quality="test", periodic=False).periodic is False
     assert wm.optical_volume(hyd, phase_quality="test", periodic="transport").periodic == "transport"
     assert wm.optical_volume(wm.synthetic.cumulus(), phase_quality="test").periodic is False
@@ -226,3 +227,16 @@ def test_agreement_in_noise_on_known_noise():
     assert abs(a["mean_z"]) < 3 and 0.6 < a["block_chi2"] < 1.5, a
     shift = 5 * np.sqrt(2) * 0.01 / 32  # 5 standard errors of the difference of the means
     assert agreement_in_noise(img(shift), img())["mean_z"] > 3
+
+
+def test_command_line_periodic_flags():
+    from weather_mi.cli.commands import build_parser
+    from weather_mi.cli.periodic_option import periodic_value
+    parser = build_parser()
+    expect = {(): None, ("--periodic",): True, ("--periodic", "view"): True, ("--periodic", "transport"): "transport",
+              ("--no-periodic",): False}
+    for command in ("render", "view", "satellite"):
+        for flags, value in expect.items():
+            args = parser.parse_args([command, "--demo", "cumulus", *flags] + (["-o", "x.nc"] if command == "satellite" else []))
+            got = periodic_value(args)
+            assert got == value and type(got) is type(value), (command, flags, got)

@@ -46,11 +46,17 @@ def check_periodic(value, what: str = "periodic"):
     raise WeatherDataError("render options", what, 'False, True ("view") or "transport"', repr(value))
 
 
-def periodic_of_attrs(attrs) -> bool:
-    """Whether a dataset's attributes say it is doubly periodic: ``attrs["periodic"]`` (1, True or "xy", as
-    the LES reader writes it; netCDF attributes cannot be booleans)."""
+DEFAULT_PERIODIC = "transport"  # a dataset that says it is periodic: the light periodic, the camera on its own tile
+
+
+def periodic_of_attrs(attrs):
+    """The default boundaries of a dataset: DEFAULT_PERIODIC where its attributes say it is doubly periodic
+    (``attrs["periodic"]``: 1, True or "xy", as the LES reader writes it; netCDF attributes cannot be
+    booleans), else False. "transport" rather than True: the default camera frames the domain's own clouds
+    as before, with the light of the tiling, and both renderers show the same scene (the copies reach 10
+    periods in the path tracer, one in the slicer; ``periodic=True`` shows them)."""
     value = attrs.get("periodic", 0)
-    return str(value).strip().lower() in ("1", "true", "xy")
+    return DEFAULT_PERIODIC if str(value).strip().lower() in ("1", "true", "xy") else False
 
 
 def pad_levels(a: np.ndarray, axis: int = 0) -> np.ndarray:

@@ -278,8 +278,8 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     phase_quality : {"default", "high", "test"}, default "default"
         Quality of the tables built with the volume ("test": small, fast tables).
     periodic : bool or "transport", optional
-        Horizontal boundaries (``OpticalVolume.periodic``); default: periodic where the hydrometeors say
-        so (``attrs["periodic"]``: the LES reader's doubly periodic domains), else False.
+        Horizontal boundaries (``OpticalVolume.periodic``); default: "transport" where the hydrometeors say
+        they are periodic (``attrs["periodic"]``: the LES reader's doubly periodic domains), else False.
 
     Returns
     -------
