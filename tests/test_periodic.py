@@ -240,3 +240,12 @@ def test_command_line_periodic_flags():
             args = parser.parse_args([command, "--demo", "cumulus", *flags] + (["-o", "x.nc"] if command == "satellite" else []))
             got = periodic_value(args)
             assert got == value and type(got) is type(value), (command, flags, got)
+
+
+def test_checkpoint_key_includes_periodic():
+    """A checkpoint of an isolated render is not resumed as a periodic one (and the isolated key is the old one)."""
+    from weather_mi.reference.checkpoints import fingerprint
+    vol, per, _ = _volumes()
+    keys = {fingerprint(_spec(), v, [1]) for v in (vol, per, dataclasses.replace(vol, periodic="transport"))}
+    assert len(keys) == 3
+

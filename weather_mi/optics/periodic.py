@@ -20,7 +20,9 @@ tiling exactly where it matters and cheaply:
 What the camera sees: ``periodic=True`` ("view"), the periodic continuation (a cloud field to the edge of
 the extended box, the physical meaning of a periodic LES); ``periodic="transport"``, the centre tile only
 (camera rays interact with the medium only inside the domain's own box) with light transport still
-periodic (its ground shadowed by the neighbours' clouds, light entering its sides through them).
+periodic (its ground shadowed by the neighbours' clouds, light entering its sides through them): the
+default for a dataset that says it is periodic (:func:`periodic_of_attrs`). docs/periodic.md has the design
+and the check against tiled copies.
 """
 from __future__ import annotations
 
@@ -28,7 +30,6 @@ import numpy as np
 
 from ..errors import WeatherDataError
 
-PERIODIC_MODES = (False, True, "transport")
 PATH_TILES = 10    # the path tracer's medium box reaches this many periods beyond the domain on each side
 SLICER_TILES = 1   # the slicer's slicing box: one period on each side (3 x 3 tiles)
 
