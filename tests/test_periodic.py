@@ -237,7 +237,8 @@ def test_command_line_periodic_flags():
               ("--no-periodic",): False}
     for command in ("render", "view", "satellite"):
         for flags, value in expect.items():
-            args = parser.parse_args([command, "--demo", "cumulus", *flags] + (["-o", "x.nc"] if command == "satellite" else []))
+            output = ["-o", "x.nc"] if command == "satellite" else []
+            args = parser.parse_args([command, "--demo", "cumulus", *flags, *output])
             got = periodic_value(args)
             assert got == value and type(got) is type(value), (command, flags, got)
 
