@@ -250,3 +250,46 @@ def test_checkpoint_key_includes_periodic():
     keys = {fingerprint(_spec(), v, [1]) for v in (vol, per, dataclasses.replace(vol, periodic="transport"))}
     assert len(keys) == 3
 
+
+
+def test_mixture_weights_wrap_like_the_tiling():
+    """The Eq. 8 phase plugin of a periodic medium (two species, weights varying across the walls) gives at
+    any point, in the domain or periods away, the value the clamped plugin of the 3 x 3 numpy tiling gives at
+    the same point of its centre tile."""
+    import drjit as dr
+    import mitsuba as mi
+    from weather_mi.kernel.plugins import hydrometeor_mixture as hm
+    from weather_mi.kernel.variant import ensure_registered
+    ensure_registered()
+    rng = np.random.default_rng(2)
+    weights = rng.random((3, 4, 5, 2)).astype(np.float32)
+    nodes, values = hm.prepare_tables([wm.phase.isotropic(), wm.phase.henyey_greenstein(0.8)])
+
+    def plugin(w, bbox, periodic):
+        d = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
+             "weights": mi.TensorXf(w), "to_world": hm.bbox_transform(bbox)}
+        return mi.load_dict({**d, "periodic": True} if periodic else d)
+
+    box = ((0.0, 0.0, 0.0), (5.0, 4.0, 3.0))
+    per = plugin(weights, box, True)
+    tiled = plugin(np.tile(weights, (1, 3, 3, 1)), ((-5.0, -4.0, 0.0), (10.0, 8.0, 3.0)), False)
+    n = 4096
+    p = rng.random((3, n)) * np.array([[5.0], [4.0], [3.0]])
+    p[:2, : n // 2] = rng.random((2, n // 2)) * np.array([[0.4], [0.4]])  # half of them within 0.4 of a wall
+    p[:2, : n // 4] = np.array([[5.0], [4.0]]) - p[:2, : n // 4]
+    shift = rng.integers(-3, 4, (2, n)) * np.array([[5.0], [4.0]])
+
+    def value(phase, pts):
+        mei = dr.zeros(mi.MediumInteraction3f, n)
+        mei.p = mi.Point3f(*(pts.astype(np.float32)))
+        mei.wi = mi.Vector3f(0, 0, 1)
+        mei.sh_frame = mi.Frame3f(mei.wi)
+        ct = np.full(n, 0.9, np.float32)  # 26 deg from forward: the two species' values differ 1:6
+        wo = mi.Vector3f(np.sqrt(1 - ct ** 2), np.zeros_like(ct), -ct)
+        return np.array(phase.eval_pdf(mi.PhaseFunctionContext(None), mei, wo)[0])
+
+    want = value(tiled, p)
+    got = value(per, p + np.r_[shift, np.zeros((1, n))])
+    np.testing.assert_allclose(got, want, rtol=2e-4)
+    clamped = value(plugin(weights, box, False), p)
+    assert np.abs(clamped - want).max() > 0.05 * np.abs(want).max()  # the walls matter: wrapping is tested
