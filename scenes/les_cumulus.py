@@ -14,7 +14,7 @@ ap.add_argument("-o", "--out", default="out")
 args = ap.parse_args()
 
 hyd = wm.open_les(args.file)                           # LWC (g/m^3) -> mixing ratio with the standard atmosphere
-vol = wm.optical_volume(hyd, species="physical")       # uses the file's effective radii
+vol = wm.optical_volume(hyd, species="physical")       # uses the file's effective radii; LES: periodic="transport"
 sun = wm.Sun(azimuth=30, elevation=20)
 spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=210, elevation=5), sun=sun,   # looking towards the sun
                     sky=wm.Sky("sunsky"), ground=wm.Ground(0.1), width=320, height=240)

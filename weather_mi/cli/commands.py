@@ -17,6 +17,7 @@ from ..errors import OutputWriteError, WeatherDataError
 from ..io.times import parse_time, parse_times
 from ..reference.options import ReferenceOptions, add_flags, flag_values
 from ..io.sources import DEMOS, check_time, open_source
+from .periodic_option import add_periodic_option, periodic_value
 from .summary import info_text
 
 SATELLITE_ESTIMATOR = ("spp", "target_rse", "max_seconds")  # the rest: render_satellite's (reflectance)
@@ -82,7 +83,8 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..optics.volume import optical_volume
     from ..reference.render import render_reference
     hyd = open_placed(args)
-    vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase)
+    vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase,
+                         periodic=periodic_value(args))
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     spec, sun_meta = scene_spec(args, vol), None
     if args.sun_from_time:
@@ -176,7 +178,7 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     from ..reference.cluster import session
     from ..optics.volume import optical_volume
     hyd = open_placed(args)
-    vol = optical_volume(hyd, species=args.preset, phase=args.phase)
+    vol = optical_volume(hyd, species=args.preset, phase=args.phase, periodic=periodic_value(args))
     hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
     if args.rgb:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
@@ -253,9 +255,11 @@ def add_place_options(p) -> None:
 
 
 def add_scene_options(p) -> None:
-    """Volume and scene options of ``render`` and ``animate``: species, phase, camera, sun, sky, ground."""
+    """Volume and scene options of ``render`` and ``animate``: species, phase, periodic boundaries, camera,
+    sun, sky, ground."""
     p.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
     p.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
+    add_periodic_option(p)
     p.add_argument("--scale", action="append", metavar="SPECIES=FACTOR", help="e.g. --scale ice=2")
     p.add_argument("--sun-azimuth", type=float, default=290.0, help="degrees clockwise from north")
     p.add_argument("--sun-elevation", type=float, default=35.0)
@@ -298,7 +302,8 @@ def animate_command(args) -> Path:
     check_scene_options(args)
     scale = _parse_scale(args.scale)
     hyds = open_times(args.inputs, time=parse_times(args.time))
-    vols = [optical_volume(h, species=args.preset, scale=scale, phase=args.phase) for h in hyds]
+    vols = [optical_volume(h, species=args.preset, scale=scale, phase=args.phase, periodic=periodic_value(args))
+            for h in hyds]
     spec = scene_spec(args, largest(vols))  # frame the largest storm
     reference_kw = flag_values(args, ANIMATE_ESTIMATOR)
     with session(args.scheduler, args.workers) as client:
@@ -370,6 +375,7 @@ def _add_satellite_parser(sub) -> None:
     sat.add_argument("--rayleigh", action="store_true", help="molecular scattering of the air in the domain")
     sat.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
     sat.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
+    add_periodic_option(sat)
     sat.add_argument("--ground-albedo", type=float, default=None,
                      help="surface albedo where the file has none (default 0.06, the sea; with --rgb the sea "
                           "per band, 0.06 at 0.47 um to 0.02 at 0.86 um)")
@@ -410,6 +416,7 @@ def _add_view_parser(sub) -> None:
     _add_source(viewp)
     viewp.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
     viewp.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
+    add_periodic_option(viewp)
     viewp.add_argument("--port", type=int, default=5006, help="port (0: a free one)")
     viewp.add_argument("--host", default="127.0.0.1",
                        help="address to bind (default 127.0.0.1, this machine only; another address is reachable "
@@ -435,7 +442,8 @@ def view_command(args) -> None:
     from ..viewer.recipe import VolumeRecipe
     from ..viewer.serve import serve
     check_time(args.file, args.demo, args.time)
-    recipe = VolumeRecipe(path=args.file, demo=args.demo, preset=args.preset, phase=args.phase)
+    recipe = VolumeRecipe(path=args.file, demo=args.demo, preset=args.preset, phase=args.phase,
+                          periodic=periodic_value(args))
     serve(recipe, host=args.host, port=args.port, open_browser=not args.no_browser, time_option=args.time,
           size=_parse_size(args.size))
 

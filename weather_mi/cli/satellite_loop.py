@@ -57,6 +57,7 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
     from ..optics.volume import optical_volume
     from ..reference.cluster import session
     from ..satellite import imagery as si
+    from .periodic_option import periodic_value
     from ..satellite import truecolor as tc
     check_unfinished_loop(nc, args.resume)
     hyds = open_placed_times(args)
@@ -67,7 +68,7 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
 
     with session(args.scheduler, args.workers) as client:
         def render_time(hyd, ckpt, resume):
-            vol = optical_volume(hyd, species=args.preset, phase=args.phase)
+            vol = optical_volume(hyd, species=args.preset, phase=args.phase, periodic=periodic_value(args))
             hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])
             kw = dict(reference_kw, checkpoint=ckpt, resume=ckpt if resume else None, client=client)
             if args.rgb:

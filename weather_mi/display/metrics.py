@@ -268,3 +268,18 @@ def _write_error_map(path, srgb_r, srgb_a, de, flip, m, metrics) -> Path:
                  f"({metrics['n_pixels']} px)", fontsize=9)
     fig.savefig(path, dpi=100)
     return path
+
+
+def agreement_in_noise(a, b, region=np.s_[:, :], block: int = 4) -> dict:
+    """How two path-traced images (``Image``s with ``stderr``, independent samples) differ in units of their
+    combined standard error, over pixels ``region``: ``mean_z``, the difference of the region's means over
+    its standard error (within +-3 where they agree), and ``block_chi2``, the mean over blocks of block x
+    block pixels of (difference of the block sums / its standard error)^2 (~1 where they agree; blocks,
+    because a pixel's standard error from a few passes is itself noisy, and its t^2 has a heavy tail).
+    Channels are averaged first (they are not independent)."""
+    d = (np.asarray(a.radiance, np.float64) - np.asarray(b.radiance, np.float64))[region].mean(axis=2)
+    v = (np.asarray(a.stderr, np.float64) ** 2 + np.asarray(b.stderr, np.float64) ** 2)[region].mean(axis=2)
+    h, w = (n // block * block for n in d.shape)
+    ds = d[:h, :w].reshape(h // block, block, w // block, block).sum(axis=(1, 3))
+    vs = v[:h, :w].reshape(h // block, block, w // block, block).sum(axis=(1, 3))
+    return {"mean_z": float(d.sum() / np.sqrt(v.sum())), "block_chi2": float(np.mean(ds ** 2 / vs))}

@@ -519,7 +519,8 @@ def _file_attrs(path, comment, comments, names, sep, sizes, n_listed, lwc, speci
              "n_voxels_grid": int(nx * ny * nz), "species": species,
              "max_lwc_g_m3": float(lwc.max()) if lwc.size else 0.0,
              "separator": "comma" if sep == "," else ("semicolon" if sep == ";" else "whitespace"),
-             "dx": dx, "dy": dy}
+             "dx": dx, "dy": dy,
+             "periodic": 1}  # LES domains are doubly periodic (BOMEX, RICO): the renderers' default (optics/periodic.py)
     if len(comments) > 1:
         attrs["comments"] = "\n".join(comments)
     if names:
@@ -547,6 +548,8 @@ def open_les(path, rho_air=None, *, species: str = "cloud") -> xr.Dataset:
         Hydrometeors following :mod:`weather_mi.io.hydrometeors`: x = i dx, y = j dy, z = the level
         altitudes, in metres; ``r_eff_<species>`` (m) and, when the file has it, ``v_eff_<species>``
         (dimensionless). Levels that are not uniform are regridded (attribute ``vertical_regrid``).
+        ``attrs["periodic"] = 1``: the domain is doubly periodic, which both renderers then honour by
+        default (``optical_volume(..., periodic=False)`` renders it as an isolated box).
 
     Raises
     ------

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..optics.periodic import pad_levels, padded_bbox
 from ..optics.volume import OpticalVolume
 from .variant import ensure_registered
 
@@ -22,31 +23,46 @@ def phase_arrays(vol: OpticalVolume):
     return nodes, values, weights
 
 
+def grid_bbox(vol: OpticalVolume):
+    """The box of the kernel's grids: the volume's, or for a periodic volume grown by the copied bottom and
+    top levels (``optics.periodic.pad_levels``)."""
+    return padded_bbox(vol.bbox, vol.shape[0]) if vol.periodic else vol.bbox
+
+
 def phase_dict(vol: OpticalVolume) -> dict:
-    """``hydrometeor_mixture`` phase function for ``vol``."""
+    """``hydrometeor_mixture`` phase function for ``vol`` (periodic: x and y wrapped, levels padded)."""
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     ensure_registered()
     nodes, values, weights = phase_arrays(vol)
-    return {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
-            "weights": mi.TensorXf(weights), "to_world": bbox_transform(vol.bbox)}
+    d = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
+         "weights": mi.TensorXf(pad_levels(weights) if vol.periodic else weights),
+         "to_world": bbox_transform(grid_bbox(vol))}
+    if vol.periodic:
+        d["periodic"] = True
+    return d
 
 
 def medium_dict(vol: OpticalVolume) -> dict:
     """``heterogeneous`` medium: sigma_t = beta_total (1/m, grey), RGB albedo, mixture phase, all on
-    the volume's bounding box (grids indexed [z, y, x, channel], last axis world x)."""
+    the volume's bounding box (grids indexed [z, y, x, channel], last axis world x). A periodic volume's
+    grids wrap in x and y (``wrap_mode`` repeat; their levels padded: ``optics.periodic``)."""
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
-    to_world = bbox_transform(vol.bbox)
+    to_world = bbox_transform(grid_bbox(vol))
+    beta, albedo = vol.beta_total, vol.albedo
+    wrap = {}
+    if vol.periodic:
+        beta, albedo, wrap = pad_levels(beta), pad_levels(albedo), {"wrap_mode": "repeat"}
     # accel False: on CUDA the grids' hardware texture units interpolate with 8-bit weights, while
     # majorant_volpath's trackers interpolate the same texels in float32 (weather_mi/kernel/plugins/dda.py): one medium for
     # both only in software. LLVM has no texture units: no effect there.
     return {
         "type": "heterogeneous",
-        "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(vol.beta_total[..., None]),
-                    "to_world": to_world, "filter_type": "trilinear", "accel": False},
-        "albedo": {"type": "gridvolume", "data": mi.TensorXf(vol.albedo), "to_world": to_world,
-                   "filter_type": "trilinear", "accel": False},
+        "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(beta[..., None]),
+                    "to_world": to_world, "filter_type": "trilinear", "accel": False, **wrap},
+        "albedo": {"type": "gridvolume", "data": mi.TensorXf(albedo), "to_world": to_world,
+                   "filter_type": "trilinear", "accel": False, **wrap},
         "scale": 1.0,
         "has_spectral_extinction": False,
         "phase": phase_dict(vol),

@@ -6,7 +6,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from .medium import medium_dict
+from .medium import grid_bbox, medium_dict
+from ..optics.periodic import PATH_TILES, extended_box, pad_levels, require_flat_ground
 from ..optics.volume import OpticalVolume
 from ..scene.spec import Camera, SceneSpec, Sky, Sun
 from ..io.terrain import TERRAIN_APRON_M  # the ground continues level this far past a terrain grid's edge
@@ -218,6 +219,8 @@ def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.nda
     unused) from ``terrain_gap_m`` below its lowest height (the whole mesh inside the box). The grids keep
     the full bbox."""
     lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
+    if vol.periodic:  # over PATH_TILES periods on each side (optics/periodic.py)
+        lo, hi = extended_box(lo, hi, PATH_TILES)
     terrain = getattr(vol, "terrain", None)
     if floor_m is not None and terrain is not None:
         lo[2] = terrain_floor_m(terrain) - terrain_gap_m(terrain, vol.bbox)
@@ -278,6 +281,9 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
     dict
         The integrator's Mitsuba dict (``mi.load_dict``-ready inside a scene dict).
     """
+    if vol.periodic and (integrator == "volpath" or legacy):
+        raise ValueError("periodic volumes render with majorant_volpath's default estimator only "
+                         f"(integrator='majorant', legacy=False), not integrator={integrator!r}, legacy={legacy}")
     if integrator == "volpath":
         d = {"type": "volpath", "max_depth": int(max_depth)}
     else:
@@ -286,9 +292,12 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
         from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid
         ensure_registered()
         cell = DEFAULT_CELL if cell is None else cell
+        beta = pad_levels(vol.beta_total) if vol.periodic else vol.beta_total  # the medium's grids (medium.py)
         d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
-             "majorant": mi.TensorXf(majorant_grid(vol.beta_total, cell=int(cell))),
-             "to_world": bbox_transform(vol.bbox)}
+             "majorant": mi.TensorXf(majorant_grid(beta, cell=int(cell))),
+             "to_world": bbox_transform(grid_bbox(vol))}
+        if vol.periodic:
+            d.update({"periodic": "transport" if vol.periodic == "transport" else "view", "periodic_tiles": PATH_TILES})
         if sun is not None:
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
         if legacy:  # the estimator before issue 10 (see render_reference)
@@ -309,6 +318,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
     The sun is a ``directional`` emitter unless the integrator carries it (``integrator_sun``). A
     camera inside the medium's box carries the medium (its rays start in it)."""
     ensure_registered()
+    require_flat_ground(vol, vol.periodic)
     terrain = getattr(vol, "terrain", None) if spec.ground is not None else None
     floor = None if spec.ground is None else spec.ground.height  # over a terrain medium_box uses the terrain
     box = medium_shape_dict(vol, floor)

@@ -18,6 +18,7 @@ import xarray as xr
 
 from ..errors import WeatherDataError
 from ..io.hydrometeors import DIMS, SPECIES_NAMES, bbox_of, check_species_name, validate
+from .periodic import check_periodic, periodic_of_attrs
 from .species import SpeciesSet, preset
 from ..io.terrain import Terrain
 from ..io.budget import check_fits
@@ -58,6 +59,10 @@ class OpticalVolume:
     terrain : Terrain or None
         The ground under the grid (:class:`weather_mi.io.terrain.Terrain`, the hydrometeors' terrain
         coordinates; None where they have none): the reference's ground is then a height-field mesh.
+    periodic : bool or str
+        Horizontal boundaries (:mod:`weather_mi.optics.periodic`): False (an isolated box), True (doubly
+        periodic, the camera sees the periodic continuation) or "transport" (periodic light transport, the
+        camera sees the domain's own tile only).
     """
 
     species: tuple[str, ...]
@@ -72,8 +77,10 @@ class OpticalVolume:
     attrs: dict = field(default_factory=dict)
     phase_tables: tuple | None = field(default=None, repr=False)
     terrain: Terrain | None = field(default=None, repr=False)
+    periodic: bool | str = False
 
     def __post_init__(self):
+        object.__setattr__(self, "periodic", check_periodic(self.periodic))
         for name in ("beta_ext", "beta_total", "albedo", "weights"):
             view = np.asarray(getattr(self, name)).view()
             view.flags.writeable = False
@@ -250,7 +257,7 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
 def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
                    phase_tables: Sequence | None = None, model_radii: bool | None = None,
-                   phase_quality: str = "default") -> OpticalVolume:
+                   phase_quality: str = "default", periodic: bool | str | None = None) -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
     Parameters
@@ -270,6 +277,9 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
         the "paper" preset, which reproduces the paper's fixed radii.
     phase_quality : {"default", "high", "test"}, default "default"
         Quality of the tables built with the volume ("test": small, fast tables).
+    periodic : bool or "transport", optional
+        Horizontal boundaries (``OpticalVolume.periodic``); default: "transport" where the hydrometeors say
+        they are periodic (``attrs["periodic"]``: the LES reader's doubly periodic domains), else False.
 
     Returns
     -------
@@ -293,4 +303,4 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     attrs["model_radii"] = use_model
     return OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
-                         Terrain.of(hyd))
+                         Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic)

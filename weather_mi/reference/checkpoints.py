@@ -30,6 +30,8 @@ def fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
         h.update(np.ascontiguousarray(t.theta, np.float64).tobytes())
         h.update(np.ascontiguousarray(t.values, np.float64).tobytes())
     h.update(json.dumps([list(map(float, p)) for p in vol.bbox]).encode())
+    if vol.periodic:  # periodic boundaries (none: the key of before)
+        h.update(f"periodic={vol.periodic}".encode())
     terrain = getattr(vol, "terrain", None)
     if terrain is not None:  # the ground mesh (no terrain: the key of before)
         for a in (terrain.x, terrain.y, terrain.height_m, terrain.albedo):

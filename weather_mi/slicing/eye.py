@@ -284,7 +284,8 @@ FACTOR_CAP = math.exp(30.0)  # SlabAverage.factor's largest value
 
 
 def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
-              ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None, ambient_below=None):
+              ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None, ambient_below=None,
+              tile=None):
     """Radiance (mi.Color3f) and transmittance of every pixel ray through the slices of ``f`` (the sun's
     light volume's frame: the slice planes of the frame's geometry).
 
@@ -298,6 +299,8 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
                      terraces the slab planes leave on lit faces fall at a different depth in every pixel
     sca_ratio      : None, or beta_sca / beta of the one group where ``tex_eye`` holds beta alone
     ambient_below  : None, or mi.Color3f: the light from the ground below, before occlusion ("multiple")
+    tile           : None, or (lo, hi): the medium is seen only where x and y's texture coordinates lie in
+                     [lo, hi] (a periodic volume's own tile, slicing/periodic.py)
     """
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
@@ -340,7 +343,11 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
         a, b = dr.select(sub, a_sub, a), dr.select(sub, a_sub + w_sub, b)
         kf = 0.5 * (a + b)
         p = o + ((d_first - kf * spacing - os_) / sd) * d
-        vals = tex_eye.eval((p - glo) * inv_span)
+        tc = (p - glo) * inv_span
+        vals = tex_eye.eval(tc)
+        if tile is not None:  # periodic "transport": the eye sees the domain's own tile only
+            seen = (tc.x >= tile[0]) & (tc.x <= tile[1]) & (tc.y >= tile[0]) & (tc.y <= tile[1])
+            vals = [dr.select(seen, v, 0.0) for v in vals]
         ext = dr.maximum(vals[0], 0.0)
         # an optically thick slab is done again in M sub-segments (this sample only decides that)
         split = ~sub & (ext * de * (b - a) > EYE_SPLIT_DEPTH)

@@ -124,6 +124,7 @@ KERNEL_CONSTANTS = (
     "one_scattering_ratio",  # the eye's texture holds beta alone (beta_sca = omega_bar beta)
     "light_channels",        # channels of the light pass's source: 1 (beta) or 2 (beta, beta_f)
     "grid_box",              # the grid's (lo, hi) world corners (m), numpy
+    "tile_box",              # None, or periodic "transport": the texture coordinates (lo, hi) of the eye's x and y
     "g_scattering",          # the cloud's asymmetry parameter (the ground's transmission, "multiple")
     "mode",                  # SliceMode (frozen): phase functions, light model, octaves, colouring
     "light",                 # the sun's LightVolume (kernels bind its store and frame from the inputs)

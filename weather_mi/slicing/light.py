@@ -406,7 +406,8 @@ class LightVolume:
             D = D_k exp(-tau),   D + I = (D_k + I_k) exp(-tau_keep)
         with the optical depths tau (extinction) and tau_keep (extinction less forward scattering) of the
         path from the plane to p, from ``samples`` midpoint samples of ``source`` ((extinction, forward
-        scattering) in 1/m; ``grid``: its (lo corner, 1 / span) as kernel vectors; zero outside it). Unlike
+        scattering) in 1/m; ``grid``: its (lo corner, 1 / span) as kernel vectors, zero outside it; periodic:
+        and (lo, hi) texture coordinates where it is read, slicing/periodic.py). Unlike
         an interpolation between two planes, this puts a cloud's face that lies between them where it is
         (to the sampling's resolution), and the light decays across the face at the local extinction. The
         plane's value is bilinear in its logarithm (the old interpolation across the buffer: linear in D
@@ -431,11 +432,13 @@ class LightVolume:
         D0, F0 = dr.select(first, 1.0, dr.exp(v[0])), dr.select(first, 1.0, dr.exp(v[1]))
         u = dr.select(first, kf + 0.5, kf - mi.Float(k0))   # slice units from there to p
         ds = u * f.light_step * (1.0 / samples)             # metres per sample
-        glo, inv_span = grid
+        glo, inv_span = grid[:2]
+        tlo, thi = grid[2:] if len(grid) > 2 else (0.0, 1.0)  # periodic: any x and y, the grid's own levels
         tau, tau_keep = mi.Float(0.0), mi.Float(0.0)
         for i in range(samples):
             t = (p + f.to_light * (ds * (i + 0.5)) - glo) * inv_span
-            inside = active & (t.x >= 0.0) & (t.x <= 1.0) & (t.y >= 0.0) & (t.y <= 1.0) & (t.z >= 0.0) & (t.z <= 1.0)
+            inside = active & dr.all((t >= tlo) & (t <= thi)) if len(grid) > 2 else \
+                active & (t.x >= 0.0) & (t.x <= 1.0) & (t.y >= 0.0) & (t.y <= 1.0) & (t.z >= 0.0) & (t.z <= 1.0)
             e, keep = source_extinction(dr, source, t, inside)
             tau += dr.select(inside, e, 0.0) * ds
             tau_keep += dr.select(inside, keep, 0.0) * ds

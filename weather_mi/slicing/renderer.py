@@ -38,6 +38,7 @@ from .jitter import jitter_rotation, slab_offsets
 from .light import LightVolume, auto_light_res
 from .modes import SliceMode, SliceParams
 from .occupancy import OccupancyMap
+from .periodic import PeriodicSlicing
 from .rays import Scalars, f32, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
 from .view import ViewCache
@@ -93,6 +94,9 @@ class SliceRenderer:
         import mitsuba as mi
         self.mi = mi
         self.box = slicing_box(vol)                                               # where slices go
+        self.periodic = PeriodicSlicing(vol, self.box) if vol.periodic else None  # (slicing/periodic.py)
+        if self.periodic is not None:
+            self.box = self.periodic.box
         if light_res is None:
             light_res = auto_light_res(self.box, vol.spacing)
         if slices < 2 or light_res < 4:
@@ -107,25 +111,7 @@ class SliceRenderer:
         self.slices, self.light_res = int(slices), int(light_res)
         self.differentiable = differentiable
         self.n_species = len(vol.species)
-        self.shape = tuple(vol.beta_total.shape)
-        beta_s = np.moveaxis(vol.beta_ext, 0, -1).astype(np.float32)
-        if detail_field is not None and mode.detail:
-            detail = np.asarray(detail_field, dtype=np.float32)
-            if detail.shape != self.shape:
-                raise ValueError(f"detail_field must have the volume's shape {self.shape}, got {detail.shape}")
-            beta_s = beta_s * detail[..., None]
-        self.detail_noise = None  # unit-variance noise n: species s's extinction x exp(a_s n - a_s^2 / 2)
-        if detail_noise is not None and mode.detail:
-            n = np.asarray(detail_noise, dtype=np.float32)
-            if n.shape != self.shape:
-                raise ValueError(f"detail_noise must have the volume's shape {self.shape}, got {n.shape}")
-            self.detail_noise = mi.Float(np.ascontiguousarray(n).ravel())
-        self.beta_s = [mi.Float(np.ascontiguousarray(beta_s[..., si]).ravel()) for si in range(self.n_species)]  # (z, y, x) each
-        self.beta_sum_s = beta_s.reshape(-1, self.n_species).sum(axis=0, dtype=np.float64)  # 1/m, over all voxels
-        self.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
-        # the grid as kernel vectors (lo corner, 1 / span), for the light carried through the medium
-        self._grid_scalars = (mi.Point3f(*(kernel_scalar(mi, c) for c in self.grid_box[0])),
-                              mi.Vector3f(*(kernel_scalar(mi, 1.0 / (h - l)) for l, h in zip(*self.grid_box))))
+        self._set_grids(vol, mode, detail_field, detail_noise)
         self.voxel_m = float(np.mean(vol.spacing))
         tables = list(vol.require_phase_tables())
         if mode.phase == "uniform":
@@ -145,7 +131,7 @@ class SliceRenderer:
                                       self.albedo_rgb / np.maximum(self.albedo_rgb.mean(axis=1, keepdims=True), 1e-12))
         self._make_textures(mode)
         # light and eye rays read the medium only between their first and last occupied block (occupancy.py)
-        self.occupancy = OccupancyMap(mi, vol.beta_total, self.grid_box, vol.spacing)
+        self.occupancy = None if self.periodic else OccupancyMap(mi, vol.beta_total, self.grid_box, vol.spacing)
         # the "multiple" model's parameters act in the eye pass only: its light pass is not differentiated
         # (one kernel for all slices instead of one per slice)
         self.light = LightVolume(mi, self.box, self.light_res, differentiable and mode.light != "multiple",
@@ -174,6 +160,39 @@ class SliceRenderer:
         self._recording_error = None  # what the kernels raised while being recorded (see recording.freeze_kernels)
         self._constants = KernelConstants(self)  # all of the renderer that its frame's kernels see
 
+    def _set_grids(self, vol, mode, detail_field, detail_noise):
+        """The per-species extinction grids (detail applied), their box in texture coordinates and the
+        detail noise (periodic: levels padded, slicing/periodic.py)."""
+        mi = self.mi
+        self.shape = tuple(vol.beta_total.shape)
+        beta_s = np.moveaxis(vol.beta_ext, 0, -1).astype(np.float32)
+        if detail_field is not None and mode.detail:
+            detail = np.asarray(detail_field, dtype=np.float32)
+            if detail.shape != self.shape:
+                raise ValueError(f"detail_field must have the volume's shape {self.shape}, got {detail.shape}")
+            beta_s = beta_s * detail[..., None]
+        self.detail_noise = None  # unit-variance noise n: species s's extinction x exp(a_s n - a_s^2 / 2)
+        if detail_noise is not None and mode.detail:
+            n = np.asarray(detail_noise, dtype=np.float32)
+            if n.shape != self.shape:
+                raise ValueError(f"detail_noise must have the volume's shape {self.shape}, got {n.shape}")
+            self.detail_noise = mi.Float(np.ascontiguousarray(n).ravel())
+        self.beta_sum_s = beta_s.reshape(-1, self.n_species).sum(axis=0, dtype=np.float64)  # 1/m, over all voxels
+        self.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
+        if self.periodic is not None:  # the grids' levels padded (slicing/periodic.py)
+            beta_s, self.grid_box = self.periodic.pad(beta_s), self.periodic.grid_box
+            self.shape = tuple(beta_s.shape[:3])
+            if self.detail_noise is not None:
+                self.detail_noise = mi.Float(self.periodic.pad(np.asarray(detail_noise, np.float32)).ravel())
+        self.beta_s = [mi.Float(np.ascontiguousarray(beta_s[..., si]).ravel()) for si in range(self.n_species)]  # (z, y, x) each
+        # the grid as kernel vectors (lo corner, 1 / span), for the light carried through the medium (periodic:
+        # and the texture coordinates where it samples the medium)
+        self._grid_scalars = (mi.Point3f(*(kernel_scalar(mi, c) for c in self.grid_box[0])),
+                              mi.Vector3f(*(kernel_scalar(mi, 1.0 / (h - l)) for l, h in zip(*self.grid_box))))
+        if self.periodic is not None:
+            self._grid_scalars += self.periodic.carried_bounds(mi)
+        self.tile_box = None if self.periodic is None else self.periodic.tile  # "transport": the eye's own tile
+
     def _make_textures(self, mode: SliceMode):
         """The eye's texture (beta and beta_sca per group) and the light pass's source ((beta, beta_f), or
         beta alone where no light is scattered forward). One phase function and albedos that agree within
@@ -185,9 +204,10 @@ class SliceRenderer:
         self.uniform_forward = mode.light == "translucent" and uniform  # beta_f = f omega_bar beta
         self.light_channels = 2 if mode.light == "translucent" and not self.uniform_forward else 1
         eye_channels = 1 if self.one_scattering_ratio else 1 + len(self.groups)
-        self.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (eye_channels,), np.float32)), use_accel=False)
-        self.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(self.shape + (self.light_channels,), np.float32)),
-                                          use_accel=False)
+        texture = (lambda t: mi.Texture3f(t, use_accel=False)) if self.periodic is None else \
+            (lambda t: self.periodic.texture(mi, t))  # periodic: wrapping in x and y
+        self.tex_eye = texture(mi.TensorXf(np.zeros(self.shape + (eye_channels,), np.float32)))
+        self.tex_light_src = texture(mi.TensorXf(np.zeros(self.shape + (self.light_channels,), np.float32)))
 
     # ------------------------------------------------------------------ per-frame volume data
     def _species_vectors(self, params: SliceParams):
@@ -486,7 +506,7 @@ class SliceRenderer:
         offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
         return composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
                          e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
-                         e.sca_ratio, e.below)
+                         e.sca_ratio, e.below, self.tile_box)
 
 
 FROZEN_FRAMES = True

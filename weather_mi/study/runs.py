@@ -100,7 +100,9 @@ def load_scene(name: str, cfg: StudyConfig, data_dir=None):
         hyd = sources.open_demo(demo, **grid)
     else:
         raise ValueError(f"unknown study scene {name!r}")
-    vol = optical_volume(hyd, species=cfg.species, phase_quality=cfg.phase_quality, scale=scale)
+    # isolated boxes: the study's LES files are crops of their runs with clear edges (not periodic themselves),
+    # and its recorded figures are for the boxes alone (optics/periodic.py)
+    vol = optical_volume(hyd, species=cfg.species, phase_quality=cfg.phase_quality, scale=scale, periodic=False)
     return vol, desc
 
 

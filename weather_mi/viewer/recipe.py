@@ -15,7 +15,8 @@ class VolumeRecipe:
     """path: a wrfout NetCDF or LES text file (None: the demo); demo: "supercell" or "cumulus";
     time: the WRF time (index or timestamp; None: the last); preset: species table ("physical" or
     "paper"); phase: "per_species" or "paper"; dataset: a Hydrometeors Dataset in memory (a notebook's
-    ``wm.view(hyd)``; it travels to a reference process by pickling)."""
+    ``wm.view(hyd)``; it travels to a reference process by pickling); periodic: the horizontal boundaries
+    (``optical_volume``'s; None: the data's default, periodic for LES)."""
 
     path: str | None = None
     demo: str | None = None
@@ -23,6 +24,7 @@ class VolumeRecipe:
     preset: str = "physical"
     phase: str = "per_species"
     dataset: object = field(default=None, compare=False, repr=False)
+    periodic: bool | str | None = None
 
     @property
     def label(self) -> str:
@@ -56,7 +58,8 @@ class VolumeRecipe:
         """The OpticalVolume (Eq. 1-6, 8) of the (scaled) storm; ``hyd``: its Hydrometeors if already read."""
         from ..optics.volume import optical_volume
         hyd = self.hydrometeors() if hyd is None else hyd
-        return optical_volume(hyd, species=self.preset, scale=dict(scale or {}) or None, phase=self.phase)
+        return optical_volume(hyd, species=self.preset, scale=dict(scale or {}) or None, phase=self.phase,
+                              periodic=self.periodic)
 
     def times(self) -> list[str]:
         """The labels of the input's times (one for a demo or an LES file; every time of a WRF file)."""

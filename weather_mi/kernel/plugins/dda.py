@@ -16,26 +16,45 @@ class Grid:
     coordinates q = local * scale + shift; ``majorant`` (Float, flattened (Z, Y, X), index c - lo) and
     ``empty`` (Int32, ``empty_space_radius``) per cell. Sizes and scales are opaque (no recompiles)."""
 
-    def __init__(self, majorant, empty, dims, scale, shift: float, lo: int):
+    def __init__(self, majorant, empty, dims, scale, shift: float, lo: int, reach: int | None = None):
         self.majorant, self.empty = majorant, empty
         self.dims = [dr.opaque(mi.Int32, int(v)) for v in dims]
         self.scale = [dr.opaque(mi.Float, float(v)) for v in scale]
         self.shift, self.lo = float(shift), int(lo)
+        # periodic in x and y (``reach``: periods walked beyond the grid on each side, None: not periodic): the
+        # cells of x and y run over the whole extended box and are looked up modulo dims (cell 0 first)
+        self.reach = reach
+
+    def span(self, k: int):
+        """(first, last) cell walked along axis k: the grid's, or for a periodic axis the extended box's
+        (one period of slack on each side: the walk ends at the box anyway)."""
+        if self.reach is None or k == 2:
+            return self.lo, self.lo + self.dims[k] - 1
+        return -(self.reach + 1) * self.dims[k], (self.reach + 2) * self.dims[k] - 1
+
+    def wrapped(self, c, k: int):
+        """Cell c of axis k as an index into the arrays (c - lo, modulo dims on a periodic axis)."""
+        if self.reach is None or k == 2:
+            return dr.clip(c - self.lo, 0, self.dims[k] - 1)
+        m = c % self.dims[k]
+        return dr.select(m < 0, m + self.dims[k], m)
 
 
-def ray_box(to_local, ray, t_end, active):
+def ray_box(to_local, ray, t_end, active, bounds=None):
     """The ray in the grid's local (unit-cube) coordinates (``to_local``: the world-to-unit-cube
     transform) and its overlap [t_near, t_far] with the cube within [0, t_end]; ``active`` cleared where
-    it misses."""
+    it misses. ``bounds``: None (the unit cube) or per axis (lo, hi) in local units (a periodic grid's
+    extended box, per lane)."""
     o_l = to_local @ ray.o
     d_l = to_local @ mi.Vector3f(ray.d)
     t_near, t_far = mi.Float(0.0), mi.Float(t_end)
     for k in range(3):
         o, d = o_l[k], d_l[k]
+        b0, b1 = (0.0, 1.0) if bounds is None else bounds[k]
         flat = dr.abs(d) < 1e-30
         inv = dr.rcp(dr.select(flat, 1.0, d))
-        ta, tb = (0.0 - o) * inv, (1.0 - o) * inv
-        inside = (o >= 0.0) & (o <= 1.0)
+        ta, tb = (b0 - o) * inv, (b1 - o) * inv
+        inside = (o >= b0) & (o <= b1)
         t_near = dr.select(flat, dr.select(inside, t_near, dr.inf), dr.maximum(t_near, dr.minimum(ta, tb)))
         t_far = dr.select(flat, dr.select(inside, t_far, -dr.inf), dr.minimum(t_far, dr.maximum(ta, tb)))
     return o_l, d_l, t_near, t_far, mi.Bool(active) & (t_near < t_far)
@@ -49,7 +68,7 @@ def locate(grid, q0, dq, t):
         q = q0[k] + dq[k] * t
         c = mi.Int32(dr.floor(q))
         c = dr.select((dq[k] < 0.0) & (mi.Float(c) == q), c - 1, c)
-        c = dr.clip(c, grid.lo, grid.lo + grid.dims[k] - 1)
+        c = dr.clip(c, *grid.span(k))
         boundary = mi.Float(c) + dr.select(dq[k] > 0.0, 1.0, 0.0)
         inv = dr.rcp(dr.select(dq[k] != 0.0, dq[k], 1.0))
         nexts.append(dr.select(dq[k] != 0.0, dr.maximum(t + (boundary - q) * inv, t), dr.inf))
@@ -75,13 +94,14 @@ def dda_step(grid, q0, dq, t, cells, nexts, jump_k, move):
         c = dr.select(jump, jc[a], dr.select(plain, cells[a] + step, cells[a]))
         out_cells.append(c)
         out_nexts.append(dr.select(jump, jn[a], dr.select(plain, nexts[a] + delta, nexts[a])))
-        outside |= (c < grid.lo) | (c >= grid.lo + grid.dims[a])
+        first, last = grid.span(a)
+        outside |= (c < first) | (c > last)
     return out_cells, out_nexts, outside
 
 
 def cell_of(grid, cells, active):
     """(majorant, flat index) of the current cells."""
-    cx, cy, cz = (dr.clip(c - grid.lo, 0, grid.dims[a] - 1) for a, c in enumerate(cells))
+    cx, cy, cz = (grid.wrapped(c, a) for a, c in enumerate(cells))
     idx = mi.UInt32((cz * grid.dims[1] + cy) * grid.dims[0] + cx)
     return dr.gather(mi.Float, grid.majorant, idx, active), idx
 
@@ -105,9 +125,14 @@ def cell_interpolant(texels, grid, q0, dq, cells, ts, active):
     interpolant of its 8 texels (gathered once; indices clamped as the gridvolume clamps them),
     times the medium's scale. ``texels`` = (data, scale); grey extinction."""
     data, scale = texels
-    n = [d - 1 for d in grid.dims]  # texels per axis
-    lo = [dr.clip(c, 0, m - 1) for c, m in zip(cells, n)]
-    hi = [dr.clip(c + 1, 0, m - 1) for c, m in zip(cells, n)]
+    if grid.reach is None:
+        n = [d - 1 for d in grid.dims]  # texels per axis
+        lo = [dr.clip(c, 0, m - 1) for c, m in zip(cells, n)]
+        hi = [dr.clip(c + 1, 0, m - 1) for c, m in zip(cells, n)]
+    else:  # periodic x and y: cell c lies between texels c and c + 1, modulo the texels per axis
+        n = [grid.dims[0], grid.dims[1], grid.dims[2] - 1]
+        lo = [grid.wrapped(cells[k], k) for k in range(2)] + [dr.clip(cells[2], 0, n[2] - 1)]
+        hi = [dr.select(lo[k] + 1 == n[k], 0, lo[k] + 1) for k in range(2)] + [dr.clip(cells[2] + 1, 0, n[2] - 1)]
     v = {}
     for iz, z in enumerate((lo[2], hi[2])):
         for iy, y in enumerate((lo[1], hi[1])):

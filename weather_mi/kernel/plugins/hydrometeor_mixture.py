@@ -237,6 +237,7 @@ class HydrometeorMixture:
             raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {values.shape[0]}; "
                              f"got {tuple(weights.shape)}")
         self.n_species, self.n_nodes = int(values.shape[0]), int(nodes.size)
+        self.periodic = bool(props.get("periodic", False))  # x and y wrap (a periodic medium); else clamped
         inverse = np.linalg.inv(np.array(to_world.matrix, dtype=np.float64).reshape(4, 4))
         self.to_local = mi.Transform4f(mi.ScalarTransform4f(inverse.astype(np.float32).tolist()))
         self._set_tables(nodes, values)
@@ -278,11 +279,16 @@ class HydrometeorMixture:
         p = self.to_local @ mei.p
         nz, ny, nx = self.grid_shape
         corner, frac = [], []
-        for coord, n in ((p.z, nz), (p.y, ny), (p.x, nx)):
+        for axis, (coord, n) in enumerate(((p.z, nz), (p.y, ny), (p.x, nx))):
             u = coord * n - 0.5
             u0 = dr.floor(u)
             i0 = mi.Int32(u0)
-            corner.append((dr.clip(i0, 0, n - 1), dr.clip(i0 + 1, 0, n - 1)))
+            if self.periodic and axis > 0:  # indices modulo n (as the grid volumes' wrap_mode "repeat")
+                i0 = i0 % n
+                i0 = dr.select(i0 < 0, i0 + n, i0)
+                corner.append((i0, dr.select(i0 + 1 == n, 0, i0 + 1)))
+            else:
+                corner.append((dr.clip(i0, 0, n - 1), dr.clip(i0 + 1, 0, n - 1)))
             frac.append(u - u0)
         (z0, z1), (y0, y1), (x0, x1) = corner
         fz, fy, fx = frac

@@ -120,6 +120,10 @@ class MajorantVolpath:
      * - mvnee, mvnee_length
        - |float|, |int|
        - Probability of a multiple-vertex NEE chain (:mod:`.mvnee`; exclusive as the aureole) and its length.
+     * - periodic, periodic_tiles
+       - |string|, |int|
+       - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each
+         side (:mod:`weather_mi.optics.periodic`; grids with ``wrap_mode`` repeat, "texel" tracking).
 
     The methods only: :func:`register` puts them on the current variant's ``mi.SamplingIntegrator``
     (see ``variant_class``)."""
@@ -155,6 +159,10 @@ class MajorantVolpath:
         self.emitter_nee = float(get("emitter_nee", DEFAULT_EMITTER_NEE))
         _check(0.0 < self.emitter_nee <= 1.0, f"'emitter_nee' must be in (0, 1], got {self.emitter_nee}")
         self.channels = _choice(props, "phase_channels", "history", ("history", "mean"))
+        self.periodic = _choice(props, "periodic", "none", ("none", "view", "transport"))
+        self.reach = int(get("periodic_tiles", 0))
+        _check(self.periodic == "none" or (self.reach >= 1 and self.track_mode == "texel"),
+               f"periodic needs periodic_tiles >= 1 and tracking_grid 'texel', got {self.reach}, {self.track_mode!r}")
         self.sun_mode, self.guiding, self.aureole, self.sun_sampling, self.mvnee = "none", 0.0, 0.0, "mis", 0.0
         if "sun_direction" not in props:
             for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee", "mvnee"):
@@ -236,9 +244,10 @@ class MajorantVolpath:
                 self.majorant = mi.TensorXf(majorant_grid(np.asarray(data) * ms.scale, self.cell))
                 self._auto_key = key
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
-        texel, texel_data = self._grids.texel(vol, ms.scale)
+        periodic = self.periodic != "none"
+        texel, texel_data = self._grids.texel(vol, ms.scale, *((self.reach,) if periodic else ()))
         track = texel if (texel is not None and self.track_mode == "texel") else coarse
-        self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data)
+        self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data, self.periodic, self.reach)
 
     # ------------------------------------------------------------ main entry
     def sample(self, scene, sampler, ray, medium=None, active=True):
@@ -367,7 +376,8 @@ class PathLoop:
             active_medium = p.active & (p.medium != None)  # noqa: E711
             v.active_surface = p.active & ~active_medium
             t_end = dr.minimum(p.si.t, p.ray.maxt)
-            found, t_coll, w_walk = delta_tracking(self.tk, p.ray, t_end, sampler, active_medium, p.throughput)
+            tile_only = (p.depth == 0) if self.tk.periodic == "transport" else None  # camera rays: its own tile
+            found, t_coll, w_walk = delta_tracking(self.tk, p.ray, t_end, sampler, active_medium, p.throughput, tile_only)
             p.throughput = dr.select(active_medium, w_walk, p.throughput)
             v.act_scatter = active_medium & found
             v.active_surface |= active_medium & ~found

@@ -65,7 +65,7 @@ def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: flo
     return (np.maximum(d, 0.0).astype(np.float64) * float(safety)).astype(np.float32)
 
 
-def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.ndarray:
+def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY, periodic: bool = False) -> np.ndarray:
     """Majorants per texel cell: the cells between 2 x 2 x 2 texel centres.
 
     Parameters
@@ -75,6 +75,9 @@ def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.n
         count as 0.
     safety : float
         Factor on the maxima.
+    periodic : bool
+        Periodic in x and y: there the cells are 0 .. N - 1 (cell i between texels i and i + 1 modulo N),
+        (nz + 1, ny, nx) in all.
 
     Returns
     -------
@@ -89,7 +92,10 @@ def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.n
     a = a.max(axis=3) if a.ndim == 4 else a
     if a.ndim != 3 or min(a.shape) < 1 or not all(bool(np.isfinite(level).all()) for level in a):
         raise ValueError(f"texel_majorant_grid: expected a finite (nz, ny, nx) or (nz, ny, nx, C) array, got shape {a.shape}")
-    a = np.pad(a, 1, mode="edge")  # clamped borders
+    if periodic:  # clamped in z; in x and y the first column again after the last (the tiling's next)
+        a = np.pad(np.pad(a, ((1, 1), (0, 0), (0, 0)), mode="edge"), ((0, 0), (0, 1), (0, 1)), mode="wrap")
+    else:
+        a = np.pad(a, 1, mode="edge")  # clamped borders
     np.maximum(a, 0.0, out=a)
     for axis in range(3):  # the larger of the two texels on either side, per axis
         a = np.maximum(a[(slice(None),) * axis + (slice(0, -1),)], a[(slice(None),) * axis + (slice(1, None),)])
@@ -99,13 +105,18 @@ def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY) -> np.n
     return out
 
 
-def empty_space_radius(majorant: np.ndarray) -> np.ndarray:
+PERIODIC_RADIUS = 16  # periodic grids: empty-space radii are computed (and capped) this many cells across the wrap
+
+
+def empty_space_radius(majorant: np.ndarray, periodic: bool = False) -> np.ndarray:
     """Empty-space radii of a majorant grid (proximity clouds, Cohen & Sheffer 1994).
 
     Parameters
     ----------
     majorant : numpy.ndarray
         Majorants (any units), (Z, Y, X).
+    periodic : bool
+        Periodic in x and y: the cubes may reach across the wrap (radii capped at PERIODIC_RADIUS cells).
 
     Returns
     -------
@@ -116,6 +127,10 @@ def empty_space_radius(majorant: np.ndarray) -> np.ndarray:
         occupied cells and for empty cells next to an occupied one.
     """
     from scipy.ndimage import distance_transform_cdt
+    if periodic and np.any(np.asarray(majorant) > 0.0):
+        r = PERIODIC_RADIUS
+        wrapped = np.pad(np.asarray(majorant), ((0, 0), (r, r), (r, r)), mode="wrap")
+        return np.minimum(empty_space_radius(wrapped)[:, r:-r, r:-r], r).astype(np.int32)
     occupied = np.asarray(majorant) > 0.0
     if not occupied.any():
         return np.full(occupied.shape, max(occupied.shape), np.int32)

@@ -172,11 +172,28 @@ class Tracking:
         The grid of free flights and ratio tracking (``texel`` or ``coarse``).
     texel_data : tuple or None
         (sigma_t data, scale) of a grey sigma_t grid, for interpolating in a texel cell; else None.
+    periodic : str
+        "none", or periodic in x and y (:mod:`weather_mi.optics.periodic`): "view" or "transport" (camera
+        rays meet the medium in the grid's own box only).
+    reach : int
+        Periods walked beyond the grid on each side when periodic.
     """
 
-    def __init__(self, ms, to_local=None, coarse=None, texel=None, track=None, texel_data=None):
+    def __init__(self, ms, to_local=None, coarse=None, texel=None, track=None, texel_data=None,
+                 periodic: str = "none", reach: int = 0):
         self.ms, self.to_local = ms, to_local
         self.coarse, self.texel, self.track, self.texel_data = coarse, texel, track, texel_data
+        self.periodic, self.reach = periodic, int(reach)
+
+    def bounds(self, tile_only=None):
+        """``dda.ray_box``'s bounds: None (the unit cube), or periodic the extended box in x and y (the unit
+        cube on the lanes ``tile_only``, camera rays in "transport" mode)."""
+        if self.periodic == "none":
+            return None
+        r0, r1 = mi.Float(-float(self.reach)), mi.Float(1.0 + self.reach)
+        if tile_only is not None:
+            r0, r1 = dr.select(tile_only, 0.0, r0), dr.select(tile_only, 1.0, r1)
+        return [(r0, r1), (r0, r1), (0.0, 1.0)]
 
 
 class GridCache:
@@ -216,19 +233,24 @@ class GridCache:
             self.skip_key = maj_key
         return Grid(majorant.array, self.skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
 
-    def texel(self, vol, scale: float):
+    def texel(self, vol, scale: float, reach: int | None = None):
         """(The texel-centre grid, (data, scale) of a grey grid or None); (None, None) without a sigma_t
         grid. Its cells lie between 2 x 2 x 2 texel centres (cells -1 .. N - 1 per axis, the first and last
         halves cut by the box), where the trilinear interpolant is one trilinear polynomial; majorant =
-        SAFETY x the maximum of the cell's 8 texels, which is the maximum of the interpolant there."""
+        SAFETY x the maximum of the cell's 8 texels, which is the maximum of the interpolant there.
+        ``reach``: periodic in x and y, walked over that many periods on each side (cells 0 .. N - 1 there,
+        between texels i and i + 1 modulo N)."""
         if vol is None:
             return None, None
         data = volume_data(vol)
-        key = (data.array.index, scale)
+        periodic = reach is not None
+        key = (data.array.index, scale, periodic)
         if key != self.texel_key:
-            maj = texel_majorant_grid(np.asarray(data) * scale)
-            self.texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty_space_radius(maj).ravel()))
+            maj = texel_majorant_grid(np.asarray(data) * scale, periodic=periodic)
+            empty = empty_space_radius(maj, periodic=True) if periodic else empty_space_radius(maj)
+            self.texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty.ravel()))
             self.texel_key = key
         rx, ry, rz = (int(v) for v in vol.resolution())
         texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
-        return Grid(*self.texel_arrays, (rx + 1, ry + 1, rz + 1), (rx, ry, rz), shift=-0.5, lo=-1), texel_data
+        dims = (rx, ry, rz + 1) if periodic else (rx + 1, ry + 1, rz + 1)
+        return Grid(*self.texel_arrays, dims, (rx, ry, rz), shift=-0.5, lo=-1, reach=reach), texel_data

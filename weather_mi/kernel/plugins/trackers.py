@@ -32,9 +32,9 @@ class _Walk:
     within [0, t_end] (``cells``, ``nexts``, ``t_near``), ``t_max`` where it leaves, ``active`` where it
     meets the box."""
 
-    def __init__(self, tk, grid, texels, ray, t_end, active):
+    def __init__(self, tk, grid, texels, ray, t_end, active, tile_only=None):
         self.tk, self.grid, self.texels, self.ray = tk, grid, texels, ray
-        o_l, d_l, self.t_near, self.t_max, self.active = ray_box(tk.to_local, ray, t_end, active)
+        o_l, d_l, self.t_near, self.t_max, self.active = ray_box(tk.to_local, ray, t_end, active, tk.bounds(tile_only))
         self.q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
         self.dq = [d_l[k] * grid.scale[k] for k in range(3)]
         self.cells, self.nexts = locate(grid, self.q0, self.dq, self.t_near)
@@ -70,11 +70,11 @@ class _Walk:
         return t, cells, nexts, active
 
 
-def _tracking_walk(tk, ray, t_end, active):
+def _tracking_walk(tk, ray, t_end, active, tile_only=None):
     """The walk of free flights and ratio tracking: over ``tk.track``, texels interpolated in texel cells."""
     grid = tk.track
     texels = tk.texel_data if (grid is tk.texel and not tk.ms.spectral) else None
-    return _Walk(tk, grid, texels, ray, t_end, active)
+    return _Walk(tk, grid, texels, ray, t_end, active, tile_only)
 
 
 def _spectral_collision(tr, maj, s_t, xi, collide, found):
@@ -105,7 +105,7 @@ def _walk_loop(walk, sampler, tr, body, label: str):
         cond=lambda sampler, active, *_: active, body=body, label=label)
 
 
-def delta_tracking(tk, ray, t_end, sampler, active, weight):
+def delta_tracking(tk, ray, t_end, sampler, active, weight, tile_only=None):
     """Free flight along ``ray`` over [0, t_end] (clipped to the grid's box) by delta tracking.
 
     Parameters
@@ -122,6 +122,8 @@ def delta_tracking(tk, ray, t_end, sampler, active, weight):
         Lanes that walk.
     weight : mi.Spectrum
         The path throughput w (used with spectral extinction only).
+    tile_only : mi.Bool, optional
+        Periodic medium: lanes that meet the medium in the grid's own box only (``Tracking.bounds``).
 
     Returns
     -------
@@ -135,7 +137,7 @@ def delta_tracking(tk, ray, t_end, sampler, active, weight):
         collision times the product of w (majorant - sigma_t) / (majorant (1 - P)) over the null
         collisions (unbiased; the mean of the throughput is preserved).
     """
-    walk = _tracking_walk(tk, ray, t_end, active)
+    walk = _tracking_walk(tk, ray, t_end, active, tile_only)
     spectral = tk.ms.spectral
     tr = mi.Spectrum(weight) if spectral else mi.Float(1.0)
 
