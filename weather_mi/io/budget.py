@@ -16,7 +16,8 @@ from pathlib import Path
 
 from ..errors import DomainTooLargeError
 
-BYTES_PER_CELL = {"reading": 48, "optics": 64}  # beyond what is allocated before the step (the Hydrometeors for optics)
+BYTES_PER_CELL = {"reading": 48, "reading_sizes": 72, "optics": 64}  # beyond what is allocated before the step
+# (the Hydrometeors for optics); "reading_sizes": reading with the scheme's radii (io.particle_sizes), 20 bytes per cell more
 
 
 UNLIMITED = 1 << 60  # cgroup v1 writes "no limit" as a page-rounded 2^63 - 1; v2 writes "max"

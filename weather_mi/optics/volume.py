@@ -189,23 +189,47 @@ def _radius_field(hyd: xr.Dataset, name: str, default_m: float, use_model: bool)
     return default_m
 
 
-def _species_setup(species, scale, model_radii) -> tuple[SpeciesSet, bool]:
-    """(the SpeciesSet with the scalings, whether the model's radii are used) of ``optical_volume``'s arguments."""
+SIZES = ("scheme", "physical", "paper")
+
+
+def _species_setup(species, scale, model_radii, sizes=None) -> tuple[SpeciesSet, bool]:
+    """(the SpeciesSet with the scalings, whether the model's radii are used) of ``optical_volume``'s arguments:
+    ``sizes`` "scheme" uses the model's radii, "physical"/"paper" that preset's radii (and their albedos) for
+    every species; None leaves both to the species table and ``model_radii``."""
     sp = preset(species) if isinstance(species, str) else species
     for name in scale or {}:
         check_species_name(name, "optical_volume", f"scale[{name!r}]")
     sp = sp.with_overrides(scale={n: sp[n].scale * f for n, f in (scale or {}).items()})
-    use_model = (sp.preset_name != "paper") if model_radii is None else bool(model_radii)
-    return sp, use_model
+    if sizes is not None and sizes not in SIZES:
+        raise WeatherDataError("optical_volume", "sizes", f"one of {SIZES}", repr(sizes))
+    if sizes in ("physical", "paper"):
+        fixed = preset(sizes)
+        sp = sp.with_overrides({s.name: {"radius_m": s.radius_m, "albedo_rgb": s.albedo_rgb} for s in fixed})
+    if model_radii is None:
+        model_radii = (sp.preset_name != "paper") if sizes is None else sizes == "scheme"
+    return sp, bool(model_radii)
+
+
+def default_sizes(hyd: xr.Dataset) -> str | None:
+    """The command line's default particle sizes: "scheme" where ``hyd`` carries effective radii (a WRF file
+    of a microphysics scheme weather-mi knows, RE_* fields, an LES file's reff), else None (the preset's)."""
+    return "scheme" if any(str(v).startswith("r_eff_") for v in hyd.data_vars) else None
+
+
+def sizes_used(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool) -> dict[str, str]:
+    """Where each species' radius comes from: "model" (the Hydrometeors' ``r_eff_<species>``) or the radius of
+    the species table (um)."""
+    return {s.name: "model" if use_model and f"r_eff_{s.name}" in hyd else f"{1e6 * s.radius_m:.4g} um"
+            for s in sp}
 
 
 def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapping[str, float] | None = None, *,
-               model_radii: bool | None = None) -> tuple[np.ndarray, dict[str, float]]:
+               model_radii: bool | None = None, sizes: str | None = None) -> tuple[np.ndarray, dict[str, float]]:
     """The total extinction (Eq. 4, 6; (z, y, x) float32, 1/m) of ``hyd`` and each species' largest extinction
     (1/m), as ``optical_volume`` computes them (same arguments), a species at a time and without the rest of a
     volume (albedo, weights, phase tables): what a summary needs, in 4 bytes per cell and one temporary."""
     validate(hyd)
-    sp, use_model = _species_setup(species, scale, model_radii)
+    sp, use_model = _species_setup(species, scale, model_radii, sizes)
     rho = np.asarray(hyd["rho_air"].values, np.float32)
     total, largest = None, {}
     for s in sp:
@@ -250,7 +274,7 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
 def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
                    phase_tables: Sequence | None = None, model_radii: bool | None = None,
-                   phase_quality: str = "default") -> OpticalVolume:
+                   phase_quality: str = "default", sizes: str | None = None) -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
     Parameters
@@ -270,6 +294,11 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
         the "paper" preset, which reproduces the paper's fixed radii.
     phase_quality : {"default", "high", "test"}, default "default"
         Quality of the tables built with the volume ("test": small, fast tables).
+    sizes : {"scheme", "physical", "paper"}, optional
+        The particle sizes: "scheme" the model's effective radii per voxel (``r_eff_<species>``: the
+        microphysics scheme's size distributions, ``weather_mi.io.microphysics``, or the file's RE_*; the
+        species table's radius where a species has none); "physical" / "paper" that preset's fixed radii
+        (and albedos) with the rest of ``species``. None: as ``species`` and ``model_radii`` say.
 
     Returns
     -------
@@ -284,13 +313,15 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     validate(hyd)
     if phase not in ("per_species", "paper"):
         raise WeatherDataError("optical_volume", "phase", '"per_species" or "paper"', repr(phase))
-    sp, use_model = _species_setup(species, scale, model_radii)
+    sp, use_model = _species_setup(species, scale, model_radii, sizes)
 
     check_fits(str(hyd.attrs.get("source", "hydrometeors")), hyd["rho_air"].shape, "optics")  # before allocating
     beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model)
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
+    if sizes is not None:
+        attrs["sizes"] = sizes
     return OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
                          Terrain.of(hyd))
