@@ -24,8 +24,8 @@ class SizeReader:
     """Where each species' effective radius comes from in one wrfout time (``radius``), and what was used
     (``attrs``). ``t_k``: the native temperature (K), set by the reader where ``needs_temperature``."""
 
-    def __init__(self, ds, path, it, sel, mp, scheme, present, sizes: bool, stacklevel: int = 2):
-        self.ds, self.path, self.it, self.sel, self.scheme = ds, path, it, sel, scheme
+    def __init__(self, ds, path, read_field, mp, scheme, present, sizes: bool, stacklevel: int = 2):
+        self.ds, self.path, self.read_field, self.scheme = ds, path, read_field, scheme
         self.file_vars = {n: RADIUS_VARS[n] for n in present if RADIUS_VARS.get(n) in ds}
         rules = microphysics.rules(mp, ds.variables) if sizes else {}
         self.rules = {n: r for n, r in rules.items() if n in present and n not in self.file_vars}
@@ -43,15 +43,15 @@ class SizeReader:
 
     def radius(self, name, rho_q, rho, shape):
         """The effective radius (m, float32, native grid) of species ``name`` with mass content ``rho_q``
-        (kg/m^3), or None where neither the file nor the scheme gives one."""
-        from .wrfout import read
+        (kg/m^3), or None where neither the file nor the scheme gives one; ``read_field(var, shape)`` reads a native
+        field (float32, checked finite)."""
         if name in self.file_vars:
             r = self._file_radius(self.file_vars[name], rho_q, shape)
         elif name in self.rules:
             rule = self.rules[name]
             number = None
             if rule.number_var is not None:
-                number = read(self.ds, rule.number_var, self.it, self.sel, self.path, shape, np.float32)
+                number = self.read_field(rule.number_var, shape)
                 if np.any(number < 0):
                     raise WeatherDataError(self.path, rule.number_var, "number concentrations >= 0",
                                            f"{int(np.count_nonzero(number < 0))} negative values "
@@ -67,15 +67,16 @@ class SizeReader:
             self.ranges[name] = (float(r[has].min()), float(r[has].max()))
         return r
 
-    def clip_to_native(self, name, r_cell) -> None:
-        """Keep the regridded radii (m, in place; 0 stays 0) within the native range of species ``name``'s."""
+    def clip_to_native(self, name, r_cell, mass) -> None:
+        """Keep the regridded radii (m, in place) within the native range of species ``name``'s, and give the
+        cells with mass but no radius (the two reconstructions disagreeing at a tiny content) the largest."""
         if name in self.ranges:
             lo, hi = self.ranges[name]
+            r_cell[(r_cell <= 0) & (mass > 0)] = np.float32(hi)
             np.clip(r_cell, np.float32(lo), np.float32(hi), out=r_cell, where=r_cell > 0)
 
     def _file_radius(self, var, rho_q, shape):
-        from .wrfout import read
-        r = np.maximum(read(self.ds, var, self.it, self.sel, self.path, shape, np.float32), 0.0)
+        r = np.maximum(self.read_field(var, shape), 0.0)
         units = str(self.ds[var].attrs.get("units", "")).strip()
         if units:
             if units.lower() not in RADIUS_UNITS:

@@ -120,7 +120,8 @@ def convert(ds, path, it: int, stamp: str, x, y, dz, top, bottom, sizes: bool = 
     attrs = {"source": path, "model": str(ds.attrs.get("TITLE", "WRF")).strip(), "time": stamp,
              "time_index": it, "microphysics": scheme, "mp_physics": mp}
     present = _species_present(ds, path, scheme, mp, attrs)
-    sizer = particle_sizes.SizeReader(ds, path, it, sel, mp, scheme, present, sizes, stacklevel=5)
+    sizer = particle_sizes.SizeReader(ds, path, lambda var, shape: read(ds, var, it, sel, path, shape, np.float32), mp,
+                                      scheme, present, sizes, stacklevel=5)
     step = "reading_sizes" if sizer.rules else "reading"
     budget.check_fits(path, _native_shape(ds, sel), step)  # before reading anything
     shape, z_w, rho = _air(ds, path, it, sel, attrs, sizer)
@@ -267,7 +268,7 @@ def _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present, siz
             del r_native
             r_eff[name] = np.divide(mass, ext, out=np.zeros_like(ext), where=(ext > 0) & (mass > 0))
             del ext
-            sizer.clip_to_native(name, r_eff[name])  # the reconstructions' ratio where both are tiny
+            sizer.clip_to_native(name, r_eff[name], mass)  # the reconstructions' ratio where both are tiny
         del q
         mass /= rho_above
         q_new[name] = mass
