@@ -284,3 +284,20 @@ def test_info_prints_effective_radius_ranges(capsys):
     assert main(["info", str(SUPERCELL), "--sizes", "physical"]) == 0
     out = capsys.readouterr().out
     assert "physical preset" in out and "r_eff (um)" in out
+
+
+def test_voxel_albedo_from_the_scheme_radius(tmp_path):
+    """With sizes="scheme" a rain-only voxel's albedo is 1 - Q_abs/2 of its own radius (van de Hulst's weak
+    absorption, Q_abs = 8/3 x k (n^3 - (n^2 - 1)^1.5), x = 2 pi r / lambda; water n, k at 650/550/450 nm)."""
+    path, _ = _rain_file(tmp_path)
+    hyd = wm.open_wrf(path)
+    tables = [None] * 5
+    vol = wm.optical_volume(hyd, "physical", sizes="scheme", phase_tables=tables)
+    fixed = wm.optical_volume(hyd, "physical", phase_tables=tables)
+    n, k = (1.331, 1.333, 1.337), (1.6e-8, 2.0e-9, 1.0e-9)
+    rain = hyd.q_rain.values > 0
+    r = hyd.r_eff_rain.values[rain].astype(np.float64)
+    for c, lam in enumerate((650e-9, 550e-9, 450e-9)):
+        q_abs = np.minimum(8 / 3 * (2 * pi * r / lam) * k[c] * (n[c] ** 3 - (n[c] ** 2 - 1) ** 1.5), 1)
+        np.testing.assert_allclose(1 - vol.albedo[..., c][rain], q_abs / 2, rtol=2e-2, atol=3e-8)
+    assert np.ptp(vol.albedo[..., 0][rain]) > 0 and np.ptp(fixed.albedo[..., 0][rain]) < 1e-7

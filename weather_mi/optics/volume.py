@@ -18,7 +18,7 @@ import xarray as xr
 
 from ..errors import WeatherDataError
 from ..io.hydrometeors import DIMS, SPECIES_NAMES, bbox_of, check_species_name, validate
-from .species import SpeciesSet, preset
+from .species import SpeciesSet, physical_albedo, preset
 from ..io.terrain import Terrain
 from ..io.budget import check_fits
 
@@ -241,7 +241,26 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
     return total, largest
 
 
-def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
+def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_sum: np.ndarray) -> None:
+    """Eq. 5's numerator with each voxel's own albedo: sum_s omega_s(r_eff) beta_s, the weak-absorption albedo
+    (``species.physical_albedo``) of the model's radius in place of the species' one, added to ``albedo_sum``
+    ((N, 3), in place) for the species with ``r_eff_<species>`` whose albedo is the physical one of its radius
+    (an overridden, artistic albedo is kept). The Eq. 8 weights keep the species' albedo (co-albedos < 1e-3)."""
+    for i, s in enumerate(sp):
+        var = f"r_eff_{s.name}"
+        physical = tuple(float(a) for a in physical_albedo(s.phase_class, np.float64(s.radius_m), s.density_kg_m3))
+        if var not in hyd or tuple(s.albedo_rgb) != physical:
+            continue
+        r = np.asarray(hyd[var].values).reshape(-1)
+        beta = beta_ext[i].reshape(-1)
+        idx = np.flatnonzero((beta > 0) & (r > 0))
+        omegas = physical_albedo(s.phase_class, r[idx].astype(np.float64), s.density_kg_m3)
+        b = beta[idx].astype(np.float64)
+        for c in range(3):
+            albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
+
+
+def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool = False):
     """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32: beyond its
     outputs (56 bytes per cell) this takes one or two float32 grids of temporaries (Eq. 4's)."""
     rho = np.ascontiguousarray(hyd["rho_air"].values, np.float32)
@@ -262,6 +281,8 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
     albedo = np.empty(shape + (3,), np.float32)
     mix(beta_ext.reshape(n_s, -1), rgb, mean_albedo, beta_total.reshape(-1), albedo.reshape(-1, 3),
         weights.reshape(n_s, -1))
+    if voxel_albedo and use_model:
+        _voxel_albedo(hyd, sp, beta_ext, albedo.reshape(-1, 3))
     # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
     # trilinear interpolation at cloud edges does not blend in a dark value
     total_ext = float(beta_total.sum(dtype=np.float64))
@@ -297,8 +318,10 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     sizes : {"scheme", "physical", "paper"}, optional
         The particle sizes: "scheme" the model's effective radii per voxel (``r_eff_<species>``: the
         microphysics scheme's size distributions, ``weather_mi.io.microphysics``, or the file's RE_*; the
-        species table's radius where a species has none); "physical" / "paper" that preset's fixed radii
-        (and albedos) with the rest of ``species``. None: as ``species`` and ``model_radii`` say.
+        species table's radius where a species has none), and each voxel's albedo from its radius (Eq. 5 with
+        the weak-absorption albedo of ``species.physical_albedo``); "physical" / "paper" that preset's fixed
+        radii (and albedos) with the rest of ``species``. None: as ``species`` and ``model_radii`` say (the
+        model's radii, the species' albedo).
 
     Returns
     -------
@@ -316,7 +339,7 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     sp, use_model = _species_setup(species, scale, model_radii, sizes)
 
     check_fits(str(hyd.attrs.get("source", "hydrometeors")), hyd["rho_air"].shape, "optics")  # before allocating
-    beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model)
+    beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model, voxel_albedo=sizes == "scheme")
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
