@@ -301,3 +301,55 @@ def test_voxel_albedo_from_the_scheme_radius(tmp_path):
         q_abs = np.minimum(8 / 3 * (2 * pi * r / lam) * k[c] * (n[c] ** 3 - (n[c] ** 2 - 1) ** 1.5), 1)
         np.testing.assert_allclose(1 - vol.albedo[..., c][rain], q_abs / 2, rtol=2e-2, atol=3e-8)
     assert np.ptp(vol.albedo[..., 0][rain]) > 0 and np.ptp(fixed.albedo[..., 0][rain]) < 1e-7
+
+
+# ---- size classes: Eq. 8 components by radius ----
+
+def test_size_classes_split_conserves_the_species():
+    from weather_mi.optics.size_classes import class_radii_m, split
+    rng = np.random.default_rng(3)
+    shape = (4, 5, 6)
+    q = {n: np.zeros(shape) for n in wm.SPECIES_NAMES}
+    q["rain"] = rng.uniform(0, 2e-3, shape)
+    r_rain = np.exp(rng.uniform(np.log(20e-6), np.log(2e-3), shape)).astype(np.float32)
+    hyd = wm.from_arrays(q, rho_air=1.0, spacing=(100.0, 100.0, 100.0), r_eff={"rain": r_rain})
+    sp = wm.species.preset("physical")
+    beta = np.zeros((5,) + shape, np.float32)
+    beta[2] = sp["rain"].beta_ext_per_m(1.0, q["rain"], r_rain).astype(np.float32)
+    weights = (beta > 0).astype(np.float32)
+    names, b, w, comps = split(hyd, sp, beta, weights, 3)
+    assert names[:2] == ("cloud", "ice") and [n for n in names if n.startswith("rain")] == ["rain#1", "rain#2", "rain#3"]
+    k = [i for i, n in enumerate(names) if n.startswith("rain")]
+    np.testing.assert_array_equal(b[k].sum(0), beta[2])            # each voxel in exactly one class
+    np.testing.assert_array_equal(w[k].sum(0), weights[2])
+    edges, centres = class_radii_m("rain", 3)
+    for j, c in zip(k, range(3)):
+        inside = b[j] > 0
+        assert np.all(r_rain[inside] >= edges[c] * (1 - 1e-6)) and np.all(r_rain[inside] <= edges[c + 1] * (1 + 1e-6))
+        assert comps[j].radius_m == pytest.approx(np.sqrt(edges[c] * edges[c + 1]), rel=5e-3)
+    assert sp[names[k[1]]].name == "rain"                           # a component's species by its name
+
+
+def test_size_classes_volume_and_sized_tables(tmp_path):
+    path, _ = _rain_file(tmp_path)
+    hyd = wm.open_wrf(path)
+    one = wm.optical_volume(hyd, "physical", sizes="scheme", phase="paper", phase_quality="test")
+    three = wm.optical_volume(hyd, "physical", sizes="scheme", phase="paper", phase_quality="test", size_classes=3)
+    assert len(three.species) == len(three.phase_tables) > 5 and three.attrs["size_classes"] == 3
+    np.testing.assert_array_equal(three.beta_total, one.beta_total)
+    np.testing.assert_array_equal(three.albedo, one.albedo)
+    with pytest.raises(WeatherDataError, match="size_classes"):
+        wm.optical_volume(hyd, sizes="scheme", size_classes=0, phase_tables=[None] * 5)
+    # a size class's cloud table is Mie at its radius: its asymmetry at 550 nm against miepython's single-size
+    # efficiencies integrated here over the Hansen gamma distribution n(r) ~ r^((1-3v)/v) exp(-r/(r_eff v))
+    import miepython
+    from weather_mi.optics.phase.species_tables import table_for
+    from weather_mi.optics.species import Species
+    r = np.linspace(0.2e-6, 20e-6, 3000)
+    n_r = r ** ((1 - 3 * 0.1) / 0.1) * np.exp(-r / (4e-6 * 0.1))
+    _, qsca, _, g = miepython.efficiencies(1.333 - 2e-9j, 2 * r, 550e-9)
+    expected = float(np.sum(qsca * r ** 2 * n_r * g) / np.sum(qsca * r ** 2 * n_r))
+    small = table_for(Species("cloud", 4e-6, 1000.0, (1, 1, 1), "water", (1, 0, 0)), quality="test", sized=True)
+    assert "r_eff=4e-06" in small.name and small.g[1] == pytest.approx(expected, abs=3e-3)
+    assert small.g[1] < table_for(Species("cloud", 10e-6, 1000.0, (1, 1, 1), "water", (1, 0, 0)), quality="test",
+                                  sized=True).g[1]

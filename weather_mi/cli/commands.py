@@ -84,7 +84,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..reference.render import render_reference
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase,
-                         sizes=args.sizes or default_sizes(hyd))
+                         sizes=args.sizes or default_sizes(hyd), size_classes=args.size_classes)
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     spec, sun_meta = scene_spec(args, vol), None
     if args.sun_from_time:
@@ -176,7 +176,8 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     from ..reference.cluster import session
     from ..optics.volume import optical_volume
     hyd = open_placed(args)
-    vol = optical_volume(hyd, species=args.preset, phase=args.phase, sizes=args.sizes or default_sizes(hyd))
+    vol = optical_volume(hyd, species=args.preset, phase=args.phase, sizes=args.sizes or default_sizes(hyd),
+                         size_classes=args.size_classes)
     hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
     if args.rgb:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
@@ -283,9 +284,14 @@ SIZES_HELP = ("particle sizes: scheme (default where the file names a microphysi
               "fixed radius per species)")
 
 
-def add_sizes_option(p) -> None:
-    """``--sizes scheme|physical|paper`` (``optical_volume(sizes=...)``; None: the scheme's where known)."""
+def add_sizes_option(p, classes: bool = True) -> None:
+    """``--sizes scheme|physical|paper`` (``optical_volume(sizes=...)``; None: the scheme's where known) and,
+    where ``classes``, ``--size-classes N``."""
     p.add_argument("--sizes", default=None, choices=("scheme", "physical", "paper"), help=SIZES_HELP)
+    if classes:
+        p.add_argument("--size-classes", type=int, default=None, metavar="N",
+                       help="with the scheme's sizes: each species as up to N size classes with their own phase "
+                            "functions (weather_mi.optics.size_classes; tables built once and cached); default one")
 
 
 def add_dask_options(p) -> None:
@@ -306,8 +312,8 @@ def animate_command(args) -> Path:
     check_scene_options(args)
     scale = _parse_scale(args.scale)
     hyds = open_times(args.inputs, time=parse_times(args.time), sizes=args.sizes not in ("physical", "paper"))
-    vols = [optical_volume(h, species=args.preset, scale=scale, phase=args.phase, sizes=args.sizes or default_sizes(h))
-            for h in hyds]
+    vols = [optical_volume(h, species=args.preset, scale=scale, phase=args.phase, sizes=args.sizes or default_sizes(h),
+                           size_classes=args.size_classes) for h in hyds]
     spec = scene_spec(args, largest(vols))  # frame the largest storm
     reference_kw = flag_values(args, ANIMATE_ESTIMATOR)
     with session(args.scheduler, args.workers) as client:
@@ -325,7 +331,7 @@ def build_parser() -> argparse.ArgumentParser:
     info = sub.add_parser("info", help="summarise a data file or a demo storm")
     _add_source(info)
     info.add_argument("--species", default="paper", choices=("paper", "physical"))
-    add_sizes_option(info)
+    add_sizes_option(info, classes=False)
     add_place_options(info)
     _add_render_parser(sub)
     _add_satellite_parser(sub)
@@ -416,7 +422,7 @@ def _add_view_parser(sub) -> None:
                            "click away")
     _add_source(viewp)
     viewp.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
-    add_sizes_option(viewp)
+    add_sizes_option(viewp, classes=False)
     viewp.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
     viewp.add_argument("--port", type=int, default=5006, help="port (0: a free one)")
     viewp.add_argument("--host", default="127.0.0.1",

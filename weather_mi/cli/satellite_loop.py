@@ -56,7 +56,8 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
 
     with session(args.scheduler, args.workers) as client:
         def render_time(hyd, ckpt, resume):
-            vol = optical_volume(hyd, species=args.preset, phase=args.phase, sizes=args.sizes or default_sizes(hyd))
+            vol = optical_volume(hyd, species=args.preset, phase=args.phase, sizes=args.sizes or default_sizes(hyd),
+                                 size_classes=args.size_classes)
             hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])
             kw = dict(reference_kw, checkpoint=ckpt, resume=ckpt if resume else None, client=client)
             if args.rgb:

@@ -101,6 +101,8 @@ class SpeciesSet:
                                    f"the five species in order {SPECIES_NAMES}", repr(names))
 
     def __getitem__(self, name: str) -> Species:
+        """The species ``name``, or of a size class's component name ("rain#2": rain, ``optics.size_classes``)."""
+        name = name.split("#", 1)[0]
         for s in self.members:
             if s.name == name:
                 return s

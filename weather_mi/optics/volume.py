@@ -58,6 +58,9 @@ class OpticalVolume:
     terrain : Terrain or None
         The ground under the grid (:class:`weather_mi.io.terrain.Terrain`, the hydrometeors' terrain
         coordinates; None where they have none): the reference's ground is then a height-field mesh.
+    components : tuple of Species or None
+        Size classes (``optics.size_classes``): the Species of each entry of ``species`` (its radius the
+        class's), whose tables are built by radius; None: one component per species of ``species_set``.
     """
 
     species: tuple[str, ...]
@@ -72,6 +75,7 @@ class OpticalVolume:
     attrs: dict = field(default_factory=dict)
     phase_tables: tuple | None = field(default=None, repr=False)
     terrain: Terrain | None = field(default=None, repr=False)
+    components: tuple | None = field(default=None, repr=False)
 
     def __post_init__(self):
         for name in ("beta_ext", "beta_total", "albedo", "weights"):
@@ -81,7 +85,8 @@ class OpticalVolume:
         tables = self.phase_tables
         if tables is None and self.species_set is not None:
             from . import phase
-            tables = phase.for_species(list(self.species_set), mode=self.phase_mode, quality=self.phase_quality)
+            tables = phase.for_species(list(self.components or self.species_set), mode=self.phase_mode,
+                                       quality=self.phase_quality, sized=self.components is not None)
         if tables is not None:
             tables = tuple(tables)
             if len(tables) != len(self.species):
@@ -295,7 +300,8 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
 def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
                    phase_tables: Sequence | None = None, model_radii: bool | None = None,
-                   phase_quality: str = "default", sizes: str | None = None) -> OpticalVolume:
+                   phase_quality: str = "default", sizes: str | None = None,
+                   size_classes: int | None = None) -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
     Parameters
@@ -322,6 +328,10 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
         the weak-absorption albedo of ``species.physical_albedo``); "physical" / "paper" that preset's fixed
         radii (and albedos) with the rest of ``species``. None: as ``species`` and ``model_radii`` say (the
         model's radii, the species' albedo).
+    size_classes : int, optional
+        With the model's radii: each species with ``r_eff_<species>`` split into up to this many size
+        classes, Eq. 8 components with their own phase tables (``weather_mi.optics.size_classes``; the
+        volume's ``species`` then name the components, e.g. "rain#2"); None or 1: one per species.
 
     Returns
     -------
@@ -340,11 +350,20 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
 
     check_fits(str(hyd.attrs.get("source", "hydrometeors")), hyd["rho_air"].shape, "optics")  # before allocating
     beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model, voxel_albedo=sizes == "scheme")
+    names, components, attrs_classes = SPECIES_NAMES, None, {}
+    if size_classes is not None and not (isinstance(size_classes, (int, np.integer)) and size_classes >= 1):
+        raise WeatherDataError("optical_volume", "size_classes", "a whole number of size classes >= 1",
+                               repr(size_classes))
+    if size_classes is not None and int(size_classes) > 1 and use_model:
+        from .size_classes import split
+        names, beta_ext, weights, components = split(hyd, sp, beta_ext, weights, int(size_classes))
+        attrs_classes = {"size_classes": int(size_classes)}
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
     if sizes is not None:
         attrs["sizes"] = sizes
-    return OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
+    attrs.update(attrs_classes)
+    return OpticalVolume(names, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
-                         Terrain.of(hyd))
+                         Terrain.of(hyd), components)
