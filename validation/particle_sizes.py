@@ -58,6 +58,8 @@ def main(argv=None) -> int:
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--resolution", type=float, default=2.0, help="satellite pixel size (km)")
     ap.add_argument("--no-render", action="store_true", help="optical depths only")
+    ap.add_argument("--size-classes", type=int, default=None, metavar="N",
+                    help="also the scheme's sizes as N size classes with their own phase tables (row scheme+N)")
     a = ap.parse_args(argv)
     print(f"{'case':20s} {'sizes':9s} {'tau mean':>9s} {'tau max':>9s} {'cloudy cols':>11s} "
           f"{'R 0.64 cloud':>13s} {'cloud px':>9s} {'Y ground view':>14s} {'s':>6s}")
@@ -65,14 +67,16 @@ def main(argv=None) -> int:
         hyd = wm.open_wrf(a.data / rel)
         if place:
             hyd = assume_place(hyd, place["lat"], place["lon"], place["date"])
-        for sizes in SIZES:
+        rows = [(s, None) for s in SIZES] + ([("scheme", a.size_classes)] if a.size_classes else [])
+        for sizes, classes in rows:
             t0 = time.perf_counter()
-            vol = wm.optical_volume(hyd, "physical", sizes=sizes)
+            vol = wm.optical_volume(hyd, "physical", sizes=sizes, size_classes=classes)
             row = column_depths(vol)
             if not a.no_render:
                 row.update(reflectance(hyd, vol, sat, a.spp, a.resolution))
                 row.update(luminance(vol, a.spp))
-            print(f"{case:20s} {sizes:9s} {row['tau_mean']:9.2f} {row['tau_max']:9.1f} {row['cloudy_columns']:11d} "
+            label = sizes if classes is None else f"{sizes}+{classes}"
+            print(f"{case:20s} {label:9s} {row['tau_mean']:9.2f} {row['tau_max']:9.1f} {row['cloudy_columns']:11d} "
                   f"{row.get('reflectance_cloud_mean', np.nan):13.4f} {row.get('cloud_pixels', 0):9d} "
                   f"{row.get('luminance_cloud_mean', np.nan):14.4f} "
                   f"{time.perf_counter() - t0:6.1f}", flush=True)
