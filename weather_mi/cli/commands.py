@@ -19,6 +19,7 @@ from ..reference.options import ReferenceOptions, add_flags, flag_values
 from ..io.sources import DEMOS, check_time, open_source
 from .periodic_option import add_periodic_option, periodic_value
 from .summary import info_text
+from ..optics.volume import default_sizes
 
 SATELLITE_ESTIMATOR = ("spp", "target_rse", "max_seconds")  # the rest: render_satellite's (reflectance)
 ANIMATE_ESTIMATOR = ("spp", "target_rse", "max_seconds")  # per frame, with --renderer reference
@@ -84,6 +85,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..reference.render import render_reference
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase,
+                         sizes=args.sizes or default_sizes(hyd), size_classes=args.size_classes,
                          periodic=periodic_value(args))
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     spec, sun_meta = scene_spec(args, vol), None
@@ -178,7 +180,9 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     from ..reference.cluster import session
     from ..optics.volume import optical_volume
     hyd = open_placed(args)
-    vol = optical_volume(hyd, species=args.preset, phase=args.phase, periodic=periodic_value(args))
+    vol = optical_volume(hyd, species=args.preset, phase=args.phase, sizes=args.sizes or default_sizes(hyd),
+                         size_classes=args.size_classes,
+                         periodic=periodic_value(args))
     hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
     if args.rgb:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
@@ -240,7 +244,7 @@ def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt) -> Path:
 
 def open_placed(args):
     """The input of ``info``/``render``, placed and dated by ``--lat/--lon/--date`` where given (ideal cases)."""
-    hyd = open_source(args.file, args.demo, parse_time(args.time))
+    hyd = open_source(args.file, args.demo, parse_time(args.time), sizes=args.sizes not in ("physical", "paper"))
     if args.lat is None and args.lon is None and args.date is None:
         return hyd
     from ..scene.place import assume_place
@@ -258,6 +262,7 @@ def add_scene_options(p) -> None:
     """Volume and scene options of ``render`` and ``animate``: species, phase, periodic boundaries, camera,
     sun, sky, ground."""
     p.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
+    add_sizes_option(p)
     p.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
     add_periodic_option(p)
     p.add_argument("--scale", action="append", metavar="SPECIES=FACTOR", help="e.g. --scale ice=2")
@@ -284,6 +289,22 @@ def add_scene_options(p) -> None:
     p.add_argument("--size", default="320x240", help="WIDTHxHEIGHT")
 
 
+SIZES_HELP = ("particle sizes: scheme (default where the file names a microphysics scheme weather-mi knows, or "
+              "carries effective radii: each voxel's effective radius from the scheme's size distributions, "
+              "weather_mi.io.microphysics; elsewhere the preset's radii), physical or paper (that preset's "
+              "fixed radius per species)")
+
+
+def add_sizes_option(p, classes: bool = True) -> None:
+    """``--sizes scheme|physical|paper`` (``optical_volume(sizes=...)``; None: the scheme's where known) and,
+    where ``classes``, ``--size-classes N``."""
+    p.add_argument("--sizes", default=None, choices=("scheme", "physical", "paper"), help=SIZES_HELP)
+    if classes:
+        p.add_argument("--size-classes", type=int, default=None, metavar="N",
+                       help="with the scheme's sizes: each species as up to N size classes with their own phase "
+                            "functions (weather_mi.optics.size_classes; tables built once and cached); default one")
+
+
 def add_dask_options(p) -> None:
     where = p.add_mutually_exclusive_group()
     where.add_argument("--scheduler", metavar="ADDR", default=None,
@@ -301,9 +322,10 @@ def animate_command(args) -> Path:
     from ..io.sources import open_times
     check_scene_options(args)
     scale = _parse_scale(args.scale)
-    hyds = open_times(args.inputs, time=parse_times(args.time))
-    vols = [optical_volume(h, species=args.preset, scale=scale, phase=args.phase, periodic=periodic_value(args))
-            for h in hyds]
+    hyds = open_times(args.inputs, time=parse_times(args.time), sizes=args.sizes not in ("physical", "paper"))
+    vols = [optical_volume(h, species=args.preset, scale=scale, phase=args.phase, sizes=args.sizes or default_sizes(h),
+                           size_classes=args.size_classes,
+                           periodic=periodic_value(args)) for h in hyds]
     spec = scene_spec(args, largest(vols))  # frame the largest storm
     reference_kw = flag_values(args, ANIMATE_ESTIMATOR)
     with session(args.scheduler, args.workers) as client:
@@ -321,6 +343,7 @@ def build_parser() -> argparse.ArgumentParser:
     info = sub.add_parser("info", help="summarise a data file or a demo storm")
     _add_source(info)
     info.add_argument("--species", default="paper", choices=("paper", "physical"))
+    add_sizes_option(info, classes=False)
     add_place_options(info)
     _add_render_parser(sub)
     _add_satellite_parser(sub)
@@ -374,6 +397,7 @@ def _add_satellite_parser(sub) -> None:
     sat.add_argument("--resolution", default="1km", help="pixel size at the sub-satellite point (e.g. 1km, 500m)")
     sat.add_argument("--rayleigh", action="store_true", help="molecular scattering of the air in the domain")
     sat.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
+    add_sizes_option(sat)
     sat.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
     add_periodic_option(sat)
     sat.add_argument("--ground-albedo", type=float, default=None,
@@ -415,6 +439,7 @@ def _add_view_parser(sub) -> None:
                            "click away")
     _add_source(viewp)
     viewp.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
+    add_sizes_option(viewp, classes=False)
     viewp.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
     add_periodic_option(viewp)
     viewp.add_argument("--port", type=int, default=5006, help="port (0: a free one)")
@@ -435,14 +460,15 @@ def _add_validate_parser(sub) -> None:
 
 
 def info_command(args) -> None:
-    print(info_text(open_placed(args), args.species))
+    hyd = open_placed(args)
+    print(info_text(hyd, args.species, args.sizes or default_sizes(hyd)))
 
 
 def view_command(args) -> None:
     from ..viewer.recipe import VolumeRecipe
     from ..viewer.serve import serve
     check_time(args.file, args.demo, args.time)
-    recipe = VolumeRecipe(path=args.file, demo=args.demo, preset=args.preset, phase=args.phase,
+    recipe = VolumeRecipe(path=args.file, demo=args.demo, preset=args.preset, phase=args.phase, sizes=args.sizes,
                           periodic=periodic_value(args))
     serve(recipe, host=args.host, port=args.port, open_browser=not args.no_browser, time_option=args.time,
           size=_parse_size(args.size))

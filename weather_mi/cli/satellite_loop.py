@@ -28,7 +28,7 @@ def open_placed_times(args) -> list:
     from ..io.times import normalise_time, parse_times
     from ..scene.place import assume_place, sun_from_time
     from ..scene.solar import as_utc
-    hyds = open_times(args.file, time=parse_times(args.time or "all"))
+    hyds = open_times(args.file, time=parse_times(args.time or "all"), sizes=args.sizes not in ("physical", "paper"))
     if args.lat is not None or args.lon is not None or args.date is not None:
         t0 = normalise_time(hyds[0].attrs["time"])
         dates = [None if args.date is None else
@@ -54,7 +54,7 @@ def loop_options(args, resolution: float, reference_kw: dict) -> dict:
 def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict) -> Path:
     """Open and check every time, then render the loop (``display.satellite_loop``) holding a Dask session."""
     from ..display.satellite_loop import check_unfinished_loop, satellite_loop
-    from ..optics.volume import optical_volume
+    from ..optics.volume import default_sizes, optical_volume
     from ..reference.cluster import session
     from ..satellite import imagery as si
     from .periodic_option import periodic_value
@@ -68,7 +68,9 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
 
     with session(args.scheduler, args.workers) as client:
         def render_time(hyd, ckpt, resume):
-            vol = optical_volume(hyd, species=args.preset, phase=args.phase, periodic=periodic_value(args))
+            vol = optical_volume(hyd, species=args.preset, phase=args.phase, sizes=args.sizes or default_sizes(hyd),
+                                 size_classes=args.size_classes,
+                                 periodic=periodic_value(args))
             hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])
             kw = dict(reference_kw, checkpoint=ckpt, resume=ckpt if resume else None, client=client)
             if args.rgb:

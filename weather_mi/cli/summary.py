@@ -9,12 +9,13 @@ from ..io.projection import latlon_text
 from ..io.hydrometeors import SPECIES_NAMES, spacing_of
 
 
-def info_text(hyd, species: str = "paper") -> str:
-    """Dimensions, spacing (m), per-species max/mean mixing ratio (g/kg), max extinction (1/km) and the
-    densest column's vertical optical depth of ``hyd`` with the species table ``species``."""
+def info_text(hyd, species: str = "paper", sizes: str | None = None) -> str:
+    """Dimensions, spacing (m), per-species max/mean mixing ratio (g/kg), effective radius range (um), max
+    extinction (1/km) and the densest column's vertical optical depth of ``hyd`` with the species table
+    ``species`` and the particle sizes ``sizes`` (``optical_volume``'s)."""
     from ..optics.volume import extinction  # not a whole OpticalVolume: the extinction is all it prints
     from ..io.hydrometeors import bbox_of
-    beta_total, largest = extinction(hyd, species=species)
+    beta_total, largest = extinction(hyd, species=species, sizes=sizes)
     dz, dy, dx = spacing_of(hyd)
     nz, ny, nx = beta_total.shape
     (x0, y0, z0), (x1, y1, z1) = bbox_of(hyd)
@@ -24,12 +25,16 @@ def info_text(hyd, species: str = "paper") -> str:
              f"extent      : x {x0 / 1e3:.2f}..{x1 / 1e3:.2f} km, y {y0 / 1e3:.2f}..{y1 / 1e3:.2f} km, "
              f"z {z0 / 1e3:.2f}..{z1 / 1e3:.2f} km",
              *place_lines(hyd),
-             f"species preset: {species}",
-             f"{'species':<9}{'max q (g/kg)':>14}{'mean q (g/kg)':>15}{'max beta (1/km)':>17}"]
+             f"species preset: {species}    particle sizes: {sizes or 'default'}",
+             f"{'species':<9}{'max q (g/kg)':>14}{'mean q (g/kg)':>15}{'max beta (1/km)':>17}"
+             f"{'r_eff (um)':>16}  from"]
+    radii = radius_ranges_um(hyd, species, sizes)
     for name in SPECIES_NAMES:
         q = hyd[f"q_{name}"].values
+        lo, hi, where = radii[name]
+        r_text = "-" if lo is None else f"{lo:.3g}" if lo == hi else f"{lo:.3g}..{hi:.3g}"
         lines.append(f"{name:<9}{1e3 * float(q.max()):>14.4g}{1e3 * float(q.mean()):>15.4g}"
-                     f"{1e3 * largest[name]:>17.4g}")
+                     f"{1e3 * largest[name]:>17.4g}{r_text:>16}  {where}")
     tau = beta_total.sum(axis=0, dtype=np.float64) * ((z1 - z0) / nz)  # OpticalVolume.optical_depth_z
     j, i = np.unravel_index(int(np.argmax(tau)), tau.shape)
     lines.append(f"max extinction: {1e3 * float(beta_total.max()):.4g} 1/km")
@@ -38,6 +43,27 @@ def info_text(hyd, species: str = "paper") -> str:
     if hyd.attrs.get("n_negative_clipped"):
         lines.append(f"negative mixing ratios clipped: {hyd.attrs['n_negative_clipped']}")
     return "\n".join(lines)
+
+
+def radius_ranges_um(hyd, species="paper", sizes=None) -> dict[str, tuple]:
+    """Each species' (smallest, largest effective radius (um) over the voxels that hold it, or None, None where
+    none does; where the radius comes from), as ``optical_volume(hyd, species, sizes=sizes)`` uses them."""
+    from ..optics.volume import _species_setup
+    sp, use_model = _species_setup(species, None, None, sizes)
+    out = {}
+    for s in sp:
+        has = hyd[f"q_{s.name}"].values > 0
+        var = f"r_eff_{s.name}"
+        if not has.any():
+            out[s.name] = (None, None, "-")
+        elif use_model and var in hyd:
+            r = hyd[var].values[has]
+            r = np.where(r > 0, r, s.radius_m)  # the species table's where the model gives none
+            where = hyd.attrs.get(f"r_eff_source_{s.name}", "the input's r_eff")
+            out[s.name] = (1e6 * float(r.min()), 1e6 * float(r.max()), where)
+        else:
+            out[s.name] = (1e6 * s.radius_m, 1e6 * s.radius_m, f"{sp.preset_name if sizes is None else sizes} preset")
+    return out
 
 
 def place_lines(hyd) -> list[str]:

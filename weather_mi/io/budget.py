@@ -16,7 +16,9 @@ from pathlib import Path
 
 from ..errors import DomainTooLargeError
 
-BYTES_PER_CELL = {"reading": 48, "optics": 64}  # beyond what is allocated before the step (the Hydrometeors for optics)
+BYTES_PER_CELL = {"reading": 48, "reading_sizes": 76, "optics": 64}  # beyond what is allocated before the step
+# (the Hydrometeors for optics); "reading_sizes": reading with the scheme's radii (io.particle_sizes): 28 bytes per
+# cell more at the peak (20 held: five radius grids), by tracemalloc on the supercell (docs/particle-sizes.md)
 
 
 UNLIMITED = 1 << 60  # cgroup v1 writes "no limit" as a page-rounded 2^63 - 1; v2 writes "max"

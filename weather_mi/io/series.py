@@ -34,12 +34,14 @@ def _timeline(paths: list[str], opened: dict) -> tuple[list[tuple[str, int, str]
 
 
 def open_wrf_series(paths, time="all", *, x: slice | None = None, y: slice | None = None,
-                    dz: float | None = None, top: float | None = None, bottom: float | None = None) -> xr.Dataset:
+                    dz: float | None = None, top: float | None = None, bottom: float | None = None,
+                    sizes: bool = True) -> xr.Dataset:
     """Times of one or several wrfout files as Hydrometeors with a ``time`` dimension (see the module).
 
     time : "all", a slice or a list of indices/timestamps into the times of all files in the order given.
     The common height grid: ``dz`` default the first time's mean layer depth; ``bottom``/``top`` default
-    the lowest terrain and the highest model top over the selected times."""
+    the lowest terrain and the highest model top over the selected times; ``sizes``: the scheme's effective
+    radii (``open_wrf``)."""
     paths = [os.fspath(p) for p in ([paths] if isinstance(paths, (str, os.PathLike)) else paths)]
     if not paths:
         raise WeatherDataError("open_wrf", "path", "at least one wrfout file", "an empty list")
@@ -61,7 +63,7 @@ def open_wrf_series(paths, time="all", *, x: slice | None = None, y: slice | Non
                 dz = float(np.mean(z_w[-1] - z_w[0], dtype=np.float64) / (z_w.shape[0] - 1))
         bottom = min(lows) if bottom is None else bottom
         top = max(highs) if top is None else top
-        frames = [wrfout.convert(opened[p], p, it, stamp, x, y, dz, top, bottom) for p, it, stamp in chosen]
+        frames = [wrfout.convert(opened[p], p, it, stamp, x, y, dz, top, bottom, sizes) for p, it, stamp in chosen]
     stamps = [stamp for _, _, stamp in chosen]
     out = xr.concat(frames, dim="time", combine_attrs="drop_conflicts", coords="minimal", compat="override")
     out = out.assign_coords(time=("time", stamps), time_index=("time", [it for _, it, _ in chosen]),

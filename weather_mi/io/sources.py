@@ -48,7 +48,7 @@ def check_time(path=None, demo: str | None = None, time=None) -> None:
                          "leave --time out")
 
 
-def open_source(path=None, demo: str | None = None, time=None, *, dataset=None):
+def open_source(path=None, demo: str | None = None, time=None, *, dataset=None, sizes: bool = True):
     """The Hydrometeors of an input.
 
     Parameters
@@ -62,6 +62,8 @@ def open_source(path=None, demo: str | None = None, time=None, *, dataset=None):
         inputs with one time.
     dataset : xarray.Dataset, optional
         Hydrometeors already in memory: returned as they are.
+    sizes : bool, default True
+        WRF files: the microphysics scheme's effective radii (``weather_mi.io.open_wrf``).
 
     Returns
     -------
@@ -77,13 +79,14 @@ def open_source(path=None, demo: str | None = None, time=None, *, dataset=None):
         return open_demo(demo or "supercell")
     if what == "les":
         return open_les(Path(path))
-    return open_wrf(Path(path), time=-1 if time is None else time)
+    return open_wrf(Path(path), time=-1 if time is None else time, sizes=sizes)
 
 
-def open_times(path=None, demo: str | None = None, time="all", *, dataset=None) -> list:
+def open_times(path=None, demo: str | None = None, time="all", *, dataset=None, sizes: bool = True) -> list:
     """Every selected time of an input as Hydrometeors, all on one height grid: for WRF file(s)
     (``path``: one or a list) the times ``time`` selects ("all", a slice, a list, an index or a
-    timestamp; ``weather_mi.io.open_wrf``), for the other inputs their one time.
+    timestamp; ``weather_mi.io.open_wrf``, with the scheme's radii where ``sizes``), for the other inputs their
+    one time.
 
     Returns
     -------
@@ -95,7 +98,7 @@ def open_times(path=None, demo: str | None = None, time="all", *, dataset=None) 
         return [open_source(path, demo, dataset=dataset)]
     if not isinstance(path, (str, Path)):
         path = path[0] if len(path) == 1 else list(path)
-    return time_steps(open_wrf(path, time=time))
+    return time_steps(open_wrf(path, time=time, sizes=sizes))
 
 
 def time_labels(path=None, demo: str | None = None, dataset=None) -> list[str] | None:

@@ -29,7 +29,8 @@ def is_series(path, time) -> bool:
 
 
 def open_wrf(path, time=None, *, x: slice | None = None, y: slice | None = None,
-             dz: float | None = None, top: float | None = None, bottom: float | None = None) -> xr.Dataset:
+             dz: float | None = None, top: float | None = None, bottom: float | None = None,
+             sizes: bool = True) -> xr.Dataset:
     """Read one time of a wrfout file into Hydrometeors on a uniform height grid.
 
     Parameters
@@ -47,6 +48,9 @@ def open_wrf(path, time=None, *, x: slice | None = None, y: slice | None = None,
         Vertical spacing (m); default the native mean layer depth.
     bottom, top : float, optional
         Extent of the height grid (m above MSL); default lowest terrain to highest model top.
+    sizes : bool, default True
+        The microphysics scheme's effective radii (``r_eff_<species>``, m; ``weather_mi.io.microphysics``)
+        where the file names a scheme weather-mi knows; the file's RE_CLOUD/RE_ICE/RE_SNOW are read either way.
 
     Returns
     -------
@@ -54,7 +58,8 @@ def open_wrf(path, time=None, *, x: slice | None = None, y: slice | None = None,
         Hydrometeors (mixing ratios in kg/kg, dry-air density in kg/m^3 on a regular grid in metres).
     """
     if is_series(path, time):
-        return open_wrf_series(path, "all" if time is None else time, x=x, y=y, dz=dz, top=top, bottom=bottom)
+        return open_wrf_series(path, "all" if time is None else time, x=x, y=y, dz=dz, top=top, bottom=bottom,
+                               sizes=sizes)
     time = -1 if time is None else time
     path = os.fspath(path)
     if not Path(path).is_file():
@@ -64,4 +69,4 @@ def open_wrf(path, time=None, *, x: slice | None = None, y: slice | None = None,
         stamps = time_strings(ds)
         labels = stamps or [str(i) for i in range(ds.sizes.get("Time", 1))]
         it = select_times(labels, time, path, stamped=bool(stamps))[0]
-        return wrfout.convert(ds, path, it, labels[it], x, y, dz, top, bottom)
+        return wrfout.convert(ds, path, it, labels[it], x, y, dz, top, bottom, sizes)

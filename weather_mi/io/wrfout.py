@@ -29,6 +29,7 @@ from . import budget, vertical
 from .georef import place_coords
 from .map_factors import horizontal_spacing
 from .schemes import MP_SCHEMES, SCHEME_VARS
+from . import particle_sizes
 
 G = 9.81               # m/s^2, WRF's gravity
 R_D = 287.0            # J/(kg K)
@@ -37,7 +38,6 @@ EPS_INV = 1.608        # R_v / R_d: virtual-temperature factor for the vapour mi
 THETA0 = 300.0         # K, WRF's base potential temperature offset of T
 
 SPECIES_VARS = {"cloud": "QCLOUD", "ice": "QICE", "rain": "QRAIN", "snow": "QSNOW", "graupel": "QGRAUP"}
-RADIUS_VARS = {"cloud": "RE_CLOUD", "ice": "RE_ICE", "snow": "RE_SNOW"}
 REQUIRED = ("P", "PB", "T", "PH", "PHB")
 MAP_FACTOR_VARS = ("MAPFAC_M", "MAPFAC_MX", "MAPFAC_MY")
 
@@ -84,9 +84,14 @@ def w_level_heights(ds, it, sel, path, dtype=np.float64) -> np.ndarray:
     return z_w
 
 
-def dry_air_density(p_pa, theta_k, qv):
-    """rho_d = p / (R_d T (1 + 1.608 q_v)), T = theta (p / 1e5)^(R_d/c_p) (kg/m^3)."""
-    t_k = theta_k * (p_pa / 1.0e5) ** RD_OVER_CP
+def temperature(p_pa, theta_k):
+    """T = theta (p / 1e5)^(R_d/c_p) (K)."""
+    return theta_k * (p_pa / 1.0e5) ** RD_OVER_CP
+
+
+def dry_air_density(p_pa, theta_k, qv, t_k=None):
+    """rho_d = p / (R_d T (1 + 1.608 q_v)), T = theta (p / 1e5)^(R_d/c_p) (kg/m^3; ``t_k``: T already computed)."""
+    t_k = temperature(p_pa, theta_k) if t_k is None else t_k
     return p_pa / (R_D * t_k * (1.0 + EPS_INV * qv))
 
 
@@ -97,12 +102,13 @@ def check_required(ds, path) -> None:
         raise WeatherDataError(path, ", ".join(missing), f"the wrfout variables {', '.join(REQUIRED)}", "missing")
 
 
-def convert(ds, path, it: int, stamp: str, x, y, dz, top, bottom) -> xr.Dataset:
+def convert(ds, path, it: int, stamp: str, x, y, dz, top, bottom, sizes: bool = True) -> xr.Dataset:
     """Hydrometeors of time index ``it`` (timestamp ``stamp``) of the open wrfout ``ds`` (see the module).
 
     x, y : slices of mass-point indices (west_east, south_north) or None. dz : vertical spacing (m), None:
     the native mean layer depth. bottom, top : the height grid's extent (m above MSL), None: lowest terrain
-    to highest model top.
+    to highest model top. sizes : the scheme's effective radii as ``r_eff_<species>`` (m;
+    ``weather_mi.io.particle_sizes``); the file's RE_CLOUD/RE_ICE/RE_SNOW are read either way.
 
     Memory: float32 fields, the species read and regridded one at a time through one shared
     ``vertical.VerticalPlan``; the peak is the output (one field per species and the density) and a few
@@ -114,20 +120,25 @@ def convert(ds, path, it: int, stamp: str, x, y, dz, top, bottom) -> xr.Dataset:
     attrs = {"source": path, "model": str(ds.attrs.get("TITLE", "WRF")).strip(), "time": stamp,
              "time_index": it, "microphysics": scheme, "mp_physics": mp}
     present = _species_present(ds, path, scheme, mp, attrs)
-    budget.check_fits(path, _native_shape(ds, sel), "reading")  # before reading anything
-    shape, z_w, rho = _air(ds, path, it, sel, attrs)
+    sizer = particle_sizes.SizeReader(ds, path, lambda var, shape: read(ds, var, it, sel, path, shape, np.float32), mp,
+                                      scheme, present, sizes, stacklevel=5)
+    step = "reading_sizes" if sizer.rules else "reading"
+    budget.check_fits(path, _native_shape(ds, sel), step)  # before reading anything
+    shape, z_w, rho = _air(ds, path, it, sel, attrs, sizer)
     dz, z_lo, edges = _height_grid(path, z_w, shape, dz, top, bottom)
-    budget.check_fits(path, (len(edges) - 1,) + shape[1:], "reading")  # the target grid, before regridding
+    budget.check_fits(path, (len(edges) - 1,) + shape[1:], step)  # the target grid, before regridding
     plan = vertical.VerticalPlan(z_w, edges)
     rho_above = _air_above(plan, z_w, rho, edges)
-    q_new, r_eff, negatives = _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present)
+    q_new, r_eff, negatives = _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present, sizer)
     del plan, rho
+    sizer.t_k = None
     dx, dy, grid_attrs = _spacing(ds, path, it, sel, shape)
     i0 = (x.start or 0) if x is not None else 0
     j0 = (y.start or 0) if y is not None else 0
     attrs.update({"n_negative_clipped_native": int(sum(negatives.values())), "dz_native_mean": dz,
                   "map_proj": int(ds.attrs.get("MAP_PROJ", 0)), **grid_attrs})
     attrs.update({f"n_negative_clipped_{k}": v for k, v in negatives.items()})
+    attrs.update(sizer.attrs())
     hyd = from_arrays(q_new, rho_above, (dz, dy, dx), (z_lo + dz / 2, j0 * dy, i0 * dx), r_eff=r_eff,
                       attrs=attrs, source=path, copy=False)
     del q_new, r_eff, rho_above
@@ -155,9 +166,9 @@ def _sub_box(path, x, y) -> dict:
     return sel
 
 
-def _air(ds, path, it, sel, attrs):
+def _air(ds, path, it, sel, attrs, sizer):
     """(shape of the mass grid, z_w (m), dry-air density (kg/m^3) on the mass points), float32; ``attrs`` gets
-    the ALT cross-check."""
+    the ALT cross-check; ``sizer`` the temperature (K) where its rules need it."""
     p = read(ds, "P", it, sel, path, dtype=np.float32)
     shape = p.shape
     if len(shape) != 3 or min(shape) < 1:
@@ -175,8 +186,10 @@ def _air(ds, path, it, sel, attrs):
     else:
         warnings.warn(f"{path}: no QVAPOR; dry-air density computed without the vapour correction", stacklevel=4)
         qv = np.zeros(shape, np.float32)
-    rho = dry_air_density(p, theta, qv)
-    del p, theta, qv
+    t_k = temperature(p, theta)
+    rho = dry_air_density(p, theta, qv, t_k)
+    sizer.t_k = t_k if sizer.needs_temperature else None
+    del p, theta, qv, t_k
     if "ALT" in ds:
         alt = read(ds, "ALT", it, sel, path, shape, np.float32)
         alt *= rho
@@ -231,9 +244,10 @@ def _air_above(plan, z_w, rho, edges) -> np.ndarray:
     return out
 
 
-def _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present):
-    """({species: mixing ratio on the target grid (kg/kg, mass conserved)}, {species: effective radius,
-    mass-weighted (m)}, {species: negatives clipped}), one species read and regridded at a time."""
+def _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present, sizer):
+    """({species: mixing ratio on the target grid (kg/kg, mass conserved)}, {species: effective radius (m),
+    the cell's mass over its mass / r_eff, so that Eq. 4's extinction is conserved}, {species: negatives
+    clipped}), one species read and regridded at a time."""
     q_new, r_eff, negatives, minima = {}, {}, {}, {}
     for name in present:
         var = SPECIES_VARS[name]
@@ -247,13 +261,14 @@ def _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present):
         q *= rho  # kg/m^3 of this species, conserved by the regridding
         mass = plan.average(q)
         np.maximum(mass, 0.0, out=mass)
-        if RADIUS_VARS.get(name) in ds:  # mass-weighted cell average of the radius
-            r = np.maximum(read(ds, RADIUS_VARS[name], it, sel, path, shape, np.float32), 0.0)
-            r *= q
-            num = plan.average(r)
-            del r
-            r_eff[name] = np.divide(num, mass, out=np.zeros_like(num), where=mass > 0)
-            del num
+        r_native = sizer.radius(name, q, rho, shape)  # the file's RE_* or the scheme's (m), or None
+        if r_native is not None:  # Eq. 4 conserved: the cell's rho q over its average of rho q / r_eff
+            np.divide(q, r_native, out=r_native, where=r_native > 0)  # (0 where no radius: q has none there)
+            ext = plan.average(r_native)
+            del r_native
+            r_eff[name] = np.divide(mass, ext, out=np.zeros_like(ext), where=(ext > 0) & (mass > 0))
+            del ext
+            sizer.clip_to_native(name, r_eff[name], mass)  # the reconstructions' ratio where both are tiny
         del q
         mass /= rho_above
         q_new[name] = mass

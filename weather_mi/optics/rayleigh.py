@@ -83,7 +83,7 @@ def with_rayleigh(vol: OpticalVolume, wavelength_m: float, rho_air_kg_m3: np.nda
     beta_ext = np.concatenate([np.asarray(vol.beta_ext), beta_r[None]])
     attrs = {**vol.attrs, "rayleigh_wavelength_m": float(wavelength_m)}
     return replace(vol, species=tuple(vol.species) + ("rayleigh",), beta_ext=beta_ext, beta_total=total,
-                   albedo=albedo.astype(np.float32), weights=weights.astype(np.float32), species_set=None,
+                   albedo=albedo.astype(np.float32), weights=weights.astype(np.float32), species_set=None, components=None,
                    phase_tables=tuple(vol.require_phase_tables()) + (phase_table(),), attrs=attrs)
 
 

@@ -101,6 +101,8 @@ class SpeciesSet:
                                    f"the five species in order {SPECIES_NAMES}", repr(names))
 
     def __getitem__(self, name: str) -> Species:
+        """The species ``name``, or of a size class's component name ("rain#2": rain, ``optics.size_classes``)."""
+        name = name.split("#", 1)[0]
         for s in self.members:
             if s.name == name:
                 return s
@@ -135,12 +137,25 @@ class SpeciesSet:
 
 def albedo_weak_absorption(radius_m: float, n_rgb, k_rgb) -> tuple[float, float, float]:
     """omega = 1 - Q_abs/2 with Q_abs = 8/3 x k (n^3 - (n^2-1)^1.5), x = 2 pi r / lambda (k x << 1 << x)."""
+    return tuple(float(a) for a in albedo_of_radius(np.float64(radius_m), n_rgb, k_rgb))
+
+
+def albedo_of_radius(radius_m, n_rgb, k_rgb) -> list:
+    """``albedo_weak_absorption`` of a radius or an array of radii (m): the three channels' albedos (float64)."""
     out = []
     for lam, n, k in zip(RGB_WAVELENGTHS_M, n_rgb, k_rgb):
         x = 2.0 * np.pi * radius_m / lam
-        q_abs = min(8.0 / 3.0 * x * k * (n ** 3 - (n * n - 1.0) ** 1.5), 1.0)
+        q_abs = np.minimum(8.0 / 3.0 * x * k * (n ** 3 - (n * n - 1.0) ** 1.5), 1.0)
         out.append(1.0 - q_abs / 2.0)
-    return tuple(out)
+    return out
+
+
+def physical_albedo(phase_class: str, radius_m, density_kg_m3: float) -> list:
+    """The weak-absorption albedo (three channels) of particles of ``radius_m`` (a number or an array; m):
+    water drops, or ice whose absorbing path is that of solid ice (the radius scaled by rho / rho_ice)."""
+    if phase_class == "water":
+        return albedo_of_radius(radius_m, WATER_N, WATER_K)
+    return albedo_of_radius(radius_m * min(density_kg_m3 / RHO_ICE, 1.0), ICE_N, ICE_K)
 
 
 # Table III display colours: cloud red, ice magenta, rain blue, snow yellow, graupel green
@@ -161,10 +176,7 @@ def _make(preset_name: str) -> SpeciesSet:
     members = []
     for name in SPECIES_NAMES:
         r, rho = _RADII_M[preset_name][name], _DENSITIES[preset_name][name]
-        if PHASE_CLASS[name] == "water":
-            albedo = albedo_weak_absorption(r, WATER_N, WATER_K)
-        else:
-            albedo = albedo_weak_absorption(r * min(rho / RHO_ICE, 1.0), ICE_N, ICE_K)
+        albedo = tuple(float(a) for a in physical_albedo(PHASE_CLASS[name], np.float64(r), rho))
         members.append(Species(name, r, rho, albedo, PHASE_CLASS[name], TABLE_III_COLORS[name]))
     return SpeciesSet(preset_name, tuple(members))
 

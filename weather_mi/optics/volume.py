@@ -19,7 +19,7 @@ import xarray as xr
 from ..errors import WeatherDataError
 from ..io.hydrometeors import DIMS, SPECIES_NAMES, bbox_of, check_species_name, validate
 from .periodic import check_periodic, periodic_of_attrs
-from .species import SpeciesSet, preset
+from .species import SpeciesSet, physical_albedo, preset
 from ..io.terrain import Terrain
 from ..io.budget import check_fits
 
@@ -63,6 +63,9 @@ class OpticalVolume:
         Horizontal boundaries (:mod:`weather_mi.optics.periodic`): False (an isolated box), True (doubly
         periodic, the camera sees the periodic continuation) or "transport" (periodic light transport, the
         camera sees the domain's own tile only).
+    components : tuple of Species or None
+        Size classes (``optics.size_classes``): the Species of each entry of ``species`` (its radius the
+        class's), whose tables are built by radius; None: one component per species of ``species_set``.
     """
 
     species: tuple[str, ...]
@@ -78,6 +81,7 @@ class OpticalVolume:
     phase_tables: tuple | None = field(default=None, repr=False)
     terrain: Terrain | None = field(default=None, repr=False)
     periodic: bool | str = False
+    components: tuple | None = field(default=None, repr=False)
 
     def __post_init__(self):
         object.__setattr__(self, "periodic", check_periodic(self.periodic))
@@ -88,7 +92,8 @@ class OpticalVolume:
         tables = self.phase_tables
         if tables is None and self.species_set is not None:
             from . import phase
-            tables = phase.for_species(list(self.species_set), mode=self.phase_mode, quality=self.phase_quality)
+            tables = phase.for_species(list(self.components or self.species_set), mode=self.phase_mode,
+                                       quality=self.phase_quality, sized=self.components is not None)
         if tables is not None:
             tables = tuple(tables)
             if len(tables) != len(self.species):
@@ -196,23 +201,47 @@ def _radius_field(hyd: xr.Dataset, name: str, default_m: float, use_model: bool)
     return default_m
 
 
-def _species_setup(species, scale, model_radii) -> tuple[SpeciesSet, bool]:
-    """(the SpeciesSet with the scalings, whether the model's radii are used) of ``optical_volume``'s arguments."""
+SIZES = ("scheme", "physical", "paper")
+
+
+def _species_setup(species, scale, model_radii, sizes=None) -> tuple[SpeciesSet, bool]:
+    """(the SpeciesSet with the scalings, whether the model's radii are used) of ``optical_volume``'s arguments:
+    ``sizes`` "scheme" uses the model's radii, "physical"/"paper" that preset's radii (and their albedos) for
+    every species; None leaves both to the species table and ``model_radii``."""
     sp = preset(species) if isinstance(species, str) else species
     for name in scale or {}:
         check_species_name(name, "optical_volume", f"scale[{name!r}]")
     sp = sp.with_overrides(scale={n: sp[n].scale * f for n, f in (scale or {}).items()})
-    use_model = (sp.preset_name != "paper") if model_radii is None else bool(model_radii)
-    return sp, use_model
+    if sizes is not None and sizes not in SIZES:
+        raise WeatherDataError("optical_volume", "sizes", f"one of {SIZES}", repr(sizes))
+    if sizes in ("physical", "paper"):
+        fixed = preset(sizes)
+        sp = sp.with_overrides({s.name: {"radius_m": s.radius_m, "albedo_rgb": s.albedo_rgb} for s in fixed})
+    if model_radii is None:
+        model_radii = (sp.preset_name != "paper") if sizes is None else sizes == "scheme"
+    return sp, bool(model_radii)
+
+
+def default_sizes(hyd: xr.Dataset) -> str | None:
+    """The command line's default particle sizes: "scheme" where ``hyd`` carries effective radii (a WRF file
+    of a microphysics scheme weather-mi knows, RE_* fields, an LES file's reff), else None (the preset's)."""
+    return "scheme" if any(str(v).startswith("r_eff_") for v in hyd.data_vars) else None
+
+
+def sizes_used(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool) -> dict[str, str]:
+    """Where each species' radius comes from: "model" (the Hydrometeors' ``r_eff_<species>``) or the radius of
+    the species table (um)."""
+    return {s.name: "model" if use_model and f"r_eff_{s.name}" in hyd else f"{1e6 * s.radius_m:.4g} um"
+            for s in sp}
 
 
 def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapping[str, float] | None = None, *,
-               model_radii: bool | None = None) -> tuple[np.ndarray, dict[str, float]]:
+               model_radii: bool | None = None, sizes: str | None = None) -> tuple[np.ndarray, dict[str, float]]:
     """The total extinction (Eq. 4, 6; (z, y, x) float32, 1/m) of ``hyd`` and each species' largest extinction
     (1/m), as ``optical_volume`` computes them (same arguments), a species at a time and without the rest of a
     volume (albedo, weights, phase tables): what a summary needs, in 4 bytes per cell and one temporary."""
     validate(hyd)
-    sp, use_model = _species_setup(species, scale, model_radii)
+    sp, use_model = _species_setup(species, scale, model_radii, sizes)
     rho = np.asarray(hyd["rho_air"].values, np.float32)
     total, largest = None, {}
     for s in sp:
@@ -224,7 +253,26 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
     return total, largest
 
 
-def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
+def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_sum: np.ndarray) -> None:
+    """Eq. 5's numerator with each voxel's own albedo: sum_s omega_s(r_eff) beta_s, the weak-absorption albedo
+    (``species.physical_albedo``) of the model's radius in place of the species' one, added to ``albedo_sum``
+    ((N, 3), in place) for the species with ``r_eff_<species>`` whose albedo is the physical one of its radius
+    (an overridden, artistic albedo is kept). The Eq. 8 weights keep the species' albedo (co-albedos < 1e-3)."""
+    for i, s in enumerate(sp):
+        var = f"r_eff_{s.name}"
+        physical = tuple(float(a) for a in physical_albedo(s.phase_class, np.float64(s.radius_m), s.density_kg_m3))
+        if var not in hyd or tuple(s.albedo_rgb) != physical:
+            continue
+        r = np.asarray(hyd[var].values).reshape(-1)
+        beta = beta_ext[i].reshape(-1)
+        idx = np.flatnonzero((beta > 0) & (r > 0))
+        omegas = physical_albedo(s.phase_class, r[idx].astype(np.float64), s.density_kg_m3)
+        b = beta[idx].astype(np.float64)
+        for c in range(3):
+            albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
+
+
+def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool = False):
     """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32: beyond its
     outputs (56 bytes per cell) this takes one or two float32 grids of temporaries (Eq. 4's)."""
     rho = np.ascontiguousarray(hyd["rho_air"].values, np.float32)
@@ -245,6 +293,8 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
     albedo = np.empty(shape + (3,), np.float32)
     mix(beta_ext.reshape(n_s, -1), rgb, mean_albedo, beta_total.reshape(-1), albedo.reshape(-1, 3),
         weights.reshape(n_s, -1))
+    if voxel_albedo and use_model:
+        _voxel_albedo(hyd, sp, beta_ext, albedo.reshape(-1, 3))
     # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
     # trilinear interpolation at cloud edges does not blend in a dark value
     total_ext = float(beta_total.sum(dtype=np.float64))
@@ -257,7 +307,8 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool):
 def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
                    phase_tables: Sequence | None = None, model_radii: bool | None = None,
-                   phase_quality: str = "default", periodic: bool | str | None = None) -> OpticalVolume:
+                   phase_quality: str = "default", sizes: str | None = None,
+                   size_classes: int | None = None, periodic: bool | str | None = None) -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
     Parameters
@@ -277,6 +328,17 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
         the "paper" preset, which reproduces the paper's fixed radii.
     phase_quality : {"default", "high", "test"}, default "default"
         Quality of the tables built with the volume ("test": small, fast tables).
+    sizes : {"scheme", "physical", "paper"}, optional
+        The particle sizes: "scheme" the model's effective radii per voxel (``r_eff_<species>``: the
+        microphysics scheme's size distributions, ``weather_mi.io.microphysics``, or the file's RE_*; the
+        species table's radius where a species has none), and each voxel's albedo from its radius (Eq. 5 with
+        the weak-absorption albedo of ``species.physical_albedo``); "physical" / "paper" that preset's fixed
+        radii (and albedos) with the rest of ``species``. None: as ``species`` and ``model_radii`` say (the
+        model's radii, the species' albedo).
+    size_classes : int, optional
+        With the model's radii: each species with ``r_eff_<species>`` split into up to this many size
+        classes, Eq. 8 components with their own phase tables (``weather_mi.optics.size_classes``; the
+        volume's ``species`` then name the components, e.g. "rain#2"); None or 1: one per species.
     periodic : bool or "transport", optional
         Horizontal boundaries (``OpticalVolume.periodic``); default: "transport" where the hydrometeors say
         they are periodic (``attrs["periodic"]``: the LES reader's doubly periodic domains), else False.
@@ -294,13 +356,25 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     validate(hyd)
     if phase not in ("per_species", "paper"):
         raise WeatherDataError("optical_volume", "phase", '"per_species" or "paper"', repr(phase))
-    sp, use_model = _species_setup(species, scale, model_radii)
+    sp, use_model = _species_setup(species, scale, model_radii, sizes)
 
     check_fits(str(hyd.attrs.get("source", "hydrometeors")), hyd["rho_air"].shape, "optics")  # before allocating
-    beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model)
+    beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model, voxel_albedo=sizes == "scheme")
+    names, components, attrs_classes = SPECIES_NAMES, None, {}
+    if size_classes is not None and not (isinstance(size_classes, (int, np.integer)) and size_classes >= 1):
+        raise WeatherDataError("optical_volume", "size_classes", "a whole number of size classes >= 1",
+                               repr(size_classes))
+    if size_classes is not None and int(size_classes) > 1 and use_model:
+        from .size_classes import split
+        names, beta_ext, weights, components = split(hyd, sp, beta_ext, weights, int(size_classes))
+        attrs_classes = {"size_classes": int(size_classes)}
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
-    return OpticalVolume(SPECIES_NAMES, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
+    if sizes is not None:
+        attrs["sizes"] = sizes
+    attrs.update(attrs_classes)
+    return OpticalVolume(names, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
-                         Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic)
+                         Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic,
+                         components)

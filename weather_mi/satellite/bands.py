@@ -112,7 +112,8 @@ def band_volume(vol: OpticalVolume, b: Band) -> OpticalVolume:
     from ..optics.phase.table import RGB_WAVELENGTHS_M
     c = int(np.argmin(np.abs(np.asarray(RGB_WAVELENGTHS_M) - b.wavelength_m)))
     if vol.species_set is not None:
-        tables = for_species(list(vol.species_set), vol.phase_mode, vol.phase_quality, wavelength_m=b.wavelength_m)
+        tables = for_species(list(vol.components or vol.species_set), vol.phase_mode, vol.phase_quality,
+                             wavelength_m=b.wavelength_m, sized=vol.components is not None)
     else:
         tables = [nearest_channel(t, b.wavelength_m) for t in vol.require_phase_tables()]
     albedo = np.repeat(np.asarray(vol.albedo)[..., c:c + 1], 3, axis=-1)

@@ -14,7 +14,8 @@ from ..io import sources
 class VolumeRecipe:
     """path: a wrfout NetCDF or LES text file (None: the demo); demo: "supercell" or "cumulus";
     time: the WRF time (index or timestamp; None: the last); preset: species table ("physical" or
-    "paper"); phase: "per_species" or "paper"; dataset: a Hydrometeors Dataset in memory (a notebook's
+    "paper"); phase: "per_species" or "paper"; sizes: "scheme", "physical", "paper" or None (the scheme's
+    where known, ``optical_volume``); dataset: a Hydrometeors Dataset in memory (a notebook's
     ``wm.view(hyd)``; it travels to a reference process by pickling); periodic: the horizontal boundaries
     (``optical_volume``'s; None: the data's default, periodic for LES)."""
 
@@ -23,6 +24,7 @@ class VolumeRecipe:
     time: int | str | None = None
     preset: str = "physical"
     phase: str = "per_species"
+    sizes: str | None = None
     dataset: object = field(default=None, compare=False, repr=False)
     periodic: bool | str | None = None
 
@@ -42,23 +44,24 @@ class VolumeRecipe:
             return self.dataset
         if isinstance(self.time, int) and self._wrf() and len(self.times()) > 1:
             return self.series()[self.time]
-        return sources.open_source(self.path, self.demo, self.time)
+        return sources.open_source(self.path, self.demo, self.time, sizes=self.sizes not in ("physical", "paper"))
 
     def series(self) -> list:
         """Every time of a WRF file as Hydrometeors on one height grid (``io.open_wrf(time="all")``, the
         reader of ``weather-mi animate``), so that the storm's times and their references share a grid."""
         if not self._wrf():
             return [self.hydrometeors()]
-        return sources.open_times(self.path, time="all")
+        return sources.open_times(self.path, time="all", sizes=self.sizes not in ("physical", "paper"))
 
     def _wrf(self) -> bool:
         return sources.kind(self.path, self.demo, self.dataset) == "wrf"
 
     def volume(self, scale: Mapping[str, float] | None = None, hyd=None):
         """The OpticalVolume (Eq. 1-6, 8) of the (scaled) storm; ``hyd``: its Hydrometeors if already read."""
-        from ..optics.volume import optical_volume
+        from ..optics.volume import default_sizes, optical_volume
         hyd = self.hydrometeors() if hyd is None else hyd
         return optical_volume(hyd, species=self.preset, scale=dict(scale or {}) or None, phase=self.phase,
+                              sizes=self.sizes or default_sizes(hyd),
                               periodic=self.periodic)
 
     def times(self) -> list[str]:

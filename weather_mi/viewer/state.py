@@ -186,7 +186,7 @@ import weather_mi as wm
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer
 
 {load}
-vol = wm.optical_volume(hyd, species={recipe.preset!r}, phase={recipe.phase!r})
+vol = wm.optical_volume(hyd, species={recipe.preset!r}, phase={recipe.phase!r}, sizes={recipe.sizes!r})
 spec = wm.SceneSpec.from_dict({json.dumps(spec.to_dict())})
 params = SliceParams(**{changed!r})
 {detail_line}renderer = SliceRenderer(vol, {mode_expr}, slices={state.slices}{", detail_noise=detail" if mode.detail else ""})
@@ -195,7 +195,8 @@ image = renderer.frame(spec, params, supersample={REFINE_SUPERSAMPLE})  # as the
 
 def ground_truth(spp=16, target_rse=0.02, max_seconds=600):
     """The path-traced reference of the same view: it sees the scalings, not the slicer's knobs."""
-    ref_vol = wm.optical_volume(hyd, species={recipe.preset!r}, phase={recipe.phase!r}, scale={dict(state.scale) or None!r})
+    ref_vol = wm.optical_volume(hyd, species={recipe.preset!r}, phase={recipe.phase!r}, sizes={recipe.sizes!r},
+                                scale={dict(state.scale) or None!r})
     return wm.render_reference(spec, ref_vol, spp=spp, target_rse=target_rse, max_seconds=max_seconds)
 
 

@@ -39,9 +39,11 @@ def nearest_channel(table: PhaseTable, wavelength_m: float) -> PhaseTable:
 
 
 def table_for(sp, mode: str = "per_species", quality: str = "default",
-              wavelength_m: float | None = None) -> PhaseTable:
+              wavelength_m: float | None = None, sized: bool = False) -> PhaseTable:
     """The phase table of one species object: R, G, B, or one band's (``wavelength_m``) in all three
-    channels (water by Mie theory at that wavelength, ice from its nearest channel, ``nearest_channel``)."""
+    channels (water by Mie theory at that wavelength, ice from its nearest channel, ``nearest_channel``).
+    ``sized`` (a size class, ``optics.size_classes``): every "per_species" table at the object's
+    ``radius_m`` (Mie cloud at that r_eff, the ice habits' diffraction by that population), not only rain's."""
     if mode not in MODES:
         raise ValueError(f"mode must be one of {', '.join(map(repr, MODES))}, got {mode!r}")
     if quality not in QUALITIES:
@@ -49,10 +51,11 @@ def table_for(sp, mode: str = "per_species", quality: str = "default",
     if wavelength_m is not None:
         cloud_like = _attr(sp, "phase_class") == "water" if mode == "paper" else _attr(sp, "name") == "cloud"
         if cloud_like:
-            return mie_cloud(quality=quality, wavelength_m=wavelength_m)
+            r_eff = float(_attr(sp, "radius_m")) if sized and mode != "paper" else 10e-6
+            return mie_cloud(r_eff, quality=quality, wavelength_m=wavelength_m)
         if mode != "paper" and _attr(sp, "name") == "rain":
             return mie_rain(radius=float(_attr(sp, "radius_m")), quality=quality, wavelength_m=wavelength_m)
-        return nearest_channel(table_for(sp, mode, quality), wavelength_m)
+        return nearest_channel(table_for(sp, mode, quality, sized=sized), wavelength_m)
     if mode == "paper":
         cls = _attr(sp, "phase_class")
         if cls == "water":
@@ -61,6 +64,8 @@ def table_for(sp, mode: str = "per_species", quality: str = "default",
             return ice_crystals("column", quality=quality)
         raise ValueError(f"phase_class must be 'water' or 'ice', got {cls!r}")
     name = _attr(sp, "name")
+    if sized and name != "rain":
+        return _sized_table(name, float(_attr(sp, "radius_m")), quality)
     if name == "cloud":
         return mie_cloud(quality=quality)
     if name == "rain":
@@ -74,12 +79,25 @@ def table_for(sp, mode: str = "per_species", quality: str = "default",
     raise ValueError(f"species name must be one of cloud, ice, rain, snow, graupel; got {name!r}")
 
 
+def _sized_table(name: str, radius_m: float, quality: str) -> PhaseTable:
+    """The "per_species" table of species ``name`` at ``radius_m`` (m) for cloud, ice, snow and graupel."""
+    if name == "cloud":
+        return mie_cloud(radius_m, quality=quality)
+    if name == "ice":
+        return ice_crystals("column", radius_m=radius_m, quality=quality)
+    if name == "snow":
+        return snow(radius_m, quality=quality)
+    if name == "graupel":
+        return graupel(radius_m, quality=quality)
+    raise ValueError(f"species name must be one of cloud, ice, rain, snow, graupel; got {name!r}")
+
+
 def for_species(species: Sequence, mode: str = "per_species", quality: str = "default",
-                wavelength_m: float | None = None) -> list[PhaseTable]:
+                wavelength_m: float | None = None, sized: bool = False) -> list[PhaseTable]:
     """One :class:`PhaseTable` per entry of ``species``, in order (see the module doc for the
-    mapping; ``wavelength_m``: one band's tables, ``table_for``). Tables are cached on disk and in memory,
-    so repeated species cost nothing."""
-    return [table_for(sp, mode, quality, wavelength_m) for sp in species]
+    mapping; ``wavelength_m``: one band's tables, ``sized``: size classes' tables, ``table_for``). Tables are
+    cached on disk and in memory, so repeated species cost nothing."""
+    return [table_for(sp, mode, quality, wavelength_m, sized) for sp in species]
 
 
 __all__ = ["for_species", "table_for", "nearest_channel", "MODES"]
