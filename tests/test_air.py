@@ -1,6 +1,9 @@
 """The 1-D atmosphere and the sun's path through it (weather_mi.optics.air), against numbers that do not
 come from this code: the Chapman function's closed form at 90 degrees, the Kasten-Young air mass,
 Bodhaine et al.'s Rayleigh optical depth, and Bird & Riordan's SPCTRL2 (pvlib) direct beam."""
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -8,6 +11,8 @@ from weather_mi.optics import spectrum
 from weather_mi.optics.air import Atmosphere, sun_air_table, sun_xyz, transmittance
 from weather_mi.optics.air.atmosphere import TOP_M
 from weather_mi.optics.air.shell import EARTH_RADIUS_M, horizon_mu, slant_columns
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
 def test_chapman_at_90_degrees_is_the_closed_form():
@@ -97,29 +102,16 @@ def test_direct_beam_against_spectrl2(h_m):
         np.testing.assert_allclose(ours, ref, rtol=0.03, err_msg=f"SZA {sza}, {h_m} m")
 
 
-def _delta_e_equal_lightness(xy_a, xy_b):
-    import colour
-    labs = [colour.XYZ_to_Lab(colour.xyY_to_XYZ([x, y, 1.0])) for x, y in (xy_a, xy_b)]
-    return float(colour.delta_E(labs[0], labs[1], method="CIE 2000"))
-
-
-def _spectrl2_xy(sza, pressure_pa, water_cm=0.0):
-    import colour
-    lam, dni, _ = _spectrl2(sza, pressure_pa, water_cm)
-    sel = (lam >= 360) & (lam <= 830)
-    sd = colour.SpectralDistribution(dict(zip(lam[sel], dni[sel])))
-    sd = sd.interpolate(colour.SpectralShape(360, 830, 1), interpolator=colour.LinearInterpolator)
-    return colour.XYZ_to_xy(colour.sd_to_XYZ(sd, method="Integration"))
-
-
 def test_direct_beam_chromaticity_against_spectrl2():
     """The direct sun's chromaticity at sea level against SPCTRL2's (colour-science's integration of its
     spectrum): CIEDE2000 at equal lightness below 2 at zenith angles 0, 60, 80 and 86 deg."""
+    from validation.sun_colour import spectrl2_direct_xy
+    from weather_mi.display.cloud_colour import delta_e_equal_lightness
     atm = _matched(0.0)
     for sza in (0.0, 60.0, 80.0, 86.0):
-        ref = _spectrl2_xy(sza, 101325.0)
+        ref = spectrl2_direct_xy(90.0 - sza, 1013.25, water_cm=0.0)
         ours = spectrum.chromaticity_xy(sun_xyz(atm, 0.0, np.cos(np.radians(sza))))
-        assert _delta_e_equal_lightness(ours, ref) < 2.0, (sza, ours, ref)
+        assert delta_e_equal_lightness(ours, ref) < 2.0, (sza, ours, ref)
 
 
 def test_table_lookup_and_slicer_form():

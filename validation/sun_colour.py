@@ -28,7 +28,7 @@ PRESSURES_HPA = (1013.25, 850.0, 700.0, 500.0)
 def spectrl2_direct_xy(elevation_deg: float, pressure_hpa: float, water_cm: float = 1.4, ozone_atm_cm: float = 0.3,
                        turbidity_500: float = 0.1) -> np.ndarray:
     """CIE 1931 chromaticity of SPCTRL2's direct normal irradiance (pvlib ``spectrl2``, Kasten-Young air mass),
-    integrated by colour-science over 360-830 nm (linear between SPCTRL2's wavelengths)."""
+    integrated by colour-science over its default 360-780 nm (linear between SPCTRL2's wavelengths)."""
     import colour
     import pvlib
     sza = 90.0 - elevation_deg
@@ -38,9 +38,8 @@ def spectrl2_direct_xy(elevation_deg: float, pressure_hpa: float, water_cm: floa
                                   relative_airmass=np.array([am]), precipitable_water=water_cm, ozone=ozone_atm_cm,
                                   aerosol_turbidity_500nm=turbidity_500, dayofyear=1)
     lam, dni = out["wavelength"], out["dni"][:, 0]
-    sel = (lam >= 350) & (lam <= 850)
-    sd = colour.SpectralDistribution(dict(zip(lam[sel], dni[sel])))
-    sd = sd.interpolate(colour.SpectralShape(360, 830, 1), interpolator=colour.LinearInterpolator)
+    shape = colour.SpectralShape(360, 780, 1)
+    sd = colour.SpectralDistribution(np.interp(shape.wavelengths, lam, dni), shape.wavelengths)
     return np.asarray(colour.XYZ_to_xy(colour.sd_to_XYZ(sd, method="Integration")))
 
 
