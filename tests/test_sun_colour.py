@@ -63,7 +63,8 @@ def no_render(monkeypatch):
 
 @pytest.mark.parametrize("args, word", [(["--aod", "0.2"], "--atmosphere clear"),
                                         (["--atmosphere", "clear", "--aod", "7"], "--aod"),
-                                        (["--atmosphere", "clear", "--ozone", "-0.1"], "--ozone")])
+                                        (["--atmosphere", "clear", "--ozone", "-0.1"], "--ozone"),
+                                        (["--atmosphere", "clear", "--integrator", "volpath"], "volpath")])
 def test_bad_air_options_are_named_before_rendering(tmp_path, capsys, no_render, args, word):
     rc = cli.main(["render", "--demo", "cumulus", "--size", "8x6", "--spp", "1", *args, "-o", str(tmp_path / "a.exr")])
     err = capsys.readouterr().err

@@ -65,6 +65,8 @@ def check_scene_options(args) -> None:
     if air is not None and getattr(args, "renderer", None) == "slices":
         raise ValueError("--atmosphere clear colours the reference renderer's sun; the slicer (--renderer slices) "
                          "does not take it yet")
+    if air is not None and getattr(args, "integrator", None) == "volpath":
+        raise ValueError("--atmosphere clear colours the sun of --integrator majorant (the default), not volpath's")
 
 
 def render_command(args) -> Path:

@@ -72,7 +72,8 @@ def parse_air(sun, props, check) -> None:
           f"'sun_air' must be a finite, non-negative (n_mu >= 2, n_h >= 2, 3) tensor, got shape {t.shape}")
     h0, h1, mu0, mu1, radius = (float(props[n]) for n in AIR_PROPERTIES[1:])
     check(h1 > h0 and mu1 > mu0 and radius > 0.0, "'sun_air' needs h1 > h0, mu1 > mu0 and a positive radius")
-    sun.air = mi.Texture2f(mi.TensorXf(t), filter_mode=dr.FilterMode.Linear, wrap_mode=dr.WrapMode.Clamp)
+    sun.air = mi.Texture2f(mi.TensorXf(t), use_accel=False,  # CUDA: float interpolation weights, not 8-bit
+                           filter_mode=dr.FilterMode.Linear, wrap_mode=dr.WrapMode.Clamp)
     n_mu, n_h = t.shape[:2]
     # texel centres at (i + 0.5) / n: coordinate = (v - v0) / (v1 - v0) (n - 1) / n + 0.5 / n
     sun.air_map = [mi.Float(v) for v in (h0, (n_h - 1) / (n_h * (h1 - h0)), 0.5 / n_h,
