@@ -84,3 +84,22 @@ def test_lit_storm_at_a_low_sun_has_the_direct_suns_colour():
         de = delta_e_equal_lightness(xy, spectrl2_at_height(4.0, height))
         assert 2000.0 < height < 14000.0
         assert ok(de), (atmosphere, xy, height, de)
+
+
+def test_lit_cloud_pixels_and_their_height():
+    """The measure of the headline: the brightest opaque pixels, and where their eye rays reach optical
+    depth 1 (a slab 2-3 km of 0.01 /m seen from above: 100 m below its top)."""
+    from weather_mi.display.cloud_colour import lit_cloud_pixels, visible_height_m
+    rad = np.zeros((4, 5, 3))
+    rad[..., :] = np.arange(20).reshape(4, 5, 1)
+    trans = np.zeros((4, 5))
+    trans[0] = 1.0  # the first row is clear sky
+    mask = lit_cloud_pixels(rad, trans, top_fraction=0.2)
+    assert mask.sum() == 3 and mask[3, 2:].all()
+    vol = wm.OpticalVolume.from_arrays(beta_ext=np.full((4, 4, 4), 0.01, np.float32), albedo=1.0,
+                                       phase=wm.phase.henyey_greenstein(0.5),
+                                       bbox=((-3000.0, -3000.0, 2000.0), (3000.0, 3000.0, 3000.0)))
+    spec = wm.SceneSpec(camera=DOWN, sky=None, ground=None, width=5, height=4)
+    np.testing.assert_allclose(visible_height_m(spec, vol, mask, step_m=10.0), 2900.0, atol=15.0)
+    with pytest.raises(ValueError, match="opaque"):
+        lit_cloud_pixels(rad, np.ones((4, 5)))
