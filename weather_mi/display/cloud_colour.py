@@ -35,6 +35,8 @@ def visible_height_m(spec, vol, mask: np.ndarray, tau: float = 1.0, step_m: floa
     ``vol``'s extinction (nearest voxel, steps of ``step_m``): where the light those pixels show comes
     from, about. NaN for a ray that does not reach it."""
     from ..slicing.geometry import film_rays
+    if np.shape(mask) != (spec.height, spec.width):
+        raise ValueError(f"the mask is {np.shape(mask)}, the scene's image (height, width) {(spec.height, spec.width)}")
     iy, ix = np.nonzero(mask)
     origins, dirs = film_rays(spec, ix + 0.5, iy + 0.5)
     lo, hi = (np.asarray(b, np.float64) for b in vol.bbox)
