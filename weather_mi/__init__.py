@@ -15,6 +15,7 @@ from .io.sources import open_source, open_times
 from .io.image import Image
 from .optics import species
 from .optics.volume import OpticalVolume, optical_volume
+from .optics.air.atmosphere import Atmosphere
 from .kernel.variant import ensure_registered, register_lazily, set_variant
 from .kernel.medium import medium_dict, phase_dict
 from .scene.spec import Camera, Ground, RayTable, SceneSpec, Sky, Sun
@@ -31,11 +32,11 @@ SUBPACKAGES = ("io", "optics", "scene", "kernel", "reference", "slicing", "plane
 SHORT_NAMES = {"hydrometeors": "io.hydrometeors", "sources": "io.sources", "synthetic": "io.synthetic",
                "species": "optics.species", "phase": "optics.phase", "detail": "optics.detail",
                "terrain": "io.terrain", "place": "scene.place", "metrics": "display.metrics",
-               "denoise": "display.denoise"}
+               "denoise": "display.denoise", "air": "optics.air", "spectrum": "optics.spectrum"}
 
 __all__ = ["WeatherDataError", "SPECIES_NAMES", "from_arrays", "validate", "open_wrf", "open_les", "open_source",
            "open_times", "optical_volume", "OpticalVolume", "set_variant", "medium_dict", "phase_dict",
-           "Camera", "Ground", "RayTable", "SceneSpec", "Sky", "Sun", "Image", "render_reference", "render_transmittance",
+           "Camera", "Ground", "RayTable", "SceneSpec", "Sky", "Sun", "Atmosphere", "Image", "render_reference", "render_transmittance",
            "SliceMode", "SliceParams", "SliceRenderer", "render_slices", "view", *SUBPACKAGES, *SHORT_NAMES]
 
 # imported on first use (the phase tables pull in miepython/numba, the metrics FLIP)

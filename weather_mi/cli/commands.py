@@ -56,12 +56,19 @@ def check_unfinished(ckpt, resume: bool) -> None:
 
 
 def check_scene_options(args) -> None:
-    """The scene options that can be judged without the input (``--size``, ``--fov``), checked before it
-    is read; ``scene_spec`` builds from them."""
+    """The scene options that can be judged without the input (``--size``, ``--fov``, the atmosphere's),
+    checked before it is read; ``scene_spec`` builds from them."""
+    from ..scene.framing import atmosphere_of
     from ..scene.spec import check_fov_deg
     _parse_size(args.size)
     if args.fov is not None:
         check_fov_deg(args.fov)
+    air = atmosphere_of(args.atmosphere, args.aod, args.ozone)
+    if air is not None and getattr(args, "renderer", None) == "slices":
+        raise ValueError("--atmosphere clear colours the reference renderer's sun; the slicer (--renderer slices) "
+                         "does not take it yet")
+    if air is not None and getattr(args, "integrator", None) == "volpath":
+        raise ValueError("--atmosphere clear colours the sun of --integrator majorant (the default), not volpath's")
 
 
 def render_command(args) -> Path:
@@ -285,6 +292,13 @@ def add_scene_options(p) -> None:
     p.add_argument("--fov", type=float, default=None,
                    help="horizontal field of view (degrees; default 70 ground, 45 orbit)")
     p.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none"))
+    p.add_argument("--atmosphere", default="none", choices=("none", "clear"),
+                   help="clear: the sun coloured by a clear 1-D atmosphere on its path (molecules, ozone, aerosol; "
+                        "the reference renderer); none (default): the sun as given, no air outside the box")
+    p.add_argument("--aod", type=float, default=None,
+                   help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
+    p.add_argument("--ozone", type=float, default=None,
+                   help="with --atmosphere clear: ozone column in atm-cm, in [0, 0.6] (default 0.3)")
     p.add_argument("--ground-albedo", type=float, default=0.15, help="negative: no ground")
     p.add_argument("--size", default="320x240", help="WIDTHxHEIGHT")
 

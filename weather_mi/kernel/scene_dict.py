@@ -249,9 +249,34 @@ def integrator_sun(sun: Sun, guiding: float = 0.0, aureole: float = 0.0, mvnee: 
             "aureole_nee": float(aureole), **({"mvnee": float(mvnee)} if mvnee > 0 else {})}
 
 
+def sun_below_air(spec: SceneSpec) -> Sun:
+    """The scene's sun as it reaches the ground (sea level without one) through ``spec.atmosphere``: its
+    irradiance times the direct sun's colour there (``optics.air.sun_rgb``). The sky model's radiance is
+    scaled to this sun, keeping the model's sky-to-sun ratio at the ground."""
+    from ..optics.air import sun_rgb
+    h = 0.0 if spec.ground is None else max(float(spec.ground.height), 0.0)
+    rgb = sun_rgb(spec.atmosphere, h, spec.sun.mu0)
+    return replace(spec.sun, irradiance=tuple(float(v) for v in np.asarray(spec.sun.irradiance) * rgb))
+
+
+def integrator_air(sun: Sun, atmosphere, bbox) -> dict:
+    """Properties of ``majorant_volpath`` that colour its sun by the air on the sun's path
+    (``optics.air.sun_air_table``; the kernel's frame has the box's centre at x = y = 0, heights above sea
+    level, the Earth's centre below it): heights up to 2 km above the box, mu over the box's width."""
+    import mitsuba as mi
+    from ..optics.air import sun_air_table
+    from ..optics.air.shell import EARTH_RADIUS_M
+    (x0, y0, _), (x1, y1, z1) = bbox
+    half = float(np.hypot(max(abs(x0), abs(x1)), max(abs(y0), abs(y1))))
+    table = sun_air_table(atmosphere, sun.mu0, top_m=max(float(z1), 0.0) + 2000.0, half_width_m=half)
+    return {"sun_air": mi.TensorXf(table.rgb), "sun_air_h0": float(table.heights_m[0]),
+            "sun_air_h1": float(table.heights_m[-1]), "sun_air_mu0": float(table.mu[0]),
+            "sun_air_mu1": float(table.mu[-1]), "sun_air_radius": float(EARTH_RADIUS_M)}
+
+
 def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_depth: int | None = None,
                     cell: int | None = None, sun: Sun | None = None, sun_guiding: float = 0.0, legacy: bool = False,
-                    aureole_nee: float = 0.0, mvnee: float = 0.0) -> dict:
+                    aureole_nee: float = 0.0, mvnee: float = 0.0, atmosphere=None) -> dict:
     """Mitsuba integrator dict: stock ``volpath`` or ``majorant_volpath``.
 
     Parameters
@@ -275,6 +300,8 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
         see ``render_reference``).
     legacy : bool
         The estimator before issue 10 ("majorant"; see ``render_reference``).
+    atmosphere : optics.air.Atmosphere or None
+        The air on the sun's path (``integrator_air``; needs ``sun``); None: the sun as it is given.
 
     Returns
     -------
@@ -284,6 +311,9 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
     if vol.periodic and (integrator == "volpath" or legacy):
         raise ValueError("periodic volumes render with majorant_volpath's default estimator only "
                          f"(integrator='majorant', legacy=False), not integrator={integrator!r}, legacy={legacy}")
+    if atmosphere is not None and (integrator != "majorant" or sun is None or legacy):
+        raise ValueError("the atmosphere on the sun's path needs the integrator's own sun: integrator "
+                         "'majorant' without legacy (or atmosphere None)")
     if integrator == "volpath":
         d = {"type": "volpath", "max_depth": int(max_depth)}
     else:
@@ -300,6 +330,8 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
             d.update({"periodic": "transport" if vol.periodic == "transport" else "view", "periodic_tiles": PATH_TILES})
         if sun is not None:
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
+        if atmosphere is not None:
+            d.update(integrator_air(sun, atmosphere, vol.bbox))
         if legacy:  # the estimator before issue 10 (see render_reference)
             d.update({"rr_mode": "volpath", "phase_channels": "mean", "emitter_nee": 1.0, "tracking_grid": "coarse",
                       "transmittance": "ratio", "persistent_lanes": False})
@@ -332,7 +364,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
         if _inside(spec.camera.origin, medium_box(vol, floor)):
             sensor["medium"] = {"type": "ref", "id": "weather_medium"}
     if spec.sky is not None:
-        d["sky"] = sky_dict(spec.sky, spec.sun)
+        d["sky"] = sky_dict(spec.sky, spec.sun if spec.atmosphere is None else sun_below_air(spec))
     if terrain is not None:  # the terrain mesh and a flat surround (Ground.height unused; its albedo too)
         d.update(terrain_ground_dicts(terrain, {"type": "ref", "id": "weather_medium"}, vol.bbox))
     elif spec.ground is not None:

@@ -115,7 +115,8 @@ class PassScene:
         o = self.options.estimator
         spec_k, vol_k, _ = recentred(self.spec, self.vol)
         vol_render = delta_scaled(vol_k, o.forward_peak_deg)
-        integ = integrator_dict(vol_render, sun=self.spec.sun if o.own_sun else None, **o.kernel_options())
+        integ = integrator_dict(vol_render, sun=self.spec.sun if o.own_sun else None, atmosphere=self.spec.atmosphere,
+                                **o.kernel_options())
         return mi.load_dict(scene_dict(spec_k, vol_render, integ))
 
 

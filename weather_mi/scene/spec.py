@@ -12,6 +12,8 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from ..optics.air.atmosphere import Atmosphere
+
 
 def direction_from_angles(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
     """Unit vector towards (azimuth clockwise from north, elevation above horizon): (east, north, up)."""
@@ -465,6 +467,9 @@ class SceneSpec:
         Every pixel's rays from a table (the reference renderer's ``raytable`` sensor; a satellite's
         view) instead of ``camera``'s projection; its film size must be (width, height). ``camera`` then
         only names a nominal view (metadata).
+    atmosphere : optics.air.Atmosphere or None, default None
+        The clear air around the model's box on the sun's path (the reference renderer colours its sun by
+        it: ``optics.air.sunlight``); None: the sun as ``sun`` gives it, no air outside the box.
 
     Raises
     ------
@@ -481,8 +486,11 @@ class SceneSpec:
     height: int = 300
     seed: int = 0
     rays: RayTable | None = None
+    atmosphere: Atmosphere | None = None
 
     def __post_init__(self):
+        if self.atmosphere is not None and not isinstance(self.atmosphere, Atmosphere):
+            raise ValueError(f"SceneSpec atmosphere must be an optics.air.Atmosphere or None, got {self.atmosphere!r}")
         object.__setattr__(self, "width", _positive_int(self.width, "Image size (width, pixels)"))
         object.__setattr__(self, "height", _positive_int(self.height, "Image size (height, pixels)"))
         object.__setattr__(self, "seed", _positive_int(self.seed, "SceneSpec seed", minimum=0))
@@ -498,6 +506,8 @@ class SceneSpec:
         ``RayTable.to_dict``)."""
         d = asdict(replace(self, rays=None))
         del d["rays"]
+        if self.atmosphere is None:  # absent: descriptions and fingerprints as before the atmosphere
+            del d["atmosphere"]
         if self.rays is not None:  # absent otherwise: descriptions and fingerprints as before ray tables
             d["rays"] = self.rays.to_dict()
         return d
@@ -510,7 +520,8 @@ class SceneSpec:
         return cls(camera=Camera(**d["camera"]), sun=Sun(**d["sun"]),
                    sky=None if d.get("sky") is None else Sky(**d["sky"]),
                    ground=None if d.get("ground") is None else Ground(**d["ground"]),
-                   width=d["width"], height=d["height"], seed=d["seed"])
+                   width=d["width"], height=d["height"], seed=d["seed"],
+                   atmosphere=None if d.get("atmosphere") is None else Atmosphere(**d["atmosphere"]))
 
 
 def default_spec(vol, width: int = 300, height: int = 300, **kw) -> SceneSpec:

@@ -110,6 +110,9 @@ class MajorantVolpath:
      * - sun_angular_diameter
        - |float|
        - Degrees, <= MAX_SUN_DIAMETER_DEG; 0 (default) is a point sun.
+     * - sun_air, sun_air_h0/h1/mu0/mu1/radius
+       - |tensor|, |float|
+       - Optional: the sun's colour after the air on its path, by height and cos(zenith) (:func:`.sun.parse_air`).
      * - sun_sampling
        - |string|
        - "mis" (default), or one strategy alone, "nee" or "phase" (for tests).
@@ -164,8 +167,9 @@ class MajorantVolpath:
         _check(self.periodic == "none" or (self.reach >= 1 and self.track_mode == "texel"),
                f"periodic needs periodic_tiles >= 1 and tracking_grid 'texel', got {self.reach}, {self.track_mode!r}")
         self.sun_mode, self.guiding, self.aureole, self.sun_sampling, self.mvnee = "none", 0.0, 0.0, "mis", 0.0
+        self.air = None
         if "sun_direction" not in props:
-            for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee", "mvnee"):
+            for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee", "mvnee") + sun.AIR_PROPERTIES:
                 _check(name not in props, f"'{name}' needs 'sun_direction'")
             return
         # the integrator's own sun (module docstring; without sun_direction the sun, if any, is a scene emitter)
@@ -200,6 +204,7 @@ class MajorantVolpath:
         self.guide_p = mi.Float(self.guiding)
         self.aureole_p = mi.Float(self.aureole)
         dr.make_opaque(self.sun_dir, self.sun_vmax, self.sun_value, self.guide_p, self.aureole_p)
+        sun.parse_air(self, props, _check)  # the air on the sun's path (optional)
 
     # ------------------------------------------------------------ Mitsuba object interface
     def aov_names(self):
@@ -409,7 +414,7 @@ class PathLoop:
             if self.hide:
                 in_sun &= p.depth != 0
             w_hit = dr.select(count_direct, 1.0, self.sun_mis(p.last_pdf_sun, self.c_sun * self.sun_pdf, nee=False))
-            p.result = dr.select(in_sun, p.result + p.throughput * w_hit * mi.Spectrum(self.integ.sun_value), p.result)
+            p.result = dr.select(in_sun, p.result + p.throughput * w_hit * sun.radiance_at(self.integ, p.ray.o), p.result)
         v.active_surface &= p.si.is_valid()
         v.bsdf = p.si.bsdf(p.ray)
 
@@ -491,7 +496,7 @@ class PathLoop:
             if self.aureole or self.mvnee:  # MIS against the aureole estimator / the chains launched before
                 w_s = dr.select(v.act_scatter, w_s * (p.aur_w if self.aureole else mvnee.path_weight(p.mv_r)), w_s)
             w = dr.select(pick_em, w, w_s)
-            em_val = dr.select(pick_em, em_val, mi.Spectrum(self.integ.sun_value))
+            em_val = dr.select(pick_em, em_val, sun.radiance_at(self.integ, v.ref.p))
         return w, em_val
 
     def aureole_nee(self, sampler, p, v):

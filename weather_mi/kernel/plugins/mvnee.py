@@ -24,7 +24,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .medium_setup import phase_ctx, scattering_event
-from .sun import about_sun, aureole_pdf, sample_disk, sun_direction
+from .sun import about_sun, aureole_pdf, radiance_at, sample_disk, sun_direction
 from .trackers import delta_tracking
 
 MAX_LENGTH = 4  # chain vertices at most (the path state holds R_1..R_4)
@@ -111,5 +111,5 @@ def chain(loop, sampler, v, p, eps: float, length: int, active):
             w_x = mi.Float(1.0)
         w_x *= r[j] * path_weight(r)  # this chain's share: R_{j+1} / (1 + sum R)
         tr = loop.transmittance(loop.scene, sampler, mei.spawn_ray(wo), p.medium, act)
-        result = dr.select(act, result + weight * f_x * w_x * tr * mi.Spectrum(integ.sun_value), result)
+        result = dr.select(act, result + weight * f_x * w_x * tr * radiance_at(integ, mei.p), result)
     return result

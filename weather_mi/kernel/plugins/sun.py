@@ -11,6 +11,10 @@ aureole next-event estimation.
   VROOM, Buras & Mayer 2011): q = (1 - eps) q_phase + eps (q_phase,sun + U_disk) / 2.
 * :func:`aureole_nee`: sun light that reaches a vertex A through one more, forward, scattering at B,
   sampled from A about the sun; balance heuristic against the path's own draw.
+* :func:`parse_air`, :func:`radiance_at`: the air on the sun's path (``sun_air``, optional): the sun's
+  value at a point is multiplied by the colour of the direct sun there, bilinear in a table over the
+  point's height above a spherical Earth and the sun's cos(zenith) at it (``optics.air.sunlight``), the
+  Earth's centre at (0, 0, -``sun_air_radius``) in the kernel's frame.
 
 ``sun`` is the integrator (its ``sun_dir``, ``sun_vmax``, ``sun_value``, ``sun_mode``, ``guiding``);
 measurements of these estimators: ``docs/reference-estimator.md``.
@@ -49,6 +53,47 @@ def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
     if r <= 0.0:
         return 0.0, e
     return float(2.0 * np.sin(r / 2.0) ** 2), e / (np.pi * np.sin(r) ** 2)
+
+
+AIR_PROPERTIES = ("sun_air", "sun_air_h0", "sun_air_h1", "sun_air_mu0", "sun_air_mu1", "sun_air_radius")
+
+
+def parse_air(sun, props, check) -> None:
+    """The air's table on the sun's path: ``sun_air`` (n_mu, n_h, 3) RGB transmittance colours (>= 0) on
+    the uniform grids h0..h1 (m above sea level) by mu0..mu1 (cos zenith), ``sun_air_radius`` the Earth's
+    (m); ``sun.air`` None without it."""
+    sun.air = None
+    if "sun_air" not in props:
+        return
+    for name in AIR_PROPERTIES:
+        check(name in props, f"'sun_air' needs '{name}'")
+    t = np.asarray(props["sun_air"], np.float32)
+    check(t.ndim == 3 and t.shape[2] == 3 and min(t.shape[:2]) >= 2 and np.all(np.isfinite(t)) and t.min() >= 0.0,
+          f"'sun_air' must be a finite, non-negative (n_mu >= 2, n_h >= 2, 3) tensor, got shape {t.shape}")
+    h0, h1, mu0, mu1, radius = (float(props[n]) for n in AIR_PROPERTIES[1:])
+    check(h1 > h0 and mu1 > mu0 and radius > 0.0, "'sun_air' needs h1 > h0, mu1 > mu0 and a positive radius")
+    sun.air = mi.Texture2f(mi.TensorXf(t), use_accel=False,  # CUDA: float interpolation weights, not 8-bit
+                           filter_mode=dr.FilterMode.Linear, wrap_mode=dr.WrapMode.Clamp)
+    n_mu, n_h = t.shape[:2]
+    # texel centres at (i + 0.5) / n: coordinate = (v - v0) / (v1 - v0) (n - 1) / n + 0.5 / n
+    sun.air_map = [mi.Float(v) for v in (h0, (n_h - 1) / (n_h * (h1 - h0)), 0.5 / n_h,
+                                         mu0, (n_mu - 1) / (n_mu * (mu1 - mu0)), 0.5 / n_mu, radius)]
+    dr.make_opaque(*sun.air_map)
+
+
+def radiance_at(sun, p):
+    """The sun's value (radiance of the disk, or irradiance of a point sun) at point ``p``: ``sun_value``,
+    times the air's colour at p's height and the sun's cos(zenith) there where ``sun_air`` is given."""
+    value = mi.Spectrum(sun.sun_value)
+    if sun.air is None:
+        return value
+    h0, h_scale, h_off, mu0, mu_scale, mu_off, radius = sun.air_map
+    q = mi.Vector3f(p.x, p.y, p.z + radius)  # from the Earth's centre
+    r = dr.norm(q)
+    h = (dr.square(p.x) + dr.square(p.y) + p.z * (p.z + 2.0 * radius)) * dr.rcp(r + radius)  # r - R, no cancellation
+    mu = dr.dot(q, sun.sun_dir) * dr.rcp(r)
+    c = sun.air.eval(mi.Point2f((h - h0) * h_scale + h_off, (mu - mu0) * mu_scale + mu_off))
+    return value * mi.Spectrum(c[0], c[1], c[2])
 
 
 def sample_disk(sun, sample):
@@ -142,4 +187,4 @@ def aureole_nee(sun, tk, transmittance, scene, sampler, phase, mei, medium, thro
     else:
         w_b = mi.Float(1.0)
     tr = transmittance(scene, sampler, mei_b.spawn_ray(wo), medium, act_b)
-    return dr.select(act_b, result + weight * albedo * f_b * w_b * tr * mi.Spectrum(sun.sun_value), result)
+    return dr.select(act_b, result + weight * albedo * f_b * w_b * tr * radiance_at(sun, mei_b.p), result)
