@@ -3,19 +3,26 @@ the Hydrometeors (y, x) grid, as data a renderer can turn into a height-field me
 
 Readers put them in a Hydrometeors Dataset as (y, x) coordinates, not data variables, so that they never
 mix with the hydrometeors: ``terrain_height`` (m above MSL: WRF's HGT), ``land`` (1 land, 0 water, from
-LANDMASK or XLAND) and ``surface_albedo`` (WRF's ALBEDO where the file has it, else ALBBCK, else the
-default of the column's class). The defaults are WRF's own all-season land/water table (``LW12`` in
-WRF's ``run/LANDUSE.TBL``: land 20 %, water 8 %); a file without LANDMASK/XLAND is taken as land.
+LANDMASK, else XLAND, else LU_INDEX's water and lake classes, else the offline global mask at the columns'
+latitude/longitude, ``land_mask``), ``surface_albedo`` (WRF's broadband ALBEDO where the file has it, else
+ALBBCK, else the default of the column's class), ``surface_kind`` (``land_use.KINDS``: sea, lake, forest, ...,
+from LU_INDEX and its MMINLU table where the file has it, else land or sea) and, where the file says,
+``snow_cover`` (SNOWC, SNOWH or SNOW). The default albedos are WRF's own all-season land/water table
+(``LW12`` in WRF's ``run/LANDUSE.TBL``: land 20 %, water 8 %); a file with none of the land sources (no
+mask, no land use, no latitude/longitude) is taken as land. ``Terrain.in_band`` gives the albedo in an
+imager's band (``land_use.band_albedo``).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .land_use import KIND, WATER_KINDS, band_albedo, kinds_from_land_use, snow_cover
+
 LAND_ALBEDO = 0.20   # WRF run/LANDUSE.TBL, table LW12, class 1 'Land' (ALBD 20 %)
 WATER_ALBEDO = 0.08  # WRF run/LANDUSE.TBL, table LW12, class 2 'Water' (ALBD 8 %; the USGS 'Water Bodies' too)
-COORDS = ("terrain_height", "land", "surface_albedo")
+COORDS = ("terrain_height", "land", "surface_albedo", "surface_kind", "snow_cover")
 TERRAIN_APRON_M = 100e3  # a rendered ground continues level this far past the grid's edge (``scene_hits``)
 
 
@@ -35,6 +42,13 @@ class Terrain:
         (ny, nx) broadband surface albedo in [0, 1].
     albedo_source : str
         Where the albedo came from (a variable of the file, or the default table).
+    kind : numpy.ndarray or None
+        (ny, nx) surface kinds (``land_use.KINDS``); None: land or sea by ``land``.
+    snow : numpy.ndarray or None
+        (ny, nx) snow-covered fraction, where the file gives one.
+    wind_m_s : float or None
+        Wind speed 10 m above the water (m/s; the mean over the water columns of the file's U10/V10), None
+        where the file has none; it sets the sea surface's roughness (``kernel.sea_surface``).
     """
 
     x: np.ndarray
@@ -43,16 +57,44 @@ class Terrain:
     land: np.ndarray
     albedo: np.ndarray
     albedo_source: str
+    kind: np.ndarray | None = None
+    snow: np.ndarray | None = None
+    wind_m_s: float | None = None
 
     @classmethod
     def of(cls, hyd) -> Terrain | None:
         """The terrain stored in a Hydrometeors Dataset (None where it has none: LES, arrays, demos)."""
         if "terrain_height" not in hyd.coords:
             return None
+        opt = {name: np.asarray(hyd[name].values) for name in ("surface_kind", "snow_cover") if name in hyd.coords}
+        wind = hyd.attrs.get("wind_10m_water_m_s")
         return cls(np.asarray(hyd.x.values, float), np.asarray(hyd.y.values, float),
                    np.asarray(hyd["terrain_height"].values, float), np.asarray(hyd["land"].values) > 0,
                    np.asarray(hyd["surface_albedo"].values, float),
-                   str(hyd.attrs.get("surface_albedo_source", "?")))
+                   str(hyd.attrs.get("surface_albedo_source", "?")),
+                   None if "surface_kind" not in opt else opt["surface_kind"].astype(np.int8),
+                   None if "snow_cover" not in opt else opt["snow_cover"].astype(float),
+                   None if wind is None else float(wind))
+
+    @property
+    def kinds(self) -> np.ndarray:
+        """(ny, nx) surface kinds (``land_use.KINDS``): the file's, else land or sea by ``land``."""
+        if self.kind is not None:
+            return self.kind
+        return np.where(self.land, KIND["land"], KIND["sea"]).astype(np.int8)
+
+    @property
+    def water(self) -> np.ndarray:
+        """(ny, nx) bool, True over the sea and lakes (their surface is the sea surface's, with its glint)."""
+        return np.isin(self.kinds, WATER_KINDS)
+
+    def in_band(self, wavelength_um: float) -> "Terrain":
+        """This terrain with its albedo at ``wavelength_um`` (``land_use.band_albedo``: the file's broadband
+        albedo shaped by each column's kind and snow, or the kind's own where the file has none; over water the
+        water body's Lambertian part)."""
+        from_file = self.albedo_source in ("ALBEDO", "ALBBCK")
+        a = band_albedo(self.kinds, wavelength_um, self.albedo if from_file else None, self.snow)
+        return replace(self, albedo=a, albedo_source=f"{self.albedo_source} at {wavelength_um:g} um (land_use)")
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A height-field triangle mesh through the column centres: vertices (ny * nx, 3) at (x, y,
@@ -195,7 +237,8 @@ class Terrain:
         y = np.r_[self.y[0] - distance_m, self.y, self.y[-1] + distance_m]
         pad = {"pad_width": 1, "mode": "edge"}
         return Terrain(x, y, np.pad(self.height_m, **pad), np.pad(self.land, **pad), np.pad(self.albedo, **pad),
-                       self.albedo_source)
+                       self.albedo_source, None if self.kind is None else np.pad(self.kind, **pad),
+                       None if self.snow is None else np.pad(self.snow, **pad), self.wind_m_s)
 
     def skirt(self, floor_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A vertical wall from the mesh's boundary down to ``floor_m`` (m), facing outwards, as
@@ -220,7 +263,34 @@ class Terrain:
         return np.concatenate([top, bottom]), faces, albedo
 
 
-def surface_fields(read2d, has, z_surface_m: np.ndarray) -> tuple[dict, dict]:
+def land_and_kind(read2d, has, shape, attrs=None, latlon=None, source: str = "input"):
+    """(land (bool), surface kinds (int8, ``land_use.KINDS``), land source) of a grid: land from LANDMASK, else
+    XLAND, else LU_INDEX (not its water or lake classes), else the global mask (``land_mask``) at ``latlon``
+    ((lat, lon) in degrees, (y, x)), else land everywhere; kinds from LU_INDEX where the file has it (with
+    the land of the first sources kept: a land column of a water class becomes unknown land, a water column
+    of a land class sea), else land or sea."""
+    kind = kinds_from_land_use(read2d("LU_INDEX"), attrs or {}, source) if has("LU_INDEX") else None
+    if has("LANDMASK"):
+        land, land_source = read2d("LANDMASK") > 0.5, "LANDMASK"
+    elif has("XLAND"):
+        land, land_source = read2d("XLAND") < 1.5, "XLAND"
+    elif kind is not None:
+        land, land_source = ~np.isin(kind, WATER_KINDS), f"LU_INDEX ({str((attrs or {}).get('MMINLU', '')).strip()})"
+    elif latlon is not None:
+        from . import land_mask
+        land, land_source = land_mask.is_land(*latlon), land_mask.SOURCE
+    else:
+        land, land_source = np.ones(shape, bool), "none in the file: land assumed"
+    if kind is None:
+        kind = np.where(land, KIND["land"], KIND["sea"]).astype(np.int8)
+    else:
+        water = np.isin(kind, WATER_KINDS)
+        kind = np.where(land & water, KIND["land"], np.where(~land & ~water, KIND["sea"], kind)).astype(np.int8)
+    return land, kind, land_source
+
+
+def surface_fields(read2d, has, z_surface_m: np.ndarray, attrs=None, latlon=None,
+                   source: str = "input") -> tuple[dict, dict]:
     """Terrain coordinates and attributes of a wrfout time.
 
     Parameters
@@ -231,20 +301,23 @@ def surface_fields(read2d, has, z_surface_m: np.ndarray) -> tuple[dict, dict]:
         ``has(name)``: whether the file has the variable.
     z_surface_m : numpy.ndarray
         (y, x) height of the lowest w-level (m above MSL), the terrain where the file has no HGT.
+    attrs : dict, optional
+        The file's global attributes (MMINLU, ISWATER, ISLAKE, ISICE for LU_INDEX).
+    latlon : (numpy.ndarray, numpy.ndarray), optional
+        The columns' latitude and longitude (degrees), for the global land mask where the file has no land.
+    source : str
+        The file, named in errors.
 
     Returns
     -------
     (dict, dict)
-        Coordinates name -> ((y, x), array, attributes) for ``terrain_height`` (m), ``land`` (int8) and
-        ``surface_albedo``; attributes ``surface_albedo_source`` and ``land_source``.
+        Coordinates name -> ((y, x), array, attributes) for ``terrain_height`` (m), ``land`` (int8),
+        ``surface_albedo``, ``surface_kind`` (int8) and ``snow_cover`` (where the file has snow); attributes
+        ``surface_albedo_source``, ``land_source``, ``terrain_source`` and, where the file has U10/V10 and
+        water, ``wind_10m_water_m_s`` (the mean 10 m wind speed over the water columns).
     """
     hgt, hgt_source = (read2d("HGT"), "HGT") if has("HGT") else (z_surface_m, "lowest w-level (PH + PHB) / g")
-    if has("LANDMASK"):
-        land, land_source = read2d("LANDMASK") > 0.5, "LANDMASK"
-    elif has("XLAND"):
-        land, land_source = read2d("XLAND") < 1.5, "XLAND"
-    else:
-        land, land_source = np.ones(hgt.shape, bool), "none in the file: land assumed"
+    land, kind, land_source = land_and_kind(read2d, has, hgt.shape, attrs, latlon, source)
     albedo_var = next((v for v in ("ALBEDO", "ALBBCK") if has(v)), None)
     if albedo_var:
         albedo, albedo_source = np.clip(read2d(albedo_var), 0.0, 1.0), albedo_var
@@ -252,9 +325,21 @@ def surface_fields(read2d, has, z_surface_m: np.ndarray) -> tuple[dict, dict]:
         albedo = np.where(land, LAND_ALBEDO, WATER_ALBEDO)
         albedo_source = f"default of WRF's LW12 table (land {LAND_ALBEDO}, water {WATER_ALBEDO}) by {land_source}"
     dims = ("y", "x")
+    from .land_use import KINDS
     coords = {"terrain_height": (dims, np.asarray(hgt, np.float64),
                                  {"units": "m", "long_name": "terrain height above MSL", "source": hgt_source}),
               "land": (dims, land.astype(np.int8), {"long_name": "1 land, 0 water", "source": land_source}),
               "surface_albedo": (dims, np.asarray(albedo, np.float64),
-                                 {"units": "1", "long_name": "surface albedo", "source": albedo_source})}
-    return coords, {"surface_albedo_source": albedo_source, "land_source": land_source, "terrain_source": hgt_source}
+                                 {"units": "1", "long_name": "surface albedo", "source": albedo_source}),
+              "surface_kind": (dims, kind, {"long_name": "surface kind: " + ", ".join(f"{k} {n}" for k, n in
+                                                                               enumerate(KINDS)),
+                                            "source": "LU_INDEX" if has("LU_INDEX") else land_source})}
+    snow, snow_source = snow_cover(read2d, has)
+    if snow is not None:
+        coords["snow_cover"] = (dims, np.asarray(snow, np.float64),
+                                {"units": "1", "long_name": "snow-covered fraction", "source": snow_source})
+    out = {"surface_albedo_source": albedo_source, "land_source": land_source, "terrain_source": hgt_source}
+    water = np.isin(kind, WATER_KINDS)
+    if has("U10") and has("V10") and np.any(water):
+        out["wind_10m_water_m_s"] = float(np.mean(np.hypot(read2d("U10"), read2d("V10"))[water]))
+    return coords, out
