@@ -123,10 +123,10 @@ def test_skirt_faces_outwards_and_hides_the_mesh_underside():
 def test_height_field_rays_meet_the_reference_mesh():
     """The slicer's ray-height-field intersection (``Terrain.ray_hits`` on ``Terrain.surface_at``) against
     Mitsuba's intersection of the reference's PLY mesh: the same points for slanted rays over the relief."""
-    from weather_mi.kernel.scene_dict import _terrain_ply
+    from weather_mi.kernel.scene_dict import _terrain_meshes
     terrain = Terrain.of(hydrometeors(relief(), 0.3))
     wm.set_variant("llvm_ad_rgb")
-    scene = mi.load_dict({"type": "scene", "t": {"type": "ply", "filename": _terrain_ply(terrain, 2000.0)}})
+    scene = mi.load_dict({"type": "scene", "t": {"type": "ply", "filename": _terrain_meshes(terrain, 2000.0)[0][0]}})
     rng = np.random.default_rng(4)
     n = 500
     o = np.stack([rng.uniform(terrain.x[0], terrain.x[-1], n), rng.uniform(terrain.y[0], terrain.y[-1], n),

@@ -49,6 +49,11 @@ class Terrain:
     wind_m_s : float or None
         Wind speed 10 m above the water (m/s; the mean over the water columns of the file's U10/V10), None
         where the file has none; it sets the sea surface's roughness (``kernel.sea_surface``).
+    albedo_rgb : numpy.ndarray or None
+        (ny, nx, 3) albedo per render channel (``in_bands``: a band per channel), None: ``albedo`` in all three.
+    sea : bool
+        Whether a renderer draws the water columns as the sea surface (Fresnel, Cox-Munk glint at
+        ``wind_m_s``: ``kernel.sea_surface``) instead of Lambertian with ``albedo`` (``with_sea``).
     """
 
     x: np.ndarray
@@ -60,6 +65,8 @@ class Terrain:
     kind: np.ndarray | None = None
     snow: np.ndarray | None = None
     wind_m_s: float | None = None
+    albedo_rgb: np.ndarray | None = None
+    sea: bool = False
 
     @classmethod
     def of(cls, hyd) -> Terrain | None:
@@ -94,7 +101,36 @@ class Terrain:
         water body's Lambertian part)."""
         from_file = self.albedo_source in ("ALBEDO", "ALBBCK")
         a = band_albedo(self.kinds, wavelength_um, self.albedo if from_file else None, self.snow)
-        return replace(self, albedo=a, albedo_source=f"{self.albedo_source} at {wavelength_um:g} um (land_use)")
+        return replace(self, albedo=a, albedo_rgb=None,
+                       albedo_source=f"{self.albedo_source} at {wavelength_um:g} um (land_use)")
+
+    def in_bands(self, wavelengths_um) -> "Terrain":
+        """This terrain with the albedo at ``wavelengths_um[c]`` in render channel c (``albedo_rgb``; ``albedo``
+        their mean, for what reads one albedo)."""
+        rgb = np.stack([self.in_band(w).albedo for w in wavelengths_um], axis=-1)
+        return replace(self, albedo=rgb.mean(axis=-1), albedo_rgb=rgb,
+                       albedo_source=f"{self.albedo_source} at {'/'.join(f'{w:g}' for w in wavelengths_um)} um")
+
+    def with_sea(self, wind_m_s: float | None = None) -> "Terrain":
+        """This terrain with its water drawn as the sea surface (``sea``) at ``wind_m_s`` (m/s; None: the
+        file's U10/V10 over the water, else ``kernel``'s default, 5 m/s)."""
+        return replace(self, sea=True, wind_m_s=self.wind_m_s if wind_m_s is None else float(wind_m_s))
+
+    def land_at(self, x_m, y_m) -> np.ndarray:
+        """The land flag (int8: 1 land, 0 water) of the nearest column to points (x_m, y_m) (m), -1 beyond the
+        grid (more than half a spacing outside it)."""
+        x, y = np.asarray(x_m, float), np.asarray(y_m, float)
+        dx = (self.x[1] - self.x[0]) if self.x.size > 1 else 1.0
+        dy = (self.y[1] - self.y[0]) if self.y.size > 1 else 1.0
+        fi, fj = np.rint((x - self.x[0]) / dx), np.rint((y - self.y[0]) / dy)
+        inside = (fi >= 0) & (fi < self.x.size) & (fj >= 0) & (fj < self.y.size)
+        i = np.clip(np.nan_to_num(fi), 0, self.x.size - 1).astype(int)
+        j = np.clip(np.nan_to_num(fj), 0, self.y.size - 1).astype(int)
+        return np.where(inside, (~self.water[j, i]).astype(np.int8), np.int8(-1)).astype(np.int8)
+
+    def vertex_rgb(self) -> np.ndarray:
+        """(ny, nx, 3) albedo per render channel: ``albedo_rgb``, else ``albedo`` in all three."""
+        return self.albedo_rgb if self.albedo_rgb is not None else np.repeat(self.albedo[..., None], 3, axis=-1)
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A height-field triangle mesh through the column centres: vertices (ny * nx, 3) at (x, y,
@@ -238,7 +274,9 @@ class Terrain:
         pad = {"pad_width": 1, "mode": "edge"}
         return Terrain(x, y, np.pad(self.height_m, **pad), np.pad(self.land, **pad), np.pad(self.albedo, **pad),
                        self.albedo_source, None if self.kind is None else np.pad(self.kind, **pad),
-                       None if self.snow is None else np.pad(self.snow, **pad), self.wind_m_s)
+                       None if self.snow is None else np.pad(self.snow, **pad), self.wind_m_s,
+                       None if self.albedo_rgb is None else np.pad(self.albedo_rgb, ((1, 1), (1, 1), (0, 0)), "edge"),
+                       self.sea)
 
     def skirt(self, floor_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A vertical wall from the mesh's boundary down to ``floor_m`` (m), facing outwards, as

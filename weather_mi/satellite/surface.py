@@ -1,0 +1,43 @@
+"""The ground an imager sees under a domain (``satellite_scene``'s ``surface``):
+
+- ``"file"`` (default): each column's own surface in the rendered band(s): land, sea and lakes from the file
+  (LANDMASK, XLAND, LU_INDEX, else the global land mask: ``io.terrain``), land albedo per band from the
+  file's ALBEDO and its land use (``io.land_use``), snow where the file says so, the water as the sea
+  surface with its Cox-Munk sun glint (``kernel.sea_surface``; wind from the file's U10/V10 over the water,
+  else ``wind_m_s``, else 5 m/s);
+- ``"albedo"``: the file's broadband albedo per column, Lambertian everywhere (weather-mi before the surface);
+- ``"flat"``: no terrain, one flat Lambertian ground of ``ground_albedo``.
+
+A domain without a ground of its own (a demo storm, an LES field, arrays) has the flat ground whatever the
+choice.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+SURFACES = ("file", "albedo", "flat")
+
+
+def check_surface(surface: str) -> str:
+    """``surface`` if it is one of ``SURFACES``; a ValueError naming the option otherwise."""
+    if surface not in SURFACES:
+        raise ValueError(f"--surface {surface!r}: expected one of {', '.join(SURFACES)}")
+    return surface
+
+
+def with_surface(vol, bands, surface: str = "file", wind_m_s: float | None = None):
+    """``vol`` with its terrain as ``surface`` (module docstring) in ``bands`` (one ``Band``, or one per render
+    channel): the band's albedo per column and the sea surface for ``"file"``; unchanged for ``"albedo"``; no
+    terrain for ``"flat"``."""
+    check_surface(surface)
+    terrain = getattr(vol, "terrain", None)
+    if terrain is None or surface == "albedo":
+        return vol
+    if surface == "flat":
+        return replace(vol, terrain=None)
+    um = [b.wavelength_m * 1e6 for b in bands]
+    terrain = terrain.in_band(um[0]) if len(um) == 1 else terrain.in_bands(um)
+    return replace(vol, terrain=terrain.with_sea(wind_m_s))
+
+
+__all__ = ["SURFACES", "check_surface", "with_surface"]
