@@ -113,7 +113,10 @@ class Terrain:
 
     def with_sea(self, wind_m_s: float | None = None) -> "Terrain":
         """This terrain with its water drawn as the sea surface (``sea``) at ``wind_m_s`` (m/s; None: the
-        file's U10/V10 over the water, else ``kernel``'s default, 5 m/s)."""
+        file's U10/V10 over the water, else ``kernel``'s default, 5 m/s); a ValueError for a negative or
+        non-finite wind."""
+        if wind_m_s is not None and not (np.isfinite(float(wind_m_s)) and float(wind_m_s) >= 0.0):
+            raise ValueError(f"--wind {wind_m_s}: expected a wind speed >= 0 m/s (10 m above the sea)")
         return replace(self, sea=True, wind_m_s=self.wind_m_s if wind_m_s is None else float(wind_m_s))
 
     def land_at(self, x_m, y_m) -> np.ndarray:

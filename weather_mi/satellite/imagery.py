@@ -46,7 +46,7 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     ``sun_time`` (UTC): the sun of another time over the same clouds (a study of the sun's elevation);
     ``rgb``: the satellite's true-colour bands in one render (``bands.rgb_volume``; ``band_name`` unused;
     ``ground_albedo`` one value or one per channel), without molecules (their extinction is not grey);
-    ``surface``, ``wind_m_s``: the ground under a domain with its own (``satellite.surface``: "file", each
+    ``surface``, ``wind_m_s``: the ground under a domain with its own (``scene.surface``: "file", each
     column's surface in the band with the sea's glint; "albedo"; "flat": ``ground_albedo`` everywhere).
 
     Raises
@@ -75,9 +75,9 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     top = float(vol.bbox[1][2]) + RAY_START_ABOVE_M
     view = satellite_view(place, sat, resolution_km, top, max_vza_deg, source)
     azimuth, elevation, sun_meta = sun_from_time(hyd)
-    from .surface import with_surface
-    bvol = with_surface(rgb_volume(vol, bands) if rgb else band_volume(vol, b), bands if rgb else (b,), surface,
-                        wind_m_s)
+    from ..scene.surface import with_surface
+    bvol = with_surface(rgb_volume(vol, bands) if rgb else band_volume(vol, b),
+                        [x.wavelength_m * 1e6 for x in (bands if rgb else (b,))], surface, wind_m_s)
     if rayleigh:
         from ..optics.rayleigh import with_rayleigh
         bvol = with_rayleigh(bvol, b.wavelength_m, hyd["rho_air"].values)

@@ -1,4 +1,5 @@
-"""The ground an imager sees under a domain (``satellite_scene``'s ``surface``):
+"""The ground the renderers draw under a domain with a ground of its own (``satellite_scene``'s and
+``render``'s ``surface``):
 
 - ``"file"`` (default): each column's own surface in the rendered band(s): land, sea and lakes from the file
   (LANDMASK, XLAND, LU_INDEX, else the global land mask: ``io.terrain``), land albedo per band from the
@@ -8,6 +9,9 @@
 - ``"albedo"``: the file's broadband albedo per column, Lambertian everywhere (weather-mi before the surface);
 - ``"flat"``: no terrain, one flat Lambertian ground of ``ground_albedo``.
 
+``render --surface file`` draws the same surface in the camera's red, green and blue (``RGB_UM``, the phase
+tables' channel wavelengths, 0.65, 0.55, 0.45 um).
+
 A domain without a ground of its own (a demo storm, an LES field, arrays) has the flat ground whatever the
 choice.
 """
@@ -15,7 +19,12 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
+
+from ..optics.phase.table import RGB_WAVELENGTHS_M
+
 SURFACES = ("file", "albedo", "flat")
+RGB_UM = tuple(w * 1e6 for w in RGB_WAVELENGTHS_M)  # ``render``'s channels: the phase tables' wavelengths
 
 
 def check_surface(surface: str) -> str:
@@ -25,19 +34,19 @@ def check_surface(surface: str) -> str:
     return surface
 
 
-def with_surface(vol, bands, surface: str = "file", wind_m_s: float | None = None):
-    """``vol`` with its terrain as ``surface`` (module docstring) in ``bands`` (one ``Band``, or one per render
-    channel): the band's albedo per column and the sea surface for ``"file"``; unchanged for ``"albedo"``; no
-    terrain for ``"flat"``."""
+def with_surface(vol, wavelengths_um, surface: str = "file", wind_m_s: float | None = None):
+    """``vol`` with its terrain as ``surface`` (module docstring) at ``wavelengths_um`` (one, all channels
+    alike, or one per render channel): each column's albedo there and the sea surface for ``"file"``;
+    unchanged for ``"albedo"``; no terrain for ``"flat"``."""
     check_surface(surface)
     terrain = getattr(vol, "terrain", None)
     if terrain is None or surface == "albedo":
         return vol
     if surface == "flat":
         return replace(vol, terrain=None)
-    um = [b.wavelength_m * 1e6 for b in bands]
+    um = [float(w) for w in np.atleast_1d(wavelengths_um)]
     terrain = terrain.in_band(um[0]) if len(um) == 1 else terrain.in_bands(um)
     return replace(vol, terrain=terrain.with_sea(wind_m_s))
 
 
-__all__ = ["SURFACES", "check_surface", "with_surface"]
+__all__ = ["SURFACES", "RGB_UM", "check_surface", "with_surface"]
