@@ -3,7 +3,8 @@
     weather-mi info FILE | --demo supercell|cumulus|stratocumulus [--lat LAT --lon LON --date UTC]
     weather-mi render FILE | --demo supercell|cumulus|stratocumulus [options] [--scheduler ADDR | --workers N] -o out.exr
     weather-mi satellite FILE... | --demo NAME [--time all|A:B|I,J] [--satellite goes-east|goes-west|himawari|meteosat] [--band 0.64 | --rgb]
-               [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC] -o out/sat.nc
+               [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC] [--surface file|albedo|flat]
+               [--wind M/S] -o out/sat.nc
     weather-mi animate WRFOUT... [--renderer slices|reference] [options] [--scheduler ADDR | --workers N] -o DIR
     weather-mi validate -o DIR [--quick]
 """
