@@ -156,3 +156,39 @@ def test_glint_at_the_specular_point():
     assert 10 < js < ds.sizes["y"] - 10 and 10 < is_ < ds.sizes["x"] - 10 and ds.land.values[js, is_] == 0
     jg, ig = glint_peak(ds.reflectance.values / fresnel_over_mu_v(ds), ds.land.values == 0)
     assert np.hypot(jg - js, ig - is_) <= 2.0
+
+
+# --- the choices ---------------------------------------------------------------------------------------------
+def test_surface_choices_and_the_sea_mesh():
+    """``file``: the band's albedo and the water's faces a second mesh, the sea surface (Beckmann alpha^2 =
+    Cox-Munk's sigma^2 at the file's wind); ``albedo``: the volume as it was; ``flat``: no terrain; a negative
+    wind and an unknown choice refused."""
+    import weather_mi as wm
+    from weather_mi.io.land_use import band_albedo
+    from weather_mi.kernel.scene_dict import terrain_ground_dicts
+    from weather_mi.optics.volume import optical_volume
+    from weather_mi.scene.surface import with_surface
+    hyd = wm.open_wrf(shared_file(WRF_THOMPSON))
+    vol = optical_volume(hyd)
+    assert with_surface(vol, 0.64, "albedo") is vol and with_surface(vol, 0.64, "flat").terrain is None
+    t = with_surface(vol, 0.64, "file").terrain
+    assert t.sea and np.allclose(t.albedo, band_albedo(t.kinds, 0.64, vol.terrain.albedo, vol.terrain.snow))
+    wm.set_variant("llvm_ad_rgb")
+    d = terrain_ground_dicts(t, {"type": "ref", "id": "m"}, vol.bbox)
+    sea = d["terrain_sea"]["bsdf"]
+    assert sea["type"] == "roughplastic" and sea["distribution"] == "beckmann"
+    assert sea["alpha"] ** 2 == pytest.approx(0.003 + 0.00512 * hyd.attrs["wind_10m_water_m_s"])
+    assert d["terrain"]["bsdf"]["type"] == "diffuse"
+    with pytest.raises(ValueError, match="--wind"):
+        with_surface(vol, 0.64, "file", wind_m_s=-2.0)
+    with pytest.raises(ValueError, match="--surface"):
+        with_surface(vol, 0.64, "glossy")
+
+
+def test_a_geogrid_is_an_input_without_time():
+    from weather_mi.io.sources import open_source
+    hyd = open_source(shared_file(GEO_MERCATOR))
+    assert float(hyd["q_cloud"].max()) == 0.0 and hyd.sizes["y"] == 130 and hyd.sizes["x"] == 210
+    assert "valid_time" not in hyd.attrs
+    with pytest.raises(ValueError, match="geogrid"):
+        open_source(shared_file(GEO_MERCATOR), time=0)

@@ -12,7 +12,7 @@ at 0.64 um. Prints
    fitted to its log around the brightest sea pixel) against the specular point computed here from the sun (the Astronomical Almanac's
    low-precision formulas) and the satellite's position on a sphere, in pixels (target <= 2).
 
-    python validation/surface_check.py [--data ../shared/data] [--spp 16]
+    python validation/surface_check.py [--data ../shared/data] [--spp 16] [--figure docs/images/satellite_surface.png]
 """
 from __future__ import annotations
 
@@ -123,9 +123,11 @@ def main(argv=None) -> dict:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--data", type=Path, default=Path(__file__).resolve().parents[1] / ".." / "shared" / "data")
     p.add_argument("--spp", type=int, default=16)
+    p.add_argument("--figure", type=Path, default=None, help="a PNG of the three checks")
     args = p.parse_args(argv)
     out = {}
     ds, _ = render(args.data, "2024-04-10T12:30", args.spp, 30.0)
+    whole = ds
     inside = ds.land.values >= 0
     ref = basemap_land(ds.lat.values, ds.lon.values)
     out["mask_agreement"] = float(np.mean((ds.land.values == 1)[inside] == ref[inside]))
@@ -144,7 +146,33 @@ def main(argv=None) -> dict:
     out["glint_offset_px"] = float(np.hypot(jg - js, ig - is_))
     print(f"glint peak at pixel ({jg:.2f}, {ig:.2f}); specular point {lat0:.3f}, {lon0:.3f} at pixel ({js}, {is_}): "
           f"{out['glint_offset_px']:.2f} pixels apart (10 km pixels)")
+    if args.figure:
+        figure(args.figure, whole, ref, ds, (js, is_), (jg, ig))
     return out
+
+
+def figure(path: Path, whole, ref, glint, specular, peak) -> None:
+    """Three panels: the whole domain at 0.64 um, where its land/sea mask and GSHHS's disagree, the glint."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 3, figsize=(13, 3.6), constrained_layout=True)
+    ax[0].imshow(whole.reflectance.values, cmap="gray", vmin=0, vmax=0.3)
+    ax[0].set_title("GOES-East 0.64 um, 30 km: geo_em Mercator, clear sky", fontsize=9)
+    inside = whole.land.values >= 0
+    show = np.where(inside, (whole.land.values == 1).astype(float) + 2 * ((whole.land.values == 1) != ref), np.nan)
+    ax[1].imshow(show, cmap="viridis", vmin=0, vmax=3, interpolation="nearest")
+    ax[1].set_title("land/sea (global-land-mask) vs GSHHS: yellow-green = disagree", fontsize=9)
+    ax[2].imshow(glint.reflectance.values, cmap="gray", vmin=0, vmax=float(np.nanmax(glint.reflectance.values)))
+    ax[2].plot(specular[1], specular[0], "rx", ms=9, label="specular point (sun, satellite)")
+    ax[2].plot(peak[1], peak[0], "c+", ms=9, label="glint centre (fit)")
+    ax[2].legend(fontsize=7, loc="upper left")
+    ax[2].set_title("glint off NE Brazil, 10 km, 2024-03-14 12:19 UTC, calm sea", fontsize=9)
+    for a in ax:
+        a.set_xticks([]), a.set_yticks([])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=80)
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":
