@@ -192,3 +192,24 @@ def test_a_geogrid_is_an_input_without_time():
     assert "valid_time" not in hyd.attrs
     with pytest.raises(ValueError, match="geogrid"):
         open_source(shared_file(GEO_MERCATOR), time=0)
+
+
+def test_land_sources_in_order():
+    """LANDMASK, else XLAND, else LU_INDEX (its water and lakes), else the global mask at the columns'
+    latitude/longitude, else land assumed; the source recorded."""
+    from weather_mi.io.land_use import KIND
+    from weather_mi.io.terrain import surface_fields
+    lat, lon = np.array([[-8.0, 0.0]]), np.array([[-62.0, -30.0]])  # the Amazon, the equatorial Atlantic
+    fields = {"LANDMASK": np.array([[0.0, 1.0]]), "XLAND": np.array([[2.0, 1.0]]), "LU_INDEX": np.array([[16.0, 28.0]])}
+    attrs = {"MMINLU": "USGS"}
+
+    def land(*names, latlon=(lat, lon)):
+        coords, out = surface_fields(lambda n: fields[n], lambda n: n in names, np.zeros((1, 2)), attrs, latlon, "f")
+        return coords["land"][1].tolist()[0], coords["surface_kind"][1].tolist()[0], out["land_source"]
+
+    assert land("LANDMASK", "XLAND", "LU_INDEX") == ([0, 1], [KIND["sea"], KIND["land"]], "LANDMASK")
+    assert land("XLAND", "LU_INDEX")[::2] == ([0, 1], "XLAND")
+    assert land("LU_INDEX") == ([0, 0], [KIND["sea"], KIND["lake"]], "LU_INDEX (USGS)")
+    got = land()
+    assert got[:2] == ([1, 0], [KIND["land"], KIND["sea"]]) and got[2].startswith("global-land-mask")
+    assert land(latlon=None) == ([1, 1], [KIND["land"]] * 2, "none in the file: land assumed")
