@@ -147,15 +147,24 @@ def test_clear_land_brighter_than_clear_sea(geo_product):
     assert np.nanmax(r[sea]) > np.mean(r[land])  # the glint outshines the land
 
 
-def test_glint_at_the_specular_point():
-    from validation.surface_check import GLINT_BOX, GLINT_TIME, fresnel_over_mu_v, glint_peak, render, specular_point
-    ds, scene = render(shared_file(GEO_MERCATOR).parents[1], GLINT_TIME, 8, 10.0, GLINT_BOX, wind=0.0)
-    lat0, lon0 = specular_point(GLINT_TIME, scene.satellite.sub_lon_deg)
-    d = (ds.lat.values - lat0) ** 2 + ((ds.lon.values - lon0) * np.cos(np.radians(lat0))) ** 2
-    js, is_ = np.unravel_index(np.argmin(d), d.shape)
+@pytest.mark.parametrize("box, km", [(None, 10.0), ((None, None), 30.0)], ids=["part", "whole domain"])
+def test_glint_at_the_specular_point(box, km):
+    """On 60 x 60 columns around the specular point (10 km pixels) and on the whole 6300 km domain (30 km
+    pixels; the specular point 2500 km from the centre, whose sun lights the render: ``satellite.glint``)."""
+    from validation.surface_check import GLINT_BOX, GLINT_TIME, glint_offset, render
+    ds, scene = render(shared_file(GEO_MERCATOR).parents[1], GLINT_TIME, 8, km, box or GLINT_BOX, wind=0.0)
+    (js, is_), (jg, ig) = glint_offset(ds, scene)
     assert 10 < js < ds.sizes["y"] - 10 and 10 < is_ < ds.sizes["x"] - 10 and ds.land.values[js, is_] == 0
-    jg, ig = glint_peak(ds.reflectance.values / fresnel_over_mu_v(ds), ds.land.values == 0)
     assert np.hypot(jg - js, ig - is_) <= 2.0
+
+
+def test_rotation_takes_one_half_vector_to_the_other():
+    from weather_mi.satellite.glint import rotate_towards
+    rng = np.random.default_rng(3)
+    a, b, z = (v / np.linalg.norm(v, axis=-1, keepdims=True) for v in rng.normal(size=(3, 50, 3)))
+    np.testing.assert_allclose(rotate_towards(a, a, b), b, atol=1e-12)
+    np.testing.assert_allclose(np.sum(rotate_towards(z, a, b) * b, -1), np.sum(z * a, -1), atol=1e-12)
+    np.testing.assert_allclose(rotate_towards(z, a, a), z, atol=1e-12)
 
 
 # --- the choices ---------------------------------------------------------------------------------------------

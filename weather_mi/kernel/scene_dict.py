@@ -156,25 +156,29 @@ def _terrain_meshes(terrain, skirt_floor_m: float) -> list:
         return [(_ply_file(np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.r_[rgb, srgb]), False)]
     sea_face = terrain.water.ravel()[f].sum(axis=1) >= 2
     land = _ply_file(np.concatenate([v, sv]), np.concatenate([f[~sea_face], sf + len(v)]), np.r_[rgb, srgb])
-    return [(land, False)] + ([(_ply_file(v, f[sea_face], rgb), True)] if np.any(sea_face) else [])
+    normals = None if terrain.sea_normal is None else terrain.sea_normal.reshape(-1, 3)
+    return [(land, False)] + ([(_ply_file(v, f[sea_face], rgb, normals), True)] if np.any(sea_face) else [])
 
 
-def _ply_file(v, f, rgb) -> str:
-    """A binary PLY of vertices ``v`` (N, 3), triangles ``f`` and per-vertex ``rgb`` (float32 x, y, z and r, g,
-    b, clipped to [0, 1]) in a directory of this process removed at exit, named by its content (the same
-    mesh: the same file)."""
+def _ply_file(v, f, rgb, normals=None) -> str:
+    """A binary PLY of vertices ``v`` (N, 3), triangles ``f``, per-vertex ``rgb`` (float32 x, y, z and r, g, b,
+    clipped to [0, 1]) and, where given, shading ``normals`` (nx, ny, nz) in a directory of this process
+    removed at exit, named by its content (the same mesh: the same file)."""
     import hashlib
     import tempfile
     global _PLY_DIR
-    vert = np.empty(len(v), dtype=[(n, "<f4") for n in ("x", "y", "z", "r", "g", "b")])
+    names = ("x", "y", "z", "r", "g", "b") + (() if normals is None else ("nx", "ny", "nz"))
+    vert = np.empty(len(v), dtype=[(n, "<f4") for n in names])
     for i, n in enumerate("xyz"):
         vert[n] = v[:, i]
     for i, n in enumerate("rgb"):
         vert[n] = np.clip(rgb[:, i], 0.0, 1.0)
+    for i, n in enumerate(("nx", "ny", "nz") if normals is not None else ()):
+        vert[n] = normals[:, i]
     faces = np.empty(len(f), dtype=[("n", "u1"), ("i", "<i4", (3,))])
     faces["n"], faces["i"] = 3, f
     header = ("ply\nformat binary_little_endian 1.0\n"
-              f"element vertex {len(v)}\n" + "".join(f"property float {n}\n" for n in "xyzrgb")
+              f"element vertex {len(v)}\n" + "".join(f"property float {n}\n" for n in names)
               + f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n").encode()
     data = header + vert.tobytes() + faces.tobytes()
     if _PLY_DIR is None:
@@ -233,7 +237,8 @@ def terrain_ground_dicts(terrain, medium_ref: dict, bbox) -> dict:
     out = {}
     for k, (ply, is_sea) in enumerate(_terrain_meshes(terrain, lo - 3.0 * gap)):
         out["terrain" if k == 0 else "terrain_sea"] = {
-            "type": "ply", "filename": ply, "face_normals": True, "exterior": medium_ref,
+            "type": "ply", "filename": ply, "face_normals": not (is_sea and terrain.sea_normal is not None),
+            "exterior": medium_ref,
             "bsdf": sea_bsdf if is_sea else {"type": "diffuse",
                                              "reflectance": {"type": "mesh_attribute", "name": "vertex_color"}}}
     return {**out, "ground": surround}

@@ -38,6 +38,8 @@ def fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
             h.update(np.ascontiguousarray(terrain.vertex_rgb(), np.float64).tobytes())
             h.update(np.ascontiguousarray(terrain.water, np.int8).tobytes())
             h.update(json.dumps([bool(terrain.sea), terrain.wind_m_s]).encode())
+            if terrain.sea_normal is not None:
+                h.update(np.ascontiguousarray(terrain.sea_normal, np.float64).tobytes())
     return h.hexdigest()
 
 

@@ -10,7 +10,7 @@ molecular scattering, present only with ``rayleigh``).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -78,6 +78,10 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     from ..scene.surface import with_surface
     bvol = with_surface(rgb_volume(vol, bands) if rgb else band_volume(vol, b),
                         [x.wavelength_m * 1e6 for x in (bands if rgb else (b,))], surface, wind_m_s)
+    sun = Sun(azimuth, elevation, (1.0, 1.0, 1.0))
+    if bvol.terrain is not None and bvol.terrain.sea:  # the glint where each column's own sun puts it
+        from .glint import sea_normals
+        bvol = replace(bvol, terrain=replace(bvol.terrain, sea_normal=sea_normals(place, sat, sun_meta, sun)))
     if rayleigh:
         from ..optics.rayleigh import with_rayleigh
         bvol = with_rayleigh(bvol, b.wavelength_m, hyd["rho_air"].values)
@@ -86,7 +90,7 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     cam = Camera.orthographic(center=((x0 + x1) / 2, (y0 + y1) / 2, top + 1000.0), direction=(0.0, 0.0, -1.0),
                               width=extent, height=extent)  # nominal: the rays come from the table
     w, h = view.size
-    spec = SceneSpec(camera=cam, sun=Sun(azimuth, elevation, (1.0, 1.0, 1.0)), sky=None,
+    spec = SceneSpec(camera=cam, sun=sun, sky=None,
                      ground=Ground(albedo=ground_albedo), width=w, height=h, seed=seed, rays=view.rays)
     return SatelliteScene(spec, bvol, view, sat, b, sun_meta, bands)
 
