@@ -156,6 +156,12 @@ class Terrain:
         a = self.albedo
         return float(np.mean(np.concatenate([a[0], a[-1], a[1:-1, 0], a[1:-1, -1]])))
 
+    def edge_rgb(self) -> np.ndarray:
+        """(3,) the mean albedo per render channel of the grid's boundary columns (``vertex_rgb``): the
+        surround's beyond the apron."""
+        a = self.vertex_rgb()
+        return np.mean(np.concatenate([a[0], a[-1], a[1:-1, 0], a[1:-1, -1]]), axis=0)
+
     def _cells(self, x_m, y_m):
         """Cell indices (j, i, j + 1, i + 1), the position (u, v) in the cell, the lower-triangle mask
         (u >= v: triangle (j, i), (j, i + 1), (j + 1, i + 1); else (j, i), (j + 1, i + 1), (j + 1, i)),
@@ -235,13 +241,15 @@ class Terrain:
                 break
         return t_hit
 
-    def scene_hits(self, origins, dirs, apron_m: float = TERRAIN_APRON_M, floor_m: float | None = None):
+    def scene_hits(self, origins, dirs, apron_m: float = TERRAIN_APRON_M, floor_m: float | None = None,
+                   rgb: bool = False):
         """The first hit of each ray (N, 3) with the ground a rendered scene has over this terrain, the
         path tracer's (``kernel.scene_dict.terrain_ground_dicts``): the mesh, level for ``apron_m`` past the grid's
         edge (``with_apron``), a vertical skirt from the apron's edge down to the lowest height (``skirt``),
         and beyond it a level surround at ``floor_m`` (default: the lowest height; the path tracer's is a
         few ray offsets below it) with the edge albedo (``edge_albedo``). Returns (distance (N,), inf where
-        none; albedo (N,); unit normal (N, 3))."""
+        none; albedo (N,), or with ``rgb`` (N, 3) per render channel (``vertex_rgb``, ``edge_rgb``); unit
+        normal (N, 3))."""
         o, d = np.asarray(origins, float), np.asarray(dirs, float)
         lo_xy = np.array([self.x[0] - apron_m, self.y[0] - apron_m])
         hi_xy = np.array([self.x[-1] + apron_m, self.y[-1] + apron_m])
@@ -270,6 +278,10 @@ class Terrain:
         on_surround = np.isfinite(t) & (t == t_surround) & ~on_skirt
         normal = np.where(on_skirt[:, None], wall, np.where(on_surround[:, None], [0.0, 0.0, 1.0], normal))
         albedo = np.where(on_surround, self.edge_albedo(), albedo)
+        if rgb:
+            cells, channels = self._cells(p[:, 0], p[:, 1]), self.vertex_rgb()
+            per = np.stack([self._linear(channels[..., c], cells)[0] for c in range(3)], -1)
+            albedo = np.where(on_surround[:, None], self.edge_rgb(), per)
         return t, albedo, normal
 
     def with_apron(self, distance_m: float) -> "Terrain":

@@ -224,9 +224,8 @@ def terrain_ground_dicts(terrain, medium_ref: dict, bbox) -> dict:
     cx, cy = float(np.mean(terrain.x)), float(np.mean(terrain.y))
     lo, gap = terrain_floor_m(terrain), terrain_gap_m(terrain, bbox)
     half = 1e7
-    rgb, water = terrain.vertex_rgb(), terrain.water
-    ring = np.concatenate([rgb[0], rgb[-1], rgb[1:-1, 0], rgb[1:-1, -1]]) if terrain.albedo_rgb is not None else None
-    edge = [terrain.edge_albedo()] * 3 if ring is None else ring.mean(axis=0).tolist()
+    water = terrain.water
+    edge = [terrain.edge_albedo()] * 3 if terrain.albedo_rgb is None else terrain.edge_rgb().tolist()
     bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": edge}}
     sea_bsdf = _sea_bsdf(terrain) if terrain.sea else None
     if terrain.sea and np.mean(np.concatenate([water[0], water[-1], water[1:-1, 0], water[1:-1, -1]])) > 0.5:
