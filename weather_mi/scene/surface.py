@@ -10,7 +10,8 @@
 - ``"flat"``: no terrain, one flat Lambertian ground of ``ground_albedo``.
 
 ``render --surface file`` draws the same surface in the camera's red, green and blue (``RGB_UM``, the phase
-tables' channel wavelengths, 0.65, 0.55, 0.45 um).
+tables' channel wavelengths, 0.65, 0.55, 0.45 um); the slicer, handed the same volume, its albedo per channel
+(``Terrain.albedo_rgb``; the water Lambertian, without the glint).
 
 A domain without a ground of its own (a demo storm, an LES field, arrays) has the flat ground whatever the
 choice.
