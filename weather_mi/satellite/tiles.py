@@ -195,10 +195,9 @@ def render_tiles(plan: TiledSatellite, client=None, *, optics: dict | None = Non
             results.append(render_tile(job))
             on_tile and on_tile(results[-1])
     else:
-        from distributed import as_completed
         futures = [client.submit(_render_tile_task, job, pure=False, key=f"weather-mi-tile-{job.tile.index}-"
                                  f"{time.time_ns()}") for job in jobs]
-        for fut in as_completed(futures):
+        for fut in futures:  # in tile order; the workers render them as they come
             results.append(fut.result())
             on_tile and on_tile(results[-1])
     return assemble(plan, results, time.perf_counter() - t0)
