@@ -57,7 +57,8 @@ def satellite_tiles_command(args, resolution: float, nc: Path, exr: Path, png: P
         ds, img, figs = st.render_tiles(plan, client, optics=optics,
                                         read_sizes=args.sizes not in ("physical", "paper"), **estimator,
                                         on_tile=lambda r: print(f"  tile {r['tile'].index + 1}/{len(plan.tiles)}: "
-                                                                f"grid {r['grid_shape']}, {r['seconds']:.1f} s",
+                                                                f"grid {r['grid_shape']}, {r['seconds']:.1f} s, "
+                                                                f"worker peak {r['peak_rss_bytes'] / 1e9:.2f} GB",
                                                                 flush=True))
     shown = shown_dataset(ds, img, args.denoise)
     write_satellite(ds, img, nc, exr)
