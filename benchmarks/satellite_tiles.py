@@ -62,7 +62,7 @@ def main(argv=None) -> int:
     ap.add_argument("--tmp", type=Path, default=Path("/tmp/weather-mi-tiles"))
     ap.add_argument("--resolution", type=float, default=1.0, help="pixel size (km)")
     ap.add_argument("--tile-size", type=int, default=128)
-    ap.add_argument("--halo", type=float, default=10.0, help="km")
+    ap.add_argument("--halo", type=float, default=30.0, help="km")
     ap.add_argument("--spp", type=int, default=4)
     ap.add_argument("--samples", type=int, default=2)
     ap.add_argument("--workers", type=int, nargs="+", default=[64, 256], help="cluster sizes to project for")

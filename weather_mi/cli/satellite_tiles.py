@@ -45,7 +45,8 @@ def satellite_tiles_command(args, resolution: float, nc: Path, exr: Path, png: P
     plan = st.tiled_satellite(args.file, parse_time(args.time), args.satellite, args.band or "0.64", resolution,
                               tile_px=args.tile_size, halo_km=args.halo, rayleigh=args.rayleigh,
                               ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
-                              seed=args.seed, lat=args.lat, lon=args.lon, date=args.date)
+                              seed=args.seed, lat=args.lat, lon=args.lon, date=args.date, surface=args.surface,
+                              wind_m_s=args.wind)
     w, h = plan.scene.view.size
     nz, ny, nx = plan.outline.shape
     cols = max(t.cells for t in plan.tiles)

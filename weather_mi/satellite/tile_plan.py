@@ -23,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 DEFAULT_TILE_PX = 64       # a tile's side in pixels
-DEFAULT_HALO_KM = 10.0     # the diffusion margin (docs/tiles.md: the image within noise of one process's)
+DEFAULT_HALO_KM = 30.0     # the smallest measured halo whose image is within noise of one process's (docs/tiles.md)
 
 
 @dataclass(frozen=True)

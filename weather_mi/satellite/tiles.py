@@ -41,6 +41,10 @@ class TileJob:
     optics: dict = field(default_factory=dict)
     estimator: dict = field(default_factory=dict)
     variant: str | None = None
+    surface: str = "file"          # ``scene.surface``: the ground under a domain with its own
+    wind_m_s: float | None = None
+    sun_meta: dict = field(default_factory=dict)   # ``place.sun_from_time``'s, of the whole domain
+    satellite: str = "goes-east"
 
 
 @dataclass(frozen=True)
@@ -78,7 +82,7 @@ def render_tile(job: TileJob) -> dict:
     optics["sizes"] = optics.get("sizes") or default_sizes(hyd)
     vol = optical_volume(hyd, **optics)
     b = band(job.band)
-    bvol = band_volume(vol, b)
+    bvol = _with_surface(job, band_volume(vol, b), b, hyd)
     if job.rayleigh:
         from ..optics.rayleigh import with_rayleigh
         bvol = with_rayleigh(bvol, b.wavelength_m, hyd["rho_air"].values)
@@ -97,6 +101,24 @@ def render_tile(job: TileJob) -> dict:
             "spp": int(img.metadata.get("spp", 0)), "seconds": time.perf_counter() - t0, "read_seconds": t_read,
             "grid_shape": grid_shape, "volume_bytes": nbytes,
             "peak_rss_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024}
+
+
+def _with_surface(job: TileJob, bvol, b, hyd):
+    """The sub-box's ground as ``imagery.satellite_scene`` puts it (``scene.surface``; the sea's glint from each
+    column's own sun, ``glint.sea_normals``, on the sub-box's columns)."""
+    from dataclasses import replace
+
+    from ..scene.place import place_of
+    from ..scene.spec import Sun
+    from ..scene.surface import with_surface
+    from .geostationary import satellite
+    bvol = with_surface(bvol, [b.wavelength_m * 1e6], job.surface, job.wind_m_s)
+    place = place_of(hyd) if "lat" in hyd.coords else None
+    if bvol.terrain is not None and bvol.terrain.sea and place is not None:
+        from .glint import sea_normals
+        normals = sea_normals(place, satellite(job.satellite), job.sun_meta, Sun(job.sun[0], job.sun[1]))
+        bvol = replace(bvol, terrain=replace(bvol.terrain, sea_normal=normals))
+    return bvol
 
 
 def _volume_bytes(vol) -> int:
@@ -119,14 +141,19 @@ class TiledSatellite:
     tiles: tuple
     halo_km: float
     tile_px: int
+    surface: str = "file"
+    wind_m_s: float | None = None
 
 
 def tiled_satellite(path, time=None, sat="goes-east", band_name: str = "0.64", resolution_km: float = 1.0, *,
                     tile_px: int = DEFAULT_TILE_PX, halo_km: float = DEFAULT_HALO_KM, rayleigh: bool = False,
                     ground_albedo: float = 0.06, seed: int = 0, max_vza_deg: float = 80.0, lat=None, lon=None,
-                    date=None) -> TiledSatellite:
+                    date=None, surface: str = "file", wind_m_s: float | None = None) -> TiledSatellite:
     """The plan of a tiled satellite image of one time of the wrfout ``path`` (``imagery.satellite_scene``'s
-    view and sun from the outline; ``lat``/``lon``/``date`` place an ideal case)."""
+    view and sun from the outline; ``lat``/``lon``/``date`` place an ideal case; ``surface``, ``wind_m_s``:
+    the ground, as ``satellite_scene``'s, built per tile)."""
+    from ..scene.surface import check_surface
+    check_surface(surface)
     from ..scene.place import place_of, sun_from_time
     from ..scene.spec import Camera, Ground, SceneSpec, Sun
     from .bands import band, check_band_on
@@ -156,7 +183,7 @@ def tiled_satellite(path, time=None, sat="goes-east", band_name: str = "0.64", r
     species = ("rayleigh",) if rayleigh else ()
     vol = OutlineVolume(outline.bbox, species, {"source": str(path)})
     return TiledSatellite(SatelliteScene(spec, vol, view, sat, b, sun_meta, (), place.source), outline, tiles,
-                          float(halo_km), int(tile_px))
+                          float(halo_km), int(tile_px), surface, wind_m_s)
 
 
 def tile_jobs(plan: TiledSatellite, *, optics: dict | None = None, read_sizes: bool = True,
@@ -171,7 +198,8 @@ def tile_jobs(plan: TiledSatellite, *, optics: dict | None = None, read_sizes: b
         jobs.append(TileJob(o.path, o.time_index, (o.dz_m, o.bottom_m, o.top_m, o.dx_m, o.dy_m), t, rays,
                             (spec.sun.azimuth, spec.sun.elevation), plan.scene.band.name,
                             "rayleigh" in plan.scene.vol.species, float(spec.ground.albedo[0]), int(spec.seed),
-                            read_sizes, dict(optics or {}), dict(estimator), variant))
+                            read_sizes, dict(optics or {}), dict(estimator), variant, plan.surface, plan.wind_m_s,
+                            dict(plan.scene.sun_meta), plan.scene.satellite.name))
     return jobs
 
 
