@@ -108,19 +108,20 @@ def test_tiles_render_on_workers_whose_budget_cannot_hold_the_domain(monkeypatch
     from weather_mi.io import budget
     from weather_mi.io.wrf import open_wrf
     from weather_mi.satellite import tiles as st
-    whole = budget.estimate_bytes((51, 100, 100), "reading_sizes")  # the 51 levels of the height grid
+    whole = budget.estimate_bytes((51, 100, 100), "optics")  # the larger step's need on the 51-level grid
     monkeypatch.setenv("WEATHER_MI_MAX_MEMORY_GB", f"{whole / 2 / 1e9:.4f}")  # spawned workers inherit it
     plan = st.tiled_satellite(DATA, None, resolution_km=8.0, tile_px=4, halo_km=0.0, **PLACE)
-    assert len(plan.tiles) == 16 and max(t.cells for t in plan.tiles) * 51 * 76 < whole / 2
+    assert len(plan.tiles) == 16 and max(t.cells for t in plan.tiles) * 51 * 64 < whole / 2
     from weather_mi.kernel.variant import set_variant
-    jobs = st.tile_jobs(plan, variant=set_variant(), spp=2)
+    fast = dict(optics=dict(species="physical", sizes="physical", phase="paper"), read_sizes=False, spp=1)
+    jobs = st.tile_jobs(plan, variant=set_variant(), **fast)
     here = [st.render_tile(jobs[k]) for k in (0, 5)]
     lc = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0")
     client = distributed.Client(lc, set_as_default=False)
     try:
         with pytest.raises(DomainTooLargeError):
             client.submit(open_wrf, str(DATA), pure=False).result()
-        ds, img, figs = st.render_tiles(plan, client, spp=2)
+        ds, img, figs = st.render_tiles(plan, client, **fast)
     finally:
         client.close()
         lc.close()
@@ -130,3 +131,23 @@ def test_tiles_render_on_workers_whose_budget_cannot_hold_the_domain(monkeypatch
         np.testing.assert_array_equal(img.radiance[t.rows, t.cols], r["radiance"])
         np.testing.assert_allclose(ds.reflectance.values[t.rows, t.cols], r["radiance"].mean(axis=2), rtol=1e-6)
     assert np.isfinite(ds.reflectance.values).all() and int(ds.cloud.sum()) > 0
+
+
+PLATEAU = DATA.parent / "wrf_d01_allvars_cropped.nc"
+
+
+@pytest.mark.skipif(not PLATEAU.is_file(), reason=f"real WRF plateau file not found at {PLATEAU}")
+def test_one_tile_keeps_the_files_ground_bit_for_bit():
+    """The Tibetan-plateau wrfout (Lambert grid, terrain above 4 km, its own land and albedo; the ground of
+    ``scene.surface``): one tile holding the domain is the one-process image bit for bit, land mask included."""
+    from weather_mi.io.wrf import open_wrf
+    from weather_mi.optics.volume import default_sizes, optical_volume
+    from weather_mi.satellite import imagery as si, tiles as st
+    hyd = open_wrf(PLATEAU, 1)
+    vol = optical_volume(hyd, species="physical", sizes=default_sizes(hyd))
+    ds1, _ = si.render_satellite(si.satellite_scene(hyd, vol, "himawari", "0.64", 12.0), spp=2, progress=False)
+    plan = st.tiled_satellite(PLATEAU, 1, "himawari", "0.64", 12.0, tile_px=1000, halo_km=1e4)
+    ds, _, _ = st.render_tiles(plan, optics=dict(species="physical"), spp=2)
+    assert "land" in ds1 and int(ds1.land.max()) == 1
+    for name in ("reflectance", "land", "cloud", "in_domain"):
+        np.testing.assert_array_equal(ds[name].values, ds1[name].values)

@@ -3,8 +3,8 @@
     weather-mi info FILE | --demo supercell|cumulus|stratocumulus [--lat LAT --lon LON --date UTC]
     weather-mi render FILE | --demo supercell|cumulus|stratocumulus [options] [--scheduler ADDR | --workers N] -o out.exr
     weather-mi satellite FILE... | --demo NAME [--time all|A:B|I,J] [--satellite goes-east|goes-west|himawari|meteosat] [--band 0.64 | --rgb]
-               [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC]
-               [--tile-size PX [--halo KM] [--scheduler ADDR | --workers N]] -o out/sat.nc
+               [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC] [--surface file|albedo|flat]
+               [--wind M/S] [--tile-size PX [--halo KM] [--scheduler ADDR | --workers N]] -o out/sat.nc
     weather-mi animate WRFOUT... [--renderer slices|reference] [options] [--scheduler ADDR | --workers N] -o DIR
     weather-mi validate -o DIR [--quick]
 """
@@ -96,6 +96,8 @@ def _render(args, out, png_path, ckpt) -> Path:
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase,
                          sizes=args.sizes or default_sizes(hyd), size_classes=args.size_classes,
                          periodic=periodic_value(args))
+    from ..scene.surface import RGB_UM, with_surface
+    vol = with_surface(vol, RGB_UM, args.surface, args.wind)  # the ground's surface in red, green and blue
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     spec, sun_meta = scene_spec(args, vol), None
     if args.sun_from_time:
@@ -200,7 +202,7 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
                                ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
-                               seed=args.seed)
+                               seed=args.seed, **surface_kw(args))
     w, h = scene.view.size
     print(f"{scene.satellite.name} (sub-satellite longitude {scene.satellite.sub_lon_deg}), band {scene.band.name} um: "
           f"{w} x {h} pixels of {resolution:g} km, view zenith {scene.view.view_zenith_deg.min():.1f}-"
@@ -228,7 +230,7 @@ def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt) -> Path:
     from ..satellite import truecolor as tc
     from ..reference.cluster import session
     scenes = tc.true_color_scenes(hyd, vol, args.satellite, resolution, rayleigh=args.rayleigh,
-                                  ground_albedo=args.ground_albedo, seed=args.seed)
+                                  ground_albedo=args.ground_albedo, seed=args.seed, **surface_kw(args))
     s = scenes[0]
     w, h = s.view.size
     names = ", ".join(sc.band.name for sc in scenes) if len(scenes) > 1 else ", ".join(b.name for b in s.bands)
@@ -261,6 +263,23 @@ def open_placed(args):
         return hyd
     from ..scene.place import assume_place
     return assume_place(hyd, args.lat, args.lon, args.date)
+
+
+def add_surface_options(p, default: str) -> None:
+    """``--surface`` and ``--wind``: the ground under a domain with its own (``scene.surface``)."""
+    from ..scene.surface import SURFACES
+    p.add_argument("--surface", default=default, choices=SURFACES,
+                   help="the ground of a file with one (HGT, land, albedo): file: each column's land use and albedo "
+                        "in the band(s), the sea and lakes with their sun glint (Cox-Munk); albedo: the file's "
+                        "broadband albedo, Lambertian; flat: one flat ground (--ground-albedo)"
+                        f" (default {default})")
+    p.add_argument("--wind", type=float, default=None,
+                   help="wind speed 10 m above the sea (m/s) for the glint; default the file's U10/V10, else 5")
+
+
+def surface_kw(args) -> dict:
+    """The ``satellite_scene`` keywords of ``--surface`` and ``--wind``."""
+    return {"surface": args.surface, "wind_m_s": args.wind}
 
 
 def add_place_options(p) -> None:
@@ -384,6 +403,7 @@ def _add_render_parser(sub) -> None:
     render.add_argument("--sun-from-time", action="store_true",
                         help="the sun where and when the data is (its centre, its valid time; NREL SPA), instead "
                              "of --sun-azimuth/--sun-elevation")
+    add_surface_options(render, "albedo")
     render.add_argument("--seed", type=int, default=0)
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")
     render.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
@@ -422,6 +442,7 @@ def _add_satellite_parser(sub) -> None:
     sat.add_argument("--ground-albedo", type=float, default=None,
                      help="surface albedo where the file has none (default 0.06, the sea; with --rgb the sea "
                           "per band, 0.06 at 0.47 um to 0.02 at 0.86 um)")
+    add_surface_options(sat, "file")
     add_flags(sat, SATELLITE_ESTIMATOR)
     sat.add_argument("--seed", type=int, default=0)
     sat.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,

@@ -137,28 +137,49 @@ def ground_dict(spec: SceneSpec, vol_bbox) -> dict:
 _PLY_DIR = None
 
 
-def _terrain_ply(terrain, skirt_floor_m: float) -> str:
-    """A binary PLY of ``Terrain.mesh`` with an apron (``Terrain.with_apron``, ``TERRAIN_APRON_M``: the edge's
-    heights continued past the domain) and its ``Terrain.skirt`` down to ``skirt_floor_m`` (below the
-    surround: no gap for a grazing ray to pass under the wall) (float32 x, y, z and r, g, b = the albedo,
-    grey) in a directory
-    of this process removed at exit, named by its content (the same terrain: the same file)."""
+def _terrain_meshes(terrain, skirt_floor_m: float) -> list:
+    """The ground mesh of ``terrain``: ``Terrain.mesh`` with an apron (``Terrain.with_apron``,
+    ``TERRAIN_APRON_M``: the edge's heights continued past the domain) and its ``Terrain.skirt`` down to
+    ``skirt_floor_m`` (below the surround: no gap for a grazing ray to pass under the wall), as [(PLY file,
+    is_sea)]: one Lambertian mesh (vertex colours: the albedo per channel, ``Terrain.vertex_rgb``), and, where
+    ``terrain.sea``, the water's faces (two or three water corners) as a second mesh for the sea surface."""
+    terrain = terrain.with_apron(TERRAIN_APRON_M)
+    v, f, albedo = terrain.mesh()
+    sv, sf, _ = terrain.skirt(skirt_floor_m)  # the apron's edge a cliff, not the mesh's underside
+    rgb_grid = terrain.vertex_rgb()
+    if terrain.albedo_rgb is None:
+        rgb = np.repeat(albedo[:, None], 3, axis=1)
+        srgb = np.repeat(terrain.skirt(skirt_floor_m)[2][:, None], 3, axis=1)
+    else:
+        rgb = rgb_grid.reshape(-1, 3)
+        srgb = np.stack([replace(terrain, albedo=rgb_grid[..., c]).skirt(skirt_floor_m)[2] for c in range(3)], 1)
+    if not terrain.sea:
+        return [(_ply_file(np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.r_[rgb, srgb]), False)]
+    sea_face = terrain.water.ravel()[f].sum(axis=1) >= 2
+    land = _ply_file(np.concatenate([v, sv]), np.concatenate([f[~sea_face], sf + len(v)]), np.r_[rgb, srgb])
+    normals = None if terrain.sea_normal is None else terrain.sea_normal.reshape(-1, 3)
+    return [(land, False)] + ([(_ply_file(v, f[sea_face], rgb, normals), True)] if np.any(sea_face) else [])
+
+
+def _ply_file(v, f, rgb, normals=None) -> str:
+    """A binary PLY of vertices ``v`` (N, 3), triangles ``f``, per-vertex ``rgb`` (float32 x, y, z and r, g, b,
+    clipped to [0, 1]) and, where given, shading ``normals`` (nx, ny, nz) in a directory of this process
+    removed at exit, named by its content (the same mesh: the same file)."""
     import hashlib
     import tempfile
     global _PLY_DIR
-    terrain = terrain.with_apron(TERRAIN_APRON_M)
-    v, f, albedo = terrain.mesh()
-    sv, sf, salbedo = terrain.skirt(skirt_floor_m)  # the apron's edge a cliff, not the mesh's underside
-    v, f, albedo = np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.r_[albedo, salbedo]
-    vert = np.empty(len(v), dtype=[(n, "<f4") for n in ("x", "y", "z", "r", "g", "b")])
+    names = ("x", "y", "z", "r", "g", "b") + (() if normals is None else ("nx", "ny", "nz"))
+    vert = np.empty(len(v), dtype=[(n, "<f4") for n in names])
     for i, n in enumerate("xyz"):
         vert[n] = v[:, i]
-    for n in "rgb":
-        vert[n] = np.clip(albedo, 0.0, 1.0)
+    for i, n in enumerate("rgb"):
+        vert[n] = np.clip(rgb[:, i], 0.0, 1.0)
+    for i, n in enumerate(("nx", "ny", "nz") if normals is not None else ()):
+        vert[n] = normals[:, i]
     faces = np.empty(len(f), dtype=[("n", "u1"), ("i", "<i4", (3,))])
     faces["n"], faces["i"] = 3, f
     header = ("ply\nformat binary_little_endian 1.0\n"
-              f"element vertex {len(v)}\n" + "".join(f"property float {n}\n" for n in "xyzrgb")
+              f"element vertex {len(v)}\n" + "".join(f"property float {n}\n" for n in names)
               + f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n").encode()
     data = header + vert.tobytes() + faces.tobytes()
     if _PLY_DIR is None:
@@ -193,23 +214,43 @@ def terrain_gap_m(terrain, bbox) -> float:
 
 def terrain_ground_dicts(terrain, medium_ref: dict, bbox) -> dict:
     """The ground over a terrain: the height-field mesh through the column centres (``Terrain.mesh``) with
-    its apron and skirt (``_terrain_ply``), Lambertian with the per-vertex albedo (grey RGB, a
-    ``mesh_attribute`` texture), the medium above it (``exterior``: rays it reflects go on in the cloud's
+    its apron and skirt (``_terrain_meshes``), Lambertian with the per-vertex albedo (per channel, a
+    ``mesh_attribute`` texture; where ``terrain.sea`` the water's faces a second mesh, the sea surface with its
+    glint, ``sea_surface``), the medium above it (``exterior``: rays it reflects go on in the cloud's
     medium), and around it out to the horizon a flat rectangle below the medium box's floor (below every
     part of the mesh, so it never shows through a valley; it shows beyond the apron), with the mean albedo
-    of the grid's edge columns. Heights, from the lowest terrain height lo down (``terrain_gap_m`` g): the
+    of the grid's edge columns (the sea surface where ``terrain.sea`` and the edge is mostly water). Heights, from the lowest terrain height lo down (``terrain_gap_m`` g): the
     box's floor lo - g (the whole mesh inside the box), the surround lo - 2 g, the skirt's foot lo - 3 g."""
     import mitsuba as mi
     cx, cy = float(np.mean(terrain.x)), float(np.mean(terrain.y))
     lo, gap = terrain_floor_m(terrain), terrain_gap_m(terrain, bbox)
     half = 1e7
+    water = terrain.water
+    edge = [terrain.edge_albedo()] * 3 if terrain.albedo_rgb is None else terrain.edge_rgb().tolist()
+    bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": edge}}
+    sea_bsdf = _sea_bsdf(terrain) if terrain.sea else None
+    if terrain.sea and np.mean(np.concatenate([water[0], water[-1], water[1:-1, 0], water[1:-1, -1]])) > 0.5:
+        bsdf = sea_bsdf  # beyond the domain the edge's surface: the sea where the edge is mostly water
     surround = {"type": "rectangle",
                 "to_world": mi.ScalarTransform4f().translate([cx, cy, lo - 2.0 * gap]).scale([half, half, 1.0]),
-                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [terrain.edge_albedo()] * 3}}}
-    mesh = {"type": "ply", "filename": _terrain_ply(terrain, lo - 3.0 * gap), "face_normals": True,
-            "bsdf": {"type": "diffuse", "reflectance": {"type": "mesh_attribute", "name": "vertex_color"}},
-            "exterior": medium_ref}
-    return {"terrain": mesh, "ground": surround}
+                "bsdf": bsdf}
+    out = {}
+    for k, (ply, is_sea) in enumerate(_terrain_meshes(terrain, lo - 3.0 * gap)):
+        out["terrain" if k == 0 else "terrain_sea"] = {
+            "type": "ply", "filename": ply, "face_normals": not (is_sea and terrain.sea_normal is not None),
+            "exterior": medium_ref,
+            "bsdf": sea_bsdf if is_sea else {"type": "diffuse",
+                                             "reflectance": {"type": "mesh_attribute", "name": "vertex_color"}}}
+    return {**out, "ground": surround}
+
+
+def _sea_bsdf(terrain) -> dict:
+    """The sea surface (``sea_surface.sea_bsdf_dict``) of a terrain: its wind (else the default), the water
+    body's Lambertian part as its water columns' albedo (per channel)."""
+    from .sea_surface import DEFAULT_WIND_M_S, sea_bsdf_dict
+    wind = DEFAULT_WIND_M_S if terrain.wind_m_s is None else terrain.wind_m_s
+    rgb = terrain.vertex_rgb()[terrain.water]
+    return sea_bsdf_dict(wind, rgb.mean(axis=0) if rgb.size else 0.02)
 
 
 def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:

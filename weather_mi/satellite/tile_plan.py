@@ -29,7 +29,7 @@ DEFAULT_HALO_KM = 30.0     # the smallest measured halo whose image is within no
 @dataclass(frozen=True)
 class Outline:
     """A wrfout domain without its fields: ``dataset`` (coordinates z, y, x in the Hydrometeors frame, m;
-    lat/lon and the georeference attributes where placed), the file, the time index, the height grid
+    lat/lon and the georeference attributes where placed; the ground's 2-D coordinates), the file, the time index, the height grid
     (``dz_m``, ``bottom_m``, ``top_m``: what ``open_wrf`` builds by default) and the grid's spacing."""
 
     dataset: xr.Dataset
@@ -80,7 +80,6 @@ def domain_outline(path, time=None, *, lat=None, lon=None, date=None) -> Outline
             factors.pop("MAPFAC_M", None)
         dx, dy, _ = horizontal_spacing(path, dx0, float(ds.attrs.get("DY", dx0)), factors, stacklevel=3)
         coords, attrs = place_coords(ds, path, it, labels[it], {}, z_w[0].astype(np.float64))
-    coords = {k: v for k, v in coords.items() if k in ("lat", "lon")}
     out = xr.Dataset(coords={"z": ("z", z_lo + dz * (np.arange(nzt) + 0.5)), "y": ("y", np.arange(ny) * dy),
                              "x": ("x", np.arange(nx) * dx), **coords},
                      attrs={"source": path, **attrs})

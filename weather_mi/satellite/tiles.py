@@ -49,11 +49,13 @@ class TileJob:
 
 @dataclass(frozen=True)
 class OutlineVolume:
-    """What ``imagery.satellite_dataset`` reads of the volume: its box, species and attributes."""
+    """What ``imagery.satellite_dataset`` reads of the volume: its box, species, attributes and the ground
+    (``io.terrain.Terrain`` of the whole domain from the outline's 2-D fields: the land mask under the pixels)."""
 
     bbox: tuple
     species: tuple
     attrs: dict
+    terrain: object = None
 
 
 def tile_hydrometeors(job: TileJob):
@@ -181,7 +183,10 @@ def tiled_satellite(path, time=None, sat="goes-east", band_name: str = "0.64", r
     spec = SceneSpec(camera=cam, sun=Sun(azimuth, elevation, (1.0, 1.0, 1.0)), sky=None,
                      ground=Ground(albedo=ground_albedo), width=w, height=h, seed=seed, rays=view.rays)
     species = ("rayleigh",) if rayleigh else ()
-    vol = OutlineVolume(outline.bbox, species, {"source": str(path)})
+    from ..io.terrain import Terrain
+    terrain = None if surface == "flat" else Terrain.of(ds)
+    vol = OutlineVolume(outline.bbox, species, {"source": str(path), "land_source": ds.attrs.get("land_source", "")},
+                        terrain)
     return TiledSatellite(SatelliteScene(spec, vol, view, sat, b, sun_meta, (), place.source), outline, tiles,
                           float(halo_km), int(tile_px), surface, wind_m_s)
 

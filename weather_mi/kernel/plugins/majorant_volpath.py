@@ -166,8 +166,7 @@ class MajorantVolpath:
         self.reach = int(get("periodic_tiles", 0))
         _check(self.periodic == "none" or (self.reach >= 1 and self.track_mode == "texel"),
                f"periodic needs periodic_tiles >= 1 and tracking_grid 'texel', got {self.reach}, {self.track_mode!r}")
-        self.sun_mode, self.guiding, self.aureole, self.sun_sampling, self.mvnee = "none", 0.0, 0.0, "mis", 0.0
-        self.air = None
+        self.sun_mode, self.guiding, self.aureole, self.sun_sampling, self.mvnee, self.air = "none", 0., 0., "mis", 0., None
         if "sun_direction" not in props:
             for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee", "mvnee") + sun.AIR_PROPERTIES:
                 _check(name not in props, f"'{name}' needs 'sun_direction'")
