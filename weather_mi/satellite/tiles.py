@@ -213,12 +213,10 @@ def render_tiles(plan: TiledSatellite, client=None, *, optics: dict | None = Non
     """Render every tile of ``plan`` (Dask tasks on ``client``, or one after another in this process) and
     put them together: (``xarray.Dataset`` of ``imagery.satellite_dataset``, Image, [per-tile figures]).
     ``estimator``: ``render_reference``'s (spp, target_rse, ...); ``on_tile(figures)`` after each tile."""
-    from ..kernel.variant import set_variant
-    variant = set_variant() if client is None else None
+    from ..kernel.variant import ensure_registered
+    variant = ensure_registered()  # this process's variant (the default where none is set): the workers' too
     if client is not None:
         from ..reference.cluster import check_workers
-        import mitsuba as mi
-        variant = mi.variant() or set_variant()
         check_workers(client, None, variant)
     jobs = tile_jobs(plan, optics=optics, read_sizes=read_sizes, variant=variant, **estimator)
     t0 = time.perf_counter()
@@ -226,13 +224,15 @@ def render_tiles(plan: TiledSatellite, client=None, *, optics: dict | None = Non
     if client is None:
         for job in jobs:
             results.append(render_tile(job))
-            on_tile and on_tile(results[-1])
+            if on_tile:
+                on_tile(results[-1])
     else:
         futures = [client.submit(_render_tile_task, job, pure=False, key=f"weather-mi-tile-{job.tile.index}-"
                                  f"{time.time_ns()}") for job in jobs]
         for fut in futures:  # in tile order; the workers render them as they come
             results.append(fut.result())
-            on_tile and on_tile(results[-1])
+            if on_tile:
+                on_tile(results[-1])
     return assemble(plan, results, time.perf_counter() - t0)
 
 
