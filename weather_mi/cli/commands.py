@@ -4,7 +4,7 @@
     weather-mi render FILE | --demo supercell|cumulus|stratocumulus [options] [--scheduler ADDR | --workers N] -o out.exr
     weather-mi satellite FILE... | --demo NAME [--time all|A:B|I,J] [--satellite goes-east|goes-west|himawari|meteosat] [--band 0.64 | --rgb]
                [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC] [--surface file|albedo|flat]
-               [--wind M/S] -o out/sat.nc
+               [--wind M/S] [--tile-size PX [--halo KM] [--scheduler ADDR | --workers N]] -o out/sat.nc
     weather-mi animate WRFOUT... [--renderer slices|reference] [options] [--scheduler ADDR | --workers N] -o DIR
     weather-mi validate -o DIR [--quick]
 """
@@ -19,6 +19,7 @@ from ..io.times import parse_time, parse_times
 from ..reference.options import ReferenceOptions, add_flags, flag_values
 from ..io.sources import DEMOS, check_time, open_source
 from .periodic_option import add_periodic_option, periodic_value
+from .satellite_tiles import add_tile_options, check_tile_options, satellite_tiles_command
 from .summary import info_text
 from ..optics.volume import default_sizes
 
@@ -153,6 +154,7 @@ def satellite_command(args) -> Path:
     resolution = si.parse_resolution_km(args.resolution)
     nc, exr, png, ckpt = si.satellite_outputs(args.output)
     check_satellite_bands(args)
+    check_tile_options(args)
     if args.denoise:
         from ..display.denoise import check_available
         check_available()
@@ -167,6 +169,8 @@ def satellite_command(args) -> Path:
         from ..satellite.truecolor import band_checkpoints
         for c in band_checkpoints(ckpt):  # --rgb --rayleigh: a checkpoint per band
             check_unfinished(c, args.resume)
+        if args.tile_size is not None:  # tiles as Dask tasks, no process reading the whole domain
+            return satellite_tiles_command(args, resolution, nc, exr, png, flag_values(args, SATELLITE_ESTIMATOR))
         return _satellite(args, resolution, nc, exr, png, ckpt)
 
 
@@ -447,6 +451,7 @@ def _add_satellite_parser(sub) -> None:
     sat.add_argument("--resume", action="store_true", help="continue from OUTPUT.exr.ckpt.npz (--rgb --rayleigh: "
                                                            "OUTPUT.exr.<band>.ckpt.npz)")
     add_dask_options(sat)
+    add_tile_options(sat)
     sat.add_argument("-o", "--output", default="weather-mi-satellite.nc", help="output NetCDF (.nc)")
 
 
