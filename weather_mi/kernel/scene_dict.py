@@ -106,11 +106,27 @@ def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
         params.update()
         n = 1 << 16
         it = dr.zeros(mi.Interaction3f, n)
+        if mi.is_spectral:  # wavelengths uniform over the CIE range, 4 a sample
+            it.wavelengths = mi.Spectrum(*(mi.MI_CIE_MIN + (mi.MI_CIE_MAX - mi.MI_CIE_MIN) * u
+                                           for u in np.random.default_rng(2).random((4, n)).astype(np.float32)))
         ds, weight = emitter.sample_direction(it, _disc_samples(mi.variant(), n))
         cos = dr.dot(ds.d, mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in sun.to_sun)))  # no literals
         e = np.array(weight * cos)
-        _SUNSKY_SUN_IRRADIANCE[key] = np.asarray(e).reshape(3, -1).mean(axis=1) if e.ndim > 1 else np.full(3, e.mean())
+        if mi.is_spectral:
+            _SUNSKY_SUN_IRRADIANCE[key] = _spectral_rgb(e, np.array(it.wavelengths))
+        else:
+            _SUNSKY_SUN_IRRADIANCE[key] = np.asarray(e).reshape(3, -1).mean(axis=1) if e.ndim > 1 else np.full(3, e.mean())
     return _SUNSKY_SUN_IRRADIANCE[key]
+
+
+def _spectral_rgb(values, wavelengths) -> np.ndarray:
+    """Linear sRGB of a spectrum sampled at uniform random ``wavelengths`` over the CIE range ((4, n) each):
+    X, Y, Z = integral S xbar dlambda / integral ybar dlambda (Mitsuba's film's), as RGB variants see it."""
+    import mitsuba as mi
+    from ..optics.spectrum import linear_srgb
+    cmf = np.stack([np.array(c) for c in mi.cie1931_xyz(mi.Float(wavelengths.ravel()))])  # (3, 4 n)
+    xyz = (cmf * np.asarray(values).ravel()).mean(axis=1) * (mi.MI_CIE_MAX - mi.MI_CIE_MIN) * mi.MI_CIE_Y_NORMALIZATION
+    return linear_srgb(xyz)
 
 
 def sky_dict(sky: Sky, sun: Sun) -> dict:
