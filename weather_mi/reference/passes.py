@@ -127,11 +127,9 @@ def _persistent(scene, persistent: bool | None) -> bool:
     Never on other variants, even when asked: persistent lanes refill the lanes of a CPU SIMD packet whose
     longest path holds it (sized in LLVM blocks per CPU thread); on CUDA a launch is many warps of 32 lanes
     that the hardware schedules as slots free up, and the lane count is an LLVM setting, so ``mi.render``
-    renders the pass there (skipped, not an error: the same image in expectation, other random numbers).
-    Nor on spectral variants: their lanes' slots hold R, G, B of one wavelength set, the film's X, Y, Z."""
-    import mitsuba as mi
+    renders the pass there (skipped, not an error: the same image in expectation, other random numbers)."""
     from ..kernel.variant import is_llvm
-    if not is_llvm() or mi.is_spectral:
+    if not is_llvm():
         return False
     if persistent is not None:
         return persistent
