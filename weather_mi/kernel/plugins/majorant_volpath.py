@@ -17,7 +17,7 @@ pbrt-v4's ``DDAMajorantIterator``), crossing empty space in one step (Cohen & Sh
 * Russian roulette once per real scattering / surface vertex, survival min(max T, 1) (no weight grows),
   long walks cut by a survival of 1/2 at each depth 2^k >= LONG_WALK_DEPTH;
 * persistent lanes (:mod:`.lanes`): ``render_pass`` / ``render_passes``, used by ``reference.render_pass`` on
-  LLVM RGB variants; spectral variants (4 wavelengths a path) take ``sun_spectrum`` (:func:`.sun.parse_spectrum`).
+  LLVM variants; spectral variants (4 wavelengths a path) take ``sun_spectrum`` (:func:`.sun.parse_spectrum`).
 
 Otherwise the structure and estimators of Mitsuba's ``volpath``: analog absorption, phase-function and
 BSDF sampling with emitter sampling and MIS (power heuristic), delta emitters by NEE only, null BSDFs
@@ -165,7 +165,7 @@ class MajorantVolpath:
         _check(self.periodic == "none" or (self.reach >= 1 and self.track_mode == "texel"),
                f"periodic needs periodic_tiles >= 1 and tracking_grid 'texel', got {self.reach}, {self.track_mode!r}")
         self.sun_mode, self.guiding, self.aureole, self.sun_sampling, self.mvnee = "none", 0.0, 0.0, "mis", 0.0
-        self.air = self.spectrum = None
+        self.air = None
         if "sun_direction" not in props:
             for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee", "mvnee") + sun.LIGHT_PROPERTIES:
                 _check(name not in props, f"'{name}' needs 'sun_direction'")
