@@ -18,6 +18,7 @@ from ..io.times import parse_time, parse_times
 from ..reference.options import ReferenceOptions, add_flags, flag_values
 from ..io.sources import DEMOS, check_time, open_source
 from .periodic_option import add_periodic_option, periodic_value
+from .spectral_option import add_spectral_options, check_spectral_options, save_png, variant_of
 from .summary import info_text
 from ..optics.volume import default_sizes
 
@@ -69,11 +70,7 @@ def check_scene_options(args) -> None:
                          "does not take it yet")
     if air is not None and getattr(args, "integrator", None) == "volpath":
         raise ValueError("--atmosphere clear colours the sun of --integrator majorant (the default), not volpath's")
-    if getattr(args, "white_balance", "daylight") != "daylight" and not getattr(args, "spectral", False):
-        raise ValueError("--white-balance scene needs --spectral (an RGB render has no spectrum to adapt)")
-    if getattr(args, "spectral", False):
-        from ..kernel.variant import spectral_variant
-        spectral_variant()  # a build without one: the error now, before the input is read
+    check_spectral_options(args)
 
 
 def render_command(args) -> Path:
@@ -106,14 +103,14 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..reference.cluster import session
     with session(args.scheduler, args.workers) as client:
         img = render_reference(spec, vol, options=ReferenceOptions(**flag_values(args)), checkpoint=ckpt,
-                               resume=ckpt if args.resume else None, client=client, variant=_variant(args))
+                               resume=ckpt if args.resume else None, client=client, variant=variant_of(args))
     if sun_meta:
         img.metadata["sun_from_time"] = sun_meta
     if args.denoise:
         from ..display.denoise import denoise_image
         denoise_image(img, spec, vol)
     img.save(out)
-    png = _save_png(img, png_path, args, spec, vol)
+    png = save_png(img, png_path, args, spec, vol)
     ckpt.unlink(missing_ok=True)
     noise = img.metadata.get("noise") or {}
     cloud = (f", over cloud pixels: mean relative standard error {noise['rse_mean']:.3f}, RMS standard error / "
@@ -125,26 +122,6 @@ def _render(args, out, png_path, ckpt) -> Path:
              "denoised.R/G/B the display layer") if args.denoise else "the PNG shows the raw (unbiased) radiance"
     print(f"wrote {out} and {png} ({spp_text}, {img.metadata['seconds']:.1f} s{cloud}); {shows}")
     return out
-
-
-def _variant(args):
-    """The Mitsuba variant of ``render``: the spectral one with --spectral, else the one selected (or the default)."""
-    if not args.spectral:
-        return None
-    from ..kernel.variant import spectral_variant
-    return spectral_variant()
-
-
-def _save_png(img, png_path, args, spec, vol):
-    """The PNG: as the EXR's R, G, B show (daylight white balance), or adapted to the scene's sun (--white-balance
-    scene: the direct sun at the middle of the volume's height)."""
-    if args.white_balance == "daylight":
-        return img.save_png(png_path, exposure=args.exposure)
-    from ..display.white_balance import adapted_to, scene_white_xyz
-    from ..io.image import write_png
-    white = scene_white_xyz(spec, 0.5 * (vol.bbox[0][2] + vol.bbox[1][2]))
-    shown = adapted_to(img.display, white)
-    return write_png(png_path, shown, args.exposure if args.exposure is not None else None)
 
 
 def scene_spec(args, vol):
@@ -406,12 +383,7 @@ def _add_render_parser(sub) -> None:
                              "of --sun-azimuth/--sun-elevation")
     render.add_argument("--seed", type=int, default=0)
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")
-    render.add_argument("--spectral", action="store_true",
-                        help="the spectral ground truth (Mitsuba's llvm_ad_spectral, cuda_ad_spectral on a GPU): 4 "
-                             "wavelengths a path, the EXR's R, G, B linear sRGB (D65) of its CIE X, Y, Z (also saved)")
-    render.add_argument("--white-balance", default="daylight", choices=("daylight", "scene"),
-                        help="with --spectral: the PNG as a camera set to daylight (D65, default) or adapted to the "
-                             "direct sun where the cloud is lit (CAT02)")
+    add_spectral_options(render)
     render.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
                         help="the PNG shows the OIDN-denoised image (an extra EXR layer, denoised.R/G/B; the "
                              "EXR's radiance and standard error stay unbiased); --no-denoise: the raw radiance")
