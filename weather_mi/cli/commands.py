@@ -20,6 +20,7 @@ from ..reference.options import ReferenceOptions, add_flags, flag_values
 from ..io.sources import DEMOS, check_time, open_source
 from .periodic_option import add_periodic_option, periodic_value
 from .satellite_tiles import add_tile_options, check_tile_options, satellite_tiles_command
+from .spectral_option import add_spectral_options, check_spectral_options, save_png, variant_of
 from .summary import info_text
 from ..optics.volume import default_sizes
 
@@ -71,6 +72,7 @@ def check_scene_options(args) -> None:
                          "does not take it yet")
     if air is not None and getattr(args, "integrator", None) == "volpath":
         raise ValueError("--atmosphere clear colours the sun of --integrator majorant (the default), not volpath's")
+    check_spectral_options(args)
 
 
 def render_command(args) -> Path:
@@ -105,14 +107,14 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..reference.cluster import session
     with session(args.scheduler, args.workers) as client:
         img = render_reference(spec, vol, options=ReferenceOptions(**flag_values(args)), checkpoint=ckpt,
-                               resume=ckpt if args.resume else None, client=client)
+                               resume=ckpt if args.resume else None, client=client, variant=variant_of(args))
     if sun_meta:
         img.metadata["sun_from_time"] = sun_meta
     if args.denoise:
         from ..display.denoise import denoise_image
         denoise_image(img, spec, vol)
     img.save(out)
-    png = img.save_png(png_path, exposure=args.exposure)
+    png = save_png(img, png_path, args, spec, vol)
     ckpt.unlink(missing_ok=True)
     noise = img.metadata.get("noise") or {}
     cloud = (f", over cloud pixels: mean relative standard error {noise['rse_mean']:.3f}, RMS standard error / "
@@ -406,6 +408,7 @@ def _add_render_parser(sub) -> None:
     add_surface_options(render, "albedo")
     render.add_argument("--seed", type=int, default=0)
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")
+    add_spectral_options(render)
     render.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
                         help="the PNG shows the OIDN-denoised image (an extra EXR layer, denoised.R/G/B; the "
                              "EXR's radiance and standard error stay unbiased); --no-denoise: the raw radiance")

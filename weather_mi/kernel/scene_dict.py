@@ -50,7 +50,8 @@ def sensor_dict(spec: SceneSpec) -> dict:
     import mitsuba as mi
     cam = spec.camera
     film = {"type": "hdrfilm", "width": int(spec.width), "height": int(spec.height),
-            "rfilter": {"type": "box"}, "pixel_format": "rgb", "component_format": "float32"}
+            "rfilter": {"type": "box"}, "pixel_format": "xyz" if mi.is_spectral else "rgb",  # spectral: CIE XYZ
+            "component_format": "float32"}
     if spec.rays is not None:
         from .plugins.raytable_sensor import sensor_dict as raytable_dict
         return raytable_dict(spec.rays.origins_m, spec.rays.directions, film)
@@ -105,11 +106,27 @@ def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
         params.update()
         n = 1 << 16
         it = dr.zeros(mi.Interaction3f, n)
+        if mi.is_spectral:  # wavelengths uniform over the CIE range, 4 a sample
+            it.wavelengths = mi.Spectrum(*(mi.MI_CIE_MIN + (mi.MI_CIE_MAX - mi.MI_CIE_MIN) * u
+                                           for u in np.random.default_rng(2).random((4, n)).astype(np.float32)))
         ds, weight = emitter.sample_direction(it, _disc_samples(mi.variant(), n))
         cos = dr.dot(ds.d, mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in sun.to_sun)))  # no literals
         e = np.array(weight * cos)
-        _SUNSKY_SUN_IRRADIANCE[key] = np.asarray(e).reshape(3, -1).mean(axis=1) if e.ndim > 1 else np.full(3, e.mean())
+        if mi.is_spectral:
+            _SUNSKY_SUN_IRRADIANCE[key] = _spectral_rgb(e, np.array(it.wavelengths))
+        else:
+            _SUNSKY_SUN_IRRADIANCE[key] = np.asarray(e).reshape(3, -1).mean(axis=1) if e.ndim > 1 else np.full(3, e.mean())
     return _SUNSKY_SUN_IRRADIANCE[key]
+
+
+def _spectral_rgb(values, wavelengths) -> np.ndarray:
+    """Linear sRGB of a spectrum sampled at uniform random ``wavelengths`` over the CIE range ((4, n) each):
+    X, Y, Z = integral S xbar dlambda / integral ybar dlambda (Mitsuba's film's), as RGB variants see it."""
+    import mitsuba as mi
+    from ..optics.spectrum import linear_srgb
+    cmf = np.stack([np.array(c) for c in mi.cie1931_xyz(mi.Float(wavelengths.ravel()))])  # (3, 4 n)
+    xyz = (cmf * np.asarray(values).ravel()).mean(axis=1) * (mi.MI_CIE_MAX - mi.MI_CIE_MIN) * mi.MI_CIE_Y_NORMALIZATION
+    return linear_srgb(xyz)
 
 
 def sky_dict(sky: Sky, sun: Sun) -> dict:
@@ -300,6 +317,12 @@ def sun_below_air(spec: SceneSpec) -> Sun:
     return replace(spec.sun, irradiance=tuple(float(v) for v in np.asarray(spec.sun.irradiance) * rgb))
 
 
+def _air_extent(bbox) -> tuple[float, float]:
+    """(The air table's top: 2 km above the box (m above sea level), the box's half width from its centre)."""
+    (x0, y0, _), (x1, y1, z1) = bbox
+    return max(float(z1), 0.0) + 2000.0, float(np.hypot(max(abs(x0), abs(x1)), max(abs(y0), abs(y1))))
+
+
 def integrator_air(sun: Sun, atmosphere, bbox) -> dict:
     """Properties of ``majorant_volpath`` that colour its sun by the air on the sun's path
     (``optics.air.sun_air_table``; the kernel's frame has the box's centre at x = y = 0, heights above sea
@@ -307,12 +330,28 @@ def integrator_air(sun: Sun, atmosphere, bbox) -> dict:
     import mitsuba as mi
     from ..optics.air import sun_air_table
     from ..optics.air.shell import EARTH_RADIUS_M
-    (x0, y0, _), (x1, y1, z1) = bbox
-    half = float(np.hypot(max(abs(x0), abs(x1)), max(abs(y0), abs(y1))))
-    table = sun_air_table(atmosphere, sun.mu0, top_m=max(float(z1), 0.0) + 2000.0, half_width_m=half)
+    top, half = _air_extent(bbox)
+    table = sun_air_table(atmosphere, sun.mu0, top_m=top, half_width_m=half)
     return {"sun_air": mi.TensorXf(table.rgb), "sun_air_h0": float(table.heights_m[0]),
             "sun_air_h1": float(table.heights_m[-1]), "sun_air_mu0": float(table.mu[0]),
             "sun_air_mu1": float(table.mu[-1]), "sun_air_radius": float(EARTH_RADIUS_M)}
+
+
+def integrator_sun_spectrum(sun: Sun, atmosphere, bbox) -> dict:
+    """Spectral variants: ``majorant_volpath``'s sun spectrum (``optics.spectral.sun_spectrum``, luminance 1
+    above the air), after ``atmosphere`` by height and mu where given (on ``integrator_air``'s grid; None:
+    none), times 1 / MI_CIE_Y_NORMALIZATION: Mitsuba's film gives X, Y, Z = integral L xbar dlambda /
+    integral ybar dlambda, so a white ground lit by it has the CIE XYZ of ``optics.air.sun_xyz``."""
+    import mitsuba as mi
+    from ..optics import spectral, spectrum
+    wl = spectrum.WAVELENGTHS_NM
+    scale = 1.0 / float(mi.MI_CIE_Y_NORMALIZATION)
+    d = {"sun_spectrum": mi.TensorXf((spectral.sun_spectrum(wl) * scale).astype(np.float32)),
+         "sun_spectrum_nm": mi.TensorXf(np.array([wl[0], wl[-1]], np.float32))}
+    if atmosphere is not None:  # the RGB table of integrator_air replaced by the spectra on its grid
+        _, _, table = spectral.sun_spectral_table(atmosphere, sun.mu0, *_air_extent(bbox), wl)
+        d["sun_air"] = mi.TensorXf(table * np.float32(scale))
+    return d
 
 
 def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_depth: int | None = None,
@@ -373,6 +412,8 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
         if atmosphere is not None:
             d.update(integrator_air(sun, atmosphere, vol.bbox))
+        if sun is not None and mi.is_spectral:
+            d.update(integrator_sun_spectrum(sun, atmosphere, vol.bbox))
         if legacy:  # the estimator before issue 10 (see render_reference)
             d.update({"rr_mode": "volpath", "phase_channels": "mean", "emitter_nee": 1.0, "tracking_grid": "coarse",
                       "transmittance": "ratio", "persistent_lanes": False})
