@@ -353,7 +353,14 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
         split = ~sub & (ext * de * (b - a) > EYE_SPLIT_DEPTH)
         # the light is read where it is scattered towards the eye (not in clear air, nor to decide a split)
         slab = SlabAverage(ext * de, k_step, 0.5 * (b - a))
-        A, B, occ, occ_below = model.terms(p, slab, ext, (ext > 0) & ~split)
+        lit = (ext > 0) & ~split
+        if differentiable:
+            A, B, occ, occ_below = model.terms(p, slab, ext, lit)
+        else:  # a packet of lanes that all see clear air here (or split the slab) skips the light model: LLVM
+            # branches per packet; their zeros add nothing, as the light read for them did (weight w = 0)
+            A, B, occ, occ_below = dr.if_stmt(
+                (p, ext, lit), lit, lambda p, ext, lit: tuple(mi.Float(v) for v in model.terms(p, slab, ext, lit)),
+                lambda p, ext, lit: (mi.Float(0.0), mi.Float(0.0), mi.Float(1.0), mi.Float(0.0)))
         alpha = dr.select(split, 0.0, 1.0 - slab.e2)    # 1 - exp(-ext de (b - a))
         w = dr.select(ext > 0, T * alpha / dr.maximum(ext, 1e-30), 0.0)
         src = mi.Color3f(0.0)
