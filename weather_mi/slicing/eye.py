@@ -285,7 +285,7 @@ FACTOR_CAP = math.exp(30.0)  # SlabAverage.factor's largest value
 
 def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
               ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None, ambient_below=None,
-              tile=None):
+              tile=None, tex_ext=None):
     """Radiance (mi.Color3f) and transmittance of every pixel ray through the slices of ``f`` (the sun's
     light volume's frame: the slice planes of the frame's geometry).
 
@@ -301,6 +301,9 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
     ambient_below  : None, or mi.Color3f: the light from the ground below, before occlusion ("multiple")
     tile           : None, or (lo, hi): the medium is seen only where x and y's texture coordinates lie in
                      [lo, hi] (a periodic volume's own tile, slicing/periodic.py)
+    tex_ext        : None, or a texture of fewer channels whose first is the extinction of ``tex_eye``'s
+                     first (the light pass's source): every sample reads it, and only samples that scatter
+                     light read ``tex_eye`` (not when ``differentiable``)
     """
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
@@ -330,6 +333,29 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
 
     M = EYE_SPLIT
 
+    def seen(tex, tc):
+        vals = tex.eval(tc)
+        if tile is not None:  # periodic "transport": the eye sees the domain's own tile only
+            inside = (tc.x >= tile[0]) & (tc.x <= tile[1]) & (tc.y >= tile[0]) & (tc.y <= tile[1])
+            vals = [dr.select(inside, v, 0.0) for v in vals]
+        return vals
+
+    def in_scattered(p, tc, ext, lit, slab, vals=None):
+        """The light scattered towards the eye per unit of a sample's weight, sum_g beta_sca,g [P_g A +
+        B / (4 pi)] colour_g E_sun + beta_sca L_amb occlusion (``vals``: the eye texture's values at tc, or
+        None: read here)."""
+        A, B, occ, occ_below = model.terms(p, slab, ext, lit)
+        if vals is None and sca_ratio is None:
+            vals = seen(tex_eye, tc)
+        src = mi.Color3f(0.0)
+        sca = mi.Float(0.0)
+        for gi in range(G):
+            bs = ext * sca_ratio if sca_ratio is not None else dr.maximum(vals[1 + gi], 0.0)
+            sca += bs
+            src += bs * (phase_colour[gi] * A + diffuse_colour[gi] * B)
+        amb = occ * ambient if ambient_below is None else occ * ambient + occ_below * ambient_below
+        return src + sca * amb
+
     def body(i, part, T, C, active):
         kc = k_start + k_step * mi.Float(i) + j
         # slab [k + j - 1/2, k + j + 1/2] clipped to the ray's span in the box, whole (part 0) or its
@@ -344,33 +370,24 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
         kf = 0.5 * (a + b)
         p = o + ((d_first - kf * spacing - os_) / sd) * d
         tc = (p - glo) * inv_span
-        vals = tex_eye.eval(tc)
-        if tile is not None:  # periodic "transport": the eye sees the domain's own tile only
-            seen = (tc.x >= tile[0]) & (tc.x <= tile[1]) & (tc.y >= tile[0]) & (tc.y <= tile[1])
-            vals = [dr.select(seen, v, 0.0) for v in vals]
+        # the extinction from the texture with the fewest channels (the light pass's source: beta first)
+        vals = seen(tex_eye if tex_ext is None else tex_ext, tc)
         ext = dr.maximum(vals[0], 0.0)
         # an optically thick slab is done again in M sub-segments (this sample only decides that)
         split = ~sub & (ext * de * (b - a) > EYE_SPLIT_DEPTH)
         # the light is read where it is scattered towards the eye (not in clear air, nor to decide a split)
         slab = SlabAverage(ext * de, k_step, 0.5 * (b - a))
         lit = (ext > 0) & ~split
+        group_vals = vals if tex_ext is None else None
         if differentiable:
-            A, B, occ, occ_below = model.terms(p, slab, ext, lit)
-        else:  # a packet of lanes that all see clear air here (or split the slab) skips the light model: LLVM
-            # branches per packet; their zeros add nothing, as the light read for them did (weight w = 0)
-            A, B, occ, occ_below = dr.if_stmt(
-                (p, ext, lit), lit, lambda p, ext, lit: tuple(mi.Float(v) for v in model.terms(p, slab, ext, lit)),
-                lambda p, ext, lit: (mi.Float(0.0), mi.Float(0.0), mi.Float(1.0), mi.Float(0.0)))
+            add = in_scattered(p, tc, ext, lit, slab, group_vals)
+        else:  # a packet of lanes that all see clear air here (or split the slab) skips the light model and the
+            # eye's texture: LLVM branches per packet; their zero adds nothing, as the light read for them did
+            add = dr.if_stmt((p, tc, ext, lit), lit, lambda *x: in_scattered(*x, slab, group_vals),
+                             lambda *x: mi.Color3f(0.0))
         alpha = dr.select(split, 0.0, 1.0 - slab.e2)    # 1 - exp(-ext de (b - a))
         w = dr.select(ext > 0, T * alpha / dr.maximum(ext, 1e-30), 0.0)
-        src = mi.Color3f(0.0)
-        sca = mi.Float(0.0)
-        for gi in range(G):
-            bs = ext * sca_ratio if sca_ratio is not None else dr.maximum(vals[1 + gi], 0.0)
-            sca += bs
-            src += bs * (phase_colour[gi] * A + diffuse_colour[gi] * B)
-        amb = occ * ambient if ambient_below is None else occ * ambient + occ_below * ambient_below
-        C = C + w * (src + sca * amb)
+        C = C + w * add
         T = T * (1.0 - alpha)
         done = ~split & (~sub | (part == M))        # the slab is done: on to the next
         i = dr.select(done, i + 1, i)

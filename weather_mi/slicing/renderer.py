@@ -506,7 +506,7 @@ class SliceRenderer:
         offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
         return composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
                          e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
-                         e.sca_ratio, e.below, self.tile_box)
+                         e.sca_ratio, e.below, self.tile_box, None if self.differentiable else inputs.tex_light)
 
 
 FROZEN_FRAMES = True
