@@ -334,6 +334,11 @@ class SliceRenderer:
         rebuilt = key is None or key != self._texture_key  # a sun or camera move keeps the textures
         self._texture_key = key
         forward, to_sun = np.asarray(spec.camera.forward, float), np.asarray(spec.sun.to_sun, float)
+        # what waits on the host for a kernel's result comes first (the sky's irradiance, its emitter for this
+        # sun; then the view, whose sky is evaluated on the rays that see it): with nothing else queued
+        # before, those waits are short, and the frame's other kernels run while Python builds the rest
+        sky_irradiance_horizontal(spec, cache=self.views.sky)
+        self.views.get(mi, spec)
         g = self._reuse("geometry", (tuple(forward), tuple(to_sun), self.slices),
                         lambda: slice_geometry(forward, to_sun, self.box, self.slices))
         omega_bar = self.mean_albedo(scale, omega) if self.uniform_forward or self.one_scattering_ratio else None
