@@ -283,6 +283,41 @@ class SlabAverage:
 FACTOR_CAP = math.exp(30.0)  # SlabAverage.factor's largest value
 
 
+class _InScattering:
+    """The light scattered towards the eye at a sample (``composite``'s arguments of the same names)."""
+
+    def __init__(self, mi, dr, model, tex_eye, phase_colour, diffuse_colour, ambient, sca_ratio, ambient_below, tile):
+        self.mi, self.dr, self.model, self.tex_eye = mi, dr, model, tex_eye
+        self.phase_colour, self.diffuse_colour, self.ambient = phase_colour, diffuse_colour, ambient
+        self.sca_ratio, self.ambient_below, self.tile = sca_ratio, ambient_below, tile
+
+    def seen(self, tex, tc):
+        """``tex``'s values at texture coordinates tc (periodic "transport": 0 outside the domain's own tile)."""
+        dr, tile = self.dr, self.tile
+        vals = tex.eval(tc)
+        if tile is not None:
+            inside = (tc.x >= tile[0]) & (tc.x <= tile[1]) & (tc.y >= tile[0]) & (tc.y <= tile[1])
+            vals = [dr.select(inside, v, 0.0) for v in vals]
+        return vals
+
+    def __call__(self, p, tc, ext, lit, slab, vals=None):
+        """Per unit of the sample's weight: sum_g beta_sca,g [P_g A + B / (4 pi)] colour_g E_sun + beta_sca L_amb
+        occlusion (``vals``: the eye texture's values at tc, or None: read here)."""
+        mi, dr = self.mi, self.dr
+        A, B, occ, occ_below = self.model.terms(p, slab, ext, lit)
+        if vals is None and self.sca_ratio is None:
+            vals = self.seen(self.tex_eye, tc)
+        src = mi.Color3f(0.0)
+        sca = mi.Float(0.0)
+        for gi in range(len(self.phase_colour)):
+            bs = ext * self.sca_ratio if self.sca_ratio is not None else dr.maximum(vals[1 + gi], 0.0)
+            sca += bs
+            src += bs * (self.phase_colour[gi] * A + self.diffuse_colour[gi] * B)
+        amb = occ * self.ambient if self.ambient_below is None else \
+            occ * self.ambient + occ_below * self.ambient_below
+        return src + sca * amb
+
+
 def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
               ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None, ambient_below=None,
               tile=None, tex_ext=None):
@@ -329,32 +364,12 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
                           mi.UInt32(dr.abs(dr.round(kb_s - j) - k_start) + 1.5), 0)
     k_lo, k_hi = dr.minimum(ka, kb), dr.maximum(ka, kb)
     de = spacing / dr.abs(sd)
-    G = len(phase_colour)
 
     M = EYE_SPLIT
 
-    def seen(tex, tc):
-        vals = tex.eval(tc)
-        if tile is not None:  # periodic "transport": the eye sees the domain's own tile only
-            inside = (tc.x >= tile[0]) & (tc.x <= tile[1]) & (tc.y >= tile[0]) & (tc.y <= tile[1])
-            vals = [dr.select(inside, v, 0.0) for v in vals]
-        return vals
-
-    def in_scattered(p, tc, ext, lit, slab, vals=None):
-        """The light scattered towards the eye per unit of a sample's weight, sum_g beta_sca,g [P_g A +
-        B / (4 pi)] colour_g E_sun + beta_sca L_amb occlusion (``vals``: the eye texture's values at tc, or
-        None: read here)."""
-        A, B, occ, occ_below = model.terms(p, slab, ext, lit)
-        if vals is None and sca_ratio is None:
-            vals = seen(tex_eye, tc)
-        src = mi.Color3f(0.0)
-        sca = mi.Float(0.0)
-        for gi in range(G):
-            bs = ext * sca_ratio if sca_ratio is not None else dr.maximum(vals[1 + gi], 0.0)
-            sca += bs
-            src += bs * (phase_colour[gi] * A + diffuse_colour[gi] * B)
-        amb = occ * ambient if ambient_below is None else occ * ambient + occ_below * ambient_below
-        return src + sca * amb
+    scattering = _InScattering(mi, dr, model, tex_eye, phase_colour, diffuse_colour, ambient, sca_ratio,
+                               ambient_below, tile)
+    seen, in_scattered = scattering.seen, scattering
 
     def body(i, part, T, C, active):
         kc = k_start + k_step * mi.Float(i) + j
