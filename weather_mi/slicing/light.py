@@ -559,7 +559,7 @@ def _slab_range(mi, dr, ka, kb, n_slices: int):
     n = float(n_slices)
     first = mi.UInt32(dr.clip(dr.floor(ka) - 2.0, 0.0, n))
     end = mi.UInt32(dr.clip(dr.ceil(kb) + 3.0, 0.0, n))
-    return first, dr.maximum(end, first)
+    return first, dr.select(kb >= ka, dr.maximum(end, first), first)
 
 
 LOG_FLOOR = math.log(1e-30)  # stored logarithms of light are at least this (the light at least 1e-30)
