@@ -16,6 +16,10 @@ I also spreads sideways like a diffusion: a Gaussian whose variance grows by ``v
 metre of light path), applied by operator splitting (slabs in chunks, then the chunk's accumulated
 variance with separable taps of exactly that variance, blur.py: no bilinear-tap diffusion), so the spread after a
 given distance is the same for any number of slices.
+
+A light ray reads the medium only in the slabs of its occupied span (occupancy.py, ``_slab_range``): at the
+other planes the loop kernel stores the light unchanged (a branch that LLVM takes per packet of lanes), the
+same floats as reading the empty texture there, at about half the light pass's cost on the demo storm.
 """
 from __future__ import annotations
 
