@@ -283,9 +283,44 @@ class SlabAverage:
 FACTOR_CAP = math.exp(30.0)  # SlabAverage.factor's largest value
 
 
+class _InScattering:
+    """The light scattered towards the eye at a sample (``composite``'s arguments of the same names)."""
+
+    def __init__(self, mi, dr, model, tex_eye, phase_colour, diffuse_colour, ambient, sca_ratio, ambient_below, tile):
+        self.mi, self.dr, self.model, self.tex_eye = mi, dr, model, tex_eye
+        self.phase_colour, self.diffuse_colour, self.ambient = phase_colour, diffuse_colour, ambient
+        self.sca_ratio, self.ambient_below, self.tile = sca_ratio, ambient_below, tile
+
+    def seen(self, tex, tc):
+        """``tex``'s values at texture coordinates tc (periodic "transport": 0 outside the domain's own tile)."""
+        dr, tile = self.dr, self.tile
+        vals = tex.eval(tc)
+        if tile is not None:
+            inside = (tc.x >= tile[0]) & (tc.x <= tile[1]) & (tc.y >= tile[0]) & (tc.y <= tile[1])
+            vals = [dr.select(inside, v, 0.0) for v in vals]
+        return vals
+
+    def __call__(self, p, tc, ext, lit, slab, vals=None):
+        """Per unit of the sample's weight: sum_g beta_sca,g [P_g A + B / (4 pi)] colour_g E_sun + beta_sca L_amb
+        occlusion (``vals``: the eye texture's values at tc, or None: read here)."""
+        mi, dr = self.mi, self.dr
+        A, B, occ, occ_below = self.model.terms(p, slab, ext, lit)
+        if vals is None and self.sca_ratio is None:
+            vals = self.seen(self.tex_eye, tc)
+        src = mi.Color3f(0.0)
+        sca = mi.Float(0.0)
+        for gi in range(len(self.phase_colour)):
+            bs = ext * self.sca_ratio if self.sca_ratio is not None else dr.maximum(vals[1 + gi], 0.0)
+            sca += bs
+            src += bs * (self.phase_colour[gi] * A + self.diffuse_colour[gi] * B)
+        amb = occ * self.ambient if self.ambient_below is None else \
+            occ * self.ambient + occ_below * self.ambient_below
+        return src + sca * amb
+
+
 def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
               ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None, ambient_below=None,
-              tile=None):
+              tile=None, tex_ext=None):
     """Radiance (mi.Color3f) and transmittance of every pixel ray through the slices of ``f`` (the sun's
     light volume's frame: the slice planes of the frame's geometry).
 
@@ -301,6 +336,9 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
     ambient_below  : None, or mi.Color3f: the light from the ground below, before occlusion ("multiple")
     tile           : None, or (lo, hi): the medium is seen only where x and y's texture coordinates lie in
                      [lo, hi] (a periodic volume's own tile, slicing/periodic.py)
+    tex_ext        : None, or a texture of fewer channels whose first is the extinction of ``tex_eye``'s
+                     first (the light pass's source): every sample reads it, and only samples that scatter
+                     light read ``tex_eye`` (not when ``differentiable``)
     """
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
@@ -326,9 +364,12 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
                           mi.UInt32(dr.abs(dr.round(kb_s - j) - k_start) + 1.5), 0)
     k_lo, k_hi = dr.minimum(ka, kb), dr.maximum(ka, kb)
     de = spacing / dr.abs(sd)
-    G = len(phase_colour)
 
     M = EYE_SPLIT
+
+    scattering = _InScattering(mi, dr, model, tex_eye, phase_colour, diffuse_colour, ambient, sca_ratio,
+                               ambient_below, tile)
+    seen, in_scattered = scattering.seen, scattering
 
     def body(i, part, T, C, active):
         kc = k_start + k_step * mi.Float(i) + j
@@ -344,26 +385,24 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
         kf = 0.5 * (a + b)
         p = o + ((d_first - kf * spacing - os_) / sd) * d
         tc = (p - glo) * inv_span
-        vals = tex_eye.eval(tc)
-        if tile is not None:  # periodic "transport": the eye sees the domain's own tile only
-            seen = (tc.x >= tile[0]) & (tc.x <= tile[1]) & (tc.y >= tile[0]) & (tc.y <= tile[1])
-            vals = [dr.select(seen, v, 0.0) for v in vals]
+        # the extinction from the texture with the fewest channels (the light pass's source: beta first)
+        vals = seen(tex_eye if tex_ext is None else tex_ext, tc)
         ext = dr.maximum(vals[0], 0.0)
         # an optically thick slab is done again in M sub-segments (this sample only decides that)
         split = ~sub & (ext * de * (b - a) > EYE_SPLIT_DEPTH)
         # the light is read where it is scattered towards the eye (not in clear air, nor to decide a split)
         slab = SlabAverage(ext * de, k_step, 0.5 * (b - a))
-        A, B, occ, occ_below = model.terms(p, slab, ext, (ext > 0) & ~split)
+        lit = (ext > 0) & ~split
+        group_vals = vals if tex_ext is None else None
+        if differentiable:
+            add = in_scattered(p, tc, ext, lit, slab, group_vals)
+        else:  # a packet of lanes that all see clear air here (or split the slab) skips the light model and the
+            # eye's texture: LLVM branches per packet; their zero adds nothing, as the light read for them did
+            add = dr.if_stmt((p, tc, ext, lit), lit, lambda *x: in_scattered(*x, slab, group_vals),
+                             lambda *x: mi.Color3f(0.0))
         alpha = dr.select(split, 0.0, 1.0 - slab.e2)    # 1 - exp(-ext de (b - a))
         w = dr.select(ext > 0, T * alpha / dr.maximum(ext, 1e-30), 0.0)
-        src = mi.Color3f(0.0)
-        sca = mi.Float(0.0)
-        for gi in range(G):
-            bs = ext * sca_ratio if sca_ratio is not None else dr.maximum(vals[1 + gi], 0.0)
-            sca += bs
-            src += bs * (phase_colour[gi] * A + diffuse_colour[gi] * B)
-        amb = occ * ambient if ambient_below is None else occ * ambient + occ_below * ambient_below
-        C = C + w * (src + sca * amb)
+        C = C + w * add
         T = T * (1.0 - alpha)
         done = ~split & (~sub | (part == M))        # the slab is done: on to the next
         i = dr.select(done, i + 1, i)
