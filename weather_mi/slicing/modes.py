@@ -62,15 +62,17 @@ TABLE_IV = {
 MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple")}
 
 # Defaults of the "multiple" light model: fitted by validation/calibrate_slicer.py (Adam through Dr.Jit
-# reverse-mode AD, weather_mi.slicing.calibrate; 50 iterations from calibrate.FIT_START) on the demo
-# supercell, the demo cumulus and the thin demo cumulus, front-, side- and back-lit (64 x 48, references
-# of 128 spp), in the frames the evaluation renders (128 slices, the automatic light buffer, 2 x 2 points
-# per pixel, slab jitter 1), with the forward peaks within 3 deg as unscattered light in both renderers;
-# judged on the real WRF supercell, WRF plateau, BOMEX and RICO storms against references of 2% cloud RSE
-# (README, "The slicer").
-MULTIPLE_DEFAULTS = {"ms_extinction": 0.1016, "ms_contribution": 0.1941, "ms_eccentricity": 0.8321,
-                     "sky_gain": 0.4503, "sky_extinction": 0.023, "diffusion_gain": 1.1045,
-                     "diffusion_scale": 0.3963, "leak_gain": 0.5146, "leak_rate": 0.6663, "diffusion_flux": 0.0}
+# reverse-mode AD, weather_mi.slicing.calibrate) on the demo supercell, the demo cumulus and the thin demo
+# cumulus, front-, side- and back-lit (64 x 48, references of 128 spp), with the forward peaks within 3 deg
+# as unscattered light in both renderers: first 50 iterations from calibrate.FIT_START in the frames the
+# evaluation renders (128 slices, the automatic light buffer, 2 x 2 points per pixel, slab jitter 1), then,
+# with the diffused light's flux term (diffusion_flux, issue 41), refitted 15 iterations from those
+# defaults at 64 slices and 1 point per pixel (--start defaults --fit-slices 64 --fit-supersample 1);
+# judged on the real WRF supercell, WRF plateau, BOMEX and RICO storms, front-, side- and back-lit, against
+# references of 2% cloud RSE or 150 s (validation/README.md, "The slicer against the path tracer").
+MULTIPLE_DEFAULTS = {"ms_extinction": 0.1662, "ms_contribution": 0.2373, "ms_eccentricity": 0.9318,
+                     "sky_gain": 0.4785, "sky_extinction": 0.0122, "diffusion_gain": 0.9821,
+                     "diffusion_scale": 0.485, "leak_gain": 0.765, "leak_rate": 1.0927, "diffusion_flux": 0.2826}
 
 
 DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail field, detail.field(amplitude=0.5))
