@@ -481,7 +481,7 @@ class SliceRenderer:
             model = MultipleLight(*(kernel_scalar(mi, v) for v in (
                 params.ms_extinction, params.ms_contribution, params.ms_eccentricity, params.sky_extinction,
                 params.diffusion_gain, params.diffusion_scale, max(float(spec.sun.to_sun[2]), 1e-3), params.leak_gain,
-                params.leak_rate)))
+                params.leak_rate, params.diffusion_flux)))
             gain = params.sky_gain
         else:
             gain = params.ambient
@@ -507,7 +507,7 @@ class SliceRenderer:
             model = LightModel(self.light, self.sky_light, self.mode.octaves, m.a, m.b, m.c, m.sky_extinction,
                                m.diffusion_gain, m.diffusion_scale, g=self.g_scattering, mu0=m.mu0,
                                carry=(inputs.tex_light, e.grid), leak_gain=m.leak_gain, leak_rate=m.leak_rate,
-                               below=e.below is not None)
+                               below=e.below is not None, flux=m.flux)
         else:
             model = LightModel(self.light, log_forward=self.mode.light == "translucent")
         offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
