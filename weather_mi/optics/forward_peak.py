@@ -86,14 +86,17 @@ def peak_tables(tables, cone_deg: float):
     return f, [truncated_table(t, cone_deg, fs) if fs > 0 else t for t, fs in zip(tables, f)]
 
 
-def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG) -> OpticalVolume:
+def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG, *, species_extinction: bool = True) \
+        -> OpticalVolume:
     """``vol`` with each species' forward peak within ``cone_deg`` counted as unscattered light.
 
     Per voxel (albedo omega_c, Eq. 8 weights w_s, peak fractions f_s), with F = sum_s w_s f_s the
     share of the scattered light in the peaks:  sigma_t' = sigma_t (1 - mean_c(omega) F),
     omega'_c = omega_c (1 - F) / (1 - mean_c(omega) F),  w'_s ~ w_s (1 - f_s), and per-species
     beta_s' = beta_s - f_s w_s mean(omega) sigma_t (they sum to sigma_t'). Returns ``vol`` itself
-    when ``cone_deg`` is 0 or no table has a peak there."""
+    when ``cone_deg`` is 0 or no table has a peak there. ``species_extinction`` False: the per-species
+    beta_s are left as ``vol``'s (shared, not scaled; 4 bytes per cell and species saved), for a caller that
+    reads only beta_total, the albedo and the weights (the path tracer's medium, ``reference.passes``)."""
     if check_cone_deg(cone_deg) == 0.0:
         return vol
     cone_deg = float(cone_deg)
@@ -107,9 +110,11 @@ def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG) -> Opti
     F = np.tensordot(f.astype(np.float32), w, axes=1)  # (z, y, x)
     omega_mean = vol.albedo.mean(axis=-1)
     scattering = omega_mean * vol.beta_total  # 1/m
-    beta_ext = np.multiply(f32, w)  # beta_s - f_s w_s scattering: the peaks' scattering, now transmitted
-    np.multiply(beta_ext, scattering[None], out=beta_ext)
-    np.maximum(np.subtract(vol.beta_ext, beta_ext, out=beta_ext), 0, out=beta_ext)
+    beta_ext = vol.beta_ext
+    if species_extinction:  # beta_s - f_s w_s scattering: the peaks' scattering, now transmitted
+        beta_ext = np.multiply(f32, w)
+        np.multiply(beta_ext, scattering[None], out=beta_ext)
+        np.maximum(np.subtract(vol.beta_ext, beta_ext, out=beta_ext), 0, out=beta_ext)
     beta_total = np.multiply(F, scattering)
     np.maximum(np.subtract(vol.beta_total, beta_total, out=beta_total), 0, out=beta_total)
     with np.errstate(invalid="ignore", divide="ignore"):

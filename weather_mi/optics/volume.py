@@ -196,7 +196,7 @@ def _radius_field(hyd: xr.Dataset, name: str, default_m: float, use_model: bool)
     """Per-voxel equivalent radius (m): the model's effective radius where given (> 0), else the species'."""
     var = f"r_eff_{name}"
     if use_model and var in hyd:
-        r = hyd[var].values.astype(np.float32)
+        r = hyd[var].values.astype(np.float32, copy=False)
         return np.where(r > 0, r, np.float32(default_m))
     return default_m
 
@@ -272,9 +272,18 @@ def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_
             albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
 
 
-def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool = False):
+def _release(hyd: xr.Dataset, names, kinds) -> None:
+    """Drop the fields ``names`` of the ``kinds`` ("q", "r_eff") from ``hyd`` in place (those it has)."""
+    for name in names:
+        if name.rsplit("_", 1)[0] in kinds and name in hyd:
+            del hyd[name]
+
+
+def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool = False,
+                   release: tuple = ()):
     """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32: beyond its
-    outputs (56 bytes per cell) this takes one or two float32 grids of temporaries (Eq. 4's)."""
+    outputs (56 bytes per cell) this takes one or two float32 grids of temporaries (Eq. 4's). ``release``: the
+    kinds of field ("q", "r_eff") dropped from ``hyd`` (in place) once used, freeing their memory."""
     rho = np.ascontiguousarray(hyd["rho_air"].values, np.float32)
     shape = rho.shape
     n_s = len(SPECIES_NAMES)
@@ -284,6 +293,8 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
     for i, s in enumerate(sp):
         q = np.ascontiguousarray(hyd[f"q_{s.name}"].values, np.float32)
         s.beta_ext_per_m(rho, q, _radius_field(hyd, s.name, s.radius_m, use_model), out=beta_ext[i])  # Eq. 4
+        del q
+        _release(hyd, [f"q_{s.name}"] + ([f"r_eff_{s.name}"] if not (voxel_albedo and use_model) else []), release)
     # Eq. 6, Eq. 5's numerator sum omega_s beta_s and the Eq. 8 weights from the scattering coefficients
     # beta_sca,s = omega_s beta_s (channel-mean albedo; the channels differ by < 1e-3 for every hydrometeor),
     # in one pass (optics.mixture_kernels)
@@ -295,6 +306,7 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
         weights.reshape(n_s, -1))
     if voxel_albedo and use_model:
         _voxel_albedo(hyd, sp, beta_ext, albedo.reshape(-1, 3))
+    _release(hyd, [f"r_eff_{s.name}" for s in sp], release)
     # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
     # trilinear interpolation at cloud edges does not blend in a dark value
     total_ext = float(beta_total.sum(dtype=np.float64))
@@ -308,7 +320,8 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
                    phase_tables: Sequence | None = None, model_radii: bool | None = None,
                    phase_quality: str = "default", sizes: str | None = None,
-                   size_classes: int | None = None, periodic: bool | str | None = None) -> OpticalVolume:
+                   size_classes: int | None = None, periodic: bool | str | None = None,
+                   release: bool = False) -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
     Parameters
@@ -342,6 +355,10 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     periodic : bool or "transport", optional
         Horizontal boundaries (``OpticalVolume.periodic``); default: "transport" where the hydrometeors say
         they are periodic (``attrs["periodic"]``: the LES reader's doubly periodic domains), else False.
+    release : bool, default False
+        Drop the mixing ratios and effective radii from ``hyd`` (in place) once their optics are computed, so
+        that their memory goes while the volume's grids are built (the command line, which needs them no more;
+        ``rho_air`` and the coordinates stay).
 
     Returns
     -------
@@ -359,7 +376,10 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     sp, use_model = _species_setup(species, scale, model_radii, sizes)
 
     check_fits(str(hyd.attrs.get("source", "hydrometeors")), hyd["rho_air"].shape, "optics")  # before allocating
-    beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model, voxel_albedo=sizes == "scheme")
+    split_later = size_classes is not None and size_classes != 1 and use_model  # size_classes.split reads r_eff
+    kinds = (("q",) if split_later else ("q", "r_eff")) if release else ()
+    beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model, voxel_albedo=sizes == "scheme",
+                                                           release=kinds)
     names, components, attrs_classes = SPECIES_NAMES, None, {}
     if size_classes is not None and not (isinstance(size_classes, (int, np.integer)) and size_classes >= 1):
         raise WeatherDataError("optical_volume", "size_classes", "a whole number of size classes >= 1",

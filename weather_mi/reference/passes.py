@@ -114,7 +114,7 @@ class PassScene:
         import mitsuba as mi
         o = self.options.estimator
         spec_k, vol_k, _ = recentred(self.spec, self.vol)
-        vol_render = delta_scaled(vol_k, o.forward_peak_deg)
+        vol_render = delta_scaled(vol_k, o.forward_peak_deg, species_extinction=False)  # the kernel reads no beta_s
         integ = integrator_dict(vol_render, sun=self.spec.sun if o.own_sun else None, atmosphere=self.spec.atmosphere,
                                 **o.kernel_options())
         d = scene_dict(spec_k, vol_render, integ)
