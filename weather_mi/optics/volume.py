@@ -388,6 +388,7 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
         from .size_classes import split
         names, beta_ext, weights, components = split(hyd, sp, beta_ext, weights, int(size_classes))
         attrs_classes = {"size_classes": int(size_classes)}
+    _release(hyd, [f"r_eff_{s.name}" for s in sp], ("r_eff",) if release else ())
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
