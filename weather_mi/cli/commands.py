@@ -93,7 +93,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase,
                          sizes=args.sizes or default_sizes(hyd), size_classes=args.size_classes,
-                         periodic=periodic_value(args), release=True)
+                         periodic=periodic_value(args), release=True, keep=("weights",))  # the path tracer's
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     spec, sun_meta = scene_spec(args, vol), None
     if args.sun_from_time:
@@ -189,7 +189,8 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, phase=args.phase, sizes=args.sizes or default_sizes(hyd),
                          size_classes=args.size_classes,
-                         periodic=periodic_value(args), release=True)
+                         periodic=periodic_value(args), release=True,
+                         keep=("beta_ext", "weights") if args.rgb or args.rayleigh else ("weights",))  # the air: beta_s
     hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
     if args.rgb:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)

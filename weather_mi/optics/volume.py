@@ -24,6 +24,29 @@ from ..io.terrain import Terrain
 from ..io.budget import check_fits
 
 
+class ReleasedGrid:
+    """A grid an OpticalVolume was built without (``optical_volume(keep=...)``), to save its memory where
+    nothing reads it: its ``shape`` and ``dtype`` stay; reading its values raises WeatherDataError naming it."""
+
+    def __init__(self, name: str, shape):
+        self.name, self.shape, self.dtype = name, tuple(int(n) for n in shape), np.dtype(np.float32)
+        self.ndim = len(self.shape)
+
+    def __len__(self):
+        return self.shape[0]
+
+    def _refuse(self, *_a, **_k):
+        raise WeatherDataError("OpticalVolume", self.name, f"the grid kept (optical_volume(keep=(..., {self.name!r})))",
+                               "released after the optics to save memory")
+
+    __array__ = __getitem__ = __iter__ = _refuse
+
+    def __getattr__(self, attr):  # called only for attributes it lacks: the array's
+        if attr.startswith("__") or attr in ("name", "shape", "dtype", "ndim"):
+            raise AttributeError(attr)
+        self._refuse()
+
+
 @dataclass(frozen=True)
 class OpticalVolume:
     """Everything both renderers consume (docs/design.md). All grids are float32, indexed [z, y, x].
@@ -86,6 +109,8 @@ class OpticalVolume:
     def __post_init__(self):
         object.__setattr__(self, "periodic", check_periodic(self.periodic))
         for name in ("beta_ext", "beta_total", "albedo", "weights"):
+            if isinstance(getattr(self, name), ReleasedGrid):
+                continue
             view = np.asarray(getattr(self, name)).view()
             view.flags.writeable = False
             object.__setattr__(self, name, view)
@@ -321,7 +346,7 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    phase_tables: Sequence | None = None, model_radii: bool | None = None,
                    phase_quality: str = "default", sizes: str | None = None,
                    size_classes: int | None = None, periodic: bool | str | None = None,
-                   release: bool = False) -> OpticalVolume:
+                   release: bool = False, keep: tuple = ("beta_ext", "weights")) -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
     Parameters
@@ -359,6 +384,10 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
         Drop the mixing ratios and effective radii from ``hyd`` (in place) once their optics are computed, so
         that their memory goes while the volume's grids are built (the command line, which needs them no more;
         ``rho_air`` and the coordinates stay).
+    keep : tuple of str, default ("beta_ext", "weights")
+        The per-species grids the volume keeps; one left out is a :class:`ReleasedGrid` (its memory freed
+        once the total, the albedo and the weights exist): the path tracer reads no ``beta_ext`` (4 bytes per
+        cell and species saved), the slicer no ``weights``.
 
     Returns
     -------
@@ -395,6 +424,10 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     if sizes is not None:
         attrs["sizes"] = sizes
     attrs.update(attrs_classes)
+    if "beta_ext" not in keep:
+        beta_ext = ReleasedGrid("beta_ext", beta_ext.shape)
+    if "weights" not in keep:
+        weights = ReleasedGrid("weights", weights.shape)
     return OpticalVolume(names, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
                          Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic,
