@@ -171,3 +171,20 @@ def test_release_drops_the_fields_once_used_and_changes_no_grid(sizes, size_clas
     assert vol.species == kept.species
     assert [v for v in hyd.data_vars if v.startswith(("q_", "r_eff_"))] == []
     assert "rho_air" in hyd
+
+
+def test_voxel_albedo_by_chunks_equals_the_whole_grid_at_once(monkeypatch):
+    """Each voxel's albedo from its radius (``sizes="scheme"``) computed a few voxels at a time (bounded
+    float64 temporaries) is the whole-grid computation's, bit for bit, and differs from the species' fixed
+    albedo where the radii differ from the species'."""
+    import weather_mi.optics.volume as volume
+    hyd = wm.synthetic.cumulus()
+    rng = np.random.default_rng(2)
+    for s in wm.SPECIES_NAMES:
+        hyd[f"r_eff_{s}"] = hyd[f"q_{s}"].copy(data=rng.uniform(1e-5, 5e-4, hyd[f"q_{s}"].shape).astype(np.float32))
+    whole = wm.optical_volume(hyd, "physical", sizes="scheme", phase_quality="test")
+    monkeypatch.setattr(volume, "ALBEDO_CHUNK", hyd["rho_air"].size // 5 + 3)  # five chunks, the last partial
+    chunked = wm.optical_volume(hyd, "physical", sizes="scheme", phase_quality="test")
+    np.testing.assert_array_equal(chunked.albedo, whole.albedo)
+    fixed = wm.optical_volume(hyd, "physical", sizes="physical", phase_quality="test")
+    assert not np.array_equal(fixed.albedo, whole.albedo)

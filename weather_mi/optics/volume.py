@@ -278,6 +278,9 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
     return total, largest
 
 
+ALBEDO_CHUNK = 1 << 22  # voxels of a grid at a time in ``_voxel_albedo``
+
+
 def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_sum: np.ndarray) -> None:
     """Eq. 5's numerator with each voxel's own albedo: sum_s omega_s(r_eff) beta_s, the weak-absorption albedo
     (``species.physical_albedo``) of the model's radius in place of the species' one, added to ``albedo_sum``
@@ -290,11 +293,13 @@ def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_
             continue
         r = np.asarray(hyd[var].values).reshape(-1)
         beta = beta_ext[i].reshape(-1)
-        idx = np.flatnonzero((beta > 0) & (r > 0))
-        omegas = physical_albedo(s.phase_class, r[idx].astype(np.float64), s.density_kg_m3)
-        b = beta[idx].astype(np.float64)
-        for c in range(3):
-            albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
+        for start in range(0, beta.size, ALBEDO_CHUNK):  # float64 temporaries of a chunk, not of the grid
+            part = slice(start, start + ALBEDO_CHUNK)
+            idx = np.flatnonzero((beta[part] > 0) & (r[part] > 0)) + start
+            omegas = physical_albedo(s.phase_class, r[idx].astype(np.float64), s.density_kg_m3)
+            b = beta[idx].astype(np.float64)
+            for c in range(3):
+                albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
 
 
 def _release(hyd: xr.Dataset, names, kinds) -> None:
