@@ -430,3 +430,25 @@ def test_phase_arrays_pack_the_scattering_coefficients_in_aligned_memory():
     flat = packed.reshape(vol.shape + (8,))
     np.testing.assert_array_equal(flat[..., :5], plain)
     assert not flat[..., 5:].any() and (flat[..., :5] > 0).any()
+
+
+def test_a_grey_albedo_grid_is_handed_as_one_channel_and_renders_the_same():
+    """``medium.grey_or_rgb``: a band's albedo (three equal channels) becomes one (z, y, x, 1) channel, which the
+    gridvolume holds as given; an albedo whose channels differ anywhere stays RGB. The medium's albedo
+    evaluated at points inside the grid is the same either way (trilinear, per channel)."""
+    from weather_mi.kernel.medium import grey_or_rgb
+    rng = np.random.default_rng(3)
+    grey = np.repeat(rng.uniform(0.5, 1.0, (3, 4, 5, 1)).astype(np.float32), 3, axis=-1)
+    one = grey_or_rgb(grey)
+    assert one.shape == (3, 4, 5, 1) and one.flags.c_contiguous
+    np.testing.assert_array_equal(one[..., 0], grey[..., 0])
+    rgb = grey.copy()
+    rgb[2, 3, 4, 2] += 1e-3  # one channel of one voxel differs: RGB kept
+    assert grey_or_rgb(rgb).shape == (3, 4, 5, 3)
+    p = mi.Point3f(*[mi.Float(rng.uniform(0.05, 0.95, 64).astype(np.float32)) for _ in range(3)])
+    it = dr.zeros(mi.Interaction3f)
+    it.p = p
+    vals = [np.array(mi.load_dict({"type": "gridvolume", "data": mi.TensorXf(a), "filter_type": "trilinear",
+                                   "accel": False}).eval(it)) for a in (grey, one)]
+    np.testing.assert_array_equal(vals[0], vals[1])
+    assert vals[0].min() >= 0.5

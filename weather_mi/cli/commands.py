@@ -197,6 +197,7 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
                                ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
                                seed=args.seed)
+    del vol  # the scene holds the band's volume (its own albedo): the RGB albedo goes
     w, h = scene.view.size
     print(f"{scene.satellite.name} (sub-satellite longitude {scene.satellite.sub_lon_deg}), band {scene.band.name} um: "
           f"{w} x {h} pixels of {resolution:g} km, view zenith {scene.view.view_zenith_deg.min():.1f}-"

@@ -55,6 +55,17 @@ def phase_dict(vol: OpticalVolume) -> dict:
     return d
 
 
+def grey_or_rgb(albedo: np.ndarray) -> np.ndarray:
+    """The albedo grid (z, y, x, 3) as the medium takes it: one channel (z, y, x, 1) where the three agree
+    everywhere (a satellite band's), which a gridvolume holds as given, where three channels it copies."""
+    a = np.asarray(albedo)
+    for c in (1, 2):
+        for k in range(a.shape[0]):  # a level at a time: no whole-grid temporaries
+            if not np.array_equal(a[k, ..., 0], a[k, ..., c]):
+                return a
+    return np.ascontiguousarray(a[..., :1])
+
+
 def medium_dict(vol: OpticalVolume) -> dict:
     """``heterogeneous`` medium: sigma_t = beta_total (1/m, grey), RGB albedo, mixture phase, all on
     the volume's bounding box (grids indexed [z, y, x, channel], last axis world x). A periodic volume's
@@ -62,7 +73,7 @@ def medium_dict(vol: OpticalVolume) -> dict:
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     to_world = bbox_transform(grid_bbox(vol))
-    beta, albedo = vol.beta_total, vol.albedo
+    beta, albedo = vol.beta_total, grey_or_rgb(vol.albedo)
     wrap = {}
     if vol.periodic:
         beta, albedo, wrap = pad_levels(beta), pad_levels(albedo), {"wrap_mode": "repeat"}
