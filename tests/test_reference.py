@@ -555,6 +555,8 @@ def test_a_volume_without_its_species_extinction_renders_the_same_image():
         np.asarray(lean.beta_ext)
     with pytest.raises(wm.WeatherDataError, match="beta_ext"):
         lean.beta_ext.sum()
+    import pickle  # to Dask workers and back: still released, its shape kept
+    assert pickle.loads(pickle.dumps(lean)).beta_ext.shape == whole.beta_ext.shape
     (x0, y0, _), (x1, y1, z1) = whole.bbox
     cam = wm.Camera.orthographic(center=((x0 + x1) / 2, (y0 + y1) / 2, z1 + 1000.0), direction=(0.0, 0.0, -1.0),
                                  width=x1 - x0, height=y1 - y0)
