@@ -123,10 +123,10 @@ def test_skirt_faces_outwards_and_hides_the_mesh_underside():
 def test_height_field_rays_meet_the_reference_mesh():
     """The slicer's ray-height-field intersection (``Terrain.ray_hits`` on ``Terrain.surface_at``) against
     Mitsuba's intersection of the reference's PLY mesh: the same points for slanted rays over the relief."""
-    from weather_mi.kernel.scene_dict import _terrain_ply
+    from weather_mi.kernel.scene_dict import _terrain_meshes
     terrain = Terrain.of(hydrometeors(relief(), 0.3))
     wm.set_variant("llvm_ad_rgb")
-    scene = mi.load_dict({"type": "scene", "t": {"type": "ply", "filename": _terrain_ply(terrain, 2000.0)}})
+    scene = mi.load_dict({"type": "scene", "t": {"type": "ply", "filename": _terrain_meshes(terrain, 2000.0)[0][0]}})
     rng = np.random.default_rng(4)
     n = 500
     o = np.stack([rng.uniform(terrain.x[0], terrain.x[-1], n), rng.uniform(terrain.y[0], terrain.y[-1], n),
@@ -202,3 +202,22 @@ def test_slicer_rays_meet_the_reference_ground_beyond_the_domain():
     vol2, _ = recentred_volume(vol)
     rendered = terrain_ground_dicts(vol2.terrain, {"type": "homogeneous", "sigma_t": 0.0, "albedo": 0.0}, vol2.bbox)
     assert terrain_surround_m(vol) == pytest.approx(float(np.array(rendered["ground"]["to_world"].matrix)[2, 3]), abs=1e-3)
+
+
+def test_slicer_ground_per_channel_is_the_references():
+    """A terrain with an albedo per render channel (``Terrain.albedo_rgb``: ``scene.surface``'s ``file``): the
+    slicer and the path tracer see the same coloured ground, channel by channel, as for one grey albedo."""
+    from dataclasses import replace
+    from weather_mi.slicing import render_slices
+    hyd = hydrometeors(relief(), 0.3)
+    vol = volume(hyd)
+    gx = np.linspace(0.0, 1.0, NX)[None, :] * np.ones((NY, 1))
+    rgb = np.stack([0.1 + 0.3 * gx, 0.25 * np.ones_like(gx), 0.4 - 0.3 * gx], -1)
+    vol = replace(vol, terrain=replace(vol.terrain, albedo=rgb.mean(-1), albedo_rgb=rgb))
+    spec = nadir_spec(vol, elevation=40.0, w=48, h=36)
+    ref = np.asarray(wm.render_reference(spec, vol, spp=64, progress=False, max_depth=2).radiance)
+    sl = np.asarray(render_slices(spec, vol, slices=16).radiance)
+    assert np.corrcoef(ref[..., 0].ravel(), ref[..., 2].ravel())[0, 1] < 0  # the channels differ across x
+    for c in range(3):
+        rel = np.abs(sl[..., c] / ref[..., c] - 1.0)
+        assert np.median(rel) < 0.002 and np.mean(rel < 0.005) > 0.75, (c, np.median(rel), np.mean(rel < 0.005))

@@ -3,7 +3,8 @@
     weather-mi info FILE | --demo supercell|cumulus|stratocumulus [--lat LAT --lon LON --date UTC]
     weather-mi render FILE | --demo supercell|cumulus|stratocumulus [options] [--scheduler ADDR | --workers N] -o out.exr
     weather-mi satellite FILE... | --demo NAME [--time all|A:B|I,J] [--satellite goes-east|goes-west|himawari|meteosat] [--band 0.64 | --rgb]
-               [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC] -o out/sat.nc
+               [--resolution 1km] [--rayleigh] [--lat LAT --lon LON --date UTC] [--surface file|albedo|flat]
+               [--wind M/S] [--tile-size PX [--halo KM] [--scheduler ADDR | --workers N]] -o out/sat.nc
     weather-mi animate WRFOUT... [--renderer slices|reference] [options] [--scheduler ADDR | --workers N] -o DIR
     weather-mi validate -o DIR [--quick]
 """
@@ -18,6 +19,8 @@ from ..io.times import parse_time, parse_times
 from ..reference.options import ReferenceOptions, add_flags, flag_values
 from ..io.sources import DEMOS, check_time, open_source
 from .periodic_option import add_periodic_option, periodic_value
+from .satellite_tiles import add_tile_options, check_tile_options, satellite_tiles_command
+from .spectral_option import add_spectral_options, check_spectral_options, save_png, variant_of
 from .summary import info_text
 from ..optics.volume import default_sizes
 
@@ -69,6 +72,7 @@ def check_scene_options(args) -> None:
                          "does not take it yet")
     if air is not None and getattr(args, "integrator", None) == "volpath":
         raise ValueError("--atmosphere clear colours the sun of --integrator majorant (the default), not volpath's")
+    check_spectral_options(args)
 
 
 def render_command(args) -> Path:
@@ -94,6 +98,8 @@ def _render(args, out, png_path, ckpt) -> Path:
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase,
                          sizes=args.sizes or default_sizes(hyd), size_classes=args.size_classes,
                          periodic=periodic_value(args), release=True, keep=("weights",))  # the path tracer's
+    from ..scene.surface import RGB_UM, with_surface
+    vol = with_surface(vol, RGB_UM, args.surface, args.wind)  # the ground's surface in red, green and blue
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     spec, sun_meta = scene_spec(args, vol), None
     if args.sun_from_time:
@@ -101,14 +107,14 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..reference.cluster import session
     with session(args.scheduler, args.workers) as client:
         img = render_reference(spec, vol, options=ReferenceOptions(**flag_values(args)), checkpoint=ckpt,
-                               resume=ckpt if args.resume else None, client=client)
+                               resume=ckpt if args.resume else None, client=client, variant=variant_of(args))
     if sun_meta:
         img.metadata["sun_from_time"] = sun_meta
     if args.denoise:
         from ..display.denoise import denoise_image
         denoise_image(img, spec, vol)
     img.save(out)
-    png = img.save_png(png_path, exposure=args.exposure)
+    png = save_png(img, png_path, args, spec, vol)
     ckpt.unlink(missing_ok=True)
     noise = img.metadata.get("noise") or {}
     cloud = (f", over cloud pixels: mean relative standard error {noise['rse_mean']:.3f}, RMS standard error / "
@@ -150,6 +156,7 @@ def satellite_command(args) -> Path:
     resolution = si.parse_resolution_km(args.resolution)
     nc, exr, png, ckpt = si.satellite_outputs(args.output)
     check_satellite_bands(args)
+    check_tile_options(args)
     if args.denoise:
         from ..display.denoise import check_available
         check_available()
@@ -164,6 +171,8 @@ def satellite_command(args) -> Path:
         from ..satellite.truecolor import band_checkpoints
         for c in band_checkpoints(ckpt):  # --rgb --rayleigh: a checkpoint per band
             check_unfinished(c, args.resume)
+        if args.tile_size is not None:  # tiles as Dask tasks, no process reading the whole domain
+            return satellite_tiles_command(args, resolution, nc, exr, png, flag_values(args, SATELLITE_ESTIMATOR))
         return _satellite(args, resolution, nc, exr, png, ckpt)
 
 
@@ -196,7 +205,7 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
                                ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
-                               seed=args.seed)
+                               seed=args.seed, **surface_kw(args))
     del vol  # the scene holds the band's volume (its own albedo): the RGB albedo goes
     w, h = scene.view.size
     print(f"{scene.satellite.name} (sub-satellite longitude {scene.satellite.sub_lon_deg}), band {scene.band.name} um: "
@@ -225,7 +234,7 @@ def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt) -> Path:
     from ..satellite import truecolor as tc
     from ..reference.cluster import session
     scenes = tc.true_color_scenes(hyd, vol, args.satellite, resolution, rayleigh=args.rayleigh,
-                                  ground_albedo=args.ground_albedo, seed=args.seed)
+                                  ground_albedo=args.ground_albedo, seed=args.seed, **surface_kw(args))
     s = scenes[0]
     w, h = s.view.size
     names = ", ".join(sc.band.name for sc in scenes) if len(scenes) > 1 else ", ".join(b.name for b in s.bands)
@@ -258,6 +267,23 @@ def open_placed(args):
         return hyd
     from ..scene.place import assume_place
     return assume_place(hyd, args.lat, args.lon, args.date)
+
+
+def add_surface_options(p, default: str) -> None:
+    """``--surface`` and ``--wind``: the ground under a domain with its own (``scene.surface``)."""
+    from ..scene.surface import SURFACES
+    p.add_argument("--surface", default=default, choices=SURFACES,
+                   help="the ground of a file with one (HGT, land, albedo): file: each column's land use and albedo "
+                        "in the band(s), the sea and lakes with their sun glint (Cox-Munk); albedo: the file's "
+                        "broadband albedo, Lambertian; flat: one flat ground (--ground-albedo)"
+                        f" (default {default})")
+    p.add_argument("--wind", type=float, default=None,
+                   help="wind speed 10 m above the sea (m/s) for the glint; default the file's U10/V10, else 5")
+
+
+def surface_kw(args) -> dict:
+    """The ``satellite_scene`` keywords of ``--surface`` and ``--wind``."""
+    return {"surface": args.surface, "wind_m_s": args.wind}
 
 
 def add_place_options(p) -> None:
@@ -381,8 +407,10 @@ def _add_render_parser(sub) -> None:
     render.add_argument("--sun-from-time", action="store_true",
                         help="the sun where and when the data is (its centre, its valid time; NREL SPA), instead "
                              "of --sun-azimuth/--sun-elevation")
+    add_surface_options(render, "albedo")
     render.add_argument("--seed", type=int, default=0)
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")
+    add_spectral_options(render)
     render.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
                         help="the PNG shows the OIDN-denoised image (an extra EXR layer, denoised.R/G/B; the "
                              "EXR's radiance and standard error stay unbiased); --no-denoise: the raw radiance")
@@ -419,6 +447,7 @@ def _add_satellite_parser(sub) -> None:
     sat.add_argument("--ground-albedo", type=float, default=None,
                      help="surface albedo where the file has none (default 0.06, the sea; with --rgb the sea "
                           "per band, 0.06 at 0.47 um to 0.02 at 0.86 um)")
+    add_surface_options(sat, "file")
     add_flags(sat, SATELLITE_ESTIMATOR)
     sat.add_argument("--seed", type=int, default=0)
     sat.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
@@ -427,6 +456,7 @@ def _add_satellite_parser(sub) -> None:
     sat.add_argument("--resume", action="store_true", help="continue from OUTPUT.exr.ckpt.npz (--rgb --rayleigh: "
                                                            "OUTPUT.exr.<band>.ckpt.npz)")
     add_dask_options(sat)
+    add_tile_options(sat)
     sat.add_argument("-o", "--output", default="weather-mi-satellite.nc", help="output NetCDF (.nc)")
 
 

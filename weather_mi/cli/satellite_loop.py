@@ -60,6 +60,7 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
     from .periodic_option import periodic_value
     from ..satellite import truecolor as tc
     check_unfinished_loop(nc, args.resume)
+    surface = {"surface": args.surface, "wind_m_s": args.wind}  # --surface, --wind
     hyds = open_placed_times(args)
     albedo = 0.06 if args.ground_albedo is None else args.ground_albedo
     what = "true colour" if args.rgb else f"band {args.band or '0.64'} um"
@@ -75,10 +76,12 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
             kw = dict(reference_kw, checkpoint=ckpt, resume=ckpt if resume else None, client=client)
             if args.rgb:
                 scenes = tc.true_color_scenes(hyd, vol, args.satellite, resolution, rayleigh=args.rayleigh,
-                                              ground_albedo=args.ground_albedo, seed=args.seed)
+                                              ground_albedo=args.ground_albedo, seed=args.seed,
+                                              **surface)
                 return tc.render_true_color(scenes, **kw)
             scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution,
-                                       rayleigh=args.rayleigh, ground_albedo=albedo, seed=args.seed)
+                                       rayleigh=args.rayleigh, ground_albedo=albedo, seed=args.seed,
+                                       **surface)
             return si.render_satellite(scene, **kw)
         loop = satellite_loop(hyds, render_time, nc, resume=args.resume, fps=args.fps, denoise=args.denoise,
                               options=loop_options(args, resolution, reference_kw))

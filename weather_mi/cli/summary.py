@@ -91,6 +91,13 @@ def place_lines(hyd) -> list[str]:
         lines.append(f"terrain     : {terrain.height_m.min():.0f}..{terrain.height_m.max():.0f} m above MSL; "
                      f"{int(terrain.land.sum())} of {terrain.land.size} columns land; surface albedo "
                      f"{terrain.albedo.min():.3g}..{terrain.albedo.max():.3g} ({terrain.albedo_source})")
+        from ..io.land_use import KINDS
+        kinds, counts = np.unique(terrain.kinds, return_counts=True)
+        lines.append(f"surface     : {', '.join(f'{KINDS[k]} {n}' for k, n in zip(kinds, counts))} columns "
+                     f"(land from {hyd.attrs.get('land_source', '?')}"
+                     + (f"; snow on {int(np.sum(terrain.snow > 0.5))}" if terrain.snow is not None else "")
+                     + (f"; wind 10 m over water {hyd.attrs['wind_10m_water_m_s']:.1f} m/s"
+                        if "wind_10m_water_m_s" in hyd.attrs else "") + ")")
     return lines
 
 

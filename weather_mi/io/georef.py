@@ -43,15 +43,37 @@ def place_coords(ds, path: str, it: int, stamp: str, sel: dict, z_surface_m: np.
     mp = int(ds.attrs.get("MAP_PROJ", 0))
     if mp != 0:
         proj_string(ds.attrs, path)  # names the file and MAP_PROJ where weather-mi does not read it
-    coords, attrs = surface_fields(lambda n: _read2d(ds, n, it, sel), lambda n: n in ds, z_surface_m)
-    hgt = coords["terrain_height"][1]
-    attrs["terrain_surface_max_diff_m"] = float(np.max(np.abs(hgt - z_surface_m)))
     when = valid_time_iso(stamp, mp)
     lat = _read2d(ds, "XLAT", it, sel) if "XLAT" in ds.variables else None
     lon = _read2d(ds, "XLONG", it, sel) if "XLONG" in ds.variables else None
+    place, attrs = None, {}
     if mp == 0 or (lat is not None and not (np.any(lat != 0) or np.any(lon != 0))):
         attrs["place"] = "none (ideal case: no map projection, no latitude/longitude)"
-        return coords, attrs
+    else:
+        if lat is None or lon is None:
+            dom = domain_georeference(ds.attrs, path)
+            if sel or z_surface_m.shape != (dom.ny, dom.nx):
+                raise WeatherDataError(path, "XLAT, XLONG", "the latitude/longitude of the mass points (a file "
+                                       "with part of a domain needs them to be placed)", "missing")
+            lat, lon = dom.latlon()
+            georef, check = dom, {"latlon_source": "the projection (no XLAT/XLONG in the file)"}
+        else:
+            georef, check = grid_georeference(ds.attrs, lat, lon, path)
+            i0, j0 = check.pop("grid_offset_ij")
+            check.update(grid_offset_i=i0, grid_offset_j=j0, latlon_source="XLAT, XLONG")
+        if when is not None:
+            attrs["valid_time"] = when
+        attrs.update(georef.attrs(), **check, place="the file's (XLAT, XLONG, MAP_PROJ)")
+        place = (lat, lon)
+    coords, surface_attrs = surface_fields(lambda n: _read2d(ds, n, it, sel), lambda n: n in ds, z_surface_m,
+                                           ds.attrs, place, path)
+    attrs.update(surface_attrs)
+    hgt = coords["terrain_height"][1]
+    attrs["terrain_surface_max_diff_m"] = float(np.max(np.abs(hgt - z_surface_m)))
+    if place is not None:
+        coords["lat"] = (("y", "x"), lat, {"units": "degrees_north", "standard_name": "latitude"})
+        coords["lon"] = (("y", "x"), lon, {"units": "degrees_east", "standard_name": "longitude"})
+    return coords, attrs
     if lat is None or lon is None:
         dom = domain_georeference(ds.attrs, path)
         if sel or z_surface_m.shape != (dom.ny, dom.nx):

@@ -24,7 +24,7 @@ from ..errors import WeatherDataError
 
 SPECIES_NAMES: tuple[str, ...] = ("cloud", "ice", "rain", "snow", "graupel")
 DIMS = ("z", "y", "x")
-GROUND_COORDS = ("lat", "lon", "terrain_height", "land", "surface_albedo")  # optional (y, x) coordinates
+GROUND_COORDS = ("lat", "lon", "terrain_height", "land", "surface_albedo", "surface_kind", "snow_cover")  # optional (y, x) coordinates
 
 
 def check_species_name(name: str, source: str = "input", variable: str | None = None) -> str:

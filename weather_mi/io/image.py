@@ -1,5 +1,5 @@
 """Images out of either renderer: radiance with its standard error, metadata and (a reference's) eye-ray
-transmittance; EXR for data (OpenEXR: R, G, B, stderr.R/G/B, transmittance.Y, the denoised display layer denoised.R/G/B and the metadata as JSON), PNG for eyes (sRGB transfer function from colour-science). Files are written under a unique temporary
+transmittance; EXR for data (OpenEXR: R, G, B, stderr.R/G/B, transmittance.Y, the denoised display layer denoised.R/G/B, a spectral render's CIE X, Y, Z and the metadata as JSON), PNG for eyes (sRGB transfer function from colour-science). Files are written under a unique temporary
 name and renamed into place (``output_paths``)."""
 from __future__ import annotations
 
@@ -36,6 +36,9 @@ class Image:
     denoised : ndarray, (H, W, 3) float32, or None
         The denoised display layer (``weather_mi.display.denoise``; biased): what the PNG shows when present,
         named in ``metadata["display"]``. Never the data: ``radiance`` and ``stderr`` are.
+    xyz : ndarray, (H, W, 3) float32, or None
+        A spectral render's CIE 1931 X, Y, Z (the same units as ``radiance``, which is then their linear
+        sRGB, D65 white); None for RGB renders.
     """
 
     radiance: np.ndarray
@@ -43,6 +46,7 @@ class Image:
     metadata: dict = field(default_factory=dict)
     transmittance: np.ndarray | None = None
     denoised: np.ndarray | None = None
+    xyz: np.ndarray | None = None
 
     def __post_init__(self):
         self.radiance = np.ascontiguousarray(self.radiance, dtype=np.float32)
@@ -56,11 +60,12 @@ class Image:
             if self.transmittance.shape != self.radiance.shape[:2]:
                 raise ValueError(f"Image transmittance must be (H, W) = {self.radiance.shape[:2]}, got "
                                  f"{self.transmittance.shape}")
-        if self.denoised is not None:
-            self.denoised = np.ascontiguousarray(self.denoised, dtype=np.float32)
-            if self.denoised.shape != self.radiance.shape:
-                raise ValueError(f"Image denoised must be (H, W, 3) = {self.radiance.shape}, got "
-                                 f"{self.denoised.shape}")
+        for name in ("denoised", "xyz"):
+            layer = getattr(self, name)
+            if layer is not None:
+                setattr(self, name, np.ascontiguousarray(layer, dtype=np.float32))
+                if layer.shape != self.radiance.shape:
+                    raise ValueError(f"Image {name} must be (H, W, 3) = {self.radiance.shape}, got {layer.shape}")
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -80,7 +85,7 @@ class Image:
         if image_format(path) == "png":
             return self.save_png(path)
         return write_exr(path, self.radiance, self.stderr, self.metadata, transmittance=self.transmittance,
-                         denoised=self.denoised)
+                         denoised=self.denoised, xyz=self.xyz)
 
     @property
     def display(self) -> np.ndarray:
@@ -100,11 +105,13 @@ class Image:
         """The image an EXR written by :meth:`save` holds (radiance, stderr, metadata, transmittance,
         denoised)."""
         radiance, stderr, metadata, transmittance = read_exr_layers(path)
-        return cls(radiance, stderr, metadata, transmittance, read_layer(path, DENOISED_LAYER))
+        return cls(radiance, stderr, metadata, transmittance, read_layer(path, DENOISED_LAYER),
+                   read_layer(path, "", "XYZ"))
 
 
 def write_exr(path, radiance: np.ndarray, stderr: np.ndarray | None = None, metadata: dict | None = None,
-              transmittance: np.ndarray | None = None, denoised: np.ndarray | None = None) -> Path:
+              transmittance: np.ndarray | None = None, denoised: np.ndarray | None = None,
+              xyz: np.ndarray | None = None) -> Path:
     """Write an EXR (ZIP-compressed float32 scanlines): R, G, B (radiance), stderr.R/G/B when given,
     transmittance.Y ((H, W)) when given, denoised.R/G/B (the display layer) when given, ``metadata`` as the JSON header attribute ``weather_mi``;
     ``OutputWriteError`` naming the file when it cannot be written (a full disk)."""
@@ -115,6 +122,8 @@ def write_exr(path, radiance: np.ndarray, stderr: np.ndarray | None = None, meta
         if rgb is not None:
             for i, c in enumerate("RGB"):
                 channels[f"{layer}.{c}"] = np.ascontiguousarray(rgb[..., i], dtype=np.float32)
+    if xyz is not None:  # a spectral render's CIE XYZ: channels X, Y, Z
+        channels.update({c: np.ascontiguousarray(xyz[..., i], dtype=np.float32) for i, c in enumerate("XYZ")})
     if transmittance is not None:
         channels[TRANSMITTANCE_CHANNEL] = np.ascontiguousarray(transmittance, dtype=np.float32)
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
@@ -149,14 +158,16 @@ def read_exr_layers(path):
     return radiance, stderr, metadata, transmittance
 
 
-def read_layer(path, layer: str):
-    """The (H, W, 3) float32 RGB layer ``layer`` (channels LAYER.R/G/B) of an EXR, or None without it."""
+def read_layer(path, layer: str, names: str = "RGB"):
+    """The (H, W, 3) float32 layer ``layer`` (channels LAYER.R/G/B, or of ``names``; "" the top level's) of an
+    EXR, or None without it."""
     import OpenEXR
+    prefix = f"{layer}." if layer else ""
     with OpenEXR.File(str(path), separate_channels=True) as f:
         ch = f.channels()
-        if not all(f"{layer}.{c}" in ch for c in "RGB"):
+        if not all(f"{prefix}{c}" in ch for c in names):
             return None
-        return np.stack([np.asarray(ch[f"{layer}.{c}"].pixels, np.float32) for c in "RGB"], axis=-1)
+        return np.stack([np.asarray(ch[f"{prefix}{c}"].pixels, np.float32) for c in names], axis=-1)
 
 
 def auto_exposure(radiance: np.ndarray, percentile: float = 99.5) -> float:

@@ -1,5 +1,5 @@
-"""Opening any input as Hydrometeors: a wrfout NetCDF file (one time or a time series), an LES text
-file, a Hydrometeors Dataset in memory (plain arrays through ``weather_mi.from_arrays``) or a built-in
+"""Opening any input as Hydrometeors: a wrfout NetCDF file (one time or a time series), a WPS geogrid
+file (a clear sky over its ground, ``geogrid``), an LES text file, a Hydrometeors Dataset in memory (plain arrays through ``weather_mi.from_arrays``) or a built-in
 demo storm. The CLI, the viewer, the validation study and ``weather-mi animate`` all open their inputs
 here; times are selected by ``weather_mi.io.times`` (one rule for all).
 
@@ -79,7 +79,25 @@ def open_source(path=None, demo: str | None = None, time=None, *, dataset=None, 
         return open_demo(demo or "supercell")
     if what == "les":
         return open_les(Path(path))
+    if isinstance(path, (str, Path)) and is_geogrid_file(path):
+        from .geogrid import open_geogrid
+        if time is not None:
+            raise ValueError(f"--time {time}: {path} is WPS geogrid output (static fields, no time): leave --time "
+                             "out, give --date for the sun")
+        return open_geogrid(path)
     return open_wrf(Path(path), time=-1 if time is None else time, sizes=sizes)
+
+
+def is_geogrid_file(path) -> bool:
+    """Whether ``path`` is WPS geogrid output (``io.geogrid``: a clear sky over its ground); False for anything
+    that does not open as NetCDF (its reader then says why)."""
+    import xarray as xr
+    from .geogrid import is_geogrid
+    try:
+        with xr.open_dataset(path) as ds:
+            return is_geogrid(ds)
+    except (OSError, ValueError):
+        return False
 
 
 def open_times(path=None, demo: str | None = None, time="all", *, dataset=None, sizes: bool = True) -> list:

@@ -3,19 +3,26 @@ the Hydrometeors (y, x) grid, as data a renderer can turn into a height-field me
 
 Readers put them in a Hydrometeors Dataset as (y, x) coordinates, not data variables, so that they never
 mix with the hydrometeors: ``terrain_height`` (m above MSL: WRF's HGT), ``land`` (1 land, 0 water, from
-LANDMASK or XLAND) and ``surface_albedo`` (WRF's ALBEDO where the file has it, else ALBBCK, else the
-default of the column's class). The defaults are WRF's own all-season land/water table (``LW12`` in
-WRF's ``run/LANDUSE.TBL``: land 20 %, water 8 %); a file without LANDMASK/XLAND is taken as land.
+LANDMASK, else XLAND, else LU_INDEX's water and lake classes, else the offline global mask at the columns'
+latitude/longitude, ``land_mask``), ``surface_albedo`` (WRF's broadband ALBEDO where the file has it, else
+ALBBCK, else the default of the column's class), ``surface_kind`` (``land_use.KINDS``: sea, lake, forest, ...,
+from LU_INDEX and its MMINLU table where the file has it, else land or sea) and, where the file says,
+``snow_cover`` (SNOWC, SNOWH or SNOW). The default albedos are WRF's own all-season land/water table
+(``LW12`` in WRF's ``run/LANDUSE.TBL``: land 20 %, water 8 %); a file with none of the land sources (no
+mask, no land use, no latitude/longitude) is taken as land. ``Terrain.in_band`` gives the albedo in an
+imager's band (``land_use.band_albedo``).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .land_use import KIND, WATER_KINDS, band_albedo, kinds_from_land_use, snow_cover
+
 LAND_ALBEDO = 0.20   # WRF run/LANDUSE.TBL, table LW12, class 1 'Land' (ALBD 20 %)
 WATER_ALBEDO = 0.08  # WRF run/LANDUSE.TBL, table LW12, class 2 'Water' (ALBD 8 %; the USGS 'Water Bodies' too)
-COORDS = ("terrain_height", "land", "surface_albedo")
+COORDS = ("terrain_height", "land", "surface_albedo", "surface_kind", "snow_cover")
 TERRAIN_APRON_M = 100e3  # a rendered ground continues level this far past the grid's edge (``scene_hits``)
 
 
@@ -35,6 +42,21 @@ class Terrain:
         (ny, nx) broadband surface albedo in [0, 1].
     albedo_source : str
         Where the albedo came from (a variable of the file, or the default table).
+    kind : numpy.ndarray or None
+        (ny, nx) surface kinds (``land_use.KINDS``); None: land or sea by ``land``.
+    snow : numpy.ndarray or None
+        (ny, nx) snow-covered fraction, where the file gives one.
+    wind_m_s : float or None
+        Wind speed 10 m above the water (m/s; the mean over the water columns of the file's U10/V10), None
+        where the file has none; it sets the sea surface's roughness (``kernel.sea_surface``).
+    albedo_rgb : numpy.ndarray or None
+        (ny, nx, 3) albedo per render channel (``in_bands``: a band per channel), None: ``albedo`` in all three.
+    sea : bool
+        Whether a renderer draws the water columns as the sea surface (Fresnel, Cox-Munk glint at
+        ``wind_m_s``: ``kernel.sea_surface``) instead of Lambertian with ``albedo`` (``with_sea``).
+    sea_normal : numpy.ndarray or None
+        (ny, nx, 3) unit shading normals of the sea surface (``satellite.glint``: the glint where each column's
+        own sun puts it), None: up.
     """
 
     x: np.ndarray
@@ -43,16 +65,79 @@ class Terrain:
     land: np.ndarray
     albedo: np.ndarray
     albedo_source: str
+    kind: np.ndarray | None = None
+    snow: np.ndarray | None = None
+    wind_m_s: float | None = None
+    albedo_rgb: np.ndarray | None = None
+    sea: bool = False
+    sea_normal: np.ndarray | None = None
 
     @classmethod
     def of(cls, hyd) -> Terrain | None:
         """The terrain stored in a Hydrometeors Dataset (None where it has none: LES, arrays, demos)."""
         if "terrain_height" not in hyd.coords:
             return None
+        opt = {name: np.asarray(hyd[name].values) for name in ("surface_kind", "snow_cover") if name in hyd.coords}
+        wind = hyd.attrs.get("wind_10m_water_m_s")
         return cls(np.asarray(hyd.x.values, float), np.asarray(hyd.y.values, float),
                    np.asarray(hyd["terrain_height"].values, float), np.asarray(hyd["land"].values) > 0,
                    np.asarray(hyd["surface_albedo"].values, float),
-                   str(hyd.attrs.get("surface_albedo_source", "?")))
+                   str(hyd.attrs.get("surface_albedo_source", "?")),
+                   None if "surface_kind" not in opt else opt["surface_kind"].astype(np.int8),
+                   None if "snow_cover" not in opt else opt["snow_cover"].astype(float),
+                   None if wind is None else float(wind))
+
+    @property
+    def kinds(self) -> np.ndarray:
+        """(ny, nx) surface kinds (``land_use.KINDS``): the file's, else land or sea by ``land``."""
+        if self.kind is not None:
+            return self.kind
+        return np.where(self.land, KIND["land"], KIND["sea"]).astype(np.int8)
+
+    @property
+    def water(self) -> np.ndarray:
+        """(ny, nx) bool, True over the sea and lakes (their surface is the sea surface's, with its glint)."""
+        return np.isin(self.kinds, WATER_KINDS)
+
+    def in_band(self, wavelength_um: float) -> "Terrain":
+        """This terrain with its albedo at ``wavelength_um`` (``land_use.band_albedo``: the file's broadband
+        albedo shaped by each column's kind and snow, or the kind's own where the file has none; over water the
+        water body's Lambertian part)."""
+        from_file = self.albedo_source in ("ALBEDO", "ALBBCK")
+        a = band_albedo(self.kinds, wavelength_um, self.albedo if from_file else None, self.snow)
+        return replace(self, albedo=a, albedo_rgb=None,
+                       albedo_source=f"{self.albedo_source} at {wavelength_um:g} um (land_use)")
+
+    def in_bands(self, wavelengths_um) -> "Terrain":
+        """This terrain with the albedo at ``wavelengths_um[c]`` in render channel c (``albedo_rgb``; ``albedo``
+        their mean, for what reads one albedo)."""
+        rgb = np.stack([self.in_band(w).albedo for w in wavelengths_um], axis=-1)
+        return replace(self, albedo=rgb.mean(axis=-1), albedo_rgb=rgb,
+                       albedo_source=f"{self.albedo_source} at {'/'.join(f'{w:g}' for w in wavelengths_um)} um")
+
+    def with_sea(self, wind_m_s: float | None = None) -> "Terrain":
+        """This terrain with its water drawn as the sea surface (``sea``) at ``wind_m_s`` (m/s; None: the
+        file's U10/V10 over the water, else ``kernel``'s default, 5 m/s); a ValueError for a negative or
+        non-finite wind."""
+        if wind_m_s is not None and not (np.isfinite(float(wind_m_s)) and float(wind_m_s) >= 0.0):
+            raise ValueError(f"--wind {wind_m_s}: expected a wind speed >= 0 m/s (10 m above the sea)")
+        return replace(self, sea=True, wind_m_s=self.wind_m_s if wind_m_s is None else float(wind_m_s))
+
+    def land_at(self, x_m, y_m) -> np.ndarray:
+        """The land flag (int8: 1 land, 0 water) of the nearest column to points (x_m, y_m) (m), -1 beyond the
+        grid (more than half a spacing outside it)."""
+        x, y = np.asarray(x_m, float), np.asarray(y_m, float)
+        dx = (self.x[1] - self.x[0]) if self.x.size > 1 else 1.0
+        dy = (self.y[1] - self.y[0]) if self.y.size > 1 else 1.0
+        fi, fj = np.rint((x - self.x[0]) / dx), np.rint((y - self.y[0]) / dy)
+        inside = (fi >= 0) & (fi < self.x.size) & (fj >= 0) & (fj < self.y.size)
+        i = np.clip(np.nan_to_num(fi), 0, self.x.size - 1).astype(int)
+        j = np.clip(np.nan_to_num(fj), 0, self.y.size - 1).astype(int)
+        return np.where(inside, (~self.water[j, i]).astype(np.int8), np.int8(-1)).astype(np.int8)
+
+    def vertex_rgb(self) -> np.ndarray:
+        """(ny, nx, 3) albedo per render channel: ``albedo_rgb``, else ``albedo`` in all three."""
+        return self.albedo_rgb if self.albedo_rgb is not None else np.repeat(self.albedo[..., None], 3, axis=-1)
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A height-field triangle mesh through the column centres: vertices (ny * nx, 3) at (x, y,
@@ -70,6 +155,12 @@ class Terrain:
         """The mean albedo of the grid's boundary columns (the surround's, beyond the apron)."""
         a = self.albedo
         return float(np.mean(np.concatenate([a[0], a[-1], a[1:-1, 0], a[1:-1, -1]])))
+
+    def edge_rgb(self) -> np.ndarray:
+        """(3,) the mean albedo per render channel of the grid's boundary columns (``vertex_rgb``): the
+        surround's beyond the apron."""
+        a = self.vertex_rgb()
+        return np.mean(np.concatenate([a[0], a[-1], a[1:-1, 0], a[1:-1, -1]]), axis=0)
 
     def _cells(self, x_m, y_m):
         """Cell indices (j, i, j + 1, i + 1), the position (u, v) in the cell, the lower-triangle mask
@@ -150,13 +241,15 @@ class Terrain:
                 break
         return t_hit
 
-    def scene_hits(self, origins, dirs, apron_m: float = TERRAIN_APRON_M, floor_m: float | None = None):
+    def scene_hits(self, origins, dirs, apron_m: float = TERRAIN_APRON_M, floor_m: float | None = None,
+                   rgb: bool = False):
         """The first hit of each ray (N, 3) with the ground a rendered scene has over this terrain, the
         path tracer's (``kernel.scene_dict.terrain_ground_dicts``): the mesh, level for ``apron_m`` past the grid's
         edge (``with_apron``), a vertical skirt from the apron's edge down to the lowest height (``skirt``),
         and beyond it a level surround at ``floor_m`` (default: the lowest height; the path tracer's is a
         few ray offsets below it) with the edge albedo (``edge_albedo``). Returns (distance (N,), inf where
-        none; albedo (N,); unit normal (N, 3))."""
+        none; albedo (N,), or with ``rgb`` (N, 3) per render channel (``vertex_rgb``, ``edge_rgb``); unit
+        normal (N, 3))."""
         o, d = np.asarray(origins, float), np.asarray(dirs, float)
         lo_xy = np.array([self.x[0] - apron_m, self.y[0] - apron_m])
         hi_xy = np.array([self.x[-1] + apron_m, self.y[-1] + apron_m])
@@ -185,6 +278,10 @@ class Terrain:
         on_surround = np.isfinite(t) & (t == t_surround) & ~on_skirt
         normal = np.where(on_skirt[:, None], wall, np.where(on_surround[:, None], [0.0, 0.0, 1.0], normal))
         albedo = np.where(on_surround, self.edge_albedo(), albedo)
+        if rgb:
+            cells, channels = self._cells(p[:, 0], p[:, 1]), self.vertex_rgb()
+            per = np.stack([self._linear(channels[..., c], cells)[0] for c in range(3)], -1)
+            albedo = np.where(on_surround[:, None], self.edge_rgb(), per)
         return t, albedo, normal
 
     def with_apron(self, distance_m: float) -> "Terrain":
@@ -193,9 +290,10 @@ class Terrain:
         (a slanted view sees past the domain's edge: 20 km of cloud at 67 deg is 47 km of parallax)."""
         x = np.r_[self.x[0] - distance_m, self.x, self.x[-1] + distance_m]
         y = np.r_[self.y[0] - distance_m, self.y, self.y[-1] + distance_m]
-        pad = {"pad_width": 1, "mode": "edge"}
-        return Terrain(x, y, np.pad(self.height_m, **pad), np.pad(self.land, **pad), np.pad(self.albedo, **pad),
-                       self.albedo_source)
+        def pad(a):
+            return None if a is None else np.pad(a, ((1, 1), (1, 1)) + ((0, 0),) * (a.ndim - 2), mode="edge")
+        return Terrain(x, y, pad(self.height_m), pad(self.land), pad(self.albedo), self.albedo_source, pad(self.kind),
+                       pad(self.snow), self.wind_m_s, pad(self.albedo_rgb), self.sea, pad(self.sea_normal))
 
     def skirt(self, floor_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A vertical wall from the mesh's boundary down to ``floor_m`` (m), facing outwards, as
@@ -220,7 +318,34 @@ class Terrain:
         return np.concatenate([top, bottom]), faces, albedo
 
 
-def surface_fields(read2d, has, z_surface_m: np.ndarray) -> tuple[dict, dict]:
+def land_and_kind(read2d, has, shape, attrs=None, latlon=None, source: str = "input"):
+    """(land (bool), surface kinds (int8, ``land_use.KINDS``), land source) of a grid: land from LANDMASK, else
+    XLAND, else LU_INDEX (not its water or lake classes), else the global mask (``land_mask``) at ``latlon``
+    ((lat, lon) in degrees, (y, x)), else land everywhere; kinds from LU_INDEX where the file has it (with
+    the land of the first sources kept: a land column of a water class becomes unknown land, a water column
+    of a land class sea), else land or sea."""
+    kind = kinds_from_land_use(read2d("LU_INDEX"), attrs or {}, source) if has("LU_INDEX") else None
+    if has("LANDMASK"):
+        land, land_source = read2d("LANDMASK") > 0.5, "LANDMASK"
+    elif has("XLAND"):
+        land, land_source = read2d("XLAND") < 1.5, "XLAND"
+    elif kind is not None:
+        land, land_source = ~np.isin(kind, WATER_KINDS), f"LU_INDEX ({str((attrs or {}).get('MMINLU', '')).strip()})"
+    elif latlon is not None:
+        from . import land_mask
+        land, land_source = land_mask.is_land(*latlon), land_mask.SOURCE
+    else:
+        land, land_source = np.ones(shape, bool), "none in the file: land assumed"
+    if kind is None:
+        kind = np.where(land, KIND["land"], KIND["sea"]).astype(np.int8)
+    else:
+        water = np.isin(kind, WATER_KINDS)
+        kind = np.where(land & water, KIND["land"], np.where(~land & ~water, KIND["sea"], kind)).astype(np.int8)
+    return land, kind, land_source
+
+
+def surface_fields(read2d, has, z_surface_m: np.ndarray, attrs=None, latlon=None,
+                   source: str = "input") -> tuple[dict, dict]:
     """Terrain coordinates and attributes of a wrfout time.
 
     Parameters
@@ -231,20 +356,23 @@ def surface_fields(read2d, has, z_surface_m: np.ndarray) -> tuple[dict, dict]:
         ``has(name)``: whether the file has the variable.
     z_surface_m : numpy.ndarray
         (y, x) height of the lowest w-level (m above MSL), the terrain where the file has no HGT.
+    attrs : dict, optional
+        The file's global attributes (MMINLU, ISWATER, ISLAKE, ISICE for LU_INDEX).
+    latlon : (numpy.ndarray, numpy.ndarray), optional
+        The columns' latitude and longitude (degrees), for the global land mask where the file has no land.
+    source : str
+        The file, named in errors.
 
     Returns
     -------
     (dict, dict)
-        Coordinates name -> ((y, x), array, attributes) for ``terrain_height`` (m), ``land`` (int8) and
-        ``surface_albedo``; attributes ``surface_albedo_source`` and ``land_source``.
+        Coordinates name -> ((y, x), array, attributes) for ``terrain_height`` (m), ``land`` (int8),
+        ``surface_albedo``, ``surface_kind`` (int8) and ``snow_cover`` (where the file has snow); attributes
+        ``surface_albedo_source``, ``land_source``, ``terrain_source`` and, where the file has U10/V10 and
+        water, ``wind_10m_water_m_s`` (the mean 10 m wind speed over the water columns).
     """
     hgt, hgt_source = (read2d("HGT"), "HGT") if has("HGT") else (z_surface_m, "lowest w-level (PH + PHB) / g")
-    if has("LANDMASK"):
-        land, land_source = read2d("LANDMASK") > 0.5, "LANDMASK"
-    elif has("XLAND"):
-        land, land_source = read2d("XLAND") < 1.5, "XLAND"
-    else:
-        land, land_source = np.ones(hgt.shape, bool), "none in the file: land assumed"
+    land, kind, land_source = land_and_kind(read2d, has, hgt.shape, attrs, latlon, source)
     albedo_var = next((v for v in ("ALBEDO", "ALBBCK") if has(v)), None)
     if albedo_var:
         albedo, albedo_source = np.clip(read2d(albedo_var), 0.0, 1.0), albedo_var
@@ -252,9 +380,21 @@ def surface_fields(read2d, has, z_surface_m: np.ndarray) -> tuple[dict, dict]:
         albedo = np.where(land, LAND_ALBEDO, WATER_ALBEDO)
         albedo_source = f"default of WRF's LW12 table (land {LAND_ALBEDO}, water {WATER_ALBEDO}) by {land_source}"
     dims = ("y", "x")
+    from .land_use import KINDS
     coords = {"terrain_height": (dims, np.asarray(hgt, np.float64),
                                  {"units": "m", "long_name": "terrain height above MSL", "source": hgt_source}),
               "land": (dims, land.astype(np.int8), {"long_name": "1 land, 0 water", "source": land_source}),
               "surface_albedo": (dims, np.asarray(albedo, np.float64),
-                                 {"units": "1", "long_name": "surface albedo", "source": albedo_source})}
-    return coords, {"surface_albedo_source": albedo_source, "land_source": land_source, "terrain_source": hgt_source}
+                                 {"units": "1", "long_name": "surface albedo", "source": albedo_source}),
+              "surface_kind": (dims, kind, {"long_name": "surface kind: " + ", ".join(f"{k} {n}" for k, n in
+                                                                               enumerate(KINDS)),
+                                            "source": "LU_INDEX" if has("LU_INDEX") else land_source})}
+    snow, snow_source = snow_cover(read2d, has)
+    if snow is not None:
+        coords["snow_cover"] = (dims, np.asarray(snow, np.float64),
+                                {"units": "1", "long_name": "snow-covered fraction", "source": snow_source})
+    out = {"surface_albedo_source": albedo_source, "land_source": land_source, "terrain_source": hgt_source}
+    water = np.isin(kind, WATER_KINDS)
+    if has("U10") and has("V10") and np.any(water):
+        out["wind_10m_water_m_s"] = float(np.mean(np.hypot(read2d("U10"), read2d("V10"))[water]))
+    return coords, out

@@ -52,6 +52,8 @@ def phase_dict(vol: OpticalVolume) -> dict:
          "to_world": bbox_transform(grid_bbox(vol))}
     if vol.periodic:
         d["periodic"] = True
+    if mi.is_spectral:
+        d.update(spectral_phase_properties(vol))
     return d
 
 
@@ -66,6 +68,18 @@ def grey_or_rgb(albedo: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(a[..., :1])
 
 
+def spectral_phase_properties(vol: OpticalVolume) -> dict:
+    """Spectral variants: the species' co-albedo spectra (``optics.spectral``), where the volume knows its
+    species (none for raw optics: the albedo is then grey at its 550 nm value)."""
+    import mitsuba as mi
+    from ..optics.spectral import COALBEDO_NM, coalbedo_table
+    species = vol.components or ([vol.species_set[n] for n in vol.species] if vol.species_set is not None else None)
+    if species is None:
+        return {}
+    return {"coalbedo": mi.TensorXf(coalbedo_table(species).astype(np.float32)),
+            "coalbedo_nm": mi.TensorXf(COALBEDO_NM.astype(np.float32))}
+
+
 def medium_dict(vol: OpticalVolume) -> dict:
     """``heterogeneous`` medium: sigma_t = beta_total (1/m, grey), RGB albedo, mixture phase, all on
     the volume's bounding box (grids indexed [z, y, x, channel], last axis world x). A periodic volume's
@@ -73,7 +87,11 @@ def medium_dict(vol: OpticalVolume) -> dict:
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     to_world = bbox_transform(grid_bbox(vol))
-    beta, albedo = vol.beta_total, grey_or_rgb(vol.albedo)
+    beta, albedo = vol.beta_total, vol.albedo
+    if mi.is_spectral:  # the 550 nm albedo, made spectral by the phase function (``spectral_phase_properties``)
+        albedo = np.ascontiguousarray(albedo[..., 1:2])
+    else:
+        albedo = grey_or_rgb(albedo)
     wrap = {}
     if vol.periodic:
         beta, albedo, wrap = pad_levels(beta), pad_levels(albedo), {"wrap_mode": "repeat"}

@@ -50,7 +50,8 @@ def sensor_dict(spec: SceneSpec) -> dict:
     import mitsuba as mi
     cam = spec.camera
     film = {"type": "hdrfilm", "width": int(spec.width), "height": int(spec.height),
-            "rfilter": {"type": "box"}, "pixel_format": "rgb", "component_format": "float32"}
+            "rfilter": {"type": "box"}, "pixel_format": "xyz" if mi.is_spectral else "rgb",  # spectral: CIE XYZ
+            "component_format": "float32"}
     if spec.rays is not None:
         from .plugins.raytable_sensor import sensor_dict as raytable_dict
         return raytable_dict(spec.rays.origins_m, spec.rays.directions, film)
@@ -105,11 +106,27 @@ def sunsky_sun_irradiance(sun: Sun, turbidity: float) -> np.ndarray:
         params.update()
         n = 1 << 16
         it = dr.zeros(mi.Interaction3f, n)
+        if mi.is_spectral:  # wavelengths uniform over the CIE range, 4 a sample
+            it.wavelengths = mi.Spectrum(*(mi.MI_CIE_MIN + (mi.MI_CIE_MAX - mi.MI_CIE_MIN) * u
+                                           for u in np.random.default_rng(2).random((4, n)).astype(np.float32)))
         ds, weight = emitter.sample_direction(it, _disc_samples(mi.variant(), n))
         cos = dr.dot(ds.d, mi.Vector3f(*(dr.opaque(mi.Float, float(v)) for v in sun.to_sun)))  # no literals
         e = np.array(weight * cos)
-        _SUNSKY_SUN_IRRADIANCE[key] = np.asarray(e).reshape(3, -1).mean(axis=1) if e.ndim > 1 else np.full(3, e.mean())
+        if mi.is_spectral:
+            _SUNSKY_SUN_IRRADIANCE[key] = _spectral_rgb(e, np.array(it.wavelengths))
+        else:
+            _SUNSKY_SUN_IRRADIANCE[key] = np.asarray(e).reshape(3, -1).mean(axis=1) if e.ndim > 1 else np.full(3, e.mean())
     return _SUNSKY_SUN_IRRADIANCE[key]
+
+
+def _spectral_rgb(values, wavelengths) -> np.ndarray:
+    """Linear sRGB of a spectrum sampled at uniform random ``wavelengths`` over the CIE range ((4, n) each):
+    X, Y, Z = integral S xbar dlambda / integral ybar dlambda (Mitsuba's film's), as RGB variants see it."""
+    import mitsuba as mi
+    from ..optics.spectrum import linear_srgb
+    cmf = np.stack([np.array(c) for c in mi.cie1931_xyz(mi.Float(wavelengths.ravel()))])  # (3, 4 n)
+    xyz = (cmf * np.asarray(values).ravel()).mean(axis=1) * (mi.MI_CIE_MAX - mi.MI_CIE_MIN) * mi.MI_CIE_Y_NORMALIZATION
+    return linear_srgb(xyz)
 
 
 def sky_dict(sky: Sky, sun: Sun) -> dict:
@@ -137,28 +154,49 @@ def ground_dict(spec: SceneSpec, vol_bbox) -> dict:
 _PLY_DIR = None
 
 
-def _terrain_ply(terrain, skirt_floor_m: float) -> str:
-    """A binary PLY of ``Terrain.mesh`` with an apron (``Terrain.with_apron``, ``TERRAIN_APRON_M``: the edge's
-    heights continued past the domain) and its ``Terrain.skirt`` down to ``skirt_floor_m`` (below the
-    surround: no gap for a grazing ray to pass under the wall) (float32 x, y, z and r, g, b = the albedo,
-    grey) in a directory
-    of this process removed at exit, named by its content (the same terrain: the same file)."""
+def _terrain_meshes(terrain, skirt_floor_m: float) -> list:
+    """The ground mesh of ``terrain``: ``Terrain.mesh`` with an apron (``Terrain.with_apron``,
+    ``TERRAIN_APRON_M``: the edge's heights continued past the domain) and its ``Terrain.skirt`` down to
+    ``skirt_floor_m`` (below the surround: no gap for a grazing ray to pass under the wall), as [(PLY file,
+    is_sea)]: one Lambertian mesh (vertex colours: the albedo per channel, ``Terrain.vertex_rgb``), and, where
+    ``terrain.sea``, the water's faces (two or three water corners) as a second mesh for the sea surface."""
+    terrain = terrain.with_apron(TERRAIN_APRON_M)
+    v, f, albedo = terrain.mesh()
+    sv, sf, _ = terrain.skirt(skirt_floor_m)  # the apron's edge a cliff, not the mesh's underside
+    rgb_grid = terrain.vertex_rgb()
+    if terrain.albedo_rgb is None:
+        rgb = np.repeat(albedo[:, None], 3, axis=1)
+        srgb = np.repeat(terrain.skirt(skirt_floor_m)[2][:, None], 3, axis=1)
+    else:
+        rgb = rgb_grid.reshape(-1, 3)
+        srgb = np.stack([replace(terrain, albedo=rgb_grid[..., c]).skirt(skirt_floor_m)[2] for c in range(3)], 1)
+    if not terrain.sea:
+        return [(_ply_file(np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.r_[rgb, srgb]), False)]
+    sea_face = terrain.water.ravel()[f].sum(axis=1) >= 2
+    land = _ply_file(np.concatenate([v, sv]), np.concatenate([f[~sea_face], sf + len(v)]), np.r_[rgb, srgb])
+    normals = None if terrain.sea_normal is None else terrain.sea_normal.reshape(-1, 3)
+    return [(land, False)] + ([(_ply_file(v, f[sea_face], rgb, normals), True)] if np.any(sea_face) else [])
+
+
+def _ply_file(v, f, rgb, normals=None) -> str:
+    """A binary PLY of vertices ``v`` (N, 3), triangles ``f``, per-vertex ``rgb`` (float32 x, y, z and r, g, b,
+    clipped to [0, 1]) and, where given, shading ``normals`` (nx, ny, nz) in a directory of this process
+    removed at exit, named by its content (the same mesh: the same file)."""
     import hashlib
     import tempfile
     global _PLY_DIR
-    terrain = terrain.with_apron(TERRAIN_APRON_M)
-    v, f, albedo = terrain.mesh()
-    sv, sf, salbedo = terrain.skirt(skirt_floor_m)  # the apron's edge a cliff, not the mesh's underside
-    v, f, albedo = np.concatenate([v, sv]), np.concatenate([f, sf + len(v)]), np.r_[albedo, salbedo]
-    vert = np.empty(len(v), dtype=[(n, "<f4") for n in ("x", "y", "z", "r", "g", "b")])
+    names = ("x", "y", "z", "r", "g", "b") + (() if normals is None else ("nx", "ny", "nz"))
+    vert = np.empty(len(v), dtype=[(n, "<f4") for n in names])
     for i, n in enumerate("xyz"):
         vert[n] = v[:, i]
-    for n in "rgb":
-        vert[n] = np.clip(albedo, 0.0, 1.0)
+    for i, n in enumerate("rgb"):
+        vert[n] = np.clip(rgb[:, i], 0.0, 1.0)
+    for i, n in enumerate(("nx", "ny", "nz") if normals is not None else ()):
+        vert[n] = normals[:, i]
     faces = np.empty(len(f), dtype=[("n", "u1"), ("i", "<i4", (3,))])
     faces["n"], faces["i"] = 3, f
     header = ("ply\nformat binary_little_endian 1.0\n"
-              f"element vertex {len(v)}\n" + "".join(f"property float {n}\n" for n in "xyzrgb")
+              f"element vertex {len(v)}\n" + "".join(f"property float {n}\n" for n in names)
               + f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n").encode()
     data = header + vert.tobytes() + faces.tobytes()
     if _PLY_DIR is None:
@@ -193,23 +231,43 @@ def terrain_gap_m(terrain, bbox) -> float:
 
 def terrain_ground_dicts(terrain, medium_ref: dict, bbox) -> dict:
     """The ground over a terrain: the height-field mesh through the column centres (``Terrain.mesh``) with
-    its apron and skirt (``_terrain_ply``), Lambertian with the per-vertex albedo (grey RGB, a
-    ``mesh_attribute`` texture), the medium above it (``exterior``: rays it reflects go on in the cloud's
+    its apron and skirt (``_terrain_meshes``), Lambertian with the per-vertex albedo (per channel, a
+    ``mesh_attribute`` texture; where ``terrain.sea`` the water's faces a second mesh, the sea surface with its
+    glint, ``sea_surface``), the medium above it (``exterior``: rays it reflects go on in the cloud's
     medium), and around it out to the horizon a flat rectangle below the medium box's floor (below every
     part of the mesh, so it never shows through a valley; it shows beyond the apron), with the mean albedo
-    of the grid's edge columns. Heights, from the lowest terrain height lo down (``terrain_gap_m`` g): the
+    of the grid's edge columns (the sea surface where ``terrain.sea`` and the edge is mostly water). Heights, from the lowest terrain height lo down (``terrain_gap_m`` g): the
     box's floor lo - g (the whole mesh inside the box), the surround lo - 2 g, the skirt's foot lo - 3 g."""
     import mitsuba as mi
     cx, cy = float(np.mean(terrain.x)), float(np.mean(terrain.y))
     lo, gap = terrain_floor_m(terrain), terrain_gap_m(terrain, bbox)
     half = 1e7
+    water = terrain.water
+    edge = [terrain.edge_albedo()] * 3 if terrain.albedo_rgb is None else terrain.edge_rgb().tolist()
+    bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": edge}}
+    sea_bsdf = _sea_bsdf(terrain) if terrain.sea else None
+    if terrain.sea and np.mean(np.concatenate([water[0], water[-1], water[1:-1, 0], water[1:-1, -1]])) > 0.5:
+        bsdf = sea_bsdf  # beyond the domain the edge's surface: the sea where the edge is mostly water
     surround = {"type": "rectangle",
                 "to_world": mi.ScalarTransform4f().translate([cx, cy, lo - 2.0 * gap]).scale([half, half, 1.0]),
-                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [terrain.edge_albedo()] * 3}}}
-    mesh = {"type": "ply", "filename": _terrain_ply(terrain, lo - 3.0 * gap), "face_normals": True,
-            "bsdf": {"type": "diffuse", "reflectance": {"type": "mesh_attribute", "name": "vertex_color"}},
-            "exterior": medium_ref}
-    return {"terrain": mesh, "ground": surround}
+                "bsdf": bsdf}
+    out = {}
+    for k, (ply, is_sea) in enumerate(_terrain_meshes(terrain, lo - 3.0 * gap)):
+        out["terrain" if k == 0 else "terrain_sea"] = {
+            "type": "ply", "filename": ply, "face_normals": not (is_sea and terrain.sea_normal is not None),
+            "exterior": medium_ref,
+            "bsdf": sea_bsdf if is_sea else {"type": "diffuse",
+                                             "reflectance": {"type": "mesh_attribute", "name": "vertex_color"}}}
+    return {**out, "ground": surround}
+
+
+def _sea_bsdf(terrain) -> dict:
+    """The sea surface (``sea_surface.sea_bsdf_dict``) of a terrain: its wind (else the default), the water
+    body's Lambertian part as its water columns' albedo (per channel)."""
+    from .sea_surface import DEFAULT_WIND_M_S, sea_bsdf_dict
+    wind = DEFAULT_WIND_M_S if terrain.wind_m_s is None else terrain.wind_m_s
+    rgb = terrain.vertex_rgb()[terrain.water]
+    return sea_bsdf_dict(wind, rgb.mean(axis=0) if rgb.size else 0.02)
 
 
 def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -259,6 +317,12 @@ def sun_below_air(spec: SceneSpec) -> Sun:
     return replace(spec.sun, irradiance=tuple(float(v) for v in np.asarray(spec.sun.irradiance) * rgb))
 
 
+def _air_extent(bbox) -> tuple[float, float]:
+    """(The air table's top: 2 km above the box (m above sea level), the box's half width from its centre)."""
+    (x0, y0, _), (x1, y1, z1) = bbox
+    return max(float(z1), 0.0) + 2000.0, float(np.hypot(max(abs(x0), abs(x1)), max(abs(y0), abs(y1))))
+
+
 def integrator_air(sun: Sun, atmosphere, bbox) -> dict:
     """Properties of ``majorant_volpath`` that colour its sun by the air on the sun's path
     (``optics.air.sun_air_table``; the kernel's frame has the box's centre at x = y = 0, heights above sea
@@ -266,12 +330,28 @@ def integrator_air(sun: Sun, atmosphere, bbox) -> dict:
     import mitsuba as mi
     from ..optics.air import sun_air_table
     from ..optics.air.shell import EARTH_RADIUS_M
-    (x0, y0, _), (x1, y1, z1) = bbox
-    half = float(np.hypot(max(abs(x0), abs(x1)), max(abs(y0), abs(y1))))
-    table = sun_air_table(atmosphere, sun.mu0, top_m=max(float(z1), 0.0) + 2000.0, half_width_m=half)
+    top, half = _air_extent(bbox)
+    table = sun_air_table(atmosphere, sun.mu0, top_m=top, half_width_m=half)
     return {"sun_air": mi.TensorXf(table.rgb), "sun_air_h0": float(table.heights_m[0]),
             "sun_air_h1": float(table.heights_m[-1]), "sun_air_mu0": float(table.mu[0]),
             "sun_air_mu1": float(table.mu[-1]), "sun_air_radius": float(EARTH_RADIUS_M)}
+
+
+def integrator_sun_spectrum(sun: Sun, atmosphere, bbox) -> dict:
+    """Spectral variants: ``majorant_volpath``'s sun spectrum (``optics.spectral.sun_spectrum``, luminance 1
+    above the air), after ``atmosphere`` by height and mu where given (on ``integrator_air``'s grid; None:
+    none), times 1 / MI_CIE_Y_NORMALIZATION: Mitsuba's film gives X, Y, Z = integral L xbar dlambda /
+    integral ybar dlambda, so a white ground lit by it has the CIE XYZ of ``optics.air.sun_xyz``."""
+    import mitsuba as mi
+    from ..optics import spectral, spectrum
+    wl = spectrum.WAVELENGTHS_NM
+    scale = 1.0 / float(mi.MI_CIE_Y_NORMALIZATION)
+    d = {"sun_spectrum": mi.TensorXf((spectral.sun_spectrum(wl) * scale).astype(np.float32)),
+         "sun_spectrum_nm": mi.TensorXf(np.array([wl[0], wl[-1]], np.float32))}
+    if atmosphere is not None:  # the RGB table of integrator_air replaced by the spectra on its grid
+        _, _, table = spectral.sun_spectral_table(atmosphere, sun.mu0, *_air_extent(bbox), wl)
+        d["sun_air"] = mi.TensorXf(table * np.float32(scale))
+    return d
 
 
 def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_depth: int | None = None,
@@ -332,6 +412,8 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
         if atmosphere is not None:
             d.update(integrator_air(sun, atmosphere, vol.bbox))
+        if sun is not None and mi.is_spectral:
+            d.update(integrator_sun_spectrum(sun, atmosphere, vol.bbox))
         if legacy:  # the estimator before issue 10 (see render_reference)
             d.update({"rr_mode": "volpath", "phase_channels": "mean", "emitter_nee": 1.0, "tracking_grid": "coarse",
                       "transmittance": "ratio", "persistent_lanes": False})

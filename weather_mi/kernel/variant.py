@@ -98,6 +98,19 @@ def default_variant() -> str:
     return "cuda_ad_rgb" if cuda_usable()[0] else "llvm_ad_rgb"
 
 
+def spectral_variant() -> str:
+    """The spectral ground truth's variant: ``cuda_ad_spectral`` where this process can run CUDA, else
+    ``llvm_ad_spectral``; a RuntimeError naming what is missing when this Mitsuba build has neither."""
+    import mitsuba as mi
+    names = [v for v in (("cuda_ad_spectral",) if cuda_usable()[0] else ()) + ("llvm_ad_spectral",)
+             if v in mi.variants()]
+    if not names:
+        raise RuntimeError("this Mitsuba build has no spectral variant (llvm_ad_spectral or cuda_ad_spectral; "
+                           f"it has {sorted(mi.variants())}): install the mitsuba wheel, which ships them, or "
+                           "render without --spectral")
+    return names[0]
+
+
 def set_variant(name: str | None = None) -> str:
     """Select a Mitsuba variant (default :func:`default_variant`) and register our plugins with it."""
     import mitsuba as mi

@@ -85,10 +85,18 @@ def linear_srgb(xyz_values) -> np.ndarray:
                                         chromatic_adaptation_transform=None, apply_cctf_encoding=False))
 
 
+def xyz_of_linear_srgb(rgb) -> np.ndarray:
+    """CIE XYZ (..., 3) of linear sRGB (D65 white, no chromatic adaptation): the inverse of :func:`linear_srgb`."""
+    import colour
+    return np.asarray(colour.RGB_to_XYZ(np.asarray(rgb, np.float64), "sRGB", illuminant=None,
+                                        chromatic_adaptation_transform=None, apply_cctf_decoding=False))
+
+
 def chromaticity_xy(xyz_values) -> np.ndarray:
     """CIE 1931 chromaticity (x, y) of XYZ (..., 3)."""
     v = np.asarray(xyz_values, np.float64)
     return v[..., :2] / np.sum(v, axis=-1, keepdims=True)
 
 
-__all__ = ["WAVELENGTHS_NM", "solar_toa_w_m2_nm", "cmfs_1931", "xyz", "linear_srgb", "chromaticity_xy"]
+__all__ = ["WAVELENGTHS_NM", "solar_toa_w_m2_nm", "cmfs_1931", "xyz", "linear_srgb", "xyz_of_linear_srgb",
+           "chromaticity_xy"]

@@ -36,6 +36,12 @@ def fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
     if terrain is not None:  # the ground mesh (no terrain: the key of before)
         for a in (terrain.x, terrain.y, terrain.height_m, terrain.albedo):
             h.update(np.ascontiguousarray(a, np.float64).tobytes())
+        if terrain.albedo_rgb is not None or terrain.sea:  # the surface's channels and sea (else: as before)
+            h.update(np.ascontiguousarray(terrain.vertex_rgb(), np.float64).tobytes())
+            h.update(np.ascontiguousarray(terrain.water, np.int8).tobytes())
+            h.update(json.dumps([bool(terrain.sea), terrain.wind_m_s]).encode())
+            if terrain.sea_normal is not None:
+                h.update(np.ascontiguousarray(terrain.sea_normal, np.float64).tobytes())
     return h.hexdigest()
 
 

@@ -131,6 +131,12 @@ class _Run:
     spp_done: int = 0
 
     @property
+    def xyz_film(self) -> bool:
+        """Whether the passes are CIE XYZ (spectral variants: ``kernel.scene_dict.sensor_dict``)."""
+        import mitsuba as mi
+        return bool(mi.is_spectral)
+
+    @property
     def planned(self) -> int:
         return self.job.options.planned
 
@@ -177,6 +183,9 @@ class _Run:
         """Add pass ``i``'s image ``raw`` (its seconds ``dt``) to the estimate and checkpoint it; the
         number of passes merged."""
         img = raw.astype(np.float64)[..., :3] * self.scale
+        if self.xyz_film:  # spectral variants: the film's CIE XYZ as linear sRGB (D65) through colour-science
+            from ..optics.spectrum import linear_srgb
+            img = linear_srgb(img)
         self.seconds += dt
         n = i + 1
         welford_update(self.mean, self.m2, img, n, where=None if i < self.planned else self.target)
@@ -189,9 +198,14 @@ class _Run:
 
     def image(self, n: int, noise: dict | None) -> Image:
         """The estimate after ``n`` passes as an ``Image`` (its own arrays) with its metadata."""
+        import mitsuba as mi
         transmittance = None if self.transmittance is None else self.transmittance.copy()
+        xyz = None
+        if mi.is_spectral:  # the passes were merged as linear sRGB (``merge``); X, Y, Z back from their mean
+            from ..optics.spectrum import xyz_of_linear_srgb
+            xyz = xyz_of_linear_srgb(self.mean)
         return Image(self.mean.astype(np.float32), self.stderr(n).astype(np.float32), self.metadata(n, noise),
-                     transmittance)
+                     transmittance, xyz=xyz)
 
     def metadata(self, n: int, noise: dict | None) -> dict:
         import mitsuba as mi

@@ -10,7 +10,7 @@ molecular scattering, present only with ``rayleigh``).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -41,11 +41,14 @@ class SatelliteScene:
 
 def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east", band_name: str = "0.64",
                     resolution_km: float = 1.0, *, rayleigh: bool = False, ground_albedo=0.06,
-                    seed: int = 0, max_vza_deg: float = 80.0, sun_time=None, rgb: bool = False) -> SatelliteScene:
+                    seed: int = 0, max_vza_deg: float = 80.0, sun_time=None, rgb: bool = False,
+                    surface: str = "file", wind_m_s: float | None = None) -> SatelliteScene:
     """The satellite's view of ``hyd`` (its place and valid time) with ``vol``'s optics in the band;
     ``sun_time`` (UTC): the sun of another time over the same clouds (a study of the sun's elevation);
     ``rgb``: the satellite's true-colour bands in one render (``bands.rgb_volume``; ``band_name`` unused;
-    ``ground_albedo`` one value or one per channel), without molecules (their extinction is not grey).
+    ``ground_albedo`` one value or one per channel), without molecules (their extinction is not grey);
+    ``surface``, ``wind_m_s``: the ground under a domain with its own (``scene.surface``: "file", each
+    column's surface in the band with the sea's glint; "albedo"; "flat": ``ground_albedo`` everywhere).
 
     Raises
     ------
@@ -73,7 +76,13 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     top = float(vol.bbox[1][2]) + RAY_START_ABOVE_M
     view = satellite_view(place, sat, resolution_km, top, max_vza_deg, source)
     azimuth, elevation, sun_meta = sun_from_time(hyd)
-    bvol = rgb_volume(vol, bands) if rgb else band_volume(vol, b)
+    from ..scene.surface import with_surface
+    bvol = with_surface(rgb_volume(vol, bands) if rgb else band_volume(vol, b),
+                        [x.wavelength_m * 1e6 for x in (bands if rgb else (b,))], surface, wind_m_s)
+    sun = Sun(azimuth, elevation, (1.0, 1.0, 1.0))
+    if bvol.terrain is not None and bvol.terrain.sea:  # the glint where each column's own sun puts it
+        from .glint import sea_normals
+        bvol = replace(bvol, terrain=replace(bvol.terrain, sea_normal=sea_normals(place, sat, sun_meta, sun)))
     if rayleigh:
         from ..optics.rayleigh import with_rayleigh
         bvol = with_rayleigh(bvol, b.wavelength_m, hyd["rho_air"].values)
@@ -82,7 +91,7 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     cam = Camera.orthographic(center=((x0 + x1) / 2, (y0 + y1) / 2, top + 1000.0), direction=(0.0, 0.0, -1.0),
                               width=extent, height=extent)  # nominal: the rays come from the table
     w, h = view.size
-    spec = SceneSpec(camera=cam, sun=Sun(azimuth, elevation, (1.0, 1.0, 1.0)), sky=None,
+    spec = SceneSpec(camera=cam, sun=sun, sky=None,
                      ground=Ground(albedo=ground_albedo), width=w, height=h, seed=seed, rays=view.rays)
     return SatelliteScene(spec, bvol, view, sat, b, sun_meta, bands, place.source)
 
@@ -143,6 +152,7 @@ def satellite_dataset(scene: SatelliteScene, img, channel: int | None = None):
                                                  "flag_values": [0, 1], "grid_mapping": gm}),
          "in_domain": (dims, inside.astype(np.int8), {"long_name": "line of sight through the model domain's box",
                                                       "flag_values": [0, 1], "grid_mapping": gm}),
+         **_surface_var(scene, dims, gm),
          gm: ((), np.int32(0), _grid_mapping(scene.satellite))},
         coords={"x": ("x", v.x_rad, {"standard_name": "projection_x_coordinate", "units": "rad",
                                      "long_name": "fixed grid east-west scan angle"}),
@@ -165,6 +175,18 @@ def satellite_dataset(scene: SatelliteScene, img, channel: int | None = None):
     ds["reflectance"].attrs.update(wavelength=b.wavelength_m * 1e6, wavelength_units="um",
                                    channel=b.channels.get(scene.satellite.imager, ""))
     return ds
+
+
+def _surface_var(scene: SatelliteScene, dims, gm) -> dict:
+    """``land``: the land/sea mask of the column under each pixel's centre (its ground point), where the
+    domain has a ground of its own; none otherwise."""
+    terrain = getattr(scene.vol, "terrain", None)
+    if terrain is None:
+        return {}
+    land = terrain.land_at(scene.view.x_m, scene.view.y_m)
+    return {"land": (dims, land, {"long_name": "surface under the pixel: 1 land, 0 water (sea or lake), -1 "
+                                               "beyond the model grid", "flag_values": [-1, 0, 1],
+                                  "grid_mapping": gm, "source": str(scene.vol.attrs.get("land_source", ""))})}
 
 
 # the names the Pytroll ecosystem (satpy's readers and writers, pyspectral) gives the imagers and the

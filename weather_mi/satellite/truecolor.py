@@ -111,10 +111,10 @@ def write_true_color_png(ds, path):
 
 
 def true_color_scenes(hyd, vol, sat, resolution_km: float, *, rayleigh: bool = False, ground_albedo=None,
-                      seed: int = 0) -> list:
+                      seed: int = 0, **surface_kw) -> list:
     """The ``SatelliteScene``(s) of a true-colour image: one with the three bands in its channels, or, with
     ``rayleigh``, one per band with that band's air. ``ground_albedo`` None: the sea's ``SEA_ALBEDO`` per band
-    (where the file has no ground). Raises the ValueErrors of ``satellite_scene`` (and a satellite without
+    (where the file has no ground); ``surface_kw``: ``satellite_scene``'s ``surface``, ``wind_m_s``. Raises the ValueErrors of ``satellite_scene`` (and a satellite without
     the bands) before anything is rendered."""
     from .geostationary import satellite
     from .imagery import satellite_scene
@@ -123,9 +123,9 @@ def true_color_scenes(hyd, vol, sat, resolution_km: float, *, rayleigh: bool = F
     albedo = {b.name: (SEA_ALBEDO[b.name] if ground_albedo is None else float(ground_albedo)) for b in bands}
     if not rayleigh:
         return [satellite_scene(hyd, vol, sat, bands[0].name, resolution_km, rgb=True, seed=seed,
-                                ground_albedo=tuple(albedo[b.name] for b in bands))]
+                                ground_albedo=tuple(albedo[b.name] for b in bands), **surface_kw)]
     return [satellite_scene(hyd, vol, sat, b.name, resolution_km, rayleigh=True, ground_albedo=albedo[b.name],
-                            seed=seed) for b in bands]
+                            seed=seed, **surface_kw) for b in bands]
 
 
 def render_true_color(scenes, spp: int = 64, **reference_kw):

@@ -55,8 +55,8 @@ class EyeRays:
     span_a: object      # mi.Float (N) or None: where the ray's occupied span begins (m, occupancy.py)
     span_b: object      # mi.Float (N) or None: and ends (m)
     n: int              # N, the ray count (part of the structure)
-    ground_sun: object = None  # mi.Float (N) over a terrain: albedo x max(n . s, 0) / mu0; else None
-    ground_sky: object = None  # mi.Float (N) over a terrain: albedo x (1 + n_z) / 2; else None
+    ground_sun: object = None  # mi.Float (N) over a terrain (Color3f: per channel): albedo max(n . s, 0) / mu0; else None
+    ground_sky: object = None  # mi.Float (N) (Color3f) over a terrain: albedo x (1 + n_z) / 2; else None
 
 
 @dataclass

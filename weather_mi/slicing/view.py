@@ -62,8 +62,8 @@ class ViewRays:
     theta: object        # mi.Float64 (N): the angle between the ray and the direction to the sun (radians)
     n: int
     pattern: object = None    # mi.Float
-    ground_sun: object = None  # mi.Float over a terrain: albedo max(n . s, 0) / mu0 at the ground point
-    ground_sky: object = None  # mi.Float over a terrain: albedo (1 + n_z) / 2 (a tilted plane's share of the sky)
+    ground_sun: object = None  # mi.Float over a terrain (mi.Color3f: per channel): albedo max(n . s, 0) / mu0
+    ground_sky: object = None  # mi.Float (Color3f) over a terrain: albedo (1 + n_z) / 2 (a tilted plane's sky)
     span_a: object = None      # mi.Float: where each ray's occupied span begins and ends (occupancy.py; the
     span_b: object = None      # whole [t0, t1] without an occupancy map)
     phase_colour: dict = field(default_factory=lambda: BoundedCache(8))  # per-pixel phase colours by (group, colour)
@@ -101,7 +101,7 @@ class ViewCache:
                 pattern = self.patterns[(spec.width, spec.height)] = aligned_float(
                     mi, offset_pattern(spec.width, spec.height))
             weights = (None, None) if surface is None else \
-                _terrain_weights(lambda a: aligned_float(mi, a), spec, surface, np.asarray(hit))
+                _terrain_weights(mi, lambda a: aligned_float(mi, a), spec, surface, np.asarray(hit))
             view = ViewRays(**fixed, background=dr.select(hit, mi.Color3f(0.0), sky),
                             theta=dr.acos(dr.clip(cos, -1.0, 1.0)),  # the scattering angle, for the phase functions
                             pattern=pattern, ground_sun=weights[0], ground_sky=weights[1])
@@ -130,7 +130,7 @@ class ViewCache:
         origins, dirs = camera_rays(spec)
         o, d = origins.reshape(-1, 3), dirs.reshape(-1, 3)
         t0, t1 = ray_box(o, d, self.box)
-        tg, *surface = terrain.scene_hits(o, d, floor_m=self.surround_m)
+        tg, *surface = terrain.scene_hits(o, d, floor_m=self.surround_m, rgb=terrain.albedo_rgb is not None)
         t1 = np.minimum(t1, tg)
         hit = np.isfinite(tg)
         pg = o + np.where(hit, tg, 0.0)[:, None] * d
@@ -154,14 +154,17 @@ class ViewCache:
         return d, hit, surface, fixed
 
 
-def _terrain_weights(F, spec: SceneSpec, surface, hit: np.ndarray):
+def _terrain_weights(mi, F, spec: SceneSpec, surface, hit: np.ndarray):
     """(ground_sun, ground_sky) of ``ViewRays`` from the terrain's (albedo, normal) where the rays meet it,
-    else (None, None): albedo max(n . s, 0) / mu0 and albedo (1 + n_z) / 2."""
+    else (None, None): albedo max(n . s, 0) / mu0 and albedo (1 + n_z) / 2; mi.Float, or mi.Color3f where the
+    albedo is per channel ((N, 3): ``Terrain.albedo_rgb``, the surface of ``scene.surface``)."""
     if surface is None:
         return None, None
     albedo, n = surface
     s = spec.sun.to_sun
     mu0 = max(float(s[2]), 1e-3)
-    sun = np.where(hit, albedo * np.maximum(n @ s, 0.0) / mu0, 0.0)
-    sky = np.where(hit, albedo * (1.0 + n[:, 2]) / 2.0, 0.0)
-    return F(sun), F(sky)
+    sun = np.where(hit, np.maximum(n @ s, 0.0) / mu0, 0.0)
+    sky = np.where(hit, (1.0 + n[:, 2]) / 2.0, 0.0)
+    if np.ndim(albedo) == 1:
+        return F(albedo * sun), F(albedo * sky)
+    return tuple(mi.Color3f(*(F(albedo[:, c] * w) for c in range(3))) for w in (sun, sky))

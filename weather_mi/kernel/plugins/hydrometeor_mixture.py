@@ -36,6 +36,14 @@ Layout for speed (every scattering event costs one ``sample`` and one ``eval_pdf
   which is also what ``sample`` inverts), so one lookup touches two or three cache lines.
 - Every table sits in 64-byte aligned memory, see :func:`_storage`.
 
+Spectral variants (``llvm_ad_spectral``: every path carries 4 wavelengths, ``mei.wavelengths``): the three
+channels of ``values`` are the tables at the wavelengths ``channel_wavelengths`` (nm, descending: 650,
+550, 450 for the R, G, B tables) and a lane's value is their linear interpolation at its wavelength,
+held constant beyond the first and last (:func:`lerp_channels`); the sampler draws from the channel mean
+as in RGB, so each lane's weight is value(lambda) / pdf. ``coalbedo`` (S x (K + 1): 1 - omega_s on the uniform
+grid ``coalbedo_nm`` of K wavelengths, and at the reference wavelength) gives the medium's single-scattering
+albedo at a lane's wavelength (:meth:`HydrometeorMixture.albedo_at`), used by ``majorant_volpath``.
+
 Properties (Python dict scenes): ``nodes`` (TensorXf, N ascending versines 1 - cos in [0, 2]), ``values``
 (TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S: beta_sca,s per voxel, >= 0; or packed as
 :func:`pack_weights` makes them, z x y x x x P x 4, kept as given) and ``to_world`` (the bounding box
@@ -224,6 +232,18 @@ def _gather4(src, index):
     return dr.gather(mi.Vector4f, src, index)
 
 
+def lerp_channels(value, wavelengths, channel_nm):
+    """Per lane of ``wavelengths`` (nm; a 4-lane Spectrum), the three channel values ``value`` (at
+    ``channel_nm``, descending) interpolated linearly in wavelength, constant beyond the ends."""
+    (l0, l1, l2), out = channel_nm, []
+    for lane in range(4):
+        lam = wavelengths[lane]
+        t_hi = dr.clip((lam - l1) / (l0 - l1), 0.0, 1.0)   # 550 -> 650: channel 1 -> 0
+        t_lo = dr.clip((lam - l2) / (l1 - l2), 0.0, 1.0)   # 450 -> 550: channel 2 -> 1
+        out.append(dr.select(lam >= l1, dr.lerp(value[1], value[0], t_hi), dr.lerp(value[2], value[1], t_lo)))
+    return mi.Spectrum(*out)
+
+
 class HydrometeorMixture:
     """Eq. 8 mixture of per-species tabulated phase functions with spatially varying weights.
 
@@ -255,6 +275,7 @@ class HydrometeorMixture:
         self.to_local = mi.Transform4f(mi.ScalarTransform4f(inverse.astype(np.float32).tolist()))
         self._set_tables(nodes, values)
         self._set_weights(weights)
+        self._set_spectral(props)
         self.m_flags = mi.PhaseFunctionFlags.Anisotropic
 
     def _set_tables(self, nodes, values):
@@ -290,7 +311,62 @@ class HydrometeorMixture:
             self.weights4 = mi.Float(flat)
         self.weights = None
 
+    def _set_spectral(self, props):
+        """Spectral variants: the channels' wavelengths (nm) and the species' co-albedo spectra."""
+        self.spectral = bool(mi.is_spectral)
+        self.channel_nm = [float(v) for v in np.asarray(props.get("channel_wavelengths", [650.0, 550.0, 450.0]),
+                                                         np.float64).ravel()]
+        if len(self.channel_nm) != 3 or not self.channel_nm[0] > self.channel_nm[1] > self.channel_nm[2]:
+            raise ValueError(f"{PLUGIN_NAME}: 'channel_wavelengths' must be 3 descending wavelengths (nm), "
+                             f"got {self.channel_nm}")
+        self.coalbedo = None
+        if "coalbedo" not in props:
+            return
+        c = np.asarray(props["coalbedo"], np.float32)
+        grid = np.asarray(props["coalbedo_nm"], np.float64).ravel()
+        if c.ndim != 2 or c.shape[0] != self.n_species or c.shape[1] != grid.size + 1 or grid.size < 2 \
+                or not np.allclose(np.diff(grid), grid[1] - grid[0]) or not (c.min() >= 0 and c.max() <= 1):
+            raise ValueError(f"{PLUGIN_NAME}: 'coalbedo' must be S x (K + 1) in [0, 1] with S = {self.n_species} "
+                             f"and K the wavelengths of the uniform grid 'coalbedo_nm' (K >= 2); got {c.shape}, "
+                             f"{grid.size}")
+        self.coalbedo = _storage(c)
+        self.coalbedo_k = int(grid.size)
+        self.coalbedo_map = (float(grid[0]), float(1.0 / (grid[1] - grid[0])))
+
     # ------------------------------------------------------------ helpers
+    def _at_wavelengths(self, value, mei):
+        """The phase value as the variant's Spectrum: the R, G, B channels as they are (RGB variants), or
+        each lane's interpolation at its wavelength (spectral: :func:`lerp_channels`)."""
+        if not self.spectral:
+            return mi.Spectrum(value)
+        return lerp_channels(value, mei.wavelengths, self.channel_nm)
+
+    def albedo_at(self, mei, albedo_ref):
+        """The mixture's single-scattering albedo at the lanes' wavelengths (spectral variants with
+        ``coalbedo``), from the medium's albedo at the reference wavelength ``albedo_ref`` (Float):
+        1 - (1 - albedo_ref) sum_s w_s c_s(lambda) / sum_s w_s c_s(ref), c_s the species' co-albedo spectra
+        (``optics.spectral``) and w_s their scattering weights (extinction weights to within the co-albedo,
+        <= 1e-3): the medium's own albedo at the reference, the species' mix of spectral shapes elsewhere."""
+        w = self._weights_at(mei)
+        lo, inv_step = self.coalbedo_map
+        k = self.coalbedo_k
+        ref = mi.Float(0.0)
+        for s in range(self.n_species):
+            ref += w[s] * _gather(self.coalbedo, s * (k + 1) + k)
+        inv_ref = dr.select(ref > 0.0, dr.rcp(ref), 0.0)
+        out = []
+        for lane in range(4):
+            u = dr.clip((mei.wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
+            i = mi.UInt32(u)
+            t = u - mi.Float(i)
+            co = mi.Float(0.0)
+            for s in range(self.n_species):
+                c0 = _gather(self.coalbedo, s * (k + 1) + i)
+                co += w[s] * dr.fma(_gather(self.coalbedo, s * (k + 1) + i + 1) - c0, t, c0)
+            ratio = dr.select(ref > 0.0, co * inv_ref, 1.0)
+            out.append(1.0 - (1.0 - albedo_ref) * ratio)
+        return mi.Spectrum(*out)
+
     def _weights_at(self, mei):
         """w_s(x) for s = 0..S-1: the coefficients trilinear on the bbox grid (texel centres at
         (i + 0.5) / n, clamped at the edges), normalised to sum to 1 (1/S each where none scatters)."""
@@ -372,14 +448,14 @@ class HydrometeorMixture:
     def sample(self, ctx, mei, sample1, sample2, active=True):
         wo, value, pdf = self._sample(mei, mi.UInt32(3), sample1, sample2)
         weight = dr.select(pdf > 0.0, value / pdf, 0.0)
-        return wo, mi.Spectrum(weight), pdf
+        return wo, self._at_wavelengths(weight, mei), pdf
 
     def sample_channel(self, ctx, mei, channel, sample1, sample2, active=True):
         """A direction drawn from colour channel ``channel``'s density (UInt32 per lane, 0..2: the
         mixture sum_s w_s p_s,c) instead of the channel mean, and the per-channel value there (1/sr).
         For history-aware channel sampling in ``majorant_volpath``, which computes the pdf itself."""
         wo, value, _ = self._sample(mei, mi.UInt32(channel), sample1, sample2)
-        return wo, mi.Spectrum(value)
+        return wo, self._at_wavelengths(value, mei)
 
     def _sample(self, mei, row, sample1, sample2):
         """(wo, per-channel value, channel-mean pdf) of a direction drawn from the density in ``row``
@@ -430,7 +506,7 @@ class HydrometeorMixture:
         h = wo + mei.wi  # |wo + wi|^2 = 2 (1 - cos Theta): accurate near forward
         idx, t = self._segment(0.5 * dr.squared_norm(h))
         value, pdf = self._mix(self._weights_at(mei), idx, t)
-        return mi.Spectrum(value), pdf
+        return self._at_wavelengths(value, mei), pdf
 
     def traverse(self, cb):
         if self.weights is None:  # the parameter as given (negative values as 0), from the packed copy

@@ -122,6 +122,8 @@ class _Launch:
             # the finished sample's radiance into its slot
             finished = done & (job < n_jobs)
             value = path.result * weight
+            if mi.is_spectral:  # the sample's CIE XYZ, as the film adds it (a unit spectrum has Y = 1)
+                value = mi.spectrum_to_xyz(value, path.ray.wavelengths, finished)
             for c in range(3):
                 dr.scatter(slots, value[c], job * 3 + c, finished)
             # the next sample, from the shared counter

@@ -16,8 +16,8 @@ pbrt-v4's ``DDAMajorantIterator``), crossing empty space in one step (Cohen & Sh
 * history-aware channel sampling of a chromatic phase function (Kutz et al. 2017, applied to directions);
 * Russian roulette once per real scattering / surface vertex, survival min(max T, 1) (no weight grows),
   long walks cut by a survival of 1/2 at each depth 2^k >= LONG_WALK_DEPTH;
-* persistent lanes (:mod:`.lanes`): ``render_pass`` / ``render_passes``, used by
-  ``reference.render_pass`` on LLVM variants.
+* persistent lanes (:mod:`.lanes`): ``render_pass`` / ``render_passes``, used by ``reference.render_pass`` on
+  LLVM variants; spectral variants (4 wavelengths a path) take ``sun_spectrum`` (:func:`.sun.parse_spectrum`).
 
 Otherwise the structure and estimators of Mitsuba's ``volpath``: analog absorption, phase-function and
 BSDF sampling with emitter sampling and MIS (power heuristic), delta emitters by NEE only, null BSDFs
@@ -110,9 +110,9 @@ class MajorantVolpath:
      * - sun_angular_diameter
        - |float|
        - Degrees, <= MAX_SUN_DIAMETER_DEG; 0 (default) is a point sun.
-     * - sun_air, sun_air_h0/h1/mu0/mu1/radius
+     * - sun_air, sun_air_h0/h1/mu0/mu1/radius, sun_spectrum, sun_spectrum_nm
        - |tensor|, |float|
-       - Optional: the sun's colour after the air on its path, by height and cos(zenith) (:func:`.sun.parse_air`).
+       - The sun's colour after the air by height and cos(zenith) (:func:`.sun.parse_air`); spectral variants: its spectrum.
      * - sun_sampling
        - |string|
        - "mis" (default), or one strategy alone, "nee" or "phase" (for tests).
@@ -128,8 +128,7 @@ class MajorantVolpath:
        - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each
          side (:mod:`weather_mi.optics.periodic`; grids with ``wrap_mode`` repeat, "texel" tracking).
 
-    The methods only: :func:`register` puts them on the current variant's ``mi.SamplingIntegrator``
-    (see ``variant_class``)."""
+    The methods only: :func:`register` puts them on the variant's ``mi.SamplingIntegrator`` (``variant_class``)."""
 
     def __init__(self, props: mi.Properties):
         mi.SamplingIntegrator.__init__(self, props)
@@ -146,9 +145,8 @@ class MajorantVolpath:
         max_depth = int(get("max_depth", -1))
         _check(max_depth >= -1, f"max_depth must be -1 (infinite) or >= 0, got {max_depth}")
         self.max_depth = 0xFFFFFFFF if max_depth == -1 else max_depth
-        self.rr_depth = int(get("rr_depth", 5))
+        self.rr_depth, self.hide_emitters_ = int(get("rr_depth", 5)), bool(get("hide_emitters", False))
         _check(self.rr_depth >= 0, f"rr_depth must be >= 0, got {self.rr_depth}")
-        self.hide_emitters_ = bool(get("hide_emitters", False))
         self.cell = int(get("cell", DEFAULT_CELL))
         _check(self.cell >= 1, f"cell must be >= 1, got {self.cell}")
         self.auto_majorant = "majorant" not in props
@@ -166,14 +164,13 @@ class MajorantVolpath:
         self.reach = int(get("periodic_tiles", 0))
         _check(self.periodic == "none" or (self.reach >= 1 and self.track_mode == "texel"),
                f"periodic needs periodic_tiles >= 1 and tracking_grid 'texel', got {self.reach}, {self.track_mode!r}")
-        self.sun_mode, self.guiding, self.aureole, self.sun_sampling, self.mvnee = "none", 0.0, 0.0, "mis", 0.0
-        self.air = None
+        self.sun_mode, self.guiding, self.aureole, self.sun_sampling, self.mvnee, self.air = "none", 0., 0., "mis", 0., None
         if "sun_direction" not in props:
-            for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee", "mvnee") + sun.AIR_PROPERTIES:
+            for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee", "mvnee") + sun.LIGHT_PROPERTIES:
                 _check(name not in props, f"'{name}' needs 'sun_direction'")
             return
         # the integrator's own sun (module docstring; without sun_direction the sun, if any, is a scene emitter)
-        _check(mi.is_rgb, f"the integrator's sun needs an RGB variant, not {mi.variant()!r}")
+        _check(mi.is_rgb or mi.is_spectral, f"the integrator's sun needs an RGB or spectral variant, not {mi.variant()!r}")
         d = np.asarray(props["sun_direction"], np.float64).reshape(3)
         _check(np.all(np.isfinite(d)) and np.linalg.norm(d) != 0,
                f"'sun_direction' must be a finite non-zero vector, got {d.tolist()}")
@@ -200,9 +197,9 @@ class MajorantVolpath:
         # opaque: a new sun position, size or irradiance reuses the kernel
         self.sun_dir = mi.Vector3f(*(float(v) for v in d))
         self.sun_vmax = mi.Float(vmax)                       # versine of the disk's radius
-        self.sun_value = mi.Color3f(*(float(v) for v in (radiance if diameter > 0 else e)))
-        self.guide_p = mi.Float(self.guiding)
-        self.aureole_p = mi.Float(self.aureole)
+        value = radiance if diameter > 0 else e  # spectral variants: a grey scale of the sun's spectrum
+        self.sun_value = mi.Color3f(*(float(v) for v in value)) if mi.is_rgb else mi.Float(float(np.mean(value)))
+        self.guide_p, self.aureole_p = mi.Float(self.guiding), mi.Float(self.aureole)
         dr.make_opaque(self.sun_dir, self.sun_vmax, self.sun_value, self.guide_p, self.aureole_p)
         sun.parse_air(self, props, _check)  # the air on the sun's path (optional)
 
@@ -301,7 +298,8 @@ class PathLoop:
         self.guiding = has_medium and sun_mode != "none" and integ.guiding > 0.0
         self.aureole = has_medium and sun_mode != "none" and integ.aureole > 0.0
         self.mvnee = has_medium and sun_mode != "none" and integ.mvnee > 0.0
-        self.by_channel = has_medium and integ.channels == "history" and hasattr(phase, "sample_channel")
+        # spectral variants sample the channel mean: the path's wavelengths are not the tables' channels
+        self.by_channel = has_medium and integ.channels == "history" and hasattr(phase, "sample_channel") and mi.is_rgb
         self.rr_cap = 0.95 if integ.rr_mode == "volpath" else 1.0
         self.c_em = c_em = integ.emitter_nee
         self.c_sky = c_em if sun_mode != "none" else 1.0          # share of shadow rays towards the scene's emitters
@@ -414,7 +412,7 @@ class PathLoop:
             if self.hide:
                 in_sun &= p.depth != 0
             w_hit = dr.select(count_direct, 1.0, self.sun_mis(p.last_pdf_sun, self.c_sun * self.sun_pdf, nee=False))
-            p.result = dr.select(in_sun, p.result + p.throughput * w_hit * sun.radiance_at(self.integ, p.ray.o), p.result)
+            p.result = dr.select(in_sun, p.result + p.throughput * w_hit * sun.radiance_at(self.integ, p.ray.o, p.ray.wavelengths), p.result)
         v.active_surface &= p.si.is_valid()
         v.bsdf = p.si.bsdf(p.ray)
 
@@ -496,7 +494,7 @@ class PathLoop:
             if self.aureole or self.mvnee:  # MIS against the aureole estimator / the chains launched before
                 w_s = dr.select(v.act_scatter, w_s * (p.aur_w if self.aureole else mvnee.path_weight(p.mv_r)), w_s)
             w = dr.select(pick_em, w, w_s)
-            em_val = dr.select(pick_em, em_val, sun.radiance_at(self.integ, v.ref.p))
+            em_val = dr.select(pick_em, em_val, sun.radiance_at(self.integ, v.ref.p, v.ref.wavelengths))
         return w, em_val
 
     def aureole_nee(self, sampler, p, v):

@@ -63,10 +63,12 @@ class MediumSetup:
         self.medium = next(iter(media.values())) if media else None
         self.volume = None
         self.scale = 1.0
-        self.spectral = False
+        self.spectral = self.spectral_albedo = False
         if self.medium is None:
             return
         self.spectral = bool(self.medium.has_spectral_extinction())
+        # spectral variants: the albedo by wavelength from a ``hydrometeor_mixture`` with co-albedo spectra
+        self.spectral_albedo = bool(mi.is_spectral) and getattr(self.medium.phase_function(), "coalbedo", None) is not None
         ch = children(self.medium)
         if "sigma_t" in ch and isinstance(ch["sigma_t"][0], mi.Volume) and "scale" in ch:
             self.volume = ch["sigma_t"][0]
@@ -148,7 +150,10 @@ def scattering_event(ms, ray, t, active):
     mei = medium_interaction(ms, ray, ray.o + ray.d * t, t, active)
     sigma_s, _, sigma_t = ms.medium.get_scattering_coefficients(mei, active)
     mei.sigma_s, mei.sigma_t = sigma_s, sigma_t
-    return mei, dr.select(sigma_t > 0.0, sigma_s / dr.select(sigma_t > 0.0, sigma_t, 1.0), 0.0)
+    albedo = dr.select(sigma_t > 0.0, sigma_s / dr.select(sigma_t > 0.0, sigma_t, 1.0), 0.0)
+    if ms.spectral_albedo:  # spectral variants: the medium's (grey) albedo at the lanes' wavelengths
+        albedo = dr.select(sigma_t > 0.0, ms.medium.phase_function().albedo_at(mei, albedo[0]), 0.0)
+    return mei, (mi.Spectrum(albedo) if mi.is_spectral else albedo)  # select gives an Array4f there
 
 
 def phase_ctx(sampler):

@@ -111,5 +111,5 @@ def chain(loop, sampler, v, p, eps: float, length: int, active):
             w_x = mi.Float(1.0)
         w_x *= r[j] * path_weight(r)  # this chain's share: R_{j+1} / (1 + sum R)
         tr = loop.transmittance(loop.scene, sampler, mei.spawn_ray(wo), p.medium, act)
-        result = dr.select(act, result + weight * f_x * w_x * tr * radiance_at(integ, mei.p), result)
+        result = dr.select(act, result + weight * f_x * w_x * tr * radiance_at(integ, mei.p, mei.wavelengths), result)
     return result

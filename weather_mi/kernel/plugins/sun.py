@@ -56,24 +56,31 @@ def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
 
 
 AIR_PROPERTIES = ("sun_air", "sun_air_h0", "sun_air_h1", "sun_air_mu0", "sun_air_mu1", "sun_air_radius")
+LIGHT_PROPERTIES = AIR_PROPERTIES + ("sun_spectrum", "sun_spectrum_nm")  # all need the integrator's sun
 
 
 def parse_air(sun, props, check) -> None:
     """The air's table on the sun's path: ``sun_air`` (n_mu, n_h, 3) RGB transmittance colours (>= 0) on
     the uniform grids h0..h1 (m above sea level) by mu0..mu1 (cos zenith), ``sun_air_radius`` the Earth's
-    (m); ``sun.air`` None without it."""
+    (m); ``sun.air`` None without it. Spectral variants: ``sun_spectrum`` (:func:`parse_spectrum`) and
+    ``sun_air`` (n_mu, n_h, n_lambda) the sun's spectrum after the air on the same grid."""
     sun.air = None
+    parse_spectrum(sun, props, check)
     if "sun_air" not in props:
         return
     for name in AIR_PROPERTIES:
         check(name in props, f"'sun_air' needs '{name}'")
     t = np.asarray(props["sun_air"], np.float32)
-    check(t.ndim == 3 and t.shape[2] == 3 and min(t.shape[:2]) >= 2 and np.all(np.isfinite(t)) and t.min() >= 0.0,
-          f"'sun_air' must be a finite, non-negative (n_mu >= 2, n_h >= 2, 3) tensor, got shape {t.shape}")
+    n_c = sun.spectrum_shape[2] if sun.spectrum is not None else 3
+    check(t.ndim == 3 and t.shape[2] == n_c and min(t.shape[:2]) >= 2 and np.all(np.isfinite(t)) and t.min() >= 0.0,
+          f"'sun_air' must be a finite, non-negative (n_mu >= 2, n_h >= 2, {n_c}) tensor, got shape {t.shape}")
     h0, h1, mu0, mu1, radius = (float(props[n]) for n in AIR_PROPERTIES[1:])
     check(h1 > h0 and mu1 > mu0 and radius > 0.0, "'sun_air' needs h1 > h0, mu1 > mu0 and a positive radius")
-    sun.air = mi.Texture2f(mi.TensorXf(t), use_accel=False,  # CUDA: float interpolation weights, not 8-bit
-                           filter_mode=dr.FilterMode.Linear, wrap_mode=dr.WrapMode.Clamp)
+    if sun.spectrum is not None:  # one Texture3f over (lambda, h, mu) in place of the top-of-atmosphere one
+        sun.spectrum, sun.spectrum_air = _spectrum_texture(t), True
+    else:
+        sun.air = mi.Texture2f(mi.TensorXf(t), use_accel=False,  # CUDA: float interpolation weights, not 8-bit
+                               filter_mode=dr.FilterMode.Linear, wrap_mode=dr.WrapMode.Clamp)
     n_mu, n_h = t.shape[:2]
     # texel centres at (i + 0.5) / n: coordinate = (v - v0) / (v1 - v0) (n - 1) / n + 0.5 / n
     sun.air_map = [mi.Float(v) for v in (h0, (n_h - 1) / (n_h * (h1 - h0)), 0.5 / n_h,
@@ -81,17 +88,66 @@ def parse_air(sun, props, check) -> None:
     dr.make_opaque(*sun.air_map)
 
 
-def radiance_at(sun, p):
+def _spectrum_texture(t):
+    """A (n_mu, n_h, n_lambda) table as a linear, clamped Texture3f (x: wavelength, y: height, z: mu)."""
+    return mi.Texture3f(mi.TensorXf(np.ascontiguousarray(t, np.float32)[..., None]), use_accel=False,
+                        filter_mode=dr.FilterMode.Linear, wrap_mode=dr.WrapMode.Clamp)
+
+
+def parse_spectrum(sun, props, check) -> None:
+    """Spectral variants: ``sun_spectrum`` (n_lambda,) the sun's spectral irradiance (any unit) on the uniform
+    grid ``sun_spectrum_nm`` (first, last wavelength in nm), times ``sun_value``; ``sun.spectrum`` None in
+    RGB variants (where it must not be given)."""
+    sun.spectrum, sun.spectrum_air = None, False
+    if not mi.is_spectral:
+        check("sun_spectrum" not in props, f"'sun_spectrum' needs a spectral variant, not {mi.variant()!r}")
+        return
+    check("sun_spectrum" in props and "sun_spectrum_nm" in props,
+          f"the integrator's sun in {mi.variant()!r} needs 'sun_spectrum' and 'sun_spectrum_nm'")
+    e = np.asarray(props["sun_spectrum"], np.float32).ravel()
+    nm = np.asarray(props["sun_spectrum_nm"], np.float64).ravel()
+    check(e.size >= 2 and np.all(np.isfinite(e)) and e.min() >= 0.0 and nm.size == 2 and nm[1] > nm[0],
+          f"'sun_spectrum' must be >= 2 finite values >= 0 on 'sun_spectrum_nm' = (first, last) nm; got {e.size}, {nm}")
+    sun.spectrum_shape = (1, 1, e.size)
+    sun.spectrum = _spectrum_texture(e.reshape(1, 1, -1))
+    # texel centres at (i + 0.5) / n: coordinate = (lambda - l0) / (l1 - l0) (n - 1) / n + 0.5 / n
+    sun.spectrum_map = [mi.Float(v) for v in (nm[0], (e.size - 1) / (e.size * (nm[1] - nm[0])), 0.5 / e.size)]
+    dr.make_opaque(*sun.spectrum_map)
+
+
+def _height_mu(sun, p):
+    """(The height of p above the sphere, the sun's cos(zenith) at p) (``sun_air_radius``)."""
+    *_, radius = sun.air_map
+    q = mi.Vector3f(p.x, p.y, p.z + radius)  # from the Earth's centre
+    r = dr.norm(q)
+    h = (dr.square(p.x) + dr.square(p.y) + p.z * (p.z + 2.0 * radius)) * dr.rcp(r + radius)  # r - R, no cancellation
+    return h, dr.dot(q, sun.sun_dir) * dr.rcp(r)
+
+
+def _spectral_radiance(sun, p, wavelengths):
+    """The sun's value at the lanes' ``wavelengths``: ``sun_value`` x the spectrum (after the air at p)."""
+    l0, l_scale, l_off = sun.spectrum_map
+    if not sun.spectrum_air:  # the top-of-atmosphere spectrum only: one texel in height and mu
+        y = z = mi.Float(0.5)
+    else:
+        h0, h_scale, h_off, mu0, mu_scale, mu_off, _ = sun.air_map
+        h, mu = _height_mu(sun, p)
+        y, z = (h - h0) * h_scale + h_off, (mu - mu0) * mu_scale + mu_off
+    lanes = [sun.spectrum.eval(mi.Point3f((wavelengths[i] - l0) * l_scale + l_off, y, z))[0] for i in range(4)]
+    return mi.Spectrum(*lanes) * sun.sun_value
+
+
+def radiance_at(sun, p, wavelengths=None):
     """The sun's value (radiance of the disk, or irradiance of a point sun) at point ``p``: ``sun_value``,
-    times the air's colour at p's height and the sun's cos(zenith) there where ``sun_air`` is given."""
+    times the air's colour at p's height and the sun's cos(zenith) there where ``sun_air`` is given
+    (spectral variants: at the lanes' ``wavelengths``, :func:`parse_spectrum`)."""
+    if sun.spectrum is not None:
+        return _spectral_radiance(sun, p, wavelengths)
     value = mi.Spectrum(sun.sun_value)
     if sun.air is None:
         return value
     h0, h_scale, h_off, mu0, mu_scale, mu_off, radius = sun.air_map
-    q = mi.Vector3f(p.x, p.y, p.z + radius)  # from the Earth's centre
-    r = dr.norm(q)
-    h = (dr.square(p.x) + dr.square(p.y) + p.z * (p.z + 2.0 * radius)) * dr.rcp(r + radius)  # r - R, no cancellation
-    mu = dr.dot(q, sun.sun_dir) * dr.rcp(r)
+    h, mu = _height_mu(sun, p)
     c = sun.air.eval(mi.Point2f((h - h0) * h_scale + h_off, (mu - mu0) * mu_scale + mu_off))
     return value * mi.Spectrum(c[0], c[1], c[2])
 
@@ -187,4 +243,5 @@ def aureole_nee(sun, tk, transmittance, scene, sampler, phase, mei, medium, thro
     else:
         w_b = mi.Float(1.0)
     tr = transmittance(scene, sampler, mei_b.spawn_ray(wo), medium, act_b)
-    return dr.select(act_b, result + weight * albedo * f_b * w_b * tr * radiance_at(sun, mei_b.p), result)
+    return dr.select(act_b, result + weight * albedo * f_b * w_b * tr * radiance_at(sun, mei_b.p, mei_b.wavelengths),
+                     result)

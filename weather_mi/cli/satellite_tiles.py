@@ -1,0 +1,70 @@
+"""``satellite --tile-size PX [--halo KM] [--scheduler ADDR | --workers N]``: the image in tiles of pixels as
+Dask tasks, each worker reading only its tile's sub-box of the wrfout plus the halo (``satellite.tiles``);
+the client writes the same NetCDF, EXR and PNG as the one-process command."""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def add_tile_options(p) -> None:
+    """``--tile-size`` and ``--halo`` on the ``satellite`` parser."""
+    from ..satellite.tile_plan import DEFAULT_HALO_KM
+    p.add_argument("--tile-size", type=int, default=None, metavar="PX",
+                   help="render in tiles of PX x PX pixels, each reading only its sub-box of the file and a halo "
+                        "(a domain larger than one machine: with --scheduler/--workers, a Dask task per tile)")
+    p.add_argument("--halo", type=float, default=DEFAULT_HALO_KM, metavar="KM",
+                   help=f"with --tile-size: the margin (km) around a tile's lines of sight and their sun paths "
+                        f"for light scattered sideways (default {DEFAULT_HALO_KM:g}: the seams within noise)")
+
+
+def check_tile_options(args) -> None:
+    """What a tiled render cannot do, named before anything is read."""
+    if args.tile_size is None:
+        return
+    from .satellite_loop import wants_loop
+    bad = [(args.demo is not None, "--demo (a tiled render reads a wrfout file's sub-boxes)"),
+           (args.demo is None and wants_loop(args), "several files or times"),
+           (args.rgb, "--rgb"), (args.resume, "--resume"), (getattr(args, "periodic", None) not in (None, "off"),
+                                                            "--periodic")]
+    found = [why for cond, why in bad if cond]
+    if found:
+        raise ValueError(f"--tile-size {args.tile_size}: not with {', '.join(found)}; a tiled render is one band "
+                         "of one time of one wrfout file")
+    from ..io.sources import kind
+    if kind(args.file) != "wrf":
+        raise ValueError(f"--tile-size: {args.file} is not a wrfout file (a tiled render reads WRF sub-boxes)")
+
+
+def satellite_tiles_command(args, resolution: float, nc: Path, exr: Path, png: Path, estimator: dict) -> Path:
+    """Plan, render the tiles (on ``--scheduler``/``--workers`` or here), write the products."""
+    from ..display.satellite_picture import shown_dataset, write_picture
+    from ..reference.cluster import session
+    from ..satellite import tiles as st
+    from ..satellite.imagery import write_satellite
+    from ..io.times import parse_time
+    plan = st.tiled_satellite(args.file, parse_time(args.time), args.satellite, args.band or "0.64", resolution,
+                              tile_px=args.tile_size, halo_km=args.halo, rayleigh=args.rayleigh,
+                              ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
+                              seed=args.seed, lat=args.lat, lon=args.lon, date=args.date, surface=args.surface,
+                              wind_m_s=args.wind)
+    w, h = plan.scene.view.size
+    nz, ny, nx = plan.outline.shape
+    cols = max(t.cells for t in plan.tiles)
+    print(f"{plan.scene.satellite.name}, band {plan.scene.band.name} um: {w} x {h} pixels of {resolution:g} km in "
+          f"{len(plan.tiles)} tiles of up to {args.tile_size} px; grid {nx} x {ny} x {nz}, the largest sub-box "
+          f"{cols} columns ({100 * cols / (nx * ny):.0f}% of the domain) with a {args.halo:g} km halo")
+    optics = dict(species=args.preset, phase=args.phase, sizes=args.sizes, size_classes=args.size_classes)
+    with session(args.scheduler, args.workers) as client:
+        ds, img, figs = st.render_tiles(plan, client, optics=optics,
+                                        read_sizes=args.sizes not in ("physical", "paper"), **estimator,
+                                        on_tile=lambda r: print(f"  tile {r['tile'].index + 1}/{len(plan.tiles)}: "
+                                                                f"grid {r['grid_shape']}, {r['seconds']:.1f} s, "
+                                                                f"worker peak {r['peak_rss_bytes'] / 1e9:.2f} GB",
+                                                                flush=True))
+    shown = shown_dataset(ds, img, args.denoise)
+    write_satellite(ds, img, nc, exr)
+    write_picture(shown, png, denoise=False)
+    print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s, "
+          f"{len(figs)} tiles; cloud pixels {int(ds.cloud.sum())}, mean relative standard error "
+          f"{ds.attrs['cloud_rse_mean']:.3f})")
+    return nc
