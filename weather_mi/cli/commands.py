@@ -97,7 +97,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase,
                          sizes=args.sizes or default_sizes(hyd), size_classes=args.size_classes,
-                         periodic=periodic_value(args))
+                         periodic=periodic_value(args), release=True, keep=("weights",))  # the path tracer's
     from ..scene.surface import RGB_UM, with_surface
     vol = with_surface(vol, RGB_UM, args.surface, args.wind)  # the ground's surface in red, green and blue
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
@@ -198,13 +198,15 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, phase=args.phase, sizes=args.sizes or default_sizes(hyd),
                          size_classes=args.size_classes,
-                         periodic=periodic_value(args))
+                         periodic=periodic_value(args), release=True,
+                         keep=("beta_ext", "weights") if args.rgb or args.rayleigh else ("weights",))  # the air: beta_s
     hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
     if args.rgb:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
                                ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
                                seed=args.seed, **surface_kw(args))
+    del vol  # the scene holds the band's volume (its own albedo): the RGB albedo goes
     w, h = scene.view.size
     print(f"{scene.satellite.name} (sub-satellite longitude {scene.satellite.sub_lon_deg}), band {scene.band.name} um: "
           f"{w} x {h} pixels of {resolution:g} km, view zenith {scene.view.view_zenith_deg.min():.1f}-"
