@@ -1,6 +1,6 @@
 """Issue 38 part 4, what a storm spotter knows: the rainbow in a rain shaft with the sun behind the camera.
 
-    .venv/bin/python validation/rainbow.py [--size 120x96] [--spp 64] [--radius-mm 0.7] [--png out.png]
+    .venv/bin/python validation/rainbow.py [--size 120x96] [--spp 64] [--radius-mm 0.7] [--spectral] [--png out.png]
 
 A thin shaft of light rain (0.05 g/kg, the "physical" species' 0.7 mm drops, optical depth ~0.3 along the
 eye rays: single scattering dominates) 1.5-4 km in front of a camera looking 24 deg up towards the antisolar
@@ -18,7 +18,9 @@ cos^2 i = (n^2 - 1) / (k (k + 2)), D = 2 (i - r) + k (pi - 2 r), sin i = n sin r
 180 - D_1, secondary D_2 - 180), with water's index from the IAPWS formulation (Harvey et al. 1998, J. Phys.
 Chem. Ref. Data 27, 761; IAPWS R9-97) at 20 C and 1 atm, relative to air. Mie theory puts the maximum of a
 distribution of mm drops a little inside the geometric bow (Airy: ~0.1-0.2 deg for 0.7 mm drops, more for
-red), and the sun's 0.53 deg disk blurs it; the target is 0.3 deg.
+red), and the sun's 0.53 deg disk blurs it; the target is 0.3 deg. ``--spectral`` measures the spectral mode's
+sRGB channels the same way: each is a band of wavelengths (the bow of each wavelength drawn from phase tables
+interpolated between the 450, 550 and 650 nm nodes), so its Descartes angles are indicative only.
 """
 from __future__ import annotations
 
@@ -177,6 +179,8 @@ def main(argv=None) -> None:
     p.add_argument("--spp", type=int, default=64)
     p.add_argument("--radius-mm", type=float, default=0.7, help="rain drops' effective radius (mm)")
     p.add_argument("--png", help="also write the rendered shaft as a PNG here")
+    p.add_argument("--spectral", action="store_true",
+                   help="also render with llvm_ad_spectral (its sRGB channels are bands, not 650/550/450 nm lines)")
     a = p.parse_args(argv)
     size = tuple(int(v) for v in a.size.lower().split("x"))
     primary, secondary = descartes_bows()
@@ -189,6 +193,11 @@ def main(argv=None) -> None:
     got, img, _ = render_and_measure(size, a.spp, radius)
     _print_table(f"path tracer, {size[0]}x{size[1]}, {a.spp} spp, {time.perf_counter() - t0:.1f} s", got,
                  primary, secondary)
+    if a.spectral:
+        t0 = time.perf_counter()
+        got, _, _ = render_and_measure(size, a.spp, radius, variant="llvm_ad_spectral")
+        _print_table(f"spectral path tracer (sRGB channels), {a.spp} spp, {time.perf_counter() - t0:.1f} s", got,
+                     primary, secondary)
     if a.png:
         img.save_png(a.png)
         print(f"wrote {a.png}")
