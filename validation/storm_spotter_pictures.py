@@ -2,7 +2,7 @@
 
     .venv/bin/python validation/storm_spotter_pictures.py --out docs/images [--spp 64] [--only rainbow|anvil]
 
-``rainbow_in_rain_shaft.png``: a shaft of light rain (0.06 g/kg, 0.7 mm drops) under a cloud deck, 3-15 km
+``rainbow_in_rain_shaft.png``: a shaft of light rain (0.12 g/kg, 0.7 mm drops) under a cloud deck, 3-15 km
 north of a camera 150 m up looking 22 deg above the horizon, the sun 8 deg high in the south behind it, coloured
 by the clear air on its path (``--atmosphere clear``), Hosek-Wilkie sky, a 0.15 ground; denoised (OIDN).
 The bows' angles in such a shaft are measured by ``validation/rainbow.py``.
@@ -38,8 +38,8 @@ def rainbow_scene(size=(320, 200), sun_elevation: float = 8.0, seed: int = 0):
     z, y, x = ((np.arange(n) + 0.5) * d + o for n, d, o in zip((30, 24, 48), spacing, (0.0, 3000.0, -12000.0)))
     zz, yy, xx = np.meshgrid(z, y, x, indexing="ij")
     sides = np.clip((12000 - np.abs(xx)) / 2000, 0, 1) * np.clip((15000 - yy) / 2000, 0, 1)
-    rain = 6e-5 * sides * np.clip((yy - 3000) / 1500, 0, 1) * (zz < 5000)
-    cloud = 6e-5 * sides * np.clip((yy - 2000) / 1500, 0, 1) * (zz > 5000) * (zz < 7000)
+    rain = 1.2e-4 * sides * np.clip((yy - 3000) / 1500, 0, 1) * (zz < 5000)
+    cloud = 3e-4 * sides * np.clip((yy - 2000) / 1500, 0, 1) * (zz > 5000) * (zz < 7000)
     hyd = wm.from_arrays({"rain": rain.astype(np.float32), "cloud": cloud.astype(np.float32)}, rho_air=1.0,
                          spacing=spacing, origin=(z[0], y[0], x[0]), source="storm_spotter_pictures rain shaft")
     vol = wm.optical_volume(hyd, wm.species.preset("physical"))
