@@ -1,6 +1,7 @@
 """Not a validation: the README's storm-spotter pictures (issue 38 part 4), path-traced.
 
-    .venv/bin/python validation/storm_spotter_pictures.py --out docs/images [--spp 64] [--only rainbow|anvil]
+    .venv/bin/python validation/storm_spotter_pictures.py --out docs/images [--spp 64] [--only rainbow|anvil|wrf-anvil]
+        [--data ../shared/data]
 
 ``rainbow_in_rain_shaft.png``: a shaft of light rain (0.12 g/kg, 0.7 mm drops) under a cloud deck, 3-15 km
 north of a camera 150 m up looking 22 deg above the horizon, the sun 8 deg high in the south behind it, coloured
@@ -9,7 +10,8 @@ The bows' angles in such a shaft are measured by ``validation/rainbow.py``.
 
 ``sunset_anvil.png``: the demo supercell at a 4 deg sun with the clear air (issue 38's headline view):
 ``weather-mi render --demo supercell --sun-elevation 4 --sun-azimuth 260 --camera-azimuth 290
---atmosphere clear``.
+--atmosphere clear``; ``sunset_anvil_wrf.png``: the same view of the real WRF supercell
+(``--data``/wrf/wrfout_quarter_ss_0130.nc, WSM6, 1 km grid).
 
 The blue haze of a distant storm needs air along the eye rays (aerial perspective), which the renderer does
 not have yet (the clear atmosphere colours the sun only): no picture.
@@ -26,8 +28,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-ANVIL_ARGS = ["--demo", "supercell", "--sun-elevation", "4", "--sun-azimuth", "260", "--camera-azimuth", "290",
-              "--atmosphere", "clear"]
+ANVIL_VIEW = ["--sun-elevation", "4", "--sun-azimuth", "260", "--camera-azimuth", "290", "--atmosphere", "clear"]
+WRF_SUPERCELL = "wrf/wrfout_quarter_ss_0130.nc"  # under --data
 
 
 def rainbow_scene(size=(320, 200), sun_elevation: float = 8.0, seed: int = 0):
@@ -59,28 +61,35 @@ def rainbow_picture(out: Path, spp: int, size=(320, 200)) -> Path:
     return img.save_png(out / "rainbow_in_rain_shaft.png")
 
 
-def anvil_picture(out: Path, spp: int, size=(320, 240)) -> Path:
+def anvil_picture(out: Path, spp: int, source: list[str], name: str, size=(320, 240)) -> Path:
+    """``weather-mi render SOURCE ANVIL_VIEW`` (``source``: ["--demo", "supercell"] or [a wrfout]) as ``name``."""
     from weather_mi.cli.commands import main as cli
     with tempfile.TemporaryDirectory() as tmp:
         exr = Path(tmp) / "anvil.exr"
-        rc = cli(["render", *ANVIL_ARGS, "--size", f"{size[0]}x{size[1]}", "--spp", str(spp), "-o", str(exr)])
+        rc = cli(["render", *source, *ANVIL_VIEW, "--size", f"{size[0]}x{size[1]}", "--spp", str(spp), "-o", str(exr)])
         if rc:
             raise SystemExit(f"weather-mi render failed ({rc})")
-        return Path(shutil.copy(exr.with_suffix(".png"), out / "sunset_anvil.png"))
+        return Path(shutil.copy(exr.with_suffix(".png"), out / name))
 
 
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", default="docs/images")
     p.add_argument("--spp", type=int, default=64)
-    p.add_argument("--only", choices=("rainbow", "anvil"))
+    p.add_argument("--only", choices=("rainbow", "anvil", "wrf-anvil"))
+    p.add_argument("--data", default="../shared/data", help="folder holding " + WRF_SUPERCELL)
     a = p.parse_args(argv)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     if a.only in (None, "rainbow"):
         print("wrote", rainbow_picture(out, a.spp))
     if a.only in (None, "anvil"):
-        print("wrote", anvil_picture(out, a.spp))
+        print("wrote", anvil_picture(out, a.spp, ["--demo", "supercell"], "sunset_anvil.png"))
+    if a.only in (None, "wrf-anvil"):
+        wrf = Path(a.data) / WRF_SUPERCELL
+        if not wrf.exists():
+            raise SystemExit(f"{wrf}: not found (the real WRF supercell; --data names its folder)")
+        print("wrote", anvil_picture(out, a.spp, [str(wrf)], "sunset_anvil_wrf.png"))
 
 
 if __name__ == "__main__":
