@@ -100,8 +100,11 @@ def _render(args, out, png_path, ckpt) -> Path:
                          periodic=periodic_value(args))
     from ..scene.surface import RGB_UM, with_surface
     vol = with_surface(vol, RGB_UM, args.surface, args.wind)  # the ground's surface in red, green and blue
-    hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     spec, sun_meta = scene_spec(args, vol), None
+    if spec.atmosphere is not None:  # the air inside the box: molecules from the model's density (optics.air.inside)
+        from ..optics.air.inside import with_box_air
+        vol = with_box_air(vol, hyd, spec.atmosphere)
+    hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     if args.sun_from_time:
         spec, sun_meta = _sun_from_time(spec, hyd)
     from ..reference.cluster import session

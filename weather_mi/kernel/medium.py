@@ -14,6 +14,11 @@ def phase_arrays(vol: OpticalVolume):
     species' scattering coefficients beta_sca,s = w_s beta omega (1/m; w_s the Eq. 8 weights, beta omega the
     voxel's scattering coefficient, channel mean), which the plugin interpolates and then normalises."""
     from .plugins.hydrometeor_mixture import prepare_tables
+    air = air_in_medium(vol)
+    if air is not None:  # the air's two components after the species (``optics.air.inside``)
+        from ..optics.air.inside import medium_grids
+        nodes, values = prepare_tables(tuple(vol.require_phase_tables()) + tuple(air.phase_tables))
+        return nodes, values, medium_grids(vol.beta_total, vol.albedo, vol.weights, air)[2]
     nodes, values = prepare_tables(vol.require_phase_tables())
     sca = np.asarray(vol.albedo, np.float32).mean(axis=-1)
     sca *= np.asarray(vol.beta_total, np.float32)
@@ -21,6 +26,19 @@ def phase_arrays(vol: OpticalVolume):
     for s, w in enumerate(vol.weights):
         np.multiply(w, sca, out=weights[..., s])
     return nodes, values, weights
+
+
+def air_in_medium(vol: OpticalVolume):
+    """The air in the box (``OpticalVolume.air``, ``optics.air.inside.BoxAir``) where the medium holds it: in
+    RGB variants; None without air or in spectral variants (there the air colours the sun only)."""
+    import mitsuba as mi
+    return None if getattr(vol, "air", None) is None or mi.is_spectral else vol.air
+
+
+def medium_extinction(vol: OpticalVolume) -> np.ndarray:
+    """The medium's sigma_t grid (1/m): grey (z, y, x), or (z, y, x, 3) with the air in the box."""
+    air = air_in_medium(vol)
+    return vol.beta_total if air is None else vol.beta_total[..., None] + air.extinction
 
 
 def grid_bbox(vol: OpticalVolume):
@@ -64,7 +82,11 @@ def medium_dict(vol: OpticalVolume) -> dict:
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     to_world = bbox_transform(grid_bbox(vol))
-    beta, albedo = vol.beta_total, vol.albedo
+    beta, albedo = vol.beta_total[..., None], vol.albedo
+    air = air_in_medium(vol)
+    if air is not None:  # RGB extinction (molecules ~ lambda^-4) and albedo of the hydrometeors and the air
+        from ..optics.air.inside import medium_grids
+        beta, albedo, _ = medium_grids(vol.beta_total, vol.albedo, vol.weights, air)
     if mi.is_spectral:  # the 550 nm albedo, made spectral by the phase function (``spectral_phase_properties``)
         albedo = np.ascontiguousarray(albedo[..., 1:2])
     wrap = {}
@@ -75,11 +97,11 @@ def medium_dict(vol: OpticalVolume) -> dict:
     # both only in software. LLVM has no texture units: no effect there.
     return {
         "type": "heterogeneous",
-        "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(beta[..., None]),
+        "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(beta),
                     "to_world": to_world, "filter_type": "trilinear", "accel": False, **wrap},
         "albedo": {"type": "gridvolume", "data": mi.TensorXf(albedo), "to_world": to_world,
                    "filter_type": "trilinear", "accel": False, **wrap},
         "scale": 1.0,
-        "has_spectral_extinction": False,
+        "has_spectral_extinction": air is not None,
         "phase": phase_dict(vol),
     }
