@@ -347,7 +347,7 @@ def integrator_air(sun: Sun, atmosphere, bbox, air_box=None) -> dict:
     return {"sun_air": mi.TensorXf(table.rgb), "sun_air_h0": float(table.heights_m[0]),
             "sun_air_h1": float(table.heights_m[-1]), "sun_air_mu0": float(table.mu[0]),
             "sun_air_mu1": float(table.mu[-1]), "sun_air_radius": float(EARTH_RADIUS_M),
-            **({"sun_air_box": [float(v) for v in (*air_box[0], *air_box[1])]} if air_box is not None else {})}
+            **({"sun_air_box": mi.TensorXf(np.array([*air_box[0], *air_box[1]], np.float32))} if air_box is not None else {})}
 
 
 def integrator_sun_spectrum(sun: Sun, atmosphere, bbox) -> dict:
