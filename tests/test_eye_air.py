@@ -1,0 +1,94 @@
+"""The air along eye rays outside the box (``optics.air.eye_path``, issue 38 part 1): transmittance and
+single-scattered sunlight against a closed form (a short horizontal path), an independent ODE integration
+(a slant path to the top of the air), and the blue haze of a distant dark target."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from weather_mi.optics.air import Atmosphere, sun_rgb
+from weather_mi.optics.air.eye_path import TOP_M, segment_air, top_distance, wide_sun_table
+
+R_EARTH = 6371e3
+ELEV = 30.0
+SUN = np.array([0.0, -math.cos(math.radians(ELEV)), math.sin(math.radians(ELEV))])
+
+
+def _table(atm):
+    return wide_sun_table(atm, float(SUN[2]), reach_m=400e3, n_mu=33, n_h=121)
+
+
+def _p_rayleigh(mu, depol=0.0279):
+    g = depol / (2 - depol)
+    return 3 / (16 * math.pi * (1 + 2 * g)) * ((1 + 3 * g) + (1 - g) * mu * mu)
+
+
+def _p_hg(g, mu):
+    return (1 - g * g) / (4 * math.pi * (1 + g * g - 2 * g * mu) ** 1.5)
+
+
+def _coefficients(atm, h):
+    """(molecular scattering, aerosol extinction, total extinction) at height h, per channel (650/550/450)."""
+    wl = np.array([650.0, 550.0, 450.0])
+    total = atm.extinction_per_m(wl, h)
+    aer = atm.aerosol_extinction_550_per_m(h) * (wl / 550.0) ** -atm.angstrom
+    from weather_mi.optics.rayleigh import cross_section_m2
+    mol = atm.air_number_density_m3(h) * cross_section_m2(wl * 1e-9)
+    return mol, aer, total
+
+
+def test_a_short_horizontal_path_is_the_homogeneous_closed_form():
+    """1 km level at 2 km (the path drops 0.08 m below its height over the sphere): T = exp(-beta L),
+    S = (beta_R p_R + omega_a beta_a p_HG) C (1 - exp(-beta L)) / beta, C the direct sun's colour there."""
+    atm = Atmosphere(aod_550=0.2)
+    d = np.array([[1.0, 0.0, 0.0]])
+    t, s = segment_air(atm, SUN, [[-500.0, 0.0, 2000.0]], d, [0.0], [1000.0], _table(atm))
+    mol, aer, beta = _coefficients(atm, 2000.0)
+    cos_t = float(d[0] @ SUN)
+    colour = sun_rgb(atm, 2000.0, float(SUN[2]))
+    closed = (mol * _p_rayleigh(cos_t) + atm.aerosol_ssa * aer * _p_hg(atm.aerosol_g, cos_t)) * colour \
+        * (1 - np.exp(-beta * 1000.0)) / beta
+    assert t[0] == pytest.approx(np.exp(-beta * 1000.0), rel=1e-6)
+    assert s[0] == pytest.approx(closed, rel=2e-3)
+
+
+def test_a_slant_path_to_the_top_against_an_ode_solver():
+    """From 300 m up at 3 deg elevation towards the sun's side, to the top of the air (several hundred km over
+    the sphere): T and S against scipy's adaptive Runge-Kutta on dtau/ds = beta, dS/ds = exp(-tau) J(s)."""
+    from scipy.integrate import solve_ivp
+    atm = Atmosphere(aod_550=0.1)
+    e = math.radians(3.0)
+    d = np.array([0.0, -math.cos(e), math.sin(e)])
+    o = np.array([0.0, 0.0, 300.0])
+    length = float(top_distance(o[None], d[None])[0])
+    q_top = o + length * d + [0, 0, R_EARTH]
+    assert np.linalg.norm(q_top) - R_EARTH == pytest.approx(TOP_M, rel=1e-6)
+    cos_t = float(d @ SUN)
+
+    def rhs(s, y):
+        q = o + s * d + [0.0, 0.0, R_EARTH]
+        r = np.linalg.norm(q)
+        h, mu = r - R_EARTH, float(q @ SUN) / r
+        mol, aer, beta = _coefficients(atm, h)
+        j = (mol * _p_rayleigh(cos_t) + atm.aerosol_ssa * aer * _p_hg(atm.aerosol_g, cos_t)) * sun_rgb(atm, h, mu)
+        return np.concatenate([beta, np.exp(-y[:3]) * j])
+    sol = solve_ivp(rhs, (0.0, length), np.zeros(6), rtol=1e-6, atol=1e-12, max_step=20e3)
+    tau, s_ref = sol.y[:3, -1], sol.y[3:, -1]
+    t, s = segment_air(atm, SUN, o[None], d[None], [0.0], [length], _table(atm))
+    assert t[0] == pytest.approx(np.exp(-tau), rel=5e-3)
+    assert s[0] == pytest.approx(s_ref, rel=1e-2)
+
+
+def test_a_distant_dark_target_is_bluer_with_distance():
+    """Clean air (AOD 0.02): a dark ground (albedo 0.05, lit by the sun at 30 deg) seen level from 300 m at
+    1, 5 and 20 km: the blue share of its apparent colour grows with distance, past its own."""
+    atm = Atmosphere(aod_550=0.02)
+    target = 0.05 * sun_rgb(atm, 0.0, float(SUN[2])) * float(SUN[2]) / math.pi
+    shares = [target[2] / target.sum()]
+    for dist in (1e3, 5e3, 20e3):
+        t, s = segment_air(atm, SUN, [[0.0, 0.0, 300.0]], [[1.0, 0.0, 0.0]], [0.0], [dist], _table(atm))
+        seen = t[0] * target + s[0]
+        shares.append(seen[2] / seen.sum())
+    assert np.all(np.diff(shares) > 0.005), shares
