@@ -18,6 +18,7 @@ from ..errors import OutputWriteError, WeatherDataError
 from ..io.times import parse_time, parse_times
 from ..reference.options import ReferenceOptions, add_flags, flag_values
 from ..io.sources import DEMOS, check_time, open_source
+from . import air_option
 from .periodic_option import add_periodic_option, periodic_value
 from .satellite_tiles import add_tile_options, check_tile_options, satellite_tiles_command
 from .spectral_option import add_spectral_options, check_spectral_options, save_png, variant_of
@@ -101,9 +102,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..scene.surface import RGB_UM, with_surface
     vol = with_surface(vol, RGB_UM, args.surface, args.wind)  # the ground's surface in red, green and blue
     spec, sun_meta = scene_spec(args, vol), None
-    if spec.atmosphere is not None:  # the air inside the box: molecules from the model's density (optics.air.inside)
-        from ..optics.air.inside import with_box_air
-        vol = with_box_air(vol, hyd, spec.atmosphere)
+    vol = air_option.in_box(vol, hyd, spec)  # the air inside the box (--atmosphere clear)
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     if args.sun_from_time:
         spec, sun_meta = _sun_from_time(spec, hyd)
@@ -113,6 +112,7 @@ def _render(args, out, png_path, ckpt) -> Path:
                                resume=ckpt if args.resume else None, client=client, variant=variant_of(args))
     if sun_meta:
         img.metadata["sun_from_time"] = sun_meta
+    img = air_option.on_eye_rays(img, spec, vol, args)  # and along the eye rays outside the box
     if args.denoise:
         from ..display.denoise import denoise_image
         denoise_image(img, spec, vol)
@@ -320,7 +320,7 @@ def add_scene_options(p) -> None:
     p.add_argument("--camera-height", type=float, default=1500.0, help="ground camera: height above ground (m)")
     p.add_argument("--fov", type=float, default=None,
                    help="horizontal field of view (degrees; default 70 ground, 45 orbit)")
-    p.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none"))
+    p.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none", "air"))
     p.add_argument("--atmosphere", default="none", choices=("none", "clear"),
                    help="clear: the sun coloured by a clear 1-D atmosphere on its path (molecules, ozone, aerosol; "
                         "the reference renderer); none (default): the sun as given, no air outside the box")
