@@ -92,3 +92,59 @@ def test_a_distant_dark_target_is_bluer_with_distance():
         seen = t[0] * target + s[0]
         shares.append(seen[2] / seen.sum())
     assert np.all(np.diff(shares) > 0.005), shares
+
+
+def _scene(sky):
+    from weather_mi.optics.phase.analytic import isotropic
+    from weather_mi.optics.volume import OpticalVolume
+    from weather_mi.scene.framing import scene_spec
+    vol = OpticalVolume.from_arrays(np.zeros((4, 4, 4), np.float32), 1.0, isotropic(),
+                                    ((-5e3, -5e3, 0.0), (5e3, 5e3, 10e3)))
+    spec = scene_spec(vol, (16, 12), camera="ground", camera_distance_km=40.0, camera_height=300.0, fov=60.0,
+                      sun_elevation=ELEV, sky=sky, atmosphere="clear", aod=0.1)
+    return spec, vol
+
+
+def test_eye_air_on_an_image_is_the_segments_air():
+    """``display.aerial``: a ground pixel gets E S + T L along camera-to-ground, a box pixel camera-to-box;
+    a sky pixel keeps the sky model's value with ``sunsky`` and gets the air's sky with ``--sky air``, blue away
+    from the sun."""
+    from weather_mi.display.aerial import _box_interval, with_eye_air
+    from weather_mi.io.image import Image
+    from weather_mi.optics.air.eye_path import wide_sun_table
+    from weather_mi.slicing.geometry import camera_rays
+    spec, vol = _scene("sunsky")
+    flat = np.full((12, 16, 3), 0.02, np.float32)
+    img = Image(radiance=flat, stderr=flat * 0.1, transmittance=np.ones((12, 16), np.float32))
+    out = with_eye_air(img, spec, vol)
+    o, d = (a.reshape(-1, 3) for a in camera_rays(spec))
+    t_in, _, hit = _box_interval(o, d, np.array([-5e3, -5e3, 0.0]), np.array([5e3, 5e3, 10e3]))
+    e = np.asarray(spec.sun.irradiance)
+    table = wide_sun_table(spec.atmosphere, spec.sun.mu0)
+    sky = (~hit) & (d[:, 2] > 0)
+    ground = (~hit) & (d[:, 2] < 0)
+    assert hit.any() and sky.any() and ground.any()
+    for mask, t_end in ((hit, t_in), (ground, (0.0 - o[:, 2]) / np.where(d[:, 2] == 0, 1, d[:, 2]))):
+        i = int(np.flatnonzero(mask)[0])
+        t, s = segment_air(spec.atmosphere, spec.sun.to_sun, o[i:i + 1], d[i:i + 1], [0.0], [t_end[i]], table)
+        assert out.radiance.reshape(-1, 3)[i] == pytest.approx(e * s[0] + t[0] * 0.02, rel=1e-5)
+    assert np.all(out.radiance.reshape(-1, 3)[sky] == 0.02)
+    spec_air, _ = _scene("air")
+    assert spec_air.sky is None
+    out_air = with_eye_air(replace_radiance(img, 0.0), spec_air, vol, sky_air=True)
+    away = sky & (d @ np.asarray(spec.sun.to_sun) < 0.5) & (d[:, 2] > 0.17)  # > 60 deg from the sun, > 10 deg up
+    assert away.any() and np.all(out_air.radiance.reshape(-1, 3)[away][:, 2] > out_air.radiance.reshape(-1, 3)[away][:, 0])
+
+
+def replace_radiance(img, value):
+    from dataclasses import replace
+    return replace(img, radiance=np.full_like(img.radiance, value))
+
+
+def test_sky_air_needs_the_atmosphere():
+    from weather_mi.optics.phase.analytic import isotropic
+    from weather_mi.optics.volume import OpticalVolume
+    from weather_mi.scene.framing import scene_spec
+    vol = OpticalVolume.from_arrays(np.zeros((2, 2, 2), np.float32), 1.0, isotropic(), ((0, 0, 0), (1e3, 1e3, 1e3)))
+    with pytest.raises(ValueError, match="--sky air"):
+        scene_spec(vol, (8, 8), sky="air")

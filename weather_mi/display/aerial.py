@@ -63,7 +63,8 @@ def eye_air(spec, vol, sky_air: bool, table=None):
         t_a[sl], s = segment_air(atm, sun.to_sun, o[sl], d[sl], np.zeros(a_end[sl].shape), a_end[sl], table)
         s_a[sl] = s * e
         if sky_air:
-            _, s = segment_air(atm, sun.to_sun, o[sl], d[sl], t_out[sl], np.where(hit[sl], t_end[sl], 0.0), table)
+            b0, b1 = np.where(hit[sl], t_out[sl], 0.0), np.where(hit[sl], t_end[sl], 0.0)  # B: none where no box
+            _, s = segment_air(atm, sun.to_sun, o[sl], d[sl], b0, b1, table)
             s_b[sl] = s * e
     keep = ~hit & ~np.isfinite(t_ground) & (not sky_air)  # sunsky's own sky
     shape = (spec.height, spec.width)
