@@ -4,6 +4,7 @@ single-scattered sunlight against a closed form (a short horizontal path), an in
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -115,7 +116,7 @@ def test_eye_air_on_an_image_is_the_segments_air():
     from weather_mi.slicing.geometry import camera_rays
     spec, vol = _scene("sunsky")
     flat = np.full((12, 16, 3), 0.02, np.float32)
-    img = Image(radiance=flat, stderr=flat * 0.1, transmittance=np.ones((12, 16), np.float32))
+    img = Image(radiance=flat, stderr=flat * 0.1, transmittance=np.zeros((12, 16), np.float32))  # opaque box
     out = with_eye_air(img, spec, vol)
     o, d = (a.reshape(-1, 3) for a in camera_rays(spec))
     t_in, _, hit = _box_interval(o, d, np.array([-5e3, -5e3, 0.0]), np.array([5e3, 5e3, 10e3]))
@@ -129,6 +130,9 @@ def test_eye_air_on_an_image_is_the_segments_air():
         t, s = segment_air(spec.atmosphere, spec.sun.to_sun, o[i:i + 1], d[i:i + 1], [0.0], [t_end[i]], table)
         assert out.radiance.reshape(-1, 3)[i] == pytest.approx(e * s[0] + t[0] * 0.02, rel=1e-5)
     assert np.all(out.radiance.reshape(-1, 3)[sky] == 0.02)
+    clear_box = with_eye_air(replace(img, transmittance=np.ones((12, 16), np.float32)), spec, vol)
+    through = hit & (d[:, 2] > 0.0)  # a clear box with the sky model's sky behind: the render holds the air
+    assert through.any() and np.all(clear_box.radiance.reshape(-1, 3)[through] == 0.02)
     spec_air, _ = _scene("air")
     assert spec_air.sky is None
     out_air = with_eye_air(replace_radiance(img, 0.0), spec_air, vol, sky_air=True)

@@ -10,7 +10,9 @@ atmosphere of ``spec.atmosphere`` is horizontally homogeneous, and each pixel's 
 * ``sky_air`` (``--sky air``: the render has no sky emitter): the rays that miss the box and the ground see
   the air's single-scattering sky E S_A; behind the box B = [box exit, ground or top] adds
   E T_A T_box S_B, T_box the eye-ray transmittance of the box's hydrometeors (``Image.transmittance``).
-  Without it (``--sky sunsky``) the sky's pixels stay Hosek-Wilkie's, which holds the air already.
+  Without it (``--sky sunsky``) the sky's pixels stay Hosek-Wilkie's, which holds the air already, and a ray
+  through the box that ends on that sky takes the air of A in proportion to the box's opacity 1 - T_box
+  (the render there is cloud over sky: the air is added to the cloud's part only, approximately).
 
 E is the scene's sun irradiance above the air (the RGB mode's sun with an atmosphere, ``sun_rgb`` = 1 in
 luminance there). Not included: light scattered more than once by the outside air, the outside air's
@@ -36,8 +38,8 @@ def _box_interval(o, d, lo, hi):
 
 
 def eye_air(spec, vol, sky_air: bool, table=None):
-    """Per pixel (H, W, 3): (T_A, E S_A, E S_B-term, whether the pixel keeps its rendered value unchanged)
-    of the module docstring (the S_B term still to be multiplied by T_box)."""
+    """Per pixel: (T_A, E S_A, E S_B (H, W, 3) of the module docstring, whether the ray ends on the sky
+    model's sky, whether it meets the box (H, W))."""
     from ..optics.air.eye_path import segment_air, top_distance, wide_sun_table
     from ..slicing.geometry import camera_rays
     atm, sun = spec.atmosphere, spec.sun
@@ -66,23 +68,26 @@ def eye_air(spec, vol, sky_air: bool, table=None):
             b0, b1 = np.where(hit[sl], t_out[sl], 0.0), np.where(hit[sl], t_end[sl], 0.0)  # B: none where no box
             _, s = segment_air(atm, sun.to_sun, o[sl], d[sl], b0, b1, table)
             s_b[sl] = s * e
-    keep = ~hit & ~np.isfinite(t_ground) & (not sky_air)  # sunsky's own sky
     shape = (spec.height, spec.width)
-    return t_a.reshape(shape + (3,)), s_a.reshape(shape + (3,)), s_b.reshape(shape + (3,)), keep.reshape(shape)
+    sky_end = ~np.isfinite(t_ground) & (not sky_air)  # ends on the sky model's sky
+    return (t_a.reshape(shape + (3,)), s_a.reshape(shape + (3,)), s_b.reshape(shape + (3,)),
+            sky_end.reshape(shape), hit.reshape(shape))
 
 
 def with_eye_air(img, spec, vol, sky_air: bool = False):
     """``img`` (a reference ``Image`` of ``spec`` and ``vol``) seen through the air outside the box (module
-    docstring): radiance E S_A + T_A (L + T_box E S_B), standard error T_A se (the added terms are exact).
+    docstring): radiance E S_A + T_A (L + T_box E S_B) (weighted by the box's opacity where the ray ends on a
+    sky model's sky), the standard error scaled alike (the added terms are exact).
     Needs ``spec.atmosphere`` (a ValueError otherwise)."""
     if spec.atmosphere is None:
         raise ValueError("the air along the eye rays needs an atmosphere (--atmosphere clear)")
-    t_a, s_a, s_b, keep = eye_air(spec, vol, sky_air)
-    t_box = np.ones(keep.shape) if img.transmittance is None else np.asarray(img.transmittance, np.float64)
+    t_a, s_a, s_b, sky_end, hit = eye_air(spec, vol, sky_air)
+    t_box = np.ones(hit.shape) if img.transmittance is None else np.asarray(img.transmittance, np.float64)
     rad = np.asarray(img.radiance, np.float64)
-    out = np.where(keep[..., None], rad, s_a + t_a * (rad + t_box[..., None] * s_b))
-    se = None if img.stderr is None else np.where(keep[..., None], img.stderr, t_a * img.stderr).astype(np.float32)
-    meta = {**img.metadata, "eye_air": {"sky": "air" if sky_air else "model", "pixels_changed": int((~keep).sum())}}
+    w = np.where(sky_end, np.where(hit, 1.0 - np.clip(t_box, 0.0, 1.0), 0.0), 1.0)[..., None]
+    out = rad + w * (s_a + t_a * (rad + t_box[..., None] * s_b) - rad)
+    se = None if img.stderr is None else (img.stderr * (1.0 + w * (t_a - 1.0))).astype(np.float32)
+    meta = {**img.metadata, "eye_air": {"sky": "air" if sky_air else "model", "pixels_changed": int((w > 0).sum())}}
     return replace(img, radiance=out.astype(np.float32), stderr=se, metadata=meta)
 
 
