@@ -4,6 +4,10 @@ each command run as a child process and measured by ``os.wait4`` (its peak resid
 
     .venv/bin/python benchmarks/cli_memory.py [--sizes 400 800] [--commands info render] [--rounds 1]
     .venv/bin/python benchmarks/cli_memory.py --repo /work/main --repo .    # before (main) vs after (this tree)
+    .venv/bin/python benchmarks/cli_memory.py --sizes 800 --commands info render satellite view
+
+``view`` is what ``weather-mi view FILE`` does before it serves the page: the input read, the optics and the
+slicer warmed up for the first view (``viewer.serve.prepare(warm=True)``), then the process ends.
 
 The tiled wrfout files are written once to ``--tmp`` (default /tmp/weather-mi-tiles; never into the
 repository): only the variables the reader uses, the supercell repeated n/100 times along x and y (seams
@@ -38,6 +42,14 @@ COMMANDS = {
 CHILD = ("import sys, runpy; sys.path.insert(0, sys.argv.pop(1)); import weather_mi; "
          "print('weather_mi from', weather_mi.__file__, file=sys.stderr); "
          "from weather_mi.cli.commands import main; sys.exit(main(sys.argv[1:]))")
+# ``view``: what ``weather-mi view FILE`` does before it serves (the input read, the optics, the slicer warmed up
+# for the first view at its default 320 x 240), then exit instead of serving
+COMMANDS["view"] = ["--view", "{file}"]
+CHILD_VIEW = ("import sys; sys.path.insert(0, sys.argv.pop(1)); import weather_mi; "
+              "print('weather_mi from', weather_mi.__file__, file=sys.stderr); "
+              "from weather_mi.cli.commands import release_freed_memory; release_freed_memory(); "
+              "from weather_mi.viewer.recipe import VolumeRecipe; from weather_mi.viewer.serve import prepare; "
+              "prepare(VolumeRecipe(path=sys.argv[2]), None, size=(320, 240), warm=True)")
 
 
 def tiled_wrfout(n: int, folder: Path) -> Path:
@@ -78,7 +90,8 @@ def run(repo: Path, argv: list[str], log: Path) -> tuple[float, int, int]:
     """(wall time s, peak RSS bytes, exit status) of ``weather-mi argv`` run with the code of ``repo``."""
     t0 = time.perf_counter()
     with open(log, "w") as out:
-        proc = subprocess.Popen([sys.executable, "-c", CHILD, str(repo), *argv], stdout=out, stderr=subprocess.STDOUT,
+        child = CHILD_VIEW if argv[:1] == ["--view"] else CHILD
+        proc = subprocess.Popen([sys.executable, "-c", child, str(repo), *argv], stdout=out, stderr=subprocess.STDOUT,
                                 cwd=str(repo))
         _, status, usage = os.wait4(proc.pid, 0)
     proc.returncode = os.waitstatus_to_exitcode(status)

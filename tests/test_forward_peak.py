@@ -109,3 +109,18 @@ def test_aureole_estimator_leaves_the_estimate_unchanged(diameter):
     aureole, se_a = _slab_mean(forward_peak_deg=0.5, aureole_nee=1.0, diameter=diameter, seed=2)
     assert plain > 1e-3
     assert abs(aureole - plain) < 4 * np.hypot(se_p, se_a), (aureole, se_a, plain, se_p)
+
+
+def test_delta_scaled_for_the_kernel_keeps_the_species_extinction_unscaled():
+    """``species_extinction=False`` (the path tracer's medium): beta_total, albedo and weights as the full
+    delta scaling, bit for bit, the per-species beta_s the input's own array (no copy); with it, the scaled
+    beta_s sum to the scaled beta_total (Eq. 6) and lie below the input's."""
+    vol = wm.optical_volume(wm.synthetic.cumulus(), "physical", phase_quality="test")
+    full = delta_scaled(vol, 3.0)
+    lean = delta_scaled(vol, 3.0, species_extinction=False)
+    for name in ("beta_total", "albedo", "weights"):
+        np.testing.assert_array_equal(getattr(lean, name), getattr(full, name))
+    assert np.shares_memory(lean.beta_ext, vol.beta_ext)
+    assert full.beta_total.sum() < vol.beta_total.sum()
+    np.testing.assert_allclose(full.beta_ext.sum(axis=0), full.beta_total, rtol=1e-5, atol=1e-9)
+    assert np.all(full.beta_ext <= vol.beta_ext)

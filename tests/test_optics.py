@@ -154,3 +154,37 @@ def test_large_grid_memory_layout():
     vol = wm.optical_volume(hyd)
     assert vol.beta_ext.shape == (5,) + shape and vol.weights.dtype == np.float32
     np.testing.assert_allclose(vol.weights.sum(axis=0), 1.0, rtol=1e-5)
+
+
+@pytest.mark.parametrize("sizes,size_classes", [("scheme", None), ("scheme", 3), ("paper", None)])
+def test_release_drops_the_fields_once_used_and_changes_no_grid(sizes, size_classes):
+    """``optical_volume(release=True)`` (the command line's): the same grids, bit for bit, as without it; the
+    mixing ratios and radii are gone from the dataset afterwards (their memory with them), rho_air stays."""
+    hyd = wm.synthetic.cumulus()
+    rng = np.random.default_rng(1)
+    for s in wm.SPECIES_NAMES:  # per-voxel radii, as a scheme's (10-500 um)
+        hyd[f"r_eff_{s}"] = hyd[f"q_{s}"].copy(data=rng.uniform(1e-5, 5e-4, hyd[f"q_{s}"].shape).astype(np.float32))
+    kept = wm.optical_volume(hyd.copy(), sizes=sizes, size_classes=size_classes, phase_quality="test")
+    vol = wm.optical_volume(hyd, sizes=sizes, size_classes=size_classes, phase_quality="test", release=True)
+    for name in ("beta_ext", "beta_total", "albedo", "weights"):
+        np.testing.assert_array_equal(getattr(vol, name), getattr(kept, name))
+    assert vol.species == kept.species
+    assert [v for v in hyd.data_vars if v.startswith(("q_", "r_eff_"))] == []
+    assert "rho_air" in hyd
+
+
+def test_voxel_albedo_by_chunks_equals_the_whole_grid_at_once(monkeypatch):
+    """Each voxel's albedo from its radius (``sizes="scheme"``) computed a few voxels at a time (bounded
+    float64 temporaries) is the whole-grid computation's, bit for bit, and differs from the species' fixed
+    albedo where the radii differ from the species'."""
+    import weather_mi.optics.volume as volume
+    hyd = wm.synthetic.cumulus()
+    rng = np.random.default_rng(2)
+    for s in wm.SPECIES_NAMES:
+        hyd[f"r_eff_{s}"] = hyd[f"q_{s}"].copy(data=rng.uniform(1e-5, 5e-4, hyd[f"q_{s}"].shape).astype(np.float32))
+    whole = wm.optical_volume(hyd, "physical", sizes="scheme", phase_quality="test")
+    monkeypatch.setattr(volume, "ALBEDO_CHUNK", hyd["rho_air"].size // 5 + 3)  # five chunks, the last partial
+    chunked = wm.optical_volume(hyd, "physical", sizes="scheme", phase_quality="test")
+    np.testing.assert_array_equal(chunked.albedo, whole.albedo)
+    fixed = wm.optical_volume(hyd, "physical", sizes="physical", phase_quality="test")
+    assert not np.array_equal(fixed.albedo, whole.albedo)

@@ -389,3 +389,66 @@ def test_eval_matches_the_prepared_tables_everywhere():
     v = 0.5 * (w[0] ** 2 + (w[2] + 1.0) ** 2)  # the versine of the float32 direction
     expected = np.interp(v, v_nodes, values[s, :, 1].astype(np.float64))
     np.testing.assert_allclose(value[1], expected, rtol=1e-4, atol=1e-7 * expected.max())
+
+
+def test_packed_weights_are_held_in_place_and_traverse_unpacks_them():
+    """Weights given packed (z x y x x x P x 4, ``medium.phase_arrays(packed=True)``) are the plugin's one copy,
+    used in place (the same Dr.Jit array, no second host copy), and evaluate as the same coefficients given
+    unpacked (species 0 HG 0.85 in the west cell, species 1 isotropic in the east: closed forms at the texel
+    centres, their mean at the midpoint); ``mi.traverse`` gives them back unpacked, exactly."""
+    weights = np.zeros((1, 1, 2, 2), np.float32)
+    weights[0, 0, 0] = (1, 0)
+    weights[0, 0, 1] = (0, 1)
+    nodes, values = hm.prepare_tables([hg_table(0.85), hg_table(0.0)])
+    packed = mi.TensorXf(hm.pack_weights(weights))
+    assert tuple(packed.shape) == (1, 1, 2, 1, 4)
+    a, b = hg(0.85, np.arccos(0.3)), 1 / (4 * np.pi)
+    for given in (packed, mi.TensorXf(weights)):
+        phase = mi.load_dict({"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]),
+                              "values": mi.TensorXf(values), "weights": given,
+                              "to_world": hm.bbox_transform(((0, 0, 0), (2000, 10, 10)))})
+        west, east, mid = (eval_at(phase, [0.3], p=(x, 5.0, 5.0))[1][0] for x in (500.0, 1500.0, 1000.0))
+        assert west == pytest.approx(a, rel=2e-3) and east == pytest.approx(b, rel=2e-3)
+        assert mid == pytest.approx(0.5 * (a + b), rel=2e-3)
+        np.testing.assert_array_equal(np.array(mi.traverse(phase)["weights"]).reshape(weights.shape), weights)
+    with pytest.raises(RuntimeError, match="packed"):
+        mi.load_dict({"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
+                      "weights": mi.TensorXf(np.zeros((1, 1, 2, 2, 4), np.float32))})
+
+
+def test_phase_arrays_pack_the_scattering_coefficients_in_aligned_memory():
+    """``phase_arrays(packed=True)``: beta_sca,s = w_s beta mean(omega) (1/m, computed here from the volume)
+    per species in packets of 4, zero-padded, in 64-byte aligned memory; the unpacked ones equal."""
+    import weather_mi as wm
+    from weather_mi.kernel.medium import phase_arrays
+    vol = wm.optical_volume(wm.synthetic.cumulus(), phase_quality="test")
+    _, _, plain = phase_arrays(vol)
+    _, _, packed = phase_arrays(vol, packed=True)
+    assert packed.shape == vol.shape + (2, 4) and packed.ctypes.data % 64 == 0
+    expect = np.moveaxis(vol.weights, 0, -1) * (vol.albedo.mean(axis=-1) * vol.beta_total)[..., None]
+    np.testing.assert_allclose(plain, expect, rtol=1e-6, atol=0)
+    flat = packed.reshape(vol.shape + (8,))
+    np.testing.assert_array_equal(flat[..., :5], plain)
+    assert not flat[..., 5:].any() and (flat[..., :5] > 0).any()
+
+
+def test_a_grey_albedo_grid_is_handed_as_one_channel_and_renders_the_same():
+    """``medium.grey_or_rgb``: a band's albedo (three equal channels) becomes one (z, y, x, 1) channel, which the
+    gridvolume holds as given; an albedo whose channels differ anywhere stays RGB. The medium's albedo
+    evaluated at points inside the grid is the same either way (trilinear, per channel)."""
+    from weather_mi.kernel.medium import grey_or_rgb
+    rng = np.random.default_rng(3)
+    grey = np.repeat(rng.uniform(0.5, 1.0, (3, 4, 5, 1)).astype(np.float32), 3, axis=-1)
+    one = grey_or_rgb(grey)
+    assert one.shape == (3, 4, 5, 1) and one.flags.c_contiguous
+    np.testing.assert_array_equal(one[..., 0], grey[..., 0])
+    rgb = grey.copy()
+    rgb[2, 3, 4, 2] += 1e-3  # one channel of one voxel differs: RGB kept
+    assert grey_or_rgb(rgb).shape == (3, 4, 5, 3)
+    p = mi.Point3f(*[mi.Float(rng.uniform(0.05, 0.95, 64).astype(np.float32)) for _ in range(3)])
+    it = dr.zeros(mi.Interaction3f)
+    it.p = p
+    vals = [np.array(mi.load_dict({"type": "gridvolume", "data": mi.TensorXf(a), "filter_type": "trilinear",
+                                   "accel": False}).eval(it)) for a in (grey, one)]
+    np.testing.assert_array_equal(vals[0], vals[1])
+    assert vals[0].min() >= 0.5

@@ -541,3 +541,26 @@ for variant, integrator in (("llvm_ad_rgb", "majorant"), ("scalar_rgb", "volpath
     assert abs(means[1] - means[0]) < 4 * np.hypot(se[0], se[1]), (means, se)
     with pytest.raises(ValueError, match="JIT variants"):
         wm.render_reference(spec(), cloud_volume(), spp=1, variant="scalar_rgb", integrator="majorant")
+
+
+def test_a_volume_without_its_species_extinction_renders_the_same_image():
+    """The command line's ``optical_volume(keep=("weights",))``: the per-species extinction released after the
+    optics (the path tracer reads beta_total, the albedo and the Eq. 8 weights only, the forward peak's delta
+    scaling included) renders the same image, bit for bit, as the whole volume; reading it raises, naming it."""
+    hyd = wm.synthetic.cumulus()
+    whole = wm.optical_volume(hyd, phase_quality="test")
+    lean = wm.optical_volume(hyd, phase_quality="test", keep=("weights",))
+    assert lean.beta_ext.shape == whole.beta_ext.shape
+    with pytest.raises(wm.WeatherDataError, match="beta_ext"):
+        np.asarray(lean.beta_ext)
+    with pytest.raises(wm.WeatherDataError, match="beta_ext"):
+        lean.beta_ext.sum()
+    import pickle  # to Dask workers and back: still released, its shape kept
+    assert pickle.loads(pickle.dumps(lean)).beta_ext.shape == whole.beta_ext.shape
+    (x0, y0, _), (x1, y1, z1) = whole.bbox
+    cam = wm.Camera.orthographic(center=((x0 + x1) / 2, (y0 + y1) / 2, z1 + 1000.0), direction=(0.0, 0.0, -1.0),
+                                 width=x1 - x0, height=y1 - y0)
+    sp = spec(camera=cam, sun=wm.Sun(200.0, 40.0))
+    a, b = render(sp, whole, spp=4, passes=2), render(sp, lean, spp=4, passes=2)
+    assert np.array_equal(a.radiance, b.radiance) and np.array_equal(a.stderr, b.stderr)
+    assert a.radiance.max() > 0

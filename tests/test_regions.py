@@ -18,8 +18,9 @@ def slab(beta):
     return wm.OpticalVolume.from_arrays(arr, 1.0, table, ((-20e3, -20e3, 1000.0), (20e3, 20e3, TOP_M)))
 
 
-def seen_from_above(vol, sun_elevation_deg):
-    camera = wm.Camera.orthographic(center=(0.0, 0.0, 5000.0), direction=(0, 0, -1), width=4000.0, height=3000.0)
+def seen_from_above(vol, sun_elevation_deg, from_below=False):
+    z, direction = (500.0, (0, 0, 1)) if from_below else (5000.0, (0, 0, -1))
+    camera = wm.Camera.orthographic(center=(0.0, 0.0, z), direction=direction, width=4000.0, height=3000.0)
     spec = wm.SceneSpec(camera=camera, sun=wm.Sun(30.0, sun_elevation_deg), width=8, height=6)
     r = SliceRenderer(vol, SliceMode("uniform", "low_albedo"), slices=128, light_res=128)
     r.frame(spec)
@@ -34,13 +35,17 @@ def test_the_surface_lies_one_optical_depth_inside():
     np.testing.assert_allclose(tau, beta * 1000.0, rtol=1e-3)              # the whole slab, 1 km
 
 
-@pytest.mark.parametrize("beta, elevation, region", [
-    (4e-3, 80.0, "sunlit face"),    # sunlight at p1: exp(-1 / sin 80) = 0.36 >= 0.3
-    (4e-3, 30.0, "shaded face"),    # exp(-1 / sin 30) = 0.14, and more cloud below p1 than above: no base
-    (1.5e-3, 60.0, "thin edge"),    # tau = 1.5
+@pytest.mark.parametrize("beta, elevation, region, from_below", [
+    (4e-3, 80.0, "sunlit face", False),    # sunlight at p1: exp(-1 / sin 80) = 0.36 >= 0.3
+    (4e-3, 30.0, "shaded face", False),    # exp(-1 / sin 30) = 0.14, and more cloud below p1 than above: no base
+    (1.5e-3, 60.0, "thin edge", False),    # tau = 1.5
+    # looking up through the slab towards a sun 60 deg high (scattering angle 30 deg): back-lit
+    (1.5e-3, 60.0, "back-lit rim", True),  # tau = 1.5
+    (4e-3, 60.0, "back-lit core", True),   # p1 250 m above the base: exp(-4e-3 x 750 / sin 60) = 0.03 < 0.3
+    (4e-3, 20.0, "shaded face", True),     # scattering angle 70 deg: not back-lit; the same p1, D ~ 0
 ])
-def test_regions_of_a_slab(beta, elevation, region):
-    r, spec = seen_from_above(slab(beta), elevation)
+def test_regions_of_a_slab(beta, elevation, region, from_below):
+    r, spec = seen_from_above(slab(beta), elevation, from_below)
     masks = pixel_regions(r, spec)
     assert masks[region].all(), {k: int(v.sum()) for k, v in masks.items()}
     assert sum(int(m.sum()) for m in masks.values()) == spec.width * spec.height  # no pixel in two regions

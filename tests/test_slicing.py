@@ -394,6 +394,31 @@ def test_diffusion_profile_of_a_cloud_column():
         assert J(0.0, 2 * X) / X == pytest.approx(1.0 * z0 * (X + z0 - X / 2) / ((X + 2 * z0) * z0), rel=0.02)
 
 
+def test_diffused_light_leaves_a_cloud_with_eddingtons_limb_law():
+    """The diffused light's flux term (eye.diffused_towards_eye): at the shadowed face of a thick column the
+    diffusion radiance (phi + 3 F . w) / (4 pi) with the extrapolated boundary z0 = 2/3 is the Eddington
+    approximation's emergent radiance I(mu) / I(0) = 1 + 3/2 mu (Chandrasekhar 1960, Radiative Transfer,
+    section 2.8), brightest looking towards the sun (back-lit); at the sunlit face the same law for light
+    leaving towards the sun. The flux itself is the profile's slope (a central difference); with no flux
+    weight, or no direction, the isotropic terms are unchanged."""
+    from types import SimpleNamespace
+    from weather_mi.slicing.eye import diffused_towards_eye, diffusion_flux, diffusion_profile
+    xp = SimpleNamespace(select=np.where, minimum=np.minimum, maximum=np.maximum, exp=np.exp)  # Dr.Jit's names
+    scale, tau_col = 0.15, 400.0                    # X = 60 transport depths
+    I = lambda tau, mu, flux=1.0: float(diffused_towards_eye(xp, np.float64(tau), np.float64(tau_col), scale, 1.0,  # noqa: E731
+                                                             0.0, 1.0, flux, mu))
+    for mu in (0.25, 0.5, 0.9):
+        assert I(tau_col, mu) / I(tau_col, 0.0) == pytest.approx(1.0 + 1.5 * mu, rel=1e-9)   # shadowed face, mu > 0
+        assert I(0.0, -mu) / I(0.0, 0.0) == pytest.approx(1.0 + 1.5 * mu, rel=1e-9)         # sunlit face, towards the sun
+        assert I(tau_col, -mu) < I(tau_col, 0.0)
+    J = lambda t: float(diffusion_profile(np, np.float64(t), np.float64(tau_col), scale))  # noqa: E731
+    for t in (2.0, 100.0, 300.0):  # off the kink at x_s = 1 (tau = 6.7)
+        slope = (J(t + 1e-3) - J(t - 1e-3)) / (2e-3 * scale)
+        assert float(diffusion_flux(xp, np.float64(t), np.float64(tau_col), scale)) == pytest.approx(-slope, rel=1e-5)
+    iso = float(diffused_towards_eye(xp, np.float64(50.0), np.float64(tau_col), scale, 1.1, 0.5, 0.7))
+    assert iso == pytest.approx(1.1 * J(50.0) + 0.5 * float(np.exp(-0.7 * scale * 50.0) * (1 - np.exp(-scale * tau_col))))
+
+
 def test_optical_depth_is_interpolated_between_slice_planes():
     """Inside a dense homogeneous layer the optical depth towards the sun grows linearly between two slice
     planes while the light falls exponentially: the "multiple" model's lookup (``log_direct``) interpolates

@@ -4,7 +4,7 @@ beside the paper's Table IV modes.
     .venv/bin/python validation/calibrate_slicer.py [-o out/slicer_calibration] [--data ../shared/data]
         [--size 64x48] [--spp 128] [--train-target-rse R] [--target-rse 0.02] [--max-seconds 600] [--iterations 50]
         [--learning-rate 0.15] [--slices 128] [--supersample 2] [--slab-jitter 1]
-        [--no-fit] [--noise-floor]
+        [--no-fit] [--noise-floor] [--start defaults|fit-start] [--fit-slices N] [--fit-supersample N]
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them);
    training views at --spp, or to --train-target-rse (the loss clips display colours at 1, so that noisy
@@ -14,10 +14,13 @@ beside the paper's Table IV modes.
    training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
    its condensate x 0.15), front-, side- and back-lit;
    held-out: the real WRF supercell, the WRF Tibetan Plateau file, BOMEX and RICO (from --data),
-   front- and side-lit.
+   front-, side- and back-lit (the sun behind the storm: silver linings, dark cores).
 2. Fit the model's parameters with Dr.Jit reverse-mode AD on the training views
-   (weather_mi.slicing.calibrate), starting near single scattering, in the frames it judges (--slices, the
-   automatic light buffer; 810 s on 2 cores at the defaults).
+   (weather_mi.slicing.calibrate), starting near single scattering (--start fit-start: calibrate.FIT_START)
+   or from the shipped defaults (--start defaults: a refit after a change of the model, the new parameters
+   at FIT_START's values), in the frames it judges (--slices, the automatic light buffer; 810 s on 2 idle
+   cores at the defaults; --fit-slices / --fit-supersample: the fit's frames coarser than the judged ones,
+   for a busy machine).
    The slicer's frames, in the fit and the evaluation, average each pixel over --supersample^2 points
    (SliceRenderer.frame(supersample=)) with slab offsets --slab-jitter: the references' pixels are
    box-filtered footprint averages, and a pixel-centre sample differs from them at every edge (held-out
@@ -51,7 +54,7 @@ from weather_mi.study.report import side_by_side  # noqa: E402
 from weather_mi.study.runs import StudyConfig, eye_transmittance, load_scene, view  # noqa: E402
 
 TRAIN = [(s, l) for s in ("demo-supercell", "demo-cumulus", "demo-cumulus-thin") for l in ("front", "side", "back")]
-HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") for l in ("front", "side")]
+HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") for l in ("front", "side", "back")]
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
 
@@ -173,7 +176,13 @@ def main(argv=None) -> int:
     ap.add_argument("--slab-jitter", type=float, default=1.0,
                     help="SliceParams.slab_jitter of the frames (fit and evaluation): with --supersample, each "
                          "pixel's points see the slab planes at different depths, which the average smooths")
+    ap.add_argument("--fit-slices", type=int, default=None, help="the fit's slice count (default --slices)")
+    ap.add_argument("--fit-supersample", type=int, default=None,
+                    help="the fit's points per pixel per side (default --supersample)")
     ap.add_argument("--no-fit", action="store_true", help="evaluate the shipped defaults only")
+    ap.add_argument("--start", default="fit-start", choices=("fit-start", "defaults"),
+                    help="where the fit starts: calibrate.FIT_START (near single scattering), or the shipped "
+                         "defaults with the parameters they leave at 0 (terms that are off) at FIT_START's values")
     ap.add_argument("--noise-floor", action="store_true",
                     help="also render a second reference (seed 1) of each held-out view and report its error")
     args = ap.parse_args(argv)
@@ -191,10 +200,12 @@ def main(argv=None) -> int:
     fitted, history, head = None, [], "Shipped defaults only (no fit)."
     if not args.no_fit:
         t = time.perf_counter()
-        fitted, history = calibrate(list(train.values()), start=FIT_START.updated(slab_jitter=args.slab_jitter),
-                                    iterations=args.iterations, slices=args.slices,
+        start = FIT_START if args.start == "fit-start" else SliceParams().updated(
+            **{n: getattr(FIT_START, n) for n in MULTIPLE_PARAMS if getattr(SliceParams(), n) == 0})
+        fitted, history = calibrate(list(train.values()), start=start.updated(slab_jitter=args.slab_jitter),
+                                    iterations=args.iterations, slices=args.fit_slices or args.slices,
                                     light_res=None, learning_rate=args.learning_rate, progress=True,
-                                    supersample=args.supersample)
+                                    supersample=args.fit_supersample or args.supersample)
         fit = {n: round(float(getattr(fitted, n)), 4) for n in MULTIPLE_PARAMS}
         head = (f"Fitted on {len(train)} training views in {time.perf_counter() - t:.0f} s: `{json.dumps(fit)}`; "
                 f"loss {history[0]:.4g} -> {history[-1]:.4g} in {len(history)} iterations.")

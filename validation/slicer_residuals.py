@@ -1,7 +1,9 @@
-"""Residuals of the slicer against path-traced references, by region of the picture (sunlit faces, shaded
-faces, cloud bases, thin edges, ice anvils, the ground in and out of cloud shadow; weather_mi/study/regions.py).
+"""Residuals of the slicer against path-traced references, by region of the picture (back-lit rims and cores,
+sunlit faces, shaded faces, cloud bases, thin edges, ice anvils, the ground in and out of cloud shadow;
+weather_mi/study/regions.py).
 
     .venv/bin/python validation/slicer_residuals.py [-o out/slicer_calibration] [--views train|held-out|all]
+        [--lightings front,side,back]
         [--target-rse 0.02] [--max-seconds 300] [--size 64x48] [--slices 128] [--params fitted.json]
         [--modes per-species/multiple,per-species/translucent] [--supersample 2] [--slab-jitter 1]
 
@@ -10,7 +12,7 @@ to --target-rse (mean relative standard error over cloud pixels) or --max-second
 and region, pooled over the views: pixels, bias (mean signed luminance error / the reference's mean
 luminance there; > 0: the slicer is brighter), relative RMS luminance error and mean CIEDE2000; then the
 views' own worst regions. --params: a JSON of SliceParams fields for the "multiple" model (default: the
-shipped defaults). --supersample / --slab-jitter: the frames as validation/calibrate_slicer.py renders them
+shipped defaults). --lightings: only the views of these lightings (e.g. back). --supersample / --slab-jitter: the frames as validation/calibrate_slicer.py renders them
 (each pixel the mean of n x n points with slab jitter; 1 and 0: pixel centres, aligned slabs).
 """
 from __future__ import annotations
@@ -51,6 +53,7 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--output", default="out/slicer_calibration")
     ap.add_argument("--data", default=str(DEFAULT_DATA))
     ap.add_argument("--views", default="train", choices=("train", "held-out", "all"))
+    ap.add_argument("--lightings", default="front,side,back", help="only the views of these lightings")
     ap.add_argument("--target-rse", type=float, default=0.02)
     ap.add_argument("--max-seconds", type=float, default=300.0)
     ap.add_argument("--size", default="64x48")
@@ -65,6 +68,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     cfg = StudyConfig(width=width, height=height, phase_quality="test")
     names = {"train": TRAIN, "held-out": HELD_OUT, "all": TRAIN + HELD_OUT}[args.views]
+    names = [(s, l) for s, l in names if l in args.lightings.split(",")]
     fitted = SliceParams() if args.params is None else SliceParams().updated(**json.loads(Path(args.params).read_text()))
     modes = args.modes.split(",")
     per_mode = {m: [] for m in modes}

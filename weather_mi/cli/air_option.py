@@ -4,6 +4,21 @@ single-scattering sky in place of a sky model)."""
 from __future__ import annotations
 
 
+def add_options(p) -> None:
+    """``--sky``, ``--atmosphere``, ``--aod``, ``--ozone`` (the scene options of the light and the air)."""
+    p.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none", "air"),
+                   help="sunsky (default): Hosek-Wilkie; air: the clear atmosphere's own single-scattering sky "
+                        "(with --atmosphere clear; render only)")
+    p.add_argument("--atmosphere", default="none", choices=("none", "clear"),
+                   help="clear: a clear 1-D atmosphere (molecules, ozone, aerosol) on the sun's path, inside the "
+                        "model's box (render: part of the medium) and along the eye rays outside it (render); "
+                        "none (default): the sun as given, vacuum between the hydrometeors")
+    p.add_argument("--aod", type=float, default=None,
+                   help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
+    p.add_argument("--ozone", type=float, default=None,
+                   help="with --atmosphere clear: ozone column in atm-cm, in [0, 0.6] (default 0.3)")
+
+
 def in_box(vol, hyd, spec):
     """``vol`` with the air of ``spec.atmosphere`` inside its box (molecules from ``hyd``'s ``rho_air``);
     ``vol`` itself without an atmosphere."""

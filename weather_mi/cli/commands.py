@@ -98,7 +98,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, scale=_parse_scale(args.scale), phase=args.phase,
                          sizes=args.sizes or default_sizes(hyd), size_classes=args.size_classes,
-                         periodic=periodic_value(args))
+                         periodic=periodic_value(args), release=True, keep=("weights",))  # the path tracer's
     from ..scene.surface import RGB_UM, with_surface
     vol = with_surface(vol, RGB_UM, args.surface, args.wind)  # the ground's surface in red, green and blue
     spec, sun_meta = scene_spec(args, vol), None
@@ -201,13 +201,15 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     hyd = open_placed(args)
     vol = optical_volume(hyd, species=args.preset, phase=args.phase, sizes=args.sizes or default_sizes(hyd),
                          size_classes=args.size_classes,
-                         periodic=periodic_value(args))
+                         periodic=periodic_value(args), release=True,
+                         keep=("beta_ext", "weights") if args.rgb or args.rayleigh else ("weights",))  # the air: beta_s
     hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
     if args.rgb:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
                                ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
                                seed=args.seed, **surface_kw(args))
+    del vol  # the scene holds the band's volume (its own albedo): the RGB albedo goes
     w, h = scene.view.size
     print(f"{scene.satellite.name} (sub-satellite longitude {scene.satellite.sub_lon_deg}), band {scene.band.name} um: "
           f"{w} x {h} pixels of {resolution:g} km, view zenith {scene.view.view_zenith_deg.min():.1f}-"
@@ -320,14 +322,7 @@ def add_scene_options(p) -> None:
     p.add_argument("--camera-height", type=float, default=1500.0, help="ground camera: height above ground (m)")
     p.add_argument("--fov", type=float, default=None,
                    help="horizontal field of view (degrees; default 70 ground, 45 orbit)")
-    p.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none", "air"))
-    p.add_argument("--atmosphere", default="none", choices=("none", "clear"),
-                   help="clear: the sun coloured by a clear 1-D atmosphere on its path (molecules, ozone, aerosol; "
-                        "the reference renderer); none (default): the sun as given, no air outside the box")
-    p.add_argument("--aod", type=float, default=None,
-                   help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
-    p.add_argument("--ozone", type=float, default=None,
-                   help="with --atmosphere clear: ozone column in atm-cm, in [0, 0.6] (default 0.3)")
+    air_option.add_options(p)  # --sky, --atmosphere, --aod, --ozone
     p.add_argument("--ground-albedo", type=float, default=0.15, help="negative: no ground")
     p.add_argument("--size", default="320x240", help="WIDTHxHEIGHT")
 

@@ -74,20 +74,3 @@ def place_coords(ds, path: str, it: int, stamp: str, sel: dict, z_surface_m: np.
         coords["lat"] = (("y", "x"), lat, {"units": "degrees_north", "standard_name": "latitude"})
         coords["lon"] = (("y", "x"), lon, {"units": "degrees_east", "standard_name": "longitude"})
     return coords, attrs
-    if lat is None or lon is None:
-        dom = domain_georeference(ds.attrs, path)
-        if sel or z_surface_m.shape != (dom.ny, dom.nx):
-            raise WeatherDataError(path, "XLAT, XLONG", "the latitude/longitude of the mass points (a file with "
-                                   "part of a domain needs them to be placed)", "missing")
-        lat, lon = dom.latlon()
-        georef, check = dom, {"latlon_source": "the projection (no XLAT/XLONG in the file)"}
-    else:
-        georef, check = grid_georeference(ds.attrs, lat, lon, path)
-        i0, j0 = check.pop("grid_offset_ij")
-        check.update(grid_offset_i=i0, grid_offset_j=j0, latlon_source="XLAT, XLONG")
-    if when is not None:
-        attrs["valid_time"] = when
-    attrs.update(georef.attrs(), **check, place="the file's (XLAT, XLONG, MAP_PROJ)")
-    coords["lat"] = (("y", "x"), lat, {"units": "degrees_north", "standard_name": "latitude"})
-    coords["lon"] = (("y", "x"), lon, {"units": "degrees_east", "standard_name": "longitude"})
-    return coords, attrs

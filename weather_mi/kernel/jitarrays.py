@@ -6,15 +6,21 @@ import numpy as np
 CHUNK = 1 << 20  # values converted at a time
 
 
+def aligned_empty(n: int) -> np.ndarray:
+    """An uninitialised float32 array of ``n`` values whose data start on a 64-byte boundary (a view into a
+    buffer 16 values longer)."""
+    buf = np.empty(int(n) + 16, dtype=np.float32)
+    off = (-buf.ctypes.data % 64) // 4
+    return buf[off:off + int(n)]
+
+
 def aligned_float(mi, a) -> "mi.Float":
     """A Dr.Jit Float from numpy data held in 64-byte aligned memory. (The LLVM backend may use host
     memory in place, and a kernel's IR records the alignment it sees: unaligned arrays one frame and
     aligned ones the next would compile a new kernel.)"""
     big = np.finfo(np.float32).max
     a = np.asarray(a).ravel()
-    buf = np.empty(a.size + 16, dtype=np.float32)
-    off = (-buf.ctypes.data % 64) // 4
-    out = buf[off:off + a.size]
+    out = aligned_empty(a.size)
     if a.dtype == np.float32:  # clipped where it lands: no float64 copy of a large grid
         np.clip(a, -big, big, out=out)
     else:  # beyond float32's range -> its largest value, in chunks

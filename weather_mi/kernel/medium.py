@@ -6,26 +6,38 @@ import numpy as np
 
 from ..optics.periodic import pad_levels, padded_bbox
 from ..optics.volume import OpticalVolume
+from .jitarrays import aligned_empty
 from .variant import ensure_registered
 
 
-def phase_arrays(vol: OpticalVolume):
+def phase_arrays(vol: OpticalVolume, packed: bool = False):
     """(nodes v = 1 - cos (N,), values (S, N, 3), weights (z, y, x, S)) as the plugin takes them: the
     species' scattering coefficients beta_sca,s = w_s beta omega (1/m; w_s the Eq. 8 weights, beta omega the
-    voxel's scattering coefficient, channel mean), which the plugin interpolates and then normalises."""
-    from .plugins.hydrometeor_mixture import prepare_tables
+    voxel's scattering coefficient, channel mean), which the plugin interpolates and then normalises.
+    ``packed``: the weights as the plugin keeps them (``hydrometeor_mixture.pack_weights``: (z, y, x, P, 4),
+    zero-padded packets of 4), written once into 64-byte aligned memory that a JIT variant uses in place.
+    With the air in the box (``air_in_medium``) its two components follow the species (``optics.air.inside``)."""
+    from .plugins.hydrometeor_mixture import pack_weights, prepare_tables
     air = air_in_medium(vol)
-    if air is not None:  # the air's two components after the species (``optics.air.inside``)
+    if air is not None:
         from ..optics.air.inside import medium_grids
         nodes, values = prepare_tables(tuple(vol.require_phase_tables()) + tuple(air.phase_tables))
-        return nodes, values, medium_grids(vol.beta_total, vol.albedo, vol.weights, air)[2]
+        coeffs = medium_grids(vol.beta_total, vol.albedo, vol.weights, air)[2]
+        if not packed:
+            return nodes, values, coeffs
+        lanes = 4 * max(1, -(-coeffs.shape[-1] // 4))
+        return nodes, values, pack_weights(coeffs, out=aligned_empty(coeffs[..., 0].size * lanes))
     nodes, values = prepare_tables(vol.require_phase_tables())
     sca = np.asarray(vol.albedo, np.float32).mean(axis=-1)
     sca *= np.asarray(vol.beta_total, np.float32)
-    weights = np.empty(sca.shape + (len(vol.weights),), np.float32)  # written a species at a time: no temporaries
-    for s, w in enumerate(vol.weights):
+    n_s = len(vol.weights)
+    lanes = 4 * max(1, -(-n_s // 4)) if packed else n_s
+    weights = aligned_empty(sca.size * lanes).reshape(sca.shape + (lanes,))
+    for s, w in enumerate(vol.weights):  # written a species at a time: no temporaries
         np.multiply(w, sca, out=weights[..., s])
-    return nodes, values, weights
+    if not packed:
+        return nodes, values, weights
+    return nodes, values, pack_weights(weights[..., :n_s], out=weights)  # in place: padding 0, clipped
 
 
 def air_in_medium(vol: OpticalVolume):
@@ -52,15 +64,31 @@ def phase_dict(vol: OpticalVolume) -> dict:
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     ensure_registered()
-    nodes, values, weights = phase_arrays(vol)
+    nodes, values, weights = phase_arrays(vol, packed=True)
+    if vol.periodic:
+        padded = pad_levels(weights)
+        weights = aligned_empty(padded.size).reshape(padded.shape)
+        weights[...] = padded
+        del padded
     d = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
-         "weights": mi.TensorXf(pad_levels(weights) if vol.periodic else weights),
+         "weights": mi.TensorXf(weights),  # packed, used in place (llvm)
          "to_world": bbox_transform(grid_bbox(vol))}
     if vol.periodic:
         d["periodic"] = True
     if mi.is_spectral:
         d.update(spectral_phase_properties(vol))
     return d
+
+
+def grey_or_rgb(albedo: np.ndarray) -> np.ndarray:
+    """The albedo grid (z, y, x, 3) as the medium takes it: one channel (z, y, x, 1) where the three agree
+    everywhere (a satellite band's), which a gridvolume holds as given, where three channels it copies."""
+    a = np.asarray(albedo)
+    for c in (1, 2):
+        for k in range(a.shape[0]):  # a level at a time: no whole-grid temporaries
+            if not np.array_equal(a[k, ..., 0], a[k, ..., c]):
+                return a
+    return np.ascontiguousarray(a[..., :1])
 
 
 def spectral_phase_properties(vol: OpticalVolume) -> dict:
@@ -89,6 +117,8 @@ def medium_dict(vol: OpticalVolume) -> dict:
         beta, albedo, _ = medium_grids(vol.beta_total, vol.albedo, vol.weights, air)
     if mi.is_spectral:  # the 550 nm albedo, made spectral by the phase function (``spectral_phase_properties``)
         albedo = np.ascontiguousarray(albedo[..., 1:2])
+    else:
+        albedo = grey_or_rgb(albedo)
     wrap = {}
     if vol.periodic:
         beta, albedo, wrap = pad_levels(beta), pad_levels(albedo), {"wrap_mode": "repeat"}

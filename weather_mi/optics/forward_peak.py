@@ -86,36 +86,47 @@ def peak_tables(tables, cone_deg: float):
     return f, [truncated_table(t, cone_deg, fs) if fs > 0 else t for t, fs in zip(tables, f)]
 
 
-def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG) -> OpticalVolume:
+def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG, *, species_extinction: bool = True) \
+        -> OpticalVolume:
     """``vol`` with each species' forward peak within ``cone_deg`` counted as unscattered light.
 
     Per voxel (albedo omega_c, Eq. 8 weights w_s, peak fractions f_s), with F = sum_s w_s f_s the
     share of the scattered light in the peaks:  sigma_t' = sigma_t (1 - mean_c(omega) F),
     omega'_c = omega_c (1 - F) / (1 - mean_c(omega) F),  w'_s ~ w_s (1 - f_s), and per-species
     beta_s' = beta_s - f_s w_s mean(omega) sigma_t (they sum to sigma_t'). Returns ``vol`` itself
-    when ``cone_deg`` is 0 or no table has a peak there."""
+    when ``cone_deg`` is 0 or no table has a peak there. ``species_extinction`` False: the per-species
+    beta_s are left as ``vol``'s (shared, not scaled; 4 bytes per cell and species saved), for a caller that
+    reads only beta_total, the albedo and the weights (the path tracer's medium, ``reference.passes``)."""
     if check_cone_deg(cone_deg) == 0.0:
         return vol
     cone_deg = float(cone_deg)
     f, truncated = peak_tables(vol.phase_tables, cone_deg)
     if not np.any(f > 0):
         return vol
-    # float32 throughout: a WRF grid's (S, z, y, x) arrays are hundreds of MB in float64
+    # float32 throughout, written in place: a WRF grid's (S, z, y, x) arrays are hundreds of MB, and each
+    # temporary of them one more (the same float32 operations in the same order as whole-array expressions)
     f32 = f.astype(np.float32)[:, None, None, None]
     w = vol.weights  # (S, z, y, x)
     F = np.tensordot(f.astype(np.float32), w, axes=1)  # (z, y, x)
     omega_mean = vol.albedo.mean(axis=-1)
     scattering = omega_mean * vol.beta_total  # 1/m
-    beta_ext = np.maximum(vol.beta_ext - f32 * w * scattering[None], 0)  # the peaks' scattering, now transmitted
-    beta_total = np.maximum(vol.beta_total - F * scattering, 0)
+    beta_ext = vol.beta_ext
+    if species_extinction:  # beta_s - f_s w_s scattering: the peaks' scattering, now transmitted
+        beta_ext = np.multiply(f32, w)
+        np.multiply(beta_ext, scattering[None], out=beta_ext)
+        np.maximum(np.subtract(vol.beta_ext, beta_ext, out=beta_ext), 0, out=beta_ext)
+    beta_total = np.multiply(F, scattering)
+    np.maximum(np.subtract(vol.beta_total, beta_total, out=beta_total), 0, out=beta_total)
     with np.errstate(invalid="ignore", divide="ignore"):
-        albedo = np.where((vol.beta_total > 0)[..., None],
-                          vol.albedo * ((1 - F) / (1 - omega_mean * F))[..., None], vol.albedo)
-        weights = w * (1 - f32)
+        albedo = vol.albedo * ((1 - F) / (1 - omega_mean * F))[..., None]
+        np.copyto(albedo, vol.albedo, where=~(vol.beta_total > 0)[..., None])
+        np.clip(albedo, 0, 1, out=albedo)
+        weights = np.multiply(w, 1 - f32)
         total = weights.sum(axis=0)
-        weights = np.where(total > 0, weights / total, np.float32(0))
-    return replace(vol, beta_ext=beta_ext.astype(np.float32), beta_total=beta_total.astype(np.float32),
-                   albedo=np.clip(albedo, 0, 1).astype(np.float32), weights=weights.astype(np.float32),
+        np.divide(weights, total, out=weights)
+        np.copyto(weights, np.float32(0), where=~(total > 0))
+    del F, omega_mean, scattering, total
+    return replace(vol, beta_ext=beta_ext, beta_total=beta_total, albedo=albedo, weights=weights,
                    attrs={**vol.attrs, "forward_peak_deg": cone_deg,
                           "forward_peak_fraction": dict(zip(vol.species, f.round(6).tolist()))},
                    phase_tables=tuple(truncated))

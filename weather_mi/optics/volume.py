@@ -24,6 +24,29 @@ from ..io.terrain import Terrain
 from ..io.budget import check_fits
 
 
+class ReleasedGrid:
+    """A grid an OpticalVolume was built without (``optical_volume(keep=...)``), to save its memory where
+    nothing reads it: its ``shape`` and ``dtype`` stay; reading its values raises WeatherDataError naming it."""
+
+    def __init__(self, name: str, shape):
+        self.name, self.shape, self.dtype = name, tuple(int(n) for n in shape), np.dtype(np.float32)
+        self.ndim = len(self.shape)
+
+    def __len__(self):
+        return self.shape[0]
+
+    def _refuse(self, *_a, **_k):
+        raise WeatherDataError("OpticalVolume", self.name, f"the grid kept (optical_volume(keep=(..., {self.name!r})))",
+                               "released after the optics to save memory")
+
+    __array__ = __getitem__ = __iter__ = _refuse
+
+    def __getattr__(self, attr):  # called only for attributes it lacks: the array's
+        if attr.startswith("__") or attr in ("name", "shape", "dtype", "ndim"):
+            raise AttributeError(attr)
+        self._refuse()
+
+
 @dataclass(frozen=True)
 class OpticalVolume:
     """Everything both renderers consume (docs/design.md). All grids are float32, indexed [z, y, x].
@@ -90,6 +113,8 @@ class OpticalVolume:
     def __post_init__(self):
         object.__setattr__(self, "periodic", check_periodic(self.periodic))
         for name in ("beta_ext", "beta_total", "albedo", "weights"):
+            if isinstance(getattr(self, name), ReleasedGrid):
+                continue
             view = np.asarray(getattr(self, name)).view()
             view.flags.writeable = False
             object.__setattr__(self, name, view)
@@ -200,7 +225,7 @@ def _radius_field(hyd: xr.Dataset, name: str, default_m: float, use_model: bool)
     """Per-voxel equivalent radius (m): the model's effective radius where given (> 0), else the species'."""
     var = f"r_eff_{name}"
     if use_model and var in hyd:
-        r = hyd[var].values.astype(np.float32)
+        r = hyd[var].values.astype(np.float32, copy=False)
         return np.where(r > 0, r, np.float32(default_m))
     return default_m
 
@@ -257,6 +282,9 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
     return total, largest
 
 
+ALBEDO_CHUNK = 1 << 22  # voxels of a grid at a time in ``_voxel_albedo``
+
+
 def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_sum: np.ndarray) -> None:
     """Eq. 5's numerator with each voxel's own albedo: sum_s omega_s(r_eff) beta_s, the weak-absorption albedo
     (``species.physical_albedo``) of the model's radius in place of the species' one, added to ``albedo_sum``
@@ -269,16 +297,27 @@ def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_
             continue
         r = np.asarray(hyd[var].values).reshape(-1)
         beta = beta_ext[i].reshape(-1)
-        idx = np.flatnonzero((beta > 0) & (r > 0))
-        omegas = physical_albedo(s.phase_class, r[idx].astype(np.float64), s.density_kg_m3)
-        b = beta[idx].astype(np.float64)
-        for c in range(3):
-            albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
+        for start in range(0, beta.size, ALBEDO_CHUNK):  # float64 temporaries of a chunk, not of the grid
+            part = slice(start, start + ALBEDO_CHUNK)
+            idx = np.flatnonzero((beta[part] > 0) & (r[part] > 0)) + start
+            omegas = physical_albedo(s.phase_class, r[idx].astype(np.float64), s.density_kg_m3)
+            b = beta[idx].astype(np.float64)
+            for c in range(3):
+                albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
 
 
-def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool = False):
+def _release(hyd: xr.Dataset, names, kinds) -> None:
+    """Drop the fields ``names`` of the ``kinds`` ("q", "r_eff") from ``hyd`` in place (those it has)."""
+    for name in names:
+        if name.rsplit("_", 1)[0] in kinds and name in hyd:
+            del hyd[name]
+
+
+def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool = False,
+                   release: tuple = ()):
     """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32: beyond its
-    outputs (56 bytes per cell) this takes one or two float32 grids of temporaries (Eq. 4's)."""
+    outputs (56 bytes per cell) this takes one or two float32 grids of temporaries (Eq. 4's). ``release``: the
+    kinds of field ("q", "r_eff") dropped from ``hyd`` (in place) once used, freeing their memory."""
     rho = np.ascontiguousarray(hyd["rho_air"].values, np.float32)
     shape = rho.shape
     n_s = len(SPECIES_NAMES)
@@ -288,6 +327,8 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
     for i, s in enumerate(sp):
         q = np.ascontiguousarray(hyd[f"q_{s.name}"].values, np.float32)
         s.beta_ext_per_m(rho, q, _radius_field(hyd, s.name, s.radius_m, use_model), out=beta_ext[i])  # Eq. 4
+        del q
+        _release(hyd, [f"q_{s.name}"] + ([f"r_eff_{s.name}"] if not (voxel_albedo and use_model) else []), release)
     # Eq. 6, Eq. 5's numerator sum omega_s beta_s and the Eq. 8 weights from the scattering coefficients
     # beta_sca,s = omega_s beta_s (channel-mean albedo; the channels differ by < 1e-3 for every hydrometeor),
     # in one pass (optics.mixture_kernels)
@@ -299,6 +340,7 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
         weights.reshape(n_s, -1))
     if voxel_albedo and use_model:
         _voxel_albedo(hyd, sp, beta_ext, albedo.reshape(-1, 3))
+    _release(hyd, [f"r_eff_{s.name}" for s in sp], release)
     # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
     # trilinear interpolation at cloud edges does not blend in a dark value
     total_ext = float(beta_total.sum(dtype=np.float64))
@@ -312,7 +354,8 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
                    phase_tables: Sequence | None = None, model_radii: bool | None = None,
                    phase_quality: str = "default", sizes: str | None = None,
-                   size_classes: int | None = None, periodic: bool | str | None = None) -> OpticalVolume:
+                   size_classes: int | None = None, periodic: bool | str | None = None,
+                   release: bool = False, keep: tuple = ("beta_ext", "weights")) -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
     Parameters
@@ -346,6 +389,14 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     periodic : bool or "transport", optional
         Horizontal boundaries (``OpticalVolume.periodic``); default: "transport" where the hydrometeors say
         they are periodic (``attrs["periodic"]``: the LES reader's doubly periodic domains), else False.
+    release : bool, default False
+        Drop the mixing ratios and effective radii from ``hyd`` (in place) once their optics are computed, so
+        that their memory goes while the volume's grids are built (the command line, which needs them no more;
+        ``rho_air`` and the coordinates stay).
+    keep : tuple of str, default ("beta_ext", "weights")
+        The per-species grids the volume keeps; one left out is a :class:`ReleasedGrid` (its memory freed
+        once the total, the albedo and the weights exist): the path tracer reads no ``beta_ext`` (4 bytes per
+        cell and species saved), the slicer no ``weights``.
 
     Returns
     -------
@@ -363,7 +414,10 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     sp, use_model = _species_setup(species, scale, model_radii, sizes)
 
     check_fits(str(hyd.attrs.get("source", "hydrometeors")), hyd["rho_air"].shape, "optics")  # before allocating
-    beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model, voxel_albedo=sizes == "scheme")
+    split_later = size_classes is not None and size_classes != 1 and use_model  # size_classes.split reads r_eff
+    kinds = (("q",) if split_later else ("q", "r_eff")) if release else ()
+    beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model, voxel_albedo=sizes == "scheme",
+                                                           release=kinds)
     names, components, attrs_classes = SPECIES_NAMES, None, {}
     if size_classes is not None and not (isinstance(size_classes, (int, np.integer)) and size_classes >= 1):
         raise WeatherDataError("optical_volume", "size_classes", "a whole number of size classes >= 1",
@@ -372,12 +426,17 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
         from .size_classes import split
         names, beta_ext, weights, components = split(hyd, sp, beta_ext, weights, int(size_classes))
         attrs_classes = {"size_classes": int(size_classes)}
+    _release(hyd, [f"r_eff_{s.name}" for s in sp], ("r_eff",) if release else ())
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
     if sizes is not None:
         attrs["sizes"] = sizes
     attrs.update(attrs_classes)
+    if "beta_ext" not in keep:
+        beta_ext = ReleasedGrid("beta_ext", beta_ext.shape)
+    if "weights" not in keep:
+        weights = ReleasedGrid("weights", weights.shape)
     return OpticalVolume(names, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
                          Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic,

@@ -24,8 +24,8 @@ def fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
     estimator ``options`` (JSON), the volume's extinction, albedo, species weights, phase tables and bbox."""
     h = hashlib.sha256()
     h.update(json.dumps([spec.to_dict(), spp_list, *options], sort_keys=True, default=str).encode())
-    for a in (vol.beta_total, vol.albedo, vol.weights):
-        h.update(np.ascontiguousarray(a).tobytes())
+    for a in (vol.beta_total, vol.albedo, vol.weights):  # their buffers as they are: no copy of a grid
+        h.update(memoryview(np.ascontiguousarray(a)).cast("B"))
     for t in vol.require_phase_tables():  # the phase functions are part of the scene too
         h.update(np.ascontiguousarray(t.theta, np.float64).tobytes())
         h.update(np.ascontiguousarray(t.values, np.float64).tobytes())

@@ -114,10 +114,12 @@ class PassScene:
         import mitsuba as mi
         o = self.options.estimator
         spec_k, vol_k, _ = recentred(self.spec, self.vol)
-        vol_render = delta_scaled(vol_k, o.forward_peak_deg)
+        vol_render = delta_scaled(vol_k, o.forward_peak_deg, species_extinction=False)  # the kernel reads no beta_s
         integ = integrator_dict(vol_render, sun=self.spec.sun if o.own_sun else None, atmosphere=self.spec.atmosphere,
                                 **o.kernel_options())
-        return mi.load_dict(scene_dict(spec_k, vol_render, integ))
+        d = scene_dict(spec_k, vol_render, integ)
+        del vol_k, vol_render, integ  # the grids the kernel does not hold in place (the delta-scaled beta_ext,
+        return mi.load_dict(d)        # weights) go before it builds its own (llvm: TensorXf(numpy) shares memory)
 
 
 def _persistent(scene, persistent: bool | None) -> bool:

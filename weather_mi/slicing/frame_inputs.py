@@ -72,6 +72,7 @@ class MultipleLight:
     mu0: object             # the sun's zenith cosine (>= 1e-3)
     leak_gain: object       # weight of the leaking diffusion (leak_gain), unitless
     leak_rate: object       # its decay per transport depth (leak_rate), unitless
+    flux: object            # weight of the diffused light's flux towards the eye (diffusion_flux), unitless
 
 
 @dataclass

@@ -62,15 +62,17 @@ TABLE_IV = {
 MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple")}
 
 # Defaults of the "multiple" light model: fitted by validation/calibrate_slicer.py (Adam through Dr.Jit
-# reverse-mode AD, weather_mi.slicing.calibrate; 50 iterations from calibrate.FIT_START) on the demo
-# supercell, the demo cumulus and the thin demo cumulus, front-, side- and back-lit (64 x 48, references
-# of 128 spp), in the frames the evaluation renders (128 slices, the automatic light buffer, 2 x 2 points
-# per pixel, slab jitter 1), with the forward peaks within 3 deg as unscattered light in both renderers;
-# judged on the real WRF supercell, WRF plateau, BOMEX and RICO storms against references of 2% cloud RSE
-# (README, "The slicer").
-MULTIPLE_DEFAULTS = {"ms_extinction": 0.1016, "ms_contribution": 0.1941, "ms_eccentricity": 0.8321,
-                     "sky_gain": 0.4503, "sky_extinction": 0.023, "diffusion_gain": 1.1045,
-                     "diffusion_scale": 0.3963, "leak_gain": 0.5146, "leak_rate": 0.6663}
+# reverse-mode AD, weather_mi.slicing.calibrate) on the demo supercell, the demo cumulus and the thin demo
+# cumulus, front-, side- and back-lit (64 x 48, references of 128 spp), with the forward peaks within 3 deg
+# as unscattered light in both renderers: first 50 iterations from calibrate.FIT_START in the frames the
+# evaluation renders (128 slices, the automatic light buffer, 2 x 2 points per pixel, slab jitter 1), then,
+# with the diffused light's flux term (diffusion_flux, issue 41), refitted 15 iterations from those
+# defaults at 64 slices and 1 point per pixel (--start defaults --fit-slices 64 --fit-supersample 1);
+# judged on the real WRF supercell, WRF plateau, BOMEX and RICO storms, front-, side- and back-lit, against
+# references of 2% cloud RSE or 150 s (validation/README.md, "The slicer against the path tracer").
+MULTIPLE_DEFAULTS = {"ms_extinction": 0.1662, "ms_contribution": 0.2373, "ms_eccentricity": 0.9318,
+                     "sky_gain": 0.4785, "sky_extinction": 0.0122, "diffusion_gain": 0.9821,
+                     "diffusion_scale": 0.485, "leak_gain": 0.765, "leak_rate": 1.0927, "diffusion_flux": 0.2826}
 
 
 DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail field, detail.field(amplitude=0.5))
@@ -129,6 +131,11 @@ class SliceParams:
         shadowed parts, unlike the 1-D profile, which does not decay into a thick cloud.
     leak_rate : float, default MULTIPLE_DEFAULTS["leak_rate"]
         >= 0: its decay per transport optical depth.
+    diffusion_flux : float, default MULTIPLE_DEFAULTS["diffusion_flux"]
+        In [0, 1]: the diffused light (diffusion and leak terms) is scattered towards the eye with its
+        flux along the sun ray, (phi + 3 diffusion_flux F . w_eye) / (4 pi) (the P1 radiance scattered
+        with asymmetry ~ diffusion_flux; eye.diffused_towards_eye): back-lit, the light flowing through
+        a cloud away from the sun brightens its shadowed side; 0: isotropic.
     slab_jitter : float, default 0.0
         In [0, 1]: each pixel's slabs are offset by up to +-slab_jitter / 2 slice (jitter.py), which
         turns the terraces of the slab planes on lit faces into fine grain (0: aligned slabs, as before;
@@ -163,6 +170,7 @@ class SliceParams:
     diffusion_scale: float = MULTIPLE_DEFAULTS["diffusion_scale"]
     leak_gain: float = MULTIPLE_DEFAULTS["leak_gain"]
     leak_rate: float = MULTIPLE_DEFAULTS["leak_rate"]
+    diffusion_flux: float = MULTIPLE_DEFAULTS["diffusion_flux"]
     slab_jitter: float = 0.0
     jitter_frame: int = 0
     detail: dict = field(default_factory=dict)
@@ -178,7 +186,8 @@ class SliceParams:
             raise ValueError(f"albedo must be in [0, 1], got {self.albedo}")
         if number(self.blur_length_m) and not self.blur_length_m >= 0.0:
             raise ValueError(f"blur_length_m must be >= 0, got {self.blur_length_m}")
-        for name in ("ms_extinction", "ms_contribution", "ms_eccentricity", "diffusion_scale", "slab_jitter"):
+        for name in ("ms_extinction", "ms_contribution", "ms_eccentricity", "diffusion_scale", "slab_jitter",
+                     "diffusion_flux"):
             v = getattr(self, name)
             if number(v) and not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {v}")

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-BLOCK = 4  # voxels per block side
+BLOCK = 2  # voxels per block side (4: spans ~2x longer, the demo's drag 0-18% slower, benchmarks/README.md)
 
 
 def occupied_blocks(beta_total: np.ndarray, block: int = BLOCK) -> np.ndarray:

@@ -150,17 +150,26 @@ def phase_table(mi, table):
             [mi.Float64(np.ascontiguousarray(slopes[:, c])) for c in range(3)])
 
 
-def phase_values(mi, arrays, theta):
+def phase_index(mi, xp, theta):
+    """Where scattering angles ``theta`` (Float64, radians) fall in a table's angles ``xp`` (Float64, increasing):
+    (j, below, at_end), j the last table angle <= theta (0 .. K - 2), and whether theta lies before the
+    first angle or at or after the last. Tables with the same angles share it (``phase_values``)."""
+    import drjit as dr
+    K = dr.width(xp)
+    first_above = dr.binary_search(0, K - 1, lambda i: dr.gather(mi.Float64, xp, i) <= theta)
+    j = mi.UInt32(dr.maximum(mi.Int32(first_above) - 1, 0))
+    return j, theta < dr.gather(mi.Float64, xp, 0), theta >= dr.gather(mi.Float64, xp, K - 1)
+
+
+def phase_values(mi, arrays, theta, index=None):
     """The phase function (3 Float64, 1/sr) at scattering angles ``theta`` (Float64, radians): ``np.interp``
-    of ``table.eval`` over ``phase_table(table)``'s arrays (left and right of the table: its end values)."""
+    of ``table.eval`` over ``phase_table(table)``'s arrays (left and right of the table: its end values);
+    ``index``: ``phase_index`` of the table's angles at theta, or None (found here)."""
     import drjit as dr
     xp, fp, slopes = arrays
     K = dr.width(xp)
-    # j: the last table angle <= theta (0 .. K - 2)
-    first_above = dr.binary_search(0, K - 1, lambda i: dr.gather(mi.Float64, xp, i) <= theta)
-    j = mi.UInt32(dr.maximum(mi.Int32(first_above) - 1, 0))
+    j, below, at_end = phase_index(mi, xp, theta) if index is None else index
     x_lo, x_hi = dr.gather(mi.Float64, xp, j), dr.gather(mi.Float64, xp, j + 1)
-    below, at_end = theta < dr.gather(mi.Float64, xp, 0), theta >= dr.gather(mi.Float64, xp, K - 1)
     out = []
     for c in range(3):
         f_lo, f_hi = dr.gather(mi.Float64, fp[c], j), dr.gather(mi.Float64, fp[c], j + 1)

@@ -39,7 +39,7 @@ from .light import LightVolume, auto_light_res
 from .modes import SliceMode, SliceParams
 from .occupancy import OccupancyMap
 from .periodic import PeriodicSlicing
-from .rays import Scalars, f32, phase_table, phase_values
+from .rays import Scalars, f32, phase_index, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
 from .view import ViewCache
 
@@ -334,6 +334,10 @@ class SliceRenderer:
         rebuilt = key is None or key != self._texture_key  # a sun or camera move keeps the textures
         self._texture_key = key
         forward, to_sun = np.asarray(spec.camera.forward, float), np.asarray(spec.sun.to_sun, float)
+        # the host's waits on kernels first (the sky's irradiance and emitter, the view's sky on the rays that
+        # see it), with little queued before them: the frame's other kernels run while Python builds the rest
+        sky_irradiance_horizontal(spec, cache=self.views.sky)
+        self.views.get(mi, spec)
         g = self._reuse("geometry", (tuple(forward), tuple(to_sun), self.slices),
                         lambda: slice_geometry(forward, to_sun, self.box, self.slices))
         omega_bar = self.mean_albedo(scale, omega) if self.uniform_forward or self.one_scattering_ratio else None
@@ -454,19 +458,22 @@ class SliceRenderer:
         import drjit as dr
         rays = self.views.get(mi, spec)
         sun = np.asarray(spec.sun.irradiance, dtype=np.float64)
-        phase_colour, colours = [], []
+        phase_colour, colours, new, indices = [], [], [], {}
         for gi, members in enumerate(self.groups):
             colour = self.colors[members[0]] if self.mode.species_colors else np.mean(tint[members], axis=0)
             key = (gi, tuple(colour * sun))  # per view (and sun): a slider move reuses the uploaded array
             if key not in rays.phase_colour:  # P(Theta) colour E_sun, in kernels (rays.py: numpy's floats)
                 table = self.tables[members[0]]  # (its arrays uploaded once: kept while it is the group's table)
-                p = phase_values(mi, self._reuse(f"phase {gi}", table, lambda: phase_table(mi, table)),
-                                 rays.theta)
+                arrays = self._reuse(f"phase {gi}", table, lambda: phase_table(mi, table))
+                angles = np.asarray(table.theta).tobytes()  # tables with the same angles: one search
+                index = indices[angles] = indices.get(angles) or phase_index(mi, arrays[0], rays.theta)
+                p = phase_values(mi, arrays, rays.theta, index)
                 k = Scalars(mi, k=colour * sun)
                 rays.phase_colour[key] = mi.Color3f(*(f32(mi, p[c] * k[f"k{c}"]) for c in range(3)))
-                dr.eval(rays.phase_colour[key])
+                new.append(rays.phase_colour[key])
             phase_colour.append(rays.phase_colour[key])
             colours.append(tuple(colour * sun / (4 * np.pi)))
+        dr.eval(*new)  # (one kernel, the searches shared)
         diffuse_colour = self._reuse("diffuse", tuple(colours), lambda: [_colour(mi, c) for c in colours])
         e_sky = sky_irradiance_horizontal(spec, cache=self.views.sky)
         model = None
@@ -474,7 +481,7 @@ class SliceRenderer:
             model = MultipleLight(*(kernel_scalar(mi, v) for v in (
                 params.ms_extinction, params.ms_contribution, params.ms_eccentricity, params.sky_extinction,
                 params.diffusion_gain, params.diffusion_scale, max(float(spec.sun.to_sun[2]), 1e-3), params.leak_gain,
-                params.leak_rate)))
+                params.leak_rate, params.diffusion_flux)))
             gain = params.sky_gain
         else:
             gain = params.ambient
@@ -500,13 +507,13 @@ class SliceRenderer:
             model = LightModel(self.light, self.sky_light, self.mode.octaves, m.a, m.b, m.c, m.sky_extinction,
                                m.diffusion_gain, m.diffusion_scale, g=self.g_scattering, mu0=m.mu0,
                                carry=(inputs.tex_light, e.grid), leak_gain=m.leak_gain, leak_rate=m.leak_rate,
-                               below=e.below is not None)
+                               below=e.below is not None, flux=m.flux)
         else:
             model = LightModel(self.light, log_forward=self.mode.light == "translucent")
         offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
         return composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
                          e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
-                         e.sca_ratio, e.below, self.tile_box)
+                         e.sca_ratio, e.below, self.tile_box, None if self.differentiable else inputs.tex_light)
 
 
 FROZEN_FRAMES = True

@@ -102,6 +102,9 @@ class ViewCache:
                     mi, offset_pattern(spec.width, spec.height))
             weights = (None, None) if surface is None else \
                 _terrain_weights(mi, lambda a: aligned_float(mi, a), spec, surface, np.asarray(hit))
+            if "span_a" not in fixed:  # queued after the sky's wait on the rays (compress), not before it
+                fixed["span_a"], fixed["span_b"] = (fixed["t0"], fixed["t1"]) if self.occupancy is None else \
+                    self.occupancy.spans(fixed["origin"], fixed["direction"], fixed["t0"], fixed["t1"])
             view = ViewRays(**fixed, background=dr.select(hit, mi.Color3f(0.0), sky),
                             theta=dr.acos(dr.clip(cos, -1.0, 1.0)),  # the scattering angle, for the phase functions
                             pattern=pattern, ground_sun=weights[0], ground_sky=weights[1])
@@ -142,16 +145,14 @@ class ViewCache:
         """What a view keeps whatever the sun: (d, hit, surface, fixed), ``d`` the directions (3 Float64,
         for the phase functions' angles), ``hit`` the rays that meet the ground (mi.Bool), ``surface`` the
         terrain's (albedo, normal) there or None, ``fixed`` the ``ViewRays`` fields of the view in float32
-        (rounded once per view, not per sun), the occupied spans (``span_a``, ``span_b``) among them."""
+        (rounded once per view, not per sun); ``get`` adds the occupied spans (``span_a``, ``span_b``)."""
         import drjit as dr
         P = lambda v: [f32(mi, c) for c in v]  # noqa: E731
         t1 = f32(mi, dr.select(dr.isfinite(t1), t1, t0))
         fixed = dict(origin=mi.Point3f(*P(o)), direction=mi.Vector3f(*P(d)), t0=f32(mi, t0), t1=t1,
                      hit_ground=hit, ground=mi.Point3f(*P(ground)), n=dr.width(t0))
         dr.eval(fixed["origin"], fixed["direction"], fixed["t0"], fixed["t1"], fixed["ground"])
-        fixed["span_a"], fixed["span_b"] = (fixed["t0"], t1) if self.occupancy is None else \
-            self.occupancy.spans(fixed["origin"], fixed["direction"], fixed["t0"], t1)
-        return d, hit, surface, fixed
+        return d, hit, surface, fixed  # (the occupied spans are added by ``get``)
 
 
 def _terrain_weights(mi, F, spec: SceneSpec, surface, hit: np.ndarray):

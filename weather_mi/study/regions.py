@@ -9,7 +9,11 @@ A pixel's region comes from the medium along its eye ray, not from either image:
     volume of the frame (``SliceRenderer.light_at``);
   * the face's orientation at p1: a base when the extinction 2 grid levels above p1 exceeds that below;
   * the ice phase's share of the extinction at p1 (ice, snow and graupel).
-The regions, first match wins: "thin edge" (0.1 < tau <= 2), "ice anvil" (tau > 2, ice share > 1/2),
+  * the scattering angle Theta between the sunlight and the eye ray (cos Theta = to_sun . eye direction).
+The regions, first match wins: where the eye looks towards the sun (Theta < BACKLIT_DEG: back-lit views),
+"back-lit rim" (0.1 < tau <= 2, or tau > 2 with D >= 0.3: the thin and sunlit edges that forward
+scattering makes silver linings) and "back-lit core" (tau > 2, D < 0.3: the dark cores); elsewhere
+"thin edge" (0.1 < tau <= 2), "ice anvil" (tau > 2, ice share > 1/2),
 "cloud base" (tau > 2, a base, D < 0.3), "sunlit face" (tau > 2, D >= 0.3), "shaded face" (tau > 2,
 D < 0.3), "ground in shadow" / "ground in sun" (tau <= 0.1, the eye ray meets the ground, D < or >= 1/2).
 """
@@ -20,8 +24,9 @@ import numpy as np
 from ..display import metrics
 from ..io.image import auto_exposure
 
-REGIONS = ("thin edge", "ice anvil", "cloud base", "sunlit face", "shaded face", "ground in shadow", "ground in sun")
+REGIONS = ("back-lit rim", "back-lit core", "thin edge", "ice anvil", "cloud base", "sunlit face", "shaded face", "ground in shadow", "ground in sun")
 ICE_SPECIES = ("ice", "snow", "graupel")
+BACKLIT_DEG = 60.0  # scattering angles below this: the pixel sees sunlight scattered forward (back-lit)
 
 
 def eye_surface(r, spec, step_m: float | None = None):
@@ -93,7 +98,12 @@ def pixel_regions(r, spec) -> dict:
     D_ground = r.light_at(np.asarray(rays.ground, dtype=np.float64).T)[0]
     tau_f = tau.ravel()
     thick = (tau_f > 2.0) & has
-    rules = [("thin edge", (tau_f > 0.1) & (tau_f <= 2.0)),
+    thin = (tau_f > 0.1) & (tau_f <= 2.0)
+    cos_theta = np.asarray(rays.direction, dtype=np.float64).T @ np.asarray(spec.sun.to_sun, dtype=np.float64)
+    forward = cos_theta > np.cos(np.radians(BACKLIT_DEG))
+    rules = [("back-lit rim", forward & (thin | (thick & (D >= 0.3)))),
+             ("back-lit core", forward & thick & (D < 0.3)),
+             ("thin edge", thin),
              ("ice anvil", thick & (ice_share > 0.5)),
              ("cloud base", thick & (up > down) & (D < 0.3)),
              ("sunlit face", thick & (D >= 0.3)),

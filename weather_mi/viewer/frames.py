@@ -118,7 +118,7 @@ class Storm:
 
     def volume(self, t: int):
         with self._lock:
-            return self._volumes.get_or(t, lambda: self.recipe.volume(hyd=self.hydrometeors(t)))
+            return self._volumes.get_or(t, lambda: self.recipe.volume(hyd=self.hydrometeors(t), keep=("beta_ext",)))
 
     def detail_noise(self) -> np.ndarray:
         """Unit-variance turbulent noise on the grid (isotropic in metres), built once."""

@@ -56,13 +56,14 @@ class VolumeRecipe:
     def _wrf(self) -> bool:
         return sources.kind(self.path, self.demo, self.dataset) == "wrf"
 
-    def volume(self, scale: Mapping[str, float] | None = None, hyd=None):
-        """The OpticalVolume (Eq. 1-6, 8) of the (scaled) storm; ``hyd``: its Hydrometeors if already read."""
+    def volume(self, scale: Mapping[str, float] | None = None, hyd=None, keep: tuple = ("beta_ext", "weights")):
+        """The OpticalVolume (Eq. 1-6, 8) of the (scaled) storm; ``hyd``: its Hydrometeors if already read;
+        ``keep``: its per-species grids (``optical_volume``: the slicer reads no weights)."""
         from ..optics.volume import default_sizes, optical_volume
         hyd = self.hydrometeors() if hyd is None else hyd
         return optical_volume(hyd, species=self.preset, scale=dict(scale or {}) or None, phase=self.phase,
                               sizes=self.sizes or default_sizes(hyd),
-                              periodic=self.periodic)
+                              periodic=self.periodic, keep=keep)
 
     def times(self) -> list[str]:
         """The labels of the input's times (one for a demo or an LES file; every time of a WRF file)."""

@@ -45,7 +45,8 @@ grid ``coalbedo_nm`` of K wavelengths, and at the reference wavelength) gives th
 albedo at a lane's wavelength (:meth:`HydrometeorMixture.albedo_at`), used by ``majorant_volpath``.
 
 Properties (Python dict scenes): ``nodes`` (TensorXf, N ascending versines 1 - cos in [0, 2]), ``values``
-(TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S: beta_sca,s per voxel, >= 0) and ``to_world`` (the bounding box
+(TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S: beta_sca,s per voxel, >= 0; or packed as
+:func:`pack_weights` makes them, z x y x x x P x 4, kept as given) and ``to_world`` (the bounding box
 as a transform of the unit cube). From XML: ``filename``, an ``.npz`` written by
 :func:`save_npz` with the same arrays plus ``bbox``.
 """
@@ -56,7 +57,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from ..jitarrays import aligned_float
+from ..jitarrays import aligned_empty, aligned_float
 from .variant_class import variant_class
 
 PLUGIN_NAME = "hydrometeor_mixture"
@@ -156,16 +157,26 @@ def guide_table(v: np.ndarray, max_steps: int = 3, theta0: float = GUIDE_THETA0)
         m *= 2
 
 
-def pack_weights(weights: np.ndarray) -> np.ndarray:
-    """(z, y, x, ceil(S / 4), 4) float32: every voxel's S scattering coefficients (negative values as 0),
+def pack_weights(weights: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """(z, y, x, ceil(S / 4), 4) float32: every voxel's S scattering coefficients (negative values as 0,
+    infinite ones as float32's largest),
     zero-padded to whole packets of 4. A voxel where nothing scatters holds zeros, and a trilinear lookup
-    weighs it by nothing, as the medium's extinction does."""
+    weighs it by nothing, as the medium's extinction does. ``out``: a flat float32 array of their size to
+    write them into (e.g. 64-byte aligned memory, ``jitarrays.aligned_empty``)."""
     w = np.asarray(weights, np.float32)
     n_species = w.shape[3]
     n_packets = max(1, -(-n_species // 4))
-    out = np.zeros(w.shape[:3] + (n_packets * 4,), np.float32)
-    np.clip(w, 0.0, None, out=out[..., :n_species])  # no temporary copy of the weights
+    shape = w.shape[:3] + (n_packets * 4,)
+    out = np.empty(shape, np.float32) if out is None else out.reshape(shape)
+    out[..., n_species:] = 0.0
+    np.clip(w, 0.0, np.finfo(np.float32).max, out=out[..., :n_species])  # no temporary copy of the weights
     return out.reshape(w.shape[:3] + (n_packets, 4))
+
+
+def unpack_weights(packed, grid_shape, n_species: int) -> np.ndarray:
+    """(z, y, x, S) float32: the coefficients of ``pack_weights``'s packets (flat or shaped) without the padding."""
+    a = np.asarray(packed, np.float32).reshape(tuple(grid_shape) + (-1,))
+    return np.ascontiguousarray(a[..., :n_species])
 
 
 def bbox_transform(bbox) -> "mi.ScalarTransform4f":
@@ -253,9 +264,11 @@ class HydrometeorMixture:
         if values.ndim != 3 or values.shape[1] != nodes.size or values.shape[2] != 3:
             raise ValueError(f"{PLUGIN_NAME}: 'values' must be S x N x 3 with N = len(nodes) = {nodes.size}; "
                              f"got {values.shape}")
-        if len(weights.shape) != 4 or weights.shape[3] != values.shape[0]:
-            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {values.shape[0]}; "
-                             f"got {tuple(weights.shape)}")
+        packets = max(1, -(-int(values.shape[0]) // 4))
+        if not (len(weights.shape) == 4 and weights.shape[3] == values.shape[0]) and \
+                tuple(weights.shape[3:]) != (packets, 4):
+            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {values.shape[0]}, or packed "
+                             f"z x y x x x {packets} x 4 (pack_weights); got {tuple(weights.shape)}")
         self.n_species, self.n_nodes = int(values.shape[0]), int(nodes.size)
         self.periodic = bool(props.get("periodic", False))  # x and y wrap (a periodic medium); else clamped
         inverse = np.linalg.inv(np.array(to_world.matrix, dtype=np.float64).reshape(4, 4))
@@ -283,13 +296,20 @@ class HydrometeorMixture:
         self.inv_warp_norm = float(1.0 / np.arcsinh(np.pi / GUIDE_THETA0))
 
     def _set_weights(self, weights):
-        if not isinstance(weights, mi.TensorXf):
-            weights = mi.TensorXf(np.asarray(weights, np.float32))
-        self.weights = weights  # z x y x x x S as given: the ``weights`` parameter
+        """Pack ``weights`` (z x y x x x S) into ``weights4``, the one copy the plugin keeps (written once into
+        aligned memory on JIT variants); the ``weights`` parameter is unpacked from it when traversed."""
         self.grid_shape = tuple(int(n) for n in weights.shape[:3])
-        packed = pack_weights(weights)
-        self.n_packets = int(packed.shape[3])
-        self.weights4 = _storage(packed)
+        self.n_packets = max(1, -(-int(weights.shape[3]) // 4))
+        if len(weights.shape) == 5:  # packed already (``medium.phase_arrays``): held as given (in place)
+            self.n_packets = int(weights.shape[3])
+            self.weights4 = _storage(np.asarray(weights)) if _is_scalar_variant() else weights.array
+        elif _is_scalar_variant():
+            self.weights4 = _storage(pack_weights(weights))
+        else:
+            flat = aligned_empty(int(np.prod(self.grid_shape)) * 4 * self.n_packets)
+            pack_weights(weights, out=flat)
+            self.weights4 = mi.Float(flat)
+        self.weights = None
 
     def _set_spectral(self, props):
         """Spectral variants: the channels' wavelengths (nm) and the species' co-albedo spectra."""
@@ -489,6 +509,8 @@ class HydrometeorMixture:
         return self._at_wavelengths(value, mei), pdf
 
     def traverse(self, cb):
+        if self.weights is None:  # the parameter as given (negative values as 0), from the packed copy
+            self.weights = mi.TensorXf(unpack_weights(self.weights4, self.grid_shape, self.n_species))
         cb.put("weights", self.weights, mi.ParamFlags.NonDifferentiable)
 
     def parameters_changed(self, keys=None):

@@ -251,7 +251,9 @@ class GridCache:
         periodic = reach is not None
         key = (data.array.index, scale, periodic)
         if key != self.texel_key:
-            maj = texel_majorant_grid(np.asarray(data) * scale, periodic=periodic)
+            grid = np.asarray(data)  # the medium's grid in place (llvm); scaled in a copy only where scale != 1
+            maj = texel_majorant_grid(grid if scale == 1.0 else grid * scale, periodic=periodic)
+            del grid
             empty = empty_space_radius(maj, periodic=True) if periodic else empty_space_radius(maj)
             self.texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty.ravel()))
             self.texel_key = key
