@@ -4,7 +4,8 @@ path, against the direct sunlight of Bird & Riordan's SPCTRL2 (pvlib) at that su
     .venv/bin/python validation/sun_colour.py [--size 160x120] [--spp 64] [--elevation 4]
 
 The scene of ``weather-mi render --demo supercell --sun-elevation 4 --sun-azimuth 260 --camera-azimuth 290``
-(its defaults otherwise) rendered with ``--atmosphere none`` and ``--atmosphere clear``; the lit cloud's
+(its defaults otherwise) rendered with ``--atmosphere none`` and ``--atmosphere clear`` (the sun's path only, and
+with the air inside the box and along the eye rays as ``render --atmosphere clear`` has it); the lit cloud's
 colour is the mean of the brightest 10 % of the opaque cloud pixels (``display.cloud_colour``). The
 reference: SPCTRL2's direct normal spectrum (0.3 atm-cm ozone, AOD 0.1 at 500 nm, 1.4 cm water as in the
 issue and 0 as in our air, Kasten-Young air mass) at 1013, 850, 700 and 500 hPa, its chromaticity by
@@ -64,17 +65,24 @@ def headline_scene(vol, size=(160, 120), elevation=4.0, atmosphere="none"):
                       atmosphere=atmosphere)
 
 
-def demo_volume():
+def demo_volume(with_hyd: bool = False):
+    """The demo supercell's OpticalVolume (and its Hydrometeors with ``with_hyd``)."""
     from weather_mi.io.sources import open_source
     from weather_mi.optics.volume import optical_volume
-    return optical_volume(open_source(demo="supercell"), species="physical")
+    hyd = open_source(demo="supercell")
+    vol = optical_volume(hyd, species="physical")
+    return (hyd, vol) if with_hyd else vol
 
 
-def lit_cloud_xy(spec, vol, spp: int):
-    """(xy of the lit cloud, median height (m) where its pixels reach optical depth 1, the image)."""
+def lit_cloud_xy(spec, vol, spp: int, eye_air: bool = False):
+    """(xy of the lit cloud, median height (m) where its pixels reach optical depth 1, the image); ``eye_air``:
+    seen through the air outside the box (``display.aerial``)."""
     from weather_mi.display.cloud_colour import lit_cloud_pixels, visible_height_m, xy_of_linear_srgb
     from weather_mi.reference.render import render_reference
     img = render_reference(spec, vol, spp=spp, progress=False)
+    if eye_air:
+        from weather_mi.display.aerial import with_eye_air
+        img = with_eye_air(img, spec, vol)
     mask = lit_cloud_pixels(img.radiance, img.transmittance)
     height = float(np.nanmedian(visible_height_m(spec, vol, mask)))
     return xy_of_linear_srgb(img.radiance[mask].mean(axis=0)), height, img
@@ -88,14 +96,16 @@ def main(argv=None):
     ap.add_argument("--elevation", type=float, default=4.0)
     args = ap.parse_args(argv)
     size = tuple(int(v) for v in args.size.split("x"))
-    vol = demo_volume()
+    hyd, vol = demo_volume(with_hyd=True)
     refs = {(p, w): spectrl2_direct_xy(args.elevation, p, w) for p in PRESSURES_HPA for w in (1.4, 0.0)}
     print(f"SPCTRL2 direct sun at elevation {args.elevation} deg, xy (1.4 cm water | no water):")
     for p in PRESSURES_HPA:
         print(f"  {p:7.2f} hPa: ({refs[p, 1.4][0]:.3f}, {refs[p, 1.4][1]:.3f}) | ({refs[p, 0.0][0]:.3f}, {refs[p, 0.0][1]:.3f})")
-    for atmosphere in ("none", "clear"):
-        spec = headline_scene(vol, size, args.elevation, atmosphere)
-        xy, height, img = lit_cloud_xy(spec, vol, args.spp)
+    from weather_mi.optics.air.inside import with_box_air
+    for atmosphere in ("none", "clear", "clear, air in the box and on the eye rays"):
+        spec = headline_scene(vol, size, args.elevation, atmosphere.split(",")[0])
+        air = atmosphere != atmosphere.split(",")[0]  # what `render --atmosphere clear` does now
+        xy, height, img = lit_cloud_xy(spec, with_box_air(vol, hyd, spec.atmosphere) if air else vol, args.spp, air)
         de = {k: delta_e_equal_lightness(xy, v) for k, v in refs.items()}
         ours, theirs = own_direct_xy(args.elevation, height), spectrl2_at_height(args.elevation, height)
         print(f"--atmosphere {atmosphere}: the lit cloud's light comes from a median height of {height:.0f} m, where "

@@ -18,6 +18,7 @@ from ..errors import OutputWriteError, WeatherDataError
 from ..io.times import parse_time, parse_times
 from ..reference.options import ReferenceOptions, add_flags, flag_values
 from ..io.sources import DEMOS, check_time, open_source
+from . import air_option
 from .periodic_option import add_periodic_option, periodic_value
 from .satellite_tiles import add_tile_options, check_tile_options, satellite_tiles_command
 from .spectral_option import add_spectral_options, check_spectral_options, save_png, variant_of
@@ -100,8 +101,9 @@ def _render(args, out, png_path, ckpt) -> Path:
                          periodic=periodic_value(args), release=True, keep=("weights",))  # the path tracer's
     from ..scene.surface import RGB_UM, with_surface
     vol = with_surface(vol, RGB_UM, args.surface, args.wind)  # the ground's surface in red, green and blue
-    hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     spec, sun_meta = scene_spec(args, vol), None
+    vol = air_option.in_box(vol, hyd, spec)  # the air inside the box (--atmosphere clear)
+    hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     if args.sun_from_time:
         spec, sun_meta = _sun_from_time(spec, hyd)
     from ..reference.cluster import session
@@ -110,6 +112,7 @@ def _render(args, out, png_path, ckpt) -> Path:
                                resume=ckpt if args.resume else None, client=client, variant=variant_of(args))
     if sun_meta:
         img.metadata["sun_from_time"] = sun_meta
+    img = air_option.on_eye_rays(img, spec, vol, args)  # and along the eye rays outside the box
     if args.denoise:
         from ..display.denoise import denoise_image
         denoise_image(img, spec, vol)
@@ -319,14 +322,7 @@ def add_scene_options(p) -> None:
     p.add_argument("--camera-height", type=float, default=1500.0, help="ground camera: height above ground (m)")
     p.add_argument("--fov", type=float, default=None,
                    help="horizontal field of view (degrees; default 70 ground, 45 orbit)")
-    p.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none"))
-    p.add_argument("--atmosphere", default="none", choices=("none", "clear"),
-                   help="clear: the sun coloured by a clear 1-D atmosphere on its path (molecules, ozone, aerosol; "
-                        "the reference renderer); none (default): the sun as given, no air outside the box")
-    p.add_argument("--aod", type=float, default=None,
-                   help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
-    p.add_argument("--ozone", type=float, default=None,
-                   help="with --atmosphere clear: ozone column in atm-cm, in [0, 0.6] (default 0.3)")
+    air_option.add_options(p)  # --sky, --atmosphere, --aod, --ozone
     p.add_argument("--ground-albedo", type=float, default=0.15, help="negative: no ground")
     p.add_argument("--size", default="320x240", help="WIDTHxHEIGHT")
 

@@ -15,8 +15,18 @@ def phase_arrays(vol: OpticalVolume, packed: bool = False):
     species' scattering coefficients beta_sca,s = w_s beta omega (1/m; w_s the Eq. 8 weights, beta omega the
     voxel's scattering coefficient, channel mean), which the plugin interpolates and then normalises.
     ``packed``: the weights as the plugin keeps them (``hydrometeor_mixture.pack_weights``: (z, y, x, P, 4),
-    zero-padded packets of 4), written once into 64-byte aligned memory that a JIT variant uses in place."""
+    zero-padded packets of 4), written once into 64-byte aligned memory that a JIT variant uses in place.
+    With the air in the box (``air_in_medium``) its two components follow the species (``optics.air.inside``)."""
     from .plugins.hydrometeor_mixture import pack_weights, prepare_tables
+    air = air_in_medium(vol)
+    if air is not None:
+        from ..optics.air.inside import medium_grids
+        nodes, values = prepare_tables(tuple(vol.require_phase_tables()) + tuple(air.phase_tables))
+        coeffs = medium_grids(vol.beta_total, vol.albedo, vol.weights, air)[2]
+        if not packed:
+            return nodes, values, coeffs
+        lanes = 4 * max(1, -(-coeffs.shape[-1] // 4))
+        return nodes, values, pack_weights(coeffs, out=aligned_empty(coeffs[..., 0].size * lanes))
     nodes, values = prepare_tables(vol.require_phase_tables())
     sca = np.asarray(vol.albedo, np.float32).mean(axis=-1)
     sca *= np.asarray(vol.beta_total, np.float32)
@@ -28,6 +38,19 @@ def phase_arrays(vol: OpticalVolume, packed: bool = False):
     if not packed:
         return nodes, values, weights
     return nodes, values, pack_weights(weights[..., :n_s], out=weights)  # in place: padding 0, clipped
+
+
+def air_in_medium(vol: OpticalVolume):
+    """The air in the box (``OpticalVolume.air``, ``optics.air.inside.BoxAir``) where the medium holds it: in
+    RGB variants; None without air or in spectral variants (there the air colours the sun only)."""
+    import mitsuba as mi
+    return None if getattr(vol, "air", None) is None or mi.is_spectral else vol.air
+
+
+def medium_extinction(vol: OpticalVolume) -> np.ndarray:
+    """The medium's sigma_t grid (1/m): grey (z, y, x), or (z, y, x, 3) with the air in the box."""
+    air = air_in_medium(vol)
+    return vol.beta_total if air is None else vol.beta_total[..., None] + air.extinction
 
 
 def grid_bbox(vol: OpticalVolume):
@@ -87,7 +110,11 @@ def medium_dict(vol: OpticalVolume) -> dict:
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     to_world = bbox_transform(grid_bbox(vol))
-    beta, albedo = vol.beta_total, vol.albedo
+    beta, albedo = vol.beta_total[..., None], vol.albedo
+    air = air_in_medium(vol)
+    if air is not None:  # RGB extinction (molecules ~ lambda^-4) and albedo of the hydrometeors and the air
+        from ..optics.air.inside import medium_grids
+        beta, albedo, _ = medium_grids(vol.beta_total, vol.albedo, vol.weights, air)
     if mi.is_spectral:  # the 550 nm albedo, made spectral by the phase function (``spectral_phase_properties``)
         albedo = np.ascontiguousarray(albedo[..., 1:2])
     else:
@@ -100,11 +127,11 @@ def medium_dict(vol: OpticalVolume) -> dict:
     # both only in software. LLVM has no texture units: no effect there.
     return {
         "type": "heterogeneous",
-        "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(beta[..., None]),
+        "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(beta),
                     "to_world": to_world, "filter_type": "trilinear", "accel": False, **wrap},
         "albedo": {"type": "gridvolume", "data": mi.TensorXf(albedo), "to_world": to_world,
                    "filter_type": "trilinear", "accel": False, **wrap},
         "scale": 1.0,
-        "has_spectral_extinction": False,
+        "has_spectral_extinction": air is not None,
         "phase": phase_dict(vol),
     }

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .medium import grid_bbox, medium_dict
+from .medium import air_in_medium, grid_bbox, medium_dict, medium_extinction
 from ..optics.periodic import PATH_TILES, extended_box, pad_levels, require_flat_ground
 from ..optics.volume import OpticalVolume
 from ..scene.spec import Camera, SceneSpec, Sky, Sun
@@ -323,10 +323,22 @@ def _air_extent(bbox) -> tuple[float, float]:
     return max(float(z1), 0.0) + 2000.0, float(np.hypot(max(abs(x0), abs(x1)), max(abs(y0), abs(y1))))
 
 
-def integrator_air(sun: Sun, atmosphere, bbox) -> dict:
+def _air_box(vol: OpticalVolume):
+    """The box of the air inside the medium (None without it): the volume's, unbounded in x and y when periodic."""
+    if air_in_medium(vol) is None:
+        return None
+    (x0, y0, z0), (x1, y1, z1) = vol.bbox
+    if vol.periodic:
+        x0, y0, x1, y1 = -1e12, -1e12, 1e12, 1e12
+    return (x0, y0, z0), (x1, y1, z1)
+
+
+def integrator_air(sun: Sun, atmosphere, bbox, air_box=None) -> dict:
     """Properties of ``majorant_volpath`` that colour its sun by the air on the sun's path
     (``optics.air.sun_air_table``; the kernel's frame has the box's centre at x = y = 0, heights above sea
-    level, the Earth's centre below it): heights up to 2 km above the box, mu over the box's width."""
+    level, the Earth's centre below it): heights up to 2 km above the box, mu over the box's width.
+    ``air_box``: the box that holds the air (tracked; None: none), so the sun's colour is the table's where
+    the sun ray leaves it (``sun_air_box``), not at the vertex."""
     import mitsuba as mi
     from ..optics.air import sun_air_table
     from ..optics.air.shell import EARTH_RADIUS_M
@@ -334,7 +346,8 @@ def integrator_air(sun: Sun, atmosphere, bbox) -> dict:
     table = sun_air_table(atmosphere, sun.mu0, top_m=top, half_width_m=half)
     return {"sun_air": mi.TensorXf(table.rgb), "sun_air_h0": float(table.heights_m[0]),
             "sun_air_h1": float(table.heights_m[-1]), "sun_air_mu0": float(table.mu[0]),
-            "sun_air_mu1": float(table.mu[-1]), "sun_air_radius": float(EARTH_RADIUS_M)}
+            "sun_air_mu1": float(table.mu[-1]), "sun_air_radius": float(EARTH_RADIUS_M),
+            **({"sun_air_box": mi.TensorXf(np.array([*air_box[0], *air_box[1]], np.float32))} if air_box is not None else {})}
 
 
 def integrator_sun_spectrum(sun: Sun, atmosphere, bbox) -> dict:
@@ -402,7 +415,8 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
         from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid
         ensure_registered()
         cell = DEFAULT_CELL if cell is None else cell
-        beta = pad_levels(vol.beta_total) if vol.periodic else vol.beta_total  # the medium's grids (medium.py)
+        beta = medium_extinction(vol)
+        beta = pad_levels(beta) if vol.periodic else beta  # the medium's grids (medium.py)
         d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
              "majorant": mi.TensorXf(majorant_grid(beta, cell=int(cell))),
              "to_world": bbox_transform(grid_bbox(vol))}
@@ -411,7 +425,7 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
         if sun is not None:
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
         if atmosphere is not None:
-            d.update(integrator_air(sun, atmosphere, vol.bbox))
+            d.update(integrator_air(sun, atmosphere, vol.bbox, _air_box(vol)))
         if sun is not None and mi.is_spectral:
             d.update(integrator_sun_spectrum(sun, atmosphere, vol.bbox))
         if legacy:  # the estimator before issue 10 (see render_reference)

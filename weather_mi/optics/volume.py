@@ -89,6 +89,9 @@ class OpticalVolume:
     components : tuple of Species or None
         Size classes (``optics.size_classes``): the Species of each entry of ``species`` (its radius the
         class's), whose tables are built by radius; None: one component per species of ``species_set``.
+    air : optics.air.inside.BoxAir or None
+        The clear air inside the box (molecules, ozone, aerosol per RGB channel; ``with_box_air``), extra
+        components of the path tracer's medium; None: vacuum between the hydrometeors.
     """
 
     species: tuple[str, ...]
@@ -105,6 +108,7 @@ class OpticalVolume:
     terrain: Terrain | None = field(default=None, repr=False)
     periodic: bool | str = False
     components: tuple | None = field(default=None, repr=False)
+    air: object | None = field(default=None, repr=False)
 
     def __post_init__(self):
         object.__setattr__(self, "periodic", check_periodic(self.periodic))

@@ -66,7 +66,7 @@ def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground
     sun_azimuth, sun_elevation, sun_diameter : float
         The sun (degrees clockwise from north, degrees above the horizon, angular diameter in degrees; 0: a
         point sun).
-    sky : {"sunsky", "constant", "none"}
+    sky : {"sunsky", "constant", "none", "air"}
     ground_albedo : float
         Negative: no ground; else a ground at min(0, the volume's bottom).
     seed : int
@@ -88,7 +88,9 @@ def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground
         camera = "orbit" if regional else "ground"
         if regional:
             camera_elevation = AERIAL_ELEVATION_DEG
-    sky_ = None if sky == "none" else Sky(sky)
+    if sky == "air" and air is None:
+        raise ValueError("--sky air is the clear atmosphere's own sky: give it with --atmosphere clear")
+    sky_ = None if sky in ("none", "air") else Sky(sky)  # "air": composed after the render (display.aerial)
     ground = None if ground_albedo < 0 else Ground(albedo=ground_albedo, height=min(0.0, vol.bbox[0][2]))
     if camera == "orbit":
         cam = Camera.orbit(vol, azimuth=camera_azimuth, elevation=camera_elevation, distance=distance,

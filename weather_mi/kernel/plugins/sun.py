@@ -26,6 +26,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from . import air
 from .medium_setup import phase_ctx, scattering_event
 from .trackers import delta_tracking
 
@@ -56,7 +57,7 @@ def sun_disk(diameter_deg: float, irradiance) -> tuple[float, np.ndarray]:
 
 
 AIR_PROPERTIES = ("sun_air", "sun_air_h0", "sun_air_h1", "sun_air_mu0", "sun_air_mu1", "sun_air_radius")
-LIGHT_PROPERTIES = AIR_PROPERTIES + ("sun_spectrum", "sun_spectrum_nm")  # all need the integrator's sun
+LIGHT_PROPERTIES = AIR_PROPERTIES + ("sun_spectrum", "sun_spectrum_nm", air.BOX_PROPERTY)  # all need the integrator's sun
 
 
 def parse_air(sun, props, check) -> None:
@@ -64,9 +65,10 @@ def parse_air(sun, props, check) -> None:
     the uniform grids h0..h1 (m above sea level) by mu0..mu1 (cos zenith), ``sun_air_radius`` the Earth's
     (m); ``sun.air`` None without it. Spectral variants: ``sun_spectrum`` (:func:`parse_spectrum`) and
     ``sun_air`` (n_mu, n_h, n_lambda) the sun's spectrum after the air on the same grid."""
-    sun.air = None
+    sun.air, sun.air_box = None, None
     parse_spectrum(sun, props, check)
     if "sun_air" not in props:
+        check(air.BOX_PROPERTY not in props, f"'{air.BOX_PROPERTY}' needs the air's table 'sun_air'")
         return
     for name in AIR_PROPERTIES:
         check(name in props, f"'sun_air' needs '{name}'")
@@ -86,6 +88,7 @@ def parse_air(sun, props, check) -> None:
     sun.air_map = [mi.Float(v) for v in (h0, (n_h - 1) / (n_h * (h1 - h0)), 0.5 / n_h,
                                          mu0, (n_mu - 1) / (n_mu * (mu1 - mu0)), 0.5 / n_mu, radius)]
     dr.make_opaque(*sun.air_map)
+    air.parse_box(sun, props, check)  # the air inside the box is tracked: the table where the sun ray leaves it
 
 
 def _spectrum_texture(t):
@@ -116,8 +119,11 @@ def parse_spectrum(sun, props, check) -> None:
 
 
 def _height_mu(sun, p):
-    """(The height of p above the sphere, the sun's cos(zenith) at p) (``sun_air_radius``)."""
+    """(The height of p above the sphere, the sun's cos(zenith) at p) (``sun_air_radius``); with the air in
+    the box (``sun_air_box``) at the point where the sun ray from p leaves the box."""
     *_, radius = sun.air_map
+    if sun.air_box is not None:
+        p = air.sun_exit_point(sun, p)
     q = mi.Vector3f(p.x, p.y, p.z + radius)  # from the Earth's centre
     r = dr.norm(q)
     h = (dr.square(p.x) + dr.square(p.y) + p.z * (p.z + 2.0 * radius)) * dr.rcp(r + radius)  # r - R, no cancellation

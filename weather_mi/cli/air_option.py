@@ -1,0 +1,39 @@
+"""``--atmosphere clear`` in ``render``: the air inside the model's box (part of the path tracer's medium,
+``optics.air.inside``) and along the eye rays outside it (``display.aerial``; ``--sky air``: the air's own
+single-scattering sky in place of a sky model)."""
+from __future__ import annotations
+
+
+def add_options(p) -> None:
+    """``--sky``, ``--atmosphere``, ``--aod``, ``--ozone`` (the scene options of the light and the air)."""
+    p.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none", "air"),
+                   help="sunsky (default): Hosek-Wilkie; air: the clear atmosphere's own single-scattering sky "
+                        "(with --atmosphere clear; render only)")
+    p.add_argument("--atmosphere", default="none", choices=("none", "clear"),
+                   help="clear: a clear 1-D atmosphere (molecules, ozone, aerosol) on the sun's path, inside the "
+                        "model's box (render: part of the medium) and along the eye rays outside it (render); "
+                        "none (default): the sun as given, vacuum between the hydrometeors")
+    p.add_argument("--aod", type=float, default=None,
+                   help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
+    p.add_argument("--ozone", type=float, default=None,
+                   help="with --atmosphere clear: ozone column in atm-cm, in [0, 0.6] (default 0.3)")
+
+
+def in_box(vol, hyd, spec):
+    """``vol`` with the air of ``spec.atmosphere`` inside its box (molecules from ``hyd``'s ``rho_air``);
+    ``vol`` itself without an atmosphere."""
+    if spec.atmosphere is None:
+        return vol
+    from ..optics.air.inside import with_box_air
+    return with_box_air(vol, hyd, spec.atmosphere)
+
+
+def on_eye_rays(img, spec, vol, args):
+    """``img`` seen through the air outside the box (``display.aerial.with_eye_air``), with the air's sky for
+    ``--sky air``; ``img`` itself without an atmosphere, and in the spectral mode (``--spectral``: there the air
+    colours the sun only, as the medium leaves it out: ``kernel.medium.air_in_medium``)."""
+    if spec.atmosphere is None or img.xyz is not None:
+        return img
+    from ..display.aerial import with_eye_air
+    return with_eye_air(img, spec, vol, sky_air=args.sky == "air")
+

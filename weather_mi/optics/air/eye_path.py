@@ -1,0 +1,82 @@
+"""The air along an eye ray outside the model's box (aerial perspective): the ray's transmittance and the
+sunlight it scatters towards the eye once (single scattering), per colour channel.
+
+Along the segment s in [t0, t1] of the ray o + s d (the kernel's frame: heights above sea level, the
+Earth's centre at (0, 0, -R), as ``kernel.plugins.sun``):
+
+    T(t0, s) = exp(-integral_t0^s beta_ext(h(s'), lambda) ds')                             (Beer-Lambert)
+    S = integral_t0^t1 T(t0, s) [beta_R(h) p_R(Theta) + omega_a beta_a(h) p_HG(Theta)] C(h, mu) ds   (single scattering)
+
+with h(s) the height above the sphere, cos Theta = d . sun (the sun's light, travelling along -sun,
+scattered into -d), beta_R, beta_a the molecules' and the aerosol's extinction of the 1-D atmosphere
+(``Atmosphere``; ozone absorbs only), p_R Rayleigh's phase function (``optics.rayleigh``), p_HG
+Henyey-Greenstein's with the aerosol's asymmetry, and C(h, mu) the direct sun's colour at h, its
+cos(zenith) there mu = (q . sun) / |q| (``sunlight.sun_rgb``, over a table wide enough for every point of
+the segment). S is a radiance per unit irradiance of the sun above the air (1/sr): times the scene's sun
+irradiance it is the radiance added at the eye. The integrals are trapezoidal on s = t0 + (t1 - t0) x^2,
+x uniform (dense near t0, where an eye ray near the ground meets most of its air).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..phase.analytic import hg_value
+from ..rayleigh import AVOGADRO, M_AIR_KG_MOL, cross_section_m2 as rayleigh_cross_section_m2, phase_value
+from .atmosphere import Atmosphere
+from .inside import CHANNEL_NM
+from .ozone import cross_section_m2 as ozone_cross_section_m2
+from .shell import EARTH_RADIUS_M
+from .sunlight import SunAirTable, sun_rgb
+
+TOP_M = 60e3        # the eye path's air ends here (above it < 1e-4 of the molecules' column)
+SAMPLES = 257
+
+
+def wide_sun_table(atm: Atmosphere, mu0: float, reach_m: float = 1500e3, n_mu: int = 129, n_h: int = 121) -> SunAirTable:
+    """The direct sun's colour over heights 0..TOP_M and the band of mu that points up to ``reach_m``
+    from the scene's centre see (the sun at cos(zenith) ``mu0`` there)."""
+    sza, delta = np.arccos(mu0), reach_m / EARTH_RADIUS_M
+    mu = np.linspace(np.cos(min(sza + delta, np.pi)), np.cos(max(sza - delta, 0.0)), n_mu)
+    heights = np.linspace(0.0, TOP_M, n_h)
+    return SunAirTable(heights_m=heights, mu=mu, rgb=sun_rgb(atm, heights[None, :], mu[:, None]).astype(np.float32))
+
+
+def top_distance(origins, dirs, top_m: float = TOP_M) -> np.ndarray:
+    """Distance along the rays (n, 3) to where they leave the sphere of radius R + top_m (0 beyond it)."""
+    q = np.asarray(origins, np.float64) + [0.0, 0.0, EARTH_RADIUS_M]
+    d = np.asarray(dirs, np.float64)
+    b = np.sum(q * d, axis=-1)
+    c = np.sum(q * q, axis=-1) - (EARTH_RADIUS_M + top_m) ** 2
+    return np.maximum(-b + np.sqrt(np.maximum(b * b - c, 0.0)), 0.0)
+
+
+def segment_air(atm: Atmosphere, to_sun, origins, dirs, t0, t1, table: SunAirTable,
+                wavelengths_nm=CHANNEL_NM, samples: int = SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+    """(T (n, c), S (n, c)) of the segments [t0, t1] (n,) of the rays (n, 3) (module docstring; S in 1/sr per
+    unit irradiance of the sun above the air); T = 1, S = 0 where t1 <= t0."""
+    o, d = np.asarray(origins, np.float64), np.asarray(dirs, np.float64)
+    sun = np.asarray(to_sun, np.float64) / np.linalg.norm(to_sun)
+    t0 = np.asarray(t0, np.float64)
+    length = np.maximum(np.asarray(t1, np.float64) - t0, 0.0)
+    wl = np.asarray(wavelengths_nm, np.float64)
+    x = np.linspace(0.0, 1.0, samples)
+    s = t0[:, None] + length[:, None] * x * x                                   # (n, k)
+    q = o[:, None, :] + s[..., None] * d[:, None, :] + [0.0, 0.0, EARTH_RADIUS_M]
+    r = np.linalg.norm(q, axis=-1)
+    h = np.clip(r - EARTH_RADIUS_M, 0.0, None)
+    mu = np.sum(q * sun, axis=-1) / r
+    n_air = atm.air_number_density_m3(h)[..., None]
+    beta_r = n_air * rayleigh_cross_section_m2(wl * 1e-9)
+    beta_a = atm.aerosol_extinction_550_per_m(h)[..., None] * atm.aerosol_factor(wl)
+    ext = beta_r + beta_a + atm.ozone_number_density_m3(h)[..., None] * ozone_cross_section_m2(wl)
+    ds = np.diff(s, axis=1)[..., None]
+    tau = np.concatenate([np.zeros(ext.shape[:1] + (1,) + ext.shape[2:]),
+                          np.cumsum(0.5 * (ext[:, 1:] + ext[:, :-1]) * ds, axis=1)], axis=1)
+    cos_t = np.clip(d @ sun, -1.0, 1.0)[:, None, None]
+    source = (beta_r * phase_value(cos_t) + atm.aerosol_ssa * beta_a * hg_value(atm.aerosol_g, cos_t)) \
+        * table.at(h, mu) * np.exp(-tau)
+    inscatter = np.sum(0.5 * (source[:, 1:] + source[:, :-1]) * ds, axis=1)
+    return np.exp(-tau[:, -1]), inscatter
+
+
+__all__ = ["TOP_M", "wide_sun_table", "top_distance", "segment_air"]
