@@ -60,6 +60,7 @@ import math
 from dataclasses import dataclass
 
 from .light import LightVolume, LookupFrame
+from .sun_air import sun_colour_at
 
 
 @dataclass
@@ -323,10 +324,11 @@ FACTOR_CAP = math.exp(30.0)  # SlabAverage.factor's largest value
 class _InScattering:
     """The light scattered towards the eye at a sample (``composite``'s arguments of the same names)."""
 
-    def __init__(self, mi, dr, model, tex_eye, phase_colour, diffuse_colour, ambient, sca_ratio, ambient_below, tile):
+    def __init__(self, mi, dr, model, tex_eye, phase_colour, diffuse_colour, ambient, sca_ratio, ambient_below, tile,
+                 sun_air=None):
         self.mi, self.dr, self.model, self.tex_eye = mi, dr, model, tex_eye
         self.phase_colour, self.diffuse_colour, self.ambient = phase_colour, diffuse_colour, ambient
-        self.sca_ratio, self.ambient_below, self.tile = sca_ratio, ambient_below, tile
+        self.sca_ratio, self.ambient_below, self.tile, self.sun_air = sca_ratio, ambient_below, tile, sun_air
 
     def seen(self, tex, tc):
         """``tex``'s values at texture coordinates tc (periodic "transport": 0 outside the domain's own tile)."""
@@ -350,6 +352,8 @@ class _InScattering:
             bs = ext * self.sca_ratio if self.sca_ratio is not None else dr.maximum(vals[1 + gi], 0.0)
             sca += bs
             src += bs * (self.phase_colour[gi] * A + self.diffuse_colour[gi] * B)
+        if self.sun_air is not None:  # the sun after the air above p (sun_air.py)
+            src = src * sun_colour_at(mi, self.sun_air, p.z)
         amb = occ * self.ambient if self.ambient_below is None else \
             occ * self.ambient + occ_below * self.ambient_below
         return src + sca * amb
@@ -357,7 +361,7 @@ class _InScattering:
 
 def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
               ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None, ambient_below=None,
-              tile=None, tex_ext=None):
+              tile=None, tex_ext=None, sun_air=None):
     """Radiance (mi.Color3f) and transmittance of every pixel ray through the slices of ``f`` (the sun's
     light volume's frame: the slice planes of the frame's geometry).
 
@@ -376,6 +380,8 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
     tex_ext        : None, or a texture of fewer channels whose first is the extinction of ``tex_eye``'s
                      first (the light pass's source): every sample reads it, and only samples that scatter
                      light read ``tex_eye`` (not when ``differentiable``)
+    sun_air        : None, or a ``sun_air.SunAir``: the sunlight (and the ground's) times the sun's colour
+                     after the air above the point (``spec.atmosphere``)
     """
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
@@ -406,7 +412,7 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
     M = EYE_SPLIT
 
     scattering = _InScattering(mi, dr, model, tex_eye, phase_colour, diffuse_colour, ambient, sca_ratio,
-                               ambient_below, tile)
+                               ambient_below, tile, sun_air)
     seen, in_scattered = scattering.seen, scattering
 
     def body(i, part, T, C, active):
@@ -457,6 +463,8 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
         sun_factor, occ = model.ground_light(rays.ground)
         if getattr(rays, "ground_sun", None) is not None:  # a terrain: its albedo and slope per ray
             sun_factor, occ = sun_factor * rays.ground_sun, occ * rays.ground_sky
+        if sun_air is not None:
+            sun_factor = sun_factor * sun_colour_at(mi, sun_air, rays.ground.z)
         lit = ground[0] * sun_factor + ground[1] * occ
         bg = dr.select(rays.hit_ground, lit, rays.background)
     else:

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .light import LookupFrame, SweepPlan
+from .sun_air import SunAir
 
 
 @dataclass
@@ -90,6 +91,7 @@ class EyeInputs:
     jitter_rotation: object  # slab-offset rotation of the frame index (jitter.py), opaque Float
     sca_ratio: object      # None, or beta_sca / beta where the eye's texture holds beta alone (opaque Float)
     below: object          # None, or the lit ground's radiance x sky_gain lighting the medium from below, mi.Color3f
+    sun_air: SunAir | None = None  # None, or the sun's colour per height after the air (spec.atmosphere, sun_air.py)
 
 
 @dataclass

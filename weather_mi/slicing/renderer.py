@@ -41,6 +41,7 @@ from .occupancy import OccupancyMap
 from .periodic import PeriodicSlicing
 from .rays import Scalars, f32, phase_index, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
+from .sun_air import sun_air_input
 from .view import ViewCache
 
 # the cone angle whose spread sets the light pass's blur steps (independent of the interactive cone angle)
@@ -496,14 +497,12 @@ class SliceRenderer:
         return EyeInputs(EyeRays(**{k: getattr(rays, k) for k in names}), self._grid_scalars, phase_colour,
                          diffuse_colour, model, _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), ground,
                          kernel_scalar(mi, params.slab_jitter), kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
-                         sca_ratio, below)
+                         sca_ratio, below, sun_air_input(mi, spec, self.grid_box))
 
     def _eye_pass(self, inputs: FrameInputs):
-        mi = self.mi
         import drjit as dr
-        e = inputs.eye
-        if e.model is not None:
-            m = e.model
+        mi, e, m = self.mi, inputs.eye, inputs.eye.model
+        if m is not None:
             model = LightModel(self.light, self.sky_light, self.mode.octaves, m.a, m.b, m.c, m.sky_extinction,
                                m.diffusion_gain, m.diffusion_scale, g=self.g_scattering, mu0=m.mu0,
                                carry=(inputs.tex_light, e.grid), leak_gain=m.leak_gain, leak_rate=m.leak_rate,
@@ -513,7 +512,8 @@ class SliceRenderer:
         offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
         return composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
                          e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
-                         e.sca_ratio, e.below, self.tile_box, None if self.differentiable else inputs.tex_light)
+                         e.sca_ratio, e.below, self.tile_box, None if self.differentiable else inputs.tex_light,
+                         e.sun_air)
 
 
 FROZEN_FRAMES = True

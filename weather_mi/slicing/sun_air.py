@@ -1,0 +1,63 @@
+"""The sun's colour after the air above each height, for the slicer (``spec.atmosphere``, issue 38 part 3).
+
+The light volume holds the sunlight as fractions of the light's irradiance (``light.py``); with a clear
+atmosphere the sun reaching a point at height h (m above sea level, the slicer's world z as the path
+tracer's) is E_sun C(h, mu0), C the direct sun's linear sRGB after the air above h along the sun
+(``optics.air.sunlight.SunAirTable.by_height``: 1 in luminance above the air). The eye pass multiplies the
+sunlight it scatters (and the ground's) by C at the sample's height: a 1-D table over heights, an input of
+the frame (``SunAir``: a new sun uploads new values, nothing recompiles). Without an atmosphere it is None
+and the eye pass is unchanged. The air inside the box (the path tracer's medium there) is not in the slicer:
+C is the transmittance through all the air above the point.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+TOP_ABOVE_BOX_M = 2000.0  # the table reaches this far above the box (as the path tracer's, kernel.scene_dict)
+
+
+@dataclass
+class SunAir:
+    """The table the eye pass reads (opaque Dr.Jit values; ``n`` is part of a recording's structure)."""
+
+    h0: object      # mi.Float: the table's lowest height (m above sea level)
+    inv_dh: object  # mi.Float: 1 / its height step (1/m)
+    rgb: object     # mi.Float (n x 3): the sun's linear sRGB per height, interleaved
+    n: int          # the number of heights
+
+
+def sun_by_height(spec, z_top_m: float):
+    """(heights (n,) m above sea level, the sun's RGB (n, 3)) of ``spec.atmosphere`` for its sun, heights
+    from sea level to ``TOP_ABOVE_BOX_M`` above ``z_top_m`` (the box's top)."""
+    from ..optics.air import sun_air_table
+    table = sun_air_table(spec.atmosphere, spec.sun.mu0, top_m=max(float(z_top_m), 0.0) + TOP_ABOVE_BOX_M)
+    return table.heights_m, table.by_height(spec.sun.mu0)
+
+
+def sun_air_input(mi, spec, grid_box) -> SunAir | None:
+    """The frame's ``SunAir`` for ``spec`` in the box ``grid_box`` ((lo, hi) corners, m); None without an
+    atmosphere."""
+    if getattr(spec, "atmosphere", None) is None:
+        return None
+    import drjit as dr
+    heights, rgb = sun_by_height(spec, grid_box[1][2])
+    step = float(heights[1] - heights[0])
+    return SunAir(dr.opaque(mi.Float, float(heights[0])), dr.opaque(mi.Float, 1.0 / step),
+                  mi.Float(np.ascontiguousarray(rgb, np.float32).ravel()), int(heights.size))
+
+
+def sun_colour_at(mi, air: SunAir, z):
+    """The sun's colour (mi.Color3f) at heights z (mi.Float, m above sea level), linear in height between
+    the table's rows, clamped to its ends (inside a kernel)."""
+    import drjit as dr
+    f = dr.clip((z - air.h0) * air.inv_dh, 0.0, float(air.n - 1))
+    i = dr.minimum(mi.UInt32(f), air.n - 2)
+    t = f - mi.Float(i)
+    lo = dr.gather(mi.Color3f, air.rgb, i)
+    hi = dr.gather(mi.Color3f, air.rgb, i + 1)
+    return lo * (1.0 - t) + hi * t
+
+
+__all__ = ["SunAir", "sun_by_height", "sun_air_input", "sun_colour_at"]
