@@ -68,9 +68,6 @@ def check_scene_options(args) -> None:
     if args.fov is not None:
         check_fov_deg(args.fov)
     air = atmosphere_of(args.atmosphere, args.aod, args.ozone)
-    if air is not None and getattr(args, "renderer", None) == "slices":
-        raise ValueError("--atmosphere clear colours the reference renderer's sun; the slicer (--renderer slices) "
-                         "does not take it yet")
     if air is not None and getattr(args, "integrator", None) == "volpath":
         raise ValueError("--atmosphere clear colours the sun of --integrator majorant (the default), not volpath's")
     check_spectral_options(args)

@@ -91,4 +91,13 @@ def with_eye_air(img, spec, vol, sky_air: bool = False):
     return replace(img, radiance=out.astype(np.float32), stderr=se, metadata=meta)
 
 
-__all__ = ["eye_air", "with_eye_air"]
+def slicer_frame_with_eye_air(renderer, img, spec):
+    """The slicer's frame ``img`` of ``spec`` (``renderer.frame``'s latest: its eye-ray transmittance is
+    ``renderer.transmittance``) seen through the air outside the box as ``with_eye_air`` (the sky model's
+    sky); ``img`` itself without an atmosphere."""
+    if spec.atmosphere is None:
+        return img
+    return with_eye_air(replace(img, transmittance=renderer.transmittance), spec, renderer.vol)
+
+
+__all__ = ["eye_air", "with_eye_air", "slicer_frame_with_eye_air"]

@@ -58,17 +58,24 @@ def _slice_frame_task(spec: SceneSpec, vol: OpticalVolume, variant: str, slices:
 
 
 def _slice_frame(spec, vol, variant, slices, mode):
-    from ..slicing import MODES, render_slices
     from ..kernel.variant import set_variant
     set_variant(variant)
-    return render_slices(spec, vol, MODES[mode], slices=slices)
+    return slicer_image(spec, vol, slices, mode)
+
+
+def slicer_image(spec, vol, slices: int, mode: str) -> Image:
+    """One slicer frame (``MODES[mode]``), with the air along the eye rays outside the box where ``spec``
+    has an atmosphere (``aerial.slicer_frame_with_eye_air``)."""
+    from ..slicing import MODES, SliceRenderer
+    from .aerial import slicer_frame_with_eye_air
+    renderer = SliceRenderer(vol, MODES[mode], slices)
+    return slicer_frame_with_eye_air(renderer, renderer.frame(spec), spec)
 
 
 def _slicer_frames(specs, volumes, client, slices: int, mode: str, bar):
-    from ..slicing import MODES, render_slices
     if client is None:
         for spec, vol in zip(specs, volumes):
-            yield render_slices(spec, vol, MODES[mode], slices=slices)
+            yield slicer_image(spec, vol, slices, mode)
             bar.update(1)
         return
     import mitsuba as mi
