@@ -73,7 +73,7 @@ def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground
         The path tracer's seed.
     atmosphere : {"none", "clear"}
         "clear": the sun coloured by a clear atmosphere on its path (``optics.air.Atmosphere``; the
-        reference renderer only, for now) with aerosol optical depth ``aod`` at 550 nm and ozone column
+        path tracer, and the slicer's sun per height) with aerosol optical depth ``aod`` at 550 nm and ozone column
         ``ozone`` (atm-cm) (None: the Atmosphere's defaults, 0.1 and 0.3); "none": no air outside the box.
 
     Returns
