@@ -12,7 +12,7 @@ def add_options(p) -> None:
     p.add_argument("--atmosphere", default="none", choices=("none", "clear"),
                    help="clear: a clear 1-D atmosphere (molecules, ozone, aerosol) on the sun's path, inside the "
                         "model's box (render: part of the medium) and along the eye rays outside it (render; animate "
-                        "--renderer slices: the sun's colour per height and the eye rays' air); "
+                        "--renderer slices: the sun's colour per height, the sky scaled, the eye rays' air); "
                         "none (default): the sun as given, vacuum between the hydrometeors")
     p.add_argument("--aod", type=float, default=None,
                    help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")

@@ -8,16 +8,22 @@ import numpy as np
 from ..scene.spec import SceneSpec
 
 
+def _ground_height(spec: SceneSpec):
+    """The ground's height (m), or None: with an atmosphere the sky is scaled to the sun there."""
+    return None if spec.ground is None else float(spec.ground.height)
+
+
 def _sky_emitter(spec: SceneSpec, cache: dict | None):
     """Mitsuba's sky emitter for this spec. With a ``cache`` (a renderer's), one instance per variant
     and sky is kept and updated in place (sun direction, scale), so a moving sun recompiles nothing."""
     import mitsuba as mi
-    from .scene_dict import sky_dict
+    from .scene_dict import sky_dict, sun_below_air
     cache = {} if cache is None else cache
     last = cache.get("last")  # (the sky and sun of the last call: a camera move keeps them)
-    if last is not None and last[0] == (mi.variant(), spec.sky, spec.sun):
+    if last is not None and last[0] == (mi.variant(), spec.sky, spec.sun, spec.atmosphere, _ground_height(spec)):
         return last[1], last[2]
-    d = sky_dict(spec.sky, spec.sun)
+    # with an atmosphere, the sky scaled to the sun at the ground, as the reference's (scene_dict.scene_dict)
+    d = sky_dict(spec.sky, spec.sun if spec.atmosphere is None else sun_below_air(spec))
     key = (mi.variant(), spec.sky.turbidity, spec.sky.ground_albedo)
     if key not in cache:
         cache[key] = mi.load_dict({**d, "sky_scale": 1.0})  # the scale is applied outside: it is a
@@ -28,7 +34,7 @@ def _sky_emitter(spec: SceneSpec, cache: dict | None):
         params["sun_direction"] = mi.Vector3f(*d["sun_direction"])
         params.update()
         cache[sun_key] = tuple(d["sun_direction"])
-    cache["last"] = ((mi.variant(), spec.sky, spec.sun), emitter, d["sky_scale"])
+    cache["last"] = ((mi.variant(), spec.sky, spec.sun, spec.atmosphere, _ground_height(spec)), emitter, d["sky_scale"])
     return emitter, d["sky_scale"]
 
 
@@ -97,7 +103,7 @@ def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | N
         return np.zeros(3)
     if spec.sky.kind == "constant":
         return np.pi * np.asarray(spec.sky.radiance)
-    memo = (spec.sky, spec.sun, n)
+    memo = (spec.sky, spec.sun, spec.atmosphere, _ground_height(spec), n)
     if cache is not None and memo in cache:
         return cache[memo]
     import drjit as dr

@@ -89,7 +89,7 @@ class ViewCache:
         if ray_key not in self.rays:
             self.rays[ray_key] = self._rays(mi, spec) if terrain is None else self._terrain_rays(mi, spec, terrain)
         d, hit, surface, fixed = self.rays[ray_key]
-        bg_key = ray_key + (spec.sun.azimuth, spec.sun.elevation, spec.sun.irradiance, spec.sky)
+        bg_key = ray_key + (spec.sun.azimuth, spec.sun.elevation, spec.sun.irradiance, spec.sky, spec.atmosphere)
         if bg_key not in self.backgrounds:
             import drjit as dr
             sky = sky_radiance_arrays(spec, fixed["direction"], self.sky, active=~hit)
