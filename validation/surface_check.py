@@ -168,16 +168,16 @@ def figure(path: Path, whole, ref, glint, specular, peak) -> None:
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 3, figsize=(13, 3.6), constrained_layout=True)
     ax[0].imshow(whole.reflectance.values, cmap="gray", vmin=0, vmax=0.3)
-    ax[0].set_title("GOES-East 0.64 um, 30 km, 2024-04-10 12:30 UTC: geo_em Mercator, clear sky", fontsize=9)
+    ax[0].set_title("GOES-East 0.64 um, 30 km, 2024-04-10 12:30 UTC\ngeo_em Mercator, clear sky", fontsize=9)
     inside = whole.land.values >= 0
     show = np.where(inside, (whole.land.values == 1).astype(float) + 2 * ((whole.land.values == 1) != ref), np.nan)
     ax[1].imshow(show, cmap="viridis", vmin=0, vmax=3, interpolation="nearest")
-    ax[1].set_title("land/sea (global-land-mask) vs GSHHS: yellow-green = disagree", fontsize=9)
+    ax[1].set_title("land/sea: global-land-mask vs GSHHS\n(yellow: they disagree)", fontsize=9)
     ax[2].imshow(glint.reflectance.values, cmap="gray", vmin=0, vmax=float(np.nanmax(glint.reflectance.values)))
     ax[2].plot(specular[1], specular[0], "rx", ms=9, label="specular point (sun, satellite)")
     ax[2].plot(peak[1], peak[0], "c+", ms=9, label="glint centre (fit)")
     ax[2].legend(fontsize=7, loc="upper left")
-    ax[2].set_title("glint off NE Brazil, 10 km, 2024-03-14 12:19 UTC, calm sea", fontsize=9)
+    ax[2].set_title("glint off NE Brazil, 10 km\n2024-03-14 12:19 UTC, calm sea", fontsize=9)
     for a in ax:
         a.set_xticks([]), a.set_yticks([])
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -49,8 +49,9 @@ def air_in_medium(vol: OpticalVolume):
 
 def medium_extinction(vol: OpticalVolume) -> np.ndarray:
     """The medium's sigma_t grid (1/m): grey (z, y, x), or (z, y, x, 3) with the air in the box."""
+    from ..optics.air.inside import medium_extinction as with_air
     air = air_in_medium(vol)
-    return vol.beta_total if air is None else vol.beta_total[..., None] + air.extinction
+    return vol.beta_total if air is None else with_air(vol.beta_total, air)
 
 
 def grid_bbox(vol: OpticalVolume):

@@ -82,13 +82,18 @@ def with_box_air(vol, hyd, atm: Atmosphere):
     return replace(vol, air=box_air(atm, rho, z_m))
 
 
+def medium_extinction(beta_total, air: BoxAir) -> np.ndarray:
+    """sigma_t (z, y, x, 3), 1/m: the hydrometeors' grey ``beta_total`` (z, y, x) plus the air's extinction."""
+    return np.asarray(beta_total, np.float32)[..., None] + air.extinction
+
+
 def medium_grids(beta_total, albedo, weights, air: BoxAir):
     """The medium with the air added: (sigma_t (z, y, x, 3), albedo (z, y, x, 3), Eq. 8 scattering
     coefficients of the hydrometeors' species and the air's two components (z, y, x, S + 2), channel mean),
     from the hydrometeors' grey ``beta_total`` (z, y, x), ``albedo`` (z, y, x, 3) and weights (S, z, y, x)."""
     beta = np.asarray(beta_total, np.float32)
     alb = np.asarray(albedo, np.float32)
-    sigma_t = beta[..., None] + air.extinction
+    sigma_t = medium_extinction(beta, air)
     sca = alb * beta[..., None] + air.scattering.sum(axis=0)
     out_albedo = np.divide(sca, sigma_t, out=np.ones_like(sigma_t), where=sigma_t > 0)
     sca_h = beta * alb.mean(axis=-1)
@@ -96,4 +101,4 @@ def medium_grids(beta_total, albedo, weights, air: BoxAir):
     return sigma_t, np.clip(out_albedo, 0.0, 1.0).astype(np.float32), np.moveaxis(coeffs, 0, -1).astype(np.float32)
 
 
-__all__ = ["BoxAir", "CHANNEL_NM", "NAMES", "box_air", "medium_grids", "with_box_air"]
+__all__ = ["BoxAir", "CHANNEL_NM", "NAMES", "box_air", "medium_extinction", "medium_grids", "with_box_air"]
