@@ -44,11 +44,13 @@ def loop_options(args, resolution: float, reference_kw: dict) -> dict:
     """What a loop's times depend on (``display.satellite_loop.check_loop_options``): the inputs, the place,
     the satellite, the band(s), the optics, the ground and the estimator; not --fps, --denoise, --time (a
     time is one time whatever the selection) or where it renders."""
+    from .periodic_option import periodic_value
     files = args.file if isinstance(args.file, list) else [args.file]
     return {"inputs": [str(Path(f).resolve()) for f in files if f is not None], "lat": args.lat, "lon": args.lon,
             "date": args.date, "satellite": args.satellite, "band": "rgb" if args.rgb else (args.band or "0.64"),
             "rayleigh": bool(args.rayleigh), "resolution_km": resolution, "preset": args.preset, "phase": args.phase,
-            "ground_albedo": args.ground_albedo, "seed": args.seed, **reference_kw}
+            "ground_albedo": args.ground_albedo, "surface": args.surface, "wind": args.wind, "sizes": args.sizes,
+            "size_classes": args.size_classes, "periodic": periodic_value(args), "seed": args.seed, **reference_kw}
 
 
 def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict) -> Path:
@@ -60,7 +62,7 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
     from .periodic_option import periodic_value
     from ..satellite import truecolor as tc
     check_unfinished_loop(nc, args.resume)
-    surface = {"surface": args.surface, "wind_m_s": args.wind}  # --surface, --wind
+    surface = {"surface": args.surface, "wind_m_s": args.wind}  # --surface, --wind (commands.surface_kw: not imported, a cycle)
     hyds = open_placed_times(args)
     albedo = 0.06 if args.ground_albedo is None else args.ground_albedo
     what = "true colour" if args.rgb else f"band {args.band or '0.64'} um"

@@ -4,7 +4,8 @@ run, the land/sea mask and the sun glint checked without clouds in the way).
 
 The grid is the geogrid's mass points (XLAT_M, XLONG_M and the map-projection attributes, placed and checked
 as a wrfout's, ``projection.grid_georeference``), the ground its HGT_M (0 where absent), LANDMASK / LU_INDEX
-and ALBEDO12M where present, else the global land mask (``terrain.land_and_kind``); the air a few layers of the
+where present, else the global land mask (``terrain.land_and_kind``), the albedo by surface kind
+(ALBEDO12M, a monthly field, is not read); the air a few layers of the
 US 1976 standard atmosphere up to ``top_m`` with no hydrometeors. A geogrid has no time: give it one for the
 sun with ``scene.place.assume_place(hyd, date=...)`` (the CLI's ``--date``).
 """

@@ -412,16 +412,15 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     if phase not in ("per_species", "paper"):
         raise WeatherDataError("optical_volume", "phase", '"per_species" or "paper"', repr(phase))
     sp, use_model = _species_setup(species, scale, model_radii, sizes)
-
+    if size_classes is not None and not (isinstance(size_classes, (int, np.integer)) and size_classes >= 1):
+        raise WeatherDataError("optical_volume", "size_classes", "a whole number of size classes >= 1",
+                               repr(size_classes))  # before the optics (and ``release``) touch hyd
     check_fits(str(hyd.attrs.get("source", "hydrometeors")), hyd["rho_air"].shape, "optics")  # before allocating
     split_later = size_classes is not None and size_classes != 1 and use_model  # size_classes.split reads r_eff
     kinds = (("q",) if split_later else ("q", "r_eff")) if release else ()
     beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model, voxel_albedo=sizes == "scheme",
                                                            release=kinds)
     names, components, attrs_classes = SPECIES_NAMES, None, {}
-    if size_classes is not None and not (isinstance(size_classes, (int, np.integer)) and size_classes >= 1):
-        raise WeatherDataError("optical_volume", "size_classes", "a whole number of size classes >= 1",
-                               repr(size_classes))
     if size_classes is not None and int(size_classes) > 1 and use_model:
         from .size_classes import split
         names, beta_ext, weights, components = split(hyd, sp, beta_ext, weights, int(size_classes))

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..phase.analytic import hg_value
-from ..rayleigh import AVOGADRO, M_AIR_KG_MOL, cross_section_m2 as rayleigh_cross_section_m2, phase_value
+from ..rayleigh import cross_section_m2 as rayleigh_cross_section_m2, phase_value
 from .atmosphere import Atmosphere
 from .inside import CHANNEL_NM
 from .ozone import cross_section_m2 as ozone_cross_section_m2
