@@ -75,7 +75,8 @@ def no_loading(monkeypatch):
     import weather_mi.io
     import weather_mi.io.sources
     fail = lambda *a, **k: pytest.fail("the input was read despite a bad scene option")  # noqa: E731
-    monkeypatch.setattr(cli, "open_source", fail)
+    import weather_mi.cli.options
+    monkeypatch.setattr(weather_mi.cli.options, "open_source", fail)
     monkeypatch.setattr(weather_mi.io.sources, "open_times", fail)
     monkeypatch.setattr(weather_mi.io, "open_wrf", fail)
 

@@ -61,9 +61,9 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
     from ..satellite import imagery as si
     from .periodic_option import periodic_value
     from ..satellite import truecolor as tc
+    from .options import surface_kw
     check_unfinished_loop(nc, args.resume)
-    # --surface, --wind, as commands.surface_kw (not imported here: commands imports this module)
-    surface = {"surface": args.surface, "wind_m_s": args.wind}
+    surface = surface_kw(args)
     hyds = open_placed_times(args)
     albedo = 0.06 if args.ground_albedo is None else args.ground_albedo
     what = "true colour" if args.rgb else f"band {args.band or '0.64'} um"
