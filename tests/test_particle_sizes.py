@@ -162,7 +162,8 @@ def test_rules_by_scheme():
     assert mp.rules(8, ["QNICE", "QNRAIN"])["ice"].number_var == "QNICE"
     assert "ice" not in mp.rules(8, [])            # Thompson ice needs QNICE
     assert set(mp.rules(10, ["QNICE", "QNSNOW", "QNRAIN", "QNGRAUPEL"])) == {"cloud", "ice", "snow", "rain", "graupel"}
-    assert mp.rules(17, ["QNICE"]) == {}           # NSSL: no rules (a warning and the preset)
+    assert set(mp.rules(17, ["QNICE"])) == {"ice"}  # NSSL: each category from its own number concentration
+    assert mp.rules(19, ["QNICE"]) == {} and not mp.has_rules(19)  # NSSL 1-moment: no rules (warning, preset)
 
 
 # ---- the reader ----
@@ -229,8 +230,8 @@ def test_negative_or_nan_number_concentration_is_named(tmp_path):
 
 
 def test_unknown_scheme_warns_with_the_fallback(tmp_path):
-    path = write_wrfout(tmp_path / "w.nc", mp_physics=17)
-    with pytest.warns(UserWarning, match="no size rules for NSSL 2-moment.*species table"):
+    path = write_wrfout(tmp_path / "w.nc", mp_physics=19)
+    with pytest.warns(UserWarning, match="no size rules for NSSL 1-moment.*species table"):
         hyd = wm.open_wrf(path)
     assert not any(str(v).startswith("r_eff_") for v in hyd.data_vars)
 

@@ -33,67 +33,20 @@ reader warns and keeps the species table's radii.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import replace
 from math import gamma, pi
-from typing import Callable
 
 import numpy as np
 
-RHO_W = 1000.0       # kg/m^3, WSM/WDM/Thompson liquid water
-T0C = 273.15         # K
-R1 = 1.0e-12         # kg/m^3: WRF effectRad's smallest mass content
+from . import milbrandt_sizes, nssl_sizes, thompson_graupel
+from .size_distributions import (R1, RHO_W, T0C, SizeRule, exponential_fixed_n0, gamma_from_number,  # noqa: F401
+                                 masked as _masked, sel as _sel)
+
 NUMBER_VARS = {"cloud": "QNCLOUD", "ice": "QNICE", "rain": "QNRAIN", "snow": "QNSNOW", "graupel": "QNGRAUPEL"}
 WSM_FAMILY = {3: "WSM3", 4: "WSM5", 6: "WSM6", 24: "WSM7"}
 WDM_FAMILY = {14: "WDM5", 16: "WDM6", 26: "WDM7"}
 THOMPSON_FAMILY = {8: "Thompson", 28: "Thompson aerosol-aware", 38: "Thompson hail-aware"}
 MORRISON_FAMILY = {10: "Morrison", 40: "Morrison+CESM aerosol"}
-
-
-@dataclass(frozen=True)
-class SizeRule:
-    """How one species' effective radius follows from the fields: ``radius(rho_q, number, t_k)`` with the
-    mass content rho_q (kg/m^3), the number concentration (m^-3; None where ``number_var`` is None) and the
-    temperature (K; None unless ``needs_temperature``) gives r_eff (m, 0 where rho_q <= 0)."""
-
-    species: str
-    radius: Callable
-    number_var: str | None = None
-    needs_temperature: bool = False
-    formula: str = ""
-
-
-def _masked(rho_q, compute) -> np.ndarray:
-    """``compute(rho_q)`` (float64) where rho_q > 0, else 0, as float32."""
-    rq = np.asarray(rho_q, np.float64)
-    out = np.zeros(rq.shape, np.float32)
-    has = rq > 0
-    if np.any(has):
-        out[has] = compute(np.maximum(rq[has], R1), has)
-    return out
-
-
-def _sel(a, has):
-    return None if a is None else np.asarray(a, np.float64)[has] if np.ndim(a) else float(a)
-
-
-def exponential_fixed_n0(rho_q, n0_per_m4, rho_p, lam_max=np.inf, lam_min=0.0) -> np.ndarray:
-    """r_eff = 1.5 / lambda, lambda = (pi rho_p N0 / rho_q)^(1/4) clipped to [lam_min, lam_max] (1/m);
-    ``n0_per_m4`` a number or a grid like ``rho_q``."""
-    def f(rq, has):
-        lam = (pi * rho_p * _sel(n0_per_m4, has) / rq) ** 0.25
-        return 1.5 / np.clip(lam, lam_min, lam_max)
-    return _masked(rho_q, f)
-
-
-def gamma_from_number(rho_q, n_per_m3, rho_p, mu=0.0, lam_min=0.0, lam_max=np.inf) -> np.ndarray:
-    """r_eff = (mu + 3) / (2 lambda), lambda = (pi rho_p N Gamma(mu+4) / (6 Gamma(mu+1) rho_q))^(1/3) clipped
-    to [lam_min, lam_max] (1/m); N (m^-3) floored at 1e-6 as WRF's R2."""
-    g = gamma(mu + 4.0) / gamma(mu + 1.0)
-    def f(rq, has):
-        n = np.maximum(_sel(n_per_m3, has), 1e-6)
-        lam = (pi * rho_p / 6.0 * g * n / rq) ** (1.0 / 3.0)
-        return (mu + 3.0) / (2.0 * np.clip(lam, lam_min, lam_max))
-    return _masked(rho_q, f)
 
 
 # ---- WSM / WDM ----
@@ -150,6 +103,11 @@ def wsm_graupel(rho_q, number=None, t_k=None) -> np.ndarray:
     return exponential_fixed_n0(rho_q, 4.0e6, 500.0, lam_max=6.0e4)
 
 
+def wsm_hail(rho_q, number=None, t_k=None) -> np.ndarray:
+    """WSM7/WDM7 hail (Bae et al. 2019): exponential, N0h = 4e4 m^-4, rho_h = 912, lambda <= lamdahmax = 2e4."""
+    return exponential_fixed_n0(rho_q, 4.0e4, 912.0, lam_max=2.0e4)
+
+
 # ---- Thompson ----
 
 THOMPSON_NT_C = 100.0e6
@@ -200,21 +158,26 @@ def thompson_rain(rho_q, number, t_k=None) -> np.ndarray:
     return gamma_from_number(rho_q, number, RHO_W, mu=0.0, lam_min=3.672 / 2.5e-3, lam_max=3.672 / 37.5e-6)
 
 
-def thompson_graupel_n0(rho_q) -> np.ndarray:
-    """mp_thompson's graupel intercept without supercooled rain: ygra1 = 4.31 + log10(max(5e-5, rho_q)),
-    zans1 = 3.1 + 100 / (300 xslw1 ygra1 / (10 / xslw1 + 1 + 0.25 ygra1) + 30 + 10 ygra1), xslw1 = 0.01,
-    N0 = 10^zans1 in [gonv_min, gonv_max] = [1e4, 3e6] m^-4."""
-    ygra1 = 4.31 + np.log10(np.maximum(5.0e-5, rho_q))
-    x = 0.01
-    zans1 = 3.1 + 100.0 / (300.0 * x * ygra1 / (10.0 / x + 1.0 + 0.25 * ygra1) + 30.0 + 10.0 * ygra1)
-    return np.clip(10.0 ** zans1, 1.0e4, 3.0e6)
-
-
-def thompson_graupel(rho_q, number=None, t_k=None) -> np.ndarray:
-    """Graupel mu = 0, rho_g = 500, N0 of ``thompson_graupel_n0`` (or from QNGRAUPEL where given)."""
-    if number is not None:
-        return gamma_from_number(rho_q, number, 500.0, mu=0.0)
-    return _masked(rho_q, lambda rq, has: 1.5 / (pi * 500.0 * thompson_graupel_n0(rq) / rq) ** 0.25)
+def thompson_graupel_rule(version, has) -> SizeRule:
+    """Thompson graupel of WRF ``version`` (``thompson_graupel``; None: the newest): from QNGRAUPEL (and
+    QVGRAUPEL) where the file has it, else the version's intercept from the column's contents."""
+    v = version or thompson_graupel.NEWEST
+    if "QNGRAUPEL" in has:
+        vvar = "QVGRAUPEL" if "QVGRAUPEL" in has else None
+        def two_moment(rho_q, number, t_k=None, **inputs):
+            return thompson_graupel.radius_from_number(rho_q, number, inputs.get(vvar) if vvar else None)
+        return SizeRule("graupel", two_moment, "QNGRAUPEL", inputs=(vvar,) if vvar else (),
+                        formula="gamma mu = 0 from QNGRAUPEL" + (", density from QVGRAUPEL" if vvar else ""))
+    needs = {"3.3": ("rho", "QRAIN", "QCLOUD"), "3.4": ("rho", "QRAIN", "QNRAIN"),
+             "3.5": ("rho", "QRAIN", "QNRAIN")}.get(v, ())
+    lacking = [n for n in needs if n.startswith("Q") and n not in has]
+    if lacking:  # a cut-down file: the version's column terms cannot be computed; the newest formula
+        needs, v = (), thompson_graupel.NEWEST
+    def one_moment(rho_q, number=None, t_k=None, rho=None, QRAIN=None, QNRAIN=None, QCLOUD=None):
+        return thompson_graupel.radius(v, rho_q, t_k, rho, QRAIN, QNRAIN, QCLOUD)
+    return SizeRule("graupel", one_moment, needs_temperature=v in ("3.3", "3.4", "3.5"), inputs=needs,
+                    formula=f"exponential, mp_thompson's N0 of WRF V{v}" + ("" if version else " (version unknown: newest)")
+                    + (f" (no {', '.join(lacking)} for V{version}'s)" if lacking else ""))
 
 
 # ---- Morrison ----
@@ -245,9 +208,54 @@ MORRISON = {"ice": _morrison(500.0, 2 * 125e-6 + 100e-6, 1e-6), "snow": _morriso
             "rain": _morrison(997.0, 2800e-6, 20e-6), "graupel": _morrison(400.0, 2000e-6, 20e-6)}
 
 
-def rules(mp: int, variables) -> dict[str, SizeRule]:
+# ---- Kessler, P3 ----
+
+def kessler_rain(rho_q, number=None, t_k=None) -> np.ndarray:
+    """Kessler (1969) rain: Marshall & Palmer (1948) exponential, N0 = 8e6 m^-4, rho_w = 1000, r = 1.5 / lambda."""
+    return exponential_fixed_n0(rho_q, 8.0e6, RHO_W)
+
+
+P3_NC = 200.0e6  # m^-3: nccnst, P3's droplet number without QNCLOUD (MP_PHYSICS 50)
+
+
+def p3_cloud(rho_q, number=None, t_k=None) -> np.ndarray:
+    """P3 (Morrison & Milbrandt 2015; module_mp_p3.F ``get_cloud_dsd2``, diag_effc): mu_c = 1 / (0.0005714
+    N_c[cm^-3] + 0.2714)^2 - 1 in [2, 15], lambda_c = (pi rho_w / 6 N_c (mu_c+3)(mu_c+2)(mu_c+1) / rho_q)^(1/3) in
+    [(mu_c + 1) 2.5e4, (mu_c + 1) 1e6], r = 0.5 (mu_c + 3) / lambda_c; rho_w = 997, N_c = QNCLOUD or nccnst."""
+    def f(rq, has):
+        n = np.full(rq.shape, P3_NC) if number is None else np.maximum(_sel(number, has), 1e-16)
+        mu = np.clip(1.0 / (0.0005714 * n * 1e-6 + 0.2714) ** 2 - 1.0, 2.0, 15.0)
+        lam = (pi * 997.0 / 6.0 * n * (mu + 3) * (mu + 2) * (mu + 1) / rq) ** (1.0 / 3.0)
+        return 0.5 * (mu + 3.0) / np.clip(lam, (mu + 1) * 2.5e4, (mu + 1) * 1.0e6)
+    return _masked(rho_q, f)
+
+
+def p3_rain(rho_q, number, t_k=None) -> np.ndarray:
+    """P3 ``get_rain_dsd2``: mu_r = mu_r_constant = 0, lambda_r in [1 / Drmax = 500, 1e5] (1/m), rho_w = 997."""
+    return gamma_from_number(rho_q, number, 997.0, mu=0.0, lam_min=1.0 / 2.0e-3, lam_max=1.0e5)
+
+
+P3_FAMILY = {50: "P3 1-ice", 51: "P3 1-ice + nc", 52: "P3 2-ice", 53: "P3 1-ice 3-moment"}
+
+
+def _two_moment(names, fn, has, scheme, density, inputs=lambda name: ()) -> dict[str, SizeRule]:
+    """The rules of a scheme whose every category is sized from its own number concentration ``names[c]``."""
+    out = {}
+    for name, var in names.items():
+        var = next((v for v in var if v in has), None) if isinstance(var, tuple) else var
+        if var in has:
+            extra = tuple(i for i in inputs(name) if i == "rho" or i in has)
+            vvar = next((i for i in extra if i.startswith("QV")), None)
+            out[name] = SizeRule(name, fn(name), var, formula=f"{scheme} from {var}", inputs=extra,
+                                 density=density(name), volume_var=vvar)
+    return out
+
+
+def rules(mp: int, variables, wrf_version: str | None = None) -> dict[str, SizeRule]:
     """The size rules of microphysics scheme ``mp`` (MP_PHYSICS) by species, given the names of the file's
-    ``variables`` (number concentrations used where the file has them); empty for a scheme without rules."""
+    ``variables`` (number concentrations used where the file has them) and, for Thompson graupel, the WRF
+    version key of ``thompson_graupel.version_of``; empty for a scheme without rules. "hail": the hail
+    category's rule, for the reader to combine with graupel's."""
     has = set(variables)
     if mp in WSM_FAMILY or mp in WDM_FAMILY:
         wdm = mp in WDM_FAMILY
@@ -262,13 +270,15 @@ def rules(mp: int, variables) -> dict[str, SizeRule]:
             out["rain"] = SizeRule("rain", wdm_rain, "QNRAIN", formula="gamma mu = 1 from QNRAIN")
         else:
             out["rain"] = SizeRule("rain", wsm_rain, formula="exponential, N0r = 8e6")
+        if mp in (24, 26):  # WSM7 / WDM7 hail, combined with graupel by the reader
+            out["graupel"] = replace(out["graupel"], density=500.0)
+            out["hail"] = SizeRule("hail", wsm_hail, formula="exponential, N0h = 4e4", density=912.0)
         return out
     if mp in THOMPSON_FAMILY:
         out = {"cloud": SizeRule("cloud", thompson_cloud, "QNCLOUD" if "QNCLOUD" in has else None,
                                  formula="calc_effectRad cloud"),
                "snow": SizeRule("snow", thompson_snow, needs_temperature=True, formula="calc_effectRad snow"),
-               "graupel": SizeRule("graupel", thompson_graupel, "QNGRAUPEL" if "QNGRAUPEL" in has else None,
-                                   formula="exponential graupel")}
+               "graupel": thompson_graupel_rule(wrf_version, has)}
         if "QNICE" in has:
             out["ice"] = SizeRule("ice", thompson_ice, "QNICE", formula="calc_effectRad ice")
         if "QNRAIN" in has:
@@ -281,4 +291,39 @@ def rules(mp: int, variables) -> dict[str, SizeRule]:
             if NUMBER_VARS[name] in has:
                 out[name] = SizeRule(name, fn, NUMBER_VARS[name], formula=f"exponential from {NUMBER_VARS[name]}")
         return out
+    if mp == 1:  # Kessler: no droplet size distribution (cloud: the warning and the species table)
+        return {"rain": SizeRule("rain", kessler_rain, formula="Marshall-Palmer, N0 = 8e6")}
+    if mp in P3_FAMILY:  # ice: the file's RE_ICE only (P3's ice needs its lookup tables)
+        out = {"cloud": SizeRule("cloud", p3_cloud, "QNCLOUD" if "QNCLOUD" in has else None,
+                                 formula="get_cloud_dsd2" + (" from QNCLOUD" if "QNCLOUD" in has else ", nccnst"))}
+        if "QNRAIN" in has:
+            out["rain"] = SizeRule("rain", p3_rain, "QNRAIN", formula="get_rain_dsd2 from QNRAIN, mu_r = 0")
+        return out
+    if mp in nssl_sizes.NSSL_FAMILY:
+        numbers = {"cloud": ("QNDROP", "QNCLOUD"), "ice": "QNICE", "rain": "QNRAIN", "snow": "QNSNOW",
+                   "graupel": "QNGRAUPEL", "hail": "QNHAIL"}
+        return _two_moment(numbers, nssl_sizes.rule_function, has, "calc_eff_radius",
+                           lambda n: nssl_sizes.PARAMS[n][0], lambda n: ("rho", nssl_sizes.VOLUME_VARS.get(n, "")))
+    if mp in milbrandt_sizes.MY_FAMILY:
+        numbers = dict(NUMBER_VARS, hail="QNHAIL")
+        return _two_moment(numbers, milbrandt_sizes.rule_function, has, "gamma",
+                           lambda n: milbrandt_sizes.PARAMS[n][5])
     return {}
+
+
+def has_rules(mp: int) -> bool:
+    """Whether scheme ``mp`` has size rules here (for some species, given the fields they need)."""
+    return any(mp in f for f in (WSM_FAMILY, WDM_FAMILY, THOMPSON_FAMILY, MORRISON_FAMILY, P3_FAMILY,
+                                 nssl_sizes.NSSL_FAMILY, milbrandt_sizes.MY_FAMILY)) or mp == 1
+
+
+def why_unsized(mp: int, species: str) -> str:
+    """Why scheme ``mp`` (which has rules) gives species ``species`` no radius here, for the reader's warning."""
+    if mp == 1 and species == "cloud":
+        return "Kessler has no cloud droplet size distribution"
+    if mp in P3_FAMILY and species == "ice":
+        return "P3's ice sizes need its lookup tables and the file has no RE_ICE"
+    if mp in nssl_sizes.NSSL_FAMILY and species == "cloud":
+        return "the file lacks QNDROP (or QNCLOUD) for cloud"
+    var = NUMBER_VARS.get(species)
+    return f"the file lacks {var} for {species}" if var else f"no rule for {species}"

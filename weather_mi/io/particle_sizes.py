@@ -12,7 +12,8 @@ import warnings
 import numpy as np
 
 from ..errors import WeatherDataError
-from . import microphysics
+from . import microphysics, thompson_graupel
+from .size_distributions import combined_radius
 
 RADIUS_VARS = {"cloud": "RE_CLOUD", "ice": "RE_ICE", "snow": "RE_SNOW"}
 RADIUS_UNITS = {"m": 1.0, "meter": 1.0, "meters": 1.0, "metre": 1.0, "um": 1e-6, "micron": 1e-6, "microns": 1e-6,
@@ -27,45 +28,93 @@ class SizeReader:
     def __init__(self, ds, path, read_field, mp, scheme, present, sizes: bool, stacklevel: int = 2):
         self.ds, self.path, self.read_field, self.scheme = ds, path, read_field, scheme
         self.file_vars = {n: RADIUS_VARS[n] for n in present if RADIUS_VARS.get(n) in ds}
-        rules = microphysics.rules(mp, ds.variables) if sizes else {}
+        version = thompson_graupel.version_of(ds.attrs.get("TITLE"))
+        rules = microphysics.rules(mp, ds.variables, version) if sizes else {}
+        hail = rules.pop("hail", None)
         self.rules = {n: r for n, r in rules.items() if n in present and n not in self.file_vars}
+        # hail is drawn as graupel: its own rule where the scheme has one, combined with graupel's radius
+        self.hail_rule = hail if "QHAIL" in ds and "graupel" in self.rules else None
         self.per_m3 = mp in microphysics.WDM_FAMILY
         self.needs_temperature = any(r.needs_temperature for r in self.rules.values())
         self.t_k = None
         self.ranges: dict[str, tuple[float, float]] = {}
         lacking = [n for n in present if n not in self.rules and n not in self.file_vars]
+        if sizes and "QHAIL" in ds and "graupel" in self.rules and self.hail_rule is None:
+            warnings.warn(f"{path}: {scheme}: QHAIL is sized with graupel's rule (no hail rule or number "
+                          "concentration for it)", stacklevel=stacklevel)
         if sizes and lacking:
-            why = (f"weather-mi has no size rules for {scheme} microphysics" if not rules else
-                   f"{scheme} sizes them from number concentrations the file lacks "
-                   f"({', '.join(microphysics.NUMBER_VARS[n] for n in lacking)})")
+            why = (f"weather-mi has no size rules for {scheme} microphysics" if not microphysics.has_rules(mp) else
+                   f"{scheme}: " + "; ".join(microphysics.why_unsized(mp, n) for n in lacking))
             warnings.warn(f"{path}: {why}: the {', '.join(lacking)} radii are the species table's "
                           "(--sizes physical/paper), not the scheme's", stacklevel=stacklevel)
 
-    def radius(self, name, rho_q, rho, shape):
+    def radius(self, name, rho_q, rho, shape, hail=None):
         """The effective radius (m, float32, native grid) of species ``name`` with mass content ``rho_q``
-        (kg/m^3), or None where neither the file nor the scheme gives one; ``read_field(var, shape)`` reads a native
-        field (float32, checked finite)."""
+        (kg/m^3; for graupel, ``hail``: the hail's, sized by ``hail_rule`` and combined), or None where neither
+        the file nor the scheme gives one; ``read_field(var, shape)`` reads a native field (float32, checked
+        finite)."""
         if name in self.file_vars:
             r = self._file_radius(self.file_vars[name], rho_q, shape)
         elif name in self.rules:
-            rule = self.rules[name]
-            number = None
-            if rule.number_var is not None:
-                number = self.read_field(rule.number_var, shape)
-                if np.any(number < 0):
-                    raise WeatherDataError(self.path, rule.number_var, "number concentrations >= 0",
-                                           f"{int(np.count_nonzero(number < 0))} negative values "
-                                           f"(minimum {float(number.min()):.3g})")
-                if not self.per_m3:
-                    number *= rho  # per kg of dry air -> per m^3
-            r = rule.radius(rho_q, number, self.t_k)
-            del number
+            r = self._rule_radius(self.rules[name], rho_q, rho, shape, hail)
         else:
             return None
-        has = rho_q > 0
+        has = rho_q > 0 if hail is None else (rho_q > 0) | (hail > 0)
         if np.any(has):
             self.ranges[name] = (float(r[has].min()), float(r[has].max()))
         return r
+
+    def _rule_radius(self, rule, rho_q, rho, shape, hail=None):
+        inputs = {k: self._input(k, rho, shape) for k in rule.inputs}
+        number = self._number(rule.number_var, rho, shape) if rule.number_var is not None else None
+        r = rule.radius(rho_q, number, self.t_k, **inputs)
+        del number
+        if hail is not None and self.hail_rule is not None and np.any(hail > 0):
+            h = self.hail_rule
+            r_hail = self._rule_radius(h, hail, rho, shape)
+            parts = [(r, self._volume(rule, rho_q, inputs)), (r_hail, self._volume(h, hail, rho, shape))]
+            both = combined_radius(parts)
+            r = np.where(hail > 0, np.where(rho_q > 0, both, r_hail), r)
+        return r
+
+    def _number(self, var, rho, shape):
+        """Number concentration ``var`` (m^-3), checked >= 0."""
+        number = self._checked(var, shape, "number concentrations >= 0")
+        if not self.per_m3:
+            number *= rho  # per kg of dry air -> per m^3
+        return number
+
+    def _input(self, key, rho, shape):
+        """A rule's extra input: "rho", a number concentration QN* (m^-3), a particle volume QV* (m^3/m^3,
+        >= 0) or a mass content Q* (kg/m^3, negatives as zero)."""
+        if key == "rho":
+            return rho
+        if key.startswith("QN"):
+            return self._number(key, rho, shape)
+        if key.startswith("QV") and key != "QVAPOR":
+            field = self._checked(key, shape, "particle volumes (m^3 per kg) >= 0")
+        else:
+            field = np.maximum(self.read_field(key, shape), 0.0)
+        field *= rho
+        return field
+
+    def _checked(self, var, shape, expectation):
+        field = self.read_field(var, shape)
+        if np.any(field < 0):
+            raise WeatherDataError(self.path, var, expectation, f"{int(np.count_nonzero(field < 0))} negative "
+                                   f"values (minimum {float(field.min()):.3g})")
+        return field
+
+    def _volume(self, rule, rho_q, inputs_or_rho, shape=None):
+        """The particle volume per m^3 of air of ``rule``'s category: its predicted volume where the file has
+        one (above 1e-30), else rho_q over the rule's density."""
+        inputs = inputs_or_rho if isinstance(inputs_or_rho, dict) else \
+            {k: self._input(k, inputs_or_rho, shape) for k in ((rule.volume_var,) if rule.volume_var else ())}
+        fixed = np.asarray(rho_q, np.float64) / rule.density
+        if rule.volume_var and inputs.get(rule.volume_var) is not None:
+            v = np.asarray(inputs[rule.volume_var], np.float64)
+            return np.where(v > 1e-30, v, fixed)
+        return fixed
 
     def clip_to_native(self, name, r_cell, mass) -> None:
         """Keep the regridded radii (m, in place) within the native range of species ``name``'s, and give the

@@ -252,16 +252,30 @@ def _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present, siz
     for name in present:
         var = SPECIES_VARS[name]
         q = read(ds, var, it, sel, path, shape, np.float32)
+        hail = None
         if name == "graupel" and "QHAIL" in ds:  # hail is the dense end of the rimed-ice spectrum
-            q += read(ds, "QHAIL", it, sel, path, shape, np.float32)
+            hail = read(ds, "QHAIL", it, sel, path, shape, np.float32)
+            if sizer.hail_rule is None:  # one content, sized (if at all) as graupel
+                q += hail
+                hail = None
         negatives[name] = int(np.count_nonzero(q < 0))
         if negatives[name]:
             minima[var] = (negatives[name], float(q.min()))
         np.maximum(q, 0.0, out=q)
         q *= rho  # kg/m^3 of this species, conserved by the regridding
+        if hail is not None:  # hail sized by its own rule, then added to graupel's content
+            n_hail = int(np.count_nonzero(hail < 0))
+            if n_hail:
+                minima["QHAIL"] = (n_hail, float(hail.min()))
+                negatives[name] += n_hail
+            np.maximum(hail, 0.0, out=hail)
+            hail *= rho
+        r_native = sizer.radius(name, q, rho, shape, hail)  # the file's RE_* or the scheme's (m), or None
+        if hail is not None:
+            q += hail
+            del hail
         mass = plan.average(q)
         np.maximum(mass, 0.0, out=mass)
-        r_native = sizer.radius(name, q, rho, shape)  # the file's RE_* or the scheme's (m), or None
         if r_native is not None:  # Eq. 4 conserved: the cell's rho q over its average of rho q / r_eff
             np.divide(q, r_native, out=r_native, where=r_native > 0)  # (0 where no radius: q has none there)
             ext = plan.average(r_native)
