@@ -323,11 +323,19 @@ def test_size_classes_split_conserves_the_species():
     k = [i for i, n in enumerate(names) if n.startswith("rain")]
     np.testing.assert_array_equal(b[k].sum(0), beta[2])            # each voxel in exactly one class
     np.testing.assert_array_equal(w[k].sum(0), weights[2])
-    edges, centres = class_radii_m("rain", 3)
+    # rain's classes stated independently: 15 um (Thompson's smallest rain r_eff, 1.5 x 0.75 D0r / 3.672) to
+    # 2.5 mm in 3 equal log steps of (2500 / 15)^(1/3) = 5.5032: edges 15, 82.55, 454.3, 2500 um; the tables'
+    # radii their geometric centres to 3 digits, 35.2, 194 and 1070 um
+    edges = np.array([15e-6, 82.55e-6, 454.3e-6, 2.5e-3])
+    centres = np.array([35.2e-6, 194e-6, 1070e-6])
+    got_edges, got_centres = class_radii_m("rain", 3)
+    np.testing.assert_allclose(got_edges, edges, rtol=2e-4)
+    np.testing.assert_allclose(got_centres, centres, rtol=1e-12)
     for j, c in zip(k, range(3)):
         inside = b[j] > 0
-        assert np.all(r_rain[inside] >= edges[c] * (1 - 1e-6)) and np.all(r_rain[inside] <= edges[c + 1] * (1 + 1e-6))
-        assert comps[j].radius_m == pytest.approx(np.sqrt(edges[c] * edges[c + 1]), rel=5e-3)
+        assert inside.any()
+        assert np.all(r_rain[inside] >= edges[c] * (1 - 2e-4)) and np.all(r_rain[inside] <= edges[c + 1] * (1 + 2e-4))
+        assert comps[j].radius_m == pytest.approx(centres[c], rel=1e-12)
     assert sp[names[k[1]]].name == "rain"                           # a component's species by its name
 
 

@@ -74,7 +74,7 @@ def radius(name, rho_q, number, rho, volume=None) -> np.ndarray:
         if check_n:
             ok &= sel(number, has) > CXMIN
         return np.clip(np.where(ok, r, lo), lo, hi)
-    return masked(rho_q, f)
+    return masked(rho_q, f, floor=0.0)  # the scheme's own thresholds, on the unfloored content
 
 
 def rule_function(name):

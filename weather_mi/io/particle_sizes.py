@@ -19,6 +19,7 @@ RADIUS_VARS = {"cloud": "RE_CLOUD", "ice": "RE_ICE", "snow": "RE_SNOW"}
 RADIUS_UNITS = {"m": 1.0, "meter": 1.0, "meters": 1.0, "metre": 1.0, "um": 1e-6, "micron": 1e-6, "microns": 1e-6,
                 "micrometer": 1e-6, "micrometers": 1e-6, "µm": 1e-6, "μm": 1e-6, "1e-6 m": 1e-6}
 LARGEST_RADIUS_M = 0.02  # no hydrometeor's effective radius reaches 2 cm: a larger value is in the wrong units
+SMALLEST_RADIUS_M = 1e-7  # nor is one below 0.1 um (WRF's RE_* floor is 2.51 um): metres labelled um
 
 
 class SizeReader:
@@ -134,10 +135,12 @@ class SizeReader:
             r *= np.float32(RADIUS_UNITS[units.lower()])
         elif r.size and float(r.max()) > LARGEST_RADIUS_M:  # no units: micrometres where metres cannot be
             r *= np.float32(1e-6)
-        largest = float(r[rho_q > 0].max()) if np.any(rho_q > 0) else 0.0
-        if largest > LARGEST_RADIUS_M:
-            raise WeatherDataError(self.path, var, f"effective radii below {LARGEST_RADIUS_M} m in its units "
-                                   f"({units or 'none given'})", f"up to {largest:.3g} m: wrong units")
+        sized = r[(rho_q > 0) & (r > 0)]
+        largest, smallest = (float(sized.max()), float(sized.min())) if sized.size else (0.0, 0.0)
+        if largest > LARGEST_RADIUS_M or 0 < smallest < SMALLEST_RADIUS_M:
+            raise WeatherDataError(self.path, var, f"effective radii from {SMALLEST_RADIUS_M} to {LARGEST_RADIUS_M} m "
+                                   f"in its units ({units or 'none given'})",
+                                   f"{smallest:.3g} to {largest:.3g} m where the species is: wrong units")
         return r
 
     def attrs(self) -> dict:
@@ -147,6 +150,8 @@ class SizeReader:
             out[f"r_eff_source_{name}"] = f"file {var}"
         for name, rule in self.rules.items():
             out[f"r_eff_source_{name}"] = f"{self.scheme}: {rule.formula}"
+        if self.hail_rule is not None:
+            out["r_eff_source_graupel"] += f"; with QHAIL: {self.hail_rule.formula} (combined, 0.5 sum M3 / sum M2)"
         for name, (lo, hi) in self.ranges.items():
             out[f"r_eff_native_um_{name}"] = f"{1e6 * lo:.4g}..{1e6 * hi:.4g}"
         return out

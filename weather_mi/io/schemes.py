@@ -18,6 +18,6 @@ MP_SCHEMES = {0: "none", 1: "Kessler", 2: "Purdue Lin", 3: "WSM3", 4: "WSM5", 5:
 _ALL_FIVE = ("QCLOUD", "QRAIN", "QICE", "QSNOW", "QGRAUP")
 SCHEME_VARS = {1: ("QCLOUD", "QRAIN"), 2: _ALL_FIVE, 3: ("QCLOUD", "QRAIN"), 4: ("QCLOUD", "QRAIN", "QICE", "QSNOW"),
                6: _ALL_FIVE, 7: _ALL_FIVE, 8: _ALL_FIVE, 10: _ALL_FIVE, 14: ("QCLOUD", "QRAIN", "QICE", "QSNOW"),
-               16: _ALL_FIVE, 24: _ALL_FIVE, 26: _ALL_FIVE, 28: _ALL_FIVE, 38: _ALL_FIVE,
+               9: _ALL_FIVE + ("QHAIL",), 16: _ALL_FIVE, 17: _ALL_FIVE, 18: _ALL_FIVE, 22: _ALL_FIVE, 24: _ALL_FIVE, 26: _ALL_FIVE, 28: _ALL_FIVE, 38: _ALL_FIVE,
                50: ("QCLOUD", "QRAIN", "QICE"), 51: ("QCLOUD", "QRAIN", "QICE"), 52: ("QCLOUD", "QRAIN", "QICE"),
                53: ("QCLOUD", "QRAIN", "QICE")}

@@ -44,13 +44,13 @@ class SizeRule:
     volume_var: str | None = None
 
 
-def masked(rho_q, compute) -> np.ndarray:
-    """``compute(rho_q, has)`` (float64) where rho_q > 0, else 0, as float32 (rho_q floored at R1)."""
+def masked(rho_q, compute, floor=R1) -> np.ndarray:
+    """``compute(rho_q, has)`` (float64) where rho_q > 0, else 0, as float32 (rho_q floored at ``floor``)."""
     rq = np.asarray(rho_q, np.float64)
     out = np.zeros(rq.shape, np.float32)
     has = rq > 0
     if np.any(has):
-        out[has] = compute(np.maximum(rq[has], R1), has)
+        out[has] = compute(np.maximum(rq[has], floor), has)
     return out
 
 
