@@ -333,6 +333,9 @@ def test_nssl_open_wrf_radii_within_the_clips(tmp_path):
     n = {v: 10 ** rng.uniform(0, 9, shape) for v in ("QNDROP", "QNRAIN", "QNICE", "QNSNOW", "QNGRAUPEL", "QNHAIL")}
     path = write_wrfout(tmp_path / "n.nc", mp_physics=18, override={**q, **n})
     hyd = wm.open_wrf(path)
+    scheme = wm.optical_volume(hyd, "physical", sizes="scheme", phase_tables=[None] * 5)
+    fixed = wm.optical_volume(hyd, "physical", sizes="physical", phase_tables=[None] * 5)
+    assert np.all(np.isfinite(scheme.beta_total)) and not np.array_equal(scheme.beta_total, fixed.beta_total)
     for name, (lo, hi) in (("cloud", (2.51e-6, 50e-6)), ("ice", (10.01e-6, 125e-6)), ("snow", (25e-6, 999e-6)),
                            ("rain", (50e-6, 2999e-6)), ("graupel", (50e-6, 40e-3))):
         r = hyd[f"r_eff_{name}"].values[hyd[f"q_{name}"].values > 0]

@@ -1,11 +1,7 @@
 """Particle sizes from a WRF microphysics scheme's own size distributions: the effective radius
 r_eff = <r^3>/<r^2> (m) of each species at each grid point, the radius that makes Eq. 4 exact for the
-distribution (beta_ext = 3 rho_air q / (2 rho_p r_eff) with the geometric-optics Q_ext = 2).
-
-For a gamma distribution in diameter N(D) = N0 D^mu exp(-lambda D) the mass content is
-rho_air q = (pi rho_p / 6) N_t Gamma(mu + 4) / (Gamma(mu + 1) lambda^3) (N_t = N0 Gamma(mu + 1) / lambda^(mu+1)),
-so lambda = (pi rho_p N_t Gamma(mu + 4) / (6 Gamma(mu + 1) rho_air q))^(1/3) and r_eff = (mu + 3) / (2 lambda)
-(exponential, mu = 0: r_eff = 1.5 / lambda, and with a fixed intercept N0: lambda = (pi rho_p N0 / (rho_air q))^(1/4)).
+distribution (beta_ext = 3 rho_air q / (2 rho_p r_eff) with the geometric-optics Q_ext = 2). The shared
+distributions (gamma, exponential, graupel and hail combined) are in ``size_distributions``.
 
 Schemes (WRF source, github.com/wrf-model/WRF, ``phys/``; each formula's routine is named where it is used):
 
@@ -16,19 +12,24 @@ Schemes (WRF source, github.com/wrf-model/WRF, ``phys/``; each formula's routine
   rain exponential with N0r = 8e6 m^-4 (WDM: gamma mu = 1 from QNRAIN, ``pidnr = 4 pi rho_w``), graupel
   exponential with N0g = 4e6 m^-4 and rho_g = 500, each slope limited as the scheme limits it (lamdarmax,
   lamdasmax, lamdagmax; WDM lamdarmin/max) and snow clipped to effectRad's 25-999 um. WRF's radiation radius of
-  snow is 0.5 / lambda (the mean radius); Eq. 4 needs <r^3>/<r^2> = 1.5 / lambda, used here.
+  snow is 0.5 / lambda (the mean radius); Eq. 4 needs <r^3>/<r^2> = 1.5 / lambda, used here. WSM7/WDM7 hail
+  (``module_mp_wsm7.F``): exponential, N0h = 4e4 m^-4, rho_h = 912, lamdahmax = 2e4, combined with graupel.
 * Thompson (Thompson et al. 2008; ``module_mp_thompson.F``, ``calc_effectRad``): cloud gamma with
   mu_c = min(15, 1000e6 / N_c + 2), N_c = 100e6 m^-3 or QNCLOUD (aerosol-aware); ice mu = 0, rho_i = 890 from
   QNICE; snow 0.5 M3 / M2 from the Field et al. (2005) moment relations (bm_s = 2, am_s = 0.069); clipping
   2.51-50 um (cloud), 2.51-125 um (ice), 5.01-999 um (snow). Rain mu = 0 from QNRAIN with the scheme's
-  median-volume-diameter limits (0.75 D0r = 37.5 um to 2.5 mm); graupel rho_g = 500 with the intercept of
-  ``mp_thompson``'s graupel N0 formula without its supercooled-rain term and column minimum (xslw1 = 0.01).
+  median-volume-diameter limits (0.75 D0r = 37.5 um to 2.5 mm); graupel as ``mp_thompson`` of the WRF version
+  in the file's TITLE sets its intercept (``thompson_graupel``), or from QNGRAUPEL.
 * Morrison two-moment (Morrison et al. 2009; ``module_mp_morr_two_moment.F``, EFFC/EFFI/EFFS/EFFR/EFFG):
   cloud gamma with the Martin et al. (1994) shape (2 <= pgam <= 10) from N_c = 250 cm^-3 (INUM = 1) or
   QNCLOUD; ice (rho 500), snow (100), rain (997) and graupel (400) exponential from QNICE, QNSNOW, QNRAIN,
   QNGRAUPEL, each slope clipped to the scheme's LAMMIN*/LAMMAX*.
+* NSSL two-moment (17, 18, 22): ``nssl_sizes``; Milbrandt-Yau (9): ``milbrandt_sizes``.
+* Kessler (1): rain Marshall-Palmer (N0 = 8e6 m^-4); cloud water has no size distribution in the scheme.
+* P3 (50-53; ``module_mp_p3.F``): cloud and rain from ``get_cloud_dsd2`` / ``get_rain_dsd2`` (QNCLOUD or
+  nccnst = 200 cm^-3; QNRAIN, mu_r = 0); its ice needs the scheme's lookup tables: only the file's RE_ICE.
 
-Other schemes (NSSL, Milbrandt-Yau, P3, ...) have no rule here: ``rules`` returns none for them, and the
+Other schemes (NSSL one-moment, Lin, Goddard, ...) have no rule here: ``rules`` returns none for them, and the
 reader warns and keeps the species table's radii.
 """
 from __future__ import annotations
@@ -175,9 +176,10 @@ def thompson_graupel_rule(version, has) -> SizeRule:
         needs, v = (), thompson_graupel.NEWEST
     def one_moment(rho_q, number=None, t_k=None, rho=None, QRAIN=None, QNRAIN=None, QCLOUD=None):
         return thompson_graupel.radius(v, rho_q, t_k, rho, QRAIN, QNRAIN, QCLOUD)
+    formula = (f"exponential, mp_thompson's N0 of WRF V{v}" + ("" if version else " (version unknown: newest)")
+               + (f" (no {', '.join(lacking)} for V{version}'s)" if lacking else ""))
     return SizeRule("graupel", one_moment, needs_temperature=v in ("3.3", "3.4", "3.5"), inputs=needs,
-                    formula=f"exponential, mp_thompson's N0 of WRF V{v}" + ("" if version else " (version unknown: newest)")
-                    + (f" (no {', '.join(lacking)} for V{version}'s)" if lacking else ""))
+                    formula=formula)
 
 
 # ---- Morrison ----
