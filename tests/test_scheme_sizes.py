@@ -117,8 +117,10 @@ def test_nssl_variable_density_graupel():
 # ---- Milbrandt-Yau (module_mp_milbrandt2mom.F) ----
 
 def my_fortran(cat, qx, nx, de):
-    """The scheme's iLAMDA_x with its icex* constants (alpha_x, cmx, dmx as in the Fortran), r = 0.5 M3/M2."""
+    """The scheme's iLAMDA_x with its icex* constants (alpha_x, cmx, dmx as in the Fortran), r = 0.5 M3/M2;
+    N floored at epsN = 1e-3 m^-3."""
     piov6 = pi / 6.0
+    nx = max(nx, 1e-3)
     if cat == "cloud":                                  # alpha_c = 1, MUc = 3, reff_c = 0.664639 iLAMc
         icexc9 = 1.0 / (G(1.0 + 1.0 + 3.0 / 3.0) / G(1.0 + 1.0) * piov6 * 1000.0)
         return 0.664639 * (de * qx / nx * icexc9) ** (1 / 3)
@@ -135,8 +137,8 @@ def my_fortran(cat, qx, nx, de):
 @pytest.mark.parametrize("cat", ["cloud", "ice", "rain", "snow", "graupel", "hail"])
 def test_milbrandt_yau(cat):
     de = 0.8
-    for qx in Q[2:]:
-        for nx in N[2:]:
+    for qx in Q:
+        for nx in N[1:]:
             got = float(milbrandt_sizes.radius(cat, np.array([qx * de]), np.array([nx]))[0])
             assert got == pytest.approx(my_fortran(cat, qx, nx, de), rel=1e-5), (cat, qx, nx)
     # the iLAMmin floors bind for rain/graupel/hail at tiny contents: 1.5 um

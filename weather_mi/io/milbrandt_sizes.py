@@ -47,7 +47,7 @@ def radius(name, rho_q, number) -> np.ndarray:
     def f(rq, has):
         ilam = np.maximum(ilam_min, (rq / np.maximum(sel(number, has), EPS_N) * icex) ** (1.0 / d))
         return factor * ilam
-    return masked(rho_q, f)
+    return masked(rho_q, f, floor=0.0)  # the formula down to any content (the scheme sets no threshold here)
 
 
 def rule_function(name):
