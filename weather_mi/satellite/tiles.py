@@ -60,13 +60,8 @@ class OutlineVolume:
 
 def tile_hydrometeors(job: TileJob):
     """The tile's sub-box of the file as Hydrometeors on the whole domain's height grid, in its frame."""
-    from ..io.wrf import open_wrf
-    dz, bottom, top, dx, dy = job.grid
-    t = job.tile
-    hyd = open_wrf(job.path, job.time_index, x=t.x, y=t.y, dz=dz, top=top, bottom=bottom, sizes=job.read_sizes)
-    # the domain's spacing (a sub-box's mean map factor differs from the domain's)
-    return hyd.assign_coords(x=("x", (t.x.start + np.arange(hyd.sizes["x"])) * dx, hyd.x.attrs),
-                             y=("y", (t.y.start + np.arange(hyd.sizes["y"])) * dy, hyd.y.attrs))
+    from ..io.outline import read_sub_box
+    return read_sub_box(job.path, job.time_index, job.grid, job.tile.x, job.tile.y, job.read_sizes)
 
 
 def render_tile(job: TileJob) -> dict:
