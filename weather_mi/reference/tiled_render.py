@@ -148,8 +148,9 @@ def render_pixels(spec: SceneSpec, vol, tile: Tile, variant: str | None = None, 
                                       lambda i: pix, n_pixels=spec.width * spec.height, limit=len(spp_list)):
             n = i + 1
             welford_update(mean, m2, raw.astype(np.float64)[tile.rows, tile.cols, :3] * scale, n)
+        transmittance = tile_transmittance(spec, vol, tile)  # at the path tracer's width, as render_reference's
     return {"radiance": mean.astype(np.float32), "stderr": pass_stderr(m2, n).astype(np.float32),
-            "transmittance": tile_transmittance(spec, vol, tile), "spp": int(sum(spp_list))}
+            "transmittance": transmittance, "spp": int(sum(spp_list))}
 
 
 def tile_transmittance(spec: SceneSpec, vol, tile: Tile) -> np.ndarray:
