@@ -5,6 +5,7 @@ Finished tiles are kept in OUT.exr.tiles/ until the image is written (``io.resum
 renders only the missing ones, with the options recorded there (other options are refused)."""
 from __future__ import annotations
 
+from contextlib import contextmanager
 from pathlib import Path
 
 # what does not change a tiled product's pixels: not recorded for --resume
@@ -18,6 +19,22 @@ def recorded_options(args) -> dict:
     files = args.file if isinstance(args.file, list) else [args.file]
     out["file"] = [str(Path(f).resolve()) for f in files if f is not None]
     return out
+
+
+@contextmanager
+def tiles_kept(store):
+    """An error while the tiles render (a worker's budget too small for a sub-box, a lost cluster) named with the
+    finished tiles ``store`` keeps and how to continue (a RuntimeError); others as they are."""
+    from ..errors import WeatherDataError
+    try:
+        yield
+    except (WeatherDataError, ValueError, ConnectionError, RuntimeError) as exc:
+        done = len(list(store.folder.glob("tile-*.npz")))
+        if not done:
+            raise
+        raise RuntimeError(f"{exc}\n{done} finished tiles are kept in {store.folder}: run the same command with "
+                           "--resume to render only the missing ones (--workers, --scheduler and "
+                           "WEATHER_MI_MAX_MEMORY_GB may change)") from exc
 
 
 def check_render_tile_options(args) -> None:
@@ -70,7 +87,7 @@ def render_tiles_command(args, exr: Path, png: Path) -> Path:
           f"sub-box {cols} columns ({100 * cols / (nx * ny):.0f}% of the domain) with a {args.halo:g} km halo")
     optics = dict(species=args.preset, scale=parse_scale(args.scale), phase=args.phase, sizes=args.sizes,
                   size_classes=args.size_classes, release=True, keep=("weights",))
-    with session(args.scheduler, args.workers) as client:
+    with session(args.scheduler, args.workers) as client, tiles_kept(store):
         img, figs = tr.render_tiles(plan, client, store=store, optics=optics, surface=args.surface, wind_m_s=args.wind,
                                     read_sizes=args.sizes not in ("physical", "paper"), **flag_values(args),
                                     on_tile=lambda r: print(f"  tile {r['tile'].index + 1}/{len(plan.tiles)}: grid "

@@ -46,7 +46,7 @@ def satellite_tiles_command(args, resolution: float, nc: Path, exr: Path, png: P
     from ..satellite.imagery import write_satellite
     from ..io.resumable import TileStore, tiles_folder
     from ..io.times import parse_time
-    from .render_tiles import recorded_options
+    from .render_tiles import recorded_options, tiles_kept
     plan = st.tiled_satellite(args.file, parse_time(args.time), args.satellite, args.band or "0.64", resolution,
                               tile_px=args.tile_size, halo_km=args.halo, rayleigh=args.rayleigh,
                               ground_albedo=args.ground_albedo, seed=args.seed, lat=args.lat, lon=args.lon,
@@ -62,7 +62,7 @@ def satellite_tiles_command(args, resolution: float, nc: Path, exr: Path, png: P
           f"{len(plan.tiles)} tiles of up to {args.tile_size} px; grid {nx} x {ny} x {nz}, the largest sub-box "
           f"{cols} columns ({100 * cols / (nx * ny):.0f}% of the domain) with a {args.halo:g} km halo")
     optics = dict(species=args.preset, phase=args.phase, sizes=args.sizes, size_classes=args.size_classes)
-    with session(args.scheduler, args.workers) as client:
+    with session(args.scheduler, args.workers) as client, tiles_kept(store):
         ds, img, figs = st.render_tiles(plan, client, optics=optics, store=store,
                                         read_sizes=args.sizes not in ("physical", "paper"), **estimator,
                                         on_tile=lambda r: print(f"  tile {r['tile'].index + 1}/{len(plan.tiles)}: "
