@@ -147,7 +147,7 @@ class TiledSatellite:
 
 def tiled_satellite(path, time=None, sat="goes-east", band_name: str = "0.64", resolution_km: float = 1.0, *,
                     tile_px: int = DEFAULT_TILE_PX, halo_km: float = DEFAULT_HALO_KM, rayleigh: bool = False,
-                    ground_albedo: float = 0.06, seed: int = 0, max_vza_deg: float = 80.0, lat=None, lon=None,
+                    ground_albedo=0.06, seed: int = 0, max_vza_deg: float = 80.0, lat=None, lon=None,
                     date=None, surface: str = "file", wind_m_s: float | None = None,
                     rgb: bool = False) -> TiledSatellite:
     """The plan of a tiled satellite image of one time of the wrfout ``path`` (``imagery.satellite_scene``'s
