@@ -240,3 +240,28 @@ def test_satellite_tiles_in_true_colour_resume_only_the_missing_tiles(tmp_path, 
     ds, _, _ = st.render_tiles(plan, optics=dict(species="physical", sizes="physical", phase="paper"),
                                read_sizes=False, spp=2)
     np.testing.assert_array_equal(ds.reflectance.values, ds1.reflectance.values)
+
+
+@needs_data
+def test_a_resumed_aerial_render_renders_only_the_missing_tiles(tmp_path):
+    """``render_tiles`` with a ``TileStore``: every tile saved as it comes back; with one tile's file gone, a
+    second run renders that tile alone and puts together the same image bit for bit; a store with other
+    options is refused without --resume and with other options on --resume."""
+    from weather_mi.io.resumable import TileStore
+    outline, spec = _supercell_spec(16, 12)
+    plan = tr.plan_render(outline, spec, tile_px=8, halo_km=5.0)
+    fast = dict(optics=dict(species="physical", sizes="physical", phase="paper"), read_sizes=False, spp=2)
+    store = TileStore(tmp_path / "out.exr.tiles")
+    store.check({"spp": 2}, resume=False)
+    first, _ = tr.render_tiles(plan, store=store, **fast)
+    assert sorted(p.name for p in store.folder.glob("tile-*.npz")) == [f"tile-{k}.npz" for k in range(4)]
+    store.path(1).unlink()
+    rendered = []
+    again, figs = tr.render_tiles(plan, store=store, on_tile=lambda r: rendered.append(r["tile"].index), **fast)
+    assert rendered == [1] and len(figs) == 4
+    np.testing.assert_array_equal(again.radiance, first.radiance)
+    np.testing.assert_array_equal(again.stderr, first.stderr)
+    with pytest.raises(ValueError, match="add --resume"):
+        store.check({"spp": 2}, resume=False)
+    with pytest.raises(ValueError, match="spp 2, now 4"):
+        store.check({"spp": 4}, resume=True)
