@@ -22,7 +22,9 @@ from . import air_option
 from .options import add_dask_options, add_place_options, add_scene_options, add_sizes_option, add_source, \
     add_surface_options, check_unfinished, open_placed, parse_scale, parse_size
 from .periodic_option import add_periodic_option, periodic_value
+from .render_tiles import check_render_tile_options, render_tiles_command
 from .satellite_command import add_satellite_parser, satellite_command
+from .satellite_tiles import add_tile_options
 from .spectral_option import add_spectral_options, check_spectral_options, save_png, variant_of
 from .summary import info_text
 from ..optics.volume import default_sizes
@@ -49,14 +51,17 @@ def render_command(args) -> Path:
     holding the outputs' lock, write EXR + PNG."""
     from ..io.output_paths import OutputLock, check_writable_folder, render_outputs
     check_scene_options(args)
+    check_render_tile_options(args)
     check_time(args.file, args.demo, args.time)
-    if args.denoise:
+    if args.denoise and args.tile_size is None:
         from ..display.denoise import check_available
         check_available()
     exr, png, ckpt = render_outputs(args.output)
     check_writable_folder(exr)
     with OutputLock(exr):
         check_unfinished(ckpt, args.resume)
+        if args.tile_size is not None:  # tiles as Dask tasks, no process reading the whole domain
+            return render_tiles_command(args, exr, png)
         return _render(args, exr, png, ckpt)
 
 
@@ -178,8 +183,10 @@ def _add_render_parser(sub) -> None:
     render.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=True,
                         help="the PNG shows the OIDN-denoised image (an extra EXR layer, denoised.R/G/B; the "
                              "EXR's radiance and standard error stay unbiased); --no-denoise: the raw radiance")
-    render.add_argument("--resume", action="store_true", help="continue from OUTPUT.ckpt.npz")
+    render.add_argument("--resume", action="store_true", help="continue from OUTPUT.ckpt.npz (--tile-size: from "
+                                                              "the finished tiles in OUTPUT.exr.tiles/)")
     add_dask_options(render)
+    add_tile_options(render)
     render.add_argument("-o", "--output", default="weather-mi.exr",
                         help="OUT.exr (or OUT.png): writes OUT.exr and OUT.png; OUT.exr.ckpt.npz while rendering")
 
@@ -299,11 +306,15 @@ def _resume_hint(args) -> str:
     if args.command not in ("render", "satellite"):
         return ""
     from ..io.output_paths import render_outputs
+    from ..io.resumable import tiles_folder
     from ..satellite.imagery import satellite_outputs
     try:
-        ckpt = (render_outputs(args.output) if args.command == "render" else satellite_outputs(args.output))[-1]
+        outs = render_outputs(args.output) if args.command == "render" else satellite_outputs(args.output)
     except ValueError:
         return ""
+    ckpt, work = outs[-1], tiles_folder(outs[0])
+    if getattr(args, "tile_size", None) is not None and work.is_dir():
+        return f"; the finished tiles are kept in {work}: run the same command with --resume to continue"
     from ..display.satellite_loop import parts_folder
     if args.command == "satellite" and parts_folder(args.output).is_dir():
         return "; the finished times are kept: run the same command with --resume to continue"

@@ -1,6 +1,9 @@
-"""``satellite --tile-size PX [--halo KM] [--scheduler ADDR | --workers N]``: the image in tiles of pixels as
-Dask tasks, each worker reading only its tile's sub-box of the wrfout plus the halo (``satellite.tiles``);
-the client writes the same NetCDF, EXR and PNG as the one-process command."""
+"""``satellite --tile-size PX [--halo KM] [--scheduler ADDR | --workers N] [--rgb] [--resume]``: the image in
+tiles of pixels as Dask tasks, each worker reading only its tile's sub-box of the wrfout plus the halo
+(``satellite.tiles``); the client writes the same NetCDF, EXR and PNG as the one-process command (``--rgb``: the
+true-colour bands in one render per tile, the recipe of ``satellite.truecolor`` applied to the assembled bands).
+Finished tiles are kept in OUT.nc.tiles/ until the products are written (``io.resumable.TileStore``):
+``--resume`` renders only the missing ones, with the options recorded there (other options are refused)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -24,12 +27,12 @@ def check_tile_options(args) -> None:
     from .satellite_loop import wants_loop
     bad = [(args.demo is not None, "--demo (a tiled render reads a wrfout file's sub-boxes)"),
            (args.demo is None and wants_loop(args), "several files or times"),
-           (args.rgb, "--rgb"), (args.resume, "--resume"), (getattr(args, "periodic", None) not in (None, "off"),
-                                                            "--periodic")]
+           (args.rgb and args.rayleigh, "--rgb --rayleigh (the Rayleigh correction needs the whole domain's air)"),
+           (getattr(args, "periodic", None) not in (None, "off"), "--periodic")]
     found = [why for cond, why in bad if cond]
     if found:
         raise ValueError(f"--tile-size {args.tile_size}: not with {', '.join(found)}; a tiled render is one band "
-                         "of one time of one wrfout file")
+                         "(or --rgb) of one time of one wrfout file")
     from ..io.sources import kind
     if kind(args.file) != "wrf":
         raise ValueError(f"--tile-size: {args.file} is not a wrfout file (a tiled render reads WRF sub-boxes)")
@@ -41,21 +44,26 @@ def satellite_tiles_command(args, resolution: float, nc: Path, exr: Path, png: P
     from ..reference.cluster import session
     from ..satellite import tiles as st
     from ..satellite.imagery import write_satellite
+    from ..io.resumable import TileStore, tiles_folder
     from ..io.times import parse_time
+    from .render_tiles import recorded_options, tiles_kept
     plan = st.tiled_satellite(args.file, parse_time(args.time), args.satellite, args.band or "0.64", resolution,
                               tile_px=args.tile_size, halo_km=args.halo, rayleigh=args.rayleigh,
-                              ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
-                              seed=args.seed, lat=args.lat, lon=args.lon, date=args.date, surface=args.surface,
-                              wind_m_s=args.wind)
+                              ground_albedo=args.ground_albedo, seed=args.seed, lat=args.lat, lon=args.lon,
+                              date=args.date, surface=args.surface, wind_m_s=args.wind, rgb=args.rgb)
+    store = TileStore(tiles_folder(nc))
+    store.check(dict(recorded_options(args), resolution_km=resolution), args.resume)
     w, h = plan.scene.view.size
     nz, ny, nx = plan.outline.shape
     cols = max(t.cells for t in plan.tiles)
-    print(f"{plan.scene.satellite.name}, band {plan.scene.band.name} um: {w} x {h} pixels of {resolution:g} km in "
+    what = "true colour (" + ", ".join(b.name for b in plan.scene.bands) + " um)" if args.rgb else \
+        f"band {plan.scene.band.name} um"
+    print(f"{plan.scene.satellite.name}, {what}: {w} x {h} pixels of {resolution:g} km in "
           f"{len(plan.tiles)} tiles of up to {args.tile_size} px; grid {nx} x {ny} x {nz}, the largest sub-box "
           f"{cols} columns ({100 * cols / (nx * ny):.0f}% of the domain) with a {args.halo:g} km halo")
     optics = dict(species=args.preset, phase=args.phase, sizes=args.sizes, size_classes=args.size_classes)
-    with session(args.scheduler, args.workers) as client:
-        ds, img, figs = st.render_tiles(plan, client, optics=optics,
+    with session(args.scheduler, args.workers) as client, tiles_kept(store):
+        ds, img, figs = st.render_tiles(plan, client, optics=optics, store=store,
                                         read_sizes=args.sizes not in ("physical", "paper"), **estimator,
                                         on_tile=lambda r: print(f"  tile {r['tile'].index + 1}/{len(plan.tiles)}: "
                                                                 f"grid {r['grid_shape']}, {r['seconds']:.1f} s, "
@@ -64,7 +72,8 @@ def satellite_tiles_command(args, resolution: float, nc: Path, exr: Path, png: P
     shown = shown_dataset(ds, img, args.denoise)
     write_satellite(ds, img, nc, exr)
     write_picture(shown, png, denoise=False)
+    store.remove()
     print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s, "
           f"{len(figs)} tiles; cloud pixels {int(ds.cloud.sum())}, mean relative standard error "
-          f"{ds.attrs['cloud_rse_mean']:.3f})")
+          f"{ds.attrs.get('cloud_rse_mean', float('nan')):.3f})")
     return nc

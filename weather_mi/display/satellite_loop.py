@@ -59,26 +59,11 @@ def time_tag(valid_time) -> str:
     return str(valid_time).replace("-", "").replace(":", "").replace("_", "T")
 
 
-OPTIONS_FILE = "options.json"
-
-
 def check_loop_options(work: Path, options: dict | None, resume: bool) -> None:
     """Record ``options`` (JSON-able: what the loop's times depend on) in ``work``, or, resuming, compare
     them with those recorded: a ValueError naming each that differs (before anything is rendered)."""
-    import json
-    if options is None:
-        return
-    options = json.loads(json.dumps(options, default=str))
-    path = work / OPTIONS_FILE
-    if resume and path.is_file():
-        before = json.loads(path.read_text())
-        diff = [f"{k} {before.get(k)!r}, now {options.get(k)!r}" for k in sorted(set(before) | set(options))
-                if before.get(k) != options.get(k)]
-        if diff:
-            raise ValueError(f"{work} holds times rendered with other options ({'; '.join(diff)}): resume with "
-                             "the same options, or delete it to render the loop afresh")
-    work.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(options, indent=1, sort_keys=True))
+    from ..io.resumable import check_recorded_options
+    check_recorded_options(work, options, resume, "times", "the loop")
 
 
 def satellite_loop(hyds: list, render_time, nc, *, resume: bool = False, fps: float = 4.0,

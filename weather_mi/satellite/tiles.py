@@ -45,6 +45,7 @@ class TileJob:
     wind_m_s: float | None = None
     sun_meta: dict = field(default_factory=dict)   # ``place.sun_from_time``'s, of the whole domain
     satellite: str = "goes-east"
+    rgb: bool = False              # the true-colour bands, one per channel (``bands.rgb_volume``)
 
 
 @dataclass(frozen=True)
@@ -60,13 +61,8 @@ class OutlineVolume:
 
 def tile_hydrometeors(job: TileJob):
     """The tile's sub-box of the file as Hydrometeors on the whole domain's height grid, in its frame."""
-    from ..io.wrf import open_wrf
-    dz, bottom, top, dx, dy = job.grid
-    t = job.tile
-    hyd = open_wrf(job.path, job.time_index, x=t.x, y=t.y, dz=dz, top=top, bottom=bottom, sizes=job.read_sizes)
-    # the domain's spacing (a sub-box's mean map factor differs from the domain's)
-    return hyd.assign_coords(x=("x", (t.x.start + np.arange(hyd.sizes["x"])) * dx, hyd.x.attrs),
-                             y=("y", (t.y.start + np.arange(hyd.sizes["y"])) * dy, hyd.y.attrs))
+    from ..io.outline import read_sub_box
+    return read_sub_box(job.path, job.time_index, job.grid, job.tile.x, job.tile.y, job.read_sizes)
 
 
 def render_tile(job: TileJob) -> dict:
@@ -77,14 +73,16 @@ def render_tile(job: TileJob) -> dict:
     from ..optics.volume import default_sizes, optical_volume
     from ..reference.render import render_reference
     from ..scene.spec import Camera, Ground, SceneSpec, Sun
-    from .bands import band, band_volume
+    from .bands import band, band_volume, rgb_volume, true_color_bands
+    from .geostationary import satellite
     t0 = time.perf_counter()
     hyd = tile_hydrometeors(job)
     optics = dict(job.optics)
     optics["sizes"] = optics.get("sizes") or default_sizes(hyd)
     vol = optical_volume(hyd, **optics)
     b = band(job.band)
-    bvol = _with_surface(job, band_volume(vol, b), b, hyd)
+    bands = true_color_bands(satellite(job.satellite)) if job.rgb else (b,)
+    bvol = _with_surface(job, rgb_volume(vol, bands) if job.rgb else band_volume(vol, b), bands, hyd)
     if job.rayleigh:
         from ..optics.rayleigh import with_rayleigh
         bvol = with_rayleigh(bvol, b.wavelength_m, hyd["rho_air"].values)
@@ -105,16 +103,16 @@ def render_tile(job: TileJob) -> dict:
             "peak_rss_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024}
 
 
-def _with_surface(job: TileJob, bvol, b, hyd):
-    """The sub-box's ground as ``imagery.satellite_scene`` puts it (``scene.surface``; the sea's glint from each
-    column's own sun, ``glint.sea_normals``, on the sub-box's columns)."""
+def _with_surface(job: TileJob, bvol, bands, hyd):
+    """The sub-box's ground in ``bands`` as ``imagery.satellite_scene`` puts it (``scene.surface``; the sea's glint
+    from each column's own sun, ``glint.sea_normals``, on the sub-box's columns)."""
     from dataclasses import replace
 
     from ..scene.place import place_of
     from ..scene.spec import Sun
     from ..scene.surface import with_surface
     from .geostationary import satellite
-    bvol = with_surface(bvol, [b.wavelength_m * 1e6], job.surface, job.wind_m_s)
+    bvol = with_surface(bvol, [b.wavelength_m * 1e6 for b in bands], job.surface, job.wind_m_s)
     place = place_of(hyd) if "lat" in hyd.coords else None
     if bvol.terrain is not None and bvol.terrain.sea and place is not None:
         from .glint import sea_normals
@@ -149,16 +147,18 @@ class TiledSatellite:
 
 def tiled_satellite(path, time=None, sat="goes-east", band_name: str = "0.64", resolution_km: float = 1.0, *,
                     tile_px: int = DEFAULT_TILE_PX, halo_km: float = DEFAULT_HALO_KM, rayleigh: bool = False,
-                    ground_albedo: float = 0.06, seed: int = 0, max_vza_deg: float = 80.0, lat=None, lon=None,
-                    date=None, surface: str = "file", wind_m_s: float | None = None) -> TiledSatellite:
+                    ground_albedo=0.06, seed: int = 0, max_vza_deg: float = 80.0, lat=None, lon=None,
+                    date=None, surface: str = "file", wind_m_s: float | None = None,
+                    rgb: bool = False) -> TiledSatellite:
     """The plan of a tiled satellite image of one time of the wrfout ``path`` (``imagery.satellite_scene``'s
     view and sun from the outline; ``lat``/``lon``/``date`` place an ideal case; ``surface``, ``wind_m_s``:
-    the ground, as ``satellite_scene``'s, built per tile)."""
+    the ground, as ``satellite_scene``'s, built per tile; ``rgb``: the true-colour bands in one render, one per
+    channel, ``ground_albedo`` one value or one per band, None: the sea's per band (``truecolor``'s))."""
     from ..scene.surface import check_surface
     check_surface(surface)
     from ..scene.place import place_of, sun_from_time
     from ..scene.spec import Camera, Ground, SceneSpec, Sun
-    from .bands import band, check_band_on
+    from .bands import SEA_ALBEDO, band, check_band_on, true_color_bands
     from .geostationary import satellite
     from .imagery import RAY_START_ABOVE_M, SatelliteScene
     from .rays import satellite_view
@@ -169,8 +169,16 @@ def tiled_satellite(path, time=None, sat="goes-east", band_name: str = "0.64", r
         raise ValueError(f"{path}: a satellite view needs the domain's latitude/longitude; the file has none "
                          "(an ideal case: give --lat and --lon, and --date for the sun)")
     sat = satellite(sat) if isinstance(sat, str) else sat
-    b = band(band_name)
+    bands = true_color_bands(sat) if rgb else ()
+    b = bands[0] if rgb else band(band_name)
     check_band_on(b, sat)
+    if rgb and rayleigh:
+        raise ValueError("--tile-size --rgb: not with --rayleigh (the per-band renders of the air and the Rayleigh "
+                         "correction need the whole domain's air column); drop one of them")
+    if rgb:
+        ground_albedo = tuple(SEA_ALBEDO[x.name] if ground_albedo is None else float(ground_albedo) for x in bands)
+    elif ground_albedo is None:
+        ground_albedo = 0.06
     top = outline.top_m + RAY_START_ABOVE_M
     view = satellite_view(place, sat, resolution_km, top, max_vza_deg, str(path))
     azimuth, elevation, sun_meta = sun_from_time(ds)
@@ -187,7 +195,7 @@ def tiled_satellite(path, time=None, sat="goes-east", band_name: str = "0.64", r
     terrain = None if surface == "flat" else Terrain.of(ds)
     vol = OutlineVolume(outline.bbox, species, {"source": str(path), "land_source": ds.attrs.get("land_source", "")},
                         terrain)
-    return TiledSatellite(SatelliteScene(spec, vol, view, sat, b, sun_meta, (), place.source), outline, tiles,
+    return TiledSatellite(SatelliteScene(spec, vol, view, sat, b, sun_meta, bands, place.source), outline, tiles,
                           float(halo_km), int(tile_px), surface, wind_m_s)
 
 
@@ -195,45 +203,41 @@ def tile_jobs(plan: TiledSatellite, *, optics: dict | None = None, read_sizes: b
               variant: str | None = None, **estimator) -> list[TileJob]:
     """One ``TileJob`` per tile of ``plan``."""
     from ..scene.spec import RayTable
-    o, spec = plan.outline, plan.scene.spec
+    o, spec, rgb = plan.outline, plan.scene.spec, bool(plan.scene.bands)
     jobs = []
     for t in plan.tiles:
         rows, cols = slice(t.rows.start, t.rows.stop + 1), slice(t.cols.start, t.cols.stop + 1)
         rays = RayTable(spec.rays.origins_m[rows, cols], spec.rays.directions[rows, cols])
         jobs.append(TileJob(o.path, o.time_index, (o.dz_m, o.bottom_m, o.top_m, o.dx_m, o.dy_m), t, rays,
                             (spec.sun.azimuth, spec.sun.elevation), plan.scene.band.name,
-                            "rayleigh" in plan.scene.vol.species, float(spec.ground.albedo[0]), int(spec.seed),
+                            "rayleigh" in plan.scene.vol.species,
+                            tuple(spec.ground.albedo) if rgb else float(spec.ground.albedo[0]), int(spec.seed),
                             read_sizes, dict(optics or {}), dict(estimator), variant, plan.surface, plan.wind_m_s,
-                            dict(plan.scene.sun_meta), plan.scene.satellite.name))
+                            dict(plan.scene.sun_meta), plan.scene.satellite.name, rgb))
     return jobs
 
 
 def render_tiles(plan: TiledSatellite, client=None, *, optics: dict | None = None, read_sizes: bool = True,
-                 on_tile=None, **estimator):
+                 on_tile=None, store=None, **estimator):
     """Render every tile of ``plan`` (Dask tasks on ``client``, or one after another in this process) and
     put them together: (``xarray.Dataset`` of ``imagery.satellite_dataset``, Image, [per-tile figures]).
-    ``estimator``: ``render_reference``'s (spp, target_rse, ...); ``on_tile(figures)`` after each tile."""
+    ``estimator``: ``render_reference``'s (spp, target_rse, ...); ``on_tile(figures)`` after each tile rendered;
+    ``store``: an ``io.resumable.TileStore`` whose finished tiles are read back instead of rendered, and into
+    which each new one is saved."""
     from ..kernel.variant import ensure_registered
+    from ..reference.tiled_render import finished_tiles, run_tiles
     variant = ensure_registered()  # this process's variant (the default where none is set): the workers' too
-    if client is not None:
-        from ..reference.cluster import check_workers
-        check_workers(client, None, variant)
     jobs = tile_jobs(plan, optics=optics, read_sizes=read_sizes, variant=variant, **estimator)
     t0 = time.perf_counter()
-    results = []
-    if client is None:
-        for job in jobs:
-            results.append(render_tile(job))
-            if on_tile:
-                on_tile(results[-1])
-    else:
-        futures = [client.submit(_render_tile_task, job, pure=False, key=f"weather-mi-tile-{job.tile.index}-"
-                                 f"{time.time_ns()}") for job in jobs]
-        for fut in futures:  # in tile order; the workers render them as they come
-            results.append(fut.result())
-            if on_tile:
-                on_tile(results[-1])
-    return assemble(plan, results, time.perf_counter() - t0)
+    results = finished_tiles(plan.tiles, store)
+    for r in run_tiles([j for j in jobs if j.tile.index not in results], render_tile, _render_tile_task, client,
+                       variant):
+        results[r["tile"].index] = r
+        if store is not None:
+            store.save(r["tile"].index, r)
+        if on_tile:
+            on_tile(r)
+    return assemble(plan, [results[t.index] for t in plan.tiles if t.index in results], time.perf_counter() - t0)
 
 
 def assemble(plan: TiledSatellite, results: list[dict], seconds: float):
@@ -260,6 +264,9 @@ def assemble(plan: TiledSatellite, results: list[dict], seconds: float):
             "tile_seconds": [round(r["seconds"], 3) for r in tiles],
             "tile_grid_shapes": [list(r["grid_shape"]) for r in tiles]}
     img = Image(rad, se, meta, trans)
+    if plan.scene.bands:  # true colour: a band per channel, the NetCDF's band dimension
+        from .truecolor import rgb_dataset
+        return rgb_dataset([satellite_dataset(plan.scene, img, c) for c in range(3)]), img, tiles
     return satellite_dataset(plan.scene, img), img, tiles
 
 
