@@ -50,7 +50,15 @@ def loop_options(args, resolution: float, reference_kw: dict) -> dict:
             "date": args.date, "satellite": args.satellite, "band": "rgb" if args.rgb else (args.band or "0.64"),
             "rayleigh": bool(args.rayleigh), "resolution_km": resolution, "preset": args.preset, "phase": args.phase,
             "ground_albedo": args.ground_albedo, "surface": args.surface, "wind": args.wind, "sizes": args.sizes,
-            "size_classes": args.size_classes, "periodic": periodic_value(args), "seed": args.seed, **reference_kw}
+            "size_classes": args.size_classes, "periodic": periodic_value(args), "seed": args.seed,
+            **air_options(args), **reference_kw}
+
+
+def air_options(args) -> dict:
+    """The loop's atmosphere (``satellite_air_option``): its kind, and its aerosol and ozone where clear."""
+    from .satellite_air_option import atmosphere_kind
+    kind = atmosphere_kind(args)
+    return {"atmosphere": kind, **({"aod": args.aod, "ozone": args.ozone} if kind == "clear" else {})}
 
 
 def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict) -> Path:
@@ -62,7 +70,9 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
     from .periodic_option import periodic_value
     from ..satellite import truecolor as tc
     from .options import surface_kw
+    from .satellite_air_option import satellite_atmosphere
     check_unfinished_loop(nc, args.resume)
+    atm = satellite_atmosphere(args)
     surface = surface_kw(args)
     hyds = open_placed_times(args)
     albedo = 0.06 if args.ground_albedo is None else args.ground_albedo
@@ -80,11 +90,11 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
             if args.rgb:
                 scenes = tc.true_color_scenes(hyd, vol, args.satellite, resolution, rayleigh=args.rayleigh,
                                               ground_albedo=args.ground_albedo, seed=args.seed,
-                                              **surface)
+                                              atmosphere=atm, **surface)
                 return tc.render_true_color(scenes, **kw)
             scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution,
                                        rayleigh=args.rayleigh, ground_albedo=albedo, seed=args.seed,
-                                       **surface)
+                                       atmosphere=atm, **surface)
             return si.render_satellite(scene, **kw)
         loop = satellite_loop(hyds, render_time, nc, resume=args.resume, fps=args.fps, denoise=args.denoise,
                               options=loop_options(args, resolution, reference_kw))
