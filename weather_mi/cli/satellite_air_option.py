@@ -3,15 +3,15 @@ around the model's box, on the sun's path: ``satellite.air``) and ``--view refle
 astronaut's eye would see: ``satellite.natural``)."""
 from __future__ import annotations
 
-DEFAULT_ATMOSPHERE = "clear"
+DEFAULT_ATMOSPHERE = "none"  # clear costs 2.3-2.4x the render time (benchmarks/satellite_atmosphere.py)
 
 
 def add_satellite_air_options(p) -> None:
     p.add_argument("--atmosphere", default=None, choices=("none", "clear"),
-                   help=f"clear (default {DEFAULT_ATMOSPHERE!r}; 'none' with --rayleigh or --tile-size): a clear 1-D "
-                        "atmosphere (molecules, ozone, aerosol) in the band(s), inside the model's box from its own air "
-                        "density, above its top and around it, and on the sun's path through a spherical shell; "
-                        "none: vacuum between the hydrometeors (the sun as it is above the air)")
+                   help="clear: a clear 1-D atmosphere (molecules, ozone, aerosol) in the band(s), inside the model's "
+                        "box from its own air density, above its top and around it, and on the sun's path through a "
+                        "spherical shell (about 2.3x the render time); none (default; always with --rayleigh or "
+                        "--tile-size): vacuum between the hydrometeors, the sun as it is above the air")
     p.add_argument("--aod", type=float, default=None,
                    help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
     p.add_argument("--ozone", type=float, default=None,

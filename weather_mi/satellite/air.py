@@ -30,9 +30,10 @@ from dataclasses import replace
 import numpy as np
 
 CHUNK = 2048            # rays per ``segment_air`` call
-TOP_LAYERS_M = (0.0, 30e3, 80e3)  # DISORT layers: 500 m up to 30 km, 2.5 km above
+TOP_LAYERS_M = (0.0, 30e3, 80e3)  # DISORT layers: LAYER_M up to 30 km, 5 km above
+LAYER_M = 1000.0
 ALBEDOS = (0.0, 0.1, 0.5)         # the surface albedos of the three DISORT solves (R_0, then K and s)
-N_STREAMS = 32
+N_STREAMS = 16                    # Rayleigh needs 4; the aerosol's forward peak is left to DISORT's corrections
 
 
 def air_layers(atm, wavelength_nm: float, ground_m: float = 0.0, split_m: float | None = None):
@@ -106,10 +107,10 @@ def above_box_coupling(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_node
 
 
 def _layer_edges(ground_m: float, split_m: float | None = None) -> np.ndarray:
-    """The heights (m, ascending) of ``air_layers``' layer edges: every 500 m to 30 km, every 2.5 km above,
+    """The heights (m, ascending) of ``air_layers``' layer edges: every ``LAYER_M`` to 30 km, every 5 km above,
     and ``split_m``."""
     lo, mid, top = TOP_LAYERS_M
-    edges = np.r_[np.arange(max(ground_m, lo), mid, 500.0), np.arange(mid, top + 1.0, 2500.0)]
+    edges = np.r_[np.arange(max(ground_m, lo), mid, LAYER_M), np.arange(mid, top + 1.0, 5000.0)]
     return np.unique(np.r_[edges, [] if split_m is None else [min(max(split_m, ground_m), top)]])
 
 
@@ -142,7 +143,7 @@ def with_air_outside(scene, img):
     band_nm = scene.vol.air.band_nm
     o, d, mu, phi, t0, t1 = pixel_angles(scene)
     hit = t0 <= t1
-    if scene.vol.periodic:  # the box's copies hold the air of every line of sight: A ends at the model top
+    if scene.vol.periodic and scene.vol.periodic != "transport":  # the copies seen: A ends at the model top
         t0, hit = np.where(hit, t0, 0.0), np.ones_like(hit)
     mu0 = float(scene.spec.sun.mu0)
     rad = np.asarray(img.radiance, np.float64).copy()
@@ -164,9 +165,10 @@ def _above(atm, scene, o, d, t_entry, band_nm, mu0):
     """(T_A, pi S_A / mu0) (n, 3) of the lines of sight (origins (n, 3) at the rays' start, directions) from the
     top of the atmosphere to ``t_entry`` past their start."""
     from ..optics.air.eye_path import segment_air, top_distance, wide_sun_table
-    table = wide_sun_table(atm, mu0, band_nm=band_nm)
     back = top_distance(o, -d)                      # from the start back up to the top of the air
     start = o - back[:, None] * d
+    reach = float(np.max(np.linalg.norm(start[:, :2], axis=-1), initial=0.0)) + 50e3
+    table = wide_sun_table(atm, mu0, reach_m=reach, n_mu=17, n_h=61, band_nm=band_nm)
     t, r = np.ones((len(o), 3)), np.zeros((len(o), 3))
     for i in range(0, len(o), CHUNK):
         sl = slice(i, i + CHUNK)
