@@ -103,7 +103,7 @@ def test_rayleigh_correction_of_the_clear_air_gives_back_the_sea():
         err = corrected[band] - SEA_ALBEDO[band]
         assert abs(err.mean()) < 0.015, (band, err.mean())
     raw = ds.reflectance.sel(band="0.47").values
-    assert np.abs(raw - SEA_ALBEDO["0.47"]).min() > 0.04
+    assert raw.mean() - SEA_ALBEDO["0.47"] > 0.04
 
 
 def _sun_xy():
