@@ -48,21 +48,27 @@ def satellite_atmosphere(args):
     return atmosphere_of(kind, args.aod, args.ozone)
 
 
-def check_natural_view(args) -> None:
-    """``--view natural`` renders its own wavelengths, one time, in one process: a ValueError naming --band,
-    --rgb, --rayleigh, --tile-size or a loop."""
+def check_natural_view(args, loop: bool) -> None:
+    """``--view natural`` renders its own wavelengths, one time (``loop``: several), in one process: a ValueError
+    naming --band, --rgb, --rayleigh, --tile-size or a loop."""
     if args.view != "natural":
         return
-    from .satellite_loop import wants_loop
     found = [why for cond, why in ((args.band is not None, f"--band {args.band}"), (args.rgb, "--rgb"),
                                    (args.rayleigh, "--rayleigh"),
                                    (getattr(args, "tile_size", None) is not None, "--tile-size"),
-                                   (wants_loop(args), "several files or times"))
+                                   (loop, "several files or times"))
              if cond]
     if found:
         raise ValueError(f"--view natural: not with {', '.join(found)}; it renders its own wavelengths (400-700 nm) "
                          "of one time in one process")
 
 
+def air_options(args) -> dict:
+    """What a loop records of its atmosphere (``satellite_loop.loop_options``): its kind, and its aerosol and
+    ozone where clear."""
+    kind = atmosphere_kind(args)
+    return {"atmosphere": kind, **({"aod": args.aod, "ozone": args.ozone} if kind == "clear" else {})}
+
+
 __all__ = ["DEFAULT_ATMOSPHERE", "add_satellite_air_options", "atmosphere_kind", "satellite_atmosphere",
-           "check_natural_view"]
+           "check_natural_view", "air_options"]

@@ -24,14 +24,14 @@ def satellite_command(args) -> Path:
     from ..satellite import imagery as si
     resolution = si.parse_resolution_km(args.resolution)
     nc, exr, png, ckpt = si.satellite_outputs(args.output)
-    check_natural_view(args)
+    from .satellite_loop import satellite_loop_command, wants_loop
+    check_natural_view(args, wants_loop(args))
     check_satellite_bands(args)
     check_tile_options(args)
     satellite_atmosphere(args)
     if args.denoise:
         from ..display.denoise import check_available
         check_available()
-    from .satellite_loop import satellite_loop_command, wants_loop
     if wants_loop(args):  # several times: one NetCDF with a time dimension, a PNG per time, an MP4
         check_writable_folder(nc)
         with OutputLock(nc):

@@ -45,6 +45,7 @@ def loop_options(args, resolution: float, reference_kw: dict) -> dict:
     the satellite, the band(s), the optics, the ground and the estimator; not --fps, --denoise, --time (a
     time is one time whatever the selection) or where it renders."""
     from .periodic_option import periodic_value
+    from .satellite_air_option import air_options
     files = args.file if isinstance(args.file, list) else [args.file]
     return {"inputs": [str(Path(f).resolve()) for f in files if f is not None], "lat": args.lat, "lon": args.lon,
             "date": args.date, "satellite": args.satellite, "band": "rgb" if args.rgb else (args.band or "0.64"),
@@ -52,13 +53,6 @@ def loop_options(args, resolution: float, reference_kw: dict) -> dict:
             "ground_albedo": args.ground_albedo, "surface": args.surface, "wind": args.wind, "sizes": args.sizes,
             "size_classes": args.size_classes, "periodic": periodic_value(args), "seed": args.seed,
             **air_options(args), **reference_kw}
-
-
-def air_options(args) -> dict:
-    """The loop's atmosphere (``satellite_air_option``): its kind, and its aerosol and ozone where clear."""
-    from .satellite_air_option import atmosphere_kind
-    kind = atmosphere_kind(args)
-    return {"atmosphere": kind, **({"aod": args.aod, "ozone": args.ozone} if kind == "clear" else {})}
 
 
 def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict) -> Path:
