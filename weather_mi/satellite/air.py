@@ -6,7 +6,8 @@ vertex through the spherical shell (the direct beam's transmittance in each band
 Outside the box each pixel's line of sight (its centre, ``rays.box_segment``) is completed here:
 
 * through the box: the air A between the top of the atmosphere and the box entry (above the model top; below
-  it where the line enters through a side), single scattering (``eye_path.segment_air``; heights above a
+  it where the line enters through a side) and B from a side wall's exit down to the ground (its single
+  scattering times the clear column's ratio of all orders to the first), single scattering (``eye_path.segment_air``; heights above a
   spherical Earth whose centre is under the box's centre), and the coupling C of the air above the top with
   what lies below it, as the clear plane-parallel column has it (``above_box_coupling``: its diffuse light onto
   the box and back, 2-3 % of a clear sea's reflectance at 0.47 um under a 20 km top):
@@ -64,19 +65,23 @@ def air_layers(atm, wavelength_nm: float, ground_m: float = 0.0, split_m: float 
     return tau, np.clip(sca / np.maximum(tau, 1e-30), 0.0, 1.0 - 1e-7), moments
 
 
-def plane_parallel_terms(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_nodes, ground_m: float = 0.0):
+def plane_parallel_terms(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_nodes, ground_m: float = 0.0,
+                         albedos=ALBEDOS):
     """(R_0, K, s) of the module docstring on the grid ``mu_nodes`` (ascending cos of the view zenith) x
-    ``phi_nodes`` (deg, 0 forward scattering): three DISORT solves (``ALBEDOS``)."""
+    ``phi_nodes`` (deg, 0 forward scattering): three DISORT solves (``ALBEDOS``; ``albedos`` (0,): R_0 alone,
+    K and s None)."""
     from ..plane_parallel.disort import solve
     tau, ssa, moments = air_layers(atm, wavelength_nm, ground_m)
     mu_nodes, phi_nodes = np.asarray(mu_nodes, np.float64), np.asarray(phi_nodes, np.float64)
     refl = []
-    for a in ALBEDOS:
+    for a in albedos:
         res = solve(tau, ssa, mu0, mu_nodes, [0.0], phi_nodes, moments=moments, surface_albedo=a,
                     n_streams=N_STREAMS)
         refl.append(np.array([[np.pi * res.intensities(m, 0, p) / mu0 for p in range(phi_nodes.size)]
                               for m in range(mu_nodes.size)]))
-    r0, (a1, a2) = refl[0], ALBEDOS[1:]
+    if len(refl) == 1:
+        return refl[0], None, None
+    r0, (a1, a2) = refl[0], albedos[1:]
     y1, y2 = (refl[1] - r0) / a1, (refl[2] - r0) / a2     # y_i = K / (1 - a_i s)
     s = (y1 - y2) / (a1 * y1 - a2 * y2)
     return r0, y1 * (1.0 - a1 * s), s
@@ -148,7 +153,8 @@ def with_air_outside(scene, img):
     mu0 = float(scene.spec.sun.mu0)
     rad = np.asarray(img.radiance, np.float64).copy()
     se = None if img.stderr is None else np.asarray(img.stderr, np.float64).copy()
-    t_a, r_a = _above(atm, scene, o[hit], d[hit], np.maximum(t0[hit], 0.0), band_nm, mu0)
+    t_box = None if img.transmittance is None else np.asarray(img.transmittance, np.float64)[hit]
+    t_a, r_a = _through_box(atm, scene, t_box, o[hit], d[hit], mu[hit], phi[hit], t0[hit], t1[hit], band_nm, mu0)
     rad[hit] = r_a + t_a * rad[hit] + _coupling(atm, scene, mu[hit], phi[hit], band_nm, mu0)
     if se is not None:
         se[hit] = t_a * se[hit]
@@ -161,21 +167,61 @@ def with_air_outside(scene, img):
                    metadata=meta)
 
 
-def _above(atm, scene, o, d, t_entry, band_nm, mu0):
-    """(T_A, pi S_A / mu0) (n, 3) of the lines of sight (origins (n, 3) at the rays' start, directions) from the
-    top of the atmosphere to ``t_entry`` past their start."""
-    from ..optics.air.eye_path import segment_air, top_distance, wide_sun_table
+def _sun_table(atm, start, band_nm, mu0):
+    """The direct sun per channel over the heights and the band of mu that the lines of sight from ``start``
+    (their points at the top of the air, (n, 3)) and the box see (``eye_path.wide_sun_table``)."""
+    from ..optics.air.eye_path import wide_sun_table
+    reach = float(np.max(np.linalg.norm(start[:, :2], axis=-1), initial=0.0)) + 50e3
+    return wide_sun_table(atm, mu0, reach_m=reach, n_mu=17, n_h=61, band_nm=band_nm)
+
+
+def _segments(atm, scene, start, d, s0, s1, table, band_nm):
+    """(T, S) (n, 3) of ``eye_path.segment_air`` over [s0, s1] along the lines from ``start``, in chunks."""
+    from ..optics.air.eye_path import segment_air
+    t, out = np.ones((len(start), 3)), np.zeros((len(start), 3))
+    for i in range(0, len(start), CHUNK):
+        sl = slice(i, i + CHUNK)
+        t[sl], out[sl] = segment_air(atm, scene.spec.sun.to_sun, start[sl], d[sl], s0[sl], s1[sl], table,
+                                     wavelengths_nm=band_nm)
+    return t, out
+
+
+def _through_box(atm, scene, t_box, o, d, mu, phi, t0, t1, band_nm, mu0):
+    """(T_A (n, 3), the air's reflectance added (n, 3)) of lines of sight through the box: A from the top of the
+    air to the box entry ``t0`` (single scattering), and B from a side wall's exit ``t1`` down to the ground
+    (single scattering times the column's ratio of all orders to the first, R_0 / (pi S_column / mu0),
+    seen through A and the box: ``t_box`` (n,), the render's eye-ray transmittance, or None)."""
+    from ..optics.air.eye_path import top_distance
     back = top_distance(o, -d)                      # from the start back up to the top of the air
     start = o - back[:, None] * d
-    reach = float(np.max(np.linalg.norm(start[:, :2], axis=-1), initial=0.0)) + 50e3
-    table = wide_sun_table(atm, mu0, reach_m=reach, n_mu=17, n_h=61, band_nm=band_nm)
-    t, r = np.ones((len(o), 3)), np.zeros((len(o), 3))
-    for i in range(0, len(o), CHUNK):
-        sl = slice(i, i + CHUNK)
-        t[sl], s = segment_air(atm, scene.spec.sun.to_sun, start[sl], d[sl], np.zeros(back[sl].shape),
-                               back[sl] + t_entry[sl], table, wavelengths_nm=band_nm)
-        r[sl] = np.pi * s / mu0
-    return t, r
+    table = _sun_table(atm, start, band_nm, mu0)
+    t_a, s_a = _segments(atm, scene, start, d, np.zeros(back.shape), back + np.maximum(t0, 0.0), table, band_nm)
+    floor = 0.0 if scene.spec.ground is None else float(scene.spec.ground.height)
+    t_ground = (floor - o[:, 2]) / np.minimum(d[:, 2], -1e-9)
+    side = (t1 < t_ground - 1.0) & ~(scene.vol.periodic and scene.vol.periodic != "transport")
+    added = np.pi * s_a / mu0
+    if side.any():
+        k = np.flatnonzero(side)
+        _, s_b = _segments(atm, scene, start[k], d[k], back[k] + t1[k], back[k] + t_ground[k], table, band_nm)
+        _, s_col = _segments(atm, scene, start[k], d[k], np.zeros(k.size), back[k] + t_ground[k], table, band_nm)
+        ratio = _path_reflectance(atm, scene, mu[k], phi[k], band_nm, mu0) / np.maximum(np.pi * s_col / mu0, 1e-12)
+        seen = 1.0 if t_box is None else t_box[k, None]
+        added[k] += t_a[k] * seen * ratio * np.pi * s_b / mu0
+    return t_a, added
+
+
+def _path_reflectance(atm, scene, mu, phi, band_nm, mu0):
+    """R_0 (n, 3): the clear column's reflectance over a black surface (DISORT) at the lines' angles."""
+    from scipy.interpolate import RegularGridInterpolator
+    mu_nodes, phi_nodes, pts = _grid(mu, phi)
+    ground = 0.0 if scene.spec.ground is None else max(float(scene.spec.ground.height), 0.0)
+    out, done = np.zeros((mu.size, 3)), {}
+    for c, wl in enumerate(band_nm):
+        if wl not in done:
+            r0 = plane_parallel_terms(atm, wl, mu0, mu_nodes, phi_nodes, ground, albedos=(0.0,))[0]
+            done[wl] = RegularGridInterpolator((mu_nodes, phi_nodes), r0)(pts)
+        out[:, c] = done[wl]
+    return out
 
 
 def _grid(mu, phi):
