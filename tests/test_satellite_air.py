@@ -191,3 +191,27 @@ def test_a_loop_records_its_atmosphere():
     from weather_mi.cli.satellite_air_option import air_options
     assert air_options(_args(atmosphere="clear", aod=0.2)) == {"atmosphere": "clear", "aod": 0.2, "ozone": None}
     assert air_options(_args(atmosphere="none")) == {"atmosphere": "none"}
+
+
+def test_satellite_view_natural_writes_xyz_srgb_and_a_png(tmp_path, capsys):
+    """``weather-mi satellite --view natural --atmosphere clear``: the NetCDF holds X, Y, Z, R, G, B and the
+    spectral reflectance; the EXR and a PNG enlarged as the satellite pictures are written; --band with it is refused before rendering."""
+    import xarray as xr
+    from PIL import Image
+    from weather_mi.cli import commands as cli
+    out = tmp_path / "nat.nc"
+    argv = ["satellite", "--demo", "cumulus", "--lat", "25", "--lon", "-75", "--date", "2013-05-20T16:00",
+            "--resolution", "2km", "--spp", "4", "--view", "natural", "--atmosphere", "clear", "-o", str(out)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        assert cli.main(argv) == 0
+    from weather_mi.display.satellite_picture import zoom_for
+    with xr.open_dataset(out) as ds:
+        assert all(v in ds for v in ("X", "Y", "Z", "R", "G", "B", "spectral_reflectance"))
+        assert ds.attrs["view"] == "natural" and ds.attrs["atmosphere"] == "clear"
+        assert ds.spectral_reflectance.sizes["wavelength"] == 9
+        width = ds.sizes["x"]
+    assert out.with_suffix(".exr").is_file()
+    assert Image.open(out.with_suffix(".png")).size[0] == width * zoom_for(width) > width
+    assert cli.main(argv[:-2] + ["--band", "0.64", "-o", str(tmp_path / "x.nc")]) == 2
+    assert "--view natural: not with --band 0.64" in capsys.readouterr().err

@@ -156,7 +156,7 @@ def _satellite_natural(args, hyd, vol, resolution, nc, exr, png, ckpt, atm) -> P
         ds, img = sn.render_natural(scenes, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
                                     resume=ckpt if args.resume else None, client=client)
     write_satellite(ds, img, nc, exr)
-    sn.write_natural_png(img, png)
+    _natural_png(img, png)
     for c in sn.natural_checkpoints(ckpt):
         c.unlink(missing_ok=True)
     inside = ds.in_domain.values == 1
@@ -164,6 +164,18 @@ def _satellite_natural(args, hyd, vol, resolution, nc, exr, png, ckpt, atm) -> P
     print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s; over the domain "
           f"Y {xy[1]:.3f}, chromaticity x {xy[0] / xy.sum():.4f}, y {xy[1] / xy.sum():.4f})")
     return nc
+
+
+def _natural_png(img, png) -> None:
+    """The natural view's linear sRGB as an 8-bit sRGB PNG (``io.image.to_srgb8``, Y = 1 at full scale): white
+    balanced for daylight (D65 is white; the sun above the air a little warm), enlarged as the satellite pictures
+    are (``display.satellite_picture.zoom_for``)."""
+    import numpy as np
+    from ..display.satellite_picture import zoom_for
+    from ..io.image import to_srgb8, write_png8
+    frame = to_srgb8(np.asarray(img.radiance, np.float64), 1.0)
+    k = zoom_for(frame.shape[1])
+    write_png8(png, np.repeat(np.repeat(frame, k, axis=0), k, axis=1))
 
 
 def add_satellite_parser(sub) -> None:

@@ -137,12 +137,5 @@ def natural_checkpoints(ckpt) -> list:
     return [band_checkpoint(ckpt, group[0].name) for group in natural_bands()]
 
 
-def write_natural_png(img, path, exposure: float = 1.0):
-    """The linear sRGB as an 8-bit sRGB PNG (``io.image.write_png``): white balanced for daylight (D65 is white;
-    the sun above the air is then a little warm), Y = 1 at full scale times ``exposure``."""
-    from ..io.image import write_png
-    return write_png(path, np.asarray(img.radiance, np.float64), exposure)
-
-
 __all__ = ["NATURAL_NM", "natural_bands", "sea_albedo", "natural_scenes", "xyz_weights", "natural_colour",
-           "render_natural", "natural_dataset", "natural_checkpoints", "write_natural_png"]
+           "render_natural", "natural_dataset", "natural_checkpoints"]
