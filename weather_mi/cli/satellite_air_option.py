@@ -64,10 +64,11 @@ def check_natural_view(args, loop: bool) -> None:
 
 
 def air_options(args) -> dict:
-    """What a loop records of its atmosphere (``satellite_loop.loop_options``): its kind, and its aerosol and
-    ozone where clear."""
-    kind = atmosphere_kind(args)
-    return {"atmosphere": kind, **({"aod": args.aod, "ozone": args.ozone} if kind == "clear" else {})}
+    """What a loop records of its atmosphere (``satellite_loop.loop_options``): the clear one with its aerosol and
+    ozone; nothing for none (so that a loop recorded before the option resumes)."""
+    if atmosphere_kind(args) == "none":
+        return {}
+    return {"atmosphere": "clear", "aod": args.aod, "ozone": args.ozone}
 
 
 __all__ = ["DEFAULT_ATMOSPHERE", "add_satellite_air_options", "atmosphere_kind", "satellite_atmosphere",
