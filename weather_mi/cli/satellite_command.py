@@ -199,7 +199,7 @@ def add_satellite_parser(sub) -> None:
     sat.add_argument("--resolution", default="1km", help="pixel size at the sub-satellite point (e.g. 1km, 500m)")
     sat.add_argument("--rayleigh", action="store_true",
                      help="the old option: molecular scattering of the air in the domain only (with --atmosphere none; "
-                          "--atmosphere clear, the default, holds the molecules in, above and around the domain)")
+                          "--atmosphere clear holds the molecules in, above and around the domain)")
     add_satellite_air_options(sat)
     sat.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
     add_sizes_option(sat)

@@ -214,7 +214,7 @@ def _path_reflectance(atm, scene, mu, phi, band_nm, mu0):
     """R_0 (n, 3): the clear column's reflectance over a black surface (DISORT) at the lines' angles."""
     from scipy.interpolate import RegularGridInterpolator
     mu_nodes, phi_nodes, pts = _grid(mu, phi)
-    ground = 0.0 if scene.spec.ground is None else max(float(scene.spec.ground.height), 0.0)
+    ground = ground_height_m(scene)
     out, done = np.zeros((mu.size, 3)), {}
     for c, wl in enumerate(band_nm):
         if wl not in done:
@@ -235,7 +235,7 @@ def _coupling(atm, scene, mu, phi, band_nm, mu0):
     """``above_box_coupling`` (n, 3) at the lines of sight's angles, per channel (the ground's albedo there)."""
     from scipy.interpolate import RegularGridInterpolator
     mu_nodes, phi_nodes, pts = _grid(mu, phi)
-    ground = 0.0 if scene.spec.ground is None else max(float(scene.spec.ground.height), 0.0)
+    ground = ground_height_m(scene)
     albedo = (0.0,) * 3 if scene.spec.ground is None else scene.spec.ground.albedo
     out, done = np.zeros((mu.size, 3)), {}
     for c, (wl, a) in enumerate(zip(band_nm, albedo)):
@@ -251,7 +251,7 @@ def _past_box(atm, scene, mu, phi, rendered, band_nm, mu0):
     box (module docstring), the plane-parallel terms interpolated in (mu, phi) per distinct wavelength."""
     from scipy.interpolate import RegularGridInterpolator
     from ..optics.air.sunlight import transmittance
-    ground = 0.0 if scene.spec.ground is None else max(float(scene.spec.ground.height), 0.0)
+    ground = ground_height_m(scene)
     mu_nodes, phi_nodes, pts = _grid(mu, phi)
     out, factor = np.empty_like(rendered), np.empty_like(rendered)
     for wl in sorted(set(band_nm)):
@@ -265,6 +265,11 @@ def _past_box(atm, scene, mu, phi, rendered, band_nm, mu0):
     return out, factor
 
 
+def ground_height_m(scene) -> float:
+    """The scene's flat ground (m above sea level, >= 0; sea level without one): where the 1-D air starts."""
+    return 0.0 if scene.spec.ground is None else max(float(scene.spec.ground.height), 0.0)
+
+
 def column_rayleigh_optical_depth(atm, wavelength_nm: float, ground_m: float = 0.0) -> float:
     """The molecules' vertical optical depth of ``atm`` from ``ground_m`` to its top at ``wavelength_nm``: what
     the true-colour recipe's Rayleigh correction subtracts over (``truecolor``)."""
@@ -274,4 +279,5 @@ def column_rayleigh_optical_depth(atm, wavelength_nm: float, ground_m: float = 0
     return float(np.trapezoid(atm.air_number_density_m3(z), z) * cross_section_m2(wavelength_nm * 1e-9))
 
 
-__all__ = ["air_layers", "above_box_coupling", "plane_parallel_terms", "pixel_angles", "with_air_outside", "column_rayleigh_optical_depth"]
+__all__ = ["air_layers", "above_box_coupling", "plane_parallel_terms", "pixel_angles", "with_air_outside",
+           "column_rayleigh_optical_depth", "ground_height_m"]

@@ -194,9 +194,8 @@ def _with_air_column(ds, scene, channel: int):
     atm = scene.spec.atmosphere
     if atm is None:
         return ds
-    from .air import column_rayleigh_optical_depth
-    ground = 0.0 if scene.spec.ground is None else max(float(scene.spec.ground.height), 0.0)
-    tau = column_rayleigh_optical_depth(atm, scene.bands[channel].wavelength_m * 1e9, ground)
+    from .air import column_rayleigh_optical_depth, ground_height_m
+    tau = column_rayleigh_optical_depth(atm, scene.bands[channel].wavelength_m * 1e9, ground_height_m(scene))
     refl = rayleigh_reflectance(tau, ds.solar_zenith_angle.values, ds.sensor_zenith_angle.values,
                                 ds.solar_azimuth_angle.values, ds.sensor_azimuth_angle.values)
     ds["rayleigh_reflectance"] = (("y", "x"), refl.astype(np.float32), {
