@@ -57,7 +57,8 @@ def main(argv=None):
         for a in ("none", "clear"):
             results = [run(case, built[a][case], args.spp) for _ in range(args.repeats)]
             best[(case, a)] = min(results)
-            print(f"{case:5s} {a:5s}: " + ", ".join(f"{t:.1f} s" for t, _ in results) + f" (cloud RSE {results[0][1]:.3f})")
+            times = ", ".join(f"{t:.1f} s" for t, _ in results)
+            print(f"{case:5s} {a:5s}: {times} (cloud RSE {results[0][1]:.3f})")
         (tn, rn), (tc_, rc) = best[(case, "none")], best[(case, "clear")]
         print(f"{case}: clear / none = {tc_ / tn:.2f}x the time; to the same cloud RSE {tc_ / tn * (rc / rn) ** 2:.2f}x")
 

@@ -90,7 +90,8 @@ def test_rayleigh_correction_of_the_clear_air_gives_back_the_sea():
     the cumulus's grid periodic and its copies seen (a 6 km box: isolated, its air would lose its light through
     the sides; every line of sight crosses the box's air, its own or a copy's, in and around the domain): the
     recipe's corrected reflectance (sun zenith and Rayleigh, ``truecolor.corrected_bands``) within 0.015 of the
-    sea's albedo on average over the image (the recipe does not undo the air's transmittance: 15-20 % of the albedo at 0.47 um);
+    sea's albedo on average over the image (the recipe does not undo the air's transmittance: 15-20 % of the
+    albedo at 0.47 um);
     uncorrected, the 0.47 um band is more than 0.04 off."""
     from weather_mi.optics.air import Atmosphere
     from weather_mi.satellite import truecolor as tc
@@ -195,7 +196,8 @@ def test_a_loop_records_its_atmosphere():
 
 def test_satellite_view_natural_writes_xyz_srgb_and_a_png(tmp_path, capsys):
     """``weather-mi satellite --view natural --atmosphere clear``: the NetCDF holds X, Y, Z, R, G, B and the
-    spectral reflectance; the EXR and a PNG enlarged as the satellite pictures are written; --band with it is refused before rendering."""
+    spectral reflectance; the EXR and a PNG enlarged as the satellite pictures are written; --band with it is
+    refused before rendering."""
     import xarray as xr
     from PIL import Image
     from weather_mi.cli import commands as cli

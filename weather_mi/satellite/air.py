@@ -7,8 +7,8 @@ Outside the box each pixel's line of sight (its centre, ``rays.box_segment``) is
 
 * through the box: the air A between the top of the atmosphere and the box entry (above the model top; below
   it where the line enters through a side) and B from a side wall's exit down to the ground (its single
-  scattering times the clear column's ratio of all orders to the first), single scattering (``eye_path.segment_air``; heights above a
-  spherical Earth whose centre is under the box's centre), and the coupling C of the air above the top with
+  scattering times the clear column's ratio of all orders to the first), single scattering
+  (``eye_path.segment_air``; heights above a spherical Earth whose centre is under the box's centre), and the coupling C of the air above the top with
   what lies below it, as the clear plane-parallel column has it (``above_box_coupling``: its diffuse light onto
   the box and back, 2-3 % of a clear sea's reflectance at 0.47 um under a 20 km top):
       R = pi S_A / mu0 + T_A R_render + C                              (S_A per unit irradiance of the sun)

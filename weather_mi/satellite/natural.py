@@ -60,7 +60,7 @@ def xyz_weights(nodes_nm) -> np.ndarray:
     from ..optics import spectrum
     wl = spectrum.WAVELENGTHS_NM
     nodes = np.asarray(nodes_nm, np.float64)
-    interp = np.stack([np.interp(wl, nodes, np.eye(nodes.size)[k]) for k in range(nodes.size)], axis=-1)  # hat functions
+    interp = np.stack([np.interp(wl, nodes, np.eye(nodes.size)[k]) for k in range(nodes.size)], axis=-1)  # hats
     sun = spectrum.solar_toa_w_m2_nm(wl)
     y_sun = float(spectrum.xyz(sun, wl)[1])
     return np.stack([spectrum.xyz(sun * interp[:, k], wl) for k in range(nodes.size)], axis=-1) / y_sun

@@ -282,8 +282,9 @@ def rgb_dataset(parts):
                                    channel=[str(d["reflectance"].attrs.get("channel", "")) for d in parts])
     if "rayleigh_reflectance" in ds:
         ds["rayleigh_optical_depth"] = ("band", np.asarray([d.attrs["rayleigh_optical_depth"] for d in parts]),
-                                        {"long_name": "the molecular optical depth under the Rayleigh correction (the domain's "
-                                         "column mean; the whole column with the clear atmosphere)", "units": "1"})
+                                        {"long_name": "the molecular optical depth under the Rayleigh correction "
+                                                      "(the domain's column mean; the whole column with the clear "
+                                                      "atmosphere)", "units": "1"})
         ds.attrs.pop("rayleigh_optical_depth", None)
     ds.attrs.update(title=ds.attrs["title"].replace(f"{names[0]} um", "true-colour (" + ", ".join(names) + " um)"),
                     band_um=" ".join(names), band_wavelength_m=[w * 1e-6 for w in wl_um],

@@ -40,7 +40,8 @@ def wide_sun_table(atm: Atmosphere, mu0: float, reach_m: float = 1500e3, n_mu: i
     sza, delta = np.arccos(mu0), reach_m / EARTH_RADIUS_M
     mu = np.linspace(np.cos(min(sza + delta, np.pi)), np.cos(max(sza - delta, 0.0)), n_mu)
     heights = np.linspace(0.0, TOP_M, n_h)
-    return SunAirTable(heights_m=heights, mu=mu, rgb=channel_values(atm, heights[None, :], mu[:, None], band_nm).astype(np.float32))
+    rgb = channel_values(atm, heights[None, :], mu[:, None], band_nm)
+    return SunAirTable(heights_m=heights, mu=mu, rgb=rgb.astype(np.float32))
 
 
 def top_distance(origins, dirs, top_m: float = TOP_M) -> np.ndarray:
