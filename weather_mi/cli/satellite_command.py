@@ -10,6 +10,7 @@ from ..reference.options import add_flags, flag_values
 from .options import add_dask_options, add_place_options, add_sizes_option, add_surface_options, check_unfinished, \
     open_placed, surface_kw
 from .periodic_option import add_periodic_option, periodic_value
+from .satellite_air_option import add_satellite_air_options, check_natural_view, satellite_atmosphere
 from .satellite_tiles import add_tile_options, check_tile_options, satellite_tiles_command
 
 
@@ -23,12 +24,14 @@ def satellite_command(args) -> Path:
     from ..satellite import imagery as si
     resolution = si.parse_resolution_km(args.resolution)
     nc, exr, png, ckpt = si.satellite_outputs(args.output)
+    from .satellite_loop import satellite_loop_command, wants_loop
+    check_natural_view(args, wants_loop(args))
     check_satellite_bands(args)
     check_tile_options(args)
+    satellite_atmosphere(args)
     if args.denoise:
         from ..display.denoise import check_available
         check_available()
-    from .satellite_loop import satellite_loop_command, wants_loop
     if wants_loop(args):  # several times: one NetCDF with a time dimension, a PNG per time, an MP4
         check_writable_folder(nc)
         with OutputLock(nc):
@@ -37,7 +40,8 @@ def satellite_command(args) -> Path:
     check_writable_folder(nc)
     with OutputLock(nc):
         from ..satellite.truecolor import band_checkpoints
-        for c in band_checkpoints(ckpt):  # --rgb --rayleigh: a checkpoint per band
+        from ..satellite.natural import natural_checkpoints
+        for c in band_checkpoints(ckpt) + natural_checkpoints(ckpt):  # a checkpoint per band or render
             check_unfinished(c, args.resume)
         if args.tile_size is not None:  # tiles as Dask tasks, no process reading the whole domain
             return satellite_tiles_command(args, resolution, nc, exr, png, flag_values(args, SATELLITE_ESTIMATOR))
@@ -50,6 +54,8 @@ def check_satellite_bands(args) -> None:
     from ..satellite.bands import band, check_band_on, true_color_bands
     from ..satellite.geostationary import satellite
     sat = satellite(args.satellite)
+    if args.view == "natural":  # its own wavelengths (check_natural_view)
+        return
     if args.rgb and args.band is not None:
         raise ValueError(f"--rgb renders the true-colour bands ({', '.join(b.name for b in true_color_bands(sat))} "
                          f"um on {sat.name}) in one run: drop --band {args.band}, or drop --rgb for one band")
@@ -67,13 +73,17 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     vol = optical_volume(hyd, species=args.preset, phase=args.phase, sizes=args.sizes or default_sizes(hyd),
                          size_classes=args.size_classes,
                          periodic=periodic_value(args), release=True,
-                         keep=("beta_ext", "weights") if args.rgb or args.rayleigh else ("weights",))  # the air: beta_s
+                         keep=("beta_ext", "weights") if args.rgb or args.rayleigh or args.view == "natural"
+                         else ("weights",))  # the air: beta_s
     hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
+    atm = satellite_atmosphere(args)
+    if args.view == "natural":
+        return _satellite_natural(args, hyd, vol, resolution, nc, exr, png, ckpt, atm)
     if args.rgb:
-        return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
+        return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt, atm)
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
                                ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
-                               seed=args.seed, **surface_kw(args))
+                               seed=args.seed, atmosphere=atm, **surface_kw(args))
     del vol  # the scene holds the band's volume (its own albedo): the RGB albedo goes
     w, h = scene.view.size
     print(f"{scene.satellite.name} (sub-satellite longitude {scene.satellite.sub_lon_deg}), band {scene.band.name} um: "
@@ -95,14 +105,15 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     return nc
 
 
-def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt) -> Path:
+def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt, atm) -> Path:
     """``satellite --rgb``: the true-colour bands in one render (per band with --rayleigh), the NetCDF with a
     band dimension, the EXR (the bands in R, G, B) and the PNG of the operational recipe
     (``satellite.truecolor``)."""
     from ..satellite import truecolor as tc
     from ..reference.cluster import session
     scenes = tc.true_color_scenes(hyd, vol, args.satellite, resolution, rayleigh=args.rayleigh,
-                                  ground_albedo=args.ground_albedo, seed=args.seed, **surface_kw(args))
+                                  ground_albedo=args.ground_albedo, seed=args.seed, atmosphere=atm,
+                                  **surface_kw(args))
     s = scenes[0]
     w, h = s.view.size
     names = ", ".join(sc.band.name for sc in scenes) if len(scenes) > 1 else ", ".join(b.name for b in s.bands)
@@ -124,8 +135,47 @@ def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt) -> Path:
                       for b in ds.band.values)
     print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s; cloud pixels "
           f"{int(ds.cloud.sum())}; reflectance over the domain {means}; the PNG: sun-zenith"
-          f"{', Rayleigh' if args.rayleigh else ''} corrected, CIRA-stretched true colour)")
+          f"{', Rayleigh' if 'rayleigh_reflectance' in ds else ''} corrected, CIRA-stretched true colour)")
     return nc
+
+
+def _satellite_natural(args, hyd, vol, resolution, nc, exr, png, ckpt, atm) -> Path:
+    """``satellite --view natural``: the reflectance at ``satellite.natural.NATURAL_NM`` (three renders), as
+    CIE X, Y, Z and linear sRGB (NetCDF; the EXR's R, G, B) and a PNG white-balanced for daylight."""
+    from ..satellite import natural as sn
+    from ..satellite.imagery import write_satellite
+    from ..reference.cluster import session
+    scenes = sn.natural_scenes(hyd, vol, args.satellite, resolution, atmosphere=atm,
+                               ground_albedo=args.ground_albedo, seed=args.seed, **surface_kw(args))
+    s = scenes[0]
+    w, h = s.view.size
+    print(f"{s.satellite.name} (sub-satellite longitude {s.satellite.sub_lon_deg}), natural colour from "
+          f"{len(scenes) * 3} wavelengths ({len(scenes)} renders), atmosphere {'clear' if atm else 'none'}: {w} x {h} "
+          f"pixels of {resolution:g} km, solar zenith {90 - s.spec.sun.elevation:.2f} deg ({s.sun_meta['valid_time']})")
+    with session(args.scheduler, args.workers) as client:
+        ds, img = sn.render_natural(scenes, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
+                                    resume=ckpt if args.resume else None, client=client)
+    write_satellite(ds, img, nc, exr)
+    _natural_png(img, png)
+    for c in sn.natural_checkpoints(ckpt):
+        c.unlink(missing_ok=True)
+    inside = ds.in_domain.values == 1
+    xy = ds[["X", "Y", "Z"]].to_array().values[:, inside].mean(axis=1)
+    print(f"wrote {nc}, {exr} and {png} ({img.metadata['spp']} spp, {img.metadata['seconds']:.1f} s; over the domain "
+          f"Y {xy[1]:.3f}, chromaticity x {xy[0] / xy.sum():.4f}, y {xy[1] / xy.sum():.4f})")
+    return nc
+
+
+def _natural_png(img, png) -> None:
+    """The natural view's linear sRGB as an 8-bit sRGB PNG (``io.image.to_srgb8``, Y = 1 at full scale): white
+    balanced for daylight (D65 is white; the sun above the air a little warm), enlarged as the satellite pictures
+    are (``display.satellite_picture.zoom_for``)."""
+    import numpy as np
+    from ..display.satellite_picture import zoom_for
+    from ..io.image import to_srgb8, write_png8
+    frame = to_srgb8(np.asarray(img.radiance, np.float64), 1.0)
+    k = zoom_for(frame.shape[1])
+    write_png8(png, np.repeat(np.repeat(frame, k, axis=0), k, axis=1))
 
 
 def add_satellite_parser(sub) -> None:
@@ -147,7 +197,10 @@ def add_satellite_parser(sub) -> None:
                      help="true colour: the 0.47, 0.64, 0.86 um bands (himawari: 0.47, 0.51, 0.64) in one render, "
                           "a NetCDF with a band dimension and the operational products' RGB as the PNG")
     sat.add_argument("--resolution", default="1km", help="pixel size at the sub-satellite point (e.g. 1km, 500m)")
-    sat.add_argument("--rayleigh", action="store_true", help="molecular scattering of the air in the domain")
+    sat.add_argument("--rayleigh", action="store_true",
+                     help="the old option: molecular scattering of the air in the domain only (with --atmosphere none; "
+                          "--atmosphere clear holds the molecules in, above and around the domain)")
+    add_satellite_air_options(sat)
     sat.add_argument("--preset", default="physical", choices=("paper", "physical"), help="species table")
     add_sizes_option(sat)
     sat.add_argument("--phase", default="per_species", choices=("per_species", "paper"))

@@ -45,12 +45,14 @@ def loop_options(args, resolution: float, reference_kw: dict) -> dict:
     the satellite, the band(s), the optics, the ground and the estimator; not --fps, --denoise, --time (a
     time is one time whatever the selection) or where it renders."""
     from .periodic_option import periodic_value
+    from .satellite_air_option import air_options
     files = args.file if isinstance(args.file, list) else [args.file]
     return {"inputs": [str(Path(f).resolve()) for f in files if f is not None], "lat": args.lat, "lon": args.lon,
             "date": args.date, "satellite": args.satellite, "band": "rgb" if args.rgb else (args.band or "0.64"),
             "rayleigh": bool(args.rayleigh), "resolution_km": resolution, "preset": args.preset, "phase": args.phase,
             "ground_albedo": args.ground_albedo, "surface": args.surface, "wind": args.wind, "sizes": args.sizes,
-            "size_classes": args.size_classes, "periodic": periodic_value(args), "seed": args.seed, **reference_kw}
+            "size_classes": args.size_classes, "periodic": periodic_value(args), "seed": args.seed,
+            **air_options(args), **reference_kw}
 
 
 def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict) -> Path:
@@ -62,7 +64,9 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
     from .periodic_option import periodic_value
     from ..satellite import truecolor as tc
     from .options import surface_kw
+    from .satellite_air_option import satellite_atmosphere
     check_unfinished_loop(nc, args.resume)
+    atm = satellite_atmosphere(args)
     surface = surface_kw(args)
     hyds = open_placed_times(args)
     albedo = 0.06 if args.ground_albedo is None else args.ground_albedo
@@ -80,11 +84,11 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
             if args.rgb:
                 scenes = tc.true_color_scenes(hyd, vol, args.satellite, resolution, rayleigh=args.rayleigh,
                                               ground_albedo=args.ground_albedo, seed=args.seed,
-                                              **surface)
+                                              atmosphere=atm, **surface)
                 return tc.render_true_color(scenes, **kw)
             scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution,
                                        rayleigh=args.rayleigh, ground_albedo=albedo, seed=args.seed,
-                                       **surface)
+                                       atmosphere=atm, **surface)
             return si.render_satellite(scene, **kw)
         loop = satellite_loop(hyds, render_time, nc, resume=args.resume, fps=args.fps, denoise=args.denoise,
                               options=loop_options(args, resolution, reference_kw))

@@ -333,17 +333,18 @@ def _air_box(vol: OpticalVolume):
     return (x0, y0, z0), (x1, y1, z1)
 
 
-def integrator_air(sun: Sun, atmosphere, bbox, air_box=None) -> dict:
+def integrator_air(sun: Sun, atmosphere, bbox, air_box=None, band_nm=None) -> dict:
     """Properties of ``majorant_volpath`` that colour its sun by the air on the sun's path
     (``optics.air.sun_air_table``; the kernel's frame has the box's centre at x = y = 0, heights above sea
     level, the Earth's centre below it): heights up to 2 km above the box, mu over the box's width.
     ``air_box``: the box that holds the air (tracked; None: none), so the sun's colour is the table's where
-    the sun ray leaves it (``sun_air_box``), not at the vertex."""
+    the sun ray leaves it (``sun_air_box``), not at the vertex. ``band_nm``: one wavelength per channel (a
+    satellite's bands, ``BoxAir.band_nm``): the table holds the direct beam's transmittance there."""
     import mitsuba as mi
     from ..optics.air import sun_air_table
     from ..optics.air.shell import EARTH_RADIUS_M
     top, half = _air_extent(bbox)
-    table = sun_air_table(atmosphere, sun.mu0, top_m=top, half_width_m=half)
+    table = sun_air_table(atmosphere, sun.mu0, top_m=top, half_width_m=half, band_nm=band_nm)
     return {"sun_air": mi.TensorXf(table.rgb), "sun_air_h0": float(table.heights_m[0]),
             "sun_air_h1": float(table.heights_m[-1]), "sun_air_mu0": float(table.mu[0]),
             "sun_air_mu1": float(table.mu[-1]), "sun_air_radius": float(EARTH_RADIUS_M),
@@ -425,7 +426,8 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
         if sun is not None:
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
         if atmosphere is not None:
-            d.update(integrator_air(sun, atmosphere, vol.bbox, _air_box(vol)))
+            band_nm = getattr(getattr(vol, "air", None), "band_nm", None)  # a satellite's bands: transmittance
+            d.update(integrator_air(sun, atmosphere, vol.bbox, _air_box(vol), band_nm))
         if sun is not None and mi.is_spectral:
             d.update(integrator_sun_spectrum(sun, atmosphere, vol.bbox))
         if legacy:  # the estimator before issue 10 (see render_reference)

@@ -105,15 +105,20 @@ def _float(text: str):
         return None
 
 
+MIE_SHORTEST_M = 450e-9
+
+
 def band_volume(vol: OpticalVolume, b: Band) -> OpticalVolume:
     """``vol``'s optics in band ``b`` (module docstring): phase tables at its wavelength, the albedo of the
-    nearest channel, all three channels alike. Extinction is geometric (Eq. 4, Q_ext = 2) and unchanged."""
+    nearest channel, all three channels alike. Extinction is geometric (Eq. 4, Q_ext = 2) and unchanged.
+    Below ``MIE_SHORTEST_M`` (Hale & Querry's water index starts at 450 nm; the natural view's 400-437 nm) the
+    phase tables are those at 450 nm: cloud drops are grey there within the path tracer's noise."""
     from ..optics.phase.species_tables import for_species, nearest_channel
     from ..optics.phase.table import RGB_WAVELENGTHS_M
     c = int(np.argmin(np.abs(np.asarray(RGB_WAVELENGTHS_M) - b.wavelength_m)))
     if vol.species_set is not None:
         tables = for_species(list(vol.components or vol.species_set), vol.phase_mode, vol.phase_quality,
-                             wavelength_m=b.wavelength_m, sized=vol.components is not None)
+                             wavelength_m=max(b.wavelength_m, MIE_SHORTEST_M), sized=vol.components is not None)
     else:
         tables = [nearest_channel(t, b.wavelength_m) for t in vol.require_phase_tables()]
     albedo = np.repeat(np.asarray(vol.albedo)[..., c:c + 1], 3, axis=-1)

@@ -42,13 +42,18 @@ class SatelliteScene:
 def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east", band_name: str = "0.64",
                     resolution_km: float = 1.0, *, rayleigh: bool = False, ground_albedo=0.06,
                     seed: int = 0, max_vza_deg: float = 80.0, sun_time=None, rgb: bool = False,
-                    surface: str = "file", wind_m_s: float | None = None) -> SatelliteScene:
+                    surface: str = "file", wind_m_s: float | None = None, atmosphere=None,
+                    channel_bands=None) -> SatelliteScene:
     """The satellite's view of ``hyd`` (its place and valid time) with ``vol``'s optics in the band;
     ``sun_time`` (UTC): the sun of another time over the same clouds (a study of the sun's elevation);
     ``rgb``: the satellite's true-colour bands in one render (``bands.rgb_volume``; ``band_name`` unused;
     ``ground_albedo`` one value or one per channel), without molecules (their extinction is not grey);
     ``surface``, ``wind_m_s``: the ground under a domain with its own (``scene.surface``: "file", each
-    column's surface in the band with the sea's glint; "albedo"; "flat": ``ground_albedo`` everywhere).
+    column's surface in the band with the sea's glint; "albedo"; "flat": ``ground_albedo`` everywhere);
+    ``atmosphere`` (``optics.air.Atmosphere``): the clear 1-D atmosphere in the band(s) inside the box (from
+    ``hyd``'s ``rho_air``), on the sun's path and outside the box (``satellite.air``), in place of ``rayleigh``;
+    ``channel_bands``: three ``Band``s of any wavelengths in the channels, as ``rgb`` (the natural view's,
+    ``satellite.natural``).
 
     Raises
     ------
@@ -67,9 +72,14 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
         raise ValueError(f"{source}: a satellite view needs the domain's latitude/longitude; the file has none "
                          "(an ideal case: give --lat and --lon, and --date for the sun)")
     sat = satellite(sat) if isinstance(sat, str) else sat
-    bands = true_color_bands(sat) if rgb else ()
+    rgb = rgb or channel_bands is not None
+    bands = tuple(channel_bands) if channel_bands is not None else true_color_bands(sat) if rgb else ()
     b = bands[0] if rgb else band(band_name)
-    check_band_on(b, sat)
+    if channel_bands is None:
+        check_band_on(b, sat)
+    if rayleigh and atmosphere is not None:
+        raise ValueError("--rayleigh (the molecules in the box only) and --atmosphere clear (molecules, ozone and "
+                         "aerosol in and above the box, on the sun's path) exclude each other: drop --rayleigh")
     if rgb and rayleigh:
         raise ValueError("a true-colour render holds no molecules (one extinction for the three bands): render "
                          "the bands one at a time (satellite.truecolor)")
@@ -83,6 +93,10 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     if bvol.terrain is not None and bvol.terrain.sea:  # the glint where each column's own sun puts it
         from .glint import sea_normals
         bvol = replace(bvol, terrain=replace(bvol.terrain, sea_normal=sea_normals(place, sat, sun_meta, sun)))
+    if atmosphere is not None:  # one wavelength per channel: the bands' own air and sun (satellite.air)
+        from ..optics.air.inside import with_box_air
+        bvol = with_box_air(bvol, hyd, atmosphere, [x.wavelength_m * 1e9 for x in bands] if rgb
+                            else [b.wavelength_m * 1e9] * 3)
     if rayleigh:
         from ..optics.rayleigh import with_rayleigh
         bvol = with_rayleigh(bvol, b.wavelength_m, hyd["rho_air"].values)
@@ -91,8 +105,8 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     cam = Camera.orthographic(center=((x0 + x1) / 2, (y0 + y1) / 2, top + 1000.0), direction=(0.0, 0.0, -1.0),
                               width=extent, height=extent)  # nominal: the rays come from the table
     w, h = view.size
-    spec = SceneSpec(camera=cam, sun=sun, sky=None,
-                     ground=Ground(albedo=ground_albedo), width=w, height=h, seed=seed, rays=view.rays)
+    spec = SceneSpec(camera=cam, sun=sun, sky=None, ground=Ground(albedo=ground_albedo), width=w, height=h,
+                     seed=seed, rays=view.rays, atmosphere=atmosphere)
     return SatelliteScene(spec, bvol, view, sat, b, sun_meta, bands, place.source)
 
 
@@ -100,7 +114,9 @@ def render_satellite(scene: SatelliteScene, spp: int = 64, **reference_kw):
     """Path-trace ``scene`` (``render_reference`` with ``normalize="reflectance"``: its passes, checkpoints,
     ``target_rse`` and Dask ``client`` apply). Returns (``xarray.Dataset`` of ``satellite_dataset``, Image)."""
     from ..reference.render import render_reference
+    from .air import with_air_outside
     img = render_reference(scene.spec, scene.vol, spp=spp, normalize="reflectance", **reference_kw)
+    img = with_air_outside(scene, img)
     return satellite_dataset(scene, img), img
 
 
@@ -165,7 +181,8 @@ def satellite_dataset(scene: SatelliteScene, img, channel: int | None = None):
                 "source": str(scene.vol.attrs.get("source", "")), "satellite": scene.satellite.name,
                 "sub_satellite_longitude_deg": scene.satellite.sub_lon_deg, "band_um": b.name,
                 "band_wavelength_m": b.wavelength_m, "resolution_km": v.resolution_km,
-                "valid_time": str(m.get("valid_time")), "place_source": scene.place_source, "rayleigh": int("rayleigh" in scene.vol.species),
+                "valid_time": str(m.get("valid_time")), "place_source": scene.place_source,
+                "rayleigh": int("rayleigh" in scene.vol.species), **_atmosphere_attrs(scene.spec.atmosphere),
                 "rendered_solar_zenith_deg": 90.0 - scene.spec.sun.elevation,
                 "one_sun_max_error_deg": float(m.get("one_sun_max_error_deg", np.nan)),
                 "spp": int(meta.get("spp", 0)), "seconds": float(meta.get("seconds", np.nan)),
@@ -175,6 +192,13 @@ def satellite_dataset(scene: SatelliteScene, img, channel: int | None = None):
     ds["reflectance"].attrs.update(wavelength=b.wavelength_m * 1e6, wavelength_units="um",
                                    channel=b.channels.get(scene.satellite.imager, ""))
     return ds
+
+
+def _atmosphere_attrs(atm) -> dict:
+    """``atmosphere`` ("none" or "clear") and, where clear, its aerosol optical depth and ozone column."""
+    if atm is None:
+        return {"atmosphere": "none"}
+    return {"atmosphere": "clear", "aerosol_optical_depth_550nm": atm.aod_550, "ozone_column_atm_cm": atm.ozone_atm_cm}
 
 
 def _surface_var(scene: SatelliteScene, dims, gm) -> dict:

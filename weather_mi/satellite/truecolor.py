@@ -111,9 +111,10 @@ def write_true_color_png(ds, path):
 
 
 def true_color_scenes(hyd, vol, sat, resolution_km: float, *, rayleigh: bool = False, ground_albedo=None,
-                      seed: int = 0, **surface_kw) -> list:
-    """The ``SatelliteScene``(s) of a true-colour image: one with the three bands in its channels, or, with
-    ``rayleigh``, one per band with that band's air. ``ground_albedo`` None: the sea's ``SEA_ALBEDO`` per band
+                      seed: int = 0, atmosphere=None, **surface_kw) -> list:
+    """The ``SatelliteScene``(s) of a true-colour image: one with the three bands in its channels (with
+    ``atmosphere``, each channel's air at its band's wavelength: ``satellite.air``), or, with ``rayleigh``, one
+    per band with that band's air. ``ground_albedo`` None: the sea's ``SEA_ALBEDO`` per band
     (where the file has no ground); ``surface_kw``: ``satellite_scene``'s ``surface``, ``wind_m_s``. Raises the ValueErrors of ``satellite_scene`` (and a satellite without
     the bands) before anything is rendered."""
     from .geostationary import satellite
@@ -123,7 +124,8 @@ def true_color_scenes(hyd, vol, sat, resolution_km: float, *, rayleigh: bool = F
     albedo = {b.name: (SEA_ALBEDO[b.name] if ground_albedo is None else float(ground_albedo)) for b in bands}
     if not rayleigh:
         return [satellite_scene(hyd, vol, sat, bands[0].name, resolution_km, rgb=True, seed=seed,
-                                ground_albedo=tuple(albedo[b.name] for b in bands), **surface_kw)]
+                                ground_albedo=tuple(albedo[b.name] for b in bands), atmosphere=atmosphere,
+                                **surface_kw)]
     return [satellite_scene(hyd, vol, sat, b.name, resolution_km, rayleigh=True, ground_albedo=albedo[b.name],
                             seed=seed, **surface_kw) for b in bands]
 
@@ -133,10 +135,12 @@ def render_true_color(scenes, spp: int = 64, **reference_kw):
     per-band renders of ``--rayleigh`` without checkpoints). Returns (``rgb_dataset``, Image with the bands in
     the channels red, green, blue)."""
     from ..reference.render import render_reference
+    from .air import with_air_outside
     from .imagery import satellite_dataset
     if len(scenes) == 1:
-        img = render_reference(scenes[0].spec, scenes[0].vol, spp=spp, normalize="reflectance", **reference_kw)
-        return rgb_dataset([satellite_dataset(scenes[0], img, c) for c in range(3)]), img
+        s = scenes[0]
+        img = with_air_outside(s, render_reference(s.spec, s.vol, spp=spp, normalize="reflectance", **reference_kw))
+        return rgb_dataset([_with_air_column(satellite_dataset(s, img, c), s, c) for c in range(3)]), img
     ckpt, resume = reference_kw.pop("checkpoint", None), reference_kw.pop("resume", None)
     imgs = []
     for s in scenes:  # a checkpoint per band: finished bands are read back, the unfinished one resumed
@@ -180,6 +184,26 @@ def column_path_fraction(vol, rays) -> np.ndarray:
     z_in, z_out = o[..., 2] + d[..., 2] * t0, o[..., 2] + d[..., 2] * np.maximum(t1, t0)
     tau_in = np.interp(z_in, edges, cum) - np.interp(z_out, edges, cum)
     return np.where(t0 <= t1, np.clip(tau_in / cum[-1], 0.0, 1.0), 0.0) if cum[-1] > 0 else np.zeros_like(t0)
+
+
+def _with_air_column(ds, scene, channel: int):
+    """``ds`` (channel ``channel`` of a true-colour render) with, where the scene has the clear atmosphere, the
+    molecular reflectance of its whole column from the ground (``satellite.air.column_rayleigh_optical_depth``)
+    over a black surface at every pixel's angles (``rayleigh_reflectance``): the air is everywhere, so every
+    line of sight crosses all of it."""
+    atm = scene.spec.atmosphere
+    if atm is None:
+        return ds
+    from .air import column_rayleigh_optical_depth, ground_height_m
+    tau = column_rayleigh_optical_depth(atm, scene.bands[channel].wavelength_m * 1e9, ground_height_m(scene))
+    refl = rayleigh_reflectance(tau, ds.solar_zenith_angle.values, ds.sensor_zenith_angle.values,
+                                ds.solar_azimuth_angle.values, ds.sensor_azimuth_angle.values)
+    ds["rayleigh_reflectance"] = (("y", "x"), refl.astype(np.float32), {
+        "long_name": "reflectance factor of the atmosphere's molecules alone (whole column) over a black "
+                     "surface (DISORT), what the Rayleigh correction subtracts", "units": "1",
+        "grid_mapping": "fixed_grid_projection"})
+    ds.attrs["rayleigh_optical_depth"] = tau
+    return ds
 
 
 def _with_rayleigh_column(ds, scene):
@@ -258,7 +282,9 @@ def rgb_dataset(parts):
                                    channel=[str(d["reflectance"].attrs.get("channel", "")) for d in parts])
     if "rayleigh_reflectance" in ds:
         ds["rayleigh_optical_depth"] = ("band", np.asarray([d.attrs["rayleigh_optical_depth"] for d in parts]),
-                                        {"long_name": "the domain's molecular optical depth (column mean)", "units": "1"})
+                                        {"long_name": "the molecular optical depth under the Rayleigh correction "
+                                                      "(the domain's column mean; the whole column with the clear "
+                                                      "atmosphere)", "units": "1"})
         ds.attrs.pop("rayleigh_optical_depth", None)
     ds.attrs.update(title=ds.attrs["title"].replace(f"{names[0]} um", "true-colour (" + ", ".join(names) + " um)"),
                     band_um=" ".join(names), band_wavelength_m=[w * 1e-6 for w in wl_um],

@@ -26,19 +26,22 @@ from .atmosphere import Atmosphere
 from .inside import CHANNEL_NM
 from .ozone import cross_section_m2 as ozone_cross_section_m2
 from .shell import EARTH_RADIUS_M
-from .sunlight import SunAirTable, sun_rgb
+from .sunlight import SunAirTable, channel_values
 
 TOP_M = 60e3        # the eye path's air ends here (above it < 1e-4 of the molecules' column)
 SAMPLES = 257
 
 
-def wide_sun_table(atm: Atmosphere, mu0: float, reach_m: float = 1500e3, n_mu: int = 129, n_h: int = 121) -> SunAirTable:
+def wide_sun_table(atm: Atmosphere, mu0: float, reach_m: float = 1500e3, n_mu: int = 129, n_h: int = 121,
+                   band_nm=None) -> SunAirTable:
     """The direct sun's colour over heights 0..TOP_M and the band of mu that points up to ``reach_m``
-    from the scene's centre see (the sun at cos(zenith) ``mu0`` there)."""
+    from the scene's centre see (the sun at cos(zenith) ``mu0`` there); ``band_nm``: its transmittance at
+    each channel's wavelength instead (``sunlight.channel_values``)."""
     sza, delta = np.arccos(mu0), reach_m / EARTH_RADIUS_M
     mu = np.linspace(np.cos(min(sza + delta, np.pi)), np.cos(max(sza - delta, 0.0)), n_mu)
     heights = np.linspace(0.0, TOP_M, n_h)
-    return SunAirTable(heights_m=heights, mu=mu, rgb=sun_rgb(atm, heights[None, :], mu[:, None]).astype(np.float32))
+    rgb = channel_values(atm, heights[None, :], mu[:, None], band_nm)
+    return SunAirTable(heights_m=heights, mu=mu, rgb=rgb.astype(np.float32))
 
 
 def top_distance(origins, dirs, top_m: float = TOP_M) -> np.ndarray:

@@ -35,12 +35,14 @@ class BoxAir:
     """The air in the box on the volume's grid (z, y, x), per channel R, G, B: ``extinction`` (z, y, x, 3)
     and ``scattering`` (2, z, y, x, 3) of molecules and aerosol, in 1/m, float32; ``phase_tables`` the
     Rayleigh and the aerosol's Henyey-Greenstein tables; ``atmosphere`` the 1-D atmosphere of ozone and
-    aerosol."""
+    aerosol; ``band_nm`` the wavelength of each channel where each is one wavelength (a satellite's bands,
+    ``band_box_air``: the sun on its path is then the transmittance there), None for the RGB mode's colours."""
 
     extinction: np.ndarray
     scattering: np.ndarray
     atmosphere: Atmosphere
     phase_tables: tuple = field(repr=False, default=())
+    band_nm: tuple | None = None
 
     def scattering_mean(self) -> np.ndarray:
         """(2, z, y, x) the components' scattering coefficients, channel mean (the Eq. 8 weights)."""
@@ -70,16 +72,20 @@ def box_air(atm: Atmosphere, rho_air_kg_m3, z_m, wavelengths_nm=CHANNEL_NM) -> B
                   atmosphere=atm, phase_tables=(phase_table(), henyey_greenstein(atm.aerosol_g)))
 
 
-def with_box_air(vol, hyd, atm: Atmosphere):
+def with_box_air(vol, hyd, atm: Atmosphere, band_nm=None):
     """``vol`` (an ``OpticalVolume``) with the air of :func:`box_air` on its grid (``OpticalVolume.air``) from
-    the Hydrometeors ``hyd``'s ``rho_air`` and heights ``z``; a ValueError naming ``rho_air`` where its grid
-    is not the volume's."""
+    the Hydrometeors ``hyd``'s ``rho_air`` and heights ``z``; ``band_nm`` (3,): the channels at these
+    wavelengths (nm; a satellite's bands, ``BoxAir.band_nm``), else the RGB mode's. A ValueError naming
+    ``rho_air`` where its grid is not the volume's."""
     from dataclasses import replace
     rho, z_m = np.asarray(hyd["rho_air"].values), np.asarray(hyd["z"].values)
     if rho.shape != tuple(vol.shape):
         raise ValueError(f"rho_air's grid {rho.shape} is not the optical volume's {tuple(vol.shape)}: the air in "
                          "the box needs the model's air density on the volume's grid")
-    return replace(vol, air=box_air(atm, rho, z_m))
+    if band_nm is None:
+        return replace(vol, air=box_air(atm, rho, z_m))
+    band_nm = tuple(float(w) for w in band_nm)
+    return replace(vol, air=replace(box_air(atm, rho, z_m, band_nm), band_nm=band_nm))
 
 
 def medium_extinction(beta_total, air: BoxAir) -> np.ndarray:

@@ -79,9 +79,12 @@ class SunAirTable:
         return self.at(self.heights_m, np.full(self.heights_m.shape, float(mu)))
 
 
-def sun_air_table(atm: Atmosphere, mu0: float, top_m: float, half_width_m: float = 0.0) -> SunAirTable:
+def sun_air_table(atm: Atmosphere, mu0: float, top_m: float, half_width_m: float = 0.0,
+                  band_nm=None) -> SunAirTable:
     """The table for a scene whose sun is at cos(zenith) ``mu0`` at its centre, heights 0..``top_m`` and
-    points up to ``half_width_m`` horizontally from the centre (the band of mu their local zenith spans)."""
+    points up to ``half_width_m`` horizontally from the centre (the band of mu their local zenith spans).
+    ``band_nm``: one wavelength per channel (a satellite's bands, nm): ``rgb`` holds the direct beam's
+    ``transmittance`` at each instead of the sun's colour."""
     if not -1.0 <= mu0 <= 1.0:
         raise ValueError(f"mu0 must be a cosine, got {mu0}")
     if not top_m > 0.0:
@@ -91,8 +94,16 @@ def sun_air_table(atm: Atmosphere, mu0: float, top_m: float, half_width_m: float
     mu = np.cos(np.linspace(min(sza + delta, np.pi), max(sza - delta, 0.0), MU_SAMPLES))
     mu = np.linspace(mu[0], mu[-1], MU_SAMPLES)  # uniform in mu (the lookup's grid)
     heights = np.linspace(0.0, float(top_m), HEIGHT_SAMPLES)
-    rgb = sun_rgb(atm, heights[None, :], mu[:, None])
+    rgb = channel_values(atm, heights[None, :], mu[:, None], band_nm)
     return SunAirTable(heights_m=heights, mu=mu, rgb=rgb.astype(np.float32))
 
 
-__all__ = ["transmittance", "sun_xyz", "sun_rgb", "SunAirTable", "sun_air_table"]
+def channel_values(atm: Atmosphere, h_m, mu, band_nm=None) -> np.ndarray:
+    """The direct sun per channel at (h_m, mu) (...): (..., 3): its colour (``sun_rgb``) for ``band_nm`` None,
+    else its ``transmittance`` at each channel's wavelength ``band_nm`` (3,) (nm; a satellite's bands)."""
+    if band_nm is None:
+        return sun_rgb(atm, h_m, mu)
+    return transmittance(atm, np.asarray(band_nm, np.float64), h_m, mu)
+
+
+__all__ = ["transmittance", "sun_xyz", "sun_rgb", "SunAirTable", "sun_air_table", "channel_values"]

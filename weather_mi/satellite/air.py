@@ -1,0 +1,283 @@
+"""The clear 1-D atmosphere around and above a satellite view's model box (``satellite --atmosphere clear``).
+
+Inside the box the air is part of the path tracer's medium at the band's wavelength (or the three bands of a
+true-colour render, one per channel: ``optics.air.inside``, ``BoxAir.band_nm``), and the sun reaches every
+vertex through the spherical shell (the direct beam's transmittance in each band, ``sunlight.channel_values``).
+Outside the box each pixel's line of sight (its centre, ``rays.box_segment``) is completed here:
+
+* through the box: the air A between the top of the atmosphere and the box entry (above the model top; below
+  it where the line enters through a side) and B from a side wall's exit down to the ground (its single
+  scattering times the clear column's ratio of all orders to the first), single scattering
+  (``eye_path.segment_air``; heights above a spherical Earth whose centre is under the box's centre), and the coupling C of the air above the top with
+  what lies below it, as the clear plane-parallel column has it (``above_box_coupling``: its diffuse light onto
+  the box and back, 2-3 % of a clear sea's reflectance at 0.47 um under a 20 km top):
+      R = pi S_A / mu0 + T_A R_render + C                              (S_A per unit irradiance of the sun)
+* past the box: the plane-parallel 1-D atmosphere over a Lambertian surface, all orders of scattering
+  (DISORT, ``air_layers``):
+      R = R_0(mu, phi) + a K(mu, phi) / (1 - a s)                      (Chandrasekhar 1960, ch. 4; K = t(mu0) t(mu))
+  with a = R_render / T_0 the surface's albedo as the render shows it lit by the direct sun (T_0 the direct
+  beam's transmittance to the ground), R_0 the path reflectance over a black surface, K the product of the
+  total (direct + diffuse) transmittances and s the spherical albedo, both from DISORT at two more albedos.
+
+R is the reflectance factor pi L / (E0 mu0) of ``render_satellite``, mu0 the rendered sun's. Not included:
+a cloud's own coupling with the air above the top (C is the clear column's), light that leaves the box through
+its sides into the outside air and back (a periodic box has its copies instead), the outside air's shadow of
+the clouds. The standard error is scaled by T_A (the added terms are exact).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+CHUNK = 2048            # rays per ``segment_air`` call
+TOP_LAYERS_M = (0.0, 30e3, 80e3)  # DISORT layers: LAYER_M up to 30 km, 5 km above
+LAYER_M = 1000.0
+ALBEDOS = (0.0, 0.1, 0.5)         # the surface albedos of the three DISORT solves (R_0, then K and s)
+N_STREAMS = 16                    # Rayleigh needs 4; the aerosol's forward peak is left to DISORT's corrections
+
+
+def air_layers(atm, wavelength_nm: float, ground_m: float = 0.0, split_m: float | None = None):
+    """The 1-D atmosphere from ``ground_m`` to its top as DISORT layers (top first): (optical depth, single-
+    scattering albedo, Legendre moments (layers, N_STREAMS + 1)) at ``wavelength_nm``: molecules (Rayleigh with
+    depolarisation, ``optics.rayleigh``), ozone (absorbing), aerosol (Henyey-Greenstein of ``atm.aerosol_g``,
+    albedo ``atm.aerosol_ssa``); ``split_m``: a layer edge there (the layers above it come first)."""
+    from ..optics.air.ozone import cross_section_m2 as ozone_sigma
+    from ..optics.rayleigh import DEPOLARISATION, cross_section_m2 as rayleigh_sigma
+    edges = _layer_edges(ground_m, split_m)
+    wl = float(wavelength_nm)
+    taus = {k: [] for k in ("rayleigh", "ozone", "aerosol")}
+    for z0, z1 in zip(edges[:-1], edges[1:]):
+        z = np.linspace(z0, z1, 41)
+        p = atm.profiles(z)
+        taus["rayleigh"].append(np.trapezoid(p["air"], z) * float(rayleigh_sigma(wl * 1e-9)))
+        taus["ozone"].append(np.trapezoid(p["ozone"], z) * float(ozone_sigma(wl)))
+        taus["aerosol"].append(np.trapezoid(p["aerosol"], z) * float(atm.aerosol_factor(wl)))
+    t_r, t_o, t_a = (np.asarray(taus[k])[::-1] for k in ("rayleigh", "ozone", "aerosol"))  # top first
+    sca_a = atm.aerosol_ssa * t_a
+    tau = t_r + t_o + t_a
+    gamma = DEPOLARISATION / (2.0 - DEPOLARISATION)
+    chi_r = np.zeros(N_STREAMS + 1)
+    chi_r[0], chi_r[2] = 1.0, (1.0 - gamma) / (10.0 * (1.0 + 2.0 * gamma))
+    chi_a = atm.aerosol_g ** np.arange(N_STREAMS + 1)
+    sca = t_r + sca_a
+    moments = (t_r[:, None] * chi_r + sca_a[:, None] * chi_a) / np.maximum(sca, 1e-30)[:, None]
+    return tau, np.clip(sca / np.maximum(tau, 1e-30), 0.0, 1.0 - 1e-7), moments
+
+
+def plane_parallel_terms(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_nodes, ground_m: float = 0.0,
+                         albedos=ALBEDOS):
+    """(R_0, K, s) of the module docstring on the grid ``mu_nodes`` (ascending cos of the view zenith) x
+    ``phi_nodes`` (deg, 0 forward scattering): three DISORT solves (``ALBEDOS``; ``albedos`` (0,): R_0 alone,
+    K and s None)."""
+    from ..plane_parallel.disort import solve
+    tau, ssa, moments = air_layers(atm, wavelength_nm, ground_m)
+    mu_nodes, phi_nodes = np.asarray(mu_nodes, np.float64), np.asarray(phi_nodes, np.float64)
+    refl = []
+    for a in albedos:
+        res = solve(tau, ssa, mu0, mu_nodes, [0.0], phi_nodes, moments=moments, surface_albedo=a,
+                    n_streams=N_STREAMS)
+        refl.append(np.array([[np.pi * res.intensities(m, 0, p) / mu0 for p in range(phi_nodes.size)]
+                              for m in range(mu_nodes.size)]))
+    if len(refl) == 1:
+        return refl[0], None, None
+    r0, (a1, a2) = refl[0], albedos[1:]
+    y1, y2 = (refl[1] - r0) / a1, (refl[2] - r0) / a2     # y_i = K / (1 - a_i s)
+    s = (y1 - y2) / (a1 * y1 - a2 * y2)
+    return r0, y1 * (1.0 - a1 * s), s
+
+
+def above_box_coupling(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_nodes, ground_m: float, top_m: float,
+                       albedo: float) -> np.ndarray:
+    """What the air above the box's top adds to a clear column beyond its single scattering along the line of
+    sight and its direct transmittances (mu_nodes x phi_nodes): R_full - T(mu0) T(mu) R_below - R_above (DISORT,
+    the surface of ``albedo``; T the direct transmittances of the air above ``top_m``, R_above its reflectance
+    alone over a black surface): its diffuse light onto the box and the box's diffuse light scattered back into
+    the line of sight. Added to every line of sight through the box (a cloud's own coupling taken as the clear
+    column's)."""
+    from ..plane_parallel.disort import solve
+    mu_nodes, phi_nodes = np.asarray(mu_nodes, np.float64), np.asarray(phi_nodes, np.float64)
+    tau, ssa, moments = air_layers(atm, wavelength_nm, ground_m, split_m=top_m)
+    n_above = _layers_above(ground_m, top_m)
+
+    def refl(sl, a):
+        res = solve(tau[sl], ssa[sl], mu0, mu_nodes, [0.0], phi_nodes, moments=moments[sl], surface_albedo=a,
+                    n_streams=N_STREAMS)
+        return np.array([[np.pi * res.intensities(m, 0, p) / mu0 for p in range(phi_nodes.size)]
+                         for m in range(mu_nodes.size)])
+    tau_above = float(tau[:n_above].sum())
+    full, below, above = refl(slice(None), albedo), refl(slice(n_above, None), albedo), refl(slice(0, n_above), 0.0)
+    t_dir = np.exp(-tau_above / mu0) * np.exp(-tau_above / mu_nodes)[:, None]
+    return full - t_dir * below - above
+
+
+def _layer_edges(ground_m: float, split_m: float | None = None) -> np.ndarray:
+    """The heights (m, ascending) of ``air_layers``' layer edges: every ``LAYER_M`` to 30 km, every 5 km above,
+    and ``split_m``."""
+    lo, mid, top = TOP_LAYERS_M
+    edges = np.r_[np.arange(max(ground_m, lo), mid, LAYER_M), np.arange(mid, top + 1.0, 5000.0)]
+    return np.unique(np.r_[edges, [] if split_m is None else [min(max(split_m, ground_m), top)]])
+
+
+def _layers_above(ground_m: float, top_m: float) -> int:
+    """How many of ``air_layers``' layers (split at ``top_m``) lie above ``top_m``."""
+    return int(np.sum(_layer_edges(ground_m, top_m) > top_m))
+
+
+def pixel_angles(scene):
+    """Per pixel centre (H, W): (origins (H, W, 3) in the frame with the box's centre at x = y = 0, directions
+    (H, W, 3), mu = cos of the view zenith, phi = relative azimuth in deg (0: forward scattering), entry and
+    exit distances t0, t1 along the line (t0 > t1: it misses the box)), for the rendered sun."""
+    from .rays import box_segment
+    vol = scene.vol
+    t0, t1, o, d = box_segment(scene.view.rays, vol.bbox)
+    (x0, y0, _), (x1, y1, _) = vol.bbox
+    o = o - np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])
+    sun = np.asarray(scene.spec.sun.to_sun, np.float64)
+    dh, sh = d[..., :2], sun[:2]
+    cos_phi = np.sum(dh * sh, axis=-1) / np.maximum(np.linalg.norm(dh, axis=-1) * np.linalg.norm(sh), 1e-12)
+    return o, d, -d[..., 2], np.degrees(np.arccos(np.clip(cos_phi, -1.0, 1.0))), t0, t1
+
+
+def with_air_outside(scene, img):
+    """``img`` (a reflectance render of ``scene``, ``render_satellite``) with the air outside the box (module
+    docstring), per channel at ``scene.vol.air.band_nm``; ``img`` itself without ``scene.spec.atmosphere``."""
+    atm = scene.spec.atmosphere
+    if atm is None:
+        return img
+    band_nm = scene.vol.air.band_nm
+    o, d, mu, phi, t0, t1 = pixel_angles(scene)
+    hit = t0 <= t1
+    if scene.vol.periodic and scene.vol.periodic != "transport":  # the copies seen: A ends at the model top
+        t0, hit = np.where(hit, t0, 0.0), np.ones_like(hit)
+    mu0 = float(scene.spec.sun.mu0)
+    rad = np.asarray(img.radiance, np.float64).copy()
+    se = None if img.stderr is None else np.asarray(img.stderr, np.float64).copy()
+    t_box = None if img.transmittance is None else np.asarray(img.transmittance, np.float64)[hit]
+    t_a, r_a = _through_box(atm, scene, t_box, o[hit], d[hit], mu[hit], phi[hit], t0[hit], t1[hit], band_nm, mu0)
+    rad[hit] = r_a + t_a * rad[hit] + _coupling(atm, scene, mu[hit], phi[hit], band_nm, mu0)
+    if se is not None:
+        se[hit] = t_a * se[hit]
+    if (~hit).any():
+        rad[~hit], surface = _past_box(atm, scene, mu[~hit], phi[~hit], rad[~hit], band_nm, mu0)
+        if se is not None:
+            se[~hit] = se[~hit] * surface
+    meta = {**img.metadata, "air_outside": {"above_box_px": int(hit.sum()), "past_box_px": int((~hit).sum())}}
+    return replace(img, radiance=rad.astype(np.float32), stderr=None if se is None else se.astype(np.float32),
+                   metadata=meta)
+
+
+def _sun_table(atm, start, band_nm, mu0):
+    """The direct sun per channel over the heights and the band of mu that the lines of sight from ``start``
+    (their points at the top of the air, (n, 3)) and the box see (``eye_path.wide_sun_table``)."""
+    from ..optics.air.eye_path import wide_sun_table
+    reach = float(np.max(np.linalg.norm(start[:, :2], axis=-1), initial=0.0)) + 50e3
+    return wide_sun_table(atm, mu0, reach_m=reach, n_mu=17, n_h=61, band_nm=band_nm)
+
+
+def _segments(atm, scene, start, d, s0, s1, table, band_nm):
+    """(T, S) (n, 3) of ``eye_path.segment_air`` over [s0, s1] along the lines from ``start``, in chunks."""
+    from ..optics.air.eye_path import segment_air
+    t, out = np.ones((len(start), 3)), np.zeros((len(start), 3))
+    for i in range(0, len(start), CHUNK):
+        sl = slice(i, i + CHUNK)
+        t[sl], out[sl] = segment_air(atm, scene.spec.sun.to_sun, start[sl], d[sl], s0[sl], s1[sl], table,
+                                     wavelengths_nm=band_nm)
+    return t, out
+
+
+def _through_box(atm, scene, t_box, o, d, mu, phi, t0, t1, band_nm, mu0):
+    """(T_A (n, 3), the air's reflectance added (n, 3)) of lines of sight through the box: A from the top of the
+    air to the box entry ``t0`` (single scattering), and B from a side wall's exit ``t1`` down to the ground
+    (single scattering times the column's ratio of all orders to the first, R_0 / (pi S_column / mu0),
+    seen through A and the box: ``t_box`` (n,), the render's eye-ray transmittance, or None)."""
+    from ..optics.air.eye_path import top_distance
+    back = top_distance(o, -d)                      # from the start back up to the top of the air
+    start = o - back[:, None] * d
+    table = _sun_table(atm, start, band_nm, mu0)
+    t_a, s_a = _segments(atm, scene, start, d, np.zeros(back.shape), back + np.maximum(t0, 0.0), table, band_nm)
+    floor = 0.0 if scene.spec.ground is None else float(scene.spec.ground.height)
+    t_ground = (floor - o[:, 2]) / np.minimum(d[:, 2], -1e-9)
+    side = (t1 < t_ground - 1.0) & ~(scene.vol.periodic and scene.vol.periodic != "transport")
+    added = np.pi * s_a / mu0
+    if side.any():
+        k = np.flatnonzero(side)
+        _, s_b = _segments(atm, scene, start[k], d[k], back[k] + t1[k], back[k] + t_ground[k], table, band_nm)
+        _, s_col = _segments(atm, scene, start[k], d[k], np.zeros(k.size), back[k] + t_ground[k], table, band_nm)
+        ratio = _path_reflectance(atm, scene, mu[k], phi[k], band_nm, mu0) / np.maximum(np.pi * s_col / mu0, 1e-12)
+        seen = 1.0 if t_box is None else t_box[k, None]
+        added[k] += t_a[k] * seen * ratio * np.pi * s_b / mu0
+    return t_a, added
+
+
+def _path_reflectance(atm, scene, mu, phi, band_nm, mu0):
+    """R_0 (n, 3): the clear column's reflectance over a black surface (DISORT) at the lines' angles."""
+    from scipy.interpolate import RegularGridInterpolator
+    mu_nodes, phi_nodes, pts = _grid(mu, phi)
+    ground = ground_height_m(scene)
+    out, done = np.zeros((mu.size, 3)), {}
+    for c, wl in enumerate(band_nm):
+        if wl not in done:
+            r0 = plane_parallel_terms(atm, wl, mu0, mu_nodes, phi_nodes, ground, albedos=(0.0,))[0]
+            done[wl] = RegularGridInterpolator((mu_nodes, phi_nodes), r0)(pts)
+        out[:, c] = done[wl]
+    return out
+
+
+def _grid(mu, phi):
+    """(mu nodes, phi nodes, points) spanning the lines of sight's angles, for interpolating DISORT's terms."""
+    mu_nodes = np.linspace(mu.min(), max(mu.max(), mu.min() + 1e-4), 5)
+    phi_nodes = np.linspace(phi.min(), max(phi.max(), phi.min() + 1e-3), 7)
+    return mu_nodes, phi_nodes, np.stack([mu, phi], axis=-1)
+
+
+def _coupling(atm, scene, mu, phi, band_nm, mu0):
+    """``above_box_coupling`` (n, 3) at the lines of sight's angles, per channel (the ground's albedo there)."""
+    from scipy.interpolate import RegularGridInterpolator
+    mu_nodes, phi_nodes, pts = _grid(mu, phi)
+    ground = ground_height_m(scene)
+    albedo = (0.0,) * 3 if scene.spec.ground is None else scene.spec.ground.albedo
+    out, done = np.zeros((mu.size, 3)), {}
+    for c, (wl, a) in enumerate(zip(band_nm, albedo)):
+        if (wl, a) not in done:
+            table = above_box_coupling(atm, wl, mu0, mu_nodes, phi_nodes, ground, float(scene.vol.bbox[1][2]), a)
+            done[(wl, a)] = RegularGridInterpolator((mu_nodes, phi_nodes), table)(pts)
+        out[:, c] = done[(wl, a)]
+    return out
+
+
+def _past_box(atm, scene, mu, phi, rendered, band_nm, mu0):
+    """(reflectance (n, 3), the factor on the rendered surface term (n, 3)) of the lines of sight that miss the
+    box (module docstring), the plane-parallel terms interpolated in (mu, phi) per distinct wavelength."""
+    from scipy.interpolate import RegularGridInterpolator
+    from ..optics.air.sunlight import transmittance
+    ground = ground_height_m(scene)
+    mu_nodes, phi_nodes, pts = _grid(mu, phi)
+    out, factor = np.empty_like(rendered), np.empty_like(rendered)
+    for wl in sorted(set(band_nm)):
+        r0, k, s = (RegularGridInterpolator((mu_nodes, phi_nodes), v)(pts)
+                    for v in plane_parallel_terms(atm, wl, mu0, mu_nodes, phi_nodes, ground))
+        t_dir = float(transmittance(atm, [wl], ground, mu0)[0])
+        for c in (c for c, w in enumerate(band_nm) if w == wl):
+            a = np.clip(rendered[:, c] / t_dir, 0.0, 1.0)
+            factor[:, c] = k / (t_dir * (1.0 - a * s))
+            out[:, c] = r0 + rendered[:, c] * factor[:, c]
+    return out, factor
+
+
+def ground_height_m(scene) -> float:
+    """The scene's flat ground (m above sea level, >= 0; sea level without one): where the 1-D air starts."""
+    return 0.0 if scene.spec.ground is None else max(float(scene.spec.ground.height), 0.0)
+
+
+def column_rayleigh_optical_depth(atm, wavelength_nm: float, ground_m: float = 0.0) -> float:
+    """The molecules' vertical optical depth of ``atm`` from ``ground_m`` to its top at ``wavelength_nm``: what
+    the true-colour recipe's Rayleigh correction subtracts over (``truecolor``)."""
+    from ..optics.rayleigh import cross_section_m2
+    from ..optics.air.atmosphere import TOP_M
+    z = np.linspace(ground_m, TOP_M, 8001)
+    return float(np.trapezoid(atm.air_number_density_m3(z), z) * cross_section_m2(wavelength_nm * 1e-9))
+
+
+__all__ = ["air_layers", "above_box_coupling", "plane_parallel_terms", "pixel_angles", "with_air_outside",
+           "column_rayleigh_optical_depth", "ground_height_m"]
