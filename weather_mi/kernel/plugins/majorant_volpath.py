@@ -39,7 +39,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from . import mvnee, sun, sun_properties
+from . import air_levels, mvnee, sun, sun_properties
 from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
 from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401 (re-exported)
 from .medium_setup import GridCache, MediumSetup, Tracking, phase_ctx, scattering_event, unit_cube_to_world, volume_data
@@ -122,6 +122,10 @@ class MajorantVolpath:
      * - mvnee, mvnee_length
        - |float|, |int|
        - Probability of a multiple-vertex NEE chain (:mod:`.mvnee`; exclusive as the aureole) and its length.
+     * - air_extinction
+       - |tensor|
+       - (levels, 3) the air's extinction per level of the sigma_t grid (1/m), which that grid holds added
+         (:mod:`.air_levels`): its cells are crossed as empty space, with the air's majorant.
      * - periodic, periodic_tiles
        - |string|, |int|
        - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each
@@ -163,6 +167,7 @@ class MajorantVolpath:
         self.reach = int(get("periodic_tiles", 0))
         _check(self.periodic == "none" or (self.reach >= 1 and self.track_mode == "texel"),
                f"periodic needs periodic_tiles >= 1 and tracking_grid 'texel', got {self.reach}, {self.track_mode!r}")
+        self.air_levels = air_levels.parse(props, _check)  # the air in the box, per level (optional)
         sun_properties.parse(self, props)  # the integrator's own sun (optional)
 
     # ------------------------------------------------------------ Mitsuba object interface
@@ -209,7 +214,7 @@ class MajorantVolpath:
                 self._auto_key = key
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"
-        texel, texel_data = self._grids.texel(vol, ms.scale, *((self.reach,) if periodic else ()))
+        texel, texel_data = self._grids.texel(vol, ms.scale, self.reach if periodic else None, self.air_levels)
         track = texel if (texel is not None and self.track_mode == "texel") else coarse
         self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data, self.periodic, self.reach)
 
