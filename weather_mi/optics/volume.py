@@ -292,6 +292,20 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
     return total, largest
 
 
+def level_density(rho_air_kg_m3) -> np.ndarray:
+    """(z,) the dry-air density of each level, kg/m^3: the mean over the level of a (z, y, x) field (the model's
+    own density; its horizontal variations, a few per cent, would cost the path tracer its empty-space
+    skipping: ``optics.air.inside``), or a (z,) profile as given. A ValueError where it is not finite and >= 0."""
+    rho = np.asarray(rho_air_kg_m3)
+    if rho.ndim not in (1, 3):
+        raise ValueError(f"rho_air must be (z, y, x) or one value per level (z,); got shape {rho.shape}")
+    levels = rho.reshape(rho.shape[0], -1)
+    mean = levels.mean(axis=1, dtype=np.float64)  # no float64 copy of the grid
+    if not np.all(np.isfinite(mean)) or any(float(level.min()) < 0 for level in levels):
+        raise ValueError("rho_air (dry-air density, kg/m^3) must be finite and >= 0 for the air in the box")
+    return mean
+
+
 ALBEDO_CHUNK = 1 << 22  # voxels of a grid at a time in ``_voxel_albedo``
 
 
@@ -446,7 +460,6 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
         beta_ext = ReleasedGrid("beta_ext", beta_ext.shape)
     if "weights" not in keep:
         weights = ReleasedGrid("weights", weights.shape)
-    from .air.inside import level_density
     return OpticalVolume(names, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
                          Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic,

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..phase.table import RGB_WAVELENGTHS_M
 from ..rayleigh import AVOGADRO, M_AIR_KG_MOL, cross_section_m2 as rayleigh_cross_section_m2
+from ..volume import level_density
 from .atmosphere import Atmosphere
 from .ozone import cross_section_m2 as ozone_cross_section_m2
 
@@ -57,20 +58,6 @@ class BoxAir:
     def scattering_mean(self) -> np.ndarray:
         """(2, z, y, x) the components' scattering coefficients, channel mean (the Eq. 8 weights)."""
         return np.broadcast_to(self.scattering_levels.mean(axis=-1)[:, :, None, None], (2,) + tuple(self.shape))
-
-
-def level_density(rho_air_kg_m3) -> np.ndarray:
-    """(z,) the dry-air density of each level, kg/m^3: the mean over the level of a (z, y, x) field (the model's
-    own density; its horizontal variations, a few per cent, would cost the path tracer its empty-space
-    skipping), or a (z,) profile as given. A ValueError where it is not finite and >= 0."""
-    rho = np.asarray(rho_air_kg_m3)
-    if rho.ndim not in (1, 3):
-        raise ValueError(f"rho_air must be (z, y, x) or one value per level (z,); got shape {rho.shape}")
-    levels = rho.reshape(rho.shape[0], -1)
-    mean = levels.mean(axis=1, dtype=np.float64)  # no float64 copy of the grid
-    if not np.all(np.isfinite(mean)) or any(float(level.min()) < 0 for level in levels):
-        raise ValueError("rho_air (dry-air density, kg/m^3) must be finite and >= 0 for the air in the box")
-    return mean
 
 
 def box_air(atm: Atmosphere, rho_air_kg_m3, z_m, wavelengths_nm=CHANNEL_NM, shape=None) -> BoxAir:
