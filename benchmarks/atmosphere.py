@@ -1,16 +1,17 @@
 """The cost of the atmosphere (issue 38: at most 1.3x the time without it, to the same luminance RSE): the
 reference renderer with ``--atmosphere clear`` (the sun's colour along its path and the air inside the box,
 ``optics.air.inside``; the air along the eye rays outside the box is added after the path tracer and is not
-timed) against ``none``, on issue 38's headline view (demo supercell, sun at 4 deg elevation, azimuth 260,
-camera azimuth 290), in one process, kernels compiled first, in paired rounds (the two orders alternate; each
-round its own seed).
+timed) against ``none``, with the sky model and with ``--sky air`` (render's default now: no sky emitter, the air's
+own sky), on issue 38's headline view (demo supercell, sun at 4 deg elevation, azimuth 260,
+camera azimuth 290), in one process, kernels compiled first, in paired rounds (the order reverses each round;
+each round its own seed). The air along the eye rays (``display.aerial.with_eye_air``) is timed once apart.
 
     .venv/bin/python benchmarks/atmosphere.py [--size 160x120] [--spp 32] [--rounds 3]
 
 Per round: each render's seconds and the mean relative standard error of the luminance over the cloud pixels
-(``noise_stats``' ``rse_mean``). Then the ratio of the median times and the ratio of the times to the same
-RSE, sum(t) rse^2 (the RSE of a mean falls as 1 / sqrt(time)); and the time to build the per-scene table
-(``optics.air.sun_air_table``).
+(``noise_stats``' ``rse_mean``). Then, against ``none``, the ratio of the median times, of each round's times
+and of the times to the same RSE, sum(t) mean(rse^2) (the RSE of a mean falls as 1 / sqrt(time)); and the time
+to build the per-scene table (``optics.air.sun_air_table``).
 """
 from __future__ import annotations
 
@@ -24,9 +25,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+CASES = {"none": ("none", "sunsky"), "clear": ("clear", "sunsky"), "clear, --sky air": ("clear", "air")}
+
 
 def main(argv=None):
-    from validation.sun_colour import demo_volume, headline_scene
+    from validation.sun_colour import demo_volume
+    from weather_mi.scene.framing import scene_spec
     from weather_mi.optics.air import Atmosphere, sun_air_table
     from weather_mi.optics.air.inside import with_box_air
     from weather_mi.reference.render import render_reference
@@ -42,24 +46,35 @@ def main(argv=None):
     table_s = time.perf_counter() - t0
     hyd, vol = demo_volume(with_hyd=True)
     cases = {}
-    for a in ("none", "clear"):
-        spec = headline_scene(vol, size, args.elevation, a)
-        cases[a] = (spec, vol if spec.atmosphere is None else with_box_air(vol, hyd, spec.atmosphere))
+    for name, (atmosphere, sky) in CASES.items():
+        spec = scene_spec(vol, size, sun_elevation=args.elevation, sun_azimuth=260.0, camera_azimuth=290.0,
+                          atmosphere=atmosphere, sky=sky)
+        cases[name] = (spec, vol if spec.atmosphere is None else with_box_air(vol, hyd, spec.atmosphere))
     for spec, v in cases.values():  # compile the kernels first
         render_reference(spec, v, spp=2, progress=False)
-    times, rse = {a: [] for a in cases}, {a: [] for a in cases}
+    times, rse, last = {a: [] for a in cases}, {a: [] for a in cases}, {}
+    names = list(cases)
     for r in range(args.rounds):
-        for a in (("none", "clear") if r % 2 == 0 else ("clear", "none")):
+        for a in (names if r % 2 == 0 else names[::-1]):
             spec, v = cases[a]
             img = render_reference(replace(spec, seed=spec.seed + r), v, spp=args.spp, progress=False)
             times[a].append(img.metadata["seconds"])
             rse[a].append(img.metadata["noise"]["rse_mean"])
-        print(f"round {r + 1}: none {times['none'][-1]:.2f} s, RSE {rse['none'][-1]:.4f}; clear {times['clear'][-1]:.2f} s, "
-              f"RSE {rse['clear'][-1]:.4f}; time ratio {times['clear'][-1] / times['none'][-1]:.2f}", flush=True)
+            last[a] = img
+        print(f"round {r + 1}: " + "; ".join(f"{a} {times[a][-1]:.2f} s, RSE {rse[a][-1]:.4f}" for a in names), flush=True)
     cost = {a: sum(times[a]) * float(np.mean(np.square(rse[a]))) for a in cases}
-    print(f"{args.size}, {args.spp} spp, {args.rounds} rounds: time ratio clear / none (medians) "
-          f"{np.median(times['clear']) / np.median(times['none']):.2f}; to the same luminance RSE "
-          f"{cost['clear'] / cost['none']:.2f}; the table {table_s:.2f} s")
+    base = names[0]
+    for a in names[1:]:
+        print(f"{args.size}, {args.spp} spp, {args.rounds} rounds, {a} / {base}: time ratio (medians) "
+              f"{np.median(times[a]) / np.median(times[base]):.2f}, per round "
+              + ", ".join(f"{x / y:.2f}" for x, y in zip(times[a], times[base]))
+              + f"; time to the same luminance RSE {cost[a] / cost[base]:.2f}")
+    from weather_mi.display.aerial import with_eye_air
+    for a in names[1:]:
+        t0 = time.perf_counter()
+        with_eye_air(last[a], cases[a][0], cases[a][1], sky_air=CASES[a][1] == "air")
+        print(f"{a}: the air along the eye rays {time.perf_counter() - t0:.2f} s")
+    print(f"the sun's table {table_s:.2f} s")
 
 
 if __name__ == "__main__":
