@@ -49,13 +49,12 @@ def resolve(args) -> None:
               "(the default) does not", file=sys.stderr)
 
 
-def in_box(vol, hyd, spec):
-    """``vol`` with the air of ``spec.atmosphere`` inside its box (molecules from ``hyd``'s ``rho_air``);
-    ``vol`` itself without an atmosphere."""
-    if spec.atmosphere is None:
-        return vol
-    from ..optics.air.inside import with_box_air
-    return with_box_air(vol, hyd, spec.atmosphere)
+def in_box(vol, spec):
+    """``vol`` with the air of ``spec.atmosphere`` inside its box (``optics.air.inside.scene_air``, as
+    ``render_reference`` puts it there: molecules from the model's ``rho_air`` per level, which ``optical_volume``
+    keeps); ``vol`` itself without an atmosphere."""
+    from ..optics.air.inside import scene_air
+    return scene_air(vol, spec.atmosphere)
 
 
 def on_eye_rays(img, spec, vol, args):

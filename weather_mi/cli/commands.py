@@ -71,7 +71,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..scene.surface import RGB_UM, with_surface
     vol = with_surface(vol, RGB_UM, args.surface, args.wind)  # the ground's surface in red, green and blue
     spec, sun_meta = scene_spec(args, vol), None
-    vol = air_option.in_box(vol, hyd, spec)  # the air inside the box (--atmosphere clear), from the model's rho_air
+    vol = air_option.in_box(vol, spec)  # the air inside the box (--atmosphere clear), from the model's rho_air
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     if args.sun_from_time:
         spec, sun_meta = _sun_from_time(spec, hyd)
