@@ -19,7 +19,7 @@ def add_options(p) -> None:
                         "model's box (render: part of the medium) and along the eye rays outside it (render; animate "
                         "--renderer slices: the sun's colour per height, the sky scaled, the eye rays' air); "
                         "none: the sun as given, vacuum between the hydrometeors. Default: clear in render "
-                        "(none with --integrator volpath or --legacy, whose sun it cannot colour), none elsewhere")
+                        "(none with --integrator volpath or --legacy, whose sun it cannot colour, and with --tile-size), none elsewhere")
     p.add_argument("--aod", type=float, default=None,
                    help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
     p.add_argument("--ozone", type=float, default=None,
@@ -35,11 +35,12 @@ def on_by_default(p) -> None:
 def resolve(args) -> None:
     """``--atmosphere`` and ``--sky`` where the command left them to the defaults (None): "clear" and "air" where
     the atmosphere is on by default (except with ``--integrator volpath`` or ``--legacy``, whose sun is one of
-    the scene's emitters: there "none"), else "none" and "sunsky"."""
+    the scene's emitters, and a tiled render, ``--tile-size``: there "none"), else "none" and "sunsky"."""
     on = getattr(args, ON_BY_DEFAULT, False)
     if args.atmosphere is None:
         own_sun = getattr(args, "integrator", "majorant") != "volpath" and not getattr(args, "legacy", False)
-        args.atmosphere = "clear" if on and own_sun else "none"
+        tiled = getattr(args, "tile_size", None) is not None  # render --tile-size has no atmosphere yet
+        args.atmosphere = "clear" if on and own_sun and not tiled else "none"
     if args.sky is None:
         args.sky = "air" if on and args.atmosphere == "clear" else "sunsky"
     elif on and args.atmosphere == "clear" and args.sky == "sunsky":
