@@ -22,22 +22,24 @@ LAYER = ((-4000.0, -4000.0, 6000.0), (4000.0, 4000.0, 6100.0))
 DOWN = wm.Camera.orthographic(center=(0.0, 0.0, 9000.0), direction=(0.0, 0.0, -1.0), width=6000, height=6000)
 
 
-def _layer_image(atmosphere, elevation=6.0):
+def _layer_image(atmosphere, elevation=6.0, spp=16):
     vol = wm.OpticalVolume.from_arrays(beta_ext=np.full((2, 4, 4), 0.002, np.float32), albedo=1.0,
                                        phase=wm.phase.henyey_greenstein(0.5), bbox=LAYER)
     spec = wm.SceneSpec(camera=DOWN, sun=wm.Sun(200.0, elevation, angular_diameter_deg=0.0), sky=None, ground=None,
                         width=6, height=6, atmosphere=atmosphere)
-    return wm.render_reference(spec, vol, spp=16, progress=False).radiance.reshape(-1, 3).mean(axis=0)
+    return wm.render_reference(spec, vol, spp=spp, progress=False).radiance.reshape(-1, 3).mean(axis=0)
 
 
 def test_the_kernel_colours_the_sun_by_the_air_at_the_vertex():
     """A thin layer at 6.0-6.1 km lit by a sun 6 deg high (single and multiple scattering all at ~6 km):
     with the air the image is the white-sun image times the direct sun's colour at 6.05 km, computed here
-    without the table or the kernel (the same seed: the same paths)."""
+    without the table or the kernel. The atmosphere's air is in the layer's box too (``render_reference``), so
+    the sun's colour is read where its ray leaves the box (at 6.05-6.1 km) and the paths differ from the white
+    sun's: 256 spp (the ratio's noise about 0.3 %), within 1.5 % (the box's own air: < 0.5 %)."""
     atm = Atmosphere(aod_550=0.2)
-    white, coloured = _layer_image(None), _layer_image(atm)
+    white, coloured = _layer_image(None, spp=256), _layer_image(atm, spp=256)
     expect = sun_rgb(atm, 6050.0, np.sin(np.radians(6.0)))
-    np.testing.assert_allclose(coloured / white, expect, rtol=0.01)
+    np.testing.assert_allclose(coloured / white, expect, rtol=0.015)
     assert expect[2] / expect[0] < 0.8  # a visibly coloured sun: the check can fail
 
 
@@ -61,7 +63,7 @@ def no_render(monkeypatch):
                         lambda *a, **k: pytest.fail("rendering started despite a bad argument"))
 
 
-@pytest.mark.parametrize("args, word", [(["--aod", "0.2"], "--atmosphere clear"),
+@pytest.mark.parametrize("args, word", [(["--atmosphere", "none", "--aod", "0.2"], "--atmosphere clear"),
                                         (["--atmosphere", "clear", "--aod", "7"], "--aod"),
                                         (["--atmosphere", "clear", "--ozone", "-0.1"], "--ozone"),
                                         (["--atmosphere", "clear", "--integrator", "volpath"], "volpath")])

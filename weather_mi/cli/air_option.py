@@ -4,29 +4,58 @@ single-scattering sky in place of a sky model)."""
 from __future__ import annotations
 
 
+ON_BY_DEFAULT = "air_on_by_default"  # a command's parser default: the atmosphere is on unless --atmosphere none
+
+
 def add_options(p) -> None:
     """``--sky``, ``--atmosphere``, ``--aod``, ``--ozone`` (the scene options of the light and the air)."""
     p.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none", "air"),
-                   help="sunsky (default): Hosek-Wilkie; air: the clear atmosphere's own single-scattering sky "
-                        "(with --atmosphere clear; render only)")
+                   help="sunsky: Hosek-Wilkie (the default without the atmosphere; with --atmosphere clear the "
+                        "air in the box counts part of the sky model's air twice); air: the clear atmosphere's "
+                        "own sky, from the path tracer inside the box and single scattering along the eye rays "
+                        "outside it (render's default with --atmosphere clear)")
     p.add_argument("--atmosphere", default="none", choices=("none", "clear"),
                    help="clear: a clear 1-D atmosphere (molecules, ozone, aerosol) on the sun's path, inside the "
                         "model's box (render: part of the medium) and along the eye rays outside it (render; animate "
                         "--renderer slices: the sun's colour per height, the sky scaled, the eye rays' air); "
-                        "none (default): the sun as given, vacuum between the hydrometeors")
+                        "none: the sun as given, vacuum between the hydrometeors. Default: clear in render "
+                        "(none with --integrator volpath or --legacy, whose sun it cannot colour, and with --tile-size), none elsewhere")
     p.add_argument("--aod", type=float, default=None,
                    help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
     p.add_argument("--ozone", type=float, default=None,
                    help="with --atmosphere clear: ozone column in atm-cm, in [0, 0.6] (default 0.3)")
 
 
-def in_box(vol, hyd, spec):
-    """``vol`` with the air of ``spec.atmosphere`` inside its box (molecules from ``hyd``'s ``rho_air``);
-    ``vol`` itself without an atmosphere."""
-    if spec.atmosphere is None:
-        return vol
-    from ..optics.air.inside import with_box_air
-    return with_box_air(vol, hyd, spec.atmosphere)
+def on_by_default(p) -> None:
+    """The command of parser ``p`` (render) has the atmosphere on by default, and with it ``--sky air``
+    (:func:`resolve` fills them in)."""
+    p.set_defaults(atmosphere=None, sky=None, **{ON_BY_DEFAULT: True})
+
+
+def resolve(args) -> None:
+    """``--atmosphere`` and ``--sky`` where the command left them to the defaults (None): "clear" and "air" where
+    the atmosphere is on by default (except with ``--integrator volpath`` or ``--legacy``, whose sun is one of
+    the scene's emitters, and a tiled render, ``--tile-size``: there "none"), else "none" and "sunsky"."""
+    on = getattr(args, ON_BY_DEFAULT, False)
+    if args.atmosphere is None:
+        own_sun = getattr(args, "integrator", "majorant") != "volpath" and not getattr(args, "legacy", False)
+        tiled = getattr(args, "tile_size", None) is not None  # render --tile-size has no atmosphere yet
+        args.atmosphere = "clear" if on and own_sun and not tiled else "none"
+    if args.sky is None:
+        args.sky = "air" if on and args.atmosphere == "clear" else "sunsky"
+    elif on and args.atmosphere == "clear" and args.sky == "sunsky":
+        import sys
+        print("note: --sky sunsky with --atmosphere clear counts the air in the box twice (Hosek-Wilkie's sky holds "
+              "it already, and the box's air scatters light into the eye rays and the cloud again); --sky air "
+              "(the default) does not", file=sys.stderr)
+
+
+def in_box(vol, spec):
+    """``vol`` with the air of ``spec.atmosphere`` inside its box (``optics.air.inside.scene_air``, as
+    ``render_reference`` puts it there: molecules from the model's ``rho_air`` per level, which ``optical_volume``
+    keeps); ``vol`` itself without an atmosphere."""
+    from ..optics.air.inside import scene_air
+    return scene_air(vol, spec.atmosphere)
 
 
 def on_eye_rays(img, spec, vol, args):

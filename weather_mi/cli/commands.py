@@ -37,6 +37,7 @@ def check_scene_options(args) -> None:
     checked before it is read; ``scene_spec`` builds from them."""
     from ..scene.framing import atmosphere_of
     from ..scene.spec import check_fov_deg
+    air_option.resolve(args)  # --atmosphere, --sky: the command's defaults
     parse_size(args.size)
     if args.fov is not None:
         check_fov_deg(args.fov)
@@ -75,7 +76,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..scene.surface import RGB_UM, with_surface
     vol = with_surface(vol, RGB_UM, args.surface, args.wind)  # the ground's surface in red, green and blue
     spec, sun_meta = scene_spec(args, vol), None
-    vol = air_option.in_box(vol, hyd, spec)  # the air inside the box (--atmosphere clear)
+    vol = air_option.in_box(vol, spec)  # the air inside the box (--atmosphere clear), from the model's rho_air
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     if args.sun_from_time:
         spec, sun_meta = _sun_from_time(spec, hyd)
@@ -169,6 +170,7 @@ def _add_render_parser(sub) -> None:
     render = sub.add_parser("render", help="path-trace the ground-truth image (EXR + PNG)")
     add_source(render)
     add_scene_options(render)
+    air_option.on_by_default(render)  # --atmosphere clear, --sky air unless given
     # the estimator's flags (--spp, --integrator, --target-rse, --max-seconds, --sun-guiding, --forward-peak,
     # --aureole-nee): declared with its options (weather_mi.reference.options)
     add_flags(render.add_argument_group("reference estimator"))

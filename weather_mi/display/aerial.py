@@ -15,8 +15,10 @@ atmosphere of ``spec.atmosphere`` is horizontally homogeneous, and each pixel's 
   (the render there is cloud over sky: the air is added to the cloud's part only, approximately).
 
 E is the scene's sun irradiance above the air (the RGB mode's sun with an atmosphere, ``sun_rgb`` = 1 in
-luminance there). Not included: light scattered more than once by the outside air, the outside air's
-shadow of the storm, and the dimming of the ground behind the box by segment B.
+luminance there). The storm shadows the direct sun at the samples of A and B (``optics.air.storm_shadow``:
+the hydrometeors' chord towards the sun; not for a periodic field). Not included: light scattered more than
+once by the outside air, the light the storm scatters into the outside air, and the dimming of the ground
+behind the box by segment B.
 """
 from __future__ import annotations
 
@@ -59,14 +61,20 @@ def eye_air(spec, vol, sky_air: bool, table=None):
     a_end = np.where(hit, t_in, t_end)
     e = np.asarray(sun.irradiance, np.float64)
     n = o.shape[0]
+    shadow = None
+    if not vol.periodic:  # the storm's shadow on the air's single scattering (a periodic field: none)
+        from ..optics.air.storm_shadow import storm_shadow
+        sh = storm_shadow(vol.beta_total, vol.bbox, sun.to_sun)
+        shadow = lambda p: sh.transmittance(p + centre)  # noqa: E731  (the frame's points in the volume's)
     t_a, s_a, s_b = np.ones((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
     for i in range(0, n, CHUNK):
         sl = slice(i, i + CHUNK)
-        t_a[sl], s = segment_air(atm, sun.to_sun, o[sl], d[sl], np.zeros(a_end[sl].shape), a_end[sl], table)
+        t_a[sl], s = segment_air(atm, sun.to_sun, o[sl], d[sl], np.zeros(a_end[sl].shape), a_end[sl], table,
+                                 shadow=shadow)
         s_a[sl] = s * e
         if sky_air:
             b0, b1 = np.where(hit[sl], t_out[sl], 0.0), np.where(hit[sl], t_end[sl], 0.0)  # B: none where no box
-            _, s = segment_air(atm, sun.to_sun, o[sl], d[sl], b0, b1, table)
+            _, s = segment_air(atm, sun.to_sun, o[sl], d[sl], b0, b1, table, shadow=shadow)
             s_b[sl] = s * e
     shape = (spec.height, spec.width)
     sky_end = ~np.isfinite(t_ground) & (not sky_air)  # ends on the sky model's sky

@@ -423,6 +423,10 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
              "to_world": bbox_transform(grid_bbox(vol))}
         if vol.periodic:
             d.update({"periodic": "transport" if vol.periodic == "transport" else "view", "periodic_tiles": PATH_TILES})
+        air = air_in_medium(vol)
+        if air is not None:  # the air's levels, which the trackers cross as empty space (plugins/air_levels.py)
+            levels = air.extinction_levels
+            d["air_extinction"] = mi.TensorXf(np.ascontiguousarray(pad_levels(levels) if vol.periodic else levels))
         if sun is not None:
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
         if atmosphere is not None:

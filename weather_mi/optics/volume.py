@@ -92,6 +92,10 @@ class OpticalVolume:
     air : optics.air.inside.BoxAir or None
         The clear air inside the box (molecules, ozone, aerosol per RGB channel; ``with_box_air``), extra
         components of the path tracer's medium; None: vacuum between the hydrometeors.
+    air_density : numpy.ndarray or None
+        (z,) the model's dry-air density per level, kg/m^3 (its mean over the level; ``optical_volume`` keeps
+        it), from which a SceneSpec's ``atmosphere`` builds the air in the box (``optics.air.inside.scene_air``);
+        None: the standard atmosphere's there.
     """
 
     species: tuple[str, ...]
@@ -109,6 +113,7 @@ class OpticalVolume:
     periodic: bool | str = False
     components: tuple | None = field(default=None, repr=False)
     air: object | None = field(default=None, repr=False)
+    air_density: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self):
         object.__setattr__(self, "periodic", check_periodic(self.periodic))
@@ -149,6 +154,11 @@ class OpticalVolume:
         (x0, y0, z0), (x1, y1, z1) = self.bbox
         nz, ny, nx = self.shape
         return ((z1 - z0) / nz, (y1 - y0) / ny, (x1 - x0) / nx)
+
+    def level_heights_m(self) -> np.ndarray:
+        """(z,) the levels' cell-centre heights, m (the box's z axis)."""
+        z0, z1, nz = float(self.bbox[0][2]), float(self.bbox[1][2]), self.shape[0]
+        return z0 + (np.arange(nz) + 0.5) * (z1 - z0) / nz
 
     def occupied_bbox(self, threshold_per_m: float = 0.0):
         """World box ((x0, y0, z0), (x1, y1, z1)) of the cells whose extinction exceeds the threshold
@@ -280,6 +290,20 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
         largest[s.name] = float(beta.max())
         total = beta if total is None else np.add(total, beta, out=total)
     return total, largest
+
+
+def level_density(rho_air_kg_m3) -> np.ndarray:
+    """(z,) the dry-air density of each level, kg/m^3: the mean over the level of a (z, y, x) field (the model's
+    own density; its horizontal variations, a few per cent, would cost the path tracer its empty-space
+    skipping: ``optics.air.inside``), or a (z,) profile as given. A ValueError where it is not finite and >= 0."""
+    rho = np.asarray(rho_air_kg_m3)
+    if rho.ndim not in (1, 3):
+        raise ValueError(f"rho_air must be (z, y, x) or one value per level (z,); got shape {rho.shape}")
+    levels = rho.reshape(rho.shape[0], -1)
+    mean = levels.mean(axis=1, dtype=np.float64)  # no float64 copy of the grid
+    if not np.all(np.isfinite(mean)) or any(float(level.min()) < 0 for level in levels):
+        raise ValueError("rho_air (dry-air density, kg/m^3) must be finite and >= 0 for the air in the box")
+    return mean
 
 
 ALBEDO_CHUNK = 1 << 22  # voxels of a grid at a time in ``_voxel_albedo``
@@ -439,4 +463,4 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     return OpticalVolume(names, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
                          Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic,
-                         components)
+                         components, air_density=level_density(hyd["rho_air"].values))

@@ -30,6 +30,10 @@ def fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
         h.update(np.ascontiguousarray(t.theta, np.float64).tobytes())
         h.update(np.ascontiguousarray(t.values, np.float64).tobytes())
     h.update(json.dumps([list(map(float, p)) for p in vol.bbox]).encode())
+    air = getattr(vol, "air", None)
+    if air is not None:  # the air in the box (none: the key of before)
+        for a in (air.extinction_levels, air.scattering_levels):
+            h.update(np.ascontiguousarray(a, np.float32).tobytes())
     if vol.periodic:  # periodic boundaries (none: the key of before)
         h.update(f"periodic={vol.periodic}".encode())
     terrain = getattr(vol, "terrain", None)

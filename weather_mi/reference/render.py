@@ -90,6 +90,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, *args, options: Refere
     from ..kernel.variant import path_tracing_width, set_variant
     o = ReferenceOptions.of_call(options, args, estimator).resolved(spec)  # defaults filled in, checked
     _check_inputs(spec, vol, o.integrator, variant)
+    from ..optics.air.inside import scene_air
+    vol = scene_air(vol, spec.atmosphere)  # the atmosphere's air in the box too (none where vol has it already)
     set_variant(variant if variant is not None else current_or_default_variant())
     with path_tracing_width():  # the scene is built and its passes rendered at the path tracer's SIMD width
         spp_list = plan_passes(spec, o.spp, o.passes)

@@ -24,6 +24,7 @@ class Grid:
         # periodic in x and y (``reach``: periods walked beyond the grid on each side, None: not periodic): the
         # cells of x and y run over the whole extended box and are looked up modulo dims (cell 0 first)
         self.reach = reach
+        self.air = None  # the air of the box (``air_levels.AirLevels``): its cells count as empty, with its majorant
 
     def span(self, k: int):
         """(first, last) cell walked along axis k: the grid's, or for a periodic axis the extended box's

@@ -39,8 +39,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from ...scene.spec import MAX_SUN_DIAMETER_DEG
-from . import mvnee, sun
+from . import air_levels, mvnee, sun, sun_properties
 from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
 from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401 (re-exported)
 from .medium_setup import GridCache, MediumSetup, Tracking, phase_ctx, scattering_event, unit_cube_to_world, volume_data
@@ -123,6 +122,10 @@ class MajorantVolpath:
      * - mvnee, mvnee_length
        - |float|, |int|
        - Probability of a multiple-vertex NEE chain (:mod:`.mvnee`; exclusive as the aureole) and its length.
+     * - air_extinction
+       - |tensor|
+       - (levels, 3) the air's extinction per level of the sigma_t grid (1/m), which that grid holds added
+         (:mod:`.air_levels`): its cells are crossed as empty space, with the air's majorant.
      * - periodic, periodic_tiles
        - |string|, |int|
        - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each
@@ -164,44 +167,8 @@ class MajorantVolpath:
         self.reach = int(get("periodic_tiles", 0))
         _check(self.periodic == "none" or (self.reach >= 1 and self.track_mode == "texel"),
                f"periodic needs periodic_tiles >= 1 and tracking_grid 'texel', got {self.reach}, {self.track_mode!r}")
-        self.sun_mode, self.guiding, self.aureole, self.sun_sampling, self.mvnee, self.air = "none", 0., 0., "mis", 0., None
-        if "sun_direction" not in props:
-            for name in ("sun_irradiance", "sun_angular_diameter", "sun_guiding", "aureole_nee", "mvnee") + sun.LIGHT_PROPERTIES:
-                _check(name not in props, f"'{name}' needs 'sun_direction'")
-            return
-        # the integrator's own sun (module docstring; without sun_direction the sun, if any, is a scene emitter)
-        _check(mi.is_rgb or mi.is_spectral, f"the integrator's sun needs an RGB or spectral variant, not {mi.variant()!r}")
-        d = np.asarray(props["sun_direction"], np.float64).reshape(3)
-        _check(np.all(np.isfinite(d)) and np.linalg.norm(d) != 0,
-               f"'sun_direction' must be a finite non-zero vector, got {d.tolist()}")
-        d = d / np.linalg.norm(d)
-        e = np.broadcast_to(np.asarray(get("sun_irradiance", 1.0), np.float64), (3,))
-        _check(np.all(np.isfinite(e)) and not np.any(e < 0), f"'sun_irradiance' must be >= 0, got {e.tolist()}")
-        diameter = float(get("sun_angular_diameter", 0.0))
-        _check(0.0 <= diameter <= MAX_SUN_DIAMETER_DEG,
-               f"'sun_angular_diameter' must be in [0, {MAX_SUN_DIAMETER_DEG}] degrees, got {diameter}")
-        self.sun_sampling = _choice(props, "sun_sampling", "mis", ("mis", "nee", "phase"))
-        self.guiding = float(get("sun_guiding", 0.0))
-        _check(0.0 <= self.guiding < 1.0, f"'sun_guiding' must be in [0, 1), got {self.guiding}")
-        self.aureole = float(get("aureole_nee", 0.0))
-        _check(0.0 <= self.aureole <= 1.0, f"'aureole_nee' must be a probability in [0, 1], got {self.aureole}")
-        _check(not (self.aureole > 0.0 and (self.guiding > 0.0 or self.sun_sampling != "mis")),
-               "'aureole_nee' works with sun_sampling='mis' and no sun guiding")
-        self.mvnee, self.mvnee_length = mvnee.parse(props, _check)
-        _check(not (self.mvnee > 0.0 and (self.guiding > 0.0 or self.aureole > 0.0 or self.sun_sampling != "mis")),
-               "'mvnee' works with sun_sampling='mis', no sun guiding and no aureole estimator")
-        self.sun_mode = "disk" if diameter > 0 else "point"
-        _check(self.emitter_nee < 1.0, "with the integrator's sun, 'emitter_nee' must be below 1 (the rest of the "
-               f"shadow rays go to the sun), got {self.emitter_nee}")
-        vmax, radiance = sun.sun_disk(diameter, e)
-        # opaque: a new sun position, size or irradiance reuses the kernel
-        self.sun_dir = mi.Vector3f(*(float(v) for v in d))
-        self.sun_vmax = mi.Float(vmax)                       # versine of the disk's radius
-        value = radiance if diameter > 0 else e  # spectral variants: a grey scale of the sun's spectrum
-        self.sun_value = mi.Color3f(*(float(v) for v in value)) if mi.is_rgb else mi.Float(float(np.mean(value)))
-        self.guide_p, self.aureole_p = mi.Float(self.guiding), mi.Float(self.aureole)
-        dr.make_opaque(self.sun_dir, self.sun_vmax, self.sun_value, self.guide_p, self.aureole_p)
-        sun.parse_air(self, props, _check)  # the air on the sun's path (optional)
+        self.air_levels = air_levels.parse(props, _check)  # the air in the box, per level (optional)
+        sun_properties.parse(self, props)  # the integrator's own sun (optional)
 
     # ------------------------------------------------------------ Mitsuba object interface
     def aov_names(self):
@@ -247,7 +214,7 @@ class MajorantVolpath:
                 self._auto_key = key
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"
-        texel, texel_data = self._grids.texel(vol, ms.scale, *((self.reach,) if periodic else ()))
+        texel, texel_data = self._grids.texel(vol, ms.scale, self.reach if periodic else None, self.air_levels)
         track = texel if (texel is not None and self.track_mode == "texel") else coarse
         self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data, self.periodic, self.reach)
 

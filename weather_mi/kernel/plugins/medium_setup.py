@@ -9,6 +9,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from . import air_levels
 from .dda import Grid
 from .majorants import empty_space_radius, texel_majorant_grid
 from .variant_class import variant_class
@@ -238,21 +239,26 @@ class GridCache:
             self.skip_key = maj_key
         return Grid(majorant.array, self.skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
 
-    def texel(self, vol, scale: float, reach: int | None = None):
+    def texel(self, vol, scale: float, reach: int | None = None, air=None):
         """(The texel-centre grid, (data, scale) of a grey grid or None); (None, None) without a sigma_t
         grid. Its cells lie between 2 x 2 x 2 texel centres (cells -1 .. N - 1 per axis, the first and last
         halves cut by the box), where the trilinear interpolant is one trilinear polynomial; majorant =
         SAFETY x the maximum of the cell's 8 texels, which is the maximum of the interpolant there.
         ``reach``: periodic in x and y, walked over that many periods on each side (cells 0 .. N - 1 there,
-        between texels i and i + 1 modulo N)."""
+        between texels i and i + 1 modulo N). ``air``: the box's air per level (``air_levels``), whose cells
+        count as empty (majorant 0 here; the trackers use the air's own)."""
         if vol is None:
             return None, None
         data = volume_data(vol)
         periodic = reach is not None
-        key = (data.array.index, scale, periodic)
+        key = (data.array.index, scale, periodic, None if air is None else air.tobytes())
         if key != self.texel_key:
             grid = np.asarray(data)  # the medium's grid in place (llvm); scaled in a copy only where scale != 1
             maj = texel_majorant_grid(grid if scale == 1.0 else grid * scale, periodic=periodic)
+            if air is not None:
+                if scale != 1.0:
+                    raise RuntimeError(f"{PLUGIN_NAME}: the medium's air ('air_extinction') needs its scale 1, got {scale}")
+                maj[~air_levels.cloud_cells(grid, air, periodic)] = 0.0
             del grid
             empty = empty_space_radius(maj, periodic=True) if periodic else empty_space_radius(maj)
             self.texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty.ravel()))
@@ -260,4 +266,6 @@ class GridCache:
         rx, ry, rz = (int(v) for v in vol.resolution())
         texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
         dims = (rx, ry, rz + 1) if periodic else (rx + 1, ry + 1, rz + 1)
-        return Grid(*self.texel_arrays, dims, (rx, ry, rz), shift=-0.5, lo=-1, reach=reach), texel_data
+        grid = Grid(*self.texel_arrays, dims, (rx, ry, rz), shift=-0.5, lo=-1, reach=reach)
+        grid.air = None if air is None else air_levels.AirLevels(air)
+        return grid, texel_data

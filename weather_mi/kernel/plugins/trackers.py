@@ -48,13 +48,19 @@ class _Walk:
         tentative collision distance tc, whether it lies in the cell, sigma_t there)."""
         grid, q0, dq = self.grid, self.q0, self.dq
         maj, idx = cell_of(grid, cells, active)
-        t_cell, k = cell_end(grid, q0, dq, cells, nexts, idx, maj <= 0.0, active)
+        empty = maj <= 0.0
+        t_cell, k = cell_end(grid, q0, dq, cells, nexts, idx, empty, active)
         seg_end = dr.minimum(t_cell, self.t_max)
+        if grid.air is not None:  # the air's cells: the cube's air majorant (.air_levels)
+            maj = dr.select(empty, grid.air.cube_bound(cells[2], k, grid.lo, active & empty), maj)
         u = sampler.next_1d(active)
         dt = dr.select(maj > 0.0, -dr.log(1.0 - u) / maj, dr.inf)
         tc = t + dt
         collide = active & (tc < seg_end)
-        if self.texels is None:
+        if grid.air is not None:  # sigma_t in the air's cells from its levels, elsewhere the medium's lookup
+            s_t = dr.select(empty, grid.air.sigma_at(q0[2] + dq[2] * tc, collide & empty),
+                            self.sigma_t(tc, collide & ~empty))
+        elif self.texels is None:
             s_t = self.sigma_t(tc, collide)
         else:  # in a texel cell: the interpolant of its 8 texels
             s_t = cell_interpolant(self.texels, grid, q0, dq, cells, (tc,), collide)[0]
@@ -225,6 +231,7 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
     spectral = tk.ms.spectral
     walk = _Walk(tk, tk.texel, None if spectral else tk.texel_data, ray, t_end, active)
     grid, texels, q0, dq, t_max = walk.grid, walk.texels, walk.q0, walk.dq, walk.t_max
+    air = grid.air
     t_near, active, cells, nexts = walk.t_near, walk.active, walk.cells, walk.nexts
     s0 = walk.sigma_t(t_near, active)
     tau = dr.zeros(mi.Spectrum) if spectral else mi.Float(0.0)
@@ -247,7 +254,12 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
         else:  # the cell's 8 texels once, the interpolant at both points from them
             s_m, s_1 = cell_interpolant(texels, grid, q0, dq, cells, (0.5 * (t + seg_end), seg_end), lookup)
         tau = dr.select(lookup, tau + (seg_end - t) * (1.0 / 6.0) * (s0 + 4.0 * s_m + s_1), tau)  # Simpson
-        s0 = dr.select(lookup, s_1, 0.0)  # a cell whose texels are 0 is 0 on its faces
+        if air is None:
+            s0 = dr.select(lookup, s_1, 0.0)  # a cell whose texels are 0 is 0 on its faces
+        else:  # the air's cells and cubes in closed form (.air_levels); their faces hold the air alone
+            in_air = active & empty
+            tau = dr.select(in_air, tau + air.tau(q0[2], dq[2], t, seg_end, in_air), tau)
+            s0 = dr.select(lookup, s_1, air.sigma_at(q0[2] + dq[2] * seg_end, in_air))
         t = dr.select(active, seg_end, t)
         (cx, cy, cz), (tx, ty, tz), outside = dda_step(grid, q0, dq, t, cells, nexts, k, active)
         tau_min = dr.min(tau) if spectral else tau

@@ -54,9 +54,11 @@ def top_distance(origins, dirs, top_m: float = TOP_M) -> np.ndarray:
 
 
 def segment_air(atm: Atmosphere, to_sun, origins, dirs, t0, t1, table: SunAirTable,
-                wavelengths_nm=CHANNEL_NM, samples: int = SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+                wavelengths_nm=CHANNEL_NM, samples: int = SAMPLES, shadow=None) -> tuple[np.ndarray, np.ndarray]:
     """(T (n, c), S (n, c)) of the segments [t0, t1] (n,) of the rays (n, 3) (module docstring; S in 1/sr per
-    unit irradiance of the sun above the air); T = 1, S = 0 where t1 <= t0."""
+    unit irradiance of the sun above the air); T = 1, S = 0 where t1 <= t0. ``shadow``: the direct sun's
+    transmittance through the storm at points (..., 3) of the frame (``storm_shadow.StormShadow.transmittance``),
+    a factor on C(h, mu); None: no storm."""
     o, d = np.asarray(origins, np.float64), np.asarray(dirs, np.float64)
     sun = np.asarray(to_sun, np.float64) / np.linalg.norm(to_sun)
     t0 = np.asarray(t0, np.float64)
@@ -78,6 +80,8 @@ def segment_air(atm: Atmosphere, to_sun, origins, dirs, t0, t1, table: SunAirTab
     cos_t = np.clip(d @ sun, -1.0, 1.0)[:, None, None]
     source = (beta_r * phase_value(cos_t) + atm.aerosol_ssa * beta_a * hg_value(atm.aerosol_g, cos_t)) \
         * table.at(h, mu) * np.exp(-tau)
+    if shadow is not None:  # the storm's shadow on the direct sun at the samples
+        source *= shadow(q - [0.0, 0.0, EARTH_RADIUS_M])[..., None]
     inscatter = np.sum(0.5 * (source[:, 1:] + source[:, :-1]) * ds, axis=1)
     return np.exp(-tau[:, -1]), inscatter
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..phase.table import RGB_WAVELENGTHS_M
 from ..rayleigh import AVOGADRO, M_AIR_KG_MOL, cross_section_m2 as rayleigh_cross_section_m2
+from ..volume import level_density
 from .atmosphere import Atmosphere
 from .ozone import cross_section_m2 as ozone_cross_section_m2
 
@@ -32,60 +33,90 @@ NAMES = ("air_molecules", "air_aerosol")
 
 @dataclass(frozen=True)
 class BoxAir:
-    """The air in the box on the volume's grid (z, y, x), per channel R, G, B: ``extinction`` (z, y, x, 3)
-    and ``scattering`` (2, z, y, x, 3) of molecules and aerosol, in 1/m, float32; ``phase_tables`` the
-    Rayleigh and the aerosol's Henyey-Greenstein tables; ``atmosphere`` the 1-D atmosphere of ozone and
-    aerosol; ``band_nm`` the wavelength of each channel where each is one wavelength (a satellite's bands,
-    ``band_box_air``: the sun on its path is then the transmittance there), None for the RGB mode's colours."""
+    """The air in the box, one value per level (the air is horizontally homogeneous in the box, as it is
+    outside it): ``extinction_levels`` (z, 3) and ``scattering_levels`` (2, z, 3) of molecules and aerosol
+    per channel R, G, B, in 1/m, float32, on a grid of ``shape`` (z, y, x); ``phase_tables`` the Rayleigh
+    and the aerosol's Henyey-Greenstein tables; ``atmosphere`` the 1-D atmosphere of ozone and aerosol;
+    ``band_nm`` the wavelength of each channel where each is one wavelength (a satellite's bands,
+    ``band_box_air``: the sun on its path is then the transmittance there), None for the RGB mode's colours.
+    ``extinction`` and ``scattering`` are the same broadcast onto the grid (read-only views, no memory)."""
 
-    extinction: np.ndarray
-    scattering: np.ndarray
+    extinction_levels: np.ndarray
+    scattering_levels: np.ndarray
+    shape: tuple
     atmosphere: Atmosphere
     phase_tables: tuple = field(repr=False, default=())
     band_nm: tuple | None = None
 
+    @property
+    def extinction(self) -> np.ndarray:
+        """(z, y, x, 3) the extinction on the grid, 1/m (a broadcast view)."""
+        return np.broadcast_to(self.extinction_levels[:, None, None, :], tuple(self.shape) + (3,))
+
+    @property
+    def scattering(self) -> np.ndarray:
+        """(2, z, y, x, 3) the components' scattering coefficients on the grid, 1/m (a broadcast view)."""
+        return np.broadcast_to(self.scattering_levels[:, :, None, None, :], (2,) + tuple(self.shape) + (3,))
+
     def scattering_mean(self) -> np.ndarray:
         """(2, z, y, x) the components' scattering coefficients, channel mean (the Eq. 8 weights)."""
-        return self.scattering.mean(axis=-1)
+        return np.broadcast_to(self.scattering_levels.mean(axis=-1)[:, :, None, None], (2,) + tuple(self.shape))
 
 
-def box_air(atm: Atmosphere, rho_air_kg_m3, z_m, wavelengths_nm=CHANNEL_NM) -> BoxAir:
-    """The air of the box whose dry-air density is ``rho_air_kg_m3`` (z, y, x) at cell-centre heights ``z_m``
-    (z,) (m above mean sea level); molecules from that density, ozone and aerosol from ``atm``'s profiles.
-    A ValueError for a density that is not positive and finite, or heights that do not match."""
-    rho = np.asarray(rho_air_kg_m3, np.float64)
+def box_air(atm: Atmosphere, rho_air_kg_m3, z_m, wavelengths_nm=CHANNEL_NM, shape=None) -> BoxAir:
+    """The air of the box at cell-centre heights ``z_m`` (z,) (m above mean sea level): molecules from the
+    dry-air density ``rho_air_kg_m3`` (z, y, x, its mean per level: :func:`level_density`; or (z,)), ozone and
+    aerosol from ``atm``'s profiles; on a grid of ``shape`` (z, y, x) (default: ``rho_air_kg_m3``'s). A ValueError
+    for a density that is not positive and finite, or heights that do not match."""
+    rho_in = np.asarray(rho_air_kg_m3)
+    rho = level_density(rho_in)
     z = np.asarray(z_m, np.float64).ravel()
-    if rho.ndim != 3 or z.size != rho.shape[0]:
-        raise ValueError(f"rho_air must be (z, y, x) with one height per level; got {rho.shape} and {z.size} heights")
-    if not np.all(np.isfinite(rho)) or np.any(rho < 0):
-        raise ValueError("rho_air (dry-air density, kg/m^3) must be finite and >= 0 for the air in the box")
+    shape = tuple(int(v) for v in (shape if shape is not None else rho_in.shape))
+    if len(shape) != 3 or z.size != rho.size or shape[0] != rho.size:
+        raise ValueError(f"rho_air must be (z, y, x) or (z,) with one height per level on a (z, y, x) grid; got "
+                         f"{rho_in.shape}, {z.size} heights and the grid {shape}")
     wl = np.asarray(wavelengths_nm, np.float64)
-    n_air = rho * (AVOGADRO / M_AIR_KG_MOL)
-    molecules = n_air[..., None] * rayleigh_cross_section_m2(wl * 1e-9)                    # (z, y, x, 3)
-    ozone = atm.ozone_number_density_m3(z)[:, None] * ozone_cross_section_m2(wl)            # (z, 3)
-    aerosol = atm.aerosol_extinction_550_per_m(z)[:, None] * atm.aerosol_factor(wl)         # (z, 3)
-    ext = molecules + (ozone + aerosol)[:, None, None, :]
-    aer_sca = np.broadcast_to((aerosol * atm.aerosol_ssa)[:, None, None, :], ext.shape)
+    molecules = (rho * (AVOGADRO / M_AIR_KG_MOL))[:, None] * rayleigh_cross_section_m2(wl * 1e-9)   # (z, 3)
+    ozone = atm.ozone_number_density_m3(z)[:, None] * ozone_cross_section_m2(wl)                     # (z, 3)
+    aerosol = atm.aerosol_extinction_550_per_m(z)[:, None] * atm.aerosol_factor(wl)                  # (z, 3)
     from ..phase.analytic import henyey_greenstein
     from ..rayleigh import phase_table
-    return BoxAir(extinction=ext.astype(np.float32), scattering=np.stack([molecules, aer_sca]).astype(np.float32),
-                  atmosphere=atm, phase_tables=(phase_table(), henyey_greenstein(atm.aerosol_g)))
+    return BoxAir(extinction_levels=(molecules + ozone + aerosol).astype(np.float32),
+                  scattering_levels=np.stack([molecules, aerosol * atm.aerosol_ssa]).astype(np.float32),
+                  shape=shape, atmosphere=atm, phase_tables=(phase_table(), henyey_greenstein(atm.aerosol_g)))
 
 
 def with_box_air(vol, hyd, atm: Atmosphere, band_nm=None):
-    """``vol`` (an ``OpticalVolume``) with the air of :func:`box_air` on its grid (``OpticalVolume.air``) from
-    the Hydrometeors ``hyd``'s ``rho_air`` and heights ``z``; ``band_nm`` (3,): the channels at these
-    wavelengths (nm; a satellite's bands, ``BoxAir.band_nm``), else the RGB mode's. A ValueError naming
-    ``rho_air`` where its grid is not the volume's."""
+    """``vol`` (an ``OpticalVolume``) with the air of :func:`box_air` on its grid (``OpticalVolume.air``): molecules
+    from the Hydrometeors ``hyd``'s ``rho_air`` (its mean per level) where given, else from the volume's own
+    ``air_density`` (the model's, kept by ``optical_volume``), else from the US 1976 standard atmosphere at the
+    levels' heights; ``band_nm`` (3,): the channels at these wavelengths (nm; a satellite's bands,
+    ``BoxAir.band_nm``), else the RGB mode's. A ValueError naming ``rho_air`` where its grid is not the volume's."""
     from dataclasses import replace
-    rho, z_m = np.asarray(hyd["rho_air"].values), np.asarray(hyd["z"].values)
-    if rho.shape != tuple(vol.shape):
-        raise ValueError(f"rho_air's grid {rho.shape} is not the optical volume's {tuple(vol.shape)}: the air in "
-                         "the box needs the model's air density on the volume's grid")
+    z_m = vol.level_heights_m()
+    if hyd is not None:
+        rho = np.asarray(hyd["rho_air"].values)
+        if rho.shape != tuple(vol.shape):
+            raise ValueError(f"rho_air's grid {rho.shape} is not the optical volume's {tuple(vol.shape)}: the air in "
+                             "the box needs the model's air density on the volume's grid")
+    elif getattr(vol, "air_density", None) is not None:
+        rho = vol.air_density
+    else:
+        from ...io.standard_atmosphere import standard_density
+        rho = standard_density(z_m)
     if band_nm is None:
-        return replace(vol, air=box_air(atm, rho, z_m))
+        return replace(vol, air=box_air(atm, rho, z_m, shape=vol.shape))
     band_nm = tuple(float(w) for w in band_nm)
-    return replace(vol, air=replace(box_air(atm, rho, z_m, band_nm), band_nm=band_nm))
+    return replace(vol, air=replace(box_air(atm, rho, z_m, band_nm, shape=vol.shape), band_nm=band_nm))
+
+
+def scene_air(vol, atm):
+    """The one place that puts the scene's air into the box: ``vol`` with the air of ``atm`` (a SceneSpec's
+    ``atmosphere``) where it has none yet (:func:`with_box_air` from the volume's own ``air_density``); ``vol``
+    itself without an atmosphere or with its air already in it."""
+    if atm is None or getattr(vol, "air", None) is not None:
+        return vol
+    return with_box_air(vol, None, atm)
 
 
 def medium_extinction(beta_total, air: BoxAir) -> np.ndarray:
@@ -107,4 +138,5 @@ def medium_grids(beta_total, albedo, weights, air: BoxAir):
     return sigma_t, np.clip(out_albedo, 0.0, 1.0).astype(np.float32), np.moveaxis(coeffs, 0, -1).astype(np.float32)
 
 
-__all__ = ["BoxAir", "CHANNEL_NM", "NAMES", "box_air", "medium_extinction", "medium_grids", "with_box_air"]
+__all__ = ["BoxAir", "CHANNEL_NM", "NAMES", "box_air", "level_density", "medium_extinction", "medium_grids", "scene_air",
+           "with_box_air"]

@@ -1,0 +1,113 @@
+"""The clear air inside the medium's box as ``majorant_volpath``'s trackers see it (``air_extinction``): one
+extinction per level and channel (``optics.air.inside``: the air is horizontally homogeneous in the box),
+which the medium's sigma_t grid holds added to the hydrometeors'. The trackers keep the hydrometeors' empty
+space: a texel cell whose 8 texels hold air alone (every channel equal to its level's air, exactly) counts as
+empty for the DDA, and an empty cube of radius k about cell level c is crossed in one step with
+
+* the majorant ``bound(c, k)``: the largest texel-cell air majorant at or above level c - k (SAFETY x the
+  larger of the cell's two levels, maximum over channels), so that a cube keeps its long free flights
+  (delta tracking against the thin air's own small majorant, the real collisions by the medium's lookup);
+* the optical depth in closed form, :meth:`AirLevels.tau`: the gridvolume's trilinear interpolant of a grid
+  constant in x and y is linear in z between the level centres (constant beyond the outer ones), so its
+  integral along a ray is a difference of the piecewise quadratic C(q) = integral of sigma dq (float64),
+  divided by dq/dt.
+
+q is the texel-centre coordinate along z (q = k at level k's centre; the trackers' ``Grid`` coordinates).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+import drjit as dr
+import mitsuba as mi
+
+from .majorants import SAFETY
+
+PROPERTY = "air_extinction"
+FLAT_DQ = 1e-9  # |q_b - q_a| below this (texel-centre units): the optical depth by the midpoint value
+
+
+def parse(props, check):
+    """``air_extinction`` (n_levels, 3), 1/m, finite and >= 0, as float32 numpy; None without it."""
+    if PROPERTY not in props:
+        return None
+    a = np.asarray(props[PROPERTY], np.float32)
+    a = a.reshape(a.shape[0], -1) if a.ndim >= 1 else a
+    check(a.ndim == 2 and a.shape[1] == 3 and a.shape[0] >= 1 and np.all(np.isfinite(a)) and a.min() >= 0.0,
+          f"'{PROPERTY}' must be a finite, non-negative (levels, 3) tensor, got shape {np.shape(props[PROPERTY])}")
+    return a
+
+
+def cloud_cells(data: np.ndarray, air: np.ndarray, periodic: bool) -> np.ndarray:
+    """Texel cells (the shape of ``majorants.texel_majorant_grid``'s) that hold more than the air: where one of
+    the cell's 8 texels differs from its level's air in a channel. ``data`` (z, y, x, 3) the medium's sigma_t."""
+    from .majorants import texel_majorant_grid
+    if air.shape[0] != data.shape[0] or data.ndim != 4 or data.shape[3] != 3:
+        raise RuntimeError(f"majorant_volpath: '{PROPERTY}' has {air.shape[0]} levels, the sigma_t grid is "
+                           f"{data.shape}: they must be the same levels, with 3 channels")
+    occupied = np.empty(data.shape[:3], np.float32)
+    for k, level in enumerate(data):  # a level at a time: no whole-grid temporaries
+        occupied[k] = np.any(level != air[k], axis=-1)
+    return texel_majorant_grid(occupied, safety=1.0, periodic=periodic) > 0.0
+
+
+class AirLevels:
+    """The air's per-level tables on Dr.Jit arrays: ``sigma`` (levels x 3, float32), the cube bounds, the
+    cumulative C(q) per segment (float64)."""
+
+    def __init__(self, air: np.ndarray):
+        a = np.asarray(air, np.float64)
+        n = a.shape[0]
+        self.n = dr.opaque(mi.Int32, n)
+        self.sigma = mi.Float(np.asarray(air, np.float32).ravel())
+        # texel cells -1 .. n - 1 (array index i = cell + 1) lie between levels i - 1 and i (clamped)
+        lo, hi = a[np.clip(np.arange(n + 1) - 1, 0, n - 1)], a[np.clip(np.arange(n + 1), 0, n - 1)]
+        cell = (np.maximum(lo, hi).max(axis=1) * SAFETY).astype(np.float32)
+        self.bound = mi.Float(np.maximum.accumulate(cell[::-1])[::-1].copy())  # max over the cells at or above
+        # segments j = 0 .. n: [-0.5, 0], [0, 1], ..., [n - 2, n - 1], [n - 1, n - 0.5]; their left knots
+        knots = np.concatenate([[-0.5], np.arange(n, dtype=np.float64)])
+        s_left = a[np.clip(np.arange(n + 1) - 1, 0, n - 1)]
+        s_right = a[np.clip(np.arange(n + 1), 0, n - 1)]
+        width = np.concatenate([[0.5], np.ones(n - 1), [0.5]])
+        slope = np.where(np.arange(n + 1)[:, None] % n == 0, 0.0, s_right - s_left)  # per unit q; 0 in the end halves
+        c = np.concatenate([[np.zeros(3)], np.cumsum((s_left + 0.5 * slope * width[:, None]) * width[:, None], axis=0)])
+        self.knot = mi.Float64(knots)
+        self.s_left, self.slope, self.c_left = (mi.Float64(v[:n + 1].ravel()) for v in (s_left, slope, c))
+
+    def cube_bound(self, cz, k, lo: int, active):
+        """The majorant of the empty cube of radius ``k`` about texel cell level ``cz`` (cells from ``lo``)."""
+        i = dr.clip(cz - k - lo, 0, self.n)
+        return dr.gather(mi.Float, self.bound, mi.UInt32(i), active)
+
+    def sigma_at(self, q, active):
+        """sigma (Color3f, 1/m) at texel-centre coordinate q: linear between the level centres, clamped."""
+        qc = dr.clip(q, 0.0, mi.Float(self.n - 1))
+        i0 = dr.clip(mi.Int32(dr.floor(qc)), 0, self.n - 1)
+        i1 = dr.minimum(i0 + 1, self.n - 1)
+        f = qc - mi.Float(i0)
+        return mi.Color3f(*(dr.lerp(dr.gather(mi.Float, self.sigma, mi.UInt32(i0 * 3 + c), active),
+                                    dr.gather(mi.Float, self.sigma, mi.UInt32(i1 * 3 + c), active), f) for c in range(3)))
+
+    def _cumulative(self, q, active):
+        """C(q) per channel (float64), q in float64."""
+        n = self.n
+        j = dr.clip(mi.Int32(dr.floor(q)) + 1, 0, n)
+        x = dr.clip(q, -0.5, mi.Float64(n) - 0.5) - dr.gather(mi.Float64, self.knot, mi.UInt32(j), active)
+        out = []
+        for c in range(3):
+            idx = mi.UInt32(j * 3 + c)
+            s0 = dr.gather(mi.Float64, self.s_left, idx, active)
+            sl = dr.gather(mi.Float64, self.slope, idx, active)
+            out.append(dr.gather(mi.Float64, self.c_left, idx, active) + x * (s0 + 0.5 * sl * x))
+        return out
+
+    def tau(self, qz0, dqz, t0, t1, active):
+        """Optical depth (Color3f) along a ray whose z texel coordinate is qz0 + dqz t, over [t0, t1]."""
+        dq = mi.Float64(dqz) * (mi.Float64(t1) - mi.Float64(t0))
+        qa = mi.Float64(qz0) + mi.Float64(dqz) * mi.Float64(t0)
+        flat = dr.abs(dq) < FLAT_DQ
+        mid = self.sigma_at(mi.Float(qa + 0.5 * dq), active & flat)
+        ca, cb = self._cumulative(qa, active & ~flat), self._cumulative(qa + dq, active & ~flat)
+        length = mi.Float64(t1) - mi.Float64(t0)
+        inv = dr.select(flat, 0.0, length / dr.select(flat, 1.0, dq))
+        return mi.Color3f(*(dr.select(flat, mid[c] * (t1 - t0), mi.Float((cb[c] - ca[c]) * inv)) for c in range(3)))
