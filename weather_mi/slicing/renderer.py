@@ -2,6 +2,7 @@
 the glue between the modules that do the work:
 
 geometry.py  the half-angle axis and the slice planes (visited from the light's side)
+grids.py     the medium's per-species extinction grids and their box
 light.py     ``LightVolume``: the light pass and the one light lookup
 blur.py      the translucency blur of the light pass (separable taps of an exact variance)
 eye.py       the eye pass: composite along camera rays (Eq. 8/9), the ground
@@ -34,6 +35,7 @@ from .eye import LightModel, composite
 from .recording import freeze_kernels, raise_recording_error, without_gc
 from .frame_inputs import EyeInputs, EyeRays, FrameInputs, KernelConstants, MultipleLight, TextureBuild
 from .geometry import slice_geometry, slicing_box
+from .grids import set_grids
 from .jitter import jitter_rotation, slab_offsets
 from .light import LightVolume, auto_light_res
 from .modes import SliceMode, SliceParams
@@ -112,7 +114,7 @@ class SliceRenderer:
         self.slices, self.light_res = int(slices), int(light_res)
         self.differentiable = differentiable
         self.n_species = len(vol.species)
-        self._set_grids(vol, mode, detail_field, detail_noise)
+        set_grids(self, vol, mode, detail_field, detail_noise)  # (grids.py)
         self.voxel_m = float(np.mean(vol.spacing))
         tables = list(vol.require_phase_tables())
         if mode.phase == "uniform":
@@ -160,39 +162,6 @@ class SliceRenderer:
         self._frozen_kernels = freeze_kernels(weakref.ref(self))
         self._recording_error = None  # what the kernels raised while being recorded (see recording.freeze_kernels)
         self._constants = KernelConstants(self)  # all of the renderer that its frame's kernels see
-
-    def _set_grids(self, vol, mode, detail_field, detail_noise):
-        """The per-species extinction grids (detail applied), their box in texture coordinates and the
-        detail noise (periodic: levels padded, slicing/periodic.py)."""
-        mi = self.mi
-        self.shape = tuple(vol.beta_total.shape)
-        beta_s = np.moveaxis(vol.beta_ext, 0, -1).astype(np.float32)
-        if detail_field is not None and mode.detail:
-            detail = np.asarray(detail_field, dtype=np.float32)
-            if detail.shape != self.shape:
-                raise ValueError(f"detail_field must have the volume's shape {self.shape}, got {detail.shape}")
-            beta_s = beta_s * detail[..., None]
-        self.detail_noise = None  # unit-variance noise n: species s's extinction x exp(a_s n - a_s^2 / 2)
-        if detail_noise is not None and mode.detail:
-            n = np.asarray(detail_noise, dtype=np.float32)
-            if n.shape != self.shape:
-                raise ValueError(f"detail_noise must have the volume's shape {self.shape}, got {n.shape}")
-            self.detail_noise = mi.Float(np.ascontiguousarray(n).ravel())
-        self.beta_sum_s = beta_s.reshape(-1, self.n_species).sum(axis=0, dtype=np.float64)  # 1/m, over all voxels
-        self.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
-        if self.periodic is not None:  # the grids' levels padded (slicing/periodic.py)
-            beta_s, self.grid_box = self.periodic.pad(beta_s), self.periodic.grid_box
-            self.shape = tuple(beta_s.shape[:3])
-            if self.detail_noise is not None:
-                self.detail_noise = mi.Float(self.periodic.pad(np.asarray(detail_noise, np.float32)).ravel())
-        self.beta_s = [mi.Float(np.ascontiguousarray(beta_s[..., si]).ravel()) for si in range(self.n_species)]  # (z, y, x) each
-        # the grid as kernel vectors (lo corner, 1 / span), for the light carried through the medium (periodic:
-        # and the texture coordinates where it samples the medium)
-        self._grid_scalars = (mi.Point3f(*(kernel_scalar(mi, c) for c in self.grid_box[0])),
-                              mi.Vector3f(*(kernel_scalar(mi, 1.0 / (h - l)) for l, h in zip(*self.grid_box))))
-        if self.periodic is not None:
-            self._grid_scalars += self.periodic.carried_bounds(mi)
-        self.tile_box = None if self.periodic is None else self.periodic.tile  # "transport": the eye's own tile
 
     def _make_textures(self, mode: SliceMode):
         """The eye's texture (beta and beta_sca per group) and the light pass's source ((beta, beta_f), or
