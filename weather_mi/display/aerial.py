@@ -1,6 +1,7 @@
 """The air outside the model's box along the eye rays (aerial perspective), put onto a reference image.
 
-Inside the box the air is part of the path tracer's medium (``optics.air.inside``); outside it the 1-D
+The slicer puts the same air on its frames itself, in its kernels (``slicing.eye_air``). Inside the box the
+air is part of the path tracer's medium (``optics.air.inside``); outside it the 1-D
 atmosphere of ``spec.atmosphere`` is horizontally homogeneous, and each pixel's ray (its centre,
 ``slicing.geometry.film_rays``) is split where it meets the box, the flat ground and the top of the air
 (``optics.air.eye_path``; heights above sea level, the Earth's centre under the box's centre):
@@ -91,13 +92,4 @@ def with_eye_air(img, spec, vol, sky_air: bool = False):
     return replace(img, radiance=out.astype(np.float32), stderr=se, metadata=meta)
 
 
-def slicer_frame_with_eye_air(renderer, img, spec):
-    """The slicer's frame ``img`` of ``spec`` (``renderer.frame``'s latest: its eye-ray transmittance is
-    ``renderer.transmittance``) seen through the air outside the box as ``with_eye_air`` (the sky model's
-    sky); ``img`` itself without an atmosphere."""
-    if spec.atmosphere is None:
-        return img
-    return with_eye_air(replace(img, transmittance=renderer.transmittance), spec, renderer.vol)
-
-
-__all__ = ["eye_air", "with_eye_air", "slicer_frame_with_eye_air"]
+__all__ = ["eye_air", "with_eye_air"]

@@ -32,6 +32,7 @@ from ..scene.spec import SceneSpec
 from ..kernel.sky import sky_irradiance_horizontal
 from .blur import variance_per_metre
 from .eye import LightModel, composite
+from .eye_air import eye_air_input, seen_through_air
 from .recording import freeze_kernels, raise_recording_error, without_gc
 from .frame_inputs import EyeInputs, EyeRays, FrameInputs, KernelConstants, MultipleLight, TextureBuild
 from .geometry import slice_geometry, slicing_box
@@ -80,6 +81,9 @@ class SliceRenderer:
     forward_peak_deg : float, optional
         Phase-function peaks within this angle (degrees) count as unscattered light (delta-M); None:
         3 deg for the "multiple" model, 0 for the paper's modes.
+    eye_air : bool, default True
+        With ``spec.atmosphere``: the air along the eye rays, inside the box and out (``eye_air.py``); False:
+        the sun's colour by height alone (the air on the sun's path).
 
     Raises
     ------
@@ -91,7 +95,7 @@ class SliceRenderer:
     def __init__(self, vol: OpticalVolume, mode: SliceMode = SliceMode(), slices: int = 128,
                  light_res: int | None = None, detail_field: np.ndarray | None = None, uniform_phase=None,
                  differentiable: bool = False, detail_noise: np.ndarray | None = None,
-                 forward_peak_deg: float | None = None):
+                 forward_peak_deg: float | None = None, eye_air: bool = True):
         from ..kernel.variant import ensure_registered
         ensure_registered()
         import mitsuba as mi
@@ -154,6 +158,7 @@ class SliceRenderer:
         self.g_scattering = float(np.sum(sca * gs) / np.sum(sca)) if np.sum(sca) > 0 else 0.85
         self._texture_key = None  # the per-species inputs of the textures last built (plain numbers)
         self._last = {}  # per-frame numpy work kept from the last frame (``_reuse``)
+        self._air_cache = {} if eye_air else None  # the air's tables of the last atmosphere and sun (eye_air.py)
         self.timing = {}
         self._t_light = None
         # frames whose inputs keep their structure launch the recorded kernels without tracing Python
@@ -466,7 +471,9 @@ class SliceRenderer:
         return EyeInputs(EyeRays(**{k: getattr(rays, k) for k in names}), self._grid_scalars, phase_colour,
                          diffuse_colour, model, _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), ground,
                          kernel_scalar(mi, params.slab_jitter), kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
-                         sca_ratio, below, sun_air_input(mi, spec, self.grid_box))
+                         sca_ratio, below, self._reuse("sun air", (spec.atmosphere, spec.sun.mu0),
+                                                       lambda: sun_air_input(mi, spec, self.grid_box)),
+                         None if self._air_cache is None else eye_air_input(mi, spec, self.vol.bbox, self._air_cache, e_sky))
 
     def _eye_pass(self, inputs: FrameInputs):
         import drjit as dr
@@ -479,10 +486,13 @@ class SliceRenderer:
         else:
             model = LightModel(self.light, log_forward=self.mode.light == "translucent")
         offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
-        return composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
-                         e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
-                         e.sca_ratio, e.below, self.tile_box, None if self.differentiable else inputs.tex_light,
-                         e.sun_air)
+        out = composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
+                        e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
+                        e.sca_ratio, e.below, self.tile_box, None if self.differentiable else inputs.tex_light,
+                        e.sun_air, depth=e.eye_air is not None)
+        if e.eye_air is None:
+            return out
+        return seen_through_air(mi, e.eye_air, e.rays, *out), out[1]  # the air in and outside the box (eye_air.py)
 
 
 FROZEN_FRAMES = True
