@@ -75,14 +75,15 @@ def eye_air(spec, vol, sky_air: bool, table=None):
             sky_end.reshape(shape), hit.reshape(shape))
 
 
-def with_eye_air(img, spec, vol, sky_air: bool = False):
+def with_eye_air(img, spec, vol, sky_air: bool = False, air=None):
     """``img`` (a reference ``Image`` of ``spec`` and ``vol``) seen through the air outside the box (module
     docstring): radiance E S_A + T_A (L + T_box E S_B) (weighted by the box's opacity where the ray ends on a
     sky model's sky), the standard error scaled alike (the added terms are exact).
-    Needs ``spec.atmosphere`` (a ValueError otherwise)."""
+    Needs ``spec.atmosphere`` (a ValueError otherwise). ``air``: ``eye_air(spec, vol, sky_air)`` if already
+    computed (a progressive render's passes share it)."""
     if spec.atmosphere is None:
         raise ValueError("the air along the eye rays needs an atmosphere (--atmosphere clear)")
-    t_a, s_a, s_b, sky_end, hit = eye_air(spec, vol, sky_air)
+    t_a, s_a, s_b, sky_end, hit = eye_air(spec, vol, sky_air) if air is None else air
     t_box = np.ones(hit.shape) if img.transmittance is None else np.asarray(img.transmittance, np.float64)
     rad = np.asarray(img.radiance, np.float64)
     w = np.where(sky_end, np.where(hit, 1.0 - np.clip(t_box, 0.0, 1.0), 0.0), 1.0)[..., None]

@@ -359,6 +359,20 @@ class _InScattering:
         return src + sca * amb
 
 
+def _background(mi, dr, model: LightModel, rays, ground, sun_air):
+    """What each ray sees behind the medium: the lit ground where it meets it (``composite``'s ``ground``),
+    else the sky (``rays.background``)."""
+    if ground is None:
+        return rays.background
+    sun_factor, occ = model.ground_light(rays.ground)
+    if getattr(rays, "ground_sun", None) is not None:  # a terrain: its albedo and slope per ray
+        sun_factor, occ = sun_factor * rays.ground_sun, occ * rays.ground_sky
+    if sun_air is not None:
+        sun_factor = sun_factor * sun_colour_at(mi, sun_air, rays.ground.z)
+    lit = ground[0] * sun_factor + ground[1] * occ
+    return dr.select(rays.hit_ground, lit, rays.background)
+
+
 def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
               ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None, ambient_below=None,
               tile=None, tex_ext=None, sun_air=None, depth: bool = False):
@@ -465,16 +479,7 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
     kw = dict(max_iterations=(M + 1) * (n_slices + 2), mode="evaluated") if differentiable else {}
     _, _, T, C, _, *dist = dr.while_loop(state, lambda *st: st[4], body, **kw)
 
-    if ground is not None:
-        sun_factor, occ = model.ground_light(rays.ground)
-        if getattr(rays, "ground_sun", None) is not None:  # a terrain: its albedo and slope per ray
-            sun_factor, occ = sun_factor * rays.ground_sun, occ * rays.ground_sky
-        if sun_air is not None:
-            sun_factor = sun_factor * sun_colour_at(mi, sun_air, rays.ground.z)
-        lit = ground[0] * sun_factor + ground[1] * occ
-        bg = dr.select(rays.hit_ground, lit, rays.background)
-    else:
-        bg = rays.background
+    bg = _background(mi, dr, model, rays, ground, sun_air)
     if depth:
         return C + T * bg, T, bg, dist[0] / dr.maximum(1.0 - T, 1e-30)
     return C + T * bg, T

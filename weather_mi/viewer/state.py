@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from ..optics.air.atmosphere import Atmosphere
 from ..scene.spec import Camera, Ground, SceneSpec, Sky, Sun
 from ..io.sources import kind
 from ..slicing.modes import MODES, SliceMode, SliceParams
@@ -108,10 +109,16 @@ class ViewState:
     time: int = 0
     sky: str = "sunsky"
     ground_albedo: float = 0.15
+    atmosphere: str = "none"      # "clear": the 1-D atmosphere (optics.air) on the sun's and the eye's paths
+    aod: float = 0.1              # its aerosol optical depth at 550 nm
+    ozone: float = 0.3            # its ozone column, atm-cm
 
     def __post_init__(self):
         if self.mode not in MODES:
             raise ValueError(f"unknown slicer mode {self.mode!r}; expected one of {list(MODES)}")
+        if self.atmosphere not in ("none", "clear"):
+            raise ValueError(f"ViewState atmosphere must be 'none' or 'clear', got {self.atmosphere!r}")
+        self.air()  # range checks of --aod and --ozone now
         SliceParams(**self._param_kw())  # range checks now, before anything renders
 
     def updated(self, **kw) -> "ViewState":
@@ -134,6 +141,10 @@ class ViewState:
     def slice_params(self) -> SliceParams:
         return SliceParams(**self._param_kw())
 
+    def air(self) -> Atmosphere | None:
+        """The view's atmosphere (None for "none"); a ValueError names --aod or --ozone out of range."""
+        return Atmosphere(aod_550=self.aod, ozone_atm_cm=self.ozone) if self.atmosphere == "clear" else None
+
     def spec(self, frame, ground_m: float, width: int | None = None, height: int | None = None) -> SceneSpec:
         """The SceneSpec of this view (``width``/``height``: another resolution of the same view)."""
         w, h = width or self.width, height or self.height
@@ -141,7 +152,7 @@ class ViewState:
                          sun=Sun(self.sun_azimuth, self.sun_elevation, angular_diameter_deg=self.sun_diameter_deg),
                          sky=None if self.sky == "none" else Sky(self.sky),
                          ground=None if self.ground_albedo < 0 else Ground(albedo=self.ground_albedo, height=ground_m),
-                         width=w, height=h)
+                         width=w, height=h, atmosphere=self.air())
 
     def to_dict(self) -> dict:
         return asdict(self)
