@@ -116,9 +116,11 @@ def main():
             v = measure_drag(page, view, args.seconds, 200)
             # the same slider drag while the path-traced reference of the view renders in the background
             page.get_by_role("button", name="Path-trace this view").click()
-            page.get_by_text(re.compile(r"Reference: \d+ passes")).first.wait_for(timeout=120000)
+            page.get_by_text(re.compile(r"Reference: \d+ passes")).first.wait_for(timeout=300000)
             b = measure_drag(page, slider, args.seconds, 120)
             rows.append((r + 1, atm or VIEW_DEFAULT, base, first, viewer.seconds_to_serve, s, v, b))
+            print(f"round {r + 1}, --atmosphere {atm or VIEW_DEFAULT}: slider {s['fps']:.1f} fps, view {v['fps']:.1f} fps, "
+                  f"slider with the reference running {b['fps']:.1f} fps", flush=True)
 
     print(f"\nviewer: {recipe.label}, view 320x240, default mode; the slicer alone in this process:")
     for atm, base in bases.items():

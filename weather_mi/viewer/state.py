@@ -166,6 +166,18 @@ class ViewState:
         return cls(**d)
 
 
+def _reference_lines(state: ViewState) -> str:
+    """The snippet's reference render: with the atmosphere, its air inside the box (in the medium) and along the
+    eye rays outside it, as the viewer's reference (``reference_job.with_air``)."""
+    call = "wm.render_reference(spec, {}, spp=spp, target_rse=target_rse, max_seconds=max_seconds)"
+    if state.atmosphere == "none":
+        return f"    return {call.format('ref_vol')}\n"
+    return ("    from weather_mi.display.aerial import with_eye_air\n"
+            "    from weather_mi.optics.air.inside import with_box_air\n"
+            f"    image = {call.format('with_box_air(ref_vol, hyd, spec.atmosphere)')}  # the air in the box\n"
+            "    return with_eye_air(image, spec, ref_vol)  # and along the eye rays outside it\n")
+
+
 def python_snippet(state: ViewState, recipe, spec: SceneSpec, times: list[str] | None = None,
                    exposure: float | None = None) -> str:
     """A script that renders this view with the slicer and the path tracer (``recipe``: a VolumeRecipe;
@@ -208,8 +220,7 @@ def ground_truth(spp=16, target_rse=0.02, max_seconds=600):
     """The path-traced reference of the same view: it sees the scalings, not the slicer's knobs."""
     ref_vol = wm.optical_volume(hyd, species={recipe.preset!r}, phase={recipe.phase!r}, sizes={recipe.sizes!r},
                                 scale={dict(state.scale) or None!r})
-    return wm.render_reference(spec, ref_vol, spp=spp, target_rse=target_rse, max_seconds=max_seconds)
-
+{_reference_lines(state)}
 
 if __name__ == "__main__":
     image.save_png("view.png", exposure={exposure!r})
