@@ -26,6 +26,7 @@ camera or atmosphere uploads values and recompiles nothing.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,7 +36,9 @@ from ..optics.air.shell import EARTH_RADIUS_M
 HEIGHT_STEP_M = 250.0   # the height table's step (m): the aerosol's 1.2 km scale height within 0.5%
 SAMPLES_OUTSIDE = 33    # points on the segment outside the box (x^2 spacing, as eye_path's 257: S within 1%)
 SAMPLES_BOX = 13        # points on each segment inside the box (uniform)
-SUN_MU_SAMPLES = 17     # cosines of the sun's table (eye_path.wide_sun_table's band: 129; a new sun elevation redoes it)
+# the sun's colour by (cos zenith, height) for every sun, once per atmosphere (``sun_table``): cosines from below
+# the horizon of the air's top to the zenith, heights to the air's top; slant columns on 64 points a segment
+SUN_MU_RANGE, SUN_MU_SAMPLES, SUN_HEIGHT_SAMPLES, SUN_COLUMN_SAMPLES = (-0.15, 1.0), 257, 121, 64
 
 
 @dataclass
@@ -58,6 +61,20 @@ class EyeAir:
     floor: object       # mi.Float: the ground's height (m)
     ground: bool        # whether there is a ground
     ambient: object     # mi.Color3f: the diffuse light on the air in the box, W/m^2/sr per unit phase (``diffuse_light``)
+
+
+@functools.lru_cache(maxsize=4)
+def sun_table(atm):
+    """The direct sun's linear sRGB over cos(zenith) in ``SUN_MU_RANGE`` and heights 0 to ``eye_path.TOP_M``, both
+    uniform (a ``SunAirTable``): the same for every sun, so that a sun dragged in elevation recomputes nothing
+    (bilinear lookups within 1.1% of ``optics.air.sun_rgb`` of the brightest channel, 5e-5 median, at the
+    heights and cosines of a low sun; below the horizon of the air's top the sun is 0)."""
+    from ..optics.air.eye_path import TOP_M
+    from ..optics.air.sunlight import SunAirTable, sun_rgb
+    mu = np.linspace(*SUN_MU_RANGE, SUN_MU_SAMPLES)
+    heights = np.linspace(0.0, TOP_M, SUN_HEIGHT_SAMPLES)
+    rgb = sun_rgb(atm, heights[None, :], mu[:, None], samples=SUN_COLUMN_SAMPLES)
+    return SunAirTable(heights_m=heights, mu=mu, rgb=rgb.astype(np.float32))
 
 
 def height_table(atm, wavelengths_nm=None) -> np.ndarray:
@@ -96,16 +113,12 @@ def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0)) -> EyeAir 
     if atm is None:
         return None
     import drjit as dr
-    from ..optics.air.eye_path import wide_sun_table
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
     if cache.get("atm", (None,))[0] != atm:
-        cache["atm"] = (atm, mi.Float(np.ascontiguousarray(height_table(atm), np.float32).ravel()))
-    key = (atm, float(spec.sun.mu0))
-    if cache.get("sun", (None,))[0] != key:
-        t = wide_sun_table(atm, spec.sun.mu0, n_mu=SUN_MU_SAMPLES)
-        cache["sun"] = (key, t, mi.Float(np.ascontiguousarray(t.rgb, np.float32).ravel()))
-    table, rgb = cache["sun"][1:]
-    air = cache["atm"][1]
+        table = sun_table(atm)
+        cache["atm"] = (atm, mi.Float(np.ascontiguousarray(height_table(atm), np.float32).ravel()), table,
+                        mi.Float(np.ascontiguousarray(table.rgb, np.float32).ravel()))
+    air, table, rgb = cache["atm"][1:]
     (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in bbox)
     floor = None if spec.ground is None else float(spec.ground.height)
     lo = (x0, y0, max(z0, floor) if floor is not None else z0)

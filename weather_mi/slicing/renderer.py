@@ -471,7 +471,7 @@ class SliceRenderer:
         return EyeInputs(EyeRays(**{k: getattr(rays, k) for k in names}), self._grid_scalars, phase_colour,
                          diffuse_colour, model, _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), ground,
                          kernel_scalar(mi, params.slab_jitter), kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
-                         sca_ratio, below, self._reuse("sun air", (spec.atmosphere, spec.sun.mu0),
+                         sca_ratio, below, self._reuse("sun air", (spec.atmosphere, float(spec.sun.mu0)),
                                                        lambda: sun_air_input(mi, spec, self.grid_box)),
                          None if self._air_cache is None else eye_air_input(mi, spec, self.vol.bbox, self._air_cache, e_sky))
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 TOP_ABOVE_BOX_M = 2000.0  # the table reaches this far above the box (as the path tracer's, kernel.scene_dict)
+COLUMN_SAMPLES = 128  # the slant columns' points per segment (``shell.slant_columns``: the colour within 1e-3)
 
 
 @dataclass
@@ -32,11 +33,12 @@ def sun_by_height(spec, z_top_m: float):
     """(heights (n,) m above sea level, the sun's RGB (n, 3)) of ``spec.atmosphere`` for its sun, heights
     from sea level to ``TOP_ABOVE_BOX_M`` above ``z_top_m`` (the box's top): ``optics.air.sun_rgb`` at the
     sun's zenith cosine on the heights of ``sun_air_table`` (the path tracer's table; computed at that one
-    cosine alone: 33 times less work than the table's band, for a sun dragged in the viewer)."""
+    cosine alone, its slant columns on ``COLUMN_SAMPLES`` points: 100 times less work than the table, for a sun
+    dragged in the viewer)."""
     from ..optics.air import sun_rgb
     from ..optics.air.sunlight import HEIGHT_SAMPLES
     heights = np.linspace(0.0, max(float(z_top_m), 0.0) + TOP_ABOVE_BOX_M, HEIGHT_SAMPLES)
-    return heights, sun_rgb(spec.atmosphere, heights, np.full(heights.shape, float(spec.sun.mu0)))
+    return heights, sun_rgb(spec.atmosphere, heights, np.full(heights.shape, float(spec.sun.mu0)), samples=COLUMN_SAMPLES)
 
 
 def sun_air_input(mi, spec, grid_box) -> SunAir | None:
