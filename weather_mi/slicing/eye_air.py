@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..optics.air.shell import EARTH_RADIUS_M
+from .eye import OPAQUE_T
 
 HEIGHT_STEP_M = 250.0   # the height table's step (m): the aerosol's 1.2 km scale height within 0.5%
 SAMPLES_OUTSIDE = 33    # points on the segment outside the box (x^2 spacing, as eye_path's 257: S within 1%)
@@ -240,13 +241,17 @@ def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background,
     # the box: split at the cloud's depth (the box's entry where the ray meets no cloud)
     t_c = dr.clip(dr.select(transmittance < 1.0, depth, t_in), t_in, t_out)
     t_f, s_f = segment(mi, air, o, d, dr.select(hit, t_in, 0.0), dr.select(hit, t_c, 0.0), SAMPLES_BOX, False, True)
-    t_b, s_b = segment(mi, air, o, d, dr.select(hit, t_c, 0.0), dr.select(hit, t_out, 0.0), SAMPLES_BOX, False, True)
+    behind = hit & (transmittance > OPAQUE_T)  # (behind an opaque cloud the air adds nothing seen: not integrated)
+    t_b, s_b = segment(mi, air, o, d, dr.select(behind, t_c, 0.0), dr.select(behind, t_out, 0.0), SAMPLES_BOX,
+                       False, True)
     e = air.irradiance
     boxed = e * s_f + t_f * (radiance + transmittance * (e * s_b + (t_b - 1.0) * background))
-    # outside: camera to the box (or to the ground or the top)
-    t_a, s_a = segment(mi, air, o, d, mi.Float(0.0) + 0.0 * t_in, dr.select(hit, t_in, t_end), SAMPLES_OUTSIDE, True)
+    # outside: camera to the box (or to the ground or the top); none where the ray ends on the sky model's sky
+    # without crossing the box (w = 0: not integrated)
     sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
     w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
+    t_a, s_a = segment(mi, air, o, d, mi.Float(0.0) + 0.0 * t_in, dr.select(w > 0, dr.select(hit, t_in, t_end), 0.0),
+                       SAMPLES_OUTSIDE, True)
     return boxed + w * (e * s_a + (t_a - 1.0) * boxed)
 
 
