@@ -9,7 +9,10 @@ file, BOMEX, RICO; from --data) front- and side-lit at the calibration size (64 
   the storm's rho_air, ``optics.air.inside.with_box_air``) and along the eye rays outside it
   (``display.aerial.with_eye_air``), the sun coloured per vertex by height; the slicer with the sun's colour
   by height, the sky scaled and the eye rays' air inside the box and out (``slicing.eye_air``);
-* no atmosphere: both as before issue 38.
+* no atmosphere: both as before issue 38;
+* and, against the same references with the atmosphere, the slicer as it was before the box's air: the sun's
+  colour by height and the air outside the box put on its frame afterwards (``SliceRenderer(eye_air=False)``,
+  ``display.aerial.with_eye_air``).
 
 The slicer's frames are the refined viewer frames the calibration judges (2 x 2 points per pixel, slab
 jitter 1, 128 slices). CIEDE2000 and FLIP over the cloud pixels (``display.metrics.compare``), and the
@@ -97,6 +100,7 @@ def main(argv=None) -> int:
             continue
         hyd, vol = storm(name, Path(args.data), cfg)
         slicer = SliceRenderer(vol, MODES["per-species/multiple"], slices=128)
+        before = SliceRenderer(vol, MODES["per-species/multiple"], slices=128, eye_air=False)
         for lighting in args.lightings.split(","):
             for elevation in (float(e) for e in args.elevations.split(",")):
                 row = {"scene": name, "lighting": lighting, "elevation": elevation}
@@ -109,21 +113,29 @@ def main(argv=None) -> int:
                     m = metrics.compare(ref.radiance, img.radiance, mask=mask if mask.any() else "all")
                     rse = (ref.metadata.get("noise") or {}).get("rse_mean", float("nan"))
                     row[label] = (m["ciede2000"], m["flip"], rse)
+                    if atm is not None:  # the slicer before the box's air, against the same reference
+                        old = before.frame(spec, params, supersample=2)
+                        old = with_eye_air(replace(old, transmittance=before.transmittance), spec, vol)
+                        m = metrics.compare(ref.radiance, old.radiance, mask=mask if mask.any() else "all")
+                        row["before"] = (m["ciede2000"], m["flip"])
                 rows.append(row)
                 print(row, flush=True)
     print(f"\n### The slicer against the path tracer at a low sun ({width} x {height}, references {args.spp} spp; "
           "CIEDE2000 / FLIP over cloud pixels; reference noise: mean RSE)\n")
-    print("| storm | lighting | sun elevation | with the atmosphere | without | reference RSE (with / without) |")
-    print("|---|---|---|---|---|---|")
+    print("| storm | lighting | sun elevation | with the atmosphere | the same, slicer without the box's air | "
+          "without the atmosphere | reference RSE (with / without) |")
+    print("|---|---|---|---|---|---|---|")
     for r in rows:
-        (dc, fc, rc), (dn, fn, rn) = r["clear"], r["none"]
-        print(f"| {r['scene']} | {r['lighting']} | {r['elevation']:g} | {dc:.2f} / {fc:.3f} | {dn:.2f} / {fn:.3f} | "
-              f"{rc:.3f} / {rn:.3f} |")
-    for label in ("clear", "none"):
+        (dc, fc, rc), (db, fb), (dn, fn, rn) = r["clear"], r["before"], r["none"]
+        print(f"| {r['scene']} | {r['lighting']} | {r['elevation']:g} | {dc:.2f} / {fc:.3f} | {db:.2f} / {fb:.3f} | "
+              f"{dn:.2f} / {fn:.3f} | {rc:.3f} / {rn:.3f} |")
+    names = {"clear": "with the atmosphere", "before": "with it, the slicer without the box's air",
+             "none": "without the atmosphere"}
+    for label, text in names.items():
         de = [r[label][0] for r in rows]
         if de:
-            print(f"\n{'with the atmosphere' if label == 'clear' else 'without'}: median CIEDE2000 {np.median(de):.2f}, "
-                  f"mean {np.mean(de):.2f}, median FLIP {np.median([r[label][1] for r in rows]):.3f}")
+            print(f"\n{text}: median CIEDE2000 {np.median(de):.2f}, mean {np.mean(de):.2f}, "
+                  f"median FLIP {np.median([r[label][1] for r in rows]):.3f}")
     return 0
 
 
