@@ -6,12 +6,14 @@ the drag to the paper's rates on a 2003 GeForce FX 5800 (Table IV: 5.1 / 4.3 / 1
 128 slices; the "multiple" light model beyond the paper is held to the per-species translucent rate).
 
     .venv/bin/python benchmarks/slicing.py [--quick] [--rounds 3] [--frames 12] [--variant cuda_ad_rgb]
-                                           [--traced] [--fixed] [--large]
+                                           [--traced] [--fixed] [--large] [--atmosphere clear]
 
 Medians over ``--frames`` frames after three warm-up frames (compilation and recording excluded) per case,
 the cases taking turns round after round (``--rounds``; the median over rounds is printed), frames
 recorded by ``dr.freeze`` (``--traced``: also every frame traced in Python, "traced" against "frozen").
-``--fixed``: the fixed cost per frame (a 64 x 48 frame with 8 slices and an 8 x 8 light buffer, where the
+``--atmosphere clear``: every frame with the clear 1-D atmosphere (issue 38: the sun's colour by height, the
+eye rays' air inside the box and out, ``slicing/eye_air.py``), measured in turn with frames without it
+(paired, the same rounds): the table gets a row per mode and atmosphere. ``--fixed``: the fixed cost per frame (a 64 x 48 frame with 8 slices and an 8 x 8 light buffer, where the
 kernels have almost nothing to do), traced vs recorded. ``--large``: 1024 x 768 with 256 slices too.
 The rates before issue 41's drag work are recorded in benchmarks/README.md; measure them again in one
 run with ``benchmarks/slicing_vs_commit.py --commit 831c980 --case drag`` (the two trees in turn).
@@ -46,6 +48,9 @@ def default_spec(vol, width: int, height: int, **kw):
     return getattr(wm.scene, "spec", wm.scene).default_spec(vol, width, height, **kw)
 
 
+ATMOSPHERE = None  # --atmosphere clear: an optics.air.Atmosphere on every frame's scene
+
+
 def moving_view(vol, width: int, height: int, case: str, i: int, start: int = 0):
     """(SceneSpec, SliceParams) of frame ``i`` of a drag ``case``: "scaling" (a species' scaling changes,
     the view is kept: the textures are rebuilt), "camera" (the camera swings back and forth around the
@@ -61,7 +66,7 @@ def moving_view(vol, width: int, height: int, case: str, i: int, start: int = 0)
                         camera_elevation=8.0 + (3.0 * swing(0.23, 1.0) if cam else 0.0))
     sun_dir = wm.Sun(240.0 + 8.0 * swing(0.27, 2.0), 35.0 + 3.0 * swing(0.19, 3.0)) if sun else wm.Sun(240.0, 35.0)
     spec = wm.SceneSpec(camera=spec.camera, sun=sun_dir, sky=spec.sky, ground=spec.ground, width=width,
-                        height=height)
+                        height=height, **({} if ATMOSPHERE is None else {"atmosphere": ATMOSPHERE}))
     params = SliceParams(scale={"ice": 1.0 + 0.1 * (k % 97 + 1)}) if case == "scaling" else SliceParams()
     return spec, params
 
@@ -117,22 +122,33 @@ def fixed_cost(vol, frames):
     return rows
 
 
-def bench(vol, width, height, slices, light_res, frames, rounds=1, traced=False):
+def bench(vol, width, height, slices, light_res, frames, rounds=1, traced=False, air=False, modes=None):
     """{mode: {(case, frozen): seconds per frame}}: the median over ``rounds`` of each case's median
-    (``seconds_per_frame``), the cases (and traced / frozen) taking turns round after round."""
+    (``seconds_per_frame``), the cases (and traced / frozen) taking turns round after round; with ``air``,
+    also {mode + " + air": ...}: the same with the clear atmosphere, in turn with the frames without it."""
+    global ATMOSPHERE
     spec = default_spec(vol, width, height)
     out = {}
+    from weather_mi.optics.air import Atmosphere
     for name, mode in MODES.items():
-        r = SliceRenderer(vol, mode, slices=slices, light_res=light_res,
-                          detail_field=detail_field(vol) if mode.detail else None)
+        if modes is not None and name not in modes:
+            continue
+        airs = (None, Atmosphere()) if air else (None,)
+        rs = [SliceRenderer(vol, mode, slices=slices, light_res=light_res,
+                            detail_field=detail_field(vol) if mode.detail else None) for _ in airs]
         t = {}
         for k in range(rounds):
             for case in CASES:
                 for frozen in ((False, True) if traced else (True,)):
-                    r.frozen = frozen
-                    t.setdefault((case, frozen), []).append(
-                        seconds_per_frame(r, spec, frames, case, vol, start=1000 * k))
-        out[name] = {key: statistics.median(v) for key, v in t.items()}
+                    for a, r in zip(airs, rs):
+                        ATMOSPHERE = a
+                        r.frozen = frozen
+                        t.setdefault((a is not None, case, frozen), []).append(
+                            seconds_per_frame(r, spec, frames, case, vol, start=1000 * k))
+        ATMOSPHERE = None
+        for a in airs:
+            out[name + (" + air" if a is not None else "")] = {key[1:]: statistics.median(v) for key, v in t.items()
+                                                               if key[0] == (a is not None)}
     return out
 
 
@@ -146,6 +162,9 @@ def main():
     ap.add_argument("--traced", action="store_true", help="also frames traced in Python every frame")
     ap.add_argument("--fixed", action="store_true", help="also the fixed cost per frame (64 x 48, 8 slices)")
     ap.add_argument("--large", action="store_true", help="also 1024 x 768 with 256 slices")
+    ap.add_argument("--atmosphere", default="none", choices=("none", "clear"),
+                    help="clear: also every mode with the clear atmosphere (paired rounds)")
+    ap.add_argument("--modes", default=None, help="comma-separated modes (default all)")
     args = ap.parse_args()
     variant = wm.set_variant(args.variant)
     vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
@@ -163,11 +182,12 @@ def main():
         print(f"\n{w} x {h}, {slices} slices, frames per second (frozen; median of {rounds} rounds of "
               f"{frames}-frame medians)")
         print(f"{'mode':<32}{'drag':>8}{'scaling':>9}{'camera':>8}{'sun':>8}{'drag vs paper':>15}{'target':>8}")
-        rows = bench(vol, w, h, slices, args.light_res, frames, rounds, args.traced)
+        rows = bench(vol, w, h, slices, args.light_res, frames, rounds, args.traced, args.atmosphere == "clear",
+                     None if args.modes is None else args.modes.split(","))
         for name, t in rows.items():
             fps = {c: 1.0 / t[(c, True)] for c in CASES}
-            ratio = f"{fps['drag'] / PAPER_FPS[name]:.1f}x" if paper else "-"
-            target = f"{10 * PAPER_FPS[name]:.0f}" if paper else "-"
+            ratio = f"{fps['drag'] / PAPER_FPS[name.split(' + ')[0]]:.1f}x" if paper else "-"
+            target = f"{10 * PAPER_FPS[name.split(' + ')[0]]:.0f}" if paper else "-"
             print(f"{name:<32}{fps['drag']:>8.1f}{fps['scaling']:>9.1f}{fps['camera']:>8.1f}{fps['sun']:>8.1f}"
                   f"{ratio:>15}{target:>8}")
         if args.traced:

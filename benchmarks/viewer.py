@@ -3,6 +3,10 @@ view is dragged, latency from the input event to the new frame decoded on the pa
 the command to the first frame.
 
     .venv/bin/python benchmarks/viewer.py [--demo supercell | --input FILE] [--seconds 5] [--rounds 2]
+                                          [--atmospheres none,clear]
+
+``--atmospheres``: each round measures the viewer with each ``--atmosphere`` in turn (paired: the same
+machine state within a round; issue 38's air in the slicer against none), the baseline too.
 
 ``weather-mi view`` runs in a subprocess on a free port; headless Chromium (Playwright, Debian's
 chromium) drags the sun-azimuth slider and then the view itself: one press, then 60 mouse moves a
@@ -28,13 +32,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from weather_mi.viewer.browser import ViewerProcess, browser_page, wait_frames, wait_idle  # noqa: E402
 
 
-def slicer_baseline(recipe, rounds: int = 5) -> dict:
+def slicer_baseline(recipe, rounds: int = 5, air: dict | None = None) -> dict:
     """Seconds per frame of the slicer alone, full and draft, for the viewer's first view dragged: the camera
     and the sun move every frame (the half-angle changes: slice planes, light and eye rays are redone), after
     a warm-up frame of each quality."""
     from weather_mi.viewer.frames import FrameLoop
     from weather_mi.viewer.serve import prepare
-    storm, state = prepare(recipe, progress=lambda *a: None)
+    storm, state = prepare(recipe, progress=lambda *a: None, air=air)
     loop = FrameLoop(storm, publish=lambda f: None)
     out = {}
     try:
@@ -87,16 +91,21 @@ def main():
     src.add_argument("--input", default=None)
     ap.add_argument("--seconds", type=float, default=5.0, help="length of each drag measurement")
     ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--atmospheres", default=None, help="comma-separated --atmosphere values measured in turn "
+                    "(default: the command's default alone)")
     args = ap.parse_args()
+    atmospheres = args.atmospheres.split(",") if args.atmospheres else [None]
     from weather_mi.viewer.recipe import VolumeRecipe
     demo = args.demo or (None if args.input else "supercell")
     recipe = VolumeRecipe(path=args.input, demo=demo)
     source = ["--demo", demo] if demo else [args.input]
 
-    base = slicer_baseline(recipe)
+    from weather_mi.cli.air_option import VIEW_DEFAULT
+    bases = {a: slicer_baseline(recipe, air={"atmosphere": a or VIEW_DEFAULT}) for a in atmospheres}
     rows = []
-    for r in range(args.rounds):
-        with ViewerProcess(*source) as viewer, browser_page() as page:
+    for r, atm in ((r, a) for r in range(args.rounds) for a in atmospheres):
+        base = bases[atm]
+        with ViewerProcess(*source, *(["--atmosphere", atm] if atm else [])) as viewer, browser_page() as page:
             t_cmd = viewer.t_start
             page.goto(viewer.url)
             wait_frames(page, 1, 120)
@@ -107,18 +116,22 @@ def main():
             v = measure_drag(page, view, args.seconds, 200)
             # the same slider drag while the path-traced reference of the view renders in the background
             page.get_by_role("button", name="Path-trace this view").click()
-            page.get_by_text(re.compile(r"Reference: \d+ passes")).first.wait_for(timeout=120000)
+            page.get_by_text(re.compile(r"Reference: \d+ passes")).first.wait_for(timeout=300000)
             b = measure_drag(page, slider, args.seconds, 120)
-            rows.append((r + 1, first, viewer.seconds_to_serve, s, v, b))
+            rows.append((r + 1, atm or VIEW_DEFAULT, base, first, viewer.seconds_to_serve, s, v, b))
+            print(f"round {r + 1}, --atmosphere {atm or VIEW_DEFAULT}: slider {s['fps']:.1f} fps, view {v['fps']:.1f} fps, "
+                  f"slider with the reference running {b['fps']:.1f} fps", flush=True)
 
-    print(f"\nviewer: {recipe.label}, view 320x240, default mode; slicer alone in this process: full "
-          f"{1000 * base['full']:.0f} ms ({1 / base['full']:.1f} fps), draft {1000 * base['draft']:.0f} ms "
-          f"({1 / base['draft']:.1f} fps)\n")
-    print("| round | first frame s (serve s) | drag | fps received | ratio to draft alone | median latency ms | p90 ms |")
-    print("|---|---|---|---|---|---|---|")
-    for r, first, serve, *drags in rows:
+    print(f"\nviewer: {recipe.label}, view 320x240, default mode; the slicer alone in this process:")
+    for atm, base in bases.items():
+        print(f"  --atmosphere {atm or VIEW_DEFAULT}: full {1000 * base['full']:.0f} ms ({1 / base['full']:.1f} fps), "
+              f"draft {1000 * base['draft']:.0f} ms ({1 / base['draft']:.1f} fps)")
+    print("\n| round | atmosphere | first frame s (serve s) | drag | fps received | ratio to draft alone | "
+          "median latency ms | p90 ms |")
+    print("|---|---|---|---|---|---|---|---|")
+    for r, atm, base, first, serve, *drags in rows:
         for name, d in zip(("slider", "view", "slider, reference running"), drags):
-            print(f"| {r} | {first:.1f} ({serve:.1f}) | {name} | {d['fps']:.1f} | {d['fps'] * base['draft']:.2f} | "
+            print(f"| {r} | {atm} | {first:.1f} ({serve:.1f}) | {name} | {d['fps']:.1f} | {d['fps'] * base['draft']:.2f} | "
                   f"{d['latency_ms']:.0f} | {d['p90_ms']:.0f} |")
 
 

@@ -4,7 +4,8 @@ not through the slicer's table), on the lit ground and on a thin cloud layer; an
 against the path tracer's at a low sun."""
 from __future__ import annotations
 
-import dataclasses
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +14,8 @@ import weather_mi as wm
 from weather_mi.optics.air import Atmosphere
 from weather_mi.optics.air.sunlight import sun_rgb
 from weather_mi.slicing import MODES, SliceRenderer
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 ELEV = 4.0
 
@@ -37,7 +40,7 @@ def test_the_sunlit_ground_gets_the_sun_after_the_air():
     channel, C from the spectrum (within 0.5%: the slicer's table is linear over 129 heights); without the
     atmosphere rho / pi E mu0 as before."""
     vol = _layer_volume(0.0, 0.0)
-    r = SliceRenderer(vol, MODES["per-species/multiple"], slices=64)
+    r = SliceRenderer(vol, MODES["per-species/multiple"], slices=64, eye_air=False)  # the sun's path's air alone
     atm = Atmosphere()
     mu0 = np.sin(np.radians(ELEV))
     plain = r.frame(_spec(wm.Ground(albedo=0.3), None)).radiance.reshape(-1, 3).mean(axis=0)
@@ -55,7 +58,7 @@ def test_a_thin_layer_is_lit_by_the_sun_at_its_height(z):
     frame with the atmosphere over the one without is C(z, mu0) per channel (within 1%: the layer's
     250 m of height)."""
     vol = _layer_volume(z, z + 250.0)
-    r = SliceRenderer(vol, MODES["per-species/multiple"], slices=64)
+    r = SliceRenderer(vol, MODES["per-species/multiple"], slices=64, eye_air=False)  # the sun's path's air alone
     atm = Atmosphere()
     plain = r.frame(_spec(None, None)).radiance.reshape(-1, 3).mean(axis=0)
     aired = r.frame(_spec(None, atm)).radiance.reshape(-1, 3).mean(axis=0)
@@ -80,29 +83,84 @@ def _cloud_lab(img, mask):
     return colour.XYZ_to_Lab(xyz / xyz[1] * 0.5, np.array([0.3127, 0.3290]))
 
 
-def test_the_lit_cloud_colour_agrees_with_the_path_tracer_at_a_low_sun():
-    """A cloud ball seen from 30 km, sun 4 deg high, --atmosphere clear in both (the sun coloured at each
-    point's height, the sky scaled to the sun at the ground, the air along the eye rays ``display.aerial``):
-    the cloud's colour at equal lightness, slicer ("multiple") against the path tracer (32 spp). Without air
-    inside the box in either, CIEDE2000 1.1 was measured (the bound was 3). ``render_reference`` now puts the
-    atmosphere's air into the box too (``optics.air.inside.scene_air``) and the slicer has none in its box
-    yet: 6.3 measured, bound 7 until the slicer's box holds the air; a white sun and sky (the slicer before)
-    is 15-20 away: the test can tell."""
-    import colour
-    from weather_mi.display.aerial import slicer_frame_with_eye_air, with_eye_air
+def test_the_lit_cloud_and_the_air_in_the_box_agree_with_the_path_tracer_at_a_low_sun():
+    """A cloud ball seen from 30 km, sun 4 deg high, --atmosphere clear in both (``validation/slicer_air.py``):
+    the path tracer with the air inside its box (US 1976 molecules on the box's levels, ozone, aerosol) and
+    along the eye rays outside it (``display.aerial``); the slicer with the sun coloured at each point's
+    height, the sky scaled, and the eye rays' air inside the box and out (``slicing.eye_air``).
+    The cloud's colour at equal lightness: CIEDE2000 1.4-1.5 measured (32-64 spp). Below 3: under the slicer's
+    held-out median against the truth without the air (3.8, issue 38); a white sun and sky (the slicer
+    before the atmosphere) measured 20: the test can tell.
+    The clear pixels that cross the box (sky behind: its air's light and the sky dimmed): the slicer over the
+    path tracer (0.98, 0.97, 0.91) measured at 64 spp; without the box's air (0.88, 0.87, 0.79): within 6% in
+    R and G and 12% in B, where the box's air adds 7-15% (the slicer's air scatters once; the path tracer's
+    also scatters the sky's light and its own)."""
+    from validation.slicer_air import measure
+    m = measure(32, 32)
+    assert m["cloud_pixels"] > 50 and m["clear_box_pixels"] > 30
+    assert m["de_slicer"] < 3.0, m
+    assert m["de_white"] > 15.0, m
+    ratio = m["clear_slicer"] / m["clear_ref"]
+    assert np.all(np.abs(ratio - [1.0, 1.0, 0.95]) < [0.06, 0.06, 0.08]), ratio
+    without = m["clear_outside_only"] / m["clear_ref"]
+    assert np.all(ratio - without > 0.05), (ratio, without)  # the box's air is there (and the test can tell)
+
+
+def _clear_box():
+    beta = np.zeros((20, 20, 20), np.float32)  # no cloud: the box holds air alone
+    return wm.OpticalVolume.from_arrays(beta, 1.0, wm.phase.henyey_greenstein(0.85), ((-5e3, -5e3, 1e3), (5e3, 5e3, 11e3)))
+
+
+@pytest.mark.parametrize("elevation", [20.0, 4.0])
+def test_a_clear_box_shows_its_air(elevation):
+    """A cloud-free 10 km box seen from 30 km through its middle (6 km up), no sky, no ground: every pixel is
+    the light the box's air scatters once towards the eye. The slicer (``slicing.eye_air``, Dr.Jit) against
+    ``optics.air.eye_path.segment_air`` (numpy, 257 points, checked against scipy's Runge-Kutta in
+    tests/test_eye_air.py) on the same segments, within 1% per channel (measured 0.1%); against the path
+    tracer with the box's air in its medium (molecules from the US 1976 density on the box's levels, multiple
+    scattering included: 5-9% above single scattering at 20 and 4 deg, 2-3% standard error at 64 spp), within
+    12% and 3 standard errors."""
+    from validation.slicer_air import with_standard_air
+    from weather_mi.display.aerial import _box_interval
+    from weather_mi.optics.air.eye_path import segment_air, wide_sun_table
     from weather_mi.reference.render import render_reference
-    from weather_mi.scene.framing import scene_spec
+    from weather_mi.slicing.geometry import camera_rays
+    vol, atm = _clear_box(), Atmosphere()
+    spec = wm.SceneSpec(camera=wm.Camera(origin=(0.0, -30e3, 6e3), target=(0.0, 0.0, 6e3), fov=12.0),
+                        sun=wm.Sun(azimuth=60.0, elevation=elevation), sky=None, ground=None, width=12, height=12,
+                        atmosphere=atm)
+    sliced = SliceRenderer(vol, MODES["per-species/multiple"], slices=32).frame(spec).radiance.reshape(-1, 3)
+    o, d = (a.reshape(-1, 3).astype(np.float64) for a in camera_rays(spec))
+    t_in, t_out, hit = _box_interval(o, d, *(np.asarray(p, np.float64) for p in vol.bbox))
+    assert hit.all()
+    _, s = segment_air(atm, spec.sun.to_sun, o, d, t_in, t_out, wide_sun_table(atm, spec.sun.mu0))
+    np.testing.assert_allclose(sliced.mean(axis=0), (s * np.asarray(spec.sun.irradiance)).mean(axis=0), rtol=0.01)
+    ref = render_reference(spec, with_standard_air(vol, atm), spp=64, progress=False)
+    mean = ref.radiance.reshape(-1, 3).mean(axis=0)
+    se = np.sqrt((ref.stderr.reshape(-1, 3) ** 2).sum(axis=0)) / (spec.width * spec.height)
+    assert np.all(np.abs(sliced.mean(axis=0) - mean) < 0.12 * mean + 3 * se), (sliced.mean(axis=0), mean, se)
+    assert np.all(sliced.mean(axis=0) > 0.5 * mean)
+
+
+def test_the_air_recompiles_nothing_when_the_sun_and_camera_move():
+    """With an atmosphere, frames after the first compile no kernel: the sun (azimuth and elevation), the
+    camera and the aerosol are inputs of the frame."""
+    import drjit as dr
     vol = _ball()
-    spec = scene_spec(vol, (32, 32), camera="ground", camera_distance_km=30.0, camera_height=2000.0, fov=40.0,
-                      sun_elevation=ELEV, sun_azimuth=0.0, camera_azimuth=180.0, sky="sunsky", atmosphere="clear")
-    ref = with_eye_air(render_reference(spec, vol, spp=32, progress=False), spec, vol)
-    r = SliceRenderer(vol, MODES["per-species/multiple"], 128)
-    sliced = slicer_frame_with_eye_air(r, r.frame(spec), spec)
-    white = r.frame(dataclasses.replace(spec, atmosphere=None))
-    mask = ref.transmittance < 0.05
-    assert mask.sum() > 50
-    truth = _cloud_lab(ref, mask)
-    de = float(colour.delta_E(_cloud_lab(sliced, mask), truth, method="CIE 2000"))
-    de_white = float(colour.delta_E(_cloud_lab(white, mask), truth, method="CIE 2000"))
-    assert de < 7.0, (de, de_white)
-    assert de_white > 15.0, de_white
+    r = SliceRenderer(vol, MODES["per-species/multiple"], slices=24, light_res=16)
+
+    def spec(i):
+        return wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=180 + 7 * i, elevation=10), sun=wm.Sun(200 + 10 * i, 5 + 2 * i),
+                            sky=wm.Sky("sunsky"), ground=wm.Ground(0.2), width=24, height=16,
+                            atmosphere=Atmosphere(aod_550=0.1 + 0.05 * i))
+    for i in range(2):
+        r.frame(spec(i))
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    dr.kernel_history()  # clear
+    for i in range(2, 5):
+        r.frame(spec(i))
+    history = dr.kernel_history()
+    dr.set_flag(dr.JitFlag.KernelHistory, False)
+    compiled = [k for k in history if k.get("type") == dr.KernelType.JIT and not k.get("cache_hit")
+                and not k.get("cache_disk")]
+    assert compiled == [], f"{len(compiled)} kernels compiled after the first frames"

@@ -277,3 +277,58 @@ def test_the_b_view_offers_the_denoised_reference_and_the_metrics_keep_the_radia
         assert np.array_equal(panel.image.radiance, rad)   # the data is untouched
     finally:
         panel.close()
+
+
+# ---------------------------------------------------------------------- the atmosphere (issue 38 part 3)
+def test_the_atmosphere_is_a_view_setting_checked_before_rendering():
+    from weather_mi.optics.air import Atmosphere
+    with pytest.raises(ValueError, match="atmosphere"):
+        ViewState(atmosphere="hazy")
+    with pytest.raises(ValueError, match="aerosol optical depth"):
+        ViewState(atmosphere="clear", aod=5.0)
+    s = ViewState(atmosphere="clear", aod=0.3, ozone=0.25)
+    assert s.air() == Atmosphere(aod_550=0.3, ozone_atm_cm=0.25)
+    assert ViewState.from_dict(s.to_dict()) == s
+    assert ViewState().air() is None  # the library's default view: no air, as before
+
+
+def test_the_air_control_switches_the_slicer_frame(cumulus_storm):
+    """The page's Air control (``ViewControls``) reaches the slicer: at a 6 deg sun the clear atmosphere's
+    frame is redder (the sun after its long path through the air) than the frame without it."""
+    from weather_mi.viewer.frames import FrameLoop
+    from weather_mi.viewer.widgets import ViewControls
+    state = small_state(cumulus_storm, sun_elevation=6.0)
+    controls = ViewControls(state, cumulus_storm.species, 1)
+    clear = controls.changed(state, "atmosphere", "clear")
+    assert clear.atmosphere == "clear" and clear.spec(cumulus_storm.frame, cumulus_storm.ground_m).atmosphere is not None
+    loop = FrameLoop(cumulus_storm, publish=lambda f: None)
+    try:
+        plain, aired = (loop.render(s, draft=True).radiance.reshape(-1, 3).mean(axis=0) for s in (state, clear))
+    finally:
+        loop.stop()
+    assert aired[0] / aired[2] > 1.3 * plain[0] / plain[2], (plain, aired)
+
+
+def test_the_reference_sees_the_same_air(cumulus_storm):
+    """The reference job's volume holds the box's air (molecules from the storm's rho_air) and its estimates
+    get the eye rays' air outside the box; without an atmosphere both are as before."""
+    from weather_mi.io.image import Image
+    from weather_mi.viewer.reference_job import with_air
+    state = small_state(cumulus_storm, atmosphere="clear", sun_elevation=10.0)
+    spec = state.spec(cumulus_storm.frame, cumulus_storm.ground_m, 16, 12)
+    vol, seen = with_air(cumulus_storm.recipe, None, spec)
+    assert vol.air is not None and vol.air.extinction.shape == tuple(vol.shape) + (3,)
+    img = Image(np.zeros((12, 16, 3), np.float32), np.zeros((12, 16, 3), np.float32), {})
+    assert np.any(seen(img).radiance > 0)  # the eye rays' air adds light (the ground's pixels)
+    vol0, seen0 = with_air(cumulus_storm.recipe, None, small_state(cumulus_storm).spec(cumulus_storm.frame, 0.0))
+    assert getattr(vol0, "air", None) is None and seen0(img) is img
+    code = python_snippet(state, cumulus_storm.recipe, spec)
+    assert "with_box_air" in code and "with_eye_air" in code
+
+
+def test_view_air_options_are_checked_before_serving(capsys):
+    from weather_mi.cli.commands import main, build_parser
+    assert main(["view", "--demo", "cumulus", "--atmosphere", "clear", "--aod", "5", "--no-browser"]) == 2
+    assert "--aod" in capsys.readouterr().err
+    from weather_mi.cli.air_option import VIEW_DEFAULT
+    assert build_parser().parse_args(["view", "--demo", "cumulus"]).atmosphere == VIEW_DEFAULT

@@ -279,3 +279,19 @@ def test_the_time_slider_plays_a_series(browser):
             assert frame_src(tab) != before
         finally:
             tab.close()
+
+
+def test_the_air_control_reaches_the_frame(browser, viewer):
+    """The page's Air control (none | clear, issue 38): clicking "clear" brings a new frame that differs from
+    the one without the air (the sun's colour by height, the eye rays' air). A fresh tab: its own session."""
+    page = open_page(browser, viewer.url)
+    try:
+        before = frame_src(page)
+        n0 = page.evaluate("window.wmStats.frames")
+        page.locator(".wm-atmosphere").get_by_text("clear", exact=True).first.click()
+        wait_idle(page, 1.0, since=n0, timeout_s=120)
+        after = frame_src(page)
+        assert after != before and page.evaluate("window.wmStats.frames") > n0
+        assert np.abs(decoded(after) - decoded(before)).mean() > 0.5
+    finally:
+        page.close()

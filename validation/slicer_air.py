@@ -1,7 +1,17 @@
-"""The slicer's lit-cloud colour against the path tracer's, both with ``--atmosphere clear`` at a 4 deg sun
-(issue 38 part 3): a cloud ball (HG g = 0.85, tau ~ 180) seen from 30 km, the cloud pixels' mean linear sRGB
-at equal lightness (Y = 0.5), CIEDE2000 (D65) of the slicer with the atmosphere and of the slicer without it
-(white sun and sky) against the path tracer (the air along the eye rays on both, ``display.aerial``).
+"""The slicer's air against the path tracer's, both with ``--atmosphere clear`` at a 4 deg sun (issue 38 part 3):
+a cloud ball (HG g = 0.85, tau ~ 180) in a 10 x 10 x 10 km box seen from 30 km.
+
+* The path tracer: the air inside the box in its medium (``optics.air.inside``, molecules from the US 1976
+  density on the box's levels, which is the slicer's 1-D atmosphere), the air outside along the eye rays
+  (``display.aerial.with_eye_air``).
+* The slicer: the sun's colour by height, the sky scaled, the eye rays' air inside the box and out
+  (``slicing.eye_air``); and, to show what the test can tell, the slicer without the box's air (the eye-ray
+  air outside only, as before) and with a white sun and sky.
+
+Printed: the clear pixels that cross the box (cloud transmittance > 0.99): the path tracer's mean radiance
+per channel, the slicer's ratio to it, and the same for the box's air alone (each minus the render without
+an atmosphere in the box: the air's light); the cloud pixels' mean colour at equal lightness (Y = 0.5),
+CIEDE2000 (D65) against the path tracer's.
 
     python validation/slicer_air.py [SIZE [SPP]]     (defaults 32 px, 32 spp; tests/test_slicing_air.py)
 """
@@ -15,7 +25,7 @@ import colour
 import numpy as np
 
 import weather_mi as wm
-from weather_mi.display.aerial import slicer_frame_with_eye_air, with_eye_air
+from weather_mi.display.aerial import with_eye_air
 from weather_mi.reference.render import render_reference
 from weather_mi.scene.framing import scene_spec
 from weather_mi.slicing import MODES, SliceRenderer
@@ -27,35 +37,79 @@ def ball():
     return wm.OpticalVolume.from_arrays(beta, 1.0, wm.phase.henyey_greenstein(0.85), ((-5e3, -5e3, 1e3), (5e3, 5e3, 11e3)))
 
 
-def cloud_colour(img, mask):
-    """(mean linear sRGB, xy, CIELAB at Y = 0.5) over ``mask``'s pixels."""
-    rgb = img.radiance.reshape(-1, 3)[mask.ravel()].mean(axis=0)
+def with_standard_air(vol, atm):
+    """``vol`` with the air of the box (``optics.air.inside.box_air``) from the US 1976 density on its levels."""
+    from weather_mi.io.standard_atmosphere import standard_density
+    from weather_mi.optics.air.inside import box_air
+    nz = vol.shape[0]
+    z = np.linspace(vol.bbox[0][2], vol.bbox[1][2], 2 * nz + 1)[1::2]  # cell centres
+    rho = np.broadcast_to(standard_density(z)[:, None, None], vol.shape)
+    return dataclasses.replace(vol, air=box_air(atm, rho, z))
+
+
+def view(vol, size: int, elevation: float = 4.0):
+    return scene_spec(vol, (size, size), camera="ground", camera_distance_km=30.0, camera_height=2000.0, fov=40.0,
+                      sun_elevation=elevation, sun_azimuth=0.0, camera_azimuth=180.0, sky="sunsky", atmosphere="clear")
+
+
+def lab(rgb):
+    """CIELAB (D65) of linear sRGB ``rgb`` at equal lightness (Y = 0.5)."""
     xyz = colour.RGB_to_XYZ(rgb, colour.RGB_COLOURSPACES["sRGB"], apply_cctf_decoding=False)
-    xyz = xyz / xyz[1] * 0.5
-    return rgb, colour.XYZ_to_xy(xyz), colour.XYZ_to_Lab(xyz, np.array([0.3127, 0.3290]))
+    return colour.XYZ_to_Lab(xyz / xyz[1] * 0.5, np.array([0.3127, 0.3290]))
 
 
-def main(size: int = 32, spp: int = 32) -> None:
+def measure(size: int = 32, spp: int = 32, elevation: float = 4.0) -> dict:
+    """The comparisons of the module docstring, as a dict (``tests/test_slicing_air.py`` reads it)."""
     vol = ball()
-    spec = scene_spec(vol, (size, size), camera="ground", camera_distance_km=30.0, camera_height=2000.0, fov=40.0,
-                      sun_elevation=4.0, sun_azimuth=0.0, camera_azimuth=180.0, sky="sunsky", atmosphere="clear")
+    spec = view(vol, size, elevation)
+    aired = with_standard_air(vol, spec.atmosphere)
     t = time.time()
-    ref = with_eye_air(render_reference(spec, vol, spp=spp, progress=False), spec, vol)
+    ref = with_eye_air(render_reference(spec, aired, spp=spp, progress=False), spec, vol)
+    ref_no_box = with_eye_air(render_reference(spec, vol, spp=spp, progress=False), spec, vol)
     t_ref = time.time() - t
     r = SliceRenderer(vol, MODES["per-species/multiple"], 128)
     t = time.time()
-    sliced = slicer_frame_with_eye_air(r, r.frame(spec), spec)
+    sliced = r.frame(spec)
     t_slicer = time.time() - t
+    before = SliceRenderer(vol, MODES["per-species/multiple"], 128, eye_air=False)  # the sun's colour by height
+    outside = with_eye_air(dataclasses.replace(before.frame(spec), transmittance=before.transmittance), spec, vol)
     white = r.frame(dataclasses.replace(spec, atmosphere=None))
+    clear = (ref.transmittance > 0.99) & (ref_no_box.radiance.sum(axis=-1) > 0)
+    hit = _crosses_box(spec, vol)
+    clear &= hit
     mask = ref.transmittance < 0.05
-    print(f"cloud pixels {int(mask.sum())}, path tracer {t_ref:.1f} s, slicer {t_slicer:.2f} s")
-    labs = {}
-    for name, img in (("path tracer", ref), ("slicer", sliced), ("slicer, no air", white)):
-        rgb, xy, labs[name] = cloud_colour(img, mask)
-        print(f"{name:15s} rgb {np.round(rgb, 4)} xy {np.round(xy, 4)} Lab {np.round(labs[name], 2)}")
-    for name in ("slicer", "slicer, no air"):
-        de = float(colour.delta_E(labs[name], labs["path tracer"], method="CIE 2000"))
-        print(f"{name}: CIEDE2000 {de:.2f} from the path tracer")
+    out = {"cloud_pixels": int(mask.sum()), "clear_box_pixels": int(clear.sum()), "t_ref_s": t_ref,
+           "t_slicer_s": t_slicer}
+    mean = lambda img, m: img.radiance.reshape(-1, 3)[m.ravel()].mean(axis=0).astype(np.float64)  # noqa: E731
+    out["clear_ref"], out["clear_ref_no_box"] = mean(ref, clear), mean(ref_no_box, clear)
+    out["clear_slicer"], out["clear_outside_only"] = mean(sliced, clear), mean(outside, clear)
+    truth = lab(mean(ref, mask))
+    for name, img in (("slicer", sliced), ("outside_only", outside), ("white", white)):
+        out[f"de_{name}"] = float(colour.delta_E(lab(mean(img, mask)), truth, method="CIE 2000"))
+    return out
+
+
+def _crosses_box(spec, vol):
+    from weather_mi.display.aerial import _box_interval
+    from weather_mi.slicing.geometry import camera_rays
+    o, d = (a.reshape(-1, 3).astype(np.float64) for a in camera_rays(spec))
+    lo, hi = (np.asarray(p, np.float64) for p in vol.bbox)
+    t_in, t_out, hit = _box_interval(o, d, lo, hi)
+    return (hit & (t_out - t_in > 2000.0)).reshape(spec.height, spec.width)
+
+
+def main(size: int = 32, spp: int = 32) -> None:
+    m = measure(size, spp)
+    print(f"cloud pixels {m['cloud_pixels']}, clear pixels across the box {m['clear_box_pixels']}, "
+          f"path tracer {m['t_ref_s']:.1f} s, slicer {m['t_slicer_s']:.2f} s")
+    air_ref = m["clear_ref"] - m["clear_ref_no_box"]
+    print(f"clear pixels, path tracer (R, G, B): {np.round(m['clear_ref'], 5)}; its box air's light {np.round(air_ref, 5)}")
+    for name in ("slicer", "outside_only"):
+        v = m[f"clear_{name}"]
+        print(f"  {name:13s} / path tracer: {np.round(v / m['clear_ref'], 3)}; box air's light / path tracer's: "
+              f"{np.round((v - m['clear_outside_only']) / air_ref, 3)}")
+    for name in ("slicer", "outside_only", "white"):
+        print(f"cloud colour, {name}: CIEDE2000 {m['de_' + name]:.2f} from the path tracer")
 
 
 if __name__ == "__main__":

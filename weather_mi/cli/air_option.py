@@ -58,6 +58,30 @@ def in_box(vol, spec):
     return scene_air(vol, spec.atmosphere)
 
 
+VIEW_DEFAULT = "none"  # ``view --atmosphere``'s default (benchmarks/viewer.py decides it: docs in the report)
+
+
+def add_view_options(p) -> None:
+    """``view``'s ``--atmosphere``, ``--aod``, ``--ozone``: the starting view's air (a control of the page
+    switches it), for the slicer's frames and the reference the page renders."""
+    p.add_argument("--atmosphere", default=VIEW_DEFAULT, choices=("none", "clear"),
+                   help="clear: a clear 1-D atmosphere on the sun's path (its colour by height) and along the eye rays "
+                        f"inside the model's box and out, in the slicer and in the reference; default {VIEW_DEFAULT}")
+    p.add_argument("--aod", type=float, default=0.1, help="aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
+    p.add_argument("--ozone", type=float, default=0.3, help="ozone column in atm-cm, in [0, 0.6] (default 0.3)")
+
+
+def view_air(args) -> dict:
+    """The ``ViewState`` fields of ``view``'s air options, checked (a ValueError names --aod or --ozone)."""
+    from ..optics.air.atmosphere import AOD_RANGE, OZONE_RANGE_ATM_CM, Atmosphere
+    try:
+        Atmosphere(aod_550=args.aod, ozone_atm_cm=args.ozone)
+    except ValueError as exc:
+        raise ValueError(f"--aod must be in {list(AOD_RANGE)} and --ozone in {list(OZONE_RANGE_ATM_CM)} atm-cm: "
+                         f"{exc}") from None
+    return {"atmosphere": args.atmosphere, "aod": float(args.aod), "ozone": float(args.ozone)}
+
+
 def on_eye_rays(img, spec, vol, args):
     """``img`` seen through the air outside the box (``display.aerial.with_eye_air``), with the air's sky for
     ``--sky air``; ``img`` itself without an atmosphere, and in the spectral mode (``--spectral``: there the air

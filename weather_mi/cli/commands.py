@@ -227,6 +227,7 @@ def _add_view_parser(sub) -> None:
                        "from the network, without authentication)")
     viewp.add_argument("--no-browser", action="store_true", help="do not open a browser")
     viewp.add_argument("--size", default="320x240", help="WIDTHxHEIGHT of the rendered view (shown at twice that)")
+    air_option.add_view_options(viewp)
 
 
 def _add_validate_parser(sub) -> None:
@@ -247,10 +248,11 @@ def view_command(args) -> None:
     from ..viewer.recipe import VolumeRecipe
     from ..viewer.serve import serve
     check_time(args.file, args.demo, args.time)
+    air = air_option.view_air(args)
     recipe = VolumeRecipe(path=args.file, demo=args.demo, preset=args.preset, phase=args.phase, sizes=args.sizes,
                           periodic=periodic_value(args))
     serve(recipe, host=args.host, port=args.port, open_browser=not args.no_browser, time_option=args.time,
-          size=parse_size(args.size))
+          size=parse_size(args.size), air=air)
 
 
 def validate_command(args) -> None:

@@ -1,6 +1,7 @@
 """The air outside the model's box along the eye rays (aerial perspective), put onto a reference image.
 
-Inside the box the air is part of the path tracer's medium (``optics.air.inside``); outside it the 1-D
+The slicer puts the same air on its frames itself, in its kernels (``slicing.eye_air``). Inside the box the
+air is part of the path tracer's medium (``optics.air.inside``); outside it the 1-D
 atmosphere of ``spec.atmosphere`` is horizontally homogeneous, and each pixel's ray (its centre,
 ``slicing.geometry.film_rays``) is split where it meets the box, the flat ground and the top of the air
 (``optics.air.eye_path``; heights above sea level, the Earth's centre under the box's centre):
@@ -39,10 +40,13 @@ def _box_interval(o, d, lo, hi):
     return t_in, t_out, t_out > t_in
 
 
-def eye_air(spec, vol, sky_air: bool, table=None):
+def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
     """Per pixel: (T_A, E S_A, E S_B (H, W, 3) of the module docstring, whether the ray ends on the sky
-    model's sky, whether it meets the box (H, W))."""
-    from ..optics.air.eye_path import segment_air, top_distance, wide_sun_table
+    model's sky, whether it meets the box (H, W)). ``table``: the sun's (``eye_path.wide_sun_table``);
+    ``samples``: points per segment (default ``eye_path.SAMPLES``; 33 keep S within about 1%, at an eighth of
+    the cost: a viewer's reference)."""
+    from ..optics.air.eye_path import SAMPLES, segment_air, top_distance, wide_sun_table
+    samples = SAMPLES if samples is None else int(samples)
     from ..slicing.geometry import camera_rays
     atm, sun = spec.atmosphere, spec.sun
     table = wide_sun_table(atm, sun.mu0) if table is None else table
@@ -70,11 +74,11 @@ def eye_air(spec, vol, sky_air: bool, table=None):
     for i in range(0, n, CHUNK):
         sl = slice(i, i + CHUNK)
         t_a[sl], s = segment_air(atm, sun.to_sun, o[sl], d[sl], np.zeros(a_end[sl].shape), a_end[sl], table,
-                                 shadow=shadow)
+                                 shadow=shadow, samples=samples)
         s_a[sl] = s * e
         if sky_air:
             b0, b1 = np.where(hit[sl], t_out[sl], 0.0), np.where(hit[sl], t_end[sl], 0.0)  # B: none where no box
-            _, s = segment_air(atm, sun.to_sun, o[sl], d[sl], b0, b1, table, shadow=shadow)
+            _, s = segment_air(atm, sun.to_sun, o[sl], d[sl], b0, b1, table, shadow=shadow, samples=samples)
             s_b[sl] = s * e
     shape = (spec.height, spec.width)
     sky_end = ~np.isfinite(t_ground) & (not sky_air)  # ends on the sky model's sky
@@ -82,14 +86,15 @@ def eye_air(spec, vol, sky_air: bool, table=None):
             sky_end.reshape(shape), hit.reshape(shape))
 
 
-def with_eye_air(img, spec, vol, sky_air: bool = False):
+def with_eye_air(img, spec, vol, sky_air: bool = False, air=None):
     """``img`` (a reference ``Image`` of ``spec`` and ``vol``) seen through the air outside the box (module
     docstring): radiance E S_A + T_A (L + T_box E S_B) (weighted by the box's opacity where the ray ends on a
     sky model's sky), the standard error scaled alike (the added terms are exact).
-    Needs ``spec.atmosphere`` (a ValueError otherwise)."""
+    Needs ``spec.atmosphere`` (a ValueError otherwise). ``air``: ``eye_air(spec, vol, sky_air)`` if already
+    computed (a progressive render's passes share it)."""
     if spec.atmosphere is None:
         raise ValueError("the air along the eye rays needs an atmosphere (--atmosphere clear)")
-    t_a, s_a, s_b, sky_end, hit = eye_air(spec, vol, sky_air)
+    t_a, s_a, s_b, sky_end, hit = eye_air(spec, vol, sky_air) if air is None else air
     t_box = np.ones(hit.shape) if img.transmittance is None else np.asarray(img.transmittance, np.float64)
     rad = np.asarray(img.radiance, np.float64)
     w = np.where(sky_end, np.where(hit, 1.0 - np.clip(t_box, 0.0, 1.0), 0.0), 1.0)[..., None]
@@ -99,13 +104,4 @@ def with_eye_air(img, spec, vol, sky_air: bool = False):
     return replace(img, radiance=out.astype(np.float32), stderr=se, metadata=meta)
 
 
-def slicer_frame_with_eye_air(renderer, img, spec):
-    """The slicer's frame ``img`` of ``spec`` (``renderer.frame``'s latest: its eye-ray transmittance is
-    ``renderer.transmittance``) seen through the air outside the box as ``with_eye_air`` (the sky model's
-    sky); ``img`` itself without an atmosphere."""
-    if spec.atmosphere is None:
-        return img
-    return with_eye_air(replace(img, transmittance=renderer.transmittance), spec, renderer.vol)
-
-
-__all__ = ["eye_air", "with_eye_air", "slicer_frame_with_eye_air"]
+__all__ = ["eye_air", "with_eye_air"]

@@ -64,12 +64,10 @@ def _slice_frame(spec, vol, variant, slices, mode):
 
 
 def slicer_image(spec, vol, slices: int, mode: str) -> Image:
-    """One slicer frame (``MODES[mode]``), with the air along the eye rays outside the box where ``spec``
-    has an atmosphere (``aerial.slicer_frame_with_eye_air``)."""
+    """One slicer frame (``MODES[mode]``): with an atmosphere in ``spec`` the slicer puts the air along the eye
+    rays, inside the box and out, on it itself (``slicing.eye_air``)."""
     from ..slicing import MODES, SliceRenderer
-    from .aerial import slicer_frame_with_eye_air
-    renderer = SliceRenderer(vol, MODES[mode], slices)
-    return slicer_frame_with_eye_air(renderer, renderer.frame(spec), spec)
+    return SliceRenderer(vol, MODES[mode], slices).frame(spec)
 
 
 def _slicer_frames(specs, volumes, client, slices: int, mode: str, bar):

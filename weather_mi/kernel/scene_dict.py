@@ -311,10 +311,16 @@ def sun_below_air(spec: SceneSpec) -> Sun:
     """The scene's sun as it reaches the ground (sea level without one) through ``spec.atmosphere``: its
     irradiance times the direct sun's colour there (``optics.air.sun_rgb``). The sky model's radiance is
     scaled to this sun, keeping the model's sky-to-sun ratio at the ground."""
-    from ..optics.air import sun_rgb
     h = 0.0 if spec.ground is None else max(float(spec.ground.height), 0.0)
-    rgb = sun_rgb(spec.atmosphere, h, spec.sun.mu0)
+    rgb = np.asarray(_sun_rgb_at(spec.atmosphere, h, float(spec.sun.mu0)))
     return replace(spec.sun, irradiance=tuple(float(v) for v in np.asarray(spec.sun.irradiance) * rgb))
+
+
+@functools.lru_cache(maxsize=32)
+def _sun_rgb_at(atm, h_m: float, mu0: float) -> tuple:
+    """``optics.air.sun_rgb`` at one height and sun, kept (a viewer's sun dragged in azimuth asks it every frame)."""
+    from ..optics.air import sun_rgb
+    return tuple(sun_rgb(atm, h_m, mu0))
 
 
 def _air_extent(bbox) -> tuple[float, float]:

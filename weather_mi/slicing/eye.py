@@ -359,11 +359,28 @@ class _InScattering:
         return src + sca * amb
 
 
+def _background(mi, dr, model: LightModel, rays, ground, sun_air):
+    """What each ray sees behind the medium: the lit ground where it meets it (``composite``'s ``ground``),
+    else the sky (``rays.background``)."""
+    if ground is None:
+        return rays.background
+    sun_factor, occ = model.ground_light(rays.ground)
+    if getattr(rays, "ground_sun", None) is not None:  # a terrain: its albedo and slope per ray
+        sun_factor, occ = sun_factor * rays.ground_sun, occ * rays.ground_sky
+    if sun_air is not None:
+        sun_factor = sun_factor * sun_colour_at(mi, sun_air, rays.ground.z)
+    lit = ground[0] * sun_factor + ground[1] * occ
+    return dr.select(rays.hit_ground, lit, rays.background)
+
+
 def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_colour, diffuse_colour, model: LightModel,
               ambient, ground, differentiable: bool = False, offset=None, sca_ratio=None, ambient_below=None,
-              tile=None, tex_ext=None, sun_air=None):
+              tile=None, tex_ext=None, sun_air=None, depth: bool = False):
     """Radiance (mi.Color3f) and transmittance of every pixel ray through the slices of ``f`` (the sun's
-    light volume's frame: the slice planes of the frame's geometry).
+    light volume's frame: the slice planes of the frame's geometry); with ``depth``, also the background
+    (mi.Color3f: the radiance behind the medium, seen through T) and the ray's cloud depth (mi.Float, m along
+    the ray: the mean distance of its samples weighted by the opacity each adds, T_before (1 - exp(-beta de));
+    ``eye_air.seen_through_air``).
 
     phase_colour   : per group, P_g(Theta) colour_g E_sun along each ray (mi.Color3f, one per pixel)
     diffuse_colour : per group, colour_g E_sun / (4 pi) (mi.Color3f)
@@ -382,6 +399,7 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
                      light read ``tex_eye`` (not when ``differentiable``)
     sun_air        : None, or a ``sun_air.SunAir``: the sunlight (and the ground's) times the sun's colour
                      after the air above the point (``spec.atmosphere``)
+    depth          : return (radiance, transmittance, background, cloud depth) (module docstring above)
     """
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
@@ -415,7 +433,7 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
                                ambient_below, tile, sun_air)
     seen, in_scattered = scattering.seen, scattering
 
-    def body(i, part, T, C, active):
+    def body(i, part, T, C, active, *dist):
         kc = k_start + k_step * mi.Float(i) + j
         # slab [k + j - 1/2, k + j + 1/2] clipped to the ray's span in the box, whole (part 0) or its
         # sub-segment part - 1 of M in the ray's order; sample at the middle
@@ -447,26 +465,21 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
         alpha = dr.select(split, 0.0, 1.0 - slab.e2)    # 1 - exp(-ext de (b - a))
         w = dr.select(ext > 0, T * alpha / dr.maximum(ext, 1e-30), 0.0)
         C = C + w * add
+        if dist:  # the opacity-weighted distance of the sample along the ray (its depth)
+            dist = (dist[0] + T * alpha * ((d_first - kf * spacing - os_) / sd),)
         T = T * (1.0 - alpha)
         done = ~split & (~sub | (part == M))        # the slab is done: on to the next
         i = dr.select(done, i + 1, i)
         part = dr.select(done, 0, part + 1)
-        return i, part, T, C, (i < count) & (T > OPAQUE_T)
+        return (i, part, T, C, (i < count) & (T > OPAQUE_T)) + dist
 
     n = rays.n
     state = (dr.zeros(mi.UInt32, n), dr.zeros(mi.UInt32, n), dr.full(mi.Float, 1.0, n), dr.zeros(mi.Color3f, n),
-             count > 0)
+             count > 0) + ((dr.zeros(mi.Float, n),) if depth else ())
     kw = dict(max_iterations=(M + 1) * (n_slices + 2), mode="evaluated") if differentiable else {}
-    _, _, T, C, _ = dr.while_loop(state, lambda *st: st[-1], body, **kw)
+    _, _, T, C, _, *dist = dr.while_loop(state, lambda *st: st[4], body, **kw)
 
-    if ground is not None:
-        sun_factor, occ = model.ground_light(rays.ground)
-        if getattr(rays, "ground_sun", None) is not None:  # a terrain: its albedo and slope per ray
-            sun_factor, occ = sun_factor * rays.ground_sun, occ * rays.ground_sky
-        if sun_air is not None:
-            sun_factor = sun_factor * sun_colour_at(mi, sun_air, rays.ground.z)
-        lit = ground[0] * sun_factor + ground[1] * occ
-        bg = dr.select(rays.hit_ground, lit, rays.background)
-    else:
-        bg = rays.background
+    bg = _background(mi, dr, model, rays, ground, sun_air)
+    if depth:
+        return C + T * bg, T, bg, dist[0] / dr.maximum(1.0 - T, 1e-30)
     return C + T * bg, T

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .light import LookupFrame, SweepPlan
+from .eye_air import EyeAir
 from .sun_air import SunAir
 
 
@@ -92,6 +93,7 @@ class EyeInputs:
     sca_ratio: object      # None, or beta_sca / beta where the eye's texture holds beta alone (opaque Float)
     below: object          # None, or the lit ground's radiance x sky_gain lighting the medium from below, mi.Color3f
     sun_air: SunAir | None = None  # None, or the sun's colour per height after the air (spec.atmosphere, sun_air.py)
+    eye_air: EyeAir | None = None  # None, or the air along the eye rays, in and outside the box (eye_air.py)
 
 
 @dataclass

@@ -2,6 +2,7 @@
 the glue between the modules that do the work:
 
 geometry.py  the half-angle axis and the slice planes (visited from the light's side)
+grids.py     the medium's per-species extinction grids and their box
 light.py     ``LightVolume``: the light pass and the one light lookup
 blur.py      the translucency blur of the light pass (separable taps of an exact variance)
 eye.py       the eye pass: composite along camera rays (Eq. 8/9), the ground
@@ -31,9 +32,11 @@ from ..scene.spec import SceneSpec
 from ..kernel.sky import sky_irradiance_horizontal
 from .blur import variance_per_metre
 from .eye import LightModel, composite
+from .eye_air import eye_air_input, seen_through_air
 from .recording import freeze_kernels, raise_recording_error, without_gc
 from .frame_inputs import EyeInputs, EyeRays, FrameInputs, KernelConstants, MultipleLight, TextureBuild
 from .geometry import slice_geometry, slicing_box
+from .grids import set_grids
 from .jitter import jitter_rotation, slab_offsets
 from .light import LightVolume, auto_light_res
 from .modes import SliceMode, SliceParams
@@ -78,6 +81,9 @@ class SliceRenderer:
     forward_peak_deg : float, optional
         Phase-function peaks within this angle (degrees) count as unscattered light (delta-M); None:
         3 deg for the "multiple" model, 0 for the paper's modes.
+    eye_air : bool, default True
+        With ``spec.atmosphere``: the air along the eye rays, inside the box and out (``eye_air.py``); False:
+        the sun's colour by height alone (the air on the sun's path).
 
     Raises
     ------
@@ -89,7 +95,7 @@ class SliceRenderer:
     def __init__(self, vol: OpticalVolume, mode: SliceMode = SliceMode(), slices: int = 128,
                  light_res: int | None = None, detail_field: np.ndarray | None = None, uniform_phase=None,
                  differentiable: bool = False, detail_noise: np.ndarray | None = None,
-                 forward_peak_deg: float | None = None):
+                 forward_peak_deg: float | None = None, eye_air: bool = True):
         from ..kernel.variant import ensure_registered
         ensure_registered()
         import mitsuba as mi
@@ -112,7 +118,7 @@ class SliceRenderer:
         self.slices, self.light_res = int(slices), int(light_res)
         self.differentiable = differentiable
         self.n_species = len(vol.species)
-        self._set_grids(vol, mode, detail_field, detail_noise)
+        set_grids(self, vol, mode, detail_field, detail_noise)  # (grids.py)
         self.voxel_m = float(np.mean(vol.spacing))
         tables = list(vol.require_phase_tables())
         if mode.phase == "uniform":
@@ -152,6 +158,7 @@ class SliceRenderer:
         self.g_scattering = float(np.sum(sca * gs) / np.sum(sca)) if np.sum(sca) > 0 else 0.85
         self._texture_key = None  # the per-species inputs of the textures last built (plain numbers)
         self._last = {}  # per-frame numpy work kept from the last frame (``_reuse``)
+        self._air_cache = {} if eye_air else None  # the air's tables of the last atmosphere and sun (eye_air.py)
         self.timing = {}
         self._t_light = None
         # frames whose inputs keep their structure launch the recorded kernels without tracing Python
@@ -160,39 +167,6 @@ class SliceRenderer:
         self._frozen_kernels = freeze_kernels(weakref.ref(self))
         self._recording_error = None  # what the kernels raised while being recorded (see recording.freeze_kernels)
         self._constants = KernelConstants(self)  # all of the renderer that its frame's kernels see
-
-    def _set_grids(self, vol, mode, detail_field, detail_noise):
-        """The per-species extinction grids (detail applied), their box in texture coordinates and the
-        detail noise (periodic: levels padded, slicing/periodic.py)."""
-        mi = self.mi
-        self.shape = tuple(vol.beta_total.shape)
-        beta_s = np.moveaxis(vol.beta_ext, 0, -1).astype(np.float32)
-        if detail_field is not None and mode.detail:
-            detail = np.asarray(detail_field, dtype=np.float32)
-            if detail.shape != self.shape:
-                raise ValueError(f"detail_field must have the volume's shape {self.shape}, got {detail.shape}")
-            beta_s = beta_s * detail[..., None]
-        self.detail_noise = None  # unit-variance noise n: species s's extinction x exp(a_s n - a_s^2 / 2)
-        if detail_noise is not None and mode.detail:
-            n = np.asarray(detail_noise, dtype=np.float32)
-            if n.shape != self.shape:
-                raise ValueError(f"detail_noise must have the volume's shape {self.shape}, got {n.shape}")
-            self.detail_noise = mi.Float(np.ascontiguousarray(n).ravel())
-        self.beta_sum_s = beta_s.reshape(-1, self.n_species).sum(axis=0, dtype=np.float64)  # 1/m, over all voxels
-        self.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
-        if self.periodic is not None:  # the grids' levels padded (slicing/periodic.py)
-            beta_s, self.grid_box = self.periodic.pad(beta_s), self.periodic.grid_box
-            self.shape = tuple(beta_s.shape[:3])
-            if self.detail_noise is not None:
-                self.detail_noise = mi.Float(self.periodic.pad(np.asarray(detail_noise, np.float32)).ravel())
-        self.beta_s = [mi.Float(np.ascontiguousarray(beta_s[..., si]).ravel()) for si in range(self.n_species)]  # (z, y, x) each
-        # the grid as kernel vectors (lo corner, 1 / span), for the light carried through the medium (periodic:
-        # and the texture coordinates where it samples the medium)
-        self._grid_scalars = (mi.Point3f(*(kernel_scalar(mi, c) for c in self.grid_box[0])),
-                              mi.Vector3f(*(kernel_scalar(mi, 1.0 / (h - l)) for l, h in zip(*self.grid_box))))
-        if self.periodic is not None:
-            self._grid_scalars += self.periodic.carried_bounds(mi)
-        self.tile_box = None if self.periodic is None else self.periodic.tile  # "transport": the eye's own tile
 
     def _make_textures(self, mode: SliceMode):
         """The eye's texture (beta and beta_sca per group) and the light pass's source ((beta, beta_f), or
@@ -497,7 +471,9 @@ class SliceRenderer:
         return EyeInputs(EyeRays(**{k: getattr(rays, k) for k in names}), self._grid_scalars, phase_colour,
                          diffuse_colour, model, _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), ground,
                          kernel_scalar(mi, params.slab_jitter), kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
-                         sca_ratio, below, sun_air_input(mi, spec, self.grid_box))
+                         sca_ratio, below, self._reuse("sun air", (spec.atmosphere, float(spec.sun.mu0)),
+                                                       lambda: sun_air_input(mi, spec, self.grid_box)),
+                         None if self._air_cache is None else eye_air_input(mi, spec, self.vol.bbox, self._air_cache, e_sky))
 
     def _eye_pass(self, inputs: FrameInputs):
         import drjit as dr
@@ -510,10 +486,13 @@ class SliceRenderer:
         else:
             model = LightModel(self.light, log_forward=self.mode.light == "translucent")
         offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
-        return composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
-                         e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
-                         e.sca_ratio, e.below, self.tile_box, None if self.differentiable else inputs.tex_light,
-                         e.sun_air)
+        out = composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
+                        e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
+                        e.sca_ratio, e.below, self.tile_box, None if self.differentiable else inputs.tex_light,
+                        e.sun_air, depth=e.eye_air is not None)
+        if e.eye_air is None:
+            return out
+        return seen_through_air(mi, e.eye_air, e.rays, *out), out[1]  # the air in and outside the box (eye_air.py)
 
 
 FROZEN_FRAMES = True

@@ -6,8 +6,8 @@ tracer's) is E_sun C(h, mu0), C the direct sun's linear sRGB after the air above
 (``optics.air.sunlight.SunAirTable.by_height``: 1 in luminance above the air). The eye pass multiplies the
 sunlight it scatters (and the ground's) by C at the sample's height: a 1-D table over heights, an input of
 the frame (``SunAir``: a new sun uploads new values, nothing recompiles). Without an atmosphere it is None
-and the eye pass is unchanged. The air inside the box (the path tracer's medium there) is not in the slicer:
-C is the transmittance through all the air above the point.
+and the eye pass is unchanged. C is the transmittance through all the air above the point (the box's
+included); the air along the eye rays, inside the box and out, is ``eye_air.py``'s.
 """
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 TOP_ABOVE_BOX_M = 2000.0  # the table reaches this far above the box (as the path tracer's, kernel.scene_dict)
+COLUMN_SAMPLES = 128  # the slant columns' points per segment (``shell.slant_columns``: the colour within 1e-3)
 
 
 @dataclass
@@ -30,10 +31,14 @@ class SunAir:
 
 def sun_by_height(spec, z_top_m: float):
     """(heights (n,) m above sea level, the sun's RGB (n, 3)) of ``spec.atmosphere`` for its sun, heights
-    from sea level to ``TOP_ABOVE_BOX_M`` above ``z_top_m`` (the box's top)."""
-    from ..optics.air import sun_air_table
-    table = sun_air_table(spec.atmosphere, spec.sun.mu0, top_m=max(float(z_top_m), 0.0) + TOP_ABOVE_BOX_M)
-    return table.heights_m, table.by_height(spec.sun.mu0)
+    from sea level to ``TOP_ABOVE_BOX_M`` above ``z_top_m`` (the box's top): ``optics.air.sun_rgb`` at the
+    sun's zenith cosine on the heights of ``sun_air_table`` (the path tracer's table; computed at that one
+    cosine alone, its slant columns on ``COLUMN_SAMPLES`` points: 100 times less work than the table, for a sun
+    dragged in the viewer)."""
+    from ..optics.air import sun_rgb
+    from ..optics.air.sunlight import HEIGHT_SAMPLES
+    heights = np.linspace(0.0, max(float(z_top_m), 0.0) + TOP_ABOVE_BOX_M, HEIGHT_SAMPLES)
+    return heights, sun_rgb(spec.atmosphere, heights, np.full(heights.shape, float(spec.sun.mu0)), samples=COLUMN_SAMPLES)
 
 
 def sun_air_input(mi, spec, grid_box) -> SunAir | None:

@@ -47,8 +47,9 @@ def initial_time(storm, time_option) -> int:
 
 
 def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[int, int] = (320, 240),
-            warm: bool = True):
-    """The Storm (input read and checked, optics of the starting time) and the first ViewState. With
+            warm: bool = True, air: dict | None = None):
+    """The Storm (input read and checked, optics of the starting time) and the first ViewState (``air``: its
+    ``atmosphere``, ``aod``, ``ozone``; default none). With
     ``warm``, the slicer is warmed up for that view (kernels compiled, rays cached) before returning;
     ``serve`` warms it in the background instead, while the browser loads the page."""
     from .frames import Storm
@@ -57,7 +58,7 @@ def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[
     t0 = time.perf_counter()
     storm = Storm(recipe)
     state = ViewState(time=initial_time(storm, time_option), camera=ViewCamera(distance_km=default_distance_km(storm)),
-                      width=int(size[0]), height=int(size[1]))
+                      width=int(size[0]), height=int(size[1]), **(air or {}))
     if warm:
         storm.warm_up(state)
     progress(f"weather-mi view: {recipe.label}, {len(storm.times)} time(s), read in {time.perf_counter() - t0:.1f} s")
@@ -65,15 +66,16 @@ def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[
 
 
 def serve(recipe: VolumeRecipe, *, host: str = "127.0.0.1", port: int = 5006, open_browser: bool = True,
-          time_option=None, reference_kw: dict | None = None, size: tuple[int, int] = (320, 240)) -> None:
-    """Serve the viewer until Ctrl-C (blocking)."""
+          time_option=None, reference_kw: dict | None = None, size: tuple[int, int] = (320, 240),
+          air: dict | None = None) -> None:
+    """Serve the viewer until Ctrl-C (blocking); ``air``: the starting view's atmosphere (``prepare``)."""
     import panel as pn
     from .session import ViewerSession
     warning = host_warning(host)
     if warning:
         print(warning, file=sys.stderr)
     port = check_port(host, port)  # before the slow part: a taken port is said at once
-    storm, state = prepare(recipe, time_option, size=size, warm=False)
+    storm, state = prepare(recipe, time_option, size=size, warm=False, air=air)
     port = check_port(host, port)
     origins = [f"{h}:{port}" for h in ("127.0.0.1", "localhost")] + ([f"{host}:{port}"] if host not in LOCAL_HOSTS else [])
     server = pn.serve({"/": lambda: ViewerSession(storm, state, reference_kw).layout}, port=port, address=host,

@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
+from ..optics.air.atmosphere import Atmosphere
 from ..scene.spec import Camera, Ground, SceneSpec, Sky, Sun
 from ..io.sources import kind
 from ..slicing.modes import MODES, SliceMode, SliceParams
@@ -108,10 +109,16 @@ class ViewState:
     time: int = 0
     sky: str = "sunsky"
     ground_albedo: float = 0.15
+    atmosphere: str = "none"      # "clear": the 1-D atmosphere (optics.air) on the sun's and the eye's paths
+    aod: float = 0.1              # its aerosol optical depth at 550 nm
+    ozone: float = 0.3            # its ozone column, atm-cm
 
     def __post_init__(self):
         if self.mode not in MODES:
             raise ValueError(f"unknown slicer mode {self.mode!r}; expected one of {list(MODES)}")
+        if self.atmosphere not in ("none", "clear"):
+            raise ValueError(f"ViewState atmosphere must be 'none' or 'clear', got {self.atmosphere!r}")
+        self.air()  # range checks of --aod and --ozone now
         SliceParams(**self._param_kw())  # range checks now, before anything renders
 
     def updated(self, **kw) -> "ViewState":
@@ -134,6 +141,10 @@ class ViewState:
     def slice_params(self) -> SliceParams:
         return SliceParams(**self._param_kw())
 
+    def air(self) -> Atmosphere | None:
+        """The view's atmosphere (None for "none"); a ValueError names --aod or --ozone out of range."""
+        return Atmosphere(aod_550=self.aod, ozone_atm_cm=self.ozone) if self.atmosphere == "clear" else None
+
     def spec(self, frame, ground_m: float, width: int | None = None, height: int | None = None) -> SceneSpec:
         """The SceneSpec of this view (``width``/``height``: another resolution of the same view)."""
         w, h = width or self.width, height or self.height
@@ -141,7 +152,7 @@ class ViewState:
                          sun=Sun(self.sun_azimuth, self.sun_elevation, angular_diameter_deg=self.sun_diameter_deg),
                          sky=None if self.sky == "none" else Sky(self.sky),
                          ground=None if self.ground_albedo < 0 else Ground(albedo=self.ground_albedo, height=ground_m),
-                         width=w, height=h)
+                         width=w, height=h, atmosphere=self.air())
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -153,6 +164,18 @@ class ViewState:
         d["scale"] = tuple(tuple(x) for x in d.get("scale", ()))
         d["detail"] = tuple(tuple(x) for x in d.get("detail", ()))
         return cls(**d)
+
+
+def _reference_lines(state: ViewState) -> str:
+    """The snippet's reference render: with the atmosphere, its air inside the box (in the medium) and along the
+    eye rays outside it, as the viewer's reference (``reference_job.with_air``)."""
+    call = "wm.render_reference(spec, {}, spp=spp, target_rse=target_rse, max_seconds=max_seconds)"
+    if state.atmosphere == "none":
+        return f"    return {call.format('ref_vol')}\n"
+    return ("    from weather_mi.display.aerial import with_eye_air\n"
+            "    from weather_mi.optics.air.inside import with_box_air\n"
+            f"    image = {call.format('with_box_air(ref_vol, hyd, spec.atmosphere)')}  # the air in the box\n"
+            "    return with_eye_air(image, spec, ref_vol)  # and along the eye rays outside it\n")
 
 
 def python_snippet(state: ViewState, recipe, spec: SceneSpec, times: list[str] | None = None,
@@ -197,8 +220,7 @@ def ground_truth(spp=16, target_rse=0.02, max_seconds=600):
     """The path-traced reference of the same view: it sees the scalings, not the slicer's knobs."""
     ref_vol = wm.optical_volume(hyd, species={recipe.preset!r}, phase={recipe.phase!r}, sizes={recipe.sizes!r},
                                 scale={dict(state.scale) or None!r})
-    return wm.render_reference(spec, ref_vol, spp=spp, target_rse=target_rse, max_seconds=max_seconds)
-
+{_reference_lines(state)}
 
 if __name__ == "__main__":
     image.save_png("view.png", exposure={exposure!r})

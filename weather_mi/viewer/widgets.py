@@ -41,6 +41,7 @@ class ViewControls(param.Parameterized):
     species_colors = param.Boolean(False, label="Species colours (Fig. 2)")
     slices = param.Selector(objects=SLICE_CHOICES, default=128, label="Slices")
     camera_kind = param.Selector(objects=["ground", "orbit"], default="ground", label="Camera")
+    atmosphere = param.Selector(objects=["none", "clear"], default="none", label="Air")
     own_albedo = param.Boolean(False, label="One albedo for all species")
     own_forward = param.Boolean(False, label="One forward fraction")
     time = param.Integer(0, label="Time")
@@ -55,7 +56,7 @@ class ViewControls(param.Parameterized):
 
     def __init__(self, state: ViewState, species, n_times: int):
         super().__init__(mode=state.mode, species_colors=state.species_colors, slices=state.slices,
-                         camera_kind=state.camera.kind, own_albedo=state.albedo is not None,
+                         camera_kind=state.camera.kind, atmosphere=state.atmosphere, own_albedo=state.albedo is not None,
                          own_forward=state.forward_fraction is not None, time=state.time, fov=state.camera.fov,
                          sun_azimuth=state.sun_azimuth, sun_elevation=state.sun_elevation, albedo=state.albedo or 0.99,
                          cone=state.cone_angle_deg, forward=state.forward_fraction or 0.9, ambient=state.ambient,
@@ -74,6 +75,7 @@ class ViewControls(param.Parameterized):
         self.widgets = {"mode": w.Select.from_param(p.mode), "species_colors": w.Checkbox.from_param(p.species_colors),
                         "slices": w.DiscreteSlider.from_param(p.slices),
                         "camera_kind": w.RadioButtonGroup.from_param(p.camera_kind),
+                        "atmosphere": w.RadioButtonGroup.from_param(p.atmosphere, css_classes=["wm-atmosphere"]),
                         "own_albedo": w.Checkbox.from_param(p.own_albedo),
                         "own_forward": w.Checkbox.from_param(p.own_forward),
                         "time": w.Player.from_param(p.time, interval=800, loop_policy="loop", show_value=True,
@@ -123,6 +125,7 @@ class ViewControls(param.Parameterized):
             field, on, v = own[name]
             return state.updated(**{field: float(v) if on else None})
         simple = {"mode": ("mode", str), "species_colors": ("species_colors", bool), "slices": ("slices", int),
+                  "atmosphere": ("atmosphere", str),
                   "sun_azimuth": ("sun_azimuth", lambda v: float(v) % 360.0),
                   "sun_elevation": ("sun_elevation", float), "cone": ("cone_angle_deg", float),
                   "ambient": ("ambient", float), "exposure": ("exposure_ev", float),

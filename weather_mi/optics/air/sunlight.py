@@ -29,10 +29,12 @@ HEIGHT_SAMPLES = 129
 MU_MARGIN_DEG = 0.25
 
 
-def transmittance(atm: Atmosphere, wavelength_nm, h_m, mu) -> np.ndarray:
+def transmittance(atm: Atmosphere, wavelength_nm, h_m, mu, samples: int | None = None) -> np.ndarray:
     """Direct-beam transmittance from space to heights ``h_m`` (m above sea level) with the sun at cos(zenith)
-    ``mu`` (broadcast together: (...)) at wavelengths (n,): (..., n); 0 where the Earth is in the way."""
-    columns, blocked = slant_columns(atm.profiles, h_m, mu, TOP_M)
+    ``mu`` (broadcast together: (...)) at wavelengths (n,): (..., n); 0 where the Earth is in the way.
+    ``samples``: the slant columns' points per segment (``shell.slant_columns``; None: its default)."""
+    kw = {} if samples is None else {"samples": int(samples)}
+    columns, blocked = slant_columns(atm.profiles, h_m, mu, TOP_M, **kw)
     tau = atm.optical_depths(wavelength_nm, columns)
     return np.where(blocked[..., None], 0.0, np.exp(-tau))
 
@@ -41,16 +43,17 @@ def _toa_luminance(wl) -> float:
     return float(spectrum.xyz(spectrum.solar_toa_w_m2_nm(wl), wl)[1])
 
 
-def sun_xyz(atm: Atmosphere, h_m, mu, wavelength_nm=spectrum.WAVELENGTHS_NM) -> np.ndarray:
+def sun_xyz(atm: Atmosphere, h_m, mu, wavelength_nm=spectrum.WAVELENGTHS_NM, samples: int | None = None) -> np.ndarray:
     """CIE XYZ of the direct sun at (h_m, mu) (...), over the top-of-atmosphere sun's luminance: (..., 3)."""
     wl = np.asarray(wavelength_nm, np.float64)
-    t = transmittance(atm, wl, h_m, mu)
+    t = transmittance(atm, wl, h_m, mu, samples)
     return spectrum.xyz(spectrum.solar_toa_w_m2_nm(wl) * t, wl) / _toa_luminance(wl)
 
 
-def sun_rgb(atm: Atmosphere, h_m, mu, wavelength_nm=spectrum.WAVELENGTHS_NM) -> np.ndarray:
-    """Linear sRGB of the direct sun at (h_m, mu), the top-of-atmosphere sun's luminance 1 (module docstring)."""
-    return spectrum.linear_srgb(sun_xyz(atm, h_m, mu, wavelength_nm))
+def sun_rgb(atm: Atmosphere, h_m, mu, wavelength_nm=spectrum.WAVELENGTHS_NM, samples: int | None = None) -> np.ndarray:
+    """Linear sRGB of the direct sun at (h_m, mu), the top-of-atmosphere sun's luminance 1 (module docstring;
+    ``samples``: ``transmittance``'s)."""
+    return spectrum.linear_srgb(sun_xyz(atm, h_m, mu, wavelength_nm, samples))
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,143 @@
+"""The slicer against the path tracer at a low sun, with the atmosphere and without it, on the held-out storms
+(issue 38 part 3; no refit: the "multiple" model's shipped parameters, ``slicing/modes.py``).
+
+Views: ``validation/calibrate_slicer.py``'s held-out storms (the real WRF supercell, the WRF Tibetan Plateau
+file, BOMEX, RICO; from --data) front- and side-lit at the calibration size (64 x 48), the sun moved down to
+--elevations (default 4 and 8 deg). Each view twice:
+
+* ``--atmosphere clear`` (RGB mode): the path tracer with the air inside the box in its medium (molecules from
+  the storm's rho_air, ``optics.air.inside.with_box_air``) and along the eye rays outside it
+  (``display.aerial.with_eye_air``), the sun coloured per vertex by height; the slicer with the sun's colour
+  by height, the sky scaled and the eye rays' air inside the box and out (``slicing.eye_air``);
+* no atmosphere: both as before issue 38;
+* and, against the same references with the atmosphere, the slicer as it was before the box's air: the sun's
+  colour by height and the air outside the box put on its frame afterwards (``SliceRenderer(eye_air=False)``,
+  ``display.aerial.with_eye_air``).
+
+The slicer's frames are the refined viewer frames the calibration judges (2 x 2 points per pixel, slab
+jitter 1, 128 slices). CIEDE2000 and FLIP over the cloud pixels (``display.metrics.compare``), and the
+reference's own noise (its mean relative standard error over them). References are cached as EXR in --out.
+
+    python validation/slicer_low_sun.py [--data ../shared/data] [--size 64x48] [--spp 64] [--elevations 4,8]
+        [--scenes wrf-supercell,wrf-plateau,bomex,rico] [--lightings front,side] [--out DIR]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np  # noqa: E402
+
+import weather_mi as wm  # noqa: E402
+from weather_mi.display import metrics  # noqa: E402
+from weather_mi.display.aerial import with_eye_air  # noqa: E402
+from weather_mi.io import sources  # noqa: E402
+from weather_mi.io.image import Image  # noqa: E402
+from weather_mi.optics.air import Atmosphere  # noqa: E402
+from weather_mi.optics.air.inside import with_box_air  # noqa: E402
+from weather_mi.optics.volume import optical_volume  # noqa: E402
+from weather_mi.scene.spec import Sun  # noqa: E402
+from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
+from weather_mi.study.runs import CAMERA_AZIMUTH, DATA_SCENES, StudyConfig, eye_transmittance, view  # noqa: E402
+
+DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+def storm(name: str, data: Path, cfg: StudyConfig):
+    """(Hydrometeors, OpticalVolume) of a held-out storm, as the calibration loads it (isolated box)."""
+    hyd = sources.open_source(Path(data) / DATA_SCENES[name][0])
+    return hyd, optical_volume(hyd, species=cfg.species, phase_quality=cfg.phase_quality, periodic=False)
+
+
+def low_sun_view(vol, lighting: str, cfg: StudyConfig, elevation: float, atmosphere):
+    """``study.runs.view``'s front- or side-lit view with the sun at ``elevation`` degrees."""
+    spec = view(vol, lighting, cfg)
+    az = {"front": CAMERA_AZIMUTH, "side": CAMERA_AZIMUTH + 90.0}[lighting]
+    return replace(spec, sun=Sun(az, elevation), atmosphere=atmosphere)
+
+
+def reference(out: Path, tag: str, spec, vol, hyd, spp: int) -> Image:
+    """The path-traced reference (cached as EXR): with ``spec.atmosphere``, the box's air in the medium and
+    the eye rays' air outside it, as ``weather-mi render --atmosphere clear``."""
+    path = out / f"{tag}_{spec.width}x{spec.height}_{spp}spp_reference.exr"
+    if path.is_file():
+        return Image.load(path)
+    t = time.perf_counter()
+    if spec.atmosphere is None:
+        img = wm.render_reference(spec, vol, spp=spp, progress=False)
+    else:
+        img = wm.render_reference(spec, with_box_air(vol, hyd, spec.atmosphere), spp=spp, progress=False)
+        img = with_eye_air(img, spec, vol)
+    img.save(path)
+    print(f"  reference {tag}: {time.perf_counter() - t:.0f} s", flush=True)
+    return img
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", default=str(DEFAULT_DATA))
+    ap.add_argument("--size", default="64x48")
+    ap.add_argument("--spp", type=int, default=64)
+    ap.add_argument("--elevations", default="4,8")
+    ap.add_argument("--scenes", default="wrf-supercell,wrf-plateau,bomex,rico")
+    ap.add_argument("--lightings", default="front,side")
+    ap.add_argument("--out", default="validation-low-sun")
+    args = ap.parse_args(argv)
+    width, height = (int(v) for v in args.size.split("x"))
+    cfg = replace(StudyConfig(), width=width, height=height)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    params = SliceParams(slab_jitter=1.0)
+    rows = []
+    for name in args.scenes.split(","):
+        if not (Path(args.data) / DATA_SCENES[name][0]).is_file():
+            print(f"skipped {name}: {Path(args.data) / DATA_SCENES[name][0]} absent")
+            continue
+        hyd, vol = storm(name, Path(args.data), cfg)
+        slicer = SliceRenderer(vol, MODES["per-species/multiple"], slices=128)
+        before = SliceRenderer(vol, MODES["per-species/multiple"], slices=128, eye_air=False)
+        for lighting in args.lightings.split(","):
+            for elevation in (float(e) for e in args.elevations.split(",")):
+                row = {"scene": name, "lighting": lighting, "elevation": elevation}
+                for label, atm in (("clear", Atmosphere()), ("none", None)):
+                    spec = low_sun_view(vol, lighting, cfg, elevation, atm)
+                    tag = f"{name}_{lighting}_{elevation:g}deg_{label}"
+                    ref = reference(out, tag, spec, vol, hyd, args.spp)
+                    mask = metrics.cloud_mask(eye_transmittance(vol, spec, 128))
+                    img = slicer.frame(spec, params, supersample=2)
+                    m = metrics.compare(ref.radiance, img.radiance, mask=mask if mask.any() else "all")
+                    rse = (ref.metadata.get("noise") or {}).get("rse_mean", float("nan"))
+                    row[label] = (m["ciede2000"], m["flip"], rse)
+                    if atm is not None:  # the slicer before the box's air, against the same reference
+                        old = before.frame(spec, params, supersample=2)
+                        old = with_eye_air(replace(old, transmittance=before.transmittance), spec, vol)
+                        m = metrics.compare(ref.radiance, old.radiance, mask=mask if mask.any() else "all")
+                        row["before"] = (m["ciede2000"], m["flip"])
+                rows.append(row)
+                print(row, flush=True)
+    print(f"\n### The slicer against the path tracer at a low sun ({width} x {height}, references {args.spp} spp; "
+          "CIEDE2000 / FLIP over cloud pixels; reference noise: mean RSE)\n")
+    print("| storm | lighting | sun elevation | with the atmosphere | the same, slicer without the box's air | "
+          "without the atmosphere | reference RSE (with / without) |")
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        (dc, fc, rc), (db, fb), (dn, fn, rn) = r["clear"], r["before"], r["none"]
+        print(f"| {r['scene']} | {r['lighting']} | {r['elevation']:g} | {dc:.2f} / {fc:.3f} | {db:.2f} / {fb:.3f} | "
+              f"{dn:.2f} / {fn:.3f} | {rc:.3f} / {rn:.3f} |")
+    names = {"clear": "with the atmosphere", "before": "with it, the slicer without the box's air",
+             "none": "without the atmosphere"}
+    for label, text in names.items():
+        de = [r[label][0] for r in rows]
+        if de:
+            print(f"\n{text}: median CIEDE2000 {np.median(de):.2f}, mean {np.mean(de):.2f}, "
+                  f"median FLIP {np.median([r[label][1] for r in rows]):.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

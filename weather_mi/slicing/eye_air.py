@@ -1,0 +1,264 @@
+"""The air along the slicer's eye rays, inside the model's box and outside it (issue 38 part 3), in the frame's
+kernels: what ``optics.air.inside`` puts into the path tracer's medium and ``display.aerial`` onto its image.
+
+Each pixel's ray (``EyeRays``) is split where it meets the model's box (``vol.bbox``, its floor raised to the
+ground), the flat ground and the top of the air (``optics.air.eye_path.TOP_M``; heights above a spherical
+Earth whose centre lies under the box's centre, as ``display.aerial``'s):
+
+* A = [camera, box entry] (or [camera, ground or top] where the ray misses the box): the air outside, as
+  ``display.aerial.with_eye_air`` with the sky model's sky: L = E S_A + T_A L_box, weighted by the box's
+  cloud opacity 1 - T where the ray ends on the sky model's sky (which holds the air already);
+* the box [t_in, t_out], split at the eye ray's cloud depth t_c (the opacity-weighted mean distance of the
+  eye pass's samples, ``eye.composite(depth=True)``; for an opaque cloud its face): the air in front of the
+  cloud dims it and adds its own light, the air behind it is seen through the cloud:
+      L_box = E S_f + T_f (C + T (E S_b + (T_b - 1) L_bg))
+  with C + T L_bg the eye pass's radiance, T its cloud transmittance, L_bg the background (sky or ground).
+
+T_x, S_x: the segment's transmittance and single-scattered sunlight per unit irradiance above the air
+(``optics.air.eye_path``'s integrals: molecules with Rayleigh's phase function, aerosol with its albedo and
+Henyey-Greenstein's, ozone absorbing, the direct sun's colour C(h, mu) at each point), here trapezoidal on
+``SAMPLES_OUTSIDE`` points (dense near the camera: s = t0 + L x^2) and ``SAMPLES_BOX`` points (uniform) per
+box segment, from 1-D tables by height. The air in the box is the 1-D atmosphere's (US 1976 molecules; the
+path tracer takes the model's own rho_air, within a few per cent of it for the storms here). Not included:
+the cloud's shadow on the air, light scattered more than once by the air, and the air behind the box (as
+``display.aerial`` without ``--sky air``). Everything is an input of the frame (``EyeAir``): a new sun,
+camera or atmosphere uploads values and recompiles nothing.
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..optics.air.shell import EARTH_RADIUS_M
+from .eye import OPAQUE_T
+
+HEIGHT_STEP_M = 250.0   # the height table's step (m): the aerosol's 1.2 km scale height within 0.5%
+SAMPLES_OUTSIDE = 33    # points on the segment outside the box (x^2 spacing, as eye_path's 257: S within 1%)
+SAMPLES_BOX = 13        # points on each segment inside the box (uniform)
+# the sun's colour by (cos zenith, height) for every sun, once per atmosphere (``sun_table``): cosines from below
+# the horizon of the air's top to the zenith, heights to the air's top; slant columns on 64 points a segment
+SUN_MU_RANGE, SUN_MU_SAMPLES, SUN_HEIGHT_SAMPLES, SUN_COLUMN_SAMPLES = (-0.15, 1.0), 257, 121, 64
+
+
+@dataclass
+class EyeAir:
+    """The air's tables and the scene's values, as the frame's kernels read them (opaque Dr.Jit values; the
+    ints and bools are part of a recording's structure)."""
+
+    air: object         # mi.Float (n_h x 9): per height, extinction, molecules' and aerosol's scattering (R, G, B), 1/m
+    h_step: object      # mi.Float: 1 / the height table's step (1/m); its heights start at sea level
+    n_h: int            # rows of the height table
+    sun_rgb: object     # mi.Float (n_mu x n_s x 3): the direct sun's linear sRGB by (mu, height) (``wide_sun_table``)
+    sun_mu: object      # (mi.Float lowest mu, mi.Float 1 / mu step, mi.Float 1 / height step (1/m))
+    n_mu: int
+    n_s: int
+    to_sun: object      # mi.Vector3f: unit vector towards the sun
+    irradiance: object  # mi.Color3f: the sun's irradiance above the air, W/m^2
+    aerosol_g: object   # mi.Float: the aerosol's asymmetry
+    centre: object      # mi.Point3f: (box centre x, y, 0): the Earth's centre lies R below it
+    box: tuple          # (mi.Point3f lo, mi.Point3f hi): the model's box, its floor at the ground (m)
+    floor: object       # mi.Float: the ground's height (m)
+    ground: bool        # whether there is a ground
+    ambient: object     # mi.Color3f: the diffuse light on the air in the box, W/m^2/sr per unit phase (``diffuse_light``)
+
+
+@functools.lru_cache(maxsize=4)
+def sun_table(atm):
+    """The direct sun's linear sRGB over cos(zenith) in ``SUN_MU_RANGE`` and heights 0 to ``eye_path.TOP_M``, both
+    uniform (a ``SunAirTable``): the same for every sun, so that a sun dragged in elevation recomputes nothing
+    (bilinear lookups within 1.1% of ``optics.air.sun_rgb`` of the brightest channel, 5e-5 median, at the
+    heights and cosines of a low sun; below the horizon of the air's top the sun is 0)."""
+    from ..optics.air.eye_path import TOP_M
+    from ..optics.air.sunlight import SunAirTable, sun_rgb
+    mu = np.linspace(*SUN_MU_RANGE, SUN_MU_SAMPLES)
+    heights = np.linspace(0.0, TOP_M, SUN_HEIGHT_SAMPLES)
+    rgb = sun_rgb(atm, heights[None, :], mu[:, None], samples=SUN_COLUMN_SAMPLES)
+    return SunAirTable(heights_m=heights, mu=mu, rgb=rgb.astype(np.float32))
+
+
+def height_table(atm, wavelengths_nm=None) -> np.ndarray:
+    """(n_h, 9): extinction, molecules' scattering, aerosol's scattering (1/m) at R, G, B, heights 0 to
+    ``eye_path.TOP_M`` every ``HEIGHT_STEP_M``."""
+    from ..optics.air.eye_path import TOP_M
+    from ..optics.air.inside import CHANNEL_NM
+    from ..optics.rayleigh import cross_section_m2
+    wl = np.asarray(CHANNEL_NM if wavelengths_nm is None else wavelengths_nm, np.float64)
+    h = np.arange(0.0, TOP_M + HEIGHT_STEP_M / 2, HEIGHT_STEP_M)
+    molecules = atm.air_number_density_m3(h)[:, None] * cross_section_m2(wl * 1e-9)
+    aerosol = atm.aerosol_extinction_550_per_m(h)[:, None] * atm.aerosol_factor(wl)
+    return np.concatenate([atm.extinction_per_m(wl, h), molecules, aerosol * atm.aerosol_ssa], axis=1)
+
+
+def diffuse_light(spec, e_sky) -> np.ndarray:
+    """The sky's and the lit ground's light on the air in the box, as isotropic radiance over each hemisphere
+    scattered by an isotropic phase function (W/m^2/sr x 4 pi of the in-scattering, RGB): 1/2 E_sky / pi from
+    the sky above (``e_sky``: its irradiance on a horizontal plane, the sky scaled to the sun at the ground),
+    1/2 rho / pi (E_sun mu0 C(ground) + E_sky) from the ground below (the slicer's lit ground without clouds'
+    shadows): the light the path tracer's air in the box scatters besides the sun's."""
+    sky = np.asarray(e_sky, np.float64)
+    below = np.zeros(3)
+    if spec.ground is not None:
+        from ..kernel.scene_dict import sun_below_air
+        sun = np.asarray(sun_below_air(spec).irradiance, np.float64) * max(float(spec.sun.to_sun[2]), 0.0)
+        below = np.asarray(spec.ground.albedo, np.float64) / np.pi * (sun + sky)
+    return 0.5 * (sky / np.pi + below)
+
+
+def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0)) -> EyeAir | None:
+    """The frame's ``EyeAir`` for ``spec`` (None without ``spec.atmosphere``) and the model's box ``bbox``
+    ((lo, hi) corners, m); ``cache``: a dict kept between frames (the tables of the last atmosphere and sun);
+    ``e_sky``: the sky's irradiance on a horizontal plane (W/m^2, RGB; ``diffuse_light``)."""
+    atm = getattr(spec, "atmosphere", None)
+    if atm is None:
+        return None
+    import drjit as dr
+    op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
+    if cache.get("atm", (None,))[0] != atm:
+        table = sun_table(atm)
+        cache["atm"] = (atm, mi.Float(np.ascontiguousarray(height_table(atm), np.float32).ravel()), table,
+                        mi.Float(np.ascontiguousarray(table.rgb, np.float32).ravel()))
+    air, table, rgb = cache["atm"][1:]
+    (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in bbox)
+    floor = None if spec.ground is None else float(spec.ground.height)
+    lo = (x0, y0, max(z0, floor) if floor is not None else z0)
+    return EyeAir(air, op(1.0 / HEIGHT_STEP_M), dr.width(air) // 9, rgb,
+                  (op(table.mu[0]), op((table.mu.size - 1) / (table.mu[-1] - table.mu[0])),
+                   op((table.heights_m.size - 1) / (table.heights_m[-1] - table.heights_m[0]))),
+                  int(table.mu.size), int(table.heights_m.size),
+                  mi.Vector3f(*(op(v) for v in spec.sun.to_sun)), mi.Color3f(*(op(v) for v in spec.sun.irradiance)),
+                  op(atm.aerosol_g), mi.Point3f(op((x0 + x1) / 2), op((y0 + y1) / 2), op(0.0)),
+                  (mi.Point3f(*(op(v) for v in lo)), mi.Point3f(op(x1), op(y1), op(z1))),
+                  op(0.0 if floor is None else floor), floor is not None,
+                  mi.Color3f(*(op(v) for v in diffuse_light(spec, e_sky))))
+
+
+def _lerp_rows(mi, dr, table, f, n, width, offset):
+    """Linear interpolation between rows of ``table`` (rows of ``width`` floats) at fractional rows f, the
+    3 floats from ``offset`` in each row (a mi.Color3f)."""
+    f = dr.clip(f, 0.0, float(n - 1))
+    i = dr.minimum(mi.UInt32(f), n - 2)
+    t = f - mi.Float(i)
+    a = mi.Color3f(*(dr.gather(mi.Float, table, i * width + offset + c) for c in range(3)))
+    b = mi.Color3f(*(dr.gather(mi.Float, table, (i + 1) * width + offset + c) for c in range(3)))
+    return a * (1.0 - t) + b * t
+
+
+def _sun_colour(mi, dr, air: EyeAir, h, mu):
+    """The direct sun's colour at heights h and local zenith cosines mu (bilinear, clamped)."""
+    mu_lo, inv_dmu, inv_dh = air.sun_mu
+
+    def cell(f, n):
+        f = dr.clip(f, 0.0, float(n - 1))
+        i = dr.minimum(mi.UInt32(f), n - 2)
+        return i, f - mi.Float(i)
+    im, tm = cell((mu - mu_lo) * inv_dmu, air.n_mu)
+    ih, th = cell(h * inv_dh, air.n_s)
+
+    def at(row, col):
+        k = (row * air.n_s + col) * 3
+        return mi.Color3f(*(dr.gather(mi.Float, air.sun_rgb, k + c) for c in range(3)))
+    lo = at(im, ih) * (1.0 - th) + at(im, ih + 1) * th
+    hi = at(im + 1, ih) * (1.0 - th) + at(im + 1, ih + 1) * th
+    return lo * (1.0 - tm) + hi * tm
+
+
+def _phases(dr, air: EyeAir, cos_t):
+    """(Rayleigh's phase function with depolarisation, the aerosol's Henyey-Greenstein) at cos_t, 1/sr."""
+    from ..optics.rayleigh import DEPOLARISATION
+    gamma = DEPOLARISATION / (2.0 - DEPOLARISATION)
+    p_r = 3.0 / (16.0 * np.pi * (1.0 + 2.0 * gamma)) * ((1.0 + 3.0 * gamma) + (1.0 - gamma) * cos_t * cos_t)
+    g = air.aerosol_g
+    return p_r, (1.0 - g * g) / (4.0 * np.pi * dr.power(dr.maximum(1.0 + g * g - 2.0 * g * cos_t, 1e-6), 1.5))
+
+
+def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse: bool = False):
+    """(T, S) (mi.Color3f) of the rays o + s d over [t0, t1] (module docstring; S per unit irradiance above
+    the air, 1/sr; T = 1, S = 0 where t1 <= t0); o in the scene's frame. ``diffuse``: S also holds the
+    diffuse light on the air (``EyeAir.ambient`` / (4 pi) x its scattering, over the sun's irradiance)."""
+    import drjit as dr
+    length = dr.maximum(t1 - t0, 0.0)
+    p_r, p_a = _phases(dr, air, dr.dot(d, air.to_sun))
+    q0 = o - air.centre + mi.Vector3f(0.0, 0.0, EARTH_RADIUS_M)  # from the Earth's centre
+    ambient = air.ambient * (1.0 / (4.0 * np.pi)) / dr.maximum(air.irradiance, 1e-30) if diffuse else None
+
+    def point(i):
+        x = mi.Float(i) * (1.0 / (samples - 1))
+        s = t0 + length * (x * x if squared else x)
+        q = q0 + s * d
+        r = dr.norm(q)
+        h = dr.maximum(r - EARTH_RADIUS_M, 0.0)
+        fh = h * air.h_step
+        ext = _lerp_rows(mi, dr, air.air, fh, air.n_h, 9, 0)
+        sca_r, sca_a = _lerp_rows(mi, dr, air.air, fh, air.n_h, 9, 3), _lerp_rows(mi, dr, air.air, fh, air.n_h, 9, 6)
+        src = (sca_r * p_r + sca_a * p_a) * _sun_colour(mi, dr, air, h, dr.dot(q, air.to_sun) / r)
+        if diffuse:
+            src += (sca_r + sca_a) * ambient
+        return s, ext, src
+
+    n = dr.width(t0)
+    s, ext, src = point(mi.UInt32(0))
+    state = (dr.full(mi.UInt32, 1, n), s, ext, src, dr.zeros(mi.Color3f, n), dr.zeros(mi.Color3f, n), length > 0)
+
+    def body(i, s_prev, ext_prev, src_prev, tau, S, active):
+        s, ext, src = point(i)
+        ds = s - s_prev
+        tau_next = tau + 0.5 * (ext + ext_prev) * ds
+        S = S + 0.5 * (src_prev * dr.exp(-tau) + src * dr.exp(-tau_next)) * ds
+        return i + 1, s, ext, src, tau_next, S, active & (i + 1 < samples)
+
+    _, _, _, _, tau, S, _ = dr.while_loop(state, lambda *st: st[-1], body)
+    return dr.exp(-tau), S
+
+
+def box_interval(mi, air: EyeAir, o, d):
+    """(t_in, t_out) of the rays against the model's box (t >= 0; t_out <= t_in: a miss)."""
+    import drjit as dr
+    lo, hi = air.box
+    inv = dr.rcp(dr.select(dr.abs(d) < 1e-12, 1e-12, d))
+    t0, t1 = (lo - o) * inv, (hi - o) * inv
+    a, b = dr.minimum(t0, t1), dr.maximum(t0, t1)
+    return dr.maximum(dr.maximum(dr.maximum(a.x, a.y), a.z), 0.0), dr.minimum(dr.minimum(b.x, b.y), b.z)
+
+
+def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background, depth):
+    """The eye pass's ``radiance`` (C + T L_bg, mi.Color3f) of ``rays`` seen through the air (module
+    docstring), from its cloud ``transmittance`` T, ``background`` L_bg and cloud ``depth`` t_c (m)."""
+    import drjit as dr
+    o, d = rays.origin, rays.direction
+    t_in, t_out = box_interval(mi, air, o, d)
+    q = o - air.centre + mi.Vector3f(0.0, 0.0, EARTH_RADIUS_M)
+    b = dr.dot(q, d)
+    c = dr.squared_norm(q) - (EARTH_RADIUS_M + _top_m()) ** 2
+    t_top = dr.maximum(-b + dr.sqrt(dr.maximum(b * b - c, 0.0)), 0.0)
+    t_ground = dr.full(mi.Float, dr.inf, dr.width(t_in))
+    if air.ground:
+        t_ground = dr.select(d.z < 0, (air.floor - o.z) / dr.select(d.z < 0, d.z, -1.0), dr.inf)
+    t_end = dr.minimum(t_ground, t_top)
+    hit = (t_out > t_in) & (t_in < t_end)
+    t_out = dr.minimum(t_out, t_end)
+    # the box: split at the cloud's depth (the box's entry where the ray meets no cloud)
+    t_c = dr.clip(dr.select(transmittance < 1.0, depth, t_in), t_in, t_out)
+    t_f, s_f = segment(mi, air, o, d, dr.select(hit, t_in, 0.0), dr.select(hit, t_c, 0.0), SAMPLES_BOX, False, True)
+    behind = hit & (transmittance > OPAQUE_T)  # (behind an opaque cloud the air adds nothing seen: not integrated)
+    t_b, s_b = segment(mi, air, o, d, dr.select(behind, t_c, 0.0), dr.select(behind, t_out, 0.0), SAMPLES_BOX,
+                       False, True)
+    e = air.irradiance
+    boxed = e * s_f + t_f * (radiance + transmittance * (e * s_b + (t_b - 1.0) * background))
+    # outside: camera to the box (or to the ground or the top); none where the ray ends on the sky model's sky
+    # without crossing the box (w = 0: not integrated)
+    sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
+    w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
+    t_a, s_a = segment(mi, air, o, d, mi.Float(0.0) + 0.0 * t_in, dr.select(w > 0, dr.select(hit, t_in, t_end), 0.0),
+                       SAMPLES_OUTSIDE, True)
+    return boxed + w * (e * s_a + (t_a - 1.0) * boxed)
+
+
+def _top_m() -> float:
+    from ..optics.air.eye_path import TOP_M
+    return TOP_M
+
+
+__all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "SAMPLES_OUTSIDE", "box_interval", "eye_air_input",
+           "height_table", "seen_through_air", "segment"]
