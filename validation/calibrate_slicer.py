@@ -5,6 +5,7 @@ beside the paper's Table IV modes.
         [--size 64x48] [--spp 128] [--train-target-rse R] [--target-rse 0.02] [--max-seconds 600] [--iterations 50]
         [--learning-rate 0.15] [--slices 128] [--supersample 2] [--slab-jitter 1]
         [--no-fit] [--noise-floor] [--start defaults|fit-start] [--fit-slices N] [--fit-supersample N]
+        [--fit-only] [--fitted fitted.json]
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them);
    training views at --spp, or to --train-target-rse (the loss clips display colours at 1, so that noisy
@@ -28,7 +29,9 @@ beside the paper's Table IV modes.
 3. Print, per view, CIEDE2000 and FLIP over cloud pixels for the Table IV modes, the new model with its
    shipped defaults and with the parameters fitted here; write calibration.md and a side-by-side PNG
    (reference | per-species/translucent | new model) of each held-out view, at least 320 px wide.
-   --no-fit evaluates the shipped defaults only; --noise-floor adds, per held-out view, the error of a
+   --no-fit evaluates the shipped defaults only; --fit-only stops after the fit (fitted.json in the output
+   folder: the fit can run beside the held-out references' rendering); --fitted JSON evaluates the
+   parameters of an earlier fit's fitted.json as "fitted here" without fitting; --noise-floor adds, per held-out view, the error of a
    second, independent reference (seed 1) against the first: the part of every error that is the
    reference's own Monte Carlo noise.
 """
@@ -183,6 +186,9 @@ def main(argv=None) -> int:
     ap.add_argument("--start", default="fit-start", choices=("fit-start", "defaults"),
                     help="where the fit starts: calibrate.FIT_START (near single scattering), or the shipped "
                          "defaults with the parameters they leave at 0 (terms that are off) at FIT_START's values")
+    ap.add_argument("--fit-only", action="store_true", help="stop after the fit (writes fitted.json)")
+    ap.add_argument("--fitted", default=None,
+                    help="a fitted.json of an earlier fit: evaluate its parameters as \"fitted here\", no fit")
     ap.add_argument("--noise-floor", action="store_true",
                     help="also render a second reference (seed 1) of each held-out view and report its error")
     args = ap.parse_args(argv)
@@ -198,7 +204,11 @@ def main(argv=None) -> int:
                    max_seconds=args.max_seconds)
         return 0
     fitted, history, head = None, [], "Shipped defaults only (no fit)."
-    if not args.no_fit:
+    if args.fitted is not None:
+        fit = json.loads(Path(args.fitted).read_text())
+        fitted = SliceParams().updated(**fit)
+        head = f"Parameters of an earlier fit ({args.fitted}): `{json.dumps(fit)}`."
+    elif not args.no_fit:
         t = time.perf_counter()
         start = FIT_START if args.start == "fit-start" else SliceParams().updated(
             **{n: getattr(FIT_START, n) for n in MULTIPLE_PARAMS if getattr(SliceParams(), n) == 0})
@@ -211,6 +221,8 @@ def main(argv=None) -> int:
                 f"loss {history[0]:.4g} -> {history[-1]:.4g} in {len(history)} iterations.")
         (out / "fitted.json").write_text(json.dumps(fit, indent=1))
         print(head, flush=True)
+        if args.fit_only:
+            return 0
     held = load_views(HELD_OUT, out, cfg, args.data, args.spp, second_seed=args.noise_floor,
                       target_rse=args.target_rse, max_seconds=args.max_seconds, noise=noise)
     held, second = held if args.noise_floor else (held, None)
