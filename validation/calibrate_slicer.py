@@ -104,6 +104,20 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
     return (views, seconds) if second_seed else views
 
 
+def read_fitted(path: Path) -> dict:
+    """The parameters of a fitted.json (``calibrate.MULTIPLE_PARAMS`` names -> numbers); SystemExit naming
+    the file and what is wrong for anything else."""
+    try:
+        fit = json.loads(path.read_text())
+    except (OSError, ValueError) as e:
+        raise SystemExit(f"--fitted {path}: not a readable JSON file ({e})") from None
+    bad = sorted(set(fit) - set(MULTIPLE_PARAMS)) if isinstance(fit, dict) else None
+    if bad is None or bad or not all(isinstance(v, (int, float)) for v in fit.values()):
+        raise SystemExit(f"--fitted {path}: expected an object of numbers named from {sorted(MULTIPLE_PARAMS)}"
+                         + (f"; unknown: {bad}" if bad else ""))
+    return fit
+
+
 def evaluate(views, fitted, slices, out=None, second=None, supersample=1, slab_jitter=0.0,
              fitted_label="multiple (fitted here)"):
     """Rows of CIEDE2000 / FLIP per view and mode (and of a second reference: the noise floor), the frames
@@ -210,7 +224,7 @@ def main(argv=None) -> int:
         return 0
     fitted, history, head = None, [], "Shipped defaults only (no fit)."
     if args.fitted is not None:
-        fit = json.loads(Path(args.fitted).read_text())
+        fit = read_fitted(Path(args.fitted))
         fitted = SliceParams().updated(**fit)
         head = f"Parameters of an earlier fit ({args.fitted}): `{json.dumps(fit)}`."
     elif not args.no_fit:
