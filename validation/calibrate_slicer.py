@@ -5,6 +5,7 @@ beside the paper's Table IV modes.
         [--size 64x48] [--spp 128] [--train-target-rse R] [--target-rse 0.02] [--max-seconds 600] [--iterations 50]
         [--learning-rate 0.15] [--slices 128] [--supersample 2] [--slab-jitter 1]
         [--no-fit] [--noise-floor] [--start defaults|fit-start] [--fit-slices N] [--fit-supersample N]
+        [--fit-only] [--fitted fitted.json] [--held-out-only]
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them);
    training views at --spp, or to --train-target-rse (the loss clips display colours at 1, so that noisy
@@ -28,7 +29,10 @@ beside the paper's Table IV modes.
 3. Print, per view, CIEDE2000 and FLIP over cloud pixels for the Table IV modes, the new model with its
    shipped defaults and with the parameters fitted here; write calibration.md and a side-by-side PNG
    (reference | per-species/translucent | new model) of each held-out view, at least 320 px wide.
-   --no-fit evaluates the shipped defaults only; --noise-floor adds, per held-out view, the error of a
+   --no-fit evaluates the shipped defaults only; --fit-only stops after the fit (fitted.json in the output
+   folder: the fit can run beside the held-out references' rendering); --fitted JSON evaluates the
+   parameters of an earlier fit's fitted.json (the column named after the file) without fitting;
+   --held-out-only leaves the training views out of the tables; --noise-floor adds, per held-out view, the error of a
    second, independent reference (seed 1) against the first: the part of every error that is the
    reference's own Monte Carlo noise.
 """
@@ -100,15 +104,31 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
     return (views, seconds) if second_seed else views
 
 
-def evaluate(views, fitted, slices, out=None, second=None, supersample=1, slab_jitter=0.0):
+def read_fitted(path: Path) -> dict:
+    """The parameters of a fitted.json (``calibrate.MULTIPLE_PARAMS`` names -> numbers); SystemExit naming
+    the file and what is wrong for anything else."""
+    try:
+        fit = json.loads(path.read_text())
+    except (OSError, ValueError) as e:
+        raise SystemExit(f"--fitted {path}: not a readable JSON file ({e})") from None
+    bad = sorted(set(fit) - set(MULTIPLE_PARAMS)) if isinstance(fit, dict) else None
+    if bad is None or bad or not all(isinstance(v, (int, float)) for v in fit.values()):
+        raise SystemExit(f"--fitted {path}: expected an object of numbers named from {sorted(MULTIPLE_PARAMS)}"
+                         + (f"; unknown: {bad}" if bad else ""))
+    return fit
+
+
+def evaluate(views, fitted, slices, out=None, second=None, supersample=1, slab_jitter=0.0,
+             fitted_label="multiple (fitted here)"):
     """Rows of CIEDE2000 / FLIP per view and mode (and of a second reference: the noise floor), the frames
-    with ``supersample`` x ``supersample`` points per pixel and slab offsets ``slab_jitter``."""
+    with ``supersample`` x ``supersample`` points per pixel and slab offsets ``slab_jitter``; ``fitted``
+    (SliceParams or None) is the column ``fitted_label``."""
     rows, renderers = [], {}
     base = SliceParams(slab_jitter=slab_jitter)
     candidates = [(name, mode, base) for name, mode in MODES.items() if mode.light != "multiple"]
     candidates += [("multiple (defaults)", MODES["per-species/multiple"], base)]
     if fitted is not None:
-        candidates += [("multiple (fitted here)", MODES["per-species/multiple"], fitted.updated(slab_jitter=slab_jitter))]
+        candidates += [(fitted_label, MODES["per-species/multiple"], fitted.updated(slab_jitter=slab_jitter))]
     names = [c[0] for c in candidates] + (["reference, seed 1"] if second else [])
     for (scene, lighting), v in views.items():
         row = {"scene": scene, "lighting": lighting}
@@ -183,6 +203,11 @@ def main(argv=None) -> int:
     ap.add_argument("--start", default="fit-start", choices=("fit-start", "defaults"),
                     help="where the fit starts: calibrate.FIT_START (near single scattering), or the shipped "
                          "defaults with the parameters they leave at 0 (terms that are off) at FIT_START's values")
+    ap.add_argument("--fit-only", action="store_true", help="stop after the fit (writes fitted.json)")
+    ap.add_argument("--fitted", default=None,
+                    help="a fitted.json of an earlier fit: evaluate its parameters as \"fitted here\", no fit")
+    ap.add_argument("--held-out-only", action="store_true",
+                    help="evaluate the held-out views only (no training table)")
     ap.add_argument("--noise-floor", action="store_true",
                     help="also render a second reference (seed 1) of each held-out view and report its error")
     args = ap.parse_args(argv)
@@ -198,7 +223,11 @@ def main(argv=None) -> int:
                    max_seconds=args.max_seconds)
         return 0
     fitted, history, head = None, [], "Shipped defaults only (no fit)."
-    if not args.no_fit:
+    if args.fitted is not None:
+        fit = read_fitted(Path(args.fitted))
+        fitted = SliceParams().updated(**fit)
+        head = f"Parameters of an earlier fit ({args.fitted}): `{json.dumps(fit)}`."
+    elif not args.no_fit:
         t = time.perf_counter()
         start = FIT_START if args.start == "fit-start" else SliceParams().updated(
             **{n: getattr(FIT_START, n) for n in MULTIPLE_PARAMS if getattr(SliceParams(), n) == 0})
@@ -211,11 +240,14 @@ def main(argv=None) -> int:
                 f"loss {history[0]:.4g} -> {history[-1]:.4g} in {len(history)} iterations.")
         (out / "fitted.json").write_text(json.dumps(fit, indent=1))
         print(head, flush=True)
+        if args.fit_only:
+            return 0
     held = load_views(HELD_OUT, out, cfg, args.data, args.spp, second_seed=args.noise_floor,
                       target_rse=args.target_rse, max_seconds=args.max_seconds, noise=noise)
     held, second = held if args.noise_floor else (held, None)
-    kw = dict(supersample=args.supersample, slab_jitter=args.slab_jitter)
-    rows_t, names_t = evaluate(train, fitted, args.slices, **kw)
+    label = "multiple (fitted here)" if args.fitted is None else f"multiple ({Path(args.fitted).stem})"
+    kw = dict(supersample=args.supersample, slab_jitter=args.slab_jitter, fitted_label=label)
+    rows_t, names_t = ([], []) if args.held_out_only else evaluate(train, fitted, args.slices, **kw)
     rows_h, names_h = evaluate(held, fitted, args.slices, out, second, **kw)
     text = "\n\n".join([f"# Slicer calibration ({width} x {height}; references: training {args.spp} spp, held-out to a "
                          f"cloud RSE of {args.target_rse:g} or {args.max_seconds:g} s; slicer frames with "
