@@ -36,11 +36,14 @@ Layout for speed (every scattering event costs one ``sample`` and one ``eval_pdf
   which is also what ``sample`` inverts), so one lookup touches two or three cache lines.
 - Every table sits in 64-byte aligned memory, see :func:`_storage`.
 
-Spectral variants (``llvm_ad_spectral``: every path carries 4 wavelengths, ``mei.wavelengths``): the three
-channels of ``values`` are the tables at the wavelengths ``channel_wavelengths`` (nm, descending: 650,
-550, 450 for the R, G, B tables) and a lane's value is their linear interpolation at its wavelength,
-held constant beyond the first and last (:func:`lerp_channels`); the sampler draws from the channel mean
-as in RGB, so each lane's weight is value(lambda) / pdf. ``coalbedo`` (S x (K + 1): 1 - omega_s on the uniform
+Spectral variants (``llvm_ad_spectral``: every path carries 4 wavelengths, ``mei.wavelengths``): with
+``spectral_values`` (S x N x K, the species' tables at the K uniform wavelengths ``spectral_nm``, nm; what
+``kernel.medium`` passes, ``optics.phase.spectral_tables``) a lane's value is read from them, bilinear in v and
+wavelength (``spectral_phase``), and the sampler draws from the wavelengths' mean; without them the three
+channels of ``values`` are the tables at the wavelengths ``channel_wavelengths`` (nm, descending: 650, 550,
+450 for the R, G, B tables) and a lane's value is their linear interpolation at its wavelength, held
+constant beyond the first and last (:func:`lerp_channels`), drawn from the channel mean. Each lane's
+weight is value(lambda) / pdf. ``coalbedo`` (S x (K + 1): 1 - omega_s on the uniform
 grid ``coalbedo_nm`` of K wavelengths, and at the reference wavelength) gives the medium's single-scattering
 albedo at a lane's wavelength (:meth:`HydrometeorMixture.albedo_at`), used by ``majorant_volpath``.
 
