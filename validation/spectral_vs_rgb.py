@@ -15,7 +15,9 @@ display exposure for all (A's):
   (the spectral reference at twice the samples), and against A alone;
 * dE noise (the noise floor): the same between A and B, the part of a difference that is only noise (an
   upper bound of the noise in "RGB against A", whose RGB image is no noisier than B);
-* the same two over 4 x 4 pixel blocks (radiance averaged; cloud blocks: A's mean transmittance < 1/2);
+* the same two over 4 x 4 pixel blocks (radiance averaged; cloud blocks: A's mean transmittance < 1/2), and
+  between the cloud's mean colours (all cloud pixels averaged: what is left there is the modes' systematic
+  difference in the cloud's overall colour);
 * lit dE: CIEDE2000 at equal lightness between the two modes' lit-cloud chromaticities (the brightest 10%
   of the opaque cloud pixels, ``display.cloud_colour``, chosen on B), and its noise part (A against B);
 * ms/spp (each mode's seconds per sample per pixel, kernels compiled beforehand) and the spectral mode's
@@ -77,6 +79,13 @@ def delta_e(ref, other, exposure: float, mask) -> tuple[float, float]:
     return float(de.mean()), float(np.percentile(de, 95))
 
 
+def mean_colour_de(ref, other, exposure: float, mask) -> float:
+    """CIEDE2000 between the mean linear colours of ``ref`` and ``other`` over ``mask`` (the cloud's average
+    colour: its noise is that of a single pixel over the square root of the number of cloud pixels)."""
+    return delta_e(ref[mask].mean(axis=0)[None, None], other[mask].mean(axis=0)[None, None], exposure,
+                   np.ones((1, 1), bool))[0]
+
+
 def blocks(a: np.ndarray, k: int = BIN) -> np.ndarray:
     """``a`` (H, W, ...) averaged over k x k pixel blocks."""
     h, w = (n // k * k for n in a.shape[:2])
@@ -99,6 +108,8 @@ def figures(rgb: dict, a: dict, b: dict) -> dict:
             "dE_rgb_blocks": delta_e(blocks(ref), blocks(rgb["radiance"]), exposure, blocks(a["transmittance"]) < CLOUD_T),
             "dE_noise_blocks": delta_e(blocks(a["radiance"]), blocks(b["radiance"]), exposure,
                                        blocks(a["transmittance"]) < CLOUD_T),
+            "dE_mean_colour": mean_colour_de(ref, rgb["radiance"], exposure, cloud),
+            "dE_mean_colour_noise": mean_colour_de(a["radiance"], b["radiance"], exposure, cloud),
             "lit_dE": delta_e_equal_lightness(xy_r, lit_xy(ref, lit)), "lit_dE_noise": delta_e_equal_lightness(xy_b, xy_a),
             "lit_xy_spectral": lit_xy(ref, lit), "lit_xy_rgb": xy_r,
             "rse_rgb": rgb["rse"], "rse_spectral": a["rse"],
@@ -150,7 +161,7 @@ def main(argv=None):
     print("| scene | lighting | sun elev | pixels | dE RGB vs A+B | dE RGB vs A | dE noise A vs B | 4x4 blocks: dE RGB vs "
           "A+B | 4x4 blocks: dE noise | lit dE | lit dE noise "
           "| lit xy spectral | lit xy RGB | RSE RGB | RSE spectral | ms/spp RGB | ms/spp spectral | cost |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name in args.scenes.split(","):
         vol, _ = load_scene(name, cfg)
         for lighting in args.lightings.split(","):
@@ -163,6 +174,7 @@ def main(argv=None):
                       f"| {r['dE_rgb_a'][0]:.2f} / {r['dE_rgb_a'][1]:.2f} | {r['dE_noise'][0]:.2f} / {r['dE_noise'][1]:.2f} "
                       f"| {r['dE_rgb_blocks'][0]:.2f} / {r['dE_rgb_blocks'][1]:.2f} "
                       f"| {r['dE_noise_blocks'][0]:.2f} / {r['dE_noise_blocks'][1]:.2f} "
+                      f"| {r['dE_mean_colour']:.2f} | {r['dE_mean_colour_noise']:.2f} "
                       f"| {r['lit_dE']:.2f} | {r['lit_dE_noise']:.2f} "
                       f"| ({r['lit_xy_spectral'][0]:.3f}, {r['lit_xy_spectral'][1]:.3f}) "
                       f"| ({r['lit_xy_rgb'][0]:.3f}, {r['lit_xy_rgb'][1]:.3f}) | {r['rse_rgb']:.4f} | {r['rse_spectral']:.4f} "
