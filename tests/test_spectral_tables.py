@@ -152,3 +152,28 @@ def test_plugin_reads_the_tables_at_the_lanes_wavelengths(variant_restored):
     _, weight, _ = phase.sample(mi.PhaseFunctionContext(None), mei, mi.Float(u[0]), mi.Point2f(u[1], u[2]))
     mean = np.array(weight).mean(axis=1)
     np.testing.assert_allclose(mean, 1.0, atol=0.01)
+
+
+def test_delta_scaled_volume_truncates_every_wavelength(variant_restored):
+    """The medium's tables by wavelength (``kernel.medium.spectral_phase_values``) of a delta-M scaled demo
+    cumulus: at 550 nm each species' table is the truncated R, G, B table's green channel (Mie at the same
+    wavelength, the same forward fraction taken out; within 0.5%), every wavelength normalised; without the
+    truncation the forward value would be 60 to a million times larger, so the check can fail."""
+    from weather_mi.kernel.medium import spectral_phase_values
+    from weather_mi.kernel.plugins.hydrometeor_mixture import prepare_tables
+    from weather_mi.optics.forward_peak import delta_scaled
+    from weather_mi.optics.phase.spectral_tables import SPECTRAL_NM
+    vol = wm.optical_volume(wm.synthetic.cumulus(shape=(20, 16, 16), spacing_m=(200.0, 200.0, 200.0)),
+                            species="physical", phase_quality="test")
+    scaled = delta_scaled(vol, 3.0, species_extinction=False)
+    assert scaled.attrs["forward_peak_deg"] == 3.0
+    nodes, values = prepare_tables(scaled.require_phase_tables())
+    species = [scaled.species_set[n] for n in scaled.species]
+    sv = spectral_phase_values(scaled, nodes, species)
+    assert sv.shape == (len(species), nodes.size, SPECTRAL_NM.size)
+    integral = 2 * np.pi * np.sum(0.5 * (sv[:, 1:] + sv[:, :-1]) * np.diff(nodes.astype(np.float64))[None, :, None], axis=1)
+    np.testing.assert_allclose(integral, 1.0, rtol=1e-4)
+    g550 = int(np.flatnonzero(SPECTRAL_NM == 550.0)[0])
+    np.testing.assert_allclose(sv[:, :, g550], values[:, :, 1], rtol=5e-3, atol=1e-6)
+    unscaled = prepare_tables(vol.require_phase_tables())[1]
+    assert np.all(unscaled[:, 0, 1] > 30 * sv[:, 0, g550])
