@@ -443,7 +443,8 @@ def snow(radius_m: float = 1e-3, *, quality: str = "default", cache: bool = True
     Choice: a hexagonal column (aspect 2) with strongly roughened facets (roughness 0.3), diffraction
     by a 1 mm population. g ~ 0.79 (optics-notes: roughened ice and snow 0.75-0.80); no halos."""
     return ice_crystals("column", roughness=SNOW_ROUGHNESS, radius_m=radius_m, quality=quality, cache=cache,
-                        wavelength_m=wavelength_m, name=f"snow(radius_m={radius_m:g}): rough column, roughness {SNOW_ROUGHNESS}")
+                        wavelength_m=wavelength_m,
+                        name=f"snow(radius_m={radius_m:g}): rough column, roughness {SNOW_ROUGHNESS}")
 
 
 def graupel(radius_m: float = 1e-3, *, quality: str = "default", cache: bool = True,
@@ -452,7 +453,8 @@ def graupel(radius_m: float = 1e-3, *, quality: str = "default", cache: bool = T
     (roughness 0.2: the rime bumps remove the rainbows a smooth sphere would show), diffraction by
     a 1 mm population. g ~ 0.85 (optics-notes: graupel 0.8-0.9)."""
     return ice_crystals("sphere", roughness=GRAUPEL_ROUGHNESS, radius_m=radius_m, quality=quality, cache=cache,
-                        wavelength_m=wavelength_m, name=f"graupel(radius_m={radius_m:g}): rough ice sphere, roughness {GRAUPEL_ROUGHNESS}")
+                        wavelength_m=wavelength_m,
+                        name=f"graupel(radius_m={radius_m:g}): rough ice sphere, roughness {GRAUPEL_ROUGHNESS}")
 
 
 __all__ = ["ice_crystals", "snow", "graupel", "HexPrism", "Sphere", "trace", "airy_population", "ICE_N", "ICE_K",
