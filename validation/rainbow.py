@@ -19,8 +19,9 @@ cos^2 i = (n^2 - 1) / (k (k + 2)), D = 2 (i - r) + k (pi - 2 r), sin i = n sin r
 Chem. Ref. Data 27, 761; IAPWS R9-97) at 20 C and 1 atm, relative to air. Mie theory puts the maximum of a
 distribution of mm drops a little inside the geometric bow (Airy: ~0.1-0.2 deg for 0.7 mm drops, more for
 red), and the sun's 0.53 deg disk blurs it; the target is 0.3 deg. ``--spectral`` measures the spectral mode's
-sRGB channels the same way: each is a band of wavelengths (the bow of each wavelength drawn from phase tables
-interpolated between the 450, 550 and 650 nm nodes), so its Descartes angles are indicative only.
+sRGB channels the same way: each is a band of wavelengths (the bow of each wavelength drawn from the rain tables
+every 25 nm, ``optics.phase.spectral_tables``), so its Descartes angles are indicative only; it also prints the
+primary bow of those tables at 450 / 550 / 650 nm and between nodes against Descartes at each wavelength.
 """
 from __future__ import annotations
 
@@ -149,6 +150,25 @@ def table_profile(table, step_deg: float = 0.02):
     return alpha, 4 * np.pi * table.eval(np.radians(180.0 - alpha))
 
 
+def spectral_table_bows(radius_m: float, wavelengths_nm=(450.0, 462.5, 537.5, 550.0, 637.5, 650.0)):
+    """[(wavelength, primary bow (deg) of the spectral mode's rain table there, Descartes' (IAPWS index))]: its
+    tables at the nodes (``optics.phase.spectral_tables``) and interpolated between them, as the kernel reads
+    them, on a 0.02 deg grid."""
+    from weather_mi.optics import phase
+    from weather_mi.optics.phase.spectral_tables import SPECTRAL_NM, STEP_NM, interpolated
+    alpha = np.arange(30.0, 60.0 + 0.01, 0.02)
+    theta = np.radians(180.0 - alpha)
+    rows = []
+    for nm in wavelengths_nm:
+        j = int(np.clip((nm - SPECTRAL_NM[0]) // STEP_NM, 0, SPECTRAL_NM.size - 2))
+        nodes = SPECTRAL_NM[j:j + 2]
+        stack = [phase.mie_rain(radius=radius_m, wavelength_m=w * 1e-9) for w in nodes]
+        p = interpolated(stack, nodes, nm, theta)
+        rows.append((nm, peak_deg(alpha, p, PRIMARY_WINDOW),
+                     float(descartes_deg(water_index_iapws(nm) / N_AIR, 1))))
+    return rows
+
+
 def render_and_measure(size=(120, 96), spp: int = 64, radius_m: float | None = None, seed: int = 0, variant=None):
     """(measure(...) of the rendered shaft, the Image, its antisolar angles)."""
     import weather_mi as wm
@@ -194,6 +214,11 @@ def main(argv=None) -> None:
     _print_table(f"path tracer, {size[0]}x{size[1]}, {a.spp} spp, {time.perf_counter() - t0:.1f} s", got,
                  primary, secondary)
     if a.spectral:
+        print("\nthe spectral mode's rain tables (every 25 nm, linear between): primary bow (deg) against Descartes")
+        print("| wavelength (nm) | table | Descartes | diff |")
+        print("|---|---|---|---|")
+        for nm, bow, ref in spectral_table_bows(radius):
+            print(f"| {nm:g} | {bow:.2f} | {ref:.2f} | {bow - ref:+.2f} |")
         t0 = time.perf_counter()
         got, _, _ = render_and_measure(size, a.spp, radius, variant="llvm_ad_spectral")
         _print_table(f"spectral path tracer (sRGB channels), {a.spp} spp, {time.perf_counter() - t0:.1f} s", got,

@@ -77,7 +77,7 @@ def phase_dict(vol: OpticalVolume) -> dict:
     if vol.periodic:
         d["periodic"] = True
     if mi.is_spectral:
-        d.update(spectral_phase_properties(vol))
+        d.update(spectral_phase_properties(vol, nodes))
     return d
 
 
@@ -92,16 +92,43 @@ def grey_or_rgb(albedo: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(a[..., :1])
 
 
-def spectral_phase_properties(vol: OpticalVolume) -> dict:
+def spectral_phase_properties(vol: OpticalVolume, nodes=None) -> dict:
     """Spectral variants: the species' co-albedo spectra (``optics.spectral``), where the volume knows its
-    species (none for raw optics: the albedo is then grey at its 550 nm value)."""
+    species (none for raw optics: the albedo is then grey at its 550 nm value), and with the mixture's versine
+    ``nodes`` its phase tables by wavelength (:func:`spectral_phase_values`)."""
     import mitsuba as mi
     from ..optics.spectral import COALBEDO_NM, coalbedo_table
     species = vol.components or ([vol.species_set[n] for n in vol.species] if vol.species_set is not None else None)
+    d = {}
+    if nodes is not None and vol.phase_tables is not None:
+        from ..optics.phase.spectral_tables import SPECTRAL_NM
+        d = {"spectral_values": mi.TensorXf(spectral_phase_values(vol, nodes, species)),
+             "spectral_nm": mi.TensorXf(SPECTRAL_NM.astype(np.float32))}
     if species is None:
-        return {}
-    return {"coalbedo": mi.TensorXf(coalbedo_table(species).astype(np.float32)),
+        return d
+    return {**d, "coalbedo": mi.TensorXf(coalbedo_table(species).astype(np.float32)),
             "coalbedo_nm": mi.TensorXf(COALBEDO_NM.astype(np.float32))}
+
+
+def spectral_phase_values(vol: OpticalVolume, nodes, species=None) -> np.ndarray:
+    """(S, N, K) float32: the species' phase tables at ``optics.phase.spectral_tables.SPECTRAL_NM`` on the
+    mixture's versine ``nodes``. Mie and the ice recipe by wavelength where ``species`` (objects, in the volume's
+    order) are known hydrometeors in the volume's phase mode; otherwise the volume's R, G, B table linear in
+    wavelength. A delta-M scaled volume (``optics.forward_peak``: ``forward_peak_deg`` and each species'
+    ``forward_peak_fraction`` in its attrs) has every wavelength's table truncated with the species' fraction."""
+    from ..optics.forward_peak import truncated_table
+    from ..optics.phase.spectral_tables import SPECTRAL_NM, stacks_for
+    from .plugins.spectral_phase import prepare_spectral
+    tables = vol.require_phase_tables()
+    cone = vol.attrs.get("forward_peak_deg")
+    fractions = vol.attrs.get("forward_peak_fraction", {})
+    own = [None] * len(tables) if species is None or vol.phase_mode not in ("per_species", "paper") else list(species)
+    # the fallback (lerp_stack) takes the volume's tables as they are: truncated already where the volume is
+    stacks = stacks_for(own, tables, vol.phase_mode, vol.phase_quality, vol.components is not None, SPECTRAL_NM)
+    if cone:
+        stacks = [[truncated_table(t, cone, f) for t in stack] if f > 0 and sp is not None else stack
+                  for stack, sp, f in zip(stacks, own, (float(fractions.get(n, 0.0)) for n in vol.species))]
+    return prepare_spectral(nodes, stacks)
 
 
 def medium_dict(vol: OpticalVolume) -> dict:

@@ -5,7 +5,7 @@
 * Single-scattering co-albedo 1 - omega(lambda): weak-absorption geometric optics (``species``' formula,
   Q_abs = 8/3 x k (n^3 - (n^2 - 1)^(3/2)), x = 2 pi r / lambda) with the absorption index k(lambda) of
   liquid water from Hale & Querry (1973, Appl. Opt. 12, 555, Table 1; ``phase.mie.WATER_HALE_QUERRY``,
-  450-900 nm, held at its 450 nm value below: pure water absorbs least in the blue-violet, Pope & Fry 1997)
+  350-900 nm)
   and of ice from Warren & Brandt (2008, J. Geophys. Res. 113, D14220) at 450 / 550 / 650 nm
   (``species.ICE_K``), log-linear in wavelength between them and extrapolated beyond (ice's k rises
   steadily from its minimum near 400 nm into the near infrared). Each species' spectrum is scaled to its
@@ -13,10 +13,11 @@
 * The sun: the ASTM G173-03 top-of-atmosphere spectrum (``spectrum.solar_toa_w_m2_nm``) over its luminance
   (Y = 1 above the air, as ``air.sunlight.sun_xyz``), times the air's transmittance by height and cos(zenith)
   (``air.sunlight.transmittance``) with an atmosphere: :func:`sun_spectrum`, :func:`sun_spectral_table`.
-* Phase functions: the species' R, G, B tables are the tables at 650, 550 and 450 nm (Mie for cloud and
-  rain; the ice habits' ray tracing with the refractive index and diffraction of each wavelength), which the
-  kernel interpolates linearly in wavelength at each path's wavelengths, held beyond 450 and 650 nm
-  (``kernel.plugins.hydrometeor_mixture.lerp_channels``).
+* Phase functions: each species' tables every 25 nm over 350-850 nm (``phase.spectral_tables``: Mie for cloud
+  and rain with water's index at each wavelength, the ice habits' ray tally with the diffraction of each
+  wavelength), which the kernel interpolates linearly in wavelength at each path's wavelengths
+  (``kernel.plugins.spectral_phase``); tables without a spectral form (Rayleigh, given ones) as their R, G, B
+  channels linear in wavelength, held beyond 450 and 650 nm.
 """
 from __future__ import annotations
 
@@ -30,7 +31,7 @@ REFERENCE_NM = 550.0                                 # the wavelength at which a
 
 
 def water_nk(wavelength_nm) -> tuple[np.ndarray, np.ndarray]:
-    """(n, k) of liquid water (Hale & Querry 1973) at wavelengths (nm), held at 450 nm below 450 nm."""
+    """(n, k) of liquid water (Hale & Querry 1973) at wavelengths (nm), held at 350 nm below 350 nm."""
     from .phase.mie import WATER_HALE_QUERRY
     wl, n, k = (np.array(c, np.float64) for c in zip(*WATER_HALE_QUERRY))
     lam = np.clip(np.asarray(wavelength_nm, np.float64) * 1e-9, wl[0], wl[-1])

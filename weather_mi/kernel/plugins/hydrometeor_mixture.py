@@ -36,11 +36,14 @@ Layout for speed (every scattering event costs one ``sample`` and one ``eval_pdf
   which is also what ``sample`` inverts), so one lookup touches two or three cache lines.
 - Every table sits in 64-byte aligned memory, see :func:`_storage`.
 
-Spectral variants (``llvm_ad_spectral``: every path carries 4 wavelengths, ``mei.wavelengths``): the three
-channels of ``values`` are the tables at the wavelengths ``channel_wavelengths`` (nm, descending: 650,
-550, 450 for the R, G, B tables) and a lane's value is their linear interpolation at its wavelength,
-held constant beyond the first and last (:func:`lerp_channels`); the sampler draws from the channel mean
-as in RGB, so each lane's weight is value(lambda) / pdf. ``coalbedo`` (S x (K + 1): 1 - omega_s on the uniform
+Spectral variants (``llvm_ad_spectral``: every path carries 4 wavelengths, ``mei.wavelengths``): with
+``spectral_values`` (S x N x K, the species' tables at the K uniform wavelengths ``spectral_nm``, nm; what
+``kernel.medium`` passes, ``optics.phase.spectral_tables``) a lane's value is read from them, bilinear in v and
+wavelength (``spectral_phase``), and the sampler draws from the wavelengths' mean; without them the three
+channels of ``values`` are the tables at the wavelengths ``channel_wavelengths`` (nm, descending: 650, 550,
+450 for the R, G, B tables) and a lane's value is their linear interpolation at its wavelength, held
+constant beyond the first and last (:func:`lerp_channels`), drawn from the channel mean. Each lane's
+weight is value(lambda) / pdf. ``coalbedo`` (S x (K + 1): 1 - omega_s on the uniform
 grid ``coalbedo_nm`` of K wavelengths, and at the reference wavelength) gives the medium's single-scattering
 albedo at a lane's wavelength (:meth:`HydrometeorMixture.albedo_at`), used by ``majorant_volpath``.
 
@@ -273,13 +276,15 @@ class HydrometeorMixture:
         self.periodic = bool(props.get("periodic", False))  # x and y wrap (a periodic medium); else clamped
         inverse = np.linalg.inv(np.array(to_world.matrix, dtype=np.float64).reshape(4, 4))
         self.to_local = mi.Transform4f(mi.ScalarTransform4f(inverse.astype(np.float32).tolist()))
+        self._set_spectral_tables(props, nodes.size)
         self._set_tables(nodes, values)
         self._set_weights(weights)
         self._set_spectral(props)
         self.m_flags = mi.PhaseFunctionFlags.Anisotropic
 
     def _set_tables(self, nodes, values):
-        pbar = channel_mean_pdf(nodes, values)
+        # the density directions are drawn from: the mean of the channels, or (tables by wavelength) of the wavelengths
+        pbar = channel_mean_pdf(nodes, values if self.spectral_values is None else self.spectral_values)
         self.nodes = _storage(nodes)
         # (N, S, 4): R, G, B value and the channel-mean pdf of every node and species, read as one packet
         table = np.concatenate([np.asarray(values, np.float32), pbar[:, :, None]], axis=2)
@@ -310,6 +315,20 @@ class HydrometeorMixture:
             pack_weights(weights, out=flat)
             self.weights4 = mi.Float(flat)
         self.weights = None
+
+    def _set_spectral_tables(self, props, n_nodes: int):
+        """Spectral variants with ``spectral_values`` (S x N x K on the mixture's nodes) and ``spectral_nm`` (K uniform
+        wavelengths, nm): the phase tables by wavelength (``spectral_phase``); else None (R, G, B interpolated)."""
+        self.spectral_values = self.spectral_table = None
+        if not (mi.is_spectral and "spectral_values" in props):
+            return
+        from .spectral_phase import check_spectral, pack_spectral
+        values = np.asarray(props["spectral_values"], np.float32)
+        grid = np.asarray(props["spectral_nm"], np.float64).ravel()
+        check_spectral(values, grid, self.n_species, n_nodes, PLUGIN_NAME)
+        self.spectral_values = values
+        self.spectral_table = _storage(pack_spectral(values))
+        self.spectral_grid = (float(grid[0]), float(1.0 / (grid[1] - grid[0])), int(grid.size))
 
     def _set_spectral(self, props):
         """Spectral variants: the channels' wavelengths (nm) and the species' co-albedo spectra."""
@@ -430,6 +449,16 @@ class HydrometeorMixture:
         t = dr.clip((v - v0) / dr.maximum(v1 - v0, 1e-30), 0.0, 1.0)
         return lo, t
 
+    def _mix_at(self, w, idx, t, mei):
+        """(the variant's Spectrum value, pdf) of the mixture: :meth:`_mix`'s channels (at the lanes'
+        wavelengths in spectral variants), or the tables by wavelength (``spectral_phase``) where given."""
+        value, pdf = self._mix(w, idx, t)
+        if self.spectral_table is None:
+            return self._at_wavelengths(value, mei), pdf
+        from .spectral_phase import spectral_value
+        return spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
+                              _gather4), pdf
+
     def _mix(self, w, idx, t):
         """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t."""
         value = [mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)]
@@ -447,15 +476,17 @@ class HydrometeorMixture:
     # ------------------------------------------------------------ PhaseFunction interface
     def sample(self, ctx, mei, sample1, sample2, active=True):
         wo, value, pdf = self._sample(mei, mi.UInt32(3), sample1, sample2)
-        weight = dr.select(pdf > 0.0, value / pdf, 0.0)
-        return wo, self._at_wavelengths(weight, mei), pdf
+        if self.spectral_table is None:
+            weight = dr.select(pdf > 0.0, value / pdf, 0.0)
+            return wo, self._at_wavelengths(weight, mei), pdf
+        return wo, dr.select(pdf > 0.0, value / pdf, 0.0), pdf  # the lanes' values already
 
     def sample_channel(self, ctx, mei, channel, sample1, sample2, active=True):
         """A direction drawn from colour channel ``channel``'s density (UInt32 per lane, 0..2: the
         mixture sum_s w_s p_s,c) instead of the channel mean, and the per-channel value there (1/sr).
         For history-aware channel sampling in ``majorant_volpath``, which computes the pdf itself."""
         wo, value, _ = self._sample(mei, mi.UInt32(channel), sample1, sample2)
-        return wo, self._at_wavelengths(value, mei)
+        return wo, value if self.spectral_table is not None else self._at_wavelengths(value, mei)
 
     def _sample(self, mei, row, sample1, sample2):
         """(wo, per-channel value, channel-mean pdf) of a direction drawn from the density in ``row``
@@ -499,14 +530,17 @@ class HydrometeorMixture:
         sin_phi, cos_phi = dr.sincos(2.0 * dr.pi * sample2.y)
         wo = mei.to_world(mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, -cos_theta))
         # value and pdf where v was drawn: same weights, same segment (no search, no second lookup)
-        value, pdf = self._mix(w, idx, dr.clip(x / dr.maximum(dmu, 1e-30), 0.0, 1.0))
+        t = dr.clip(x / dr.maximum(dmu, 1e-30), 0.0, 1.0)
+        if self.spectral_table is not None:  # the lanes' values from the tables by wavelength
+            value, pdf = self._mix_at(w, idx, t, mei)
+        else:
+            value, pdf = self._mix(w, idx, t)
         return wo, value, pdf
 
     def eval_pdf(self, ctx, mei, wo, active=True):
         h = wo + mei.wi  # |wo + wi|^2 = 2 (1 - cos Theta): accurate near forward
         idx, t = self._segment(0.5 * dr.squared_norm(h))
-        value, pdf = self._mix(self._weights_at(mei), idx, t)
-        return self._at_wavelengths(value, mei), pdf
+        return self._mix_at(self._weights_at(mei), idx, t, mei)
 
     def traverse(self, cb):
         if self.weights is None:  # the parameter as given (negative values as 0), from the packed copy

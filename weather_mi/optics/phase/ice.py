@@ -311,28 +311,57 @@ def _quality(quality: str) -> int:
     return N_RAYS[quality]
 
 
-def _compute(habit, aspect, radius_m, roughness, n_rays, seed, max_events, theta_nodes):
-    """(values (N, 3) unnormalised, per-channel energy bookkeeping)."""
+def _trace_parts(habit, aspect, radius_m, roughness, n_rays, seed, max_events, theta_nodes):
+    """Per channel (R, G, B): (geometric-optics density at ``theta_nodes`` (N,), diffraction energy, bookkeeping):
+    the ray tally per sr and the energy that diffracts (the geometric cross-section plus the exactly forward rays)."""
     from tqdm.auto import tqdm
     edges = np.radians(go_bin_edges_deg())
     centres = 0.5 * (edges[1:] + edges[:-1])
     solid = 2 * np.pi * (np.cos(edges[:-1]) - np.cos(edges[1:]))  # sr per bin
     body = (Sphere if habit == "sphere" else HexPrism).with_area_radius(radius_m, aspect)
-    values = np.empty((theta_nodes.size, 3))
-    info = {}
+    parts = []
     with tqdm(total=3 * n_rays, desc=f"ice {habit}", unit="ray", unit_scale=True, leave=False,
               disable=n_rays < 500_000) as bar:
-        for c, wl in enumerate(RGB_WAVELENGTHS_M):
+        for wl in RGB_WAVELENGTHS_M:
             rng = np.random.default_rng(seed)  # common random numbers across channels
             alpha = 4 * np.pi * ICE_K[wl] / wl  # absorption coefficient, 1/m
             hist, fwd, geo = trace(body, ICE_N[wl], alpha, n_rays, rng, edges, roughness, max_events,
                                    progress=bar.update)
             go_density = np.interp(theta_nodes, centres, hist / solid)  # ray energy per sr
-            diff = airy_population(theta_nodes, radius_m, wl)  # 1/sr, unit energy
-            # diffraction energy = geometric cross-section (Q_ext = 2), plus the exactly forward rays
-            values[:, c] = (geo + fwd) * diff + go_density
-            info[wl] = {"go_energy": float(hist.sum()), "forward": fwd, "geometric": geo}
+            parts.append((go_density, geo + fwd, {"go_energy": float(hist.sum()), "forward": fwd, "geometric": geo}))
+    return parts
+
+
+def _compute(habit, aspect, radius_m, roughness, n_rays, seed, max_events, theta_nodes):
+    """(values (N, 3) unnormalised, per-channel energy bookkeeping)."""
+    parts = _trace_parts(habit, aspect, radius_m, roughness, n_rays, seed, max_events, theta_nodes)
+    values = np.empty((theta_nodes.size, 3))
+    info = {}
+    for c, (wl, (go_density, energy, bookkeeping)) in enumerate(zip(RGB_WAVELENGTHS_M, parts)):
+        diff = airy_population(theta_nodes, radius_m, wl)  # 1/sr, unit energy
+        # diffraction energy = geometric cross-section (Q_ext = 2), plus the exactly forward rays
+        values[:, c] = energy * diff + go_density
+        info[wl] = bookkeeping
     return values, info
+
+
+def band_values(parts, theta_nodes, radius_m: float, wavelength_m: float) -> np.ndarray:
+    """(N,) unnormalised phase values at one wavelength from :func:`_trace_parts`'s R, G, B parts: the ray
+    tally and the diffraction energy linear in wavelength between the channels (held beyond 450 and 650 nm:
+    ice's index changes by 0.3% from 450 to 650 nm, which moves the halos by ~0.1 deg), the diffraction
+    recomputed at the wavelength (its width ~ wavelength / radius)."""
+    wl = np.array(RGB_WAVELENGTHS_M)[::-1]                       # ascending: 450, 550, 650 nm
+    go = np.stack([p[0] for p in parts])[::-1]
+    energy = np.array([p[1] for p in parts])[::-1]
+    lam = float(np.clip(wavelength_m, wl[0], wl[-1]))
+    j = int(np.clip(np.searchsorted(wl, lam) - 1, 0, 1))
+    t = (lam - wl[j]) / (wl[j + 1] - wl[j])
+    go_l = (1 - t) * go[j] + t * go[j + 1]
+    e_l = (1 - t) * energy[j] + t * energy[j + 1]
+    return e_l * airy_population(theta_nodes, radius_m, float(wavelength_m)) + go_l
+
+
+_PARTS: dict = {}  # in-process memo of ray traces, so that a wavelength grid's band tables trace once
 
 
 def _table_theta() -> np.ndarray:
@@ -343,7 +372,8 @@ def _table_theta() -> np.ndarray:
 
 def ice_crystals(habit: str = "column", aspect: float | None = None, *, n_rays: int | None = None,
                  seed: int = 0, roughness: float = 0.0, radius_m: float = 30e-6, max_events: int = 16,
-                 quality: str = "default", cache: bool = True, name: str | None = None) -> PhaseTable:
+                 quality: str = "default", cache: bool = True, name: str | None = None,
+                 wavelength_m: float | None = None) -> PhaseTable:
     """Randomly oriented ice particles by geometric optics + diffraction (see the module doc).
 
     habit : "column" (hexagonal prism, aspect L/(2a) = 2.0), "plate" (0.2), "compact" (1.0) or
@@ -353,6 +383,7 @@ def ice_crystals(habit: str = "column", aspect: float | None = None, *, n_rays: 
     roughness : facet-normal tilt (standard deviation per component), 0 for pristine crystals.
     radius_m : effective radius (m) of the diffracting population (circle of equal mean projected
         area); it also sets the absorbing path length.
+    wavelength_m : one wavelength's table in all three channels (the spectral mode's, :func:`band_values`), else R, G, B.
     Pristine columns show the 22 and 46 deg halos; g ~ 0.81 (columns), ~0.88 (plates)."""
     if habit not in HABIT_ASPECT:
         raise ValueError(f"habit must be one of {', '.join(map(repr, HABIT_ASPECT))}, got {habit!r}")
@@ -372,6 +403,9 @@ def ice_crystals(habit: str = "column", aspect: float | None = None, *, n_rays: 
     label = name or (f"ice_crystals({habit!r}, aspect={aspect:g}, roughness={roughness:g}, "
                      f"radius_m={radius_m:g}, n_rays={n})")
 
+    if wavelength_m is not None:
+        return _band_table(params, theta, label, float(wavelength_m), cache)
+
     def compute():
         values, _ = _compute(habit, aspect, float(radius_m), float(roughness), n, int(seed), int(max_events), theta)
         return PhaseTable.from_values(theta, values, name=label)
@@ -380,23 +414,46 @@ def ice_crystals(habit: str = "column", aspect: float | None = None, *, n_rays: 
     return table if table.name == label else table.renamed(label)  # the label is not part of the key
 
 
+def _band_table(params: dict, theta, label: str, wavelength_m: float, cache: bool) -> PhaseTable:
+    """The table of ``ice_crystals(**params)`` at one wavelength in all three channels (:func:`band_values`),
+    cached on disk per wavelength; the ray trace behind it is done once per process for every wavelength."""
+    if not 300e-9 <= wavelength_m <= 1000e-9:
+        raise ValueError(f"ice band tables span 300-1000 nm, got {wavelength_m * 1e9:.1f} nm")
+
+    def compute():
+        from .cache import cache_key
+        key = cache_key("ice_parts", params)
+        if key not in _PARTS:
+            _PARTS[key] = _trace_parts(params["habit"], params["aspect"], params["radius_m"], params["roughness"],
+                                       params["n_rays"], params["seed"], params["max_events"], theta)
+        values = band_values(_PARTS[key], theta, params["radius_m"], wavelength_m)
+        return PhaseTable.from_values(theta, values, name=f"{label}, {wavelength_m * 1e9:.1f} nm",
+                                      wavelengths_m=(wavelength_m,) * 3)
+
+    return cached_table("ice_crystals_band", {**params, "wavelength_m": wavelength_m}, compute, use_cache=cache)
+
+
 SNOW_ROUGHNESS = 0.3
 GRAUPEL_ROUGHNESS = 0.2
 
 
-def snow(radius_m: float = 1e-3, *, quality: str = "default", cache: bool = True) -> PhaseTable:
+def snow(radius_m: float = 1e-3, *, quality: str = "default", cache: bool = True,
+         wavelength_m: float | None = None) -> PhaseTable:
     """Snow: a stand-in for aggregates of many crystals, whose many tilted facets wash out the halos.
     Choice: a hexagonal column (aspect 2) with strongly roughened facets (roughness 0.3), diffraction
     by a 1 mm population. g ~ 0.79 (optics-notes: roughened ice and snow 0.75-0.80); no halos."""
     return ice_crystals("column", roughness=SNOW_ROUGHNESS, radius_m=radius_m, quality=quality, cache=cache,
+                        wavelength_m=wavelength_m,
                         name=f"snow(radius_m={radius_m:g}): rough column, roughness {SNOW_ROUGHNESS}")
 
 
-def graupel(radius_m: float = 1e-3, *, quality: str = "default", cache: bool = True) -> PhaseTable:
+def graupel(radius_m: float = 1e-3, *, quality: str = "default", cache: bool = True,
+            wavelength_m: float | None = None) -> PhaseTable:
     """Graupel: a quasi-spherical rimed particle. Choice: an ice sphere with roughened surface
     (roughness 0.2: the rime bumps remove the rainbows a smooth sphere would show), diffraction by
     a 1 mm population. g ~ 0.85 (optics-notes: graupel 0.8-0.9)."""
     return ice_crystals("sphere", roughness=GRAUPEL_ROUGHNESS, radius_m=radius_m, quality=quality, cache=cache,
+                        wavelength_m=wavelength_m,
                         name=f"graupel(radius_m={radius_m:g}): rough ice sphere, roughness {GRAUPEL_ROUGHNESS}")
 
 

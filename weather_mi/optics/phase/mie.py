@@ -34,9 +34,13 @@ os.environ.setdefault("MIEPYTHON_USE_JIT", "1")
 # complex refractive index n - i k per channel wavelength (R, G, B)
 WATER_M = {650e-9: 1.331 - 1.6e-8j, 550e-9: 1.333 - 2.0e-9j, 450e-9: 1.337 - 1.0e-9j}
 
-# Hale & Querry (1973, Appl. Opt. 12, 555) refractive index of liquid water n, k at 25 C (their Table 1):
-# wavelength (m), n, k; ``water_index`` interpolates (n linearly, k log-linearly) for single-band tables
-WATER_HALE_QUERRY = ((450e-9, 1.337, 1.02e-9), (475e-9, 1.336, 9.35e-10), (500e-9, 1.335, 1.00e-9),
+# Hale & Querry (1973, Appl. Opt. 12, 555) refractive index of liquid water n, k at 25 C (their Table 1; the
+# values as transcribed by refractiveindex.info, database/data/main/H2O/nk/Hale.yml, CC0 1.0 / public domain):
+# wavelength (m), n, k; ``water_index`` interpolates (n linearly, k log-linearly) for single-band tables and the
+# spectral mode's tables (``spectral_tables``, 360-830 nm). The rows below 450 nm serve the spectral mode only.
+WATER_HALE_QUERRY = ((350e-9, 1.343, 6.50e-9), (375e-9, 1.341, 3.50e-9), (400e-9, 1.339, 1.86e-9),
+                     (425e-9, 1.338, 1.30e-9), (450e-9, 1.337, 1.02e-9), (475e-9, 1.336, 9.35e-10),
+                     (500e-9, 1.335, 1.00e-9),
                      (525e-9, 1.334, 1.32e-9), (550e-9, 1.333, 1.96e-9), (575e-9, 1.333, 3.60e-9),
                      (600e-9, 1.332, 1.09e-8), (625e-9, 1.332, 1.39e-8), (650e-9, 1.331, 1.64e-8),
                      (675e-9, 1.331, 2.23e-8), (700e-9, 1.331, 3.35e-8), (725e-9, 1.330, 9.15e-8),
@@ -58,7 +62,7 @@ def _rain_grid(quality: str) -> np.ndarray:
 
 
 def water_index(wavelength_m: float) -> complex:
-    """Complex refractive index n - i k of liquid water at ``wavelength_m`` (450-900 nm, Hale & Querry 1973)."""
+    """Complex refractive index n - i k of liquid water at ``wavelength_m`` (350-900 nm, Hale & Querry 1973)."""
     wl, n, k = (np.array(c, np.float64) for c in zip(*WATER_HALE_QUERRY))
     lam = float(wavelength_m)
     if not wl[0] <= lam <= wl[-1]:

@@ -39,9 +39,10 @@ def nearest_channel(table: PhaseTable, wavelength_m: float) -> PhaseTable:
 
 
 def table_for(sp, mode: str = "per_species", quality: str = "default",
-              wavelength_m: float | None = None, sized: bool = False) -> PhaseTable:
+              wavelength_m: float | None = None, sized: bool = False, ice_bands: bool = False) -> PhaseTable:
     """The phase table of one species object: R, G, B, or one band's (``wavelength_m``) in all three
-    channels (water by Mie theory at that wavelength, ice from its nearest channel, ``nearest_channel``).
+    channels (water by Mie theory at that wavelength, ice from its nearest channel, ``nearest_channel``, or
+    with ``ice_bands``, the spectral mode's tables, its own table at that wavelength: ``_ice_band``).
     ``sized`` (a size class, ``optics.size_classes``): every "per_species" table at the object's
     ``radius_m`` (Mie cloud at that r_eff, the ice habits' diffraction by that population), not only rain's."""
     if mode not in MODES:
@@ -55,6 +56,8 @@ def table_for(sp, mode: str = "per_species", quality: str = "default",
             return mie_cloud(r_eff, quality=quality, wavelength_m=wavelength_m)
         if mode != "paper" and _attr(sp, "name") == "rain":
             return mie_rain(radius=float(_attr(sp, "radius_m")), quality=quality, wavelength_m=wavelength_m)
+        if ice_bands:
+            return _ice_band(sp, mode, quality, sized, wavelength_m)
         return nearest_channel(table_for(sp, mode, quality, sized=sized), wavelength_m)
     if mode == "paper":
         cls = _attr(sp, "phase_class")
@@ -77,6 +80,21 @@ def table_for(sp, mode: str = "per_species", quality: str = "default",
     if name == "graupel":
         return graupel(quality=quality)
     raise ValueError(f"species name must be one of cloud, ice, rain, snow, graupel; got {name!r}")
+
+
+def _ice_band(sp, mode: str, quality: str, sized: bool, wavelength_m: float) -> PhaseTable:
+    """An ice species' table at one wavelength (``ice.band_values``: the habit's ray tally, the diffraction
+    of that wavelength), with the parameters of its R, G, B table."""
+    kw = {"quality": quality, "wavelength_m": float(wavelength_m)}
+    if mode == "paper":
+        return ice_crystals("column", **kw)
+    name = _attr(sp, "name")
+    if sized:
+        kw["radius_m"] = float(_attr(sp, "radius_m"))
+    makers = {"ice": lambda: ice_crystals("column", **kw), "snow": lambda: snow(**kw), "graupel": lambda: graupel(**kw)}
+    if name not in makers:
+        raise ValueError(f"species name must be one of cloud, ice, rain, snow, graupel; got {name!r}")
+    return makers[name]()
 
 
 def _sized_table(name: str, radius_m: float, quality: str) -> PhaseTable:

@@ -1,0 +1,153 @@
+"""The spectral ground truth's cost (issue 38 part 2): the reference renderer in ``llvm_ad_spectral`` (4
+wavelengths a path, the phase tables every 25 nm) against ``llvm_ad_rgb`` on the demo supercell (the study's
+front view, ``study.runs.view``, --atmosphere clear in both), paired: the two modes alternate in one process,
+kernels compiled first, and each round's ratio is taken between renders run next to each other.
+
+    .venv/bin/python benchmarks/spectral.py [--size 64x48] [--spp 64] [--passes 4] [--rounds 3] [--elevation 20]
+    .venv/bin/python benchmarks/spectral.py --phase [--lanes 1048576] [--rounds 5]
+
+Per round: each mode's seconds and luminance RSE over the cloud pixels (``Image.metadata["noise"]``), and the
+spectral mode's time to the same RSE over the RGB mode's, (t RSE^2)_spectral / (t RSE^2)_RGB (RSE falls as
+1 / sqrt(samples), so time x RSE^2 is the time to a fixed RSE). Target: at most 1.5x. The median over rounds
+is printed last. ``--three-nodes`` adds the spectral mode as it was before the tables every 25 nm.
+
+``--phase``: the mixture plugin alone in ``llvm_ad_spectral``, ``eval_pdf`` and ``sample`` on the demo
+supercell's five species (their tables at "test" quality, a random 16^3 weight grid) at random directions and
+wavelengths: ns per lane with the tables every 25 nm (``spectral_values``) against the R, G, B tables
+interpolated (without them, as before), alternating, in one process.
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+MODES = {"rgb": "llvm_ad_rgb", "spectral": "llvm_ad_spectral"}
+
+
+def phase_cost(lanes: int, rounds: int) -> None:
+    """The plugin's ns per lane with and without the tables by wavelength (module docstring)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    import weather_mi as wm
+    from weather_mi.kernel.plugins.hydrometeor_mixture import prepare_tables
+    from weather_mi.kernel.plugins.spectral_phase import prepare_spectral
+    from weather_mi.optics.phase import for_species
+    from weather_mi.optics.phase.spectral_tables import SPECTRAL_NM, stacks_for
+    wm.set_variant("llvm_ad_spectral")
+    species = [wm.species.preset("physical")[n] for n in ("cloud", "rain", "ice", "snow", "graupel")]
+    tables = for_species(species, quality="test")
+    nodes, values = prepare_tables(tables)
+    sv = prepare_spectral(nodes, stacks_for(species, tables, quality="test"))
+    weights = np.random.default_rng(0).random((16, 16, 16, 5)).astype(np.float32)
+    base = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
+            "weights": mi.TensorXf(weights)}
+    plugins = {"R, G, B interpolated": mi.load_dict(base),
+               "every 25 nm": mi.load_dict({**base, "spectral_values": mi.TensorXf(sv),
+                                            "spectral_nm": mi.TensorXf(SPECTRAL_NM.astype(np.float32))})}
+    rng = np.random.default_rng(1)
+    u = rng.random((8, lanes))
+    mei = dr.zeros(mi.MediumInteraction3f, lanes)
+    mei.p = mi.Point3f(u[0], u[1], u[2])
+    mei.wi = dr.normalize(mi.Vector3f(u[3] - 0.5, u[4] - 0.5, u[5] - 0.5))
+    mei.sh_frame = mi.Frame3f(mei.wi)
+    mei.wavelengths = mi.Spectrum(*(mi.Float(360 + 470 * rng.random(lanes)) for _ in range(4)))
+    wo = dr.normalize(mi.Vector3f(u[6] - 0.5, u[7] - 0.5, u[5] - 0.4))
+    ctx = mi.PhaseFunctionContext(None)
+    dr.eval(mei, wo)
+    s1, s2 = mi.Float(u[0]), mi.Point2f(u[1], u[2])
+    times = {k: [] for k in plugins}
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    for r in range(rounds + 1):
+        for name, ph in plugins.items():
+            dr.kernel_history()  # clear
+            value, pdf = ph.eval_pdf(ctx, mei, wo)
+            wo2, weight, pdf2 = ph.sample(ctx, mei, s1, s2)
+            dr.eval(value, pdf, wo2, weight, pdf2)
+            dr.sync_thread()
+            ms = sum(k.get("execution_time", 0.0) for k in dr.kernel_history())  # the kernels' own time (ms)
+            if r:  # round 0 compiles
+                times[name].append(ms * 1e6 / lanes)
+    for name, ts in times.items():
+        print(f"{name}: eval_pdf + sample {np.median(ts):.0f} ns per lane (rounds: {', '.join(f'{t:.0f}' for t in ts)})")
+
+
+def main(argv=None):
+    from weather_mi.optics.air import Atmosphere
+    from weather_mi.reference.render import render_reference
+    from weather_mi.study.runs import CONFIGS, load_scene, view
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--size", default="64x48")
+    ap.add_argument("--spp", type=int, default=64)
+    ap.add_argument("--passes", type=int, default=4)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--elevation", type=float, default=20.0)
+    ap.add_argument("--lighting", default="front")
+    ap.add_argument("--phase", action="store_true", help="the phase plugin alone (module docstring)")
+    ap.add_argument("--three-nodes", action="store_true",
+                    help="also the spectral mode with the R, G, B tables interpolated (as before the 25 nm tables)")
+    ap.add_argument("--lanes", type=int, default=1 << 20)
+    args = ap.parse_args(argv)
+    if args.phase:
+        return phase_cost(args.lanes, args.rounds)
+    w, h = (int(v) for v in args.size.split("x"))
+    cfg = replace(CONFIGS["quick"], width=w, height=h)
+    vol, _ = load_scene("demo-supercell", cfg)
+    spec = view(vol, args.lighting, cfg)
+    spec = replace(spec, sun=replace(spec.sun, elevation=args.elevation), atmosphere=Atmosphere())
+    modes = dict(MODES)
+    if args.three_nodes:
+        modes["spectral, 3 nodes"] = "llvm_ad_spectral"
+    for mode, variant in modes.items():  # compile (and build the spectral tables) first
+        with three_nodes(mode.endswith("3 nodes")):
+            render_reference(replace(spec, seed=99), vol, spp=1, passes=1, progress=False, variant=variant)
+    print(f"demo supercell, {args.lighting} view, sun {args.elevation:g} deg, {w}x{h}, {args.spp} spp in "
+          f"{args.passes} passes, --atmosphere clear")
+    print("| round | mode | s | RSE | time ratio to RGB | time to the same RSE, over RGB's |")
+    print("|---|---|---|---|---|---|")
+    ratios = {m: [] for m in modes if m != "rgb"}
+    for r in range(args.rounds):
+        got = {}
+        for mode, variant in (list(modes.items()) if r % 2 == 0 else list(modes.items())[::-1]):  # alternate
+            t = time.perf_counter()
+            with three_nodes(mode.endswith("3 nodes")):
+                img = render_reference(replace(spec, seed=r), vol, spp=args.spp, passes=args.passes, progress=False,
+                                       variant=variant)
+            got[mode] = (time.perf_counter() - t, float(img.metadata["noise"]["rse_mean"]))
+        tr, er = got["rgb"]
+        for mode in modes:
+            ts, es = got[mode]
+            if mode != "rgb":
+                ratios[mode].append(ts * es ** 2 / (tr * er ** 2))
+            print(f"| {r} | {mode} | {ts:.1f} | {es:.4f} | {ts / tr:.2f} | "
+                  + (f"{ratios[mode][-1]:.2f} |" if mode != "rgb" else "1 |"), flush=True)
+    for mode, rs in ratios.items():
+        print(f"median time to the same RSE, {mode} / RGB: {np.median(rs):.2f} (target <= 1.5)")
+
+
+@contextlib.contextmanager
+def three_nodes(on: bool):
+    """With ``on``: the spectral mode as before the tables every 25 nm (R, G, B tables interpolated), by
+    leaving out the mixture's ``spectral_values``."""
+    if not on:
+        yield
+        return
+    from weather_mi.kernel import medium
+    own = medium.spectral_phase_properties
+    medium.spectral_phase_properties = lambda vol, nodes=None: own(vol)
+    try:
+        yield
+    finally:
+        medium.spectral_phase_properties = own
+
+
+if __name__ == "__main__":
+    main()
