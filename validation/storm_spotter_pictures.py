@@ -1,7 +1,7 @@
 """Not a validation: the README's storm-spotter pictures (issue 38 part 4), path-traced.
 
-    .venv/bin/python validation/storm_spotter_pictures.py --out docs/images [--spp 64] [--only rainbow|anvil|wrf-anvil]
-        [--data ../shared/data]
+    .venv/bin/python validation/storm_spotter_pictures.py --out docs/images [--spp 64]
+        [--only rainbow|anvil|wrf-anvil|haze] [--data ../shared/data]
 
 ``rainbow_in_rain_shaft.png``: a shaft of light rain (0.12 g/kg, 0.7 mm drops) under a cloud deck, 3-15 km
 north of a camera 150 m up looking 22 deg above the horizon, the sun 8 deg high in the south behind it, coloured
@@ -13,8 +13,11 @@ The bows' angles in such a shaft are measured by ``validation/rainbow.py``.
 --atmosphere clear``; ``sunset_anvil_wrf.png``: the same view of the real WRF supercell
 (``--data``/wrf/wrfout_quarter_ss_0130.nc, WSM6, 1 km grid).
 
-The blue haze of a distant storm needs air along the eye rays (aerial perspective), which the renderer does
-not have yet (the clear atmosphere colours the sun only): no picture.
+``distant_storm_haze.png``: the blue haze of a distant storm (aerial perspective): the demo supercell from a
+camera 300 m up at 40, 90 and 150 km, the same 10 deg field of view scaled with the distance so the storm is the
+same size, with ``render``'s default clear atmosphere (the air in the box, on the sun's path and along the eye
+rays, ``--sky air``): ``weather-mi render --demo supercell --camera ground --camera-distance-km D
+--camera-height 300 --fov F --sun-elevation 35``.
 """
 from __future__ import annotations
 
@@ -72,11 +75,40 @@ def anvil_picture(out: Path, spp: int, source: list[str], name: str, size=(320, 
         return Path(shutil.copy(exr.with_suffix(".png"), out / name))
 
 
+HAZE_DISTANCES_KM = (40.0, 90.0, 150.0)
+
+
+def haze_picture(out: Path, spp: int, size=(200, 150)) -> Path:
+    """The demo supercell at ``HAZE_DISTANCES_KM`` (a field of view of 10 deg at 40 km, narrower farther away),
+    side by side: the farther, the bluer and paler the storm and the ground."""
+    import matplotlib.image as mpimg
+    from weather_mi.cli.commands import main as cli
+    from weather_mi.io.image import Image, auto_exposure
+    panels, exposure = [], None
+    with tempfile.TemporaryDirectory() as tmp:
+        for d in HAZE_DISTANCES_KM:
+            fov = float(np.degrees(2 * np.arctan(np.tan(np.radians(5.0)) * 40.0 / d)))
+            exr = Path(tmp) / f"haze_{d:g}.exr"
+            rc = cli(["render", "--demo", "supercell", "--camera", "ground", "--camera-distance-km", f"{d:g}",
+                      "--camera-height", "300", "--fov", f"{fov:.3f}", "--sun-elevation", "35",
+                      "--size", f"{size[0]}x{size[1]}", "--spp", str(spp), "-o", str(exr)])
+            if rc:
+                raise SystemExit(f"weather-mi render failed ({rc})")
+            img = Image.load(exr)
+            exposure = auto_exposure(img.radiance) if exposure is None else exposure  # the nearest one's, for all
+            panels.append(mpimg.imread(img.save_png(Path(tmp) / f"haze_{d:g}_same.png", exposure))[..., :3])
+    gap = np.ones((size[1], 4, 3), np.float32)
+    row = np.concatenate([x for p in panels for x in (p, gap)][:-1], axis=1)
+    path = out / "distant_storm_haze.png"
+    mpimg.imsave(path, np.clip(row, 0, 1))
+    return path
+
+
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", default="docs/images")
     p.add_argument("--spp", type=int, default=64)
-    p.add_argument("--only", choices=("rainbow", "anvil", "wrf-anvil"))
+    p.add_argument("--only", choices=("rainbow", "anvil", "wrf-anvil", "haze"))
     p.add_argument("--data", default="../shared/data", help="folder holding " + WRF_SUPERCELL)
     a = p.parse_args(argv)
     out = Path(a.out)
@@ -85,6 +117,8 @@ def main(argv=None) -> None:
         print("wrote", rainbow_picture(out, a.spp))
     if a.only in (None, "anvil"):
         print("wrote", anvil_picture(out, a.spp, ["--demo", "supercell"], "sunset_anvil.png"))
+    if a.only in (None, "haze"):
+        print("wrote", haze_picture(out, a.spp))
     if a.only in (None, "wrf-anvil"):
         wrf = Path(a.data) / WRF_SUPERCELL
         if not wrf.exists():
