@@ -106,7 +106,8 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..reference.cluster import session
     with session(args.scheduler, args.workers) as client:
         img = render_reference(spec, vol, options=ReferenceOptions(**flag_values(args)), checkpoint=ckpt,
-                               resume=ckpt if args.resume else None, client=client, variant=variant_of(args))
+                               resume=ckpt if args.resume else None, client=client, variant=variant_of(args),
+                               release_volume=True)  # the kernel's grids replace vol's (read no more: bbox, air)
     if sun_meta:
         img.metadata["sun_from_time"] = sun_meta
     img = air_option.on_eye_rays(img, spec, vol, args)  # and along the eye rays outside the box
@@ -200,7 +201,8 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
                          size_classes=args.size_classes,
                          periodic=periodic_value(args), release=True,
                          keep=("beta_ext", "weights") if args.rgb or args.rayleigh else ("weights",))  # the air: beta_s
-    hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
+    air = args.rgb or args.rayleigh  # the air's density stays for Rayleigh (true colour: its own scenes)
+    hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air" or not air])  # in vol now
     if args.rgb:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt)
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
@@ -215,7 +217,8 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
           "from a column's own)")
     with session(args.scheduler, args.workers) as client:
         ds, img = si.render_satellite(scene, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
-                                      resume=ckpt if args.resume else None, client=client)
+                                      resume=ckpt if args.resume else None, client=client,
+                                      release_volume=True)  # the kernel's grids replace the band volume's
     from ..display.satellite_picture import shown_dataset, write_picture
     shown = shown_dataset(ds, img, args.denoise)
     si.write_satellite(ds, img, nc, exr)
@@ -244,7 +247,8 @@ def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt) -> Path:
           f"centre ({s.sun_meta['valid_time']})")
     with session(args.scheduler, args.workers) as client:
         ds, img = tc.render_true_color(scenes, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
-                                       resume=ckpt if args.resume else None, client=client)
+                                       resume=ckpt if args.resume else None, client=client,
+                                      release_volume=True)  # the kernel's grids replace the band volume's
     from ..display.satellite_picture import shown_dataset, write_picture
     from ..satellite.imagery import write_satellite
     shown = shown_dataset(ds, img, args.denoise)

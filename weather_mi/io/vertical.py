@@ -15,14 +15,9 @@ costs its input, its output and a block's temporaries, never a float64 copy of t
 from __future__ import annotations
 
 import numpy as np
+from numba import njit, prange
 
 BLOCK_VALUES = 1 << 21  # node values per block of rows (float64 temporaries of ~16 MiB each)
-
-
-def _cumulative(nodes: np.ndarray, vals: np.ndarray) -> np.ndarray:
-    """Cumulative trapezoid integral at each node (starts at 0 at the surface)."""
-    seg = 0.5 * (vals[1:] + vals[:-1]) * np.diff(nodes, axis=0)
-    return np.concatenate([np.zeros_like(seg[:1]), np.cumsum(seg, axis=0)], axis=0)
 
 
 class VerticalPlan:
@@ -68,29 +63,47 @@ class VerticalPlan:
 
     def average(self, f: np.ndarray, out: np.ndarray | None = None, dtype=np.float32) -> np.ndarray:
         """Average of each column's reconstruction of ``f`` ((n, ny, nx) on the mass levels) over the target
-        cells: (m, ny, nx), written into ``out`` (new, of ``dtype``, when None)."""
+        cells: (m, ny, nx), written into ``out`` (new, of ``dtype``, when None). One compiled pass over the
+        columns (:func:`_average_columns`: float64 inside a column, the float operations of the numpy
+        expressions it replaced, in their order)."""
         out = np.empty(self.shape, dtype) if out is None else out
-        dz = np.diff(self.edges)
-        for sl in self._blocks():
-            nodes = self._nodes(sl)
-            fb = f[(slice(None),) + sl]
-            vals = np.concatenate([fb[:1], fb, fb[-1:]], axis=0, dtype=np.float64)
-            slope = np.diff(vals, axis=0)
-            h = np.diff(nodes, axis=0)
-            np.divide(slope, h, out=slope, where=h > 0)
-            slope[h <= 0] = 0.0
-            cum = _cumulative(nodes, vals)
-            prev = None
-            for j in range(len(self.edges)):
-                k = self.k[(j,) + sl][None].astype(np.intp)
-                t = self.t[(j,) + sl].astype(np.float64)
-                f0 = np.take_along_axis(vals, k, 0)[0]
-                s = np.take_along_axis(slope, k, 0)[0]
-                nxt = np.take_along_axis(cum, k, 0)[0] + t * (f0 + 0.5 * s * t)
-                if prev is not None:
-                    out[(j - 1,) + sl] = (nxt - prev) / dz[j - 1]
-                prev = nxt
+        n = self.z_w.shape[0] - 1
+        cols = int(np.prod(self.z_w.shape[1:], dtype=np.int64))
+        z_mass = np.zeros((1, 1)) if self.z_mass is None else np.ascontiguousarray(self.z_mass).reshape(n, cols)
+        _average_columns(np.ascontiguousarray(self.z_w).reshape(n + 1, cols), np.ascontiguousarray(f).reshape(n, cols),
+                         self.k.reshape(len(self.edges), cols), self.t.reshape(len(self.edges), cols), self.edges,
+                         z_mass, self.z_mass is not None, out.reshape(len(self.edges) - 1, cols))
         return out
+
+
+@njit(parallel=True, cache=True)
+def _average_columns(z_w, f, k, t, edges, z_mass, given_mass, out):  # pragma: no cover - compiled
+    """``VerticalPlan.average`` per column c: the nodes (surface, mass levels, top), the values held constant
+    beyond the lowest and top mass levels, the slopes, the cumulative trapezoid integral F, and each target cell's
+    (F(e_j+1) - F(e_j)) / dz from the plan's segments ``k`` and offsets ``t``. Arrays (levels, columns)."""
+    n, cols, m1 = f.shape[0], f.shape[1], edges.shape[0]
+    for c in prange(cols):
+        nodes, vals = np.empty(n + 2), np.empty(n + 2)
+        slope, cum = np.empty(n + 1), np.empty(n + 2)
+        nodes[0], nodes[n + 1] = np.float64(z_w[0, c]), np.float64(z_w[n, c])
+        for i in range(n):
+            nodes[i + 1] = np.float64(z_mass[i, c]) if given_mass else \
+                0.5 * (np.float64(z_w[i + 1, c]) + np.float64(z_w[i, c]))
+            vals[i + 1] = np.float64(f[i, c])
+        vals[0], vals[n + 1] = vals[1], vals[n]
+        cum[0] = 0.0
+        for i in range(n + 1):
+            h = nodes[i + 1] - nodes[i]
+            slope[i] = (vals[i + 1] - vals[i]) / h if h > 0 else 0.0
+            seg = 0.5 * (vals[i + 1] + vals[i]) * h
+            cum[i + 1] = seg if i == 0 else cum[i] + seg
+        prev = 0.0
+        for j in range(m1):
+            kk, tt = k[j, c], np.float64(t[j, c])
+            nxt = cum[kk] + tt * (vals[kk] + 0.5 * slope[kk] * tt)
+            if j > 0:
+                out[j - 1, c] = (nxt - prev) / (edges[j] - edges[j - 1])
+            prev = nxt
 
 
 def column_integral(z_w: np.ndarray, f: np.ndarray) -> np.ndarray:

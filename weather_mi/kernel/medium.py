@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..optics.forward_peak import is_grey
 from ..optics.periodic import pad_levels, padded_bbox
 from ..optics.volume import OpticalVolume
 from .jitarrays import aligned_empty
@@ -28,16 +29,34 @@ def phase_arrays(vol: OpticalVolume, packed: bool = False):
         lanes = 4 * max(1, -(-coeffs.shape[-1] // 4))
         return nodes, values, pack_weights(coeffs, out=aligned_empty(coeffs[..., 0].size * lanes))
     nodes, values = prepare_tables(vol.require_phase_tables())
-    sca = np.asarray(vol.albedo, np.float32).mean(axis=-1)
-    sca *= np.asarray(vol.beta_total, np.float32)
-    n_s = len(vol.weights)
+    n_s, shape = len(vol.weights), tuple(vol.beta_total.shape)
     lanes = 4 * max(1, -(-n_s // 4)) if packed else n_s
-    weights = aligned_empty(sca.size * lanes).reshape(sca.shape + (lanes,))
-    for s, w in enumerate(vol.weights):  # written a species at a time: no temporaries
-        np.multiply(w, sca, out=weights[..., s])
+    weights = aligned_empty(int(np.prod(shape)) * lanes).reshape(shape + (lanes,))
+    _scattering_coefficients(vol, weights.reshape(-1, lanes))
     if not packed:
         return nodes, values, weights
     return nodes, values, pack_weights(weights[..., :n_s], out=weights)  # in place: padding 0, clipped
+
+
+def _scattering_coefficients(vol: OpticalVolume, out: np.ndarray) -> None:
+    """beta_sca,s = w_s x (channel-mean albedo x beta_total) into ``out`` ((z y x, >= S) float32), a chunk of voxels
+    at a time: no grid-sized temporaries, and the weights of a ``forward_peak.ScaledWeights`` computed as read."""
+    from ..optics.forward_peak import CHUNK
+    deferred = getattr(vol.weights, "deferred", False)
+    n_s = len(vol.weights)
+    w = None if deferred else np.asarray(vol.weights).reshape(n_s, -1)
+    beta = np.asarray(vol.beta_total, np.float32).reshape(-1)
+    grey = is_grey(vol.albedo)  # one channel: read as three (the same mean as of three equal channels)
+    albedo = np.asarray(vol.albedo, np.float32)
+    albedo = albedo[..., 0].reshape(-1, 1) if grey else albedo.reshape(-1, albedo.shape[-1])
+    for start in range(0, beta.size, CHUNK):
+        part = slice(start, min(start + CHUNK, beta.size))
+        a = np.broadcast_to(albedo[part], (part.stop - start, 3)) if grey else albedo[part]
+        sca = a.mean(axis=-1)
+        sca *= beta[part]
+        ws = vol.weights.chunk(part) if deferred else w[:, part]
+        for s in range(n_s):
+            np.multiply(ws[s], sca, out=out[part, s])
 
 
 def air_in_medium(vol: OpticalVolume):
@@ -85,6 +104,8 @@ def grey_or_rgb(albedo: np.ndarray) -> np.ndarray:
     """The albedo grid (z, y, x, 3) as the medium takes it: one channel (z, y, x, 1) where the three agree
     everywhere (a satellite band's), which a gridvolume holds as given, where three channels it copies."""
     a = np.asarray(albedo)
+    if is_grey(a):  # one channel seen three times: that channel, in place
+        return a[..., :1]
     for c in (1, 2):
         for k in range(a.shape[0]):  # a level at a time: no whole-grid temporaries
             if not np.array_equal(a[k, ..., 0], a[k, ..., c]):
@@ -131,7 +152,9 @@ def medium_dict(vol: OpticalVolume) -> dict:
         "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(beta),
                     "to_world": to_world, "filter_type": "trilinear", "accel": False, **wrap},
         "albedo": {"type": "gridvolume", "data": mi.TensorXf(albedo), "to_world": to_world,
-                   "filter_type": "trilinear", "accel": False, **wrap},
+                   "filter_type": "trilinear", "accel": False, **wrap,
+                   **({} if mi.is_spectral else {"raw": True})},  # RGB: held as given (measured: not raw, a
+        # 3-channel grid is copied, 12 bytes per cell; the lookups are the same, tests/test_kernel_grids.py)
         "scale": 1.0,
         "has_spectral_extinction": air is not None,
         "phase": phase_dict(vol),

@@ -36,8 +36,8 @@ class ReleasedGrid:
         return self.shape[0]
 
     def _refuse(self, *_a, **_k):
-        raise WeatherDataError("OpticalVolume", self.name, f"the grid kept (optical_volume(keep=(..., {self.name!r})))",
-                               "released after the optics to save memory")
+        raise WeatherDataError("OpticalVolume", self.name, f"the grid kept (optical_volume(keep=(..., {self.name!r})), "
+                               "render_reference(release_volume=False))", "released to save memory")
 
     __array__ = __getitem__ = __iter__ = _refuse
 
@@ -47,12 +47,16 @@ class ReleasedGrid:
         self._refuse()
 
 
+GRIDS = ("beta_ext", "beta_total", "albedo", "weights")  # an OpticalVolume's grids
+
+
 @dataclass(frozen=True)
 class OpticalVolume:
     """Everything both renderers consume (docs/design.md). All grids are float32, indexed [z, y, x].
 
     Complete and read-only once built: the fields cannot be reassigned and the grids are read-only views
-    (the arrays given stay the caller's); ``dataclasses.replace`` makes a changed copy.
+    (the arrays given stay the caller's); ``dataclasses.replace`` makes a changed copy. The one change in place
+    is :meth:`release`, which frees grids (reading one then raises).
 
     Attributes
     ----------
@@ -112,9 +116,9 @@ class OpticalVolume:
 
     def __post_init__(self):
         object.__setattr__(self, "periodic", check_periodic(self.periodic))
-        for name in ("beta_ext", "beta_total", "albedo", "weights"):
-            if isinstance(getattr(self, name), ReleasedGrid):
-                continue
+        for name in GRIDS:
+            if isinstance(getattr(self, name), ReleasedGrid) or getattr(getattr(self, name), "deferred", False):
+                continue  # released, or computed where read (``forward_peak.ScaledWeights``)
             view = np.asarray(getattr(self, name)).view()
             view.flags.writeable = False
             object.__setattr__(self, name, view)
@@ -130,6 +134,18 @@ class OpticalVolume:
                                        f"one table per species ({len(self.species)})", f"{len(tables)} tables")
         object.__setattr__(self, "phase_tables", tables)
         object.__setattr__(self, "attrs", dict(self.attrs))
+
+    def release(self, *names: str) -> None:
+        """Free the grids ``names`` (of ``GRIDS``) in place: each becomes a :class:`ReleasedGrid` (its shape kept,
+        reading it raises), for a caller whose renderer holds what it needs of them (``render_reference(
+        release_volume=True)``: the kernel's own grids replace the volume's as they are built). The memory goes
+        once no other volume or array holds the grid."""
+        for name in names:
+            if name not in GRIDS:
+                raise ValueError(f"OpticalVolume.release: {name!r} is not one of {GRIDS}")
+            grid = getattr(self, name)
+            if not isinstance(grid, ReleasedGrid):
+                object.__setattr__(self, name, ReleasedGrid(name, grid.shape))
 
     def require_phase_tables(self) -> tuple:
         """The phase tables, or WeatherDataError when this volume was built without any."""

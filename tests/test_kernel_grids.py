@@ -1,0 +1,144 @@
+"""One copy of each grid the path tracer holds (issue 39, part 1): the delta-scaled weights packed as they are
+computed, a grey band albedo held as one channel, Mitsuba's albedo grid used in place, the volume's grids
+released as the kernel's are built. Every change is a memory change only: the references here are the whole-grid
+float32 expressions the code used before (written out in the test), compared bit for bit, and the rendered image
+with and without the savings.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import weather_mi as wm
+from weather_mi.optics import forward_peak
+from weather_mi.optics.forward_peak import ScaledWeights, delta_scaled, grey_albedo, is_grey, peak_tables
+
+
+def whole_grid_delta(vol, cone_deg=3.0):
+    """(beta_ext', beta_total', albedo', weights') by the whole-grid expressions (forward_peak before the chunks)."""
+    f, _ = peak_tables(vol.phase_tables, cone_deg)
+    f32 = f.astype(np.float32)[:, None, None, None]
+    w = np.asarray(vol.weights)
+    F = np.tensordot(f.astype(np.float32), w, axes=1)
+    omega_mean = np.asarray(vol.albedo).mean(axis=-1)
+    scattering = omega_mean * vol.beta_total
+    beta_ext = np.multiply(f32, w)
+    np.multiply(beta_ext, scattering[None], out=beta_ext)
+    np.maximum(np.subtract(vol.beta_ext, beta_ext, out=beta_ext), 0, out=beta_ext)
+    beta_total = np.multiply(F, scattering)
+    np.maximum(np.subtract(vol.beta_total, beta_total, out=beta_total), 0, out=beta_total)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        albedo = np.asarray(vol.albedo) * ((1 - F) / (1 - omega_mean * F))[..., None]
+        np.copyto(albedo, vol.albedo, where=~(vol.beta_total > 0)[..., None])
+        np.clip(albedo, 0, 1, out=albedo)
+        weights = np.multiply(w, 1 - f32)
+        total = weights.sum(axis=0)
+        np.divide(weights, total, out=weights)
+        np.copyto(weights, np.float32(0), where=~(total > 0))
+    return beta_ext, beta_total, albedo, weights
+
+
+@pytest.fixture(scope="module")
+def storm():
+    return wm.optical_volume(wm.synthetic.cumulus(), "physical", phase_quality="test")
+
+
+@pytest.fixture
+def small_chunks(monkeypatch):
+    monkeypatch.setattr(forward_peak, "CHUNK", 997)  # chunks that end mid-row, a short last one
+
+
+def test_delta_scaling_by_chunks_equals_the_whole_grid_expressions(storm, small_chunks):
+    be, bt, alb, w = whole_grid_delta(storm)
+    assert np.any(bt != storm.beta_total) and np.any(w != storm.weights)  # the scaling changes each grid
+    full = delta_scaled(storm, 3.0)
+    for name, ref in (("beta_ext", be), ("beta_total", bt), ("albedo", alb), ("weights", w)):
+        assert np.array_equal(np.asarray(getattr(full, name)), ref), name
+    lean = delta_scaled(storm, 3.0, species_extinction=False, deferred_weights=True)
+    assert isinstance(lean.weights, ScaledWeights) and lean.weights.shape == w.shape
+    assert np.array_equal(np.asarray(lean.weights), w)
+    assert np.array_equal(lean.weights[2], w[2])
+    assert np.array_equal(lean.albedo, alb) and np.array_equal(lean.beta_total, bt)
+
+
+def test_a_grey_albedo_stays_one_channel_with_the_values_of_three(storm, small_chunks):
+    channel = np.ascontiguousarray(storm.albedo[..., 1])
+    grey = wm.OpticalVolume(storm.species, storm.beta_ext, storm.beta_total, grey_albedo(channel), storm.weights,
+                            storm.bbox, storm.species_set, phase_tables=storm.phase_tables)
+    three = wm.OpticalVolume(storm.species, storm.beta_ext, storm.beta_total, np.repeat(channel[..., None], 3, -1),
+                             storm.weights, storm.bbox, storm.species_set, phase_tables=storm.phase_tables)
+    assert is_grey(grey.albedo) and not is_grey(three.albedo) and not is_grey(storm.albedo)
+    assert grey.albedo.base is not None and np.shares_memory(grey.albedo, grey.albedo[..., 0])
+    a, b = delta_scaled(grey, 3.0), delta_scaled(three, 3.0)
+    assert is_grey(a.albedo)
+    for name in ("beta_total", "albedo", "weights"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    from weather_mi.kernel.medium import grey_or_rgb
+    one = grey_or_rgb(a.albedo)
+    assert one.shape == a.albedo.shape[:3] + (1,) and np.shares_memory(one, a.albedo)
+    assert np.array_equal(one, grey_or_rgb(b.albedo))
+
+
+def test_packed_weights_from_the_deferred_weights_equal_the_whole_grid_ones(storm, small_chunks):
+    from weather_mi.kernel.medium import phase_arrays
+    from weather_mi.kernel.plugins.hydrometeor_mixture import pack_weights
+    _, bt, alb, w = whole_grid_delta(storm)
+    sca = alb.mean(axis=-1)
+    sca *= bt
+    expect = pack_weights(np.moveaxis(w * sca[None], 0, -1))
+    lean = delta_scaled(storm, 3.0, species_extinction=False, deferred_weights=True)
+    for vol in (lean, delta_scaled(storm, 3.0)):
+        nodes, values, packed = phase_arrays(vol, packed=True)
+        assert packed.shape == expect.shape and np.array_equal(packed, expect)
+        assert packed.ctypes.data % 64 == 0
+
+
+def test_release_frees_grids_and_reading_one_raises_naming_it(storm):
+    vol = delta_scaled(storm, 3.0)
+    vol.release("albedo", "weights")
+    assert vol.albedo.shape == storm.albedo.shape and vol.beta_total.shape == storm.beta_total.shape
+    with pytest.raises(wm.WeatherDataError, match="albedo"):
+        np.asarray(vol.albedo)
+    with pytest.raises(wm.WeatherDataError, match="weights"):
+        vol.weights.sum()
+    with pytest.raises(ValueError, match="bbox"):
+        vol.release("bbox")
+    np.asarray(storm.albedo)  # the volume it came from keeps its own
+
+
+def test_mitsubas_albedo_grid_is_used_in_place_with_the_same_lookups():
+    """``raw`` (RGB variants): the gridvolume holds the tensor as given instead of a copy (12 bytes per cell less,
+    measured by ``benchmarks/memory_phases.py``); its lookups, inside [0, 1] and beyond, are those of the copy."""
+    import drjit as dr
+    import mitsuba as mi
+    wm.kernel.variant.set_variant("llvm_ad_rgb")
+    rng = np.random.default_rng(3)
+    a = rng.uniform(-0.2, 1.2, (6, 7, 8, 3)).astype(np.float32)
+    it = dr.zeros(mi.Interaction3f, 4096)
+    it.p = mi.Point3f(rng.uniform(-0.1, 1.1, (3, 4096)).astype(np.float32))
+    out = []
+    for raw in (False, True):
+        grid = mi.TensorXf(a)
+        v = mi.load_dict({"type": "gridvolume", "data": grid, "filter_type": "trilinear", "accel": False, "raw": raw})
+        out.append(np.array(v.eval(it)))
+    assert np.array_equal(out[0], out[1])
+
+
+def test_a_render_that_releases_its_volume_renders_the_same_image(storm):
+    """``render_reference(release_volume=True)`` (the command line's): the same image, bit for bit; the volume's
+    grids are released after it (reading one raises), the rest (bbox, attrs) stays."""
+    (x0, y0, _), (x1, y1, z1) = storm.bbox
+    cam = wm.Camera.orthographic(center=((x0 + x1) / 2, (y0 + y1) / 2, z1 + 1000.0), direction=(0.0, 0.0, -1.0),
+                                 width=x1 - x0, height=y1 - y0)
+    sp = wm.SceneSpec(camera=cam, sun=wm.Sun(200.0, 40.0), width=24, height=18, seed=3)
+    keep = wm.render_reference(sp, storm, spp=4, passes=2, progress=False)
+    mine = wm.OpticalVolume(storm.species, storm.beta_ext, storm.beta_total, storm.albedo, storm.weights, storm.bbox,
+                            storm.species_set, phase_tables=storm.phase_tables, attrs=storm.attrs)
+    released = wm.render_reference(sp, mine, spp=4, passes=2, progress=False, release_volume=True)
+    assert np.array_equal(keep.radiance, released.radiance) and np.array_equal(keep.stderr, released.stderr)
+    assert keep.radiance.max() > 0
+    for name in ("beta_total", "albedo", "weights"):
+        with pytest.raises(wm.WeatherDataError, match=name):
+            np.asarray(getattr(mine, name))
+    assert mine.bbox == storm.bbox
+    np.asarray(storm.weights)  # the other volume over the same arrays keeps them
