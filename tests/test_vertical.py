@@ -1,5 +1,5 @@
-"""The regridding's compiled column pass (``io.vertical.VerticalPlan.average``) against the numpy block
-expressions it replaced (written out here), bit for bit, on terrain-following columns whose target cells reach
+"""The regridding's compiled column passes (``io.vertical.VerticalPlan``, its ``average``) against the numpy
+expressions they replaced (written out here), bit for bit, on terrain-following columns whose target cells reach
 below the surface and above the model top; and against closed forms: a linear profile is reproduced exactly,
 a column's integral is conserved."""
 from __future__ import annotations
@@ -10,29 +10,47 @@ import pytest
 from weather_mi.io.vertical import VerticalPlan, cell_averages
 
 
-def numpy_average(plan, f, dtype):
-    """The block-by-block numpy version (weather-mi before the compiled pass)."""
-    out = np.empty(plan.shape, dtype)
-    dz = np.diff(plan.edges)
-    for sl in plan._blocks():
-        nodes = plan._nodes(sl)
-        fb = f[(slice(None),) + sl]
-        vals = np.concatenate([fb[:1], fb, fb[-1:]], axis=0, dtype=np.float64)
-        slope = np.diff(vals, axis=0)
-        h = np.diff(nodes, axis=0)
-        np.divide(slope, h, out=slope, where=h > 0)
-        slope[h <= 0] = 0.0
-        seg = 0.5 * (vals[1:] + vals[:-1]) * np.diff(nodes, axis=0)
-        cum = np.concatenate([np.zeros_like(seg[:1]), np.cumsum(seg, axis=0)], axis=0)
-        prev = None
-        for j in range(len(plan.edges)):
-            k = plan.k[(j,) + sl][None].astype(np.intp)
-            t = plan.t[(j,) + sl].astype(np.float64)
-            nxt = np.take_along_axis(cum, k, 0)[0] + t * (np.take_along_axis(vals, k, 0)[0]
-                                                          + 0.5 * np.take_along_axis(slope, k, 0)[0] * t)
-            if prev is not None:
-                out[(j - 1,) + sl] = (nxt - prev) / dz[j - 1]
-            prev = nxt
+def numpy_nodes(z_w, z_mass):
+    z_w = np.asarray(z_w, np.float64)
+    z_mass = 0.5 * (z_w[1:] + z_w[:-1]) if z_mass is None else z_mass
+    return np.concatenate([z_w[:1], z_mass, z_w[-1:]], axis=0, dtype=np.float64)
+
+
+def numpy_plan(z_w, edges, z_mass):
+    """(k, t): the plan's numpy expressions (weather-mi before the compiled pass)."""
+    nodes, n = numpy_nodes(z_w, z_mass), z_w.shape[0] - 1
+    k_all, t_all = [], []
+    for e in np.asarray(edges, np.float64):
+        k = np.clip((nodes <= e).sum(axis=0) - 1, 0, n)
+        z0 = np.take_along_axis(nodes, k[None], 0)[0]
+        z1 = np.take_along_axis(nodes, k[None] + 1, 0)[0]
+        k_all.append(k)
+        t_all.append(np.clip(e - z0, 0.0, z1 - z0).astype(np.result_type(z_w.dtype, np.float32)))
+    return np.stack(k_all), np.stack(t_all)
+
+
+def numpy_average(z_w, edges, z_mass, f, dtype):
+    """The average's numpy expressions (weather-mi before the compiled pass)."""
+    k_all, t_all = numpy_plan(z_w, edges, z_mass)
+    nodes = numpy_nodes(z_w, z_mass)
+    out = np.empty((len(edges) - 1,) + f.shape[1:], dtype)
+    dz = np.diff(np.asarray(edges, np.float64))
+    vals = np.concatenate([f[:1], f, f[-1:]], axis=0, dtype=np.float64)
+    slope = np.diff(vals, axis=0)
+    h = np.diff(nodes, axis=0)
+    np.divide(slope, h, out=slope, where=h > 0)
+    slope[h <= 0] = 0.0
+    seg = 0.5 * (vals[1:] + vals[:-1]) * np.diff(nodes, axis=0)
+    cum = np.concatenate([np.zeros_like(seg[:1]), np.cumsum(seg, axis=0)], axis=0)
+    prev = None
+    for j in range(len(edges)):
+        k = k_all[j][None].astype(np.intp)
+        t = t_all[j].astype(np.float64)
+        nxt = np.take_along_axis(cum, k, 0)[0] + t * (np.take_along_axis(vals, k, 0)[0]
+                                                      + 0.5 * np.take_along_axis(slope, k, 0)[0] * t)
+        if prev is not None:
+            out[j - 1] = (nxt - prev) / dz[j - 1]
+        prev = nxt
     return out
 
 
@@ -46,15 +64,15 @@ def columns(n=30, ny=7, nx=9, seed=0):
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 @pytest.mark.parametrize("given_mass", [False, True])
-def test_compiled_average_equals_the_numpy_blocks_bit_for_bit(dtype, given_mass, monkeypatch):
-    import weather_mi.io.vertical as vertical
-    monkeypatch.setattr(vertical, "BLOCK_VALUES", 200)  # several blocks of rows
+def test_compiled_plan_and_average_equal_the_numpy_expressions_bit_for_bit(dtype, given_mass):
     z_w, f = columns()
     z_mass = (0.3 * z_w[1:] + 0.7 * z_w[:-1]).astype(np.float32) if given_mass else None
     edges = np.linspace(-300.0, float(z_w[-1].max()) + 700.0, 41)  # below every surface, above every top
     plan = VerticalPlan(z_w, edges, z_mass)
+    k, t = numpy_plan(z_w, edges, z_mass)
+    assert np.array_equal(plan.k, k) and plan.t.dtype == t.dtype and np.array_equal(plan.t, t)
     got = plan.average(f, dtype=dtype)
-    assert got.dtype == dtype and np.array_equal(got, numpy_average(plan, f, dtype))
+    assert got.dtype == dtype and np.array_equal(got, numpy_average(z_w, edges, z_mass, f, dtype))
     below = edges[1:, None, None] <= z_w[0][None]  # cells under the surface, over the top: empty
     above = edges[:-1, None, None] >= z_w[-1][None]
     assert below.any() and above.any() and np.all(got[below | above] == 0) and np.any(got > 0)

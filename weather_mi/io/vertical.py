@@ -9,15 +9,14 @@ exactly; cells entirely below the terrain are zero.
 
 Memory and time: a :class:`VerticalPlan` finds, once for every field, the node segment of each target
 edge in each column (1 byte per target cell, and its offset in the segment, 4 bytes for float32 heights); each field is then
-regridded in blocks of rows (float64 inside a block only), into a float32 output by default. A field
-costs its input, its output and a block's temporaries, never a float64 copy of the whole field.
+regridded column by column in one compiled pass (numba, parallel; float64 inside a column only, the float
+operations of the numpy expressions it replaced, in their order), into a float32 output by default. A field
+costs its input and its output, never a float64 copy of the whole field.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit, prange
-
-BLOCK_VALUES = 1 << 21  # node values per block of rows (float64 temporaries of ~16 MiB each)
 
 
 class VerticalPlan:
@@ -29,37 +28,25 @@ class VerticalPlan:
         self.z_w, self.z_mass = z_w, z_mass
         self.edges = np.asarray(edges, np.float64)
         n, cols = z_w.shape[0] - 1, z_w.shape[1:]
-        rows = z_w.shape[1] if z_w.ndim > 1 else 1
-        per_row = (n + 2) * int(np.prod(cols[1:], dtype=np.int64)) if z_w.ndim > 2 else n + 2
-        self.block = max(1, min(rows, BLOCK_VALUES // max(per_row, 1)))
         kind = np.uint8 if n + 1 < 256 else np.uint16
         self.k = np.empty((len(self.edges),) + cols, kind)   # segment [nodes[k], nodes[k+1]] holding the edge
         self.t = np.empty((len(self.edges),) + cols, np.result_type(z_w.dtype, np.float32))  # the edge's height above nodes[k], clipped
-        for sl in self._blocks():
-            nodes = self._nodes(sl)
-            for j, e in enumerate(self.edges):
-                k = np.clip((nodes <= e).sum(axis=0) - 1, 0, n)
-                z0 = np.take_along_axis(nodes, k[None], 0)[0]
-                z1 = np.take_along_axis(nodes, k[None] + 1, 0)[0]
-                self.k[(j,) + sl] = k
-                self.t[(j,) + sl] = np.clip(e - z0, 0.0, z1 - z0)  # 0 below the surface: F = 0 there
+        z_w2, z_mass2, given = self._columns()
+        m1 = len(self.edges)
+        _plan_columns(z_w2, z_mass2, given, self.edges, self.k.reshape(m1, -1), self.t.reshape(m1, -1))
 
     @property
     def shape(self) -> tuple[int, ...]:
         """Shape of a regridded field: (m,) + the columns' shape."""
         return (len(self.edges) - 1,) + self.z_w.shape[1:]
 
-    def _blocks(self):
-        if self.z_w.ndim == 1:
-            yield ()
-            return
-        for r0 in range(0, self.z_w.shape[1], self.block):
-            yield (slice(r0, r0 + self.block),)
-
-    def _nodes(self, sl) -> np.ndarray:
-        z_w = np.asarray(self.z_w[(slice(None),) + sl], np.float64)
-        z_mass = 0.5 * (z_w[1:] + z_w[:-1]) if self.z_mass is None else self.z_mass[(slice(None),) + sl]
-        return np.concatenate([z_w[:1], z_mass, z_w[-1:]], axis=0, dtype=np.float64)
+    def _columns(self):
+        """(z_w (n+1, columns), z_mass (n, columns) or a placeholder, whether z_mass is given)."""
+        n = self.z_w.shape[0] - 1
+        z_w = np.ascontiguousarray(self.z_w).reshape(n + 1, -1)
+        if self.z_mass is None:
+            return z_w, np.zeros((1, 1), z_w.dtype), False
+        return z_w, np.ascontiguousarray(self.z_mass).reshape(n, -1), True
 
     def average(self, f: np.ndarray, out: np.ndarray | None = None, dtype=np.float32) -> np.ndarray:
         """Average of each column's reconstruction of ``f`` ((n, ny, nx) on the mass levels) over the target
@@ -67,13 +54,44 @@ class VerticalPlan:
         columns (:func:`_average_columns`: float64 inside a column, the float operations of the numpy
         expressions it replaced, in their order)."""
         out = np.empty(self.shape, dtype) if out is None else out
-        n = self.z_w.shape[0] - 1
-        cols = int(np.prod(self.z_w.shape[1:], dtype=np.int64))
-        z_mass = np.zeros((1, 1)) if self.z_mass is None else np.ascontiguousarray(self.z_mass).reshape(n, cols)
-        _average_columns(np.ascontiguousarray(self.z_w).reshape(n + 1, cols), np.ascontiguousarray(f).reshape(n, cols),
-                         self.k.reshape(len(self.edges), cols), self.t.reshape(len(self.edges), cols), self.edges,
-                         z_mass, self.z_mass is not None, out.reshape(len(self.edges) - 1, cols))
+        z_w, z_mass, given = self._columns()
+        m1 = len(self.edges)
+        _average_columns(z_w, np.ascontiguousarray(f).reshape(z_w.shape[0] - 1, -1), self.k.reshape(m1, -1),
+                         self.t.reshape(m1, -1), self.edges, z_mass, given, out.reshape(m1 - 1, -1))
         return out
+
+
+@njit(cache=True)
+def _column_nodes(z_w, z_mass, given_mass, c, nodes):  # pragma: no cover - compiled
+    """Column c's reconstruction nodes (float64): the surface, the mass levels (given, or the mid-points of the
+    w-levels), the top."""
+    n = z_w.shape[0] - 1
+    nodes[0], nodes[n + 1] = np.float64(z_w[0, c]), np.float64(z_w[n, c])
+    for i in range(n):
+        nodes[i + 1] = np.float64(z_mass[i, c]) if given_mass else \
+            0.5 * (np.float64(z_w[i + 1, c]) + np.float64(z_w[i, c]))
+
+
+@njit(parallel=True, cache=True)
+def _plan_columns(z_w, z_mass, given_mass, edges, k, t):  # pragma: no cover - compiled
+    """``VerticalPlan``'s segments ``k`` (the count of nodes at or below the edge, less one, in [0, n]) and
+    offsets ``t`` (the edge's height above node k, clipped to the segment) of every edge in every column."""
+    n, cols, m1 = z_w.shape[0] - 1, z_w.shape[1], edges.shape[0]
+    for c in prange(cols):
+        nodes = np.empty(n + 2)
+        _column_nodes(z_w, z_mass, given_mass, c, nodes)
+        for j in range(m1):
+            e = edges[j]
+            below = 0
+            for i in range(n + 2):
+                if nodes[i] <= e:
+                    below += 1
+            kk = min(max(below - 1, 0), n)
+            v = e - nodes[kk]
+            v = v if v > 0.0 else 0.0
+            hi = nodes[kk + 1] - nodes[kk]
+            k[j, c] = kk
+            t[j, c] = hi if v > hi else v  # 0 below the surface: F = 0 there
 
 
 @njit(parallel=True, cache=True)
@@ -85,10 +103,8 @@ def _average_columns(z_w, f, k, t, edges, z_mass, given_mass, out):  # pragma: n
     for c in prange(cols):
         nodes, vals = np.empty(n + 2), np.empty(n + 2)
         slope, cum = np.empty(n + 1), np.empty(n + 2)
-        nodes[0], nodes[n + 1] = np.float64(z_w[0, c]), np.float64(z_w[n, c])
+        _column_nodes(z_w, z_mass, given_mass, c, nodes)
         for i in range(n):
-            nodes[i + 1] = np.float64(z_mass[i, c]) if given_mass else \
-                0.5 * (np.float64(z_w[i + 1, c]) + np.float64(z_w[i, c]))
             vals[i + 1] = np.float64(f[i, c])
         vals[0], vals[n + 1] = vals[1], vals[n]
         cum[0] = 0.0
