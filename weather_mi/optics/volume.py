@@ -19,7 +19,7 @@ import xarray as xr
 from ..errors import WeatherDataError
 from ..io.hydrometeors import DIMS, SPECIES_NAMES, bbox_of, check_species_name, validate
 from .periodic import check_periodic, periodic_of_attrs
-from .species import SpeciesSet, physical_albedo, preset
+from .species import RGB_WAVELENGTHS_M, SpeciesSet, absorbing_material, physical_albedo, preset
 from ..io.terrain import Terrain
 from ..io.budget import check_fits
 
@@ -298,9 +298,6 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
     return total, largest
 
 
-ALBEDO_CHUNK = 1 << 22  # voxels of a grid at a time in ``_voxel_albedo``
-
-
 def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_sum: np.ndarray) -> None:
     """Eq. 5's numerator with each voxel's own albedo: sum_s omega_s(r_eff) beta_s, the weak-absorption albedo
     (``species.physical_albedo``) of the model's radius in place of the species' one, added to ``albedo_sum``
@@ -311,15 +308,12 @@ def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_
         physical = tuple(float(a) for a in physical_albedo(s.phase_class, np.float64(s.radius_m), s.density_kg_m3))
         if var not in hyd or tuple(s.albedo_rgb) != physical:
             continue
-        r = np.asarray(hyd[var].values).reshape(-1)
-        beta = beta_ext[i].reshape(-1)
-        for start in range(0, beta.size, ALBEDO_CHUNK):  # float64 temporaries of a chunk, not of the grid
-            part = slice(start, start + ALBEDO_CHUNK)
-            idx = np.flatnonzero((beta[part] > 0) & (r[part] > 0)) + start
-            omegas = physical_albedo(s.phase_class, r[idx].astype(np.float64), s.density_kg_m3)
-            b = beta[idx].astype(np.float64)
-            for c in range(3):
-                albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
+        from .mixture_kernels import add_voxel_albedo  # one compiled pass (float64 inside, float32 sums)
+        scale, n_rgb, k_rgb = absorbing_material(s.phase_class, s.density_kg_m3)
+        n_term = np.array([n ** 3 - (n * n - 1.0) ** 1.5 for n in n_rgb])  # species.albedo_of_radius's
+        add_voxel_albedo(beta_ext[i].reshape(-1), np.asarray(hyd[var].values).reshape(-1),
+                         1.0 if scale is None else scale, np.asarray(RGB_WAVELENGTHS_M, np.float64),
+                         np.asarray(k_rgb, np.float64), n_term, np.asarray(s.albedo_rgb, np.float64), albedo_sum)
 
 
 def _release(hyd: xr.Dataset, names, kinds) -> None:
