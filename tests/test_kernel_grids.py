@@ -59,6 +59,8 @@ def test_delta_scaling_by_chunks_equals_the_whole_grid_expressions(storm, small_
     assert np.array_equal(np.asarray(lean.weights), w)
     assert np.array_equal(lean.weights[2], w[2])
     assert np.array_equal(lean.albedo, alb) and np.array_equal(lean.beta_total, bt)
+    for a in (lean.albedo, lean.beta_total):  # Mitsuba's 3-channel grids copy unaligned data (optics.aligned)
+        assert a.ctypes.data % 64 == 0
 
 
 def test_a_grey_albedo_stays_one_channel_with_the_values_of_three(storm, small_chunks):
