@@ -202,7 +202,11 @@ def test_voxel_albedo_compiled_equals_the_numpy_expressions():
     sp = wm.species.preset("physical")
     start = rng.uniform(0, 1e-3, (hyd["rho_air"].size, 3)).astype(np.float32)
     compiled, reference = start.copy(), start.copy()
-    volume._voxel_albedo(hyd, sp, np.asarray(whole.beta_ext), compiled)
+    beta_ext = np.asarray(whole.beta_ext)
+    radii = {s.name: volume._albedo_radii(hyd, s, beta_ext[i]) for i, s in enumerate(sp)}
+    assert all(r is not None for r in radii.values())
+    assert 0 < radii["cloud"][0].size < beta_ext[0].size  # the voxels with mass only
+    volume._voxel_albedo(radii, sp, beta_ext, compiled)
     numpy_voxel_albedo(hyd, sp, np.asarray(whole.beta_ext), reference)
     assert not np.array_equal(reference, start)
     np.testing.assert_array_equal(compiled, reference)

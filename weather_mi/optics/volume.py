@@ -298,22 +298,37 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
     return total, largest
 
 
-def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_sum: np.ndarray) -> None:
+def _albedo_radii(hyd: xr.Dataset, s, beta: np.ndarray):
+    """(voxels (flat indices), radii (m, float32)) of species ``s`` where beta > 0 and its ``r_eff_<species>`` > 0,
+    for :func:`_voxel_albedo`, kept instead of the radius grid (8 bytes per voxel with mass, not 4 per cell: the
+    grid goes once its Eq. 4 is done); None where ``hyd`` has no radius or the species' albedo is not the
+    physical one of its radius (an overridden, artistic albedo is kept)."""
+    var = f"r_eff_{s.name}"
+    physical = tuple(float(a) for a in physical_albedo(s.phase_class, np.float64(s.radius_m), s.density_kg_m3))
+    if var not in hyd or tuple(s.albedo_rgb) != physical:
+        return None
+    r = np.asarray(hyd[var].values).reshape(-1)
+    idx = np.flatnonzero((beta.reshape(-1) > 0) & (r > 0))
+    idx = idx.astype(np.int32) if r.size < 2 ** 31 else idx
+    return idx, r[idx]
+
+
+def _voxel_albedo(radii: dict, sp: SpeciesSet, beta_ext: np.ndarray, albedo_sum: np.ndarray) -> None:
     """Eq. 5's numerator with each voxel's own albedo: sum_s omega_s(r_eff) beta_s, the weak-absorption albedo
     (``species.physical_albedo``) of the model's radius in place of the species' one, added to ``albedo_sum``
-    ((N, 3), in place) for the species with ``r_eff_<species>`` whose albedo is the physical one of its radius
-    (an overridden, artistic albedo is kept). The Eq. 8 weights keep the species' albedo (co-albedos < 1e-3)."""
+    ((N, 3), in place) for the species of ``radii`` ({name: :func:`_albedo_radii`}), in species order, in one
+    compiled pass each (float64 inside, float32 sums). The Eq. 8 weights keep the species' albedo (co-albedos
+    < 1e-3)."""
+    from .mixture_kernels import add_voxel_albedo
     for i, s in enumerate(sp):
-        var = f"r_eff_{s.name}"
-        physical = tuple(float(a) for a in physical_albedo(s.phase_class, np.float64(s.radius_m), s.density_kg_m3))
-        if var not in hyd or tuple(s.albedo_rgb) != physical:
+        if radii.get(s.name) is None:
             continue
-        from .mixture_kernels import add_voxel_albedo  # one compiled pass (float64 inside, float32 sums)
+        idx, r = radii[s.name]
         scale, n_rgb, k_rgb = absorbing_material(s.phase_class, s.density_kg_m3)
         n_term = np.array([n ** 3 - (n * n - 1.0) ** 1.5 for n in n_rgb])  # species.albedo_of_radius's
-        add_voxel_albedo(beta_ext[i].reshape(-1), np.asarray(hyd[var].values).reshape(-1),
-                         1.0 if scale is None else scale, np.asarray(RGB_WAVELENGTHS_M, np.float64),
-                         np.asarray(k_rgb, np.float64), n_term, np.asarray(s.albedo_rgb, np.float64), albedo_sum)
+        add_voxel_albedo(idx, beta_ext[i].reshape(-1), r, 1.0 if scale is None else scale,
+                         np.asarray(RGB_WAVELENGTHS_M, np.float64), np.asarray(k_rgb, np.float64), n_term,
+                         np.asarray(s.albedo_rgb, np.float64), albedo_sum)
 
 
 def _release(hyd: xr.Dataset, names, kinds) -> None:
@@ -334,11 +349,14 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
     beta_ext = np.empty((n_s,) + shape, np.float32)
     weights = np.empty((n_s,) + shape, np.float32)
     from .mixture_kernels import finish_albedo, mix
+    radii = {}
     for i, s in enumerate(sp):
         q = np.ascontiguousarray(hyd[f"q_{s.name}"].values, np.float32)
         s.beta_ext_per_m(rho, q, _radius_field(hyd, s.name, s.radius_m, use_model), out=beta_ext[i])  # Eq. 4
         del q
-        _release(hyd, [f"q_{s.name}"] + ([f"r_eff_{s.name}"] if not (voxel_albedo and use_model) else []), release)
+        if voxel_albedo and use_model:  # the radii of the voxels with mass, for the albedo after the mixture
+            radii[s.name] = _albedo_radii(hyd, s, beta_ext[i])
+        _release(hyd, [f"q_{s.name}", f"r_eff_{s.name}"], release)
     # Eq. 6, Eq. 5's numerator sum omega_s beta_s and the Eq. 8 weights from the scattering coefficients
     # beta_sca,s = omega_s beta_s (channel-mean albedo; the channels differ by < 1e-3 for every hydrometeor),
     # in one pass (optics.mixture_kernels)
@@ -348,9 +366,8 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
     albedo = np.empty(shape + (3,), np.float32)
     mix(beta_ext.reshape(n_s, -1), rgb, mean_albedo, beta_total.reshape(-1), albedo.reshape(-1, 3),
         weights.reshape(n_s, -1))
-    if voxel_albedo and use_model:
-        _voxel_albedo(hyd, sp, beta_ext, albedo.reshape(-1, 3))
-    _release(hyd, [f"r_eff_{s.name}" for s in sp], release)
+    _voxel_albedo(radii, sp, beta_ext, albedo.reshape(-1, 3))
+    del radii
     # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
     # trilinear interpolation at cloud edges does not blend in a dark value
     total_ext = float(beta_total.sum(dtype=np.float64))
