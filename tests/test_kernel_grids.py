@@ -144,3 +144,44 @@ def test_a_render_that_releases_its_volume_renders_the_same_image(storm):
             np.asarray(getattr(mine, name))
     assert mine.bbox == storm.bbox
     np.asarray(storm.weights)  # the other volume over the same arrays keeps them
+
+
+def test_five_species_hand_the_plugin_a_packet_and_a_tail_with_the_same_values(storm, small_chunks):
+    """``kernel.medium.kernel_weights``: for 4 P + 1 species the last one's grid of its own (20 bytes per cell for
+    five, not 32); its values are the padded packets' (``phase_arrays(packed=True)``), and the plugin's lookups
+    (``weights_tail``) give the same phase function and sampling, bit for bit, as from the padded packets."""
+    import drjit as dr
+    import mitsuba as mi
+    from weather_mi.kernel.medium import kernel_weights, phase_arrays
+    from weather_mi.kernel.plugins.hydrometeor_mixture import bbox_transform
+    wm.kernel.variant.set_variant("llvm_ad_rgb")
+    w = np.random.default_rng(4).uniform(0, 1, storm.weights.shape).astype(np.float32)  # every species present
+    w /= w.sum(axis=0)
+    mixed = wm.OpticalVolume(storm.species, storm.beta_ext, storm.beta_total, storm.albedo, w, storm.bbox,
+                             storm.species_set, phase_tables=storm.phase_tables)
+    vol = delta_scaled(mixed, 3.0, species_extinction=False, deferred_weights=True)
+    nodes, values, padded = phase_arrays(vol, packed=True)
+    packets, tail = kernel_weights(vol)
+    assert padded.shape[-2:] == (2, 4) and packets.shape[-2:] == (1, 4) and tail.shape == packets.shape[:3]
+    assert np.array_equal(packets[..., 0, :], padded[..., 0, :]) and np.array_equal(tail, padded[..., 1, 0])
+    assert not np.any(padded[..., 1, 1:]) and tail.max() > 0
+    common = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
+              "to_world": bbox_transform(vol.bbox)}
+    a = mi.load_dict({**common, "weights": mi.TensorXf(padded)})
+    b = mi.load_dict({**common, "weights": mi.TensorXf(packets), "weights_tail": mi.TensorXf(tail)})
+    rng = np.random.default_rng(5)
+    n = 4096
+    (x0, y0, z0), (x1, y1, z1) = vol.bbox
+    mei = dr.zeros(mi.MediumInteraction3f, n)
+    mei.p = mi.Point3f(*(rng.uniform(lo, hi, n).astype(np.float32) for lo, hi in ((x0, x1), (y0, y1), (z0, z1))))
+    d = rng.normal(size=(3, n)).astype(np.float32)
+    mei.wi = dr.normalize(mi.Vector3f(*d))
+    mei.sh_frame = mi.Frame3f(mei.wi)
+    wo = dr.normalize(mi.Vector3f(*rng.normal(size=(3, n)).astype(np.float32)))
+    ctx = mi.PhaseFunctionContext(None)
+    s1, s2 = mi.Float(rng.uniform(size=n).astype(np.float32)), mi.Point2f(*rng.uniform(size=(2, n)).astype(np.float32))
+    for out_a, out_b in ((a.eval_pdf(ctx, mei, wo), b.eval_pdf(ctx, mei, wo)),
+                         (a.sample(ctx, mei, s1, s2), b.sample(ctx, mei, s1, s2))):
+        for x, y in zip(out_a, out_b):
+            assert np.array_equal(np.array(x), np.array(y))
+    assert np.array_equal(np.array(mi.traverse(b)["weights"]), np.array(mi.traverse(a)["weights"]))
