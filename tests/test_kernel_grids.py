@@ -185,3 +185,33 @@ def test_five_species_hand_the_plugin_a_packet_and_a_tail_with_the_same_values(s
         for x, y in zip(out_a, out_b):
             assert np.array_equal(np.array(x), np.array(y))
     assert np.array_equal(np.array(mi.traverse(b)["weights"]), np.array(mi.traverse(a)["weights"]))
+
+
+def whole_grid_majorants(a, cell, safety):
+    """``majorants.majorant_grid`` as whole-grid dilations (weather-mi before the slabs)."""
+    d = np.asarray(a, np.float32)
+    d = d.max(axis=3) if d.ndim == 4 else d
+    for axis in range(3):
+        lo, hi = [slice(None)] * 3, [slice(None)] * 3
+        lo[axis], hi[axis] = slice(0, -1), slice(1, None)
+        e = d.copy()
+        np.maximum(e[tuple(hi)], d[tuple(lo)], out=e[tuple(hi)])
+        np.maximum(e[tuple(lo)], d[tuple(hi)], out=e[tuple(lo)])
+        d = e
+    for axis in range(3):
+        d = np.maximum.reduceat(d, np.arange(0, d.shape[axis], cell), axis=axis)
+    return (np.maximum(d, 0.0).astype(np.float64) * float(safety)).astype(np.float32)
+
+
+@pytest.mark.parametrize("shape", [(7, 9, 10), (1, 5, 3), (6, 1, 1), (5, 4, 6, 3)])
+@pytest.mark.parametrize("cell", [1, 2, 3, 4])
+def test_coarse_majorants_by_slabs_equal_the_whole_grid_dilations(shape, cell):
+    from weather_mi.kernel.plugins.majorants import SAFETY, majorant_grid
+    a = np.random.default_rng(cell).normal(size=shape).astype(np.float32)  # negatives count as 0
+    got = majorant_grid(a, cell)
+    assert np.array_equal(got, whole_grid_majorants(a, cell, SAFETY))
+    grey = a if a.ndim == 3 else a.max(axis=3)  # and a bound of every voxel of its dilated cell (the definition)
+    for (k, j, i), m in np.ndenumerate(got):
+        box = grey[max(k * cell - 1, 0):(k + 1) * cell + 1, max(j * cell - 1, 0):(j + 1) * cell + 1,
+                   max(i * cell - 1, 0):(i + 1) * cell + 1]
+        assert m == np.float32(max(float(box.max()), 0.0) * SAFETY)
