@@ -3,9 +3,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..optics.aligned import aligned_empty  # noqa: F401 (re-exported: the kernels' import)
-
 CHUNK = 1 << 20  # values converted at a time
+
+
+def aligned_empty(n: int) -> np.ndarray:
+    """An uninitialised float32 array of ``n`` values whose data start on a 64-byte boundary (a view into a
+    buffer 16 values longer)."""
+    buf = np.empty(int(n) + 16, dtype=np.float32)
+    off = (-buf.ctypes.data % 64) // 4
+    return buf[off:off + int(n)]
 
 
 def aligned_float(mi, a) -> "mi.Float":

@@ -184,9 +184,7 @@ def medium_dict(vol: OpticalVolume) -> dict:
         "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(beta),
                     "to_world": to_world, "filter_type": "trilinear", "accel": False, **wrap},
         "albedo": {"type": "gridvolume", "data": mi.TensorXf(albedo), "to_world": to_world,
-                   "filter_type": "trilinear", "accel": False, **wrap,
-                   **({} if mi.is_spectral else {"raw": True})},  # RGB: held as given (measured: not raw, a
-        # 3-channel grid is copied, 12 bytes per cell; the lookups are the same, tests/test_kernel_grids.py)
+                   "filter_type": "trilinear", "accel": False, **wrap},
         "scale": 1.0,
         "has_spectral_extinction": air is not None,
         "phase": phase_dict(vol),

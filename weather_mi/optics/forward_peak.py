@@ -39,7 +39,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from .aligned import aligned_grid
 from .volume import OpticalVolume
 from .phase.table import PhaseTable
 
@@ -174,8 +173,8 @@ def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG, *, spec
     grey = is_grey(vol.albedo)
     bt_in = np.asarray(vol.beta_total).reshape(-1)
     alb_in = np.asarray(vol.albedo)[..., 0].reshape(-1, 1) if grey else np.asarray(vol.albedo).reshape(-1, 3)
-    beta_total = aligned_grid(vol.beta_total.shape)  # the kernel's grids: used there in place (optics.aligned)
-    albedo = aligned_grid(vol.beta_total.shape + (alb_in.shape[1],))
+    beta_total = np.empty(vol.beta_total.shape, np.float32)
+    albedo = np.empty(vol.beta_total.shape + (alb_in.shape[1],), np.float32)
     bt_out, alb_out = beta_total.reshape(-1), albedo.reshape(-1, alb_in.shape[1])
     beta_ext = vol.beta_ext
     if species_extinction:
