@@ -33,7 +33,8 @@ class VerticalPlan:
         self.t = np.empty((len(self.edges),) + cols, np.result_type(z_w.dtype, np.float32))  # the edge's height above nodes[k], clipped
         z_w2, z_mass2, given = self._columns()
         m1 = len(self.edges)
-        _plan_columns(z_w2, z_mass2, given, self.edges, self.k.reshape(m1, -1), self.t.reshape(m1, -1))
+        _plan_columns(z_w2, z_mass2, given, self.edges, bool(np.all(np.diff(self.edges) >= 0)),
+                      self.k.reshape(m1, -1), self.t.reshape(m1, -1))
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -61,65 +62,89 @@ class VerticalPlan:
         return out
 
 
+COLUMNS = 256  # columns per block of the compiled passes: their levels' values side by side in memory
+
+
 @njit(cache=True)
-def _column_nodes(z_w, z_mass, given_mass, c, nodes):  # pragma: no cover - compiled
-    """Column c's reconstruction nodes (float64): the surface, the mass levels (given, or the mid-points of the
-    w-levels), the top."""
+def _block_nodes(z_w, z_mass, given_mass, c0, c1):  # pragma: no cover - compiled
+    """The reconstruction nodes (float64, (n + 2, c1 - c0)) of columns c0 .. c1 - 1: the surface, the mass levels
+    (given, or the mid-points of the w-levels), the top."""
     n = z_w.shape[0] - 1
-    nodes[0], nodes[n + 1] = np.float64(z_w[0, c]), np.float64(z_w[n, c])
+    nodes = np.empty((n + 2, c1 - c0))
+    for c in range(c1 - c0):
+        nodes[0, c], nodes[n + 1, c] = np.float64(z_w[0, c0 + c]), np.float64(z_w[n, c0 + c])
     for i in range(n):
-        nodes[i + 1] = np.float64(z_mass[i, c]) if given_mass else \
-            0.5 * (np.float64(z_w[i + 1, c]) + np.float64(z_w[i, c]))
+        for c in range(c1 - c0):
+            nodes[i + 1, c] = np.float64(z_mass[i, c0 + c]) if given_mass else \
+                0.5 * (np.float64(z_w[i + 1, c0 + c]) + np.float64(z_w[i, c0 + c]))
+    return nodes
 
 
 @njit(parallel=True, cache=True)
-def _plan_columns(z_w, z_mass, given_mass, edges, k, t):  # pragma: no cover - compiled
+def _plan_columns(z_w, z_mass, given_mass, edges, edges_increasing, k, t):  # pragma: no cover - compiled
     """``VerticalPlan``'s segments ``k`` (the count of nodes at or below the edge, less one, in [0, n]) and
     offsets ``t`` (the edge's height above node k, clipped to the segment) of every edge in every column."""
     n, cols, m1 = z_w.shape[0] - 1, z_w.shape[1], edges.shape[0]
-    for c in prange(cols):
-        nodes = np.empty(n + 2)
-        _column_nodes(z_w, z_mass, given_mass, c, nodes)
-        for j in range(m1):
-            e = edges[j]
+    for b in prange((cols + COLUMNS - 1) // COLUMNS):
+        c0 = b * COLUMNS
+        c1 = min(c0 + COLUMNS, cols)
+        nodes = _block_nodes(z_w, z_mass, given_mass, c0, c1)
+        for c in range(c1 - c0):
+            ordered = edges_increasing
+            for i in range(n + 1):
+                ordered = ordered and nodes[i, c] <= nodes[i + 1, c]
             below = 0
-            for i in range(n + 2):
-                if nodes[i] <= e:
-                    below += 1
-            kk = min(max(below - 1, 0), n)
-            v = e - nodes[kk]
-            v = v if v > 0.0 else 0.0
-            hi = nodes[kk + 1] - nodes[kk]
-            k[j, c] = kk
-            t[j, c] = hi if v > hi else v  # 0 below the surface: F = 0 there
+            for j in range(m1):
+                e = edges[j]
+                if ordered:  # the count of nodes at or below e: where the last edge's count ended, onwards
+                    while below < n + 2 and nodes[below, c] <= e:
+                        below += 1
+                else:
+                    below = 0
+                    for i in range(n + 2):
+                        if nodes[i, c] <= e:
+                            below += 1
+                kk = min(max(below - 1, 0), n)
+                v = e - nodes[kk, c]
+                v = v if v > 0.0 else 0.0
+                hi = nodes[kk + 1, c] - nodes[kk, c]
+                k[j, c0 + c] = kk
+                t[j, c0 + c] = hi if v > hi else v  # 0 below the surface: F = 0 there
 
 
 @njit(parallel=True, cache=True)
 def _average_columns(z_w, f, k, t, edges, z_mass, given_mass, out):  # pragma: no cover - compiled
-    """``VerticalPlan.average`` per column c: the nodes (surface, mass levels, top), the values held constant
+    """``VerticalPlan.average`` per column: the nodes (surface, mass levels, top), the values held constant
     beyond the lowest and top mass levels, the slopes, the cumulative trapezoid integral F, and each target cell's
-    (F(e_j+1) - F(e_j)) / dz from the plan's segments ``k`` and offsets ``t``. Arrays (levels, columns)."""
+    (F(e_j+1) - F(e_j)) / dz from the plan's segments ``k`` and offsets ``t``. Arrays (levels, columns), worked
+    through in blocks of ``COLUMNS`` columns (each level's values of a block contiguous)."""
     n, cols, m1 = f.shape[0], f.shape[1], edges.shape[0]
-    for c in prange(cols):
-        nodes, vals = np.empty(n + 2), np.empty(n + 2)
-        slope, cum = np.empty(n + 1), np.empty(n + 2)
-        _column_nodes(z_w, z_mass, given_mass, c, nodes)
+    for b in prange((cols + COLUMNS - 1) // COLUMNS):
+        c0 = b * COLUMNS
+        c1 = min(c0 + COLUMNS, cols)
+        w = c1 - c0
+        nodes = _block_nodes(z_w, z_mass, given_mass, c0, c1)
+        vals, slope, cum = np.empty((n + 2, w)), np.empty((n + 1, w)), np.empty((n + 2, w))
         for i in range(n):
-            vals[i + 1] = np.float64(f[i, c])
-        vals[0], vals[n + 1] = vals[1], vals[n]
-        cum[0] = 0.0
+            for c in range(w):
+                vals[i + 1, c] = np.float64(f[i, c0 + c])
+        for c in range(w):
+            vals[0, c], vals[n + 1, c] = vals[1, c], vals[n, c]
+            cum[0, c] = 0.0
         for i in range(n + 1):
-            h = nodes[i + 1] - nodes[i]
-            slope[i] = (vals[i + 1] - vals[i]) / h if h > 0 else 0.0
-            seg = 0.5 * (vals[i + 1] + vals[i]) * h
-            cum[i + 1] = seg if i == 0 else cum[i] + seg
-        prev = 0.0
+            for c in range(w):
+                h = nodes[i + 1, c] - nodes[i, c]
+                slope[i, c] = (vals[i + 1, c] - vals[i, c]) / h if h > 0 else 0.0
+                seg = 0.5 * (vals[i + 1, c] + vals[i, c]) * h
+                cum[i + 1, c] = seg if i == 0 else cum[i, c] + seg
+        prev = np.zeros(w)
         for j in range(m1):
-            kk, tt = k[j, c], np.float64(t[j, c])
-            nxt = cum[kk] + tt * (vals[kk] + 0.5 * slope[kk] * tt)
-            if j > 0:
-                out[j - 1, c] = (nxt - prev) / (edges[j] - edges[j - 1])
-            prev = nxt
+            for c in range(w):
+                kk, tt = k[j, c0 + c], np.float64(t[j, c0 + c])
+                nxt = cum[kk, c] + tt * (vals[kk, c] + 0.5 * slope[kk, c] * tt)
+                if j > 0:
+                    out[j - 1, c0 + c] = (nxt - prev[c]) / (edges[j] - edges[j - 1])
+                prev[c] = nxt
 
 
 def column_integral(z_w: np.ndarray, f: np.ndarray) -> np.ndarray:
