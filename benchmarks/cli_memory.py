@@ -5,6 +5,9 @@ each command run as a child process and measured by ``os.wait4`` (its peak resid
     .venv/bin/python benchmarks/cli_memory.py [--sizes 400 800] [--commands info render] [--rounds 1]
     .venv/bin/python benchmarks/cli_memory.py --repo /work/main --repo .    # before (main) vs after (this tree)
     .venv/bin/python benchmarks/cli_memory.py --sizes 800 --commands info render satellite view
+    .venv/bin/python benchmarks/cli_memory.py --sizes 1800x1000 --commands satellite --resolution 3
+
+A size is ``N`` (N x N) or ``NXxNY`` (west-east x south-north), multiples of 100.
 
 ``view`` is what ``weather-mi view FILE`` does before it serves the page: the input read, the optics and the
 slicer warmed up for the first view (``viewer.serve.prepare(warm=True)``), then the process ends.
@@ -37,7 +40,7 @@ COMMANDS = {
     "render": ["render", "{file}", "--spp", "8", "--size", "64x48", "--camera", "orbit", "--sky", "constant",
                "-o", "{out}/render.exr"],
     "satellite": ["satellite", "{file}", "--lat", "35", "--lon", "-97", "--date", "2024-05-20T21:00:00Z",
-                  "--resolution", "4", "--spp", "4", "-o", "{out}/sat.nc"],
+                  "--resolution", "{resolution}", "--spp", "4", "-o", "{out}/sat.nc"],
 }
 CHILD = ("import sys, runpy; sys.path.insert(0, sys.argv.pop(1)); import weather_mi; "
          "print('weather_mi from', weather_mi.__file__, file=sys.stderr); "
@@ -52,25 +55,24 @@ CHILD_VIEW = ("import sys; sys.path.insert(0, sys.argv.pop(1)); import weather_m
               "prepare(VolumeRecipe(path=sys.argv[2]), None, size=(320, 240), warm=True)")
 
 
-def tiled_wrfout(n: int, folder: Path) -> Path:
-    """The supercell tiled into an n x n domain (n a multiple of 100), written once to ``folder``."""
+def tiled_wrfout(n, folder: Path, ny: int | None = None) -> Path:
+    """The supercell tiled into an n x ny domain (west-east x south-north; multiples of 100; ny defaults to n),
+    written once to ``folder``."""
     import netCDF4
-    path = folder / f"wrfout_supercell_{n}x{n}.nc"
+    ny = n if ny is None else ny
+    path = folder / (f"wrfout_supercell_{n}x{ny}.nc")
     if path.is_file():
         return path
     folder.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".part")
     with netCDF4.Dataset(WRF) as src, netCDF4.Dataset(tmp, "w", format="NETCDF4") as dst:
-        reps = n // src.dimensions["west_east"].size
+        rx = n // src.dimensions["west_east"].size
+        ry = ny // src.dimensions["south_north"].size
+        sizes = {"west_east": n, "south_north": ny, "west_east_stag": n + 1, "south_north_stag": ny + 1}
         for name, dim in src.dimensions.items():
-            size = None if dim.isunlimited() else len(dim)
-            if name in ("west_east", "south_north"):
-                size = n
-            elif name in ("west_east_stag", "south_north_stag"):
-                size = n + 1
-            dst.createDimension(name, size)
+            dst.createDimension(name, None if dim.isunlimited() else sizes.get(name, len(dim)))
         attrs = {k: src.getncattr(k) for k in src.ncattrs()}
-        attrs.update({"WEST-EAST_GRID_DIMENSION": n + 1, "SOUTH-NORTH_GRID_DIMENSION": n + 1})
+        attrs.update({"WEST-EAST_GRID_DIMENSION": n + 1, "SOUTH-NORTH_GRID_DIMENSION": ny + 1})
         dst.setncatts(attrs)
         for name in KEEP:
             if name not in src.variables:
@@ -80,10 +82,16 @@ def tiled_wrfout(n: int, folder: Path) -> Path:
             out.setncatts({k: var.getncattr(k) for k in var.ncattrs()})
             data = var[:]
             if var.dimensions[-2:] == ("south_north", "west_east"):
-                data = np.tile(data, (1,) * (data.ndim - 2) + (reps, reps))
+                data = np.tile(data, (1,) * (data.ndim - 2) + (ry, rx))
             out[:] = data
     tmp.rename(path)
     return path
+
+
+def size_of(text: str) -> tuple[int, int]:
+    """(nx, ny) of a ``--sizes`` entry: "800" or "1800x1000"."""
+    nx, _, ny = text.partition("x")
+    return int(nx), int(ny or nx)
 
 
 def run(repo: Path, argv: list[str], log: Path) -> tuple[float, int, int]:
@@ -100,7 +108,9 @@ def run(repo: Path, argv: list[str], log: Path) -> tuple[float, int, int]:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[400, 800], help="domain widths (multiples of 100)")
+    ap.add_argument("--sizes", type=size_of, nargs="+", default=[(400, 400), (800, 800)],
+                    help="domain sizes: N or NXxNY (multiples of 100)")
+    ap.add_argument("--resolution", type=float, default=4.0, help="satellite pixel size in km (default 4)")
     ap.add_argument("--commands", nargs="+", default=["info", "render"], choices=sorted(COMMANDS))
     ap.add_argument("--repo", type=Path, action="append", help="a tree whose weather_mi to run (repeatable; "
                     "default this one)")
@@ -112,22 +122,23 @@ def main(argv=None) -> int:
         return 0
     repos = [r.resolve() for r in (a.repo or [HERE.parents[1]])]
     rows = []
-    for n in a.sizes:
-        path = tiled_wrfout(n, a.tmp)
+    for nx, ny in a.sizes:
+        n = f"{nx}x{ny}"
+        path = tiled_wrfout(nx, a.tmp, ny)
         for cmd in a.commands:
             results = {r: [] for r in repos}
             for rnd in range(a.rounds):
                 for i, repo in enumerate(repos):
                     out = a.tmp / f"out-{i}"
                     out.mkdir(exist_ok=True)
-                    args = [s.format(file=path, out=out) for s in COMMANDS[cmd]]
+                    args = [s.format(file=path, out=out, resolution=f"{a.resolution:g}") for s in COMMANDS[cmd]]
                     log = a.tmp / f"{cmd}-{n}-{i}.log"
                     t, rss, rc = run(repo, args, log)
-                    print(f"  {n}x{n}x{NZ} {cmd:9s} {repo}: {t:7.1f} s {rss / 2 ** 30:6.2f} GiB rc {rc} ({log})",
+                    print(f"  {n}x{NZ} {cmd:9s} {repo}: {t:7.1f} s {rss / 2 ** 30:6.2f} GiB rc {rc} ({log})",
                           flush=True)
                     results[repo].append((t, rss, rc))
             rows.append((n, cmd, results))
-    cells = {n: NZ * n * n for n in a.sizes}
+    cells = {f"{nx}x{ny}": NZ * nx * ny for nx, ny in a.sizes}
     print(f"\n{'domain':<14}{'command':<11}{'tree':<28}{'time (s)':>10}{'peak (GiB)':>12}{'bytes/cell':>12}"
           f"{'time ratio':>12}{'mem ratio':>11}")
     for n, cmd, results in rows:
@@ -137,7 +148,7 @@ def main(argv=None) -> int:
             rss = max(r[1] for r in res)
             ok = all(r[2] == 0 for r in res)
             base = base or (t, rss)
-            print(f"{f'{n}x{n}x{NZ}':<14}{cmd:<11}{str(repo)[-27:]:<28}{t:>10.1f}{rss / 2 ** 30:>12.2f}"
+            print(f"{f'{n}x{NZ}':<14}{cmd:<11}{str(repo)[-27:]:<28}{t:>10.1f}{rss / 2 ** 30:>12.2f}"
                   f"{rss / cells[n]:>12.0f}{t / base[0]:>12.2f}{rss / base[1]:>11.2f}{'' if ok else '  FAILED'}")
     return 0
 

@@ -75,6 +75,15 @@ def main() -> int:
         shape["cells"] = int(hyd["rho_air"].size)
         return inner(hyd, *a, **k)
     volume.optical_volume = optics
+    opened = commands.open_source
+
+    def open_source(*a, **k):  # ``info`` builds no volume: the cells of what was read
+        out = opened(*a, **k)
+        hyd = out[0] if isinstance(out, tuple) else out
+        if hasattr(hyd, "data_vars") and "rho_air" in hyd:
+            shape.setdefault("cells", int(hyd["rho_air"].size))
+        return out
+    commands.open_source = open_source
     rc = commands.main(sys.argv[1:])
     sampler.running = False
     cells = shape.get("cells", 1)

@@ -173,18 +173,42 @@ def test_release_drops_the_fields_once_used_and_changes_no_grid(sizes, size_clas
     assert "rho_air" in hyd
 
 
-def test_voxel_albedo_by_chunks_equals_the_whole_grid_at_once(monkeypatch):
-    """Each voxel's albedo from its radius (``sizes="scheme"``) computed a few voxels at a time (bounded
-    float64 temporaries) is the whole-grid computation's, bit for bit, and differs from the species' fixed
-    albedo where the radii differ from the species'."""
+def numpy_voxel_albedo(hyd, sp, beta_ext, albedo_sum):
+    """``optics.volume._voxel_albedo`` as numpy expressions (weather-mi before the compiled pass)."""
+    from weather_mi.optics.species import physical_albedo
+    for i, s in enumerate(sp):
+        var = f"r_eff_{s.name}"
+        physical = tuple(float(a) for a in physical_albedo(s.phase_class, np.float64(s.radius_m), s.density_kg_m3))
+        if var not in hyd or tuple(s.albedo_rgb) != physical:
+            continue
+        r, beta = np.asarray(hyd[var].values).reshape(-1), beta_ext[i].reshape(-1)
+        idx = np.flatnonzero((beta > 0) & (r > 0))
+        omegas = physical_albedo(s.phase_class, r[idx].astype(np.float64), s.density_kg_m3)
+        b = beta[idx].astype(np.float64)
+        for c in range(3):
+            albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
+
+
+def test_voxel_albedo_compiled_equals_the_numpy_expressions():
+    """Each voxel's albedo from its radius (``sizes="scheme"``) in one compiled pass is the numpy expressions'
+    (written out above), bit for bit, and differs from the species' fixed albedo where the radii differ from
+    the species'."""
     import weather_mi.optics.volume as volume
     hyd = wm.synthetic.cumulus()
     rng = np.random.default_rng(2)
     for s in wm.SPECIES_NAMES:
         hyd[f"r_eff_{s}"] = hyd[f"q_{s}"].copy(data=rng.uniform(1e-5, 5e-4, hyd[f"q_{s}"].shape).astype(np.float32))
     whole = wm.optical_volume(hyd, "physical", sizes="scheme", phase_quality="test")
-    monkeypatch.setattr(volume, "ALBEDO_CHUNK", hyd["rho_air"].size // 5 + 3)  # five chunks, the last partial
-    chunked = wm.optical_volume(hyd, "physical", sizes="scheme", phase_quality="test")
-    np.testing.assert_array_equal(chunked.albedo, whole.albedo)
+    sp = wm.species.preset("physical")
+    start = rng.uniform(0, 1e-3, (hyd["rho_air"].size, 3)).astype(np.float32)
+    compiled, reference = start.copy(), start.copy()
+    beta_ext = np.asarray(whole.beta_ext)
+    radii = {s.name: volume._albedo_radii(hyd, s, beta_ext[i]) for i, s in enumerate(sp)}
+    assert all(r is not None for r in radii.values())
+    assert 0 < radii["cloud"][0].size < beta_ext[0].size  # the voxels with mass only
+    volume._voxel_albedo(radii, sp, beta_ext, compiled)
+    numpy_voxel_albedo(hyd, sp, np.asarray(whole.beta_ext), reference)
+    assert not np.array_equal(reference, start)
+    np.testing.assert_array_equal(compiled, reference)
     fixed = wm.optical_volume(hyd, "physical", sizes="physical", phase_quality="test")
     assert not np.array_equal(fixed.albedo, whole.albedo)

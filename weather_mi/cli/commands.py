@@ -83,7 +83,8 @@ def _render(args, out, png_path, ckpt) -> Path:
     from ..reference.cluster import session
     with session(args.scheduler, args.workers) as client:
         img = render_reference(spec, vol, options=ReferenceOptions(**flag_values(args)), checkpoint=ckpt,
-                               resume=ckpt if args.resume else None, client=client, variant=variant_of(args))
+                               resume=ckpt if args.resume else None, client=client, variant=variant_of(args),
+                               release_volume=True)  # the kernel's grids replace vol's (read no more: bbox, air)
     if sun_meta:
         img.metadata["sun_from_time"] = sun_meta
     img = air_option.on_eye_rays(img, spec, vol, args)  # and along the eye rays outside the box

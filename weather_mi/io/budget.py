@@ -16,9 +16,12 @@ from pathlib import Path
 
 from ..errors import DomainTooLargeError
 
-BYTES_PER_CELL = {"reading": 48, "reading_sizes": 76, "optics": 64}  # beyond what is allocated before the step
-# (the Hydrometeors for optics); "reading_sizes": reading with the scheme's radii (io.particle_sizes): 28 bytes per
-# cell more at the peak (20 held: five radius grids), by tracemalloc on the supercell (docs/particle-sizes.md)
+BYTES_PER_CELL = {"reading": 48, "reading_sizes": 72, "optics": 64}  # beyond what is allocated before the step
+# (the Hydrometeors for optics); "reading_sizes": reading with the scheme's radii (io.particle_sizes; 20 bytes per
+# cell held: five radius grids): 72 = the reader's peak over the memory at its start on 800 x 800 x 51
+# (benchmarks/memory_phases.py, issue 39: 7 -> 79 bytes per cell; 76 before each grid was freed as soon as used).
+# "optics": its grids (56) and temporaries, as the library allocates them (the command line's release=True frees
+# the input as it goes: +36 over the Hydrometeors measured there)
 
 
 UNLIMITED = 1 << 60  # cgroup v1 writes "no limit" as a page-rounded 2^63 - 1; v2 writes "max"

@@ -46,17 +46,17 @@ class SizeRule:
 
 def masked(rho_q, compute, floor=R1) -> np.ndarray:
     """``compute(rho_q, has)`` (float64) where rho_q > 0, else 0, as float32 (rho_q floored at ``floor``)."""
-    rq = np.asarray(rho_q, np.float64)
+    rq = np.asarray(rho_q)
     out = np.zeros(rq.shape, np.float32)
     has = rq > 0
-    if np.any(has):
-        out[has] = compute(np.maximum(rq[has], floor), has)
+    if np.any(has):  # float64 of the voxels with mass only (not a float64 copy of the grid)
+        out[has] = compute(np.maximum(rq[has].astype(np.float64), floor), has)
     return out
 
 
 def sel(a, has):
     """``a`` (a number, a grid like rho_q, or None) at the points ``has``, float64."""
-    return None if a is None else np.asarray(a, np.float64)[has] if np.ndim(a) else float(a)
+    return None if a is None else np.asarray(a)[has].astype(np.float64) if np.ndim(a) else float(a)
 
 
 def exponential_fixed_n0(rho_q, n0_per_m4, rho_p, lam_max=np.inf, lam_min=0.0) -> np.ndarray:

@@ -278,12 +278,17 @@ def _regrid_species(ds, path, it, sel, shape, plan, rho, rho_above, present, siz
         np.maximum(mass, 0.0, out=mass)
         if r_native is not None:  # Eq. 4 conserved: the cell's rho q over its average of rho q / r_eff
             np.divide(q, r_native, out=r_native, where=r_native > 0)  # (0 where no radius: q has none there)
+            del q  # (each grid freed as soon as it is used: the reader's peak is the sizes' step)
             ext = plan.average(r_native)
             del r_native
-            r_eff[name] = np.divide(mass, ext, out=np.zeros_like(ext), where=(ext > 0) & (mass > 0))
-            del ext
+            has = (ext > 0) & (mass > 0)
+            np.divide(mass, ext, out=ext, where=has)  # r_eff, in place of the average
+            np.copyto(ext, np.float32(0), where=~has)
+            r_eff[name] = ext
+            del ext, has
             sizer.clip_to_native(name, r_eff[name], mass)  # the reconstructions' ratio where both are tiny
-        del q
+        else:
+            del q
         mass /= rho_above
         q_new[name] = mass
     if minima:

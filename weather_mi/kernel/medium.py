@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..optics.forward_peak import is_grey
 from ..optics.periodic import pad_levels, padded_bbox
 from ..optics.volume import OpticalVolume
 from .jitarrays import aligned_empty
@@ -17,27 +18,64 @@ def phase_arrays(vol: OpticalVolume, packed: bool = False):
     ``packed``: the weights as the plugin keeps them (``hydrometeor_mixture.pack_weights``: (z, y, x, P, 4),
     zero-padded packets of 4), written once into 64-byte aligned memory that a JIT variant uses in place.
     With the air in the box (``air_in_medium``) its two components follow the species (``optics.air.inside``)."""
-    from .plugins.hydrometeor_mixture import pack_weights, prepare_tables
+    from .plugins.hydrometeor_mixture import pack_weights
     air = air_in_medium(vol)
+    nodes, values = phase_arrays_tables(vol)
     if air is not None:
         from ..optics.air.inside import medium_grids
-        nodes, values = prepare_tables(tuple(vol.require_phase_tables()) + tuple(air.phase_tables))
         coeffs = medium_grids(vol.beta_total, vol.albedo, vol.weights, air)[2]
         if not packed:
             return nodes, values, coeffs
         lanes = 4 * max(1, -(-coeffs.shape[-1] // 4))
         return nodes, values, pack_weights(coeffs, out=aligned_empty(coeffs[..., 0].size * lanes))
-    nodes, values = prepare_tables(vol.require_phase_tables())
-    sca = np.asarray(vol.albedo, np.float32).mean(axis=-1)
-    sca *= np.asarray(vol.beta_total, np.float32)
-    n_s = len(vol.weights)
+    n_s, shape = len(vol.weights), tuple(vol.beta_total.shape)
     lanes = 4 * max(1, -(-n_s // 4)) if packed else n_s
-    weights = aligned_empty(sca.size * lanes).reshape(sca.shape + (lanes,))
-    for s, w in enumerate(vol.weights):  # written a species at a time: no temporaries
-        np.multiply(w, sca, out=weights[..., s])
+    weights = aligned_empty(int(np.prod(shape)) * lanes).reshape(shape + (lanes,))
+    flat = weights.reshape(-1, lanes)
+    _scattering_coefficients(vol, [flat[:, s] for s in range(n_s)])
     if not packed:
         return nodes, values, weights
     return nodes, values, pack_weights(weights[..., :n_s], out=weights)  # in place: padding 0, clipped
+
+
+def kernel_weights(vol: OpticalVolume):
+    """(packets (z, y, x, P, 4), tail (z, y, x) or None): the plugin's coefficients as ``phase_dict`` hands them,
+    in 64-byte aligned memory. S = 4 P + 1 species without the box's air (the five hydrometeors): the last
+    species' grid of its own (``weights_tail``: 20 bytes per cell for five, not 32); otherwise
+    ``phase_arrays(packed=True)``'s padded packets and no tail. The same values either way."""
+    n_s = len(vol.weights)
+    if air_in_medium(vol) is not None or n_s % 4 != 1 or n_s == 1:
+        return phase_arrays(vol, packed=True)[2], None
+    shape, n = tuple(vol.beta_total.shape), int(np.prod(vol.beta_total.shape))
+    packets = aligned_empty(n * (n_s - 1)).reshape(-1, n_s - 1)
+    tail = aligned_empty(n)
+    _scattering_coefficients(vol, [packets[:, s] for s in range(n_s - 1)] + [tail])
+    big = np.finfo(np.float32).max  # as pack_weights: negative values as 0, infinite ones as float32's largest
+    for a in (packets, tail):
+        np.clip(a, 0.0, big, out=a)
+    return packets.reshape(shape + ((n_s - 1) // 4, 4)), tail.reshape(shape)
+
+
+def _scattering_coefficients(vol: OpticalVolume, out: list) -> None:
+    """beta_sca,s = w_s x (channel-mean albedo x beta_total) into ``out[s]`` ((z y x,) float32 each, views), a
+    chunk of voxels at a time: no grid-sized temporaries, and the weights of a ``forward_peak.ScaledWeights``
+    computed as read."""
+    from ..optics.forward_peak import CHUNK
+    deferred = getattr(vol.weights, "deferred", False)
+    n_s = len(vol.weights)
+    w = None if deferred else np.asarray(vol.weights).reshape(n_s, -1)
+    beta = np.asarray(vol.beta_total, np.float32).reshape(-1)
+    grey = is_grey(vol.albedo)  # one channel: read as three (the same mean as of three equal channels)
+    albedo = np.asarray(vol.albedo, np.float32)
+    albedo = albedo[..., 0].reshape(-1, 1) if grey else albedo.reshape(-1, albedo.shape[-1])
+    for start in range(0, beta.size, CHUNK):
+        part = slice(start, min(start + CHUNK, beta.size))
+        a = np.broadcast_to(albedo[part], (part.stop - start, 3)) if grey else albedo[part]
+        sca = a.mean(axis=-1)
+        sca *= beta[part]
+        ws = vol.weights.chunk(part) if deferred else w[:, part]
+        for s in range(n_s):
+            np.multiply(ws[s], sca, out=out[s][part])
 
 
 def air_in_medium(vol: OpticalVolume):
@@ -65,15 +103,15 @@ def phase_dict(vol: OpticalVolume) -> dict:
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     ensure_registered()
-    nodes, values, weights = phase_arrays(vol, packed=True)
+    nodes, values = phase_arrays_tables(vol)
+    weights, tail = kernel_weights(vol)
     if vol.periodic:
-        padded = pad_levels(weights)
-        weights = aligned_empty(padded.size).reshape(padded.shape)
-        weights[...] = padded
-        del padded
+        weights, tail = (None if a is None else _aligned_copy(pad_levels(a)) for a in (weights, tail))
     d = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
          "weights": mi.TensorXf(weights),  # packed, used in place (llvm)
          "to_world": bbox_transform(grid_bbox(vol))}
+    if tail is not None:
+        d["weights_tail"] = mi.TensorXf(tail)
     if vol.periodic:
         d["periodic"] = True
     if mi.is_spectral:
@@ -81,10 +119,25 @@ def phase_dict(vol: OpticalVolume) -> dict:
     return d
 
 
+def phase_arrays_tables(vol: OpticalVolume):
+    """(nodes, values) of ``phase_arrays``: the species' tables (and the box's air's) as the plugin takes them."""
+    from .plugins.hydrometeor_mixture import prepare_tables
+    air = air_in_medium(vol)
+    return prepare_tables(tuple(vol.require_phase_tables()) + (tuple(air.phase_tables) if air is not None else ()))
+
+
+def _aligned_copy(a: np.ndarray) -> np.ndarray:
+    out = aligned_empty(a.size).reshape(a.shape)
+    out[...] = a
+    return out
+
+
 def grey_or_rgb(albedo: np.ndarray) -> np.ndarray:
     """The albedo grid (z, y, x, 3) as the medium takes it: one channel (z, y, x, 1) where the three agree
     everywhere (a satellite band's), which a gridvolume holds as given, where three channels it copies."""
     a = np.asarray(albedo)
+    if is_grey(a):  # one channel seen three times: that channel, in place
+        return a[..., :1]
     for c in (1, 2):
         for k in range(a.shape[0]):  # a level at a time: no whole-grid temporaries
             if not np.array_equal(a[k, ..., 0], a[k, ..., c]):

@@ -86,8 +86,67 @@ def peak_tables(tables, cone_deg: float):
     return f, [truncated_table(t, cone_deg, fs) if fs > 0 else t for t, fs in zip(tables, f)]
 
 
-def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG, *, species_extinction: bool = True) \
-        -> OpticalVolume:
+CHUNK = 1 << 20  # voxels at a time in ``delta_scaled`` and ``ScaledWeights``: temporaries of a chunk, not of the grid
+
+
+def _chunks(n: int):
+    for start in range(0, n, CHUNK):
+        yield slice(start, min(start + CHUNK, n))
+
+
+class ScaledWeights:
+    """The delta-scaled Eq. 8 weights w'_s = w_s (1 - f_s) / sum_r w_r (1 - f_r) (0 where that sum is not > 0),
+    (S, z, y, x) float32, computed where they are read instead of held (``delta_scaled(deferred_weights=True)``):
+    ``chunk`` gives a run of voxels (the path tracer's medium packs them with each voxel's scattering coefficient
+    in one pass, ``kernel.medium.phase_arrays``), ``np.asarray`` the whole grid. The same float32 operations as
+    on the whole grid, so the same values."""
+
+    deferred = True
+
+    def __init__(self, weights, factors):
+        self.source = weights  # (S, z, y, x) float32: the weights before the scaling
+        self.factors = np.asarray(factors, np.float32).reshape(-1)  # (S,) 1 - f_s
+        self.shape, self.dtype, self.ndim = tuple(weights.shape), np.dtype(np.float32), len(weights.shape)
+
+    def __len__(self):
+        return self.shape[0]
+
+    def chunk(self, part: slice) -> np.ndarray:
+        """(S, n) the scaled weights of the voxels ``part`` of the flattened (z, y, x) grid."""
+        ws = np.multiply(np.asarray(self.source).reshape(self.shape[0], -1)[:, part], self.factors[:, None])
+        total = ws.sum(axis=0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            np.divide(ws, total, out=ws)
+        np.copyto(ws, np.float32(0), where=~(total > 0))
+        return ws
+
+    def __array__(self, dtype=None, copy=None):
+        out = np.empty(self.shape, np.float32)
+        flat = out.reshape(self.shape[0], -1)
+        for part in _chunks(flat.shape[1]):
+            flat[:, part] = self.chunk(part)
+        return out if dtype is None else out.astype(dtype, copy=False)
+
+    def __getitem__(self, index):
+        return np.asarray(self)[index]
+
+    def __iter__(self):
+        return iter(np.asarray(self))
+
+
+def is_grey(albedo) -> bool:
+    """Whether an albedo grid (..., 3) is one channel seen three times (a broadcast view: stride 0)."""
+    return isinstance(albedo, np.ndarray) and albedo.ndim >= 1 and albedo.shape[-1] == 3 and albedo.strides[-1] == 0
+
+
+def grey_albedo(channel: np.ndarray) -> np.ndarray:
+    """(z, y, x, 3): the one-channel albedo ``channel`` (z, y, x) as the three channels an OpticalVolume holds,
+    a read-only broadcast view (4 bytes per cell, not 12)."""
+    return np.broadcast_to(np.ascontiguousarray(channel, np.float32)[..., None], tuple(channel.shape) + (3,))
+
+
+def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG, *, species_extinction: bool = True,
+                 deferred_weights: bool = False) -> OpticalVolume:
     """``vol`` with each species' forward peak within ``cone_deg`` counted as unscattered light.
 
     Per voxel (albedo omega_c, Eq. 8 weights w_s, peak fractions f_s), with F = sum_s w_s f_s the
@@ -96,40 +155,55 @@ def delta_scaled(vol: OpticalVolume, cone_deg: float = DEFAULT_CONE_DEG, *, spec
     beta_s' = beta_s - f_s w_s mean(omega) sigma_t (they sum to sigma_t'). Returns ``vol`` itself
     when ``cone_deg`` is 0 or no table has a peak there. ``species_extinction`` False: the per-species
     beta_s are left as ``vol``'s (shared, not scaled; 4 bytes per cell and species saved), for a caller that
-    reads only beta_total, the albedo and the weights (the path tracer's medium, ``reference.passes``)."""
+    reads only beta_total, the albedo and the weights (the path tracer's medium, ``reference.passes``).
+    ``deferred_weights``: the weights are a :class:`ScaledWeights`, computed where read (20 bytes per cell
+    for five species not held). A grey albedo (``is_grey``) stays one channel.
+
+    Memory: the new grids, F (4 bytes per cell) and temporaries of ``CHUNK`` voxels; every value is what the
+    whole-grid float32 expressions give (the same operations in the same order, voxel by voxel)."""
     if check_cone_deg(cone_deg) == 0.0:
         return vol
     cone_deg = float(cone_deg)
     f, truncated = peak_tables(vol.phase_tables, cone_deg)
     if not np.any(f > 0):
         return vol
-    # float32 throughout, written in place: a WRF grid's (S, z, y, x) arrays are hundreds of MB, and each
-    # temporary of them one more (the same float32 operations in the same order as whole-array expressions)
-    f32 = f.astype(np.float32)[:, None, None, None]
+    f32 = f.astype(np.float32)
     w = vol.weights  # (S, z, y, x)
-    F = np.tensordot(f.astype(np.float32), w, axes=1)  # (z, y, x)
-    omega_mean = vol.albedo.mean(axis=-1)
-    scattering = omega_mean * vol.beta_total  # 1/m
+    F = np.tensordot(f32, w, axes=1).reshape(-1)  # (z y x,): whole, as BLAS sums it
+    grey = is_grey(vol.albedo)
+    bt_in = np.asarray(vol.beta_total).reshape(-1)
+    alb_in = np.asarray(vol.albedo)[..., 0].reshape(-1, 1) if grey else np.asarray(vol.albedo).reshape(-1, 3)
+    beta_total = np.empty(vol.beta_total.shape, np.float32)
+    albedo = np.empty(vol.beta_total.shape + (alb_in.shape[1],), np.float32)
+    bt_out, alb_out = beta_total.reshape(-1), albedo.reshape(-1, alb_in.shape[1])
     beta_ext = vol.beta_ext
-    if species_extinction:  # beta_s - f_s w_s scattering: the peaks' scattering, now transmitted
-        beta_ext = np.multiply(f32, w)
-        np.multiply(beta_ext, scattering[None], out=beta_ext)
-        np.maximum(np.subtract(vol.beta_ext, beta_ext, out=beta_ext), 0, out=beta_ext)
-    beta_total = np.multiply(F, scattering)
-    np.maximum(np.subtract(vol.beta_total, beta_total, out=beta_total), 0, out=beta_total)
+    if species_extinction:
+        beta_ext = np.empty(vol.beta_ext.shape, np.float32)
+        be_out, be_in, w_in = (np.asarray(a).reshape(len(f32), -1) for a in (beta_ext, vol.beta_ext, w))
     with np.errstate(invalid="ignore", divide="ignore"):
-        albedo = vol.albedo * ((1 - F) / (1 - omega_mean * F))[..., None]
-        np.copyto(albedo, vol.albedo, where=~(vol.beta_total > 0)[..., None])
-        np.clip(albedo, 0, 1, out=albedo)
-        weights = np.multiply(w, 1 - f32)
-        total = weights.sum(axis=0)
-        np.divide(weights, total, out=weights)
-        np.copyto(weights, np.float32(0), where=~(total > 0))
-    del F, omega_mean, scattering, total
-    return replace(vol, beta_ext=beta_ext, beta_total=beta_total, albedo=albedo, weights=weights,
+        for c in _chunks(F.size):
+            a_in = np.broadcast_to(alb_in[c], (alb_in[c].shape[0], 3)) if grey else alb_in[c]
+            omega_mean = a_in.mean(axis=-1)
+            scattering = omega_mean * bt_in[c]  # 1/m
+            if species_extinction:  # beta_s - f_s w_s scattering: the peaks' scattering, now transmitted
+                be = np.multiply(f32[:, None], w_in[:, c])
+                np.multiply(be, scattering[None], out=be)
+                np.maximum(np.subtract(be_in[:, c], be, out=be), 0, out=be_out[:, c])
+            bt = np.multiply(F[c], scattering)
+            np.maximum(np.subtract(bt_in[c], bt, out=bt), 0, out=bt_out[c])
+            a = np.multiply(alb_in[c], ((1 - F[c]) / (1 - omega_mean * F[c]))[:, None])
+            np.copyto(a, alb_in[c], where=~(bt_in[c] > 0)[:, None])
+            np.clip(a, 0, 1, out=alb_out[c])
+    del F
+    weights = ScaledWeights(w, 1 - f32)
+    if not deferred_weights:
+        weights = np.asarray(weights)
+    return replace(vol, beta_ext=beta_ext, beta_total=beta_total,
+                   albedo=grey_albedo(albedo[..., 0]) if grey else albedo, weights=weights,
                    attrs={**vol.attrs, "forward_peak_deg": cone_deg,
                           "forward_peak_fraction": dict(zip(vol.species, f.round(6).tolist()))},
                    phase_tables=tuple(truncated))
 
 
-__all__ = ["DEFAULT_CONE_DEG", "check_cone_deg", "delta_scaled", "peak_excess", "peak_tables", "truncated_table"]
+__all__ = ["DEFAULT_CONE_DEG", "ScaledWeights", "check_cone_deg", "delta_scaled", "grey_albedo", "is_grey", "peak_excess",
+           "peak_tables", "truncated_table"]

@@ -44,3 +44,22 @@ def finish_albedo(albedo, beta_total, fill):  # pragma: no cover - compiled
             a = albedo[v, c] / t if t > 0 else fill[c]
             albedo[v, c] = min(max(a, np.float32(0.0)), np.float32(1.0))
 
+
+
+@njit(parallel=True, cache=True)
+def add_voxel_albedo(voxels, beta, radius, radius_scale, wavelengths, k_abs, n_term, albedo_rgb,
+                     albedo_sum):  # pragma: no cover - compiled
+    """albedo_sum (N, 3) += (omega_c(r) - albedo_rgb_c) beta, float32, in place, at the flat indices ``voxels``
+    (those with beta > 0 and r > 0; ``radius`` their radii): the weak-absorption albedo of each voxel's radius
+    (``species.albedo_of_radius``: x = 2 pi r' / lambda, Q_abs = min(8/3 x k n_term, 1), omega = 1 - Q_abs / 2;
+    r' = r x ``radius_scale``), in float64 with the operations of those numpy expressions in their order (the
+    same floats). ``n_term``: n^3 - (n^2 - 1)^1.5."""
+    two_pi, eight_thirds = 2.0 * np.pi, 8.0 / 3.0
+    for i in prange(voxels.shape[0]):
+        v = voxels[i]
+        r = np.float64(radius[i]) * radius_scale
+        b = np.float64(beta[v])
+        for c in range(3):
+            x = two_pi * r / wavelengths[c]
+            q_abs = min(eight_thirds * x * k_abs[c] * n_term[c], 1.0)
+            albedo_sum[v, c] = albedo_sum[v, c] + np.float32(((1.0 - q_abs / 2.0) - albedo_rgb[c]) * b)

@@ -150,12 +150,19 @@ def albedo_of_radius(radius_m, n_rgb, k_rgb) -> list:
     return out
 
 
+def absorbing_material(phase_class: str, density_kg_m3: float):
+    """(radius scale, n_rgb, k_rgb) of ``physical_albedo``: water drops, or ice whose absorbing path is that of
+    solid ice (the radius scaled by rho / rho_ice)."""
+    if phase_class == "water":
+        return None, WATER_N, WATER_K
+    return min(density_kg_m3 / RHO_ICE, 1.0), ICE_N, ICE_K
+
+
 def physical_albedo(phase_class: str, radius_m, density_kg_m3: float) -> list:
     """The weak-absorption albedo (three channels) of particles of ``radius_m`` (a number or an array; m):
     water drops, or ice whose absorbing path is that of solid ice (the radius scaled by rho / rho_ice)."""
-    if phase_class == "water":
-        return albedo_of_radius(radius_m, WATER_N, WATER_K)
-    return albedo_of_radius(radius_m * min(density_kg_m3 / RHO_ICE, 1.0), ICE_N, ICE_K)
+    scale, n_rgb, k_rgb = absorbing_material(phase_class, density_kg_m3)
+    return albedo_of_radius(radius_m if scale is None else radius_m * scale, n_rgb, k_rgb)
 
 
 # Table III display colours: cloud red, ice magenta, rain blue, snow yellow, graupel green

@@ -17,9 +17,9 @@ import numpy as np
 import xarray as xr
 
 from ..errors import WeatherDataError
-from ..io.hydrometeors import DIMS, SPECIES_NAMES, bbox_of, check_species_name, validate
+from ..io.hydrometeors import SPECIES_NAMES, bbox_of, check_species_name, validate
 from .periodic import check_periodic, periodic_of_attrs
-from .species import SpeciesSet, physical_albedo, preset
+from .species import RGB_WAVELENGTHS_M, SpeciesSet, absorbing_material, physical_albedo, preset
 from ..io.terrain import Terrain
 from ..io.budget import check_fits
 
@@ -36,8 +36,8 @@ class ReleasedGrid:
         return self.shape[0]
 
     def _refuse(self, *_a, **_k):
-        raise WeatherDataError("OpticalVolume", self.name, f"the grid kept (optical_volume(keep=(..., {self.name!r})))",
-                               "released after the optics to save memory")
+        raise WeatherDataError("OpticalVolume", self.name, f"the grid kept (optical_volume(keep=(..., {self.name!r})), "
+                               "render_reference(release_volume=False))", "released to save memory")
 
     __array__ = __getitem__ = __iter__ = _refuse
 
@@ -47,12 +47,16 @@ class ReleasedGrid:
         self._refuse()
 
 
+GRIDS = ("beta_ext", "beta_total", "albedo", "weights")  # an OpticalVolume's grids
+
+
 @dataclass(frozen=True)
 class OpticalVolume:
     """Everything both renderers consume (docs/design.md). All grids are float32, indexed [z, y, x].
 
     Complete and read-only once built: the fields cannot be reassigned and the grids are read-only views
-    (the arrays given stay the caller's); ``dataclasses.replace`` makes a changed copy.
+    (the arrays given stay the caller's); ``dataclasses.replace`` makes a changed copy. The one change in place
+    is :meth:`release`, which frees grids (reading one then raises).
 
     Attributes
     ----------
@@ -117,9 +121,9 @@ class OpticalVolume:
 
     def __post_init__(self):
         object.__setattr__(self, "periodic", check_periodic(self.periodic))
-        for name in ("beta_ext", "beta_total", "albedo", "weights"):
-            if isinstance(getattr(self, name), ReleasedGrid):
-                continue
+        for name in GRIDS:
+            if isinstance(getattr(self, name), ReleasedGrid) or getattr(getattr(self, name), "deferred", False):
+                continue  # released, or computed where read (``forward_peak.ScaledWeights``)
             view = np.asarray(getattr(self, name)).view()
             view.flags.writeable = False
             object.__setattr__(self, name, view)
@@ -135,6 +139,18 @@ class OpticalVolume:
                                        f"one table per species ({len(self.species)})", f"{len(tables)} tables")
         object.__setattr__(self, "phase_tables", tables)
         object.__setattr__(self, "attrs", dict(self.attrs))
+
+    def release(self, *names: str) -> None:
+        """Free the grids ``names`` (of ``GRIDS``) in place: each becomes a :class:`ReleasedGrid` (its shape kept,
+        reading it raises), for a caller whose renderer holds what it needs of them (``render_reference(
+        release_volume=True)``: the kernel's own grids replace the volume's as they are built). The memory goes
+        once no other volume or array holds the grid."""
+        for name in names:
+            if name not in GRIDS:
+                raise ValueError(f"OpticalVolume.release: {name!r} is not one of {GRIDS}")
+            grid = getattr(self, name)
+            if not isinstance(grid, ReleasedGrid):
+                object.__setattr__(self, name, ReleasedGrid(name, grid.shape))
 
     def require_phase_tables(self) -> tuple:
         """The phase tables, or WeatherDataError when this volume was built without any."""
@@ -306,28 +322,37 @@ def level_density(rho_air_kg_m3) -> np.ndarray:
     return mean
 
 
-ALBEDO_CHUNK = 1 << 22  # voxels of a grid at a time in ``_voxel_albedo``
+def _albedo_radii(hyd: xr.Dataset, s, beta: np.ndarray):
+    """(voxels (flat indices), radii (m, float32)) of species ``s`` where beta > 0 and its ``r_eff_<species>`` > 0,
+    for :func:`_voxel_albedo`, kept instead of the radius grid (8 bytes per voxel with mass, not 4 per cell: the
+    grid goes once its Eq. 4 is done); None where ``hyd`` has no radius or the species' albedo is not the
+    physical one of its radius (an overridden, artistic albedo is kept)."""
+    var = f"r_eff_{s.name}"
+    physical = tuple(float(a) for a in physical_albedo(s.phase_class, np.float64(s.radius_m), s.density_kg_m3))
+    if var not in hyd or tuple(s.albedo_rgb) != physical:
+        return None
+    r = np.asarray(hyd[var].values).reshape(-1)
+    idx = np.flatnonzero((beta.reshape(-1) > 0) & (r > 0))
+    idx = idx.astype(np.int32) if r.size < 2 ** 31 else idx
+    return idx, r[idx]
 
 
-def _voxel_albedo(hyd: xr.Dataset, sp: SpeciesSet, beta_ext: np.ndarray, albedo_sum: np.ndarray) -> None:
+def _voxel_albedo(radii: dict, sp: SpeciesSet, beta_ext: np.ndarray, albedo_sum: np.ndarray) -> None:
     """Eq. 5's numerator with each voxel's own albedo: sum_s omega_s(r_eff) beta_s, the weak-absorption albedo
     (``species.physical_albedo``) of the model's radius in place of the species' one, added to ``albedo_sum``
-    ((N, 3), in place) for the species with ``r_eff_<species>`` whose albedo is the physical one of its radius
-    (an overridden, artistic albedo is kept). The Eq. 8 weights keep the species' albedo (co-albedos < 1e-3)."""
+    ((N, 3), in place) for the species of ``radii`` ({name: :func:`_albedo_radii`}), in species order, in one
+    compiled pass each (float64 inside, float32 sums). The Eq. 8 weights keep the species' albedo (co-albedos
+    < 1e-3)."""
+    from .mixture_kernels import add_voxel_albedo
     for i, s in enumerate(sp):
-        var = f"r_eff_{s.name}"
-        physical = tuple(float(a) for a in physical_albedo(s.phase_class, np.float64(s.radius_m), s.density_kg_m3))
-        if var not in hyd or tuple(s.albedo_rgb) != physical:
+        if radii.get(s.name) is None:
             continue
-        r = np.asarray(hyd[var].values).reshape(-1)
-        beta = beta_ext[i].reshape(-1)
-        for start in range(0, beta.size, ALBEDO_CHUNK):  # float64 temporaries of a chunk, not of the grid
-            part = slice(start, start + ALBEDO_CHUNK)
-            idx = np.flatnonzero((beta[part] > 0) & (r[part] > 0)) + start
-            omegas = physical_albedo(s.phase_class, r[idx].astype(np.float64), s.density_kg_m3)
-            b = beta[idx].astype(np.float64)
-            for c in range(3):
-                albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
+        idx, r = radii[s.name]
+        scale, n_rgb, k_rgb = absorbing_material(s.phase_class, s.density_kg_m3)
+        n_term = np.array([n ** 3 - (n * n - 1.0) ** 1.5 for n in n_rgb])  # species.albedo_of_radius's
+        add_voxel_albedo(idx, beta_ext[i].reshape(-1), r, 1.0 if scale is None else scale,
+                         np.asarray(RGB_WAVELENGTHS_M, np.float64), np.asarray(k_rgb, np.float64), n_term,
+                         np.asarray(s.albedo_rgb, np.float64), albedo_sum)
 
 
 def _release(hyd: xr.Dataset, names, kinds) -> None:
@@ -348,11 +373,14 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
     beta_ext = np.empty((n_s,) + shape, np.float32)
     weights = np.empty((n_s,) + shape, np.float32)
     from .mixture_kernels import finish_albedo, mix
+    radii = {}
     for i, s in enumerate(sp):
         q = np.ascontiguousarray(hyd[f"q_{s.name}"].values, np.float32)
         s.beta_ext_per_m(rho, q, _radius_field(hyd, s.name, s.radius_m, use_model), out=beta_ext[i])  # Eq. 4
         del q
-        _release(hyd, [f"q_{s.name}"] + ([f"r_eff_{s.name}"] if not (voxel_albedo and use_model) else []), release)
+        if voxel_albedo and use_model:  # the radii of the voxels with mass, for the albedo after the mixture
+            radii[s.name] = _albedo_radii(hyd, s, beta_ext[i])
+        _release(hyd, [f"q_{s.name}", f"r_eff_{s.name}"], release)
     # Eq. 6, Eq. 5's numerator sum omega_s beta_s and the Eq. 8 weights from the scattering coefficients
     # beta_sca,s = omega_s beta_s (channel-mean albedo; the channels differ by < 1e-3 for every hydrometeor),
     # in one pass (optics.mixture_kernels)
@@ -362,9 +390,8 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
     albedo = np.empty(shape + (3,), np.float32)
     mix(beta_ext.reshape(n_s, -1), rgb, mean_albedo, beta_total.reshape(-1), albedo.reshape(-1, 3),
         weights.reshape(n_s, -1))
-    if voxel_albedo and use_model:
-        _voxel_albedo(hyd, sp, beta_ext, albedo.reshape(-1, 3))
-    _release(hyd, [f"r_eff_{s.name}" for s in sp], release)
+    _voxel_albedo(radii, sp, beta_ext, albedo.reshape(-1, 3))
+    del radii
     # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
     # trilinear interpolation at cloud edges does not blend in a dark value
     total_ext = float(beta_total.sum(dtype=np.float64))

@@ -25,7 +25,12 @@ def fingerprint(spec: SceneSpec, vol: OpticalVolume, spp_list, *options) -> str:
     h = hashlib.sha256()
     h.update(json.dumps([spec.to_dict(), spp_list, *options], sort_keys=True, default=str).encode())
     for a in (vol.beta_total, vol.albedo, vol.weights):  # their buffers as they are: no copy of a grid
-        h.update(memoryview(np.ascontiguousarray(a)).cast("B"))
+        a = np.asarray(a)
+        if a.flags.c_contiguous:
+            h.update(memoryview(a).cast("B"))
+        else:  # a view (a grey albedo: one channel read three times): the same bytes, a level at a time
+            for level in a:
+                h.update(memoryview(np.ascontiguousarray(level)).cast("B"))
     for t in vol.require_phase_tables():  # the phase functions are part of the scene too
         h.update(np.ascontiguousarray(t.theta, np.float64).tobytes())
         h.update(np.ascontiguousarray(t.values, np.float64).tobytes())

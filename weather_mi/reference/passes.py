@@ -109,15 +109,24 @@ class PassScene:
             return None
         return None if i < self.options.planned else pixels
 
-    def build(self):
-        """The Mitsuba scene (current variant) in kernel-side coordinates: the bbox centred on the origin."""
+    def build(self, release: bool = False):
+        """The Mitsuba scene (current variant) in kernel-side coordinates: the bbox centred on the origin.
+        ``release``: ``vol``'s grids are released as the kernel's are made from them (``OpticalVolume.release``:
+        the extinction and albedo once delta-scaled, the weights once packed), so the peak holds one set."""
         import mitsuba as mi
         o = self.options.estimator
         spec_k, vol_k, _ = recentred(self.spec, self.vol)
-        vol_render = delta_scaled(vol_k, o.forward_peak_deg, species_extinction=False)  # the kernel reads no beta_s
+        vol_render = delta_scaled(vol_k, o.forward_peak_deg, species_extinction=False,  # the kernel reads no beta_s
+                                  deferred_weights=True)  # the weights scaled as they are packed (kernel.medium)
+        if release and vol_render is not vol_k:  # its own extinction and albedo now (views of beta_ext stay)
+            for v in (self.vol, vol_k):
+                v.release("beta_ext", "beta_total", "albedo")
         integ = integrator_dict(vol_render, sun=self.spec.sun if o.own_sun else None, atmosphere=self.spec.atmosphere,
                                 **o.kernel_options())
         d = scene_dict(spec_k, vol_render, integ)
+        if release:
+            for v in (self.vol, vol_k):
+                v.release("beta_ext", "beta_total", "albedo", "weights")
         del vol_k, vol_render, integ  # the grids the kernel does not hold in place (the delta-scaled beta_ext,
         return mi.load_dict(d)        # weights) go before it builds its own (llvm: TensorXf(numpy) shares memory)
 

@@ -34,7 +34,8 @@ MAX_TARGET_PASSES = 1 << 14
 @takes_options
 def render_reference(spec: SceneSpec, vol: OpticalVolume, *args, options: ReferenceOptions | None = None,
                      checkpoint=None, resume=None, progress: bool = True, variant: str | None = None,
-                     client=None, worker_variant=None, on_pass=None, **estimator) -> Image:
+                     client=None, worker_variant=None, on_pass=None, release_volume: bool = False,
+                     **estimator) -> Image:
     """Path-trace ``vol`` as seen by ``spec`` (Mitsuba ``volpath`` or our local-majorant tracker).
 
     Parameters
@@ -72,6 +73,10 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, *args, options: Refere
         ``target_rse``, ...). The arrays are the callback's own copies. An exception it raises
         propagates out of ``render_reference`` (queued Dask passes are cancelled and the checkpoint
         stays valid, as with Ctrl-C): a way to stop a render.
+    release_volume : bool, default False
+        In this process (no ``client``): ``vol``'s grids are released (``OpticalVolume.release``) as the
+        kernel's own grids are built from them, so that the two are not held together at the peak; reading
+        them afterwards raises. For a caller that needs them no more (the command line).
 
     Returns
     -------
@@ -103,6 +108,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, *args, options: Refere
         key = _render_key(spec, vol, spp_list, o, worker_variant if client is not None else None)
         run = _Run(PassScene(spec, vol, pass_options, key), spp_list, cloud, transmittance, _scale(spec, o.normalize),
                    mean=np.zeros((spec.height, spec.width, 3)), m2=np.zeros((spec.height, spec.width, 3)))
+        run.release_volume = bool(release_volume) and client is None
         _open_checkpoint(run, checkpoint, resume)
         remote = _merge_passes(run, client, worker_variant, progress, on_pass)
         image = run.image(run.done, run.stats(run.done))
@@ -131,6 +137,7 @@ class _Run:
     done: int = 0
     seconds: float = 0.0
     spp_done: int = 0
+    release_volume: bool = False  # the job's volume released as its scene is built (``render_reference``)
 
     @property
     def xyz_film(self) -> bool:
@@ -272,7 +279,7 @@ def _pass_source(run: _Run, client, worker_variant):
     job = run.job
     if client is None:
         limit = run.planned if run.target_rse is None else MAX_TARGET_PASSES
-        return local_passes(job.build(), job.spec.seed, run.per_pass, run.more, run.done, job.pixels_of,
+        return local_passes(job.build(release=run.release_volume), job.spec.seed, run.per_pass, run.more, run.done, job.pixels_of,
                             n_pixels=job.spec.width * job.spec.height, planned=run.planned, limit=limit), None
     remote = RemotePasses(client, job, run.per_pass, run.more, run.done, len(run.spp_list), run.target_rse is not None,
                           worker_variant=worker_variant)

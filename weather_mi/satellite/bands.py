@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..optics.volume import OpticalVolume
+from ..optics.forward_peak import grey_albedo
 
 
 @dataclass(frozen=True)
@@ -121,7 +122,7 @@ def band_volume(vol: OpticalVolume, b: Band) -> OpticalVolume:
                              wavelength_m=max(b.wavelength_m, MIE_SHORTEST_M), sized=vol.components is not None)
     else:
         tables = [nearest_channel(t, b.wavelength_m) for t in vol.require_phase_tables()]
-    albedo = np.repeat(np.asarray(vol.albedo)[..., c:c + 1], 3, axis=-1)
+    albedo = grey_albedo(np.asarray(vol.albedo)[..., c])  # one channel held, read as three
     attrs = {**vol.attrs, "band": b.name, "band_wavelength_m": b.wavelength_m}
     return replace(vol, albedo=albedo, phase_tables=tuple(tables), attrs=attrs)
 

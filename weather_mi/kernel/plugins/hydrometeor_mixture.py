@@ -31,7 +31,8 @@ Layout for speed (every scattering event costs one ``sample`` and one ``eval_pdf
   11 dependent loads each.
 - The coefficients are held as S channels packed four to a 16-byte texel, so a trilinear lookup is 8
   packet loads per 4 species (``mi.Texture3f`` loads every channel of every corner separately);
-  :func:`pack_weights`.
+  :func:`pack_weights`. Where S = 4 P + 1 (the five species), the last one may be a grid of its own
+  (``weights_tail``): 4 bytes per cell for it instead of a packet of 16 that is three quarters padding.
 - The table rows of all species at one node are adjacent (N x S x 4: R, G, B and channel-mean pdf,
   which is also what ``sample`` inverts), so one lookup touches two or three cache lines.
 - Every table sits in 64-byte aligned memory, see :func:`_storage`.
@@ -49,7 +50,8 @@ albedo at a lane's wavelength (:meth:`HydrometeorMixture.albedo_at`), used by ``
 
 Properties (Python dict scenes): ``nodes`` (TensorXf, N ascending versines 1 - cos in [0, 2]), ``values``
 (TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S: beta_sca,s per voxel, >= 0; or packed as
-:func:`pack_weights` makes them, z x y x x x P x 4, kept as given) and ``to_world`` (the bounding box
+:func:`pack_weights` makes them, z x y x x x P x 4, kept as given; with ``weights_tail``, TensorXf z x y x x,
+the last species' coefficients, the packets hold the first 4 P = S - 1) and ``to_world`` (the bounding box
 as a transform of the unit cube). From XML: ``filename``, an ``.npz`` written by
 :func:`save_npz` with the same arrays plus ``bbox``.
 """
@@ -176,10 +178,14 @@ def pack_weights(weights: np.ndarray, out: np.ndarray | None = None) -> np.ndarr
     return out.reshape(w.shape[:3] + (n_packets, 4))
 
 
-def unpack_weights(packed, grid_shape, n_species: int) -> np.ndarray:
-    """(z, y, x, S) float32: the coefficients of ``pack_weights``'s packets (flat or shaped) without the padding."""
+def unpack_weights(packed, grid_shape, n_species: int, tail=None) -> np.ndarray:
+    """(z, y, x, S) float32: the coefficients of ``pack_weights``'s packets (flat or shaped) without the padding,
+    followed by the ``tail`` grid's (the last species' grid of its own) where given."""
     a = np.asarray(packed, np.float32).reshape(tuple(grid_shape) + (-1,))
-    return np.ascontiguousarray(a[..., :n_species])
+    if tail is None:
+        return np.ascontiguousarray(a[..., :n_species])
+    return np.concatenate([a[..., :n_species - 1], np.asarray(tail, np.float32).reshape(tuple(grid_shape) + (1,))],
+                          axis=-1)
 
 
 def bbox_transform(bbox) -> "mi.ScalarTransform4f":
@@ -259,16 +265,25 @@ class HydrometeorMixture:
             data = np.load(str(props["filename"]))
             nodes, values, weights = data["nodes"], data["values"], data["weights"]
             to_world = bbox_transform(data["bbox"])
+            tail = None
         else:
             nodes = np.asarray(props["nodes"], np.float32).ravel()
             values = np.asarray(props["values"], np.float32)
             weights = props["weights"]  # a TensorXf in dict scenes: kept as it is, not copied
+            tail = props["weights_tail"] if "weights_tail" in props else None
             to_world = props["to_world"] if "to_world" in props else mi.ScalarTransform4f()
         if values.ndim != 3 or values.shape[1] != nodes.size or values.shape[2] != 3:
             raise ValueError(f"{PLUGIN_NAME}: 'values' must be S x N x 3 with N = len(nodes) = {nodes.size}; "
                              f"got {values.shape}")
         packets = max(1, -(-int(values.shape[0]) // 4))
-        if not (len(weights.shape) == 4 and weights.shape[3] == values.shape[0]) and \
+        if tail is not None:
+            packets = (int(values.shape[0]) - 1) // 4
+            if int(values.shape[0]) % 4 != 1 or packets < 1 or tuple(weights.shape[3:]) != (packets, 4) or \
+                    tuple(tail.shape) != tuple(weights.shape[:3]):
+                raise ValueError(f"{PLUGIN_NAME}: with 'weights_tail' (z x y x x), S = 4 P + 1 and 'weights' packed "
+                                 f"z x y x x x P x 4; got S = {values.shape[0]}, {tuple(weights.shape)} and "
+                                 f"{tuple(tail.shape)}")
+        elif not (len(weights.shape) == 4 and weights.shape[3] == values.shape[0]) and \
                 tuple(weights.shape[3:]) != (packets, 4):
             raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {values.shape[0]}, or packed "
                              f"z x y x x x {packets} x 4 (pack_weights); got {tuple(weights.shape)}")
@@ -278,7 +293,7 @@ class HydrometeorMixture:
         self.to_local = mi.Transform4f(mi.ScalarTransform4f(inverse.astype(np.float32).tolist()))
         self._set_spectral_tables(props, nodes.size)
         self._set_tables(nodes, values)
-        self._set_weights(weights)
+        self._set_weights(weights, tail)
         self._set_spectral(props)
         self.m_flags = mi.PhaseFunctionFlags.Anisotropic
 
@@ -300,14 +315,18 @@ class HydrometeorMixture:
         self.guide2 = _storage(guide.astype(np.float64))
         self.inv_warp_norm = float(1.0 / np.arcsinh(np.pi / GUIDE_THETA0))
 
-    def _set_weights(self, weights):
+    def _set_weights(self, weights, tail=None):
         """Pack ``weights`` (z x y x x x S) into ``weights4``, the one copy the plugin keeps (written once into
-        aligned memory on JIT variants); the ``weights`` parameter is unpacked from it when traversed."""
+        aligned memory on JIT variants); the ``weights`` parameter is unpacked from it when traversed. Packed
+        already, with the last species' ``tail`` grid or without: both held as given."""
         self.grid_shape = tuple(int(n) for n in weights.shape[:3])
         self.n_packets = max(1, -(-int(weights.shape[3]) // 4))
+        self.tail = None
         if len(weights.shape) == 5:  # packed already (``medium.phase_arrays``): held as given (in place)
             self.n_packets = int(weights.shape[3])
             self.weights4 = _storage(np.asarray(weights)) if _is_scalar_variant() else weights.array
+            if tail is not None:
+                self.tail = _storage(np.asarray(tail)) if _is_scalar_variant() else tail.array
         elif _is_scalar_variant():
             self.weights4 = _storage(pack_weights(weights))
         else:
@@ -408,20 +427,23 @@ class HydrometeorMixture:
         (z0, z1), (y0, y1), (x0, x1) = corner
         fz, fy, fx = frac
         npk = self.n_packets
-        w = []
-        for k in range(npk):
-            def texel(z, y, x):
-                return _gather4(self.weights4, mi.UInt32(((z * ny + y) * nx + x) * npk + k))
 
-            def lerp(a, b, t):
-                return dr.fma(b - a, t, a)
+        def lerp(a, b, t):
+            return dr.fma(b - a, t, a)
 
+        def trilinear(texel):  # the same operations on a packet of 4 and on one value (the tail)
             c00 = lerp(texel(z0, y0, x0), texel(z0, y0, x1), fx)
             c01 = lerp(texel(z0, y1, x0), texel(z0, y1, x1), fx)
             c10 = lerp(texel(z1, y0, x0), texel(z1, y0, x1), fx)
             c11 = lerp(texel(z1, y1, x0), texel(z1, y1, x1), fx)
-            v = lerp(lerp(c00, c01, fy), lerp(c10, c11, fy), fz)
+            return lerp(lerp(c00, c01, fy), lerp(c10, c11, fy), fz)
+
+        w = []
+        for k in range(npk):
+            v = trilinear(lambda z, y, x: _gather4(self.weights4, mi.UInt32(((z * ny + y) * nx + x) * npk + k)))
             w += [dr.maximum(v[c], 0.0) for c in range(4)]
+        if self.tail is not None:
+            w.append(dr.maximum(trilinear(lambda z, y, x: _gather(self.tail, mi.UInt32((z * ny + y) * nx + x))), 0.0))
         w = w[: self.n_species]
         total = w[0]
         for wi in w[1:]:
@@ -544,7 +566,8 @@ class HydrometeorMixture:
 
     def traverse(self, cb):
         if self.weights is None:  # the parameter as given (negative values as 0), from the packed copy
-            self.weights = mi.TensorXf(unpack_weights(self.weights4, self.grid_shape, self.n_species))
+            tail = None if self.tail is None else np.asarray(self.tail, np.float32)
+            self.weights = mi.TensorXf(unpack_weights(self.weights4, self.grid_shape, self.n_species, tail))
         cb.put("weights", self.weights, mi.ParamFlags.NonDifferentiable)
 
     def parameters_changed(self, keys=None):

@@ -210,7 +210,8 @@ class MajorantVolpath:
             data = volume_data(vol)
             key = (data.array.index, ms.scale, self.cell)
             if key != self._auto_key:
-                self.majorant = mi.TensorXf(majorant_grid(np.asarray(data) * ms.scale, self.cell))
+                grid = np.asarray(data)  # in place (llvm): a copy only where scaled
+                self.majorant = mi.TensorXf(majorant_grid(grid if ms.scale == 1.0 else grid * ms.scale, self.cell))
                 self._auto_key = key
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"

@@ -51,18 +51,29 @@ def majorant_grid(sigma_t_zyx: np.ndarray, cell: int = DEFAULT_CELL, safety: flo
     a = np.asarray(a, np.float32 if a.dtype.itemsize <= 4 else np.float64)  # maxima are exact in either
     if not all(bool(np.isfinite(level).all()) for level in a):
         raise ValueError("majorant_grid: sigma_t contains non-finite values")
-    d = a
-    for axis in range(3):  # 3-tap running maximum per axis == dilation by one voxel (edge clamped)
-        lo = [slice(None)] * 3
-        hi = [slice(None)] * 3
-        lo[axis], hi[axis] = slice(0, -1), slice(1, None)
-        e = d.copy()
-        np.maximum(e[tuple(hi)], d[tuple(lo)], out=e[tuple(hi)])
-        np.maximum(e[tuple(lo)], d[tuple(hi)], out=e[tuple(lo)])
-        d = e
-    for axis in range(3):  # block maxima, partial last blocks included
-        d = np.maximum.reduceat(d, np.arange(0, d.shape[axis], cell), axis=axis)
+    # coarse cell K along an axis: the maximum over the fine voxels [K cell - 1, (K + 1) cell] (clipped); the
+    # maximum is separable, so a slab of levels at a time (temporaries of a slab, not of the grid)
+    nz = a.shape[0]
+    d = np.empty((-(-nz // cell),) + tuple(-(-n // cell) for n in a.shape[1:]), a.dtype)
+    for k, start in enumerate(range(0, nz, cell)):
+        level = a[max(start - 1, 0):min(start + cell, nz - 1) + 1].max(axis=0)
+        for axis in range(2):
+            level = _dilated_block_max(level, axis, cell)
+        d[k] = level
     return (np.maximum(d, 0.0).astype(np.float64) * float(safety)).astype(np.float32)
+
+
+def _dilated_block_max(a: np.ndarray, axis: int, cell: int) -> np.ndarray:
+    """The maximum of ``a`` along ``axis`` over each block of ``cell`` entries dilated by one on each side."""
+    n = a.shape[axis]
+    lo = [slice(None)] * a.ndim
+    hi = [slice(None)] * a.ndim
+    lo[axis], hi[axis] = slice(0, -1), slice(1, None)
+    e = a.copy()  # 3-tap running maximum == dilation by one (edge clamped), then the blocks' maxima
+    if n > 1:
+        np.maximum(e[tuple(hi)], a[tuple(lo)], out=e[tuple(hi)])
+        np.maximum(e[tuple(lo)], a[tuple(hi)], out=e[tuple(lo)])
+    return np.maximum.reduceat(e, np.arange(0, n, cell), axis=axis)
 
 
 def texel_majorant_grid(sigma_t_zyx: np.ndarray, safety: float = SAFETY, periodic: bool = False) -> np.ndarray:
