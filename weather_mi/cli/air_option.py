@@ -82,12 +82,23 @@ def view_air(args) -> dict:
     return {"atmosphere": args.atmosphere, "aod": float(args.aod), "ozone": float(args.ozone)}
 
 
-def on_eye_rays(img, spec, vol, args):
-    """``img`` seen through the air outside the box (``display.aerial.with_eye_air``), with the air's sky for
-    ``--sky air``; ``img`` itself without an atmosphere, and in the spectral mode (``--spectral``: there the air
-    colours the sun only, as the medium leaves it out: ``kernel.medium.air_in_medium``)."""
+def eye_rays_air(spec, vol, args):
+    """The air along the eye rays outside the box (``display.aerial.eye_air``, the storm's shadow on it read from
+    ``vol``'s extinction), computed before the render releases ``vol``'s grids (``render_reference(
+    release_volume=True)``), for :func:`on_eye_rays`; None without an atmosphere and in the spectral mode."""
+    if spec.atmosphere is None or getattr(args, "spectral", False):
+        return None
+    from ..display.aerial import eye_air
+    return eye_air(spec, vol, sky_air=args.sky == "air")
+
+
+def on_eye_rays(img, spec, vol, args, air=None):
+    """``img`` seen through the air outside the box (``display.aerial.with_eye_air``; ``air``: its
+    :func:`eye_rays_air`, computed before ``vol``'s grids were released), with the air's sky for ``--sky air``;
+    ``img`` itself without an atmosphere, and in the spectral mode (``--spectral``: there the air colours the sun
+    only, as the medium leaves it out: ``kernel.medium.air_in_medium``)."""
     if spec.atmosphere is None or img.xyz is not None:
         return img
     from ..display.aerial import with_eye_air
-    return with_eye_air(img, spec, vol, sky_air=args.sky == "air")
+    return with_eye_air(img, spec, vol, sky_air=args.sky == "air", air=air)
 

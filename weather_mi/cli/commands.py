@@ -80,6 +80,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     if args.sun_from_time:
         spec, sun_meta = _sun_from_time(spec, hyd)
+    eye_air = air_option.eye_rays_air(spec, vol, args)  # before the render releases vol's grids
     from ..reference.cluster import session
     with session(args.scheduler, args.workers) as client:
         img = render_reference(spec, vol, options=ReferenceOptions(**flag_values(args)), checkpoint=ckpt,
@@ -87,7 +88,7 @@ def _render(args, out, png_path, ckpt) -> Path:
                                release_volume=True)  # the kernel's grids replace vol's (read no more: bbox, air)
     if sun_meta:
         img.metadata["sun_from_time"] = sun_meta
-    img = air_option.on_eye_rays(img, spec, vol, args)  # and along the eye rays outside the box
+    img = air_option.on_eye_rays(img, spec, vol, args, eye_air)  # and along the eye rays outside the box
     if args.denoise:
         from ..display.denoise import denoise_image
         denoise_image(img, spec, vol)
