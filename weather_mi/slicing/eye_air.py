@@ -23,8 +23,8 @@ path tracer takes the model's own rho_air, within a few per cent of it for the s
 
 The storm's shadow on the air (as ``display.aerial``'s, ``optics.air.storm_shadow``): the sunlight at each
 point of every segment, in the box and out, is the slicer's own direct light there (``shadow``: the sun's
-light volume, ``LightVolume.lookup``, exp(-tau) of the hydrometeors' chord towards the sun; on the light's
-side of the box and beside its footprint 1, beyond the box the light leaving it on the same light ray). The
+light volume's direct light, ``light_shadow``: exp(-tau) of the hydrometeors' chord towards the sun; outside
+the slicing box, the light leaving it on the point's sun ray, 1 where that ray misses the box). The
 light pass runs every frame for the frame's sun, so the shadow follows the sun and the sliders at no extra
 pass, compiles nothing new when the sun moves, and is the same shadow the slicer's cloud and ground get.
 Not included: light scattered more than once by the air, the light the storm scatters into its shadow, and
@@ -272,10 +272,30 @@ def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background,
     return boxed + w * (e * s_a + (t_a - 1.0) * boxed)
 
 
+def light_shadow(mi, light, to_sun):
+    """The storm's shadow at world points (mi.Point3f -> mi.Float) from the sun's bound light volume
+    ``light`` (``LightVolume``, its direct light D): a point outside the slicing box reads D where its sun ray
+    enters the box (where the sunlight leaves it towards the point, nudged 0.1% of the chord inside), 1 where
+    the sun ray misses the box or leaves it behind the point; a point inside reads D there."""
+    import drjit as dr
+    lo, hi = (mi.Point3f(*(float(v) for v in c)) for c in (light.lo, light.hi))
+
+    def shadow(p):
+        inv = dr.rcp(dr.select(dr.abs(to_sun) < 1e-12, 1e-12, to_sun))
+        t0, t1 = (lo - p) * inv, (hi - p) * inv
+        a, b = dr.minimum(t0, t1), dr.maximum(t0, t1)
+        t_in = dr.maximum(dr.maximum(dr.maximum(a.x, a.y), a.z), 0.0)
+        t_out = dr.minimum(dr.minimum(b.x, b.y), b.z)
+        ahead = t_out > t_in
+        t = t_in + 1e-3 * dr.maximum(t_out - t_in, 0.0)
+        return dr.select(ahead, light.lookup(p + t * to_sun, log_direct=True, active=ahead)[0], 1.0)
+    return shadow
+
+
 def _top_m() -> float:
     from ..optics.air.eye_path import TOP_M
     return TOP_M
 
 
 __all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "SAMPLES_OUTSIDE", "box_interval", "eye_air_input",
-           "height_table", "seen_through_air", "segment"]
+           "height_table", "light_shadow", "seen_through_air", "segment"]
