@@ -290,9 +290,11 @@ def light_shadow(mi, light, to_sun):
         t_out = dr.minimum(dr.minimum(b.x, b.y), b.z)
         ahead = t_out > t_in
         t = t_in + 1e-3 * dr.maximum(t_out - t_in, 0.0)
-        # D as the store holds it (its logarithm where it holds logarithms): no log or exp per texel
-        d = light.lookup(p + t * to_sun, log_direct=light.log_store, active=ahead)[0]
-        return dr.select(ahead, d, 1.0)
+        # D as the store holds it (its logarithm where it holds logarithms): no log or exp per texel; a packet
+        # of lanes whose sun rays all miss the box reads nothing (LLVM branches per packet)
+        return dr.if_stmt((p + t * to_sun, ahead), ahead,
+                          lambda q, a: light.lookup(q, log_direct=light.log_store, active=a)[0],
+                          lambda q, a: mi.Float(1.0))
     return shadow
 
 
