@@ -32,7 +32,7 @@ from ..scene.spec import SceneSpec
 from ..kernel.sky import sky_irradiance_horizontal
 from .blur import variance_per_metre
 from .eye import LightModel, composite
-from .eye_air import eye_air_input, seen_through_air
+from .eye_air import eye_air_input, light_shadow, seen_through_air
 from .recording import freeze_kernels, raise_recording_error, without_gc
 from .frame_inputs import EyeInputs, EyeRays, FrameInputs, KernelConstants, MultipleLight, TextureBuild
 from .geometry import slice_geometry, slicing_box
@@ -473,7 +473,8 @@ class SliceRenderer:
                          kernel_scalar(mi, params.slab_jitter), kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
                          sca_ratio, below, self._reuse("sun air", (spec.atmosphere, float(spec.sun.mu0)),
                                                        lambda: sun_air_input(mi, spec, self.grid_box)),
-                         None if self._air_cache is None else eye_air_input(mi, spec, self.vol.bbox, self._air_cache, e_sky))
+                         None if self._air_cache is None else eye_air_input(mi, spec, self.vol.bbox, self._air_cache, e_sky,
+                                                                            not self.vol.periodic))
 
     def _eye_pass(self, inputs: FrameInputs):
         import drjit as dr
@@ -492,7 +493,8 @@ class SliceRenderer:
                         e.sun_air, depth=e.eye_air is not None)
         if e.eye_air is None:
             return out
-        return seen_through_air(mi, e.eye_air, e.rays, *out), out[1]  # the air in and outside the box (eye_air.py)
+        shadow = light_shadow(mi, self.light, e.eye_air.to_sun)  # the storm's shadow on the air
+        return seen_through_air(mi, e.eye_air, e.rays, *out, shadow=shadow), out[1]  # the air in and out of the box
 
 
 FROZEN_FRAMES = True
