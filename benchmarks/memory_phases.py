@@ -15,9 +15,10 @@ import sys
 import threading
 import time
 
-PHASES = (("weather_mi.cli.commands", "open_source", "open"),
+PHASES = (("weather_mi.cli.options", "open_source", "open"),
           ("weather_mi.optics.volume", "optical_volume", "optics"),
           ("weather_mi.kernel.scene_dict", "medium_dict", "medium"),
+          ("weather_mi.display.aerial", "eye_air", "eye air"),
           ("weather_mi.kernel.plugins.medium_setup", "GridCache.texel", "majorants"),
           ("weather_mi.reference.render", "_cloud_pixels", "cloud pixels"),
           ("weather_mi.reference.checkpoints", "fingerprint", "fingerprint"),
@@ -75,7 +76,8 @@ def main() -> int:
         shape["cells"] = int(hyd["rho_air"].size)
         return inner(hyd, *a, **k)
     volume.optical_volume = optics
-    opened = commands.open_source
+    import weather_mi.cli.options as options
+    opened = options.open_source
 
     def open_source(*a, **k):  # ``info`` builds no volume: the cells of what was read
         out = opened(*a, **k)
@@ -83,7 +85,7 @@ def main() -> int:
         if hasattr(hyd, "data_vars") and "rho_air" in hyd:
             shape.setdefault("cells", int(hyd["rho_air"].size))
         return out
-    commands.open_source = open_source
+    options.open_source = open_source
     rc = commands.main(sys.argv[1:])
     sampler.running = False
     cells = shape.get("cells", 1)

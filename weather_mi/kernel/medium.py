@@ -23,7 +23,7 @@ def phase_arrays(vol: OpticalVolume, packed: bool = False):
     nodes, values = phase_arrays_tables(vol)
     if air is not None:
         from ..optics.air.inside import medium_grids
-        coeffs = medium_grids(vol.beta_total, vol.albedo, vol.weights, air)[2]
+        coeffs = medium_grids(vol.beta_total, vol.albedo, vol.weights, air, want=("coeffs",))[2]
         if not packed:
             return nodes, values, coeffs
         lanes = 4 * max(1, -(-coeffs.shape[-1] // 4))
@@ -195,7 +195,7 @@ def medium_dict(vol: OpticalVolume) -> dict:
     air = air_in_medium(vol)
     if air is not None:  # RGB extinction (molecules ~ lambda^-4) and albedo of the hydrometeors and the air
         from ..optics.air.inside import medium_grids
-        beta, albedo, _ = medium_grids(vol.beta_total, vol.albedo, vol.weights, air)
+        beta, albedo, _ = medium_grids(vol.beta_total, vol.albedo, vol.weights, air, want=("sigma_t", "albedo"))
     if mi.is_spectral:  # the 550 nm albedo, made spectral by the phase function (``spectral_phase_properties``)
         albedo = np.ascontiguousarray(albedo[..., 1:2])
     else:

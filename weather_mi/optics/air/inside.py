@@ -124,18 +124,47 @@ def medium_extinction(beta_total, air: BoxAir) -> np.ndarray:
     return np.asarray(beta_total, np.float32)[..., None] + air.extinction
 
 
-def medium_grids(beta_total, albedo, weights, air: BoxAir):
+SLAB_CELLS = 1 << 21  # cells of the grid at a time in ``medium_grids`` (its temporaries: a slab of levels)
+
+
+def medium_grids(beta_total, albedo, weights, air: BoxAir, want=("sigma_t", "albedo", "coeffs")):
     """The medium with the air added: (sigma_t (z, y, x, 3), albedo (z, y, x, 3), Eq. 8 scattering
     coefficients of the hydrometeors' species and the air's two components (z, y, x, S + 2), channel mean),
-    from the hydrometeors' grey ``beta_total`` (z, y, x), ``albedo`` (z, y, x, 3) and weights (S, z, y, x)."""
+    from the hydrometeors' grey ``beta_total`` (z, y, x), ``albedo`` (z, y, x, 3 or 1) and weights (S, z, y, x;
+    or ``optics.forward_peak.ScaledWeights``). Only the grids named in ``want`` are built (None for the
+    others), a slab of levels at a time into float32 outputs, so that the temporaries are a slab's."""
     beta = np.asarray(beta_total, np.float32)
-    alb = np.asarray(albedo, np.float32)
-    sigma_t = medium_extinction(beta, air)
-    sca = alb * beta[..., None] + air.scattering.sum(axis=0)
-    out_albedo = np.divide(sca, sigma_t, out=np.ones_like(sigma_t), where=sigma_t > 0)
-    sca_h = beta * alb.mean(axis=-1)
-    coeffs = np.concatenate([np.asarray(weights, np.float32) * sca_h[None], air.scattering_mean()])
-    return sigma_t, np.clip(out_albedo, 0.0, 1.0).astype(np.float32), np.moveaxis(coeffs, 0, -1).astype(np.float32)
+    nz = beta.shape[0]
+    cells = int(np.prod(beta.shape[1:]))
+    n_s = len(weights)
+    out = {"sigma_t": np.empty(beta.shape + (3,), np.float32) if "sigma_t" in want else None,
+           "albedo": np.empty(beta.shape + (3,), np.float32) if "albedo" in want else None,
+           "coeffs": np.empty(beta.shape + (n_s + 2,), np.float32) if "coeffs" in want else None}
+    step = max(1, SLAB_CELLS // max(cells, 1))
+    for z0 in range(0, nz, step):
+        lv = slice(z0, min(nz, z0 + step))
+        b = beta[lv]
+        alb = np.asarray(albedo[lv], np.float32)
+        ext = air.extinction_levels[lv][:, None, None, :]                      # (k, 1, 1, 3)
+        sca_air = air.scattering_levels[:, lv][:, :, None, None, :]           # (2, k, 1, 1, 3)
+        if out["sigma_t"] is not None or out["albedo"] is not None:
+            sigma_t = b[..., None] + ext                                      # Eq. 4 plus the air's
+            if out["sigma_t"] is not None:
+                out["sigma_t"][lv] = sigma_t
+            if out["albedo"] is not None:
+                sca = alb * b[..., None] + sca_air.sum(axis=0)
+                a = np.divide(sca, sigma_t, out=np.ones_like(sigma_t), where=sigma_t > 0)
+                out["albedo"][lv] = np.clip(a, 0.0, 1.0)
+        if out["coeffs"] is not None:
+            sca_h = b * alb.mean(axis=-1)                                     # the hydrometeors' beta omega
+            part = slice(z0 * cells, lv.stop * cells)
+            w = weights.chunk(part) if hasattr(weights, "chunk") else \
+                np.asarray(weights, np.float32).reshape(n_s, -1)[:, part]
+            c = out["coeffs"][lv].reshape(-1, n_s + 2)
+            c[:, :n_s] = (w * sca_h.reshape(1, -1)).T                         # Eq. 8's w_s beta omega
+            c[:, n_s:] = np.broadcast_to(sca_air.mean(axis=-1)[:, :, 0, 0][:, :, None],
+                                         (2, lv.stop - z0, cells)).reshape(2, -1).T
+    return out["sigma_t"], out["albedo"], out["coeffs"]
 
 
 __all__ = ["BoxAir", "CHANNEL_NM", "NAMES", "box_air", "level_density", "medium_extinction", "medium_grids", "scene_air",
