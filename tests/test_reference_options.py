@@ -23,7 +23,7 @@ from weather_mi.reference.options import BASE_TYPES, DECLARED, VALUE, ReferenceO
 from test_reference import cloud_volume, spec
 
 NOT_ESTIMATOR = {"spec", "vol", "options", "checkpoint", "resume", "progress", "variant", "client",
-                 "worker_variant", "on_pass"}
+                 "worker_variant", "on_pass", "release_volume"}
 # Written out, not derived from the declarations (a test comparing the declarations with what they generate
 # cannot fail): a flag or keyword dropped, renamed or given another default is a change of the interface.
 # The estimator's flags of `weather-mi render`: {flag: (dest, type, default, choices, metavar)}

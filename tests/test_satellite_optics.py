@@ -68,7 +68,7 @@ def test_water_index_is_hale_and_querry():
     m = water_index(650e-9)
     assert (m.real, -m.imag) == pytest.approx((1.331, 1.64e-8), rel=1e-9)
     assert water_index(640e-9).real == pytest.approx(1.3314, abs=1e-4)
-    with pytest.raises(ValueError, match="450-900 nm"):
+    with pytest.raises(ValueError, match="350-900 nm"):
         water_index(1.6e-6)
 
 
