@@ -57,3 +57,13 @@ def write_wrfout(path: Path, *, nz=6, ny=4, nx=5, times=("2020-01-01_00:00:00",)
                      "TITLE": "OUTPUT FROM A TEST FACTORY", "MAP_PROJ": np.int32(0)})
     ds.to_netcdf(path)
     return path
+
+
+@pytest.fixture
+def variant_restored():
+    """The Mitsuba variant as it was before the test (one that selects a spectral variant, say)."""
+    import mitsuba as mi
+    before = mi.variant()
+    yield
+    if before:
+        weather_mi.set_variant(before)

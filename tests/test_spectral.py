@@ -15,15 +15,6 @@ SPECTRAL = "llvm_ad_spectral"
 WL = np.arange(360.0, 830.0 + 0.1, 5.0)
 
 
-@pytest.fixture
-def variant_restored():
-    import mitsuba as mi
-    before = mi.variant()
-    yield
-    if before:
-        wm.set_variant(before)
-
-
 def _astm_toa(wl):
     """ASTM G173-03 extraterrestrial irradiance (pvlib's copy), bin-averaged here on the 5 nm grid."""
     import pvlib

@@ -13,15 +13,6 @@ from weather_mi.optics.phase import PhaseTable
 SPECTRAL = "llvm_ad_spectral"
 
 
-@pytest.fixture
-def variant_restored():
-    import mitsuba as mi
-    before = mi.variant()
-    yield
-    if before:
-        wm.set_variant(before)
-
-
 def _hg(g, mu):
     return (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * mu) ** 1.5)
 

@@ -20,6 +20,11 @@ def add_options(p) -> None:
                         "--renderer slices: the sun's colour per height, the sky scaled, the eye rays' air); "
                         "none: the sun as given, vacuum between the hydrometeors. Default: clear in render "
                         "(none with --integrator volpath or --legacy, whose sun it cannot colour, and with --tile-size), none elsewhere")
+    add_aod_ozone(p)
+
+
+def add_aod_ozone(p) -> None:
+    """``--aod`` and ``--ozone``: the clear atmosphere's aerosol and ozone (render, animate, satellite)."""
     p.add_argument("--aod", type=float, default=None,
                    help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
     p.add_argument("--ozone", type=float, default=None,

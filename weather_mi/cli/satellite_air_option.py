@@ -3,6 +3,8 @@ around the model's box, on the sun's path: ``satellite.air``) and ``--view refle
 astronaut's eye would see: ``satellite.natural``)."""
 from __future__ import annotations
 
+from .air_option import add_aod_ozone
+
 DEFAULT_ATMOSPHERE = "none"  # clear costs 2.3-2.4x the render time (benchmarks/satellite_atmosphere.py)
 
 
@@ -12,10 +14,7 @@ def add_satellite_air_options(p) -> None:
                         "box from its own air density, above its top and around it, and on the sun's path through a "
                         "spherical shell (about 2.3x the render time); none (default; always with --rayleigh or "
                         "--tile-size): vacuum between the hydrometeors, the sun as it is above the air")
-    p.add_argument("--aod", type=float, default=None,
-                   help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
-    p.add_argument("--ozone", type=float, default=None,
-                   help="with --atmosphere clear: ozone column in atm-cm, in [0, 0.6] (default 0.3)")
+    add_aod_ozone(p)
     p.add_argument("--view", default="reflectance", choices=("reflectance", "natural"),
                    help="reflectance (default): the imager's band(s) as reflectance factors; natural: what an "
                         "astronaut's eye would see, the reflectance at 9 wavelengths from 400 to 700 nm (three "
