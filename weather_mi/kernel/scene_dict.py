@@ -271,11 +271,13 @@ def _sea_bsdf(terrain) -> dict:
 
 
 def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(lo, hi) of the box that holds the medium: the volume's bbox, starting above a ground at
-    ``floor_m`` by three times Mitsuba's ray offset (coincident or too close faces of the box and the
-    ground make rays skip the ground); with a ground over a terrain (``vol.terrain``; ``floor_m`` then
-    unused) from ``terrain_gap_m`` below its lowest height (the whole mesh inside the box). The grids keep
-    the full bbox."""
+    """(lo, hi) of the box that holds the medium: the volume's bbox; where its floor lies within three times
+    Mitsuba's ray offset g of a ground at ``floor_m`` (coincident or too close faces of the box and the
+    ground make rays skip the ground), from g below the ground (the ground inside the box, as over a
+    terrain: the medium down to the ground; a floor g above it lost the lowest g of the volume, 270 m of
+    air in a periodic box's 2,000 km, issue 38); with a ground over a terrain (``vol.terrain``; ``floor_m``
+    then unused) from ``terrain_gap_m`` below its lowest height (the whole mesh inside the box). The grids
+    keep the full bbox."""
     lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
     if vol.periodic:  # over PATH_TILES periods on each side (optics/periodic.py)
         lo, hi = extended_box(lo, hi, PATH_TILES)
@@ -284,8 +286,9 @@ def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.nda
         lo[2] = terrain_floor_m(terrain) - terrain_gap_m(terrain, vol.bbox)
     elif floor_m is not None:
         gap = 3.0 * RAY_EPSILON * (1.0 + float(np.max(np.abs(np.r_[lo, hi]))))
-        lo[2] = max(lo[2], floor_m + gap)
-        if lo[2] >= hi[2]:
+        if abs(lo[2] - floor_m) < gap:
+            lo[2] = floor_m - gap
+        if hi[2] <= floor_m + gap:
             raise ValueError(f"the volume lies entirely below the ground at {floor_m} m")
     return lo, hi
 
