@@ -51,8 +51,9 @@ def _disort_clear_column(lam_nm, mu0, mu, phi_deg, albedo):
 def test_clear_sea_against_disort():
     """The demo supercell's air alone (periodic: the column plane-parallel) over a dark sea, placed at 30 N
     75 W (view zenith 35 deg, solar zenith 47 deg): the mean reflectance of the pixels 20 km around the centre at
-    0.47 and 0.64 um within max(1 %, 3 se) of DISORT, and within 5 % (the box's path tracing is 2-3 % low,
-    the air's own bias: see the module docstring of satellite.air and the report)."""
+    0.47 and 0.64 um within max(1 %, 3 se) of DISORT, and within 2 % (2048 spp: se 0.4-0.5 %; measured -0.7 %
+    and -0.6 %. The medium's box once began 270 m above the ground, the lowest air missing: -3.0 % (7 se) and
+    -2.4 % (5 se), issue 38)."""
     from weather_mi.optics.air import Atmosphere
     from weather_mi.satellite.air import pixel_angles
     from weather_mi.satellite.imagery import render_satellite, satellite_scene
@@ -63,7 +64,7 @@ def test_clear_sea_against_disort():
                                 atmosphere=Atmosphere(**CLEAR))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
-            ds, _ = render_satellite(scene, spp=256, progress=False)
+            ds, _ = render_satellite(scene, spp=2048, progress=False)
         _, _, mu, phi, _, _ = pixel_angles(scene)
         (x0, y0, _), (x1, y1, _) = vol.bbox
         centre = (np.abs(scene.view.x_m - (x0 + x1) / 2) < 20e3) & (np.abs(scene.view.y_m - (y0 + y1) / 2) < 20e3)
@@ -72,7 +73,7 @@ def test_clear_sea_against_disort():
         ref = _disort_clear_column(float(band) * 1e3, scene.spec.sun.mu0, float(mu[centre].mean()),
                                    float(phi[centre].mean()), 0.02)
         assert centre.sum() >= 50
-        assert abs(r - ref) < max(0.01 * ref, 3 * se) and abs(r - ref) < 0.05 * ref, (band, r, se, ref)
+        assert abs(r - ref) < max(0.01 * ref, 3 * se) and abs(r - ref) < 0.02 * ref, (band, r, se, ref)
 
 
 def _sea_rgb(atmosphere, spp=64):
