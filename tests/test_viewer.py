@@ -229,6 +229,22 @@ def test_the_notebook_viewer_renders_and_closes():
     assert not v.session.loop.alive
 
 
+def test_the_storm_keeps_only_what_the_slicer_and_the_read_out_read(cumulus_storm):
+    """The viewer's memory (issue 39): the storm's volume lets go of the albedo grid (the slicer takes the species
+    table's albedos), keeps the extinction, and the read-out's mixing ratios are those of the dense cells alone."""
+    from weather_mi.errors import WeatherDataError
+    t = cumulus_storm.first_time
+    vol, dense = cumulus_storm.volume(t), cumulus_storm.mixing_ratios(t)
+    with pytest.raises(WeatherDataError, match="released"):
+        np.asarray(vol.albedo)
+    hyd = cumulus_storm.hydrometeors(t)
+    thr = 0.1 / float(np.mean(vol.spacing))  # optical depth 0.1 across a cell
+    assert dense.index.size == int(np.count_nonzero(np.asarray(vol.beta_total) > thr)) > 0
+    assert dense.index.size < 0.5 * np.asarray(vol.beta_total).size
+    q = hyd["q_cloud"].values.reshape(-1)
+    assert np.array_equal(dense.q["cloud"], q[np.asarray(vol.beta_total).reshape(-1) > thr])
+
+
 def test_the_species_colour_view_paints_the_species(cumulus_storm):
     """Fig. 2's view: the same storm and view, each species in its Table III colour (not white)."""
     from weather_mi.viewer.frames import FrameLoop

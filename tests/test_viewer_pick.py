@@ -12,7 +12,7 @@ import pytest
 import mitsuba as mi
 
 import weather_mi as wm
-from weather_mi.viewer.pick import default_threshold_per_m, first_dense_voxel, pixel_ray
+from weather_mi.viewer.pick import DenseMixingRatios, default_threshold_per_m, first_dense_voxel, pixel_ray
 
 # cells of (dz, dy, dx) = (100, 200, 250) m, the box from (0, 0, 0) to (3500, 2400, 1000) m (x, y, z)
 NZ, NY, NX = 10, 12, 14
@@ -195,3 +195,24 @@ def test_a_long_ray_through_a_big_grid_is_fast():
         first_dense_voxel(None, big, spec, W / 2, H / 2)
         times.append(time.perf_counter() - t0)
     assert np.median(times) < 0.02, f"median {np.median(times) * 1e3:.1f} ms per pick"
+
+
+def test_the_dense_cells_mixing_ratios_read_out_as_the_dataset_and_hold_only_the_block(storm):
+    """The viewer's read-out store (``DenseMixingRatios``): the block's 48 cells and nothing of the faint rest
+    (the volume's optical depth 0.1 a cell is the line), their values exactly the Dataset's, the same hits."""
+    hyd, vol = storm
+    dense = DenseMixingRatios(hyd, vol)
+    block_cells = 3 * 4 * 4
+    assert dense.index.size == block_cells
+    kk, jj, ii = np.unravel_index(dense.index, (NZ, NY, NX))
+    assert (kk.min(), kk.max(), jj.min(), jj.max(), ii.min(), ii.max()) == (3, 5, 4, 7, 6, 9)
+    assert np.array_equal(np.sort(dense.q["cloud"]), np.sort(hyd["q_cloud"].values[BLOCK].ravel()))
+    assert dense.nbytes <= block_cells * (8 + 4 * len(dense.q))
+    for k, j, i in [(3, 4, 6), (5, 7, 9), (4, 6, 8)]:
+        assert dense.at(k, j, i) == {s: float(hyd[f"q_{s}"].values[k, j, i]) for s in dense.q}
+    with pytest.raises(KeyError, match="not denser"):
+        dense.at(0, 0, 0)
+    spec = spec_of(looking_east())
+    for px, py in [(W / 2, H / 2), (W / 2, 11.5), (14.5, H / 2), (17.5, 13.0)]:
+        a, b = first_dense_voxel(hyd, vol, spec, px, py), first_dense_voxel(dense, vol, spec, px, py)
+        assert a is not None and a == b

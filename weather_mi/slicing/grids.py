@@ -14,7 +14,7 @@ def set_grids(renderer, vol, mode, detail_field, detail_noise):
     slicing/periodic.py)."""
     mi = renderer.mi
     renderer.shape = tuple(vol.beta_total.shape)
-    beta_s = np.moveaxis(vol.beta_ext, 0, -1).astype(np.float32)
+    beta_s = beta_s_in = np.moveaxis(vol.beta_ext, 0, -1).astype(np.float32)
     if detail_field is not None and mode.detail:
         detail = np.asarray(detail_field, dtype=np.float32)
         if detail.shape != renderer.shape:
@@ -33,7 +33,10 @@ def set_grids(renderer, vol, mode, detail_field, detail_noise):
         renderer.shape = tuple(beta_s.shape[:3])
         if renderer.detail_noise is not None:
             renderer.detail_noise = mi.Float(renderer.periodic.pad(np.asarray(detail_noise, np.float32)).ravel())
-    renderer.beta_s = [mi.Float(np.ascontiguousarray(beta_s[..., si]).ravel()) for si in range(renderer.n_species)]  # (z, y, x) each
+    # (z, y, x) each; unchanged by detail or padding: the volume's own float32 grids, which the kernel maps, not copies
+    own = beta_s is beta_s_in and vol.beta_ext.dtype == np.float32
+    renderer.beta_s = [mi.Float(np.ascontiguousarray(vol.beta_ext[si] if own else beta_s[..., si]).ravel())
+                       for si in range(renderer.n_species)]
     # the grid as kernel vectors (lo corner, 1 / span), for the light carried through the medium (periodic:
     # and the texture coordinates where it samples the medium)
     renderer._grid_scalars = (mi.Point3f(*(kernel_scalar(mi, c) for c in renderer.grid_box[0])),

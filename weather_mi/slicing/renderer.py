@@ -45,6 +45,7 @@ from .periodic import PeriodicSlicing
 from .rays import Scalars, f32, phase_index, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
 from .sun_air import sun_air_input
+from .texture_storage import replace_storage
 from .view import ViewCache
 
 # the cone angle whose spread sets the light pass's blur steps (independent of the interactive cone angle)
@@ -265,9 +266,7 @@ class SliceRenderer:
                 g_sca = g_sca + sca[si]
             grouped.append(g_sca)
         eye = [ext] if self.one_scattering_ratio else [ext] + grouped
-        d.tex_eye.set_tensor(mi.TensorXf(_interleave(mi, eye), shape=self.shape + (len(eye),)))
-        light = [ext, beta_fwd][:self.light_channels]
-        d.tex_light.set_tensor(mi.TensorXf(_interleave(mi, light), shape=self.shape + (len(light),)))
+        replace_storage(mi, [(d.tex_eye, eye), (d.tex_light, [ext, beta_fwd][:self.light_channels])], self.shape)
 
     # ------------------------------------------------------------------ public
     def light_at(self, points) -> tuple[np.ndarray, np.ndarray]:
@@ -554,21 +553,6 @@ def _scatter_groups(tables, colours) -> list[list[int]]:
         else:
             groups.append([si])
     return groups
-
-
-def _interleave(mi, channels):
-    """Flat array with the channels interleaved (voxel-major), as a (..., C) tensor's storage: one kernel
-    over the voxels that scatters each voxel's C values."""
-    import drjit as dr
-    C = len(channels)
-    if C == 1:
-        return channels[0]
-    n = dr.width(channels[0])
-    vox = dr.arange(mi.UInt32, n) * C
-    out = dr.empty(mi.Float, n * C)  # every element is written below
-    for c in range(C):
-        dr.scatter(out, channels[c], vox + c)
-    return out
 
 
 def _texture_key(scale, omega, fwd, detail):

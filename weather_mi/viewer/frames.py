@@ -73,6 +73,13 @@ def jpeg_url(srgb8: np.ndarray, quality: int = JPEG_QUALITY) -> str:
     return "data:image/jpeg;base64," + base64.b64encode(buf.getvalue()).decode("ascii")
 
 
+def release_kernel_cache() -> None:
+    """Hand the kernel's freed grid-sized buffers (the textures' temporaries, which Dr.Jit keeps for reuse) back to
+    the system."""
+    import drjit as dr
+    dr.flush_malloc_cache()
+
+
 class Storm:
     """The input's times as OpticalVolumes (LRU), the camera frame, and the detail noise: shared by the
     sessions of one viewer (read-only after construction; building a volume takes a lock). A WRF file with
@@ -107,6 +114,8 @@ class Storm:
             finally:
                 loop.stop()
             self._warm.update(loop._renderers)
+        release_kernel_cache()
+
 
     def take_warm(self, key):
         """A warmed-up renderer for ``key`` (waits for a warm-up in progress), once; else None."""
@@ -117,8 +126,27 @@ class Storm:
         return self.recipe.hydrometeors() if self._series is None else self._series[t]
 
     def volume(self, t: int):
+        return self._optics(t)[0]
+
+    def mixing_ratios(self, t: int):
+        """The mixing ratios of time ``t``'s dense cells (``pick.DenseMixingRatios``), for the hover read-out."""
+        return self._optics(t)[1]
+
+    def _optics(self, t: int):
         with self._lock:
-            return self._volumes.get_or(t, lambda: self.recipe.volume(hyd=self.hydrometeors(t), keep=("beta_ext",)))
+            return self._volumes.get_or(t, lambda: self._build(t))
+
+    def _build(self, t: int):
+        """(The OpticalVolume of time ``t``, its DenseMixingRatios); its Hydrometeors are let go. The volume keeps
+        what the slicer and the read-out read: the per-species extinction and the total; the albedo grid only where
+        the species have no table (``SliceRenderer`` reads the table's)."""
+        from .pick import DenseMixingRatios
+        hyd = self.hydrometeors(t)
+        vol = self.recipe.volume(hyd=hyd, keep=("beta_ext",))
+        dense = DenseMixingRatios(hyd, vol)
+        if vol.species_set is not None:
+            vol.release("albedo")
+        return vol, dense
 
     def detail_noise(self) -> np.ndarray:
         """Unit-variance turbulent noise on the grid (isotropic in metres), built once."""

@@ -120,7 +120,7 @@ class ViewerSession:
         s = self.state
         try:
             spec = s.spec(self.storm.frame, self.storm.ground_m)
-            hit = first_dense_voxel(self.storm.hydrometeors(s.time), self.storm.volume(s.time), spec, x, y)
+            hit = first_dense_voxel(self.storm.mixing_ratios(s.time), self.storm.volume(s.time), spec, x, y)
         except Exception as exc:  # the read-out must never break the view
             return f"read-out failed: {exc}"
         if hit is None:
