@@ -75,8 +75,9 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
                          periodic=periodic_value(args), release=True,
                          keep=("beta_ext", "weights") if args.rgb or args.rayleigh or args.view == "natural"
                          else ("weights",))  # the air: beta_s
-    hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air"])  # in vol now; the air stays for Rayleigh
     atm = satellite_atmosphere(args)
+    air = args.rgb or args.rayleigh or atm is not None or args.view == "natural"  # their air needs rho_air
+    hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air" or not air])  # in vol now
     if args.view == "natural":
         return _satellite_natural(args, hyd, vol, resolution, nc, exr, png, ckpt, atm)
     if args.rgb:
@@ -93,7 +94,8 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
           "from a column's own)")
     with session(args.scheduler, args.workers) as client:
         ds, img = si.render_satellite(scene, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
-                                      resume=ckpt if args.resume else None, client=client)
+                                      resume=ckpt if args.resume else None, client=client,
+                                      release_volume=atm is None)  # the kernel's grids replace the band volume's
     from ..display.satellite_picture import shown_dataset, write_picture
     shown = shown_dataset(ds, img, args.denoise)
     si.write_satellite(ds, img, nc, exr)
@@ -123,7 +125,8 @@ def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt, atm) -> Path:
           f"centre ({s.sun_meta['valid_time']})")
     with session(args.scheduler, args.workers) as client:
         ds, img = tc.render_true_color(scenes, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
-                                       resume=ckpt if args.resume else None, client=client)
+                                       resume=ckpt if args.resume else None, client=client,
+                                       release_volume=atm is None and len(scenes) == 1)  # the outside air and later bands read it
     from ..display.satellite_picture import shown_dataset, write_picture
     from ..satellite.imagery import write_satellite
     shown = shown_dataset(ds, img, args.denoise)
