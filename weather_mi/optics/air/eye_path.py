@@ -14,7 +14,8 @@ Henyey-Greenstein's with the aerosol's asymmetry, and C(h, mu) the direct sun's 
 cos(zenith) there mu = (q . sun) / |q| (``sunlight.sun_rgb``, over a table wide enough for every point of
 the segment). S is a radiance per unit irradiance of the sun above the air (1/sr): times the scene's sun
 irradiance it is the radiance added at the eye. The integrals are trapezoidal on s = t0 + (t1 - t0) x^2,
-x uniform (dense near t0, where an eye ray near the ground meets most of its air).
+x uniform (dense near t0, where an eye ray near the ground meets most of its air), compiled
+(``march_kernels.segment_air``; the profiles linear on a ``PROFILE_STEP_M`` grid).
 """
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ import numpy as np
 
 from ..phase.analytic import hg_value
 from ..rayleigh import cross_section_m2 as rayleigh_cross_section_m2, phase_value
+from . import march_kernels
 from .atmosphere import Atmosphere
 from .inside import CHANNEL_NM
 from .ozone import cross_section_m2 as ozone_cross_section_m2
@@ -30,6 +32,7 @@ from .sunlight import SunAirTable, channel_values
 
 TOP_M = 60e3        # the eye path's air ends here (above it < 1e-4 of the molecules' column)
 SAMPLES = 257
+PROFILE_STEP_M = 1.0  # the air's profiles, linear between heights this far apart (within 1e-7 of the formulas)
 
 
 def wide_sun_table(atm: Atmosphere, mu0: float, reach_m: float = 1500e3, n_mu: int = 129, n_h: int = 121,
@@ -59,31 +62,33 @@ def segment_air(atm: Atmosphere, to_sun, origins, dirs, t0, t1, table: SunAirTab
     unit irradiance of the sun above the air); T = 1, S = 0 where t1 <= t0. ``shadow``: the direct sun's
     transmittance through the storm at points (..., 3) of the frame (``storm_shadow.StormShadow.transmittance``),
     a factor on C(h, mu); None: no storm."""
-    o, d = np.asarray(origins, np.float64), np.asarray(dirs, np.float64)
+    o, d = np.asarray(origins, np.float64).reshape(-1, 3), np.asarray(dirs, np.float64).reshape(-1, 3)
     sun = np.asarray(to_sun, np.float64) / np.linalg.norm(to_sun)
-    t0 = np.asarray(t0, np.float64)
+    t0 = np.broadcast_to(np.asarray(t0, np.float64), o.shape[:1])
     length = np.maximum(np.asarray(t1, np.float64) - t0, 0.0)
-    wl = np.asarray(wavelengths_nm, np.float64)
+    wl = np.asarray(wavelengths_nm, np.float64).reshape(-1)
+    wl = np.repeat(wl, table.rgb.shape[-1]) if wl.size == 1 else wl  # one wavelength, the table's channels
     x = np.linspace(0.0, 1.0, samples)
-    s = t0[:, None] + length[:, None] * x * x                                   # (n, k)
-    q = o[:, None, :] + s[..., None] * d[:, None, :] + [0.0, 0.0, EARTH_RADIUS_M]
-    r = np.linalg.norm(q, axis=-1)
-    h = np.clip(r - EARTH_RADIUS_M, 0.0, None)
-    mu = np.sum(q * sun, axis=-1) / r
-    n_air = atm.air_number_density_m3(h)[..., None]
-    beta_r = n_air * rayleigh_cross_section_m2(wl * 1e-9)
-    beta_a = atm.aerosol_extinction_550_per_m(h)[..., None] * atm.aerosol_factor(wl)
-    ext = beta_r + beta_a + atm.ozone_number_density_m3(h)[..., None] * ozone_cross_section_m2(wl)
-    ds = np.diff(s, axis=1)[..., None]
-    tau = np.concatenate([np.zeros(ext.shape[:1] + (1,) + ext.shape[2:]),
-                          np.cumsum(0.5 * (ext[:, 1:] + ext[:, :-1]) * ds, axis=1)], axis=1)
-    cos_t = np.clip(d @ sun, -1.0, 1.0)[:, None, None]
-    source = (beta_r * phase_value(cos_t) + atm.aerosol_ssa * beta_a * hg_value(atm.aerosol_g, cos_t)) \
-        * table.at(h, mu) * np.exp(-tau)
+    lit = np.zeros((0, 0))
     if shadow is not None:  # the storm's shadow on the direct sun at the samples
-        source *= shadow(q - [0.0, 0.0, EARTH_RADIUS_M])[..., None]
-    inscatter = np.sum(0.5 * (source[:, 1:] + source[:, :-1]) * ds, axis=1)
-    return np.exp(-tau[:, -1]), inscatter
+        s = t0[:, None] + length[:, None] * x * x
+        lit = np.asarray(shadow(o[:, None, :] + s[..., None] * d[:, None, :]), np.float64).reshape(s.shape)
+    z_top = float(np.max(np.r_[_heights(o, d, t0), _heights(o, d, t0 + length), 0.0]))
+    z = np.arange(0.0, z_top + 2 * PROFILE_STEP_M, PROFILE_STEP_M)
+    cos_t = np.clip(d @ sun, -1.0, 1.0)
+    return march_kernels.segment_air(
+        o, d, np.ascontiguousarray(t0), length, sun, x, 0.0, PROFILE_STEP_M,
+        np.stack([atm.air_number_density_m3(z), atm.ozone_number_density_m3(z), atm.aerosol_extinction_550_per_m(z)]),
+        rayleigh_cross_section_m2(wl * 1e-9) * np.ones_like(wl), ozone_cross_section_m2(wl) * np.ones_like(wl),
+        atm.aerosol_factor(wl) * np.ones_like(wl), float(atm.aerosol_ssa), phase_value(cos_t),
+        hg_value(atm.aerosol_g, cos_t), np.asarray(table.heights_m, np.float64), np.asarray(table.mu, np.float64),
+        np.asarray(table.rgb, np.float64), lit, float(EARTH_RADIUS_M))
+
+
+def _heights(o, d, s) -> np.ndarray:
+    """Heights above the sphere (m) of the points o + s d (n,)."""
+    q = o + s[:, None] * d + [0.0, 0.0, EARTH_RADIUS_M]
+    return np.linalg.norm(q, axis=-1) - EARTH_RADIUS_M
 
 
 __all__ = ["TOP_M", "wide_sun_table", "top_distance", "segment_air"]

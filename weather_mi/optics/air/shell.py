@@ -5,11 +5,14 @@ EARTH_RADIUS_M and the air ending at ``top_m``. No refraction (it lengthens a ho
 Along the straight ray r(s)^2 = r0^2 + 2 r0 mu s + s^2 (r0 = R + h); below the horizon (mu < 0) the ray
 passes its lowest point at s* = -r0 mu, radius r0 sqrt(1 - mu^2), and is blocked by the Earth when that
 is below R (column infinite, transmittance 0). The column is the trapezoidal integral of the tabulated
-density over [0, s*] and [s*, s_top], each sampled as s = s_lowest +- L t^2 (dense where the air is).
+density over [0, s*] and [s*, s_top], each sampled as s = s_lowest +- L t^2 (dense where the air is), linear
+between the table's heights (compiled: ``march_kernels.slant_columns``).
 """
 from __future__ import annotations
 
 import numpy as np
+
+from .march_kernels import slant_columns as slant_columns_kernel
 
 EARTH_RADIUS_M = 6371e3  # mean radius
 DZ_TABLE_M = 20.0        # profiles are tabulated on this height step
@@ -22,17 +25,8 @@ def horizon_mu(h_m, radius_m: float = EARTH_RADIUS_M) -> np.ndarray:
     return -np.sqrt(1.0 - (radius_m / r0) ** 2)
 
 
-def _segment(profiles, z_tab, r0, mu, s_a, s_b, radius_m, top_m, samples=SAMPLES):
-    """Columns over s from s_a (the lowest point) to s_b, for rays (k,) at once."""
-    t = np.linspace(0.0, 1.0, samples)
-    s = s_a[:, None] + (s_b - s_a)[:, None] * t * t
-    r2 = r0[:, None] ** 2 + 2.0 * (r0 * mu)[:, None] * s + s * s
-    z = np.clip(np.sqrt(np.maximum(r2, 0.0)) - radius_m, 0.0, top_m)
-    return {k: np.abs(np.trapezoid(np.interp(z, z_tab, v), s, axis=-1)) for k, v in profiles.items()}
-
-
 def slant_columns(profiles_of_height, h_m, mu, top_m: float, radius_m: float = EARTH_RADIUS_M,
-                  chunk: int = 2048, samples: int = SAMPLES) -> tuple[dict, np.ndarray]:
+                  samples: int = SAMPLES) -> tuple[dict, np.ndarray]:
     """Columns from (h_m, mu) (broadcast together) to space of each density that ``profiles_of_height(z)``
     returns (a dict name -> per-m^3 or per-m values at heights z, m): (dict name -> columns, blocked),
     ``blocked`` True where the Earth is in the way (columns 0 there). ``samples``: points per segment (fewer
@@ -42,21 +36,17 @@ def slant_columns(profiles_of_height, h_m, mu, top_m: float, radius_m: float = E
         raise ValueError("mu must be a cosine in [-1, 1]")
     m = np.clip(m, -1.0, 1.0)
     z_tab = np.arange(0.0, top_m + DZ_TABLE_M, DZ_TABLE_M)
-    profiles = {k: np.asarray(v, np.float64) for k, v in profiles_of_height(z_tab).items()}
+    profiles = {k: np.broadcast_to(np.asarray(v, np.float64), z_tab.shape) for k, v in profiles_of_height(z_tab).items()}
     hf, mf = h.ravel(), m.ravel()
     r0 = radius_m + hf
     blocked = (mf < 0.0) & (r0 * np.sqrt(1.0 - mf * mf) < radius_m)
     rt = radius_m + top_m
     s_star = np.maximum(-r0 * mf, 0.0)
     s_top = -r0 * mf + np.sqrt(np.maximum((r0 * mf) ** 2 + rt * rt - r0 * r0, 0.0))
-    out = {k: np.zeros(hf.shape) for k in profiles}
-    for i in range(0, hf.size, chunk):
-        sl = slice(i, i + chunk)
-        args = (profiles, z_tab, r0[sl], mf[sl])
-        down = _segment(*args, s_star[sl], np.zeros_like(s_star[sl]), radius_m, top_m, samples)  # back up to the point
-        up = _segment(*args, s_star[sl], s_top[sl], radius_m, top_m, samples)
-        for k in out:
-            out[k][sl] = np.where(blocked[sl], 0.0, down[k] + up[k])
+    names = list(profiles)
+    cols = slant_columns_kernel(np.stack([profiles[k] for k in names]), float(z_tab[0]), DZ_TABLE_M, r0, mf,
+                                s_star, s_top, blocked, float(radius_m), float(top_m), np.linspace(0.0, 1.0, samples))
+    out = dict(zip(names, cols))
     return {k: v.reshape(h.shape) for k, v in out.items()}, blocked.reshape(h.shape)
 
 
