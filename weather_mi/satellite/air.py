@@ -46,14 +46,11 @@ def air_layers(atm, wavelength_nm: float, ground_m: float = 0.0, split_m: float 
     from ..optics.rayleigh import DEPOLARISATION, cross_section_m2 as rayleigh_sigma
     edges = _layer_edges(ground_m, split_m)
     wl = float(wavelength_nm)
-    taus = {k: [] for k in ("rayleigh", "ozone", "aerosol")}
-    for z0, z1 in zip(edges[:-1], edges[1:]):
-        z = np.linspace(z0, z1, 41)
-        p = atm.profiles(z)
-        taus["rayleigh"].append(np.trapezoid(p["air"], z) * float(rayleigh_sigma(wl * 1e-9)))
-        taus["ozone"].append(np.trapezoid(p["ozone"], z) * float(ozone_sigma(wl)))
-        taus["aerosol"].append(np.trapezoid(p["aerosol"], z) * float(atm.aerosol_factor(wl)))
-    t_r, t_o, t_a = (np.asarray(taus[k])[::-1] for k in ("rayleigh", "ozone", "aerosol"))  # top first
+    z = np.linspace(edges[:-1], edges[1:], 41, axis=-1)          # (layers, 41)
+    p = atm.profiles(z)
+    t_r, t_o, t_a = (np.trapezoid(p[k], z, axis=-1)[::-1] * f   # top first
+                     for k, f in (("air", float(rayleigh_sigma(wl * 1e-9))), ("ozone", float(ozone_sigma(wl))),
+                                  ("aerosol", float(atm.aerosol_factor(wl)))))
     sca_a = atm.aerosol_ssa * t_a
     tau = t_r + t_o + t_a
     gamma = DEPOLARISATION / (2.0 - DEPOLARISATION)

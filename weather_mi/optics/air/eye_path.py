@@ -76,13 +76,30 @@ def segment_air(atm: Atmosphere, to_sun, origins, dirs, t0, t1, table: SunAirTab
     z_top = float(np.max(np.r_[_heights(o, d, t0), _heights(o, d, t0 + length), 0.0]))
     z = np.arange(0.0, z_top + 2 * PROFILE_STEP_M, PROFILE_STEP_M)
     cos_t = np.clip(d @ sun, -1.0, 1.0)
-    return march_kernels.segment_air(
+    tab = np.asarray(table.rgb, np.float64)
+    own, first = _distinct_channels(wl, tab)
+    w = wl[own]
+    per_channel = [np.broadcast_to(v, own.shape).astype(np.float64)
+                   for v in (rayleigh_cross_section_m2(w * 1e-9), ozone_cross_section_m2(w), atm.aerosol_factor(w))]
+    t, s = march_kernels.segment_air(
         o, d, np.ascontiguousarray(t0), length, sun, x, 0.0, PROFILE_STEP_M,
         np.stack([atm.air_number_density_m3(z), atm.ozone_number_density_m3(z), atm.aerosol_extinction_550_per_m(z)]),
-        rayleigh_cross_section_m2(wl * 1e-9) * np.ones_like(wl), ozone_cross_section_m2(wl) * np.ones_like(wl),
-        atm.aerosol_factor(wl) * np.ones_like(wl), float(atm.aerosol_ssa), phase_value(cos_t),
-        hg_value(atm.aerosol_g, cos_t), np.asarray(table.heights_m, np.float64), np.asarray(table.mu, np.float64),
-        np.asarray(table.rgb, np.float64), lit, float(EARTH_RADIUS_M))
+        *per_channel, float(atm.aerosol_ssa), phase_value(cos_t), hg_value(atm.aerosol_g, cos_t),
+        np.asarray(table.heights_m, np.float64), np.asarray(table.mu, np.float64), np.ascontiguousarray(tab[..., own]),
+        lit, float(EARTH_RADIUS_M))
+    return t[:, first], s[:, first]
+
+
+def _distinct_channels(wl, tab) -> tuple[np.ndarray, np.ndarray]:
+    """(The channels computed, the column of the result each channel takes): a channel with an earlier one's
+    wavelength and column of the sun's table ``tab`` (a satellite's single band, three times) takes its."""
+    own, first = [], []
+    for c in range(wl.size):
+        same = [i for i, e in enumerate(own) if wl[e] == wl[c] and np.array_equal(tab[..., e], tab[..., c])]
+        if not same:
+            own.append(c)
+        first.append(same[0] if same else len(own) - 1)
+    return np.asarray(own), np.asarray(first)
 
 
 def _heights(o, d, s) -> np.ndarray:

@@ -11,20 +11,25 @@ from numba import njit, prange
 
 
 @njit(cache=True)
-def _interp_uniform(z, z0, dz, values):  # pragma: no cover - compiled
-    """np.interp(z, z0 + dz * arange(n), values), the grid uniform: clamped to its ends."""
-    n = values.shape[0]
+def _node(z, z0, dz, n):  # pragma: no cover - compiled
+    """(j, z - z_j) of np.interp on the uniform grid z0 + dz * arange(n): j = -1 below it, n - 1 above it."""
     f = (z - z0) / dz
     if f <= 0.0:
-        return values[0]
+        return -1, 0.0
     if f >= n - 1:
-        return values[n - 1]
-    j = int(f)
-    if j > n - 2:
-        j = n - 2
-    x = z0 + dz * j
-    slope = (values[j + 1] - values[j]) / dz
-    return slope * (z - x) + values[j]
+        return n - 1, 0.0
+    j = min(int(f), n - 2)
+    return j, z - (z0 + dz * j)
+
+
+@njit(cache=True)
+def _at(values, j, off, dz):  # pragma: no cover - compiled
+    """np.interp's value at the ``_node`` (j, off) (clamped to the ends)."""
+    if j < 0:
+        return values[0]
+    if j >= values.shape[0] - 1:
+        return values[values.shape[0] - 1]
+    return (values[j + 1] - values[j]) / dz * off + values[j]
 
 
 @njit(cache=True)
@@ -39,8 +44,9 @@ def _column(profiles, z0, dz, r0, mu, s_a, s_b, radius_m, top_m, t, out, i):  # 
         s = s_a + (s_b - s_a) * t[m] * t[m]
         r2 = r0 * r0 + 2.0 * (r0 * mu) * s + s * s
         z = min(max(np.sqrt(max(r2, 0.0)) - radius_m, 0.0), top_m)
+        j, off = _node(z, z0, dz, profiles.shape[1])
         for p in range(n_p):
-            v = _interp_uniform(z, z0, dz, profiles[p])
+            v = _at(profiles[p], j, off, dz)
             if m > 0:
                 acc[p] += (s - s_prev) * (v + prev[p]) / 2.0
             prev[p] = v
@@ -65,14 +71,16 @@ def slant_columns(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, to
 
 
 @njit(cache=True)
-def _table_at(h, mu, tab_h, tab_mu, tab, c):  # pragma: no cover - compiled
-    """``sunlight.SunAirTable.at`` of channel c (bilinear, clamped; ``tab`` float64)."""
-    fh = min(max((h - tab_h[0]) / (tab_h[-1] - tab_h[0]), 0.0), 1.0) * (tab_h.shape[0] - 1)
-    ih = min(int(np.floor(fh)), tab_h.shape[0] - 2)
-    fh -= ih
-    fm = min(max((mu - tab_mu[0]) / (tab_mu[-1] - tab_mu[0]), 0.0), 1.0) * (tab_mu.shape[0] - 1)
-    im = min(int(np.floor(fm)), tab_mu.shape[0] - 2)
-    fm -= im
+def _cell(v, grid):  # pragma: no cover - compiled
+    """``sunlight.SunAirTable.at``'s (index, fraction) of v on the uniform ``grid`` (clamped)."""
+    f = min(max((v - grid[0]) / (grid[-1] - grid[0]), 0.0), 1.0) * (grid.shape[0] - 1)
+    i = min(int(np.floor(f)), grid.shape[0] - 2)
+    return i, f - i
+
+
+@njit(cache=True)
+def _table_at(tab, ih, fh, im, fm, c):  # pragma: no cover - compiled
+    """``sunlight.SunAirTable.at`` of channel c at the cells (ih, fh), (im, fm) (bilinear; ``tab`` float64)."""
     lo = tab[im, ih, c] * (1 - fh) + tab[im, ih + 1, c] * fh
     hi = tab[im + 1, ih, c] * (1 - fh) + tab[im + 1, ih + 1, c] * fh
     return lo * (1 - fm) + hi * fm
@@ -99,16 +107,16 @@ def segment_air(o, d, t0, length, sun, x, z0, dz, profiles, sigma_r, sigma_o, ae
             r = np.sqrt(q0 * q0 + q1 * q1 + q2 * q2)
             h = max(r - radius_m, 0.0)
             mu = (q0 * sun[0] + q1 * sun[1] + q2 * sun[2]) / r
-            n_air = _interp_uniform(h, z0, dz, profiles[0])
-            n_o3 = _interp_uniform(h, z0, dz, profiles[1])
-            b_a = _interp_uniform(h, z0, dz, profiles[2])
+            j, off = _node(h, z0, dz, profiles.shape[1])
+            n_air, n_o3, b_a = _at(profiles[0], j, off, dz), _at(profiles[1], j, off, dz), _at(profiles[2], j, off, dz)
+            (ih, fh), (im, fm) = _cell(h, tab_h), _cell(mu, tab_mu)
             lit = shadow[i, m] if has_shadow else 1.0
             for c in range(n_c):
                 beta_r, beta_a = n_air * sigma_r[c], b_a * aerosol_factor[c]
                 ext = beta_r + beta_a + n_o3 * sigma_o[c]
                 if m > 0:
                     tau[c] += 0.5 * (ext + prev_ext[c]) * (s - s_prev)
-                src = (beta_r * p_r[i] + aerosol_ssa * beta_a * p_hg[i]) * _table_at(h, mu, tab_h, tab_mu, tab, c) \
+                src = (beta_r * p_r[i] + aerosol_ssa * beta_a * p_hg[i]) * _table_at(tab, ih, fh, im, fm, c) \
                     * np.exp(-tau[c]) * lit
                 if m > 0:
                     acc[c] += 0.5 * (src + prev_src[c]) * (s - s_prev)

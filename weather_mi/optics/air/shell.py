@@ -36,7 +36,8 @@ def slant_columns(profiles_of_height, h_m, mu, top_m: float, radius_m: float = E
         raise ValueError("mu must be a cosine in [-1, 1]")
     m = np.clip(m, -1.0, 1.0)
     z_tab = np.arange(0.0, top_m + DZ_TABLE_M, DZ_TABLE_M)
-    profiles = {k: np.broadcast_to(np.asarray(v, np.float64), z_tab.shape) for k, v in profiles_of_height(z_tab).items()}
+    profiles = {k: np.broadcast_to(np.asarray(v, np.float64), z_tab.shape)
+                for k, v in profiles_of_height(z_tab).items()}
     hf, mf = h.ravel(), m.ravel()
     r0 = radius_m + hf
     blocked = (mf < 0.0) & (r0 * np.sqrt(1.0 - mf * mf) < radius_m)
