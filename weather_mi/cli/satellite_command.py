@@ -85,17 +85,18 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
                                ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
                                seed=args.seed, atmosphere=atm, **surface_kw(args))
-    del vol  # the scene holds the band's volume (its own albedo): the RGB albedo goes
+    del vol, hyd  # the scene holds the band's volume (its own albedo) and air: the RGB albedo and rho_air go
     w, h = scene.view.size
     print(f"{scene.satellite.name} (sub-satellite longitude {scene.satellite.sub_lon_deg}), band {scene.band.name} um: "
           f"{w} x {h} pixels of {resolution:g} km, view zenith {scene.view.view_zenith_deg.min():.1f}-"
           f"{scene.view.view_zenith_deg.max():.1f} deg, solar zenith {90 - scene.spec.sun.elevation:.2f} deg at the "
           f"centre ({scene.sun_meta['valid_time']}; one sun, up to {scene.sun_meta['one_sun_max_error_deg']:.2f} deg "
           "from a column's own)")
+    # release_volume: the kernel's grids replace the band volume's; the outside air (satellite.air) reads its bbox,
+    # periodic and air.band_nm only
     with session(args.scheduler, args.workers) as client:
         ds, img = si.render_satellite(scene, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
-                                      resume=ckpt if args.resume else None, client=client,
-                                      release_volume=atm is None)  # the kernel's grids replace the band volume's
+                                      resume=ckpt if args.resume else None, client=client, release_volume=True)
     from ..display.satellite_picture import shown_dataset, write_picture
     shown = shown_dataset(ds, img, args.denoise)
     si.write_satellite(ds, img, nc, exr)
@@ -126,7 +127,7 @@ def _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt, atm) -> Path:
     with session(args.scheduler, args.workers) as client:
         ds, img = tc.render_true_color(scenes, **flag_values(args, SATELLITE_ESTIMATOR), checkpoint=ckpt,
                                        resume=ckpt if args.resume else None, client=client,
-                                       release_volume=atm is None and len(scenes) == 1)  # the outside air and later bands read it
+                                       release_volume=len(scenes) == 1)  # later bands (--rayleigh) read it
     from ..display.satellite_picture import shown_dataset, write_picture
     from ..satellite.imagery import write_satellite
     shown = shown_dataset(ds, img, args.denoise)
