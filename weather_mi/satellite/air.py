@@ -30,7 +30,6 @@ from dataclasses import replace
 
 import numpy as np
 
-CHUNK = 2048            # rays per ``segment_air`` call
 TOP_LAYERS_M = (0.0, 30e3, 80e3)  # DISORT layers: LAYER_M up to 30 km, 5 km above
 LAYER_M = 1000.0
 ALBEDOS = (0.0, 0.1, 0.5)         # the surface albedos of the three DISORT solves (R_0, then K and s)
@@ -173,14 +172,10 @@ def _sun_table(atm, start, band_nm, mu0):
 
 
 def _segments(atm, scene, start, d, s0, s1, table, band_nm):
-    """(T, S) (n, 3) of ``eye_path.segment_air`` over [s0, s1] along the lines from ``start``, in chunks."""
+    """(T, S) (n, 3) of ``eye_path.segment_air`` over [s0, s1] along the lines from ``start`` (one compiled march:
+    no temporaries per sample)."""
     from ..optics.air.eye_path import segment_air
-    t, out = np.ones((len(start), 3)), np.zeros((len(start), 3))
-    for i in range(0, len(start), CHUNK):
-        sl = slice(i, i + CHUNK)
-        t[sl], out[sl] = segment_air(atm, scene.spec.sun.to_sun, start[sl], d[sl], s0[sl], s1[sl], table,
-                                     wavelengths_nm=band_nm)
-    return t, out
+    return segment_air(atm, scene.spec.sun.to_sun, start, d, s0, s1, table, wavelengths_nm=band_nm)
 
 
 def _through_box(atm, scene, t_box, o, d, mu, phi, t0, t1, band_nm, mu0):
