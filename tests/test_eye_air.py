@@ -190,7 +190,7 @@ def test_the_compiled_march_is_the_trapezoidal_sum(shadowed):
     t1 = np.where(top_distance(o, d) > 0, top_distance(o, d), 50e3) * rng.uniform(0.2, 1.0, 40)
     t0 = t1 * rng.uniform(0.0, 0.5, 40)
     t0[7] = t1[7] + 10.0
-    shadow = (lambda p: 0.5 + 0.5 * np.tanh((p[..., 2] - 4e3) / 2e3)) if shadowed else None
+    shadow = (lambda p: 0.55 + 0.45 * np.tanh((p[..., 2] - 4e3) / 2e3)) if shadowed else None
     wl = np.array([650.0, 550.0, 450.0])
     t, s = segment_air(atm, SUN, o, d, t0, t1, _table(atm), samples=65, shadow=shadow)
     t_ref, s_ref = _trapezoid_march(atm, SUN, o, d, t0, t1, _table(atm), wl, 65, shadow)
