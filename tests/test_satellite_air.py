@@ -218,3 +218,32 @@ def test_satellite_view_natural_writes_xyz_srgb_and_a_png(tmp_path, capsys):
     assert Image.open(out.with_suffix(".png")).size[0] == width * zoom_for(width) > width
     assert cli.main(argv[:-2] + ["--band", "0.64", "-o", str(tmp_path / "x.nc")]) == 2
     assert "--view natural: not with --band 0.64" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("rgb", [False, True])
+def test_the_clear_air_renders_the_same_with_the_volume_released(rgb):
+    """``satellite --atmosphere clear`` releases the band volume's grids as the kernel's are built (memory): the
+    air outside the box reads none of them, and the image (same seed) is the one rendered with them kept."""
+    from weather_mi.optics.air import Atmosphere
+    from weather_mi.optics.volume import ReleasedGrid
+    from weather_mi.satellite.imagery import render_satellite, satellite_scene
+    from weather_mi.satellite.truecolor import render_true_color, true_color_scenes
+    from weather_mi.scene.place import assume_place
+    wm.set_variant("llvm_ad_rgb")
+    hyd = assume_place(wm.open_source(None, "cumulus"), 25.0, -75.0, "2013-05-20T16:00")
+    images = []
+    for release in (False, True):
+        vol = wm.optical_volume(hyd, species="physical", phase_quality="test")
+        if rgb:
+            scenes = true_color_scenes(hyd, vol, "goes-east", 2.0, atmosphere=Atmosphere())
+            scene = scenes[0]
+        else:
+            scene = satellite_scene(hyd, vol, "goes-east", "0.64", 2.0, atmosphere=Atmosphere())
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            kw = dict(spp=4, progress=False, release_volume=release)
+            _, img = render_true_color(scenes, **kw) if rgb else render_satellite(scene, **kw)
+        assert isinstance(scene.vol.beta_total, ReleasedGrid) == release
+        images.append(np.asarray(img.radiance))
+    assert img.metadata["air_outside"]["above_box_px"] > 0
+    np.testing.assert_array_equal(images[0], images[1])
