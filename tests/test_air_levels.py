@@ -119,3 +119,63 @@ def test_render_reference_puts_the_atmosphere_into_the_box():
     alone = wm.render_reference(spec, vol, spp=2, progress=False)
     boxed = wm.render_reference(spec, with_box_air(vol, hyd, spec.atmosphere), spp=2, progress=False)
     assert np.array_equal(alone.radiance, boxed.radiance)
+
+
+def grey_cloud_in_air(shape=(16, 32, 32)):
+    """As :func:`cloud_in_air` with the air's G channel in all three (a satellite's single band): sigma_t
+    (z, y, x, 1), the medium's extinction grey (``kernel.medium.grey_air``)."""
+    cloud = blobs(shape)
+    air = np.repeat(air_profile(shape[0])[:, 1:2], 3, axis=1)
+    return (cloud[..., None] + air[:, None, None, :1]).astype(np.float32), cloud, air
+
+
+def grey_air_scene(sigma_grey, integrator, **kw):
+    d = scene_dict(sigma_grey[..., 0], integrator, **kw)
+    d["cloud"]["sigma_t"]["data"] = mi.TensorXf(sigma_grey)
+    return d
+
+
+def test_a_grey_air_is_tracked_grey_with_its_optical_depth_the_interpolants():
+    """A grey air (three equal channels) over a one-channel grid: the trackers stay grey (no spectral tracking),
+    ``AirLevels`` holds one channel whose values are the three-channel one's to the bit, and the exact
+    transmittance is the fine midpoint integral of the grid's trilinear interpolant (numpy)."""
+    from weather_mi.kernel.plugins.air_levels import AirLevels
+    sigma, cloud, air = grey_cloud_in_air()
+    scene = mi.load_dict(grey_air_scene(sigma, ours_air(sigma, air)))
+    integ = scene.integrator()
+    integ._setup(scene, None)
+    tk = integ._tk
+    assert not tk.ms.spectral and tk.texel.air is not None and tk.texel.air.c == 1
+    assert np.array(tk.texel.empty).max() >= 2
+    rng = np.random.default_rng(7)
+    n = 1200
+    o = LO - 2.0 + rng.random((n, 3)) * (HI - LO + 4.0)
+    d = rng.normal(size=(n, 3))
+    d[: n // 5, 2] *= 1e-3  # nearly horizontal
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    t_end = rng.random(n) * 16.0
+    ray = mi.Ray3f(mi.Point3f(*(o[:, k].astype(np.float32) for k in range(3))),
+                   mi.Vector3f(*(d[:, k].astype(np.float32) for k in range(3))))
+    got = np.array(exact_transmittance(tk, ray, mi.Float(t_end.astype(np.float32)), mi.Bool(True)))
+    tau = optical_depth_numpy(sigma[..., 0], o, d, t_end)
+    for c in range(3):
+        np.testing.assert_allclose(got[c], np.exp(-tau), rtol=2e-3, atol=1e-6)
+    q = mi.Float(np.linspace(-2.0, 18.0, 301, dtype=np.float32))
+    grey, rgb = AirLevels(air, grey=True), AirLevels(air)
+    np.testing.assert_array_equal(np.array(grey.sigma_at(q, True)), np.array(rgb.sigma_at(q, True))[1])
+    args = (mi.Float(0.3), mi.Float(0.7), mi.Float(0.0), mi.Float(np.linspace(0.0, 25.0, 301, dtype=np.float32)))
+    np.testing.assert_array_equal(np.array(grey.tau(*args, True)), np.array(rgb.tau(*args, True))[1])
+    with pytest.raises(RuntimeError, match="differs between channels"):
+        AirLevels(air_profile(16), grey=True)
+
+
+@pytest.mark.parametrize("transmittance", ["exact", "ratio"])
+def test_a_cloud_in_a_grey_air_agrees_with_volpath(transmittance):
+    """Free flights in a grey air (the cloud cells' collisions from their 8 texels) and shadow rays against stock
+    volpath on the same one-channel grid, with a ground."""
+    sigma, _, air = grey_cloud_in_air()
+    a = passes(mi.load_dict(grey_air_scene(sigma, {"type": "volpath", "max_depth": 4}, ground=True)), 16, 16)
+    b = passes(mi.load_dict(grey_air_scene(sigma, ours_air(sigma, air, max_depth=4, transmittance=transmittance),
+                                           ground=True)), 16, 16, seed0=1000)
+    assert np.all(np.isfinite(b)) and b.min() >= 0
+    assert_agree(a, b)

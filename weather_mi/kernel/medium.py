@@ -85,11 +85,24 @@ def air_in_medium(vol: OpticalVolume):
     return None if getattr(vol, "air", None) is None or mi.is_spectral else vol.air
 
 
+def grey_air(air) -> bool:
+    """Whether the box's air has one extinction in every channel at every level (a satellite's single band: its
+    three channels the same wavelength): the medium's extinction is then grey (one channel), which the trackers
+    follow without spectral tracking and interpolate from the texels (issue 38 part 5)."""
+    from .plugins.air_levels import is_grey as grey_levels
+    return grey_levels(np.asarray(air.extinction_levels))
+
+
 def medium_extinction(vol: OpticalVolume) -> np.ndarray:
-    """The medium's sigma_t grid (1/m): grey (z, y, x), or (z, y, x, 3) with the air in the box."""
+    """The medium's sigma_t grid (1/m): grey (z, y, x), or (z, y, x, 3) with the air in the box ((z, y, x, 1) with
+    a grey air, :func:`grey_air`: the same float32 sums as its three equal channels)."""
     from ..optics.air.inside import medium_extinction as with_air
     air = air_in_medium(vol)
-    return vol.beta_total if air is None else with_air(vol.beta_total, air)
+    if air is None:
+        return vol.beta_total
+    if grey_air(air):  # Eq. 4 plus the air's, one channel
+        return np.asarray(vol.beta_total, np.float32)[..., None] + air.extinction_levels[:, None, None, :1]
+    return with_air(vol.beta_total, air)
 
 
 def grid_bbox(vol: OpticalVolume):
@@ -195,7 +208,10 @@ def medium_dict(vol: OpticalVolume) -> dict:
     air = air_in_medium(vol)
     if air is not None:  # RGB extinction (molecules ~ lambda^-4) and albedo of the hydrometeors and the air
         from ..optics.air.inside import medium_grids
-        beta, albedo, _ = medium_grids(vol.beta_total, vol.albedo, vol.weights, air, want=("sigma_t", "albedo"))
+        grey = grey_air(air)  # one extinction channel: no 3-channel sigma_t grid built (medium_extinction's)
+        beta, albedo, _ = medium_grids(vol.beta_total, vol.albedo, vol.weights, air,
+                                       want=("albedo",) if grey else ("sigma_t", "albedo"))
+        beta = medium_extinction(vol) if grey else beta
     if mi.is_spectral:  # the 550 nm albedo, made spectral by the phase function (``spectral_phase_properties``)
         albedo = np.ascontiguousarray(albedo[..., 1:2])
     else:
@@ -213,6 +229,6 @@ def medium_dict(vol: OpticalVolume) -> dict:
         "albedo": {"type": "gridvolume", "data": mi.TensorXf(albedo), "to_world": to_world,
                    "filter_type": "trilinear", "accel": False, **wrap},
         "scale": 1.0,
-        "has_spectral_extinction": air is not None,
+        "has_spectral_extinction": air is not None and beta.shape[-1] > 1,
         "phase": phase_dict(vol),
     }

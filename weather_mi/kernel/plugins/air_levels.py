@@ -40,22 +40,35 @@ def parse(props, check):
 
 def cloud_cells(data: np.ndarray, air: np.ndarray, periodic: bool) -> np.ndarray:
     """Texel cells (the shape of ``majorants.texel_majorant_grid``'s) that hold more than the air: where one of
-    the cell's 8 texels differs from its level's air in a channel. ``data`` (z, y, x, 3) the medium's sigma_t."""
+    the cell's 8 texels differs from its level's air in a channel. ``data`` (z, y, x, 3) the medium's sigma_t, or
+    (z, y, x, 1) with a grey air (:func:`is_grey`)."""
     from .majorants import texel_majorant_grid
-    if air.shape[0] != data.shape[0] or data.ndim != 4 or data.shape[3] != 3:
+    c = data.shape[3] if data.ndim == 4 else 0
+    if air.shape[0] != data.shape[0] or c not in (1, 3) or (c == 1 and not is_grey(air)):
         raise RuntimeError(f"majorant_volpath: '{PROPERTY}' has {air.shape[0]} levels, the sigma_t grid is "
-                           f"{data.shape}: they must be the same levels, with 3 channels")
+                           f"{data.shape}: they must be the same levels, with 3 channels (1 for a grey air)")
     occupied = np.empty(data.shape[:3], np.float32)
     for k, level in enumerate(data):  # a level at a time: no whole-grid temporaries
-        occupied[k] = np.any(level != air[k], axis=-1)
+        occupied[k] = np.any(level != air[k, :c], axis=-1)
     return texel_majorant_grid(occupied, safety=1.0, periodic=periodic) > 0.0
 
 
-class AirLevels:
-    """The air's per-level tables on Dr.Jit arrays: ``sigma`` (levels x 3, float32), the cube bounds, the
-    cumulative C(q) per segment (float64)."""
+def is_grey(air: np.ndarray) -> bool:
+    """Whether the air (levels, 3) has one extinction in every channel (a satellite's single band)."""
+    return bool(np.array_equal(air[:, 0], air[:, 1]) and np.array_equal(air[:, 0], air[:, 2]))
 
-    def __init__(self, air: np.ndarray):
+
+class AirLevels:
+    """The air's per-level tables on Dr.Jit arrays: ``sigma`` (levels x C, float32), the cube bounds, the
+    cumulative C(q) per segment (float64). ``grey``: one channel (C = 1, the air :func:`is_grey`), its values
+    Float (the trackers' grey extinction), else C = 3 and Color3f."""
+
+    def __init__(self, air: np.ndarray, grey: bool = False):
+        if grey and not is_grey(air):
+            raise RuntimeError(f"majorant_volpath: '{PROPERTY}' differs between channels: a grey sigma_t grid needs "
+                               "the air's channels equal")
+        air = np.ascontiguousarray(np.asarray(air)[:, :1]) if grey else air
+        self.c = int(air.shape[1])
         a = np.asarray(air, np.float64)
         n = a.shape[0]
         self.n = dr.opaque(mi.Int32, n)
@@ -70,7 +83,7 @@ class AirLevels:
         s_right = a[np.clip(np.arange(n + 1), 0, n - 1)]
         width = np.concatenate([[0.5], np.ones(n - 1), [0.5]])
         slope = np.where(np.arange(n + 1)[:, None] % n == 0, 0.0, s_right - s_left)  # per unit q; 0 in the end halves
-        c = np.concatenate([[np.zeros(3)], np.cumsum((s_left + 0.5 * slope * width[:, None]) * width[:, None], axis=0)])
+        c = np.concatenate([[np.zeros(self.c)], np.cumsum((s_left + 0.5 * slope * width[:, None]) * width[:, None], axis=0)])
         self.knot = mi.Float64(knots)
         self.s_left, self.slope, self.c_left = (mi.Float64(v[:n + 1].ravel()) for v in (s_left, slope, c))
 
@@ -79,14 +92,20 @@ class AirLevels:
         i = dr.clip(cz - k - lo, 0, self.n)
         return dr.gather(mi.Float, self.bound, mi.UInt32(i), active)
 
+    def _out(self, values):
+        """Per-channel values as the trackers take them: Float (grey) or Color3f."""
+        return values[0] if self.c == 1 else mi.Color3f(*values)
+
     def sigma_at(self, q, active):
-        """sigma (Color3f, 1/m) at texel-centre coordinate q: linear between the level centres, clamped."""
+        """sigma (Color3f, or Float where grey; 1/m) at texel-centre coordinate q: linear between the level
+        centres, clamped."""
         qc = dr.clip(q, 0.0, mi.Float(self.n - 1))
         i0 = dr.clip(mi.Int32(dr.floor(qc)), 0, self.n - 1)
         i1 = dr.minimum(i0 + 1, self.n - 1)
         f = qc - mi.Float(i0)
-        return mi.Color3f(*(dr.lerp(dr.gather(mi.Float, self.sigma, mi.UInt32(i0 * 3 + c), active),
-                                    dr.gather(mi.Float, self.sigma, mi.UInt32(i1 * 3 + c), active), f) for c in range(3)))
+        nc = self.c
+        return self._out([dr.lerp(dr.gather(mi.Float, self.sigma, mi.UInt32(i0 * nc + c), active),
+                                  dr.gather(mi.Float, self.sigma, mi.UInt32(i1 * nc + c), active), f) for c in range(nc)])
 
     def _cumulative(self, q, active):
         """C(q) per channel (float64), q in float64."""
@@ -94,15 +113,15 @@ class AirLevels:
         j = dr.clip(mi.Int32(dr.floor(q)) + 1, 0, n)
         x = dr.clip(q, -0.5, mi.Float64(n) - 0.5) - dr.gather(mi.Float64, self.knot, mi.UInt32(j), active)
         out = []
-        for c in range(3):
-            idx = mi.UInt32(j * 3 + c)
+        for c in range(self.c):
+            idx = mi.UInt32(j * self.c + c)
             s0 = dr.gather(mi.Float64, self.s_left, idx, active)
             sl = dr.gather(mi.Float64, self.slope, idx, active)
             out.append(dr.gather(mi.Float64, self.c_left, idx, active) + x * (s0 + 0.5 * sl * x))
         return out
 
     def tau(self, qz0, dqz, t0, t1, active):
-        """Optical depth (Color3f) along a ray whose z texel coordinate is qz0 + dqz t, over [t0, t1]."""
+        """Optical depth (Color3f, or Float where grey) along a ray whose z texel coordinate is qz0 + dqz t, over [t0, t1]."""
         dq = mi.Float64(dqz) * (mi.Float64(t1) - mi.Float64(t0))
         qa = mi.Float64(qz0) + mi.Float64(dqz) * mi.Float64(t0)
         flat = dr.abs(dq) < FLAT_DQ
@@ -110,4 +129,5 @@ class AirLevels:
         ca, cb = self._cumulative(qa, active & ~flat), self._cumulative(qa + dq, active & ~flat)
         length = mi.Float64(t1) - mi.Float64(t0)
         inv = dr.select(flat, 0.0, length / dr.select(flat, 1.0, dq))
-        return mi.Color3f(*(dr.select(flat, mid[c] * (t1 - t0), mi.Float((cb[c] - ca[c]) * inv)) for c in range(3)))
+        mid = [mid] if self.c == 1 else mid
+        return self._out([dr.select(flat, mid[c] * (t1 - t0), mi.Float((cb[c] - ca[c]) * inv)) for c in range(self.c)])

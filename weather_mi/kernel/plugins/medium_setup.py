@@ -267,5 +267,5 @@ class GridCache:
         texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
         dims = (rx, ry, rz + 1) if periodic else (rx + 1, ry + 1, rz + 1)
         grid = Grid(*self.texel_arrays, dims, (rx, ry, rz), shift=-0.5, lo=-1, reach=reach)
-        grid.air = None if air is None else air_levels.AirLevels(air)
+        grid.air = None if air is None else air_levels.AirLevels(air, grey=data.shape[-1] == 1)
         return grid, texel_data
