@@ -125,7 +125,8 @@ class MajorantVolpath:
      * - air_extinction
        - |tensor|
        - (levels, 3) the air's extinction per level of the sigma_t grid (1/m), which that grid holds added
-         (:mod:`.air_levels`): its cells are crossed as empty space, with the air's majorant.
+         (:mod:`.air_levels`): its cells are crossed as empty space, with the air's majorant. A one-channel grid
+         takes an air whose three channels are equal (a satellite band's): tracked grey.
      * - periodic, periodic_tiles
        - |string|, |int|
        - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each
