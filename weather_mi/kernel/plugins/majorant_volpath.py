@@ -216,7 +216,8 @@ class MajorantVolpath:
                 self._auto_key = key
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"
-        texel, texel_data = self._grids.texel(vol, ms.scale, self.reach if periodic else None, self.air_levels)
+        texel, texel_data = self._grids.texel(vol, ms.scale, self.reach if periodic else None, self.air_levels,
+                                              grey_air=not ms.spectral)
         track = texel if (texel is not None and self.track_mode == "texel") else coarse
         self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data, self.periodic, self.reach)
 
