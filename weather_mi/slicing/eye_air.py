@@ -72,6 +72,8 @@ class EyeAir:
     ground: bool        # whether there is a ground
     ambient: object     # mi.Color3f: the diffuse light on the air in the box, W/m^2/sr per unit phase (``diffuse_light``)
     shadow: bool = True  # whether the storm shadows the air (False for a periodic field, as ``display.aerial``)
+    width: int = 0      # the frame's pixels (row-major rays): the coarse grid of ``eye_air_coarse``; 0: none
+    height: int = 0
 
 
 @functools.lru_cache(maxsize=4)
@@ -142,7 +144,8 @@ def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0), shadow: bo
                   op(atm.aerosol_g), mi.Point3f(op((x0 + x1) / 2), op((y0 + y1) / 2), op(0.0)),
                   (mi.Point3f(*(op(v) for v in lo)), mi.Point3f(op(x1), op(y1), op(z1))),
                   op(0.0 if floor is None else floor), floor is not None,
-                  mi.Color3f(*(op(v) for v in diffuse_light(spec, e_sky))), bool(shadow))
+                  mi.Color3f(*(op(v) for v in diffuse_light(spec, e_sky))), bool(shadow), int(spec.width),
+                  int(spec.height))
 
 
 def _lerp_rows(mi, dr, table, f, n, width, offset):
@@ -184,21 +187,15 @@ def _phases(dr, air: EyeAir, cos_t):
     return p_r, (1.0 - g * g) / (4.0 * np.pi * dr.power(dr.maximum(1.0 + g * g - 2.0 * g * cos_t, 1e-6), 1.5))
 
 
-def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse: bool = False, shadow=None):
-    """(T, S) (mi.Color3f) of the rays o + s d over [t0, t1] (module docstring; S per unit irradiance above
-    the air, 1/sr; T = 1, S = 0 where t1 <= t0); o in the scene's frame. ``diffuse``: S also holds the
-    diffuse light on the air (``EyeAir.ambient`` / (4 pi) x its scattering, over the sun's irradiance).
-    ``shadow``: None, or the direct sun's transmittance through the storm at world points (mi.Point3f ->
-    mi.Float), a factor on the sun's colour C(h, mu) (``eye_path.segment_air``'s ``shadow``)."""
+def _source(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
+    """point(s) -> (extinction, source) (mi.Color3f, 1/m and 1/m/sr per unit irradiance above the air) at o + s d:
+    the integrand of ``segment`` (its arguments)."""
     import drjit as dr
-    length = dr.maximum(t1 - t0, 0.0)
     p_r, p_a = _phases(dr, air, dr.dot(d, air.to_sun))
     q0 = o - air.centre + mi.Vector3f(0.0, 0.0, EARTH_RADIUS_M)  # from the Earth's centre
     ambient = air.ambient * (1.0 / (4.0 * np.pi)) / dr.maximum(air.irradiance, 1e-30) if diffuse else None
 
-    def point(i):
-        x = mi.Float(i) * (1.0 / (samples - 1))
-        s = t0 + length * (x * x if squared else x)
+    def at(s):
         q = q0 + s * d
         r = dr.norm(q)
         h = dr.maximum(r - EARTH_RADIUS_M, 0.0)
@@ -210,7 +207,24 @@ def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse:
             src *= shadow(o + s * d)
         if diffuse:
             src += (sca_r + sca_a) * ambient
-        return s, ext, src
+        return ext, src
+    return at
+
+
+def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse: bool = False, shadow=None):
+    """(T, S) (mi.Color3f) of the rays o + s d over [t0, t1] (module docstring; S per unit irradiance above
+    the air, 1/sr; T = 1, S = 0 where t1 <= t0); o in the scene's frame. ``diffuse``: S also holds the
+    diffuse light on the air (``EyeAir.ambient`` / (4 pi) x its scattering, over the sun's irradiance).
+    ``shadow``: None, or the direct sun's transmittance through the storm at world points (mi.Point3f ->
+    mi.Float), a factor on the sun's colour C(h, mu) (``eye_path.segment_air``'s ``shadow``)."""
+    import drjit as dr
+    length = dr.maximum(t1 - t0, 0.0)
+    source = _source(mi, air, o, d, shadow, diffuse)
+
+    def point(i):
+        x = mi.Float(i) * (1.0 / (samples - 1))
+        s = t0 + length * (x * x if squared else x)
+        return (s, *source(s))
 
     n = dr.width(t0)
     s, ext, src = point(mi.UInt32(0))
@@ -227,6 +241,28 @@ def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse:
     return dr.exp(-tau), S
 
 
+def profile(mi, air: EyeAir, o, d, t0, t1, samples: int, emit, shadow=None) -> None:
+    """The cumulative ``segment`` (uniform, with the diffuse light, the same trapezoids) of the rays o + s d over
+    [t0, t0 + x_k (t1 - t0)] at each of its points x_k = k / (samples - 1): ``emit(k, T_k, S_k)`` for k = 1 ..
+    samples - 1 (k a mi.UInt32; T_0 = 1, S_0 = 0), called inside a symbolic loop (side effects only, e.g.
+    ``dr.scatter``: all of them one kernel)."""
+    import drjit as dr
+    length = dr.maximum(t1 - t0, 0.0)
+    source = _source(mi, air, o, d, shadow, True)
+    n = dr.width(t0)
+    ext, src = source(t0)
+    ds = length * (1.0 / (samples - 1))
+
+    def body(k, ext, src, tau, S):
+        ext_next, src_next = source(t0 + length * (mi.Float(k) * (1.0 / (samples - 1))))
+        tau_next = tau + 0.5 * (ext + ext_next) * ds
+        S = S + 0.5 * (src * dr.exp(-tau) + src_next * dr.exp(-tau_next)) * ds
+        emit(k, dr.exp(-tau_next), S)
+        return k + 1, ext_next, src_next, tau_next, S
+    dr.while_loop((dr.full(mi.UInt32, 1, n), ext, src, dr.zeros(mi.Color3f, n), dr.zeros(mi.Color3f, n)),
+                  lambda k, *_: k < samples, body)
+
+
 def box_interval(mi, air: EyeAir, o, d):
     """(t_in, t_out) of the rays against the model's box (t >= 0; t_out <= t_in: a miss)."""
     import drjit as dr
@@ -237,13 +273,11 @@ def box_interval(mi, air: EyeAir, o, d):
     return dr.maximum(dr.maximum(dr.maximum(a.x, a.y), a.z), 0.0), dr.minimum(dr.minimum(b.x, b.y), b.z)
 
 
-def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background, depth, shadow=None):
-    """The eye pass's ``radiance`` (C + T L_bg, mi.Color3f) of ``rays`` seen through the air (module
-    docstring), from its cloud ``transmittance`` T, ``background`` L_bg and cloud ``depth`` t_c (m);
-    ``shadow``: the sun's direct light through the storm at world points (``segment``), used where
-    ``air.shadow``."""
+def ray_ends(mi, air: EyeAir, o, d):
+    """(t_in, t_out, t_end, hit, t_ground) of the rays: the box's chord (t_out clipped to t_end), where the
+    ray ends (the ground or the top of the air), whether it crosses the box before it ends, the ground's
+    distance (inf where the ray misses the ground)."""
     import drjit as dr
-    o, d = rays.origin, rays.direction
     t_in, t_out = box_interval(mi, air, o, d)
     q = o - air.centre + mi.Vector3f(0.0, 0.0, EARTH_RADIUS_M)
     b = dr.dot(q, d)
@@ -254,7 +288,17 @@ def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background,
         t_ground = dr.select(d.z < 0, (air.floor - o.z) / dr.select(d.z < 0, d.z, -1.0), dr.inf)
     t_end = dr.minimum(t_ground, t_top)
     hit = (t_out > t_in) & (t_in < t_end)
-    t_out = dr.minimum(t_out, t_end)
+    return t_in, dr.minimum(t_out, t_end), t_end, hit, t_ground
+
+
+def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background, depth, shadow=None):
+    """The eye pass's ``radiance`` (C + T L_bg, mi.Color3f) of ``rays`` seen through the air (module
+    docstring), from its cloud ``transmittance`` T, ``background`` L_bg and cloud ``depth`` t_c (m);
+    ``shadow``: the sun's direct light through the storm at world points (``segment``), used where
+    ``air.shadow``."""
+    import drjit as dr
+    o, d = rays.origin, rays.direction
+    t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
     # the box: split at the cloud's depth (the box's entry where the ray meets no cloud)
     t_c = dr.clip(dr.select(transmittance < 1.0, depth, t_in), t_in, t_out)
     shadow = shadow if air.shadow else None
@@ -304,4 +348,4 @@ def _top_m() -> float:
 
 
 __all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "SAMPLES_OUTSIDE", "box_interval", "eye_air_input",
-           "height_table", "light_shadow", "seen_through_air", "segment"]
+           "height_table", "light_shadow", "profile", "ray_ends", "seen_through_air", "segment"]
