@@ -56,10 +56,11 @@ class EyeAir:
     """The air's tables and the scene's values, as the frame's kernels read them (opaque Dr.Jit values; the
     ints and bools are part of a recording's structure)."""
 
-    air: object         # mi.Float (n_h x 9): per height, extinction, molecules' and aerosol's scattering (R, G, B), 1/m
+    air: object         # mi.Float (n_h x 12): per height, extinction, molecules' and aerosol's scattering (R, G, B,
+                        # each padded to a packet of 4), 1/m (``packed``)
     h_step: object      # mi.Float: 1 / the height table's step (1/m); its heights start at sea level
     n_h: int            # rows of the height table
-    sun_rgb: object     # mi.Float (n_mu x n_s x 3): the direct sun's linear sRGB by (mu, height) (``wide_sun_table``)
+    sun_rgb: object     # mi.Float (n_mu x n_s x 4): the direct sun's linear sRGB by (mu, height), padded (``sun_table``)
     sun_mu: object      # (mi.Float lowest mu, mi.Float 1 / mu step, mi.Float 1 / height step (1/m))
     n_mu: int
     n_s: int
@@ -130,13 +131,12 @@ def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0), shadow: bo
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
     if cache.get("atm", (None,))[0] != atm:
         table = sun_table(atm)
-        cache["atm"] = (atm, mi.Float(np.ascontiguousarray(height_table(atm), np.float32).ravel()), table,
-                        mi.Float(np.ascontiguousarray(table.rgb, np.float32).ravel()))
+        cache["atm"] = (atm, mi.Float(packed(height_table(atm))), table, mi.Float(packed(table.rgb)))
     air, table, rgb = cache["atm"][1:]
     (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in bbox)
     floor = None if spec.ground is None else float(spec.ground.height)
     lo = (x0, y0, max(z0, floor) if floor is not None else z0)
-    return EyeAir(air, op(1.0 / HEIGHT_STEP_M), dr.width(air) // 9, rgb,
+    return EyeAir(air, op(1.0 / HEIGHT_STEP_M), dr.width(air) // 12, rgb,
                   (op(table.mu[0]), op((table.mu.size - 1) / (table.mu[-1] - table.mu[0])),
                    op((table.heights_m.size - 1) / (table.heights_m[-1] - table.heights_m[0]))),
                   int(table.mu.size), int(table.heights_m.size),
@@ -148,14 +148,28 @@ def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0), shadow: bo
                   int(spec.height))
 
 
+def packed(table) -> np.ndarray:
+    """``table`` (..., 3 k) as float32 with each group of 3 padded to 4 (a packet the kernels gather at once),
+    flat."""
+    t = np.asarray(table, np.float32)
+    t = t.reshape(t.shape[:-1] + (t.shape[-1] // 3, 3))
+    return np.ascontiguousarray(np.concatenate([t, np.zeros(t.shape[:-1] + (1,), np.float32)], axis=-1)).ravel()
+
+
+def _packet(mi, dr, table, i):
+    """Packet i of a ``packed`` table (a mi.Color3f)."""
+    v = dr.gather(mi.Vector4f, table, i)
+    return mi.Color3f(v.x, v.y, v.z)
+
+
 def _lerp_rows(mi, dr, table, f, n, width, offset):
-    """Linear interpolation between rows of ``table`` (rows of ``width`` floats) at fractional rows f, the
-    3 floats from ``offset`` in each row (a mi.Color3f)."""
+    """Linear interpolation between rows of the ``packed`` ``table`` (rows of ``width`` packets) at fractional
+    rows f, packet ``offset`` of each row (a mi.Color3f)."""
     f = dr.clip(f, 0.0, float(n - 1))
     i = dr.minimum(mi.UInt32(f), n - 2)
     t = f - mi.Float(i)
-    a = mi.Color3f(*(dr.gather(mi.Float, table, i * width + offset + c) for c in range(3)))
-    b = mi.Color3f(*(dr.gather(mi.Float, table, (i + 1) * width + offset + c) for c in range(3)))
+    a = _packet(mi, dr, table, i * width + offset)
+    b = _packet(mi, dr, table, (i + 1) * width + offset)
     return a * (1.0 - t) + b * t
 
 
@@ -171,8 +185,7 @@ def _sun_colour(mi, dr, air: EyeAir, h, mu):
     ih, th = cell(h * inv_dh, air.n_s)
 
     def at(row, col):
-        k = (row * air.n_s + col) * 3
-        return mi.Color3f(*(dr.gather(mi.Float, air.sun_rgb, k + c) for c in range(3)))
+        return _packet(mi, dr, air.sun_rgb, row * air.n_s + col)
     lo = at(im, ih) * (1.0 - th) + at(im, ih + 1) * th
     hi = at(im + 1, ih) * (1.0 - th) + at(im + 1, ih + 1) * th
     return lo * (1.0 - tm) + hi * tm
@@ -200,8 +213,8 @@ def _source(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
         r = dr.norm(q)
         h = dr.maximum(r - EARTH_RADIUS_M, 0.0)
         fh = h * air.h_step
-        ext = _lerp_rows(mi, dr, air.air, fh, air.n_h, 9, 0)
-        sca_r, sca_a = _lerp_rows(mi, dr, air.air, fh, air.n_h, 9, 3), _lerp_rows(mi, dr, air.air, fh, air.n_h, 9, 6)
+        ext = _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 0)
+        sca_r, sca_a = _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 1), _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 2)
         src = (sca_r * p_r + sca_a * p_a) * _sun_colour(mi, dr, air, h, dr.dot(q, air.to_sun) / r)
         if shadow is not None:  # the storm's shadow on the direct sun
             src *= shadow(o + s * d)

@@ -29,6 +29,7 @@ integrate every pixel (``eye_air.seen_through_air``).
 """
 from __future__ import annotations
 
+from .eye import OPAQUE_T
 from .eye_air import SAMPLES_OUTSIDE, EyeAir, profile, ray_ends, segment
 
 STEP = 4            # the coarse grid: every STEP-th pixel in x and y (the last row and column included)
@@ -63,13 +64,14 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
     kind = _kind(dr, hit, t_ground)
     t_a, s_a = segment(mi, air, o, d, 0.0 * t_in, dr.select(hit, t_in, t_end), SAMPLES_OUTSIDE, True, shadow=shadow)
     rows = BOX_POINTS + 1
-    out = dr.zeros(mi.Float, nx * ny * rows * ROW)
+    out = dr.empty(mi.Float, nx * ny * rows * ROW)  # (every float written below)
     base = j * (rows * 2)  # in packets of 4 floats
 
     def emit(k, t, s):  # row k of the box's cumulative air; with the first, row 0 (T = 1, S = 0) and A's
         dr.scatter(out, mi.Vector4f(s.x, s.y, s.z, 0.0), base + 2 * k)
         dr.scatter(out, mi.Vector4f(t.x, t.y, t.z, 0.0), base + 2 * k + 1)
         first = k == 1
+        dr.scatter(out, mi.Vector4f(0.0, 0.0, 0.0, 0.0), base, first)
         dr.scatter(out, mi.Vector4f(1.0, 1.0, 1.0, 0.0), base + 1, first)
         dr.scatter(out, mi.Vector4f(s_a.x, s_a.y, s_a.z, kind), base + 2 * BOX_POINTS, first)
         dr.scatter(out, mi.Vector4f(t_a.x, t_a.y, t_a.z, 0.0), base + 2 * BOX_POINTS + 1, first)
@@ -115,16 +117,22 @@ def seen_through_coarse_air(mi, air: EyeAir, rays, radiance, transmittance, back
     corners = _corners(mi, dr, air.width, air.height)
     kind = _kind(dr, hit, t_ground)
 
-    def read(c, k):
-        """(S, T, flag) of row k of coarse ray c."""
-        s = dr.gather(mi.Vector4f, table, c * (rows * 2) + 2 * k)
-        t = dr.gather(mi.Vector4f, table, c * (rows * 2) + 2 * k + 1)
+    def read(c, k, active):
+        """(S, T, kind) of row k of coarse ray c (zeros where not ``active``: not read)."""
+        s = dr.gather(mi.Vector4f, table, c * (rows * 2) + 2 * k, active)
+        t = dr.gather(mi.Vector4f, table, c * (rows * 2) + 2 * k + 1, active)
         return mi.Color3f(s.x, s.y, s.z), mi.Color3f(t.x, t.y, t.z), s.w
     zero = dr.zeros(mi.Color3f, dr.width(t_in))
     s_a, t_a, s_f, t_f, s_1, t_1 = zero, zero, zero, zero, zero, zero
     total, plain = mi.Float(0.0), []
+    sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
+    w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
+    # what each pixel reads: A where it counts (w > 0), the box at the cloud's depth where there is cloud, the
+    # whole box where the cloud lets light through (elsewhere: S = 0, T = 1 in front of the cloud, nothing seen
+    # behind it)
+    need_a, need_f, need_1 = w > 0, hit & (transmittance < 1.0), hit & (transmittance > OPAQUE_T)
     for c, wgt in corners:
-        sa, ta, flag = read(c, BOX_POINTS)
+        sa, ta, flag = read(c, BOX_POINTS, need_a | hit)
         wgt_same = dr.select(flag == kind, wgt, 0.0)  # the same side of the box's silhouette and the horizon
         plain.append((c, wgt, wgt_same, sa, ta))
         total += wgt_same
@@ -132,19 +140,17 @@ def seen_through_coarse_air(mi, air: EyeAir, rays, radiance, transmittance, back
     norm = dr.select(use_all, 1.0, dr.rcp(dr.maximum(total, 1e-3)))
     for c, wgt, wgt_same, sa, ta in plain:
         k = dr.select(use_all, wgt, wgt_same) * norm
-        sl, tl, _ = read(c, i0)
-        su, tu, _ = read(c, i0 + 1)
-        se, te, _ = read(c, BOX_POINTS - 1)
+        sl, tl, _ = read(c, i0, need_f)
+        su, tu, _ = read(c, i0 + 1, need_f)
+        se, te, _ = read(c, BOX_POINTS - 1, need_1)
         s_a, t_a = s_a + k * sa, t_a + k * ta
         s_f, t_f = s_f + k * (sl + (su - sl) * f), t_f + k * (tl + (tu - tl) * f)
         s_1, t_1 = s_1 + k * se, t_1 + k * te
     one = mi.Color3f(1.0)
-    s_f, t_f = dr.select(hit, s_f, zero), dr.select(hit, t_f, one)
-    s_1, t_1 = dr.select(hit, s_1, zero), dr.select(hit, t_1, one)
+    s_f, t_f = dr.select(need_f, s_f, zero), dr.select(need_f, t_f, one)
+    s_1, t_1 = dr.select(need_1, s_1, s_f), dr.select(need_1, t_1, t_f)
     e = air.irradiance
     boxed = e * s_f + t_f * radiance + transmittance * (e * (s_1 - s_f) + (t_1 - t_f) * background)
-    sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
-    w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
     return boxed + w * (e * s_a + (t_a - 1.0) * boxed)
 
 
