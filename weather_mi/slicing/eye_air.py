@@ -31,7 +31,9 @@ map on the same segments: within 2.4-4.4% (tests/test_slicing_air.py; the light 
 rim is lighter). None for a periodic field (as ``display.aerial``).
 Not included: light scattered more than once by the air, the light the storm scatters into its shadow, and
 the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
-(``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing.
+(``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing. Frames of 96 px a side or
+more integrate all this on every 4th pixel's ray and read it per pixel (``eye_air_coarse``); the tables' rows
+are packets of 4 floats (one gather each, ``packed``).
 """
 from __future__ import annotations
 
