@@ -33,6 +33,7 @@ from ..kernel.sky import sky_irradiance_horizontal
 from .blur import variance_per_metre
 from .eye import LightModel, composite
 from .eye_air import eye_air_input, light_shadow, seen_through_air
+from .eye_air_coarse import applies, seen_through_coarse_air
 from .recording import freeze_kernels, raise_recording_error, without_gc
 from .frame_inputs import EyeInputs, EyeRays, FrameInputs, KernelConstants, MultipleLight, TextureBuild
 from .geometry import slice_geometry, slicing_box
@@ -493,7 +494,8 @@ class SliceRenderer:
         if e.eye_air is None:
             return out
         shadow = light_shadow(mi, self.light, e.eye_air.to_sun)  # the storm's shadow on the air
-        return seen_through_air(mi, e.eye_air, e.rays, *out, shadow=shadow), out[1]  # the air in and out of the box
+        through = seen_through_coarse_air if applies(e.eye_air, e.rays.n) else seen_through_air
+        return through(mi, e.eye_air, e.rays, *out, shadow=shadow), out[1]  # the air in and out of the box
 
 
 FROZEN_FRAMES = True
