@@ -63,6 +63,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..jitarrays import aligned_empty, aligned_float
+from .spectral_phase import from_properties, pack_pdf, spectral_pdf, spectral_value
 from .variant_class import variant_class
 
 PLUGIN_NAME = "hydrometeor_mixture"
@@ -304,6 +305,7 @@ class HydrometeorMixture:
         # (N, S, 4): R, G, B value and the channel-mean pdf of every node and species, read as one packet
         table = np.concatenate([np.asarray(values, np.float32), pbar[:, :, None]], axis=2)
         self.table4 = _storage(np.transpose(table, (1, 0, 2)))
+        self.spectral_pdf = None if self.spectral_values is None else _storage(pack_pdf(pbar))  # spectral_phase
         # (4, S, N - 1, 2): alias tables of the segment probabilities of every species under the density
         # of each row of table4 (R, G, B, channel mean) (prob, alias as float)
         rows = [np.asarray(values, np.float64)[:, :, c] for c in range(3)] + [pbar]
@@ -336,18 +338,10 @@ class HydrometeorMixture:
         self.weights = None
 
     def _set_spectral_tables(self, props, n_nodes: int):
-        """Spectral variants with ``spectral_values`` (S x N x K on the mixture's nodes) and ``spectral_nm`` (K uniform
-        wavelengths, nm): the phase tables by wavelength (``spectral_phase``); else None (R, G, B interpolated)."""
-        self.spectral_values = self.spectral_table = None
-        if not (mi.is_spectral and "spectral_values" in props):
-            return
-        from .spectral_phase import check_spectral, pack_spectral
-        values = np.asarray(props["spectral_values"], np.float32)
-        grid = np.asarray(props["spectral_nm"], np.float64).ravel()
-        check_spectral(values, grid, self.n_species, n_nodes, PLUGIN_NAME)
-        self.spectral_values = values
-        self.spectral_table = _storage(pack_spectral(values))
-        self.spectral_grid = (float(grid[0]), float(1.0 / (grid[1] - grid[0])), int(grid.size))
+        """Spectral variants with ``spectral_values`` and ``spectral_nm``: the phase tables by wavelength
+        (``spectral_phase.from_properties``); else None (R, G, B interpolated)."""
+        self.spectral_values, self.spectral_table, self.spectral_grid = from_properties(
+            props, self.n_species, n_nodes, PLUGIN_NAME, _storage)
 
     def _set_spectral(self, props):
         """Spectral variants: the channels' wavelengths (nm) and the species' co-albedo spectra."""
@@ -474,12 +468,11 @@ class HydrometeorMixture:
     def _mix_at(self, w, idx, t, mei):
         """(the variant's Spectrum value, pdf) of the mixture: :meth:`_mix`'s channels (at the lanes'
         wavelengths in spectral variants), or the tables by wavelength (``spectral_phase``) where given."""
-        value, pdf = self._mix(w, idx, t)
         if self.spectral_table is None:
+            value, pdf = self._mix(w, idx, t)
             return self._at_wavelengths(value, mei), pdf
-        from .spectral_phase import spectral_value
-        return spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
-                              _gather4), pdf
+        return (spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
+                               _gather4), spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4))
 
     def _mix(self, w, idx, t):
         """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t."""
