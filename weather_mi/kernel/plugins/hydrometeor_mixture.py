@@ -63,6 +63,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..jitarrays import aligned_empty, aligned_float
+from . import spectral_albedo
 from .spectral_phase import from_properties, pack_pdf, spectral_pdf, spectral_value
 from .variant_class import variant_class
 
@@ -361,9 +362,8 @@ class HydrometeorMixture:
             raise ValueError(f"{PLUGIN_NAME}: 'coalbedo' must be S x (K + 1) in [0, 1] with S = {self.n_species} "
                              f"and K the wavelengths of the uniform grid 'coalbedo_nm' (K >= 2); got {c.shape}, "
                              f"{grid.size}")
-        self.coalbedo = _storage(c)
-        self.coalbedo_k = int(grid.size)
-        self.coalbedo_map = (float(grid[0]), float(1.0 / (grid[1] - grid[0])))
+        self.coalbedo = _storage(spectral_albedo.pack_coalbedo(c))
+        self.coalbedo_grid = (float(grid[0]), float(1.0 / (grid[1] - grid[0])), int(grid.size))
 
     # ------------------------------------------------------------ helpers
     def _at_wavelengths(self, value, mei):
@@ -378,26 +378,10 @@ class HydrometeorMixture:
         ``coalbedo``), from the medium's albedo at the reference wavelength ``albedo_ref`` (Float):
         1 - (1 - albedo_ref) sum_s w_s c_s(lambda) / sum_s w_s c_s(ref), c_s the species' co-albedo spectra
         (``optics.spectral``) and w_s their scattering weights (extinction weights to within the co-albedo,
-        <= 1e-3): the medium's own albedo at the reference, the species' mix of spectral shapes elsewhere."""
-        w = self._weights_at(mei)
-        lo, inv_step = self.coalbedo_map
-        k = self.coalbedo_k
-        ref = mi.Float(0.0)
-        for s in range(self.n_species):
-            ref += w[s] * _gather(self.coalbedo, s * (k + 1) + k)
-        inv_ref = dr.select(ref > 0.0, dr.rcp(ref), 0.0)
-        out = []
-        for lane in range(4):
-            u = dr.clip((mei.wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
-            i = mi.UInt32(u)
-            t = u - mi.Float(i)
-            co = mi.Float(0.0)
-            for s in range(self.n_species):
-                c0 = _gather(self.coalbedo, s * (k + 1) + i)
-                co += w[s] * dr.fma(_gather(self.coalbedo, s * (k + 1) + i + 1) - c0, t, c0)
-            ratio = dr.select(ref > 0.0, co * inv_ref, 1.0)
-            out.append(1.0 - (1.0 - albedo_ref) * ratio)
-        return mi.Spectrum(*out)
+        <= 1e-3): the medium's own albedo at the reference, the species' mix of spectral shapes elsewhere
+        (``spectral_albedo``)."""
+        return spectral_albedo.albedo_at(self.coalbedo, self.coalbedo_grid, self.n_species, self._weights_at(mei),
+                                         mei.wavelengths, albedo_ref, _gather4)
 
     def _weights_at(self, mei):
         """w_s(x) for s = 0..S-1: the coefficients trilinear on the bbox grid (texel centres at
