@@ -9,8 +9,8 @@ each round's ratio is taken between renders run next to each other.
 
 Per round: each mode's seconds (wall, and the process's CPU seconds over all threads: on a loaded machine
 the wall time measures the other processes too) and its luminance RSE over the cloud pixels
-(``estimates.cloud_mask``): the standard error of Y over the passes (Y of linear sRGB, CIE 1931; each pass's
-image from the running means ``on_pass`` gives) over Y, averaged over the cloud pixels. The spectral mode's
+(``estimates.cloud_mask``): the standard error of Y over the passes over Y, averaged over the cloud pixels
+(``estimates.luminance_rse``). The spectral mode's
 time to the same RSE over the RGB mode's is (t RSE^2)_spectral / (t RSE^2)_RGB (RSE falls as
 1 / sqrt(samples)); target: at most 1.5. Medians over rounds are printed last. ``--channel-rse`` also prints
 the figure with ``Image.metadata["noise"]["rse_mean"]`` (the R, G, B channels' mean se over their mean: the
@@ -90,21 +90,9 @@ def phase_cost(lanes: int, rounds: int) -> None:
         print(f"{name}: eval_pdf + sample {np.median(ts):.0f} ns per lane (rounds: {', '.join(f'{t:.0f}' for t in ts)})")
 
 
-Y_OF_LINEAR_SRGB = np.array([0.2126729, 0.7151522, 0.0721750])  # CIE Y of linear sRGB (IEC 61966-2-1)
-
-
-def luminance_rse(means: list, cloud: np.ndarray) -> float:
-    """Mean over ``cloud`` pixels of se(Y) / Y, from the running means after 1, 2, ... n passes (H, W, 3)."""
-    n = len(means)
-    passes = [means[0]] + [(i + 1) * means[i] - i * means[i - 1] for i in range(1, n)]
-    y = np.stack([np.asarray(p, np.float64) @ Y_OF_LINEAR_SRGB for p in passes])
-    ym, se = y.mean(axis=0), y.std(axis=0, ddof=1) / np.sqrt(n)
-    ok = np.asarray(cloud, bool) & (ym > 0)
-    return float(np.mean(se[ok] / ym[ok]))
-
-
 def timed_render(spec, vol, spp: int, passes: int, variant: str, cloud) -> dict:
     """One render: wall and CPU seconds, the luminance RSE and the channel-mean RSE."""
+    from weather_mi.reference.estimates import luminance_rse
     from weather_mi.reference.render import render_reference
     means = []
     wall, cpu = time.perf_counter(), time.process_time()

@@ -1,6 +1,7 @@
-"""The spectral mode's sun after the air (``kernel.plugins.spectral_sun``, issue 38 part 2) and the mixture's pdf
-table (``kernel.plugins.spectral_phase.pack_pdf``): the packed lookups against interpolation done here with
-scipy and numpy on the tables they were given."""
+"""The spectral mode's cost per sample (issue 38 part 2): its packed lookups (the sun after the air,
+``kernel.plugins.spectral_sun``; the mixture's pdf, ``spectral_phase.pack_pdf``; the albedo by wavelength,
+``spectral_albedo``) against interpolation done here with scipy and numpy on the tables they were given, and
+the luminance RSE the cost is measured with (``reference.estimates.luminance_rse``)."""
 from __future__ import annotations
 
 import numpy as np
@@ -86,3 +87,26 @@ def test_albedo_records_mix_five_species_coalbedo_spectra(spectral):
     want = 1 - (1 - omega_ref) * np.einsum("sn,lsn->ln", w, c) / (w.T @ co[:, -1])
     assert np.abs(np.array(got) - want).max() < 1e-6
     assert np.ptp(want) > 1e-4  # the check can fail: the spectra differ by wavelength
+
+
+def test_luminance_rse_is_the_spread_of_the_passes_luminance_only():
+    """From the running means of 5 passes: se(Y) / Y summed here from the passes themselves; passes that differ
+    only in chromaticity (equal Y) have no luminance noise, though every channel is noisy."""
+    from weather_mi.reference.estimates import luminance_rse
+    rng = np.random.default_rng(6)
+    passes = rng.uniform(0.5, 1.5, (5, 4, 3, 3))
+    means = [passes[:i + 1].mean(axis=0) for i in range(5)]
+    cloud = np.ones((4, 3), bool)
+    cloud[0, 0] = False
+    y = passes @ np.array([0.2126729, 0.7151522, 0.0721750])  # IEC 61966-2-1's Y row
+    want = np.mean((y.std(axis=0, ddof=1) / np.sqrt(5) / y.mean(axis=0))[cloud])
+    assert luminance_rse(means, cloud) == pytest.approx(want, rel=1e-10)
+    # chroma noise only: R and B traded against each other at constant Y
+    d = rng.normal(0, 0.2, (5, 4, 3))
+    chroma = np.full((5, 4, 3, 3), 1.0)
+    chroma[..., 0] += d / 0.2126729
+    chroma[..., 2] -= d / 0.0721750
+    assert luminance_rse([chroma[:i + 1].mean(axis=0) for i in range(5)], cloud) < 1e-12
+    assert chroma[..., 0].std(axis=0).mean() > 0.5  # the channels themselves are noisy
+    with pytest.raises(ValueError, match="at least 2 passes"):
+        luminance_rse(means[:1], cloud)
