@@ -63,6 +63,8 @@ import drjit as dr
 import mitsuba as mi
 
 from ..jitarrays import aligned_empty, aligned_float
+from . import spectral_albedo
+from .spectral_phase import from_properties, pack_pdf, spectral_pdf, spectral_value
 from .variant_class import variant_class
 
 PLUGIN_NAME = "hydrometeor_mixture"
@@ -304,6 +306,7 @@ class HydrometeorMixture:
         # (N, S, 4): R, G, B value and the channel-mean pdf of every node and species, read as one packet
         table = np.concatenate([np.asarray(values, np.float32), pbar[:, :, None]], axis=2)
         self.table4 = _storage(np.transpose(table, (1, 0, 2)))
+        self.spectral_pdf = None if self.spectral_values is None else _storage(pack_pdf(pbar))  # spectral_phase
         # (4, S, N - 1, 2): alias tables of the segment probabilities of every species under the density
         # of each row of table4 (R, G, B, channel mean) (prob, alias as float)
         rows = [np.asarray(values, np.float64)[:, :, c] for c in range(3)] + [pbar]
@@ -336,18 +339,10 @@ class HydrometeorMixture:
         self.weights = None
 
     def _set_spectral_tables(self, props, n_nodes: int):
-        """Spectral variants with ``spectral_values`` (S x N x K on the mixture's nodes) and ``spectral_nm`` (K uniform
-        wavelengths, nm): the phase tables by wavelength (``spectral_phase``); else None (R, G, B interpolated)."""
-        self.spectral_values = self.spectral_table = None
-        if not (mi.is_spectral and "spectral_values" in props):
-            return
-        from .spectral_phase import check_spectral, pack_spectral
-        values = np.asarray(props["spectral_values"], np.float32)
-        grid = np.asarray(props["spectral_nm"], np.float64).ravel()
-        check_spectral(values, grid, self.n_species, n_nodes, PLUGIN_NAME)
-        self.spectral_values = values
-        self.spectral_table = _storage(pack_spectral(values))
-        self.spectral_grid = (float(grid[0]), float(1.0 / (grid[1] - grid[0])), int(grid.size))
+        """Spectral variants with ``spectral_values`` and ``spectral_nm``: the phase tables by wavelength
+        (``spectral_phase.from_properties``); else None (R, G, B interpolated)."""
+        self.spectral_values, self.spectral_table, self.spectral_grid = from_properties(
+            props, self.n_species, n_nodes, PLUGIN_NAME, _storage)
 
     def _set_spectral(self, props):
         """Spectral variants: the channels' wavelengths (nm) and the species' co-albedo spectra."""
@@ -367,9 +362,8 @@ class HydrometeorMixture:
             raise ValueError(f"{PLUGIN_NAME}: 'coalbedo' must be S x (K + 1) in [0, 1] with S = {self.n_species} "
                              f"and K the wavelengths of the uniform grid 'coalbedo_nm' (K >= 2); got {c.shape}, "
                              f"{grid.size}")
-        self.coalbedo = _storage(c)
-        self.coalbedo_k = int(grid.size)
-        self.coalbedo_map = (float(grid[0]), float(1.0 / (grid[1] - grid[0])))
+        self.coalbedo = _storage(spectral_albedo.pack_coalbedo(c))
+        self.coalbedo_grid = (float(grid[0]), float(1.0 / (grid[1] - grid[0])), int(grid.size))
 
     # ------------------------------------------------------------ helpers
     def _at_wavelengths(self, value, mei):
@@ -384,26 +378,10 @@ class HydrometeorMixture:
         ``coalbedo``), from the medium's albedo at the reference wavelength ``albedo_ref`` (Float):
         1 - (1 - albedo_ref) sum_s w_s c_s(lambda) / sum_s w_s c_s(ref), c_s the species' co-albedo spectra
         (``optics.spectral``) and w_s their scattering weights (extinction weights to within the co-albedo,
-        <= 1e-3): the medium's own albedo at the reference, the species' mix of spectral shapes elsewhere."""
-        w = self._weights_at(mei)
-        lo, inv_step = self.coalbedo_map
-        k = self.coalbedo_k
-        ref = mi.Float(0.0)
-        for s in range(self.n_species):
-            ref += w[s] * _gather(self.coalbedo, s * (k + 1) + k)
-        inv_ref = dr.select(ref > 0.0, dr.rcp(ref), 0.0)
-        out = []
-        for lane in range(4):
-            u = dr.clip((mei.wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
-            i = mi.UInt32(u)
-            t = u - mi.Float(i)
-            co = mi.Float(0.0)
-            for s in range(self.n_species):
-                c0 = _gather(self.coalbedo, s * (k + 1) + i)
-                co += w[s] * dr.fma(_gather(self.coalbedo, s * (k + 1) + i + 1) - c0, t, c0)
-            ratio = dr.select(ref > 0.0, co * inv_ref, 1.0)
-            out.append(1.0 - (1.0 - albedo_ref) * ratio)
-        return mi.Spectrum(*out)
+        <= 1e-3): the medium's own albedo at the reference, the species' mix of spectral shapes elsewhere
+        (``spectral_albedo``)."""
+        return spectral_albedo.albedo_at(self.coalbedo, self.coalbedo_grid, self.n_species, self._weights_at(mei),
+                                         mei.wavelengths, albedo_ref, _gather4)
 
     def _weights_at(self, mei):
         """w_s(x) for s = 0..S-1: the coefficients trilinear on the bbox grid (texel centres at
@@ -474,12 +452,11 @@ class HydrometeorMixture:
     def _mix_at(self, w, idx, t, mei):
         """(the variant's Spectrum value, pdf) of the mixture: :meth:`_mix`'s channels (at the lanes'
         wavelengths in spectral variants), or the tables by wavelength (``spectral_phase``) where given."""
-        value, pdf = self._mix(w, idx, t)
         if self.spectral_table is None:
+            value, pdf = self._mix(w, idx, t)
             return self._at_wavelengths(value, mei), pdf
-        from .spectral_phase import spectral_value
-        return spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
-                              _gather4), pdf
+        return (spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
+                               _gather4), spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4))
 
     def _mix(self, w, idx, t):
         """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t."""
