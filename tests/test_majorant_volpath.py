@@ -226,13 +226,15 @@ def test_agrees_with_volpath_under_a_hot_voxel():
     """One voxel 10x denser than the blobs: volpath's global majorant is 10x the local ones almost
     everywhere, so this exercises the DDA where the coarse grid and the global majorant differ most.
     Roulette off in both (volpath plays it at every null collision, which makes its multiple
-    scattering a rare-event estimator that reads low at test sample counts)."""
+    scattering a rare-event estimator that reads low at test sample counts). Stock volpath tracks the 10x
+    majorant (about 20x our time per pass): 16 passes of it against 64 of ours, combined standard errors
+    1.12x those of 32 + 32 at 60 % of the time; a majorant grid that misses the hot voxel fails."""
     s = blobs()
     s[1, 30, 30] = 60.0
     kw = dict(albedo=(1.0, 1.0, 1.0))
     extra = {"rr_depth": 100, "max_depth": 40}
-    a = passes(mi.load_dict(scene_dict(s, {"type": "volpath", **extra}, **kw)), 32, 16)
-    b = passes(mi.load_dict(scene_dict(s, ours(s, **extra), **kw)), 32, 16, seed0=1000)
+    a = passes(mi.load_dict(scene_dict(s, {"type": "volpath", **extra}, **kw)), 16, 16)
+    b = passes(mi.load_dict(scene_dict(s, ours(s, **extra), **kw)), 64, 16, seed0=1000)
     assert_agree(a, b)
 
 
