@@ -44,7 +44,7 @@ def test_box_reaches_below_the_ground_without_air():
 def test_rain_reaching_the_ground_in_a_periodic_box_is_beer_lambert():
     """Nadir reflectance pi L / (mu0 E) of a Lambertian ground under a purely absorbing rain layer (periodic,
     the sun at 30 deg elevation): A exp(-tau (1 + 1 / mu0)), tau = beta H the whole column's optical depth.
-    Within 3 se and 3 %; a box starting 147 m above the ground gave 25 % more."""
+    Within 3 se and 3 %; a box starting 147 m above the ground gave 22 % more (0.137 against 0.112)."""
     cam = wm.Camera.orthographic(center=(W_M / 2, W_M / 2, 3000.0), direction=(0, 0, -1), width=100.0,
                                  height=100.0)
     spec = wm.SceneSpec(camera=cam, sun=wm.Sun(azimuth=270.0, elevation=math.degrees(math.asin(MU0)),
