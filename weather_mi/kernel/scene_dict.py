@@ -271,14 +271,14 @@ def _sea_bsdf(terrain) -> dict:
 
 
 def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(lo, hi) of the box that holds the medium: the volume's bbox, starting above a ground at ``floor_m``
-    by three times Mitsuba's ray offset g (coincident or too close faces of the box and the ground make rays
-    skip the ground); with the air in the box (``air_in_medium``) and its floor below that, from g below the
-    ground (or its own floor) instead (the ground inside the box, as over a terrain: the air down to the ground; a
-    floor g above it lost the lowest g, 270 m of air in a periodic box 2,000 km wide: the -3 % against
-    DISORT of issue 38; without air the old floor keeps the renders bit-identical); with a ground over a
-    terrain (``vol.terrain``; ``floor_m`` then unused) from ``terrain_gap_m`` below its lowest height (the
-    whole mesh inside the box). The grids keep the full bbox."""
+    """(lo, hi) of the box that holds the medium: the volume's bbox; where its floor lies below three times
+    Mitsuba's ray offset g above a ground at ``floor_m`` (coincident or too close faces of the box and the
+    ground make rays skip the ground), from g below the ground (or its own floor, if lower) instead: the
+    ground inside the box, as over a terrain, the medium down to the ground (a floor g above it lost the
+    lowest g of hydrometeors and air alike: 13 m in the demo, 270 m in a periodic box 2,000 km wide, the
+    -3 % against DISORT of issue 38; tests/test_box_floor.py); with a ground over a terrain (``vol.terrain``;
+    ``floor_m`` then unused) from ``terrain_gap_m`` below its lowest height (the whole mesh inside the box).
+    The grids keep the full bbox."""
     lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
     if vol.periodic:  # over PATH_TILES periods on each side (optics/periodic.py)
         lo, hi = extended_box(lo, hi, PATH_TILES)
@@ -287,10 +287,8 @@ def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.nda
         lo[2] = terrain_floor_m(terrain) - terrain_gap_m(terrain, vol.bbox)
     elif floor_m is not None:
         gap = 3.0 * RAY_EPSILON * (1.0 + float(np.max(np.abs(np.r_[lo, hi]))))
-        if lo[2] < floor_m + gap and air_in_medium(vol) is not None:
+        if lo[2] < floor_m + gap:
             lo[2] = min(lo[2], floor_m - gap)
-        else:
-            lo[2] = max(lo[2], floor_m + gap)
         if hi[2] <= floor_m + gap:
             raise ValueError(f"the volume lies entirely below the ground at {floor_m} m")
     return lo, hi
