@@ -86,6 +86,10 @@ class LightModel:
     leak_rate: object = 1.0
     below: bool = False        # the lit ground lights the medium from below, through the column under it
     flux: object = 0.0         # the diffused light's flux term towards the eye (diffusion_flux, "multiple")
+    below_shadow: object = 0.0   # the light from below comes from the shadowed ground beneath ("multiple")
+    shadow_diffuse: object = 1.0  # the part of a column's diffuse transmission reaching the ground under it
+    ground_z: object = 0.0       # the ground's height (m), where the light from below is read
+    diffusion_lobe: object = 0.0  # the part of the diffused light scattered with the phase function ("multiple")
 
     def terms(self, p, slab=None, ext=None, active=True, mu=None):
         """(A, B, occlusion of the sky, occlusion of the ground below) at world points p (mi.Point3f),
@@ -140,8 +144,10 @@ class LightModel:
         tau = -log_d
         if slab is not None:  # the profile is linear in tau: its eye-weighted mean over the segment is its value
             tau = dr.clip(tau + slab.sigma * k_d * slab.mean_offset(), 0.0, tau_col)  # at the mean position
-        B = (1.0 - column) * B + diffused_towards_eye(dr, tau, tau_col, self.diffusion_scale, self.diffusion_gain,
-                                                       self.leak_gain, self.leak_rate, self.flux, mu)
+        diffused = diffused_towards_eye(dr, tau, tau_col, self.diffusion_scale, self.diffusion_gain,
+                                        self.leak_gain, self.leak_rate, self.flux, mu)
+        A = A + self.diffusion_lobe * diffused
+        B = (1.0 - column) * B + (1.0 - self.diffusion_lobe) * diffused
         occ, occ_below = 1.0, 0.0
         if self.sky is not None:  # the sky through the column above p, the lit ground through the column below
             up, _ = self.sky.lookup(p, log_direct=True, active=active)
@@ -151,6 +157,8 @@ class LightModel:
                 through, _ = self.sky.lookup(p, exit_plane=True, log_direct=True, active=active)
                 tau_down = dr.maximum(-dr.log(dr.maximum(through, 1e-30)) - tau_up, 0.0)
                 occ_below = ground_transmission(dr, self.sky_extinction * tau_down, DIFFUSE_MU, self.g)
+                shadow = self.ground_sun(self.sun.mi.Point3f(p.x, p.y, self.ground_z), active)  # the ground beneath
+                occ_below = occ_below * (1.0 - self.below_shadow * (1.0 - shadow))
         return A, B, occ, occ_below
 
 
@@ -161,12 +169,21 @@ class LightModel:
         A, B, occ, _ = self.terms(p)
         if self.octaves is None:
             return A + B, occ
-        direct, _ = self.sun.lookup(p, log_direct=True)
-        tau_vertical = -dr.log(dr.maximum(direct, 1e-30)) * self.mu0
         if self.sky is not None:  # skylight through the column above: diffuse light at the diffusivity cosine
             up, _ = self.sky.lookup(p, log_direct=True)
             occ = ground_transmission(dr, -dr.log(dr.maximum(up, 1e-30)), DIFFUSE_MU, self.g)
-        return ground_transmission(dr, tau_vertical, self.mu0, self.g), occ
+        return self.ground_sun(p), occ
+
+    def ground_sun(self, p, active=True):
+        """The "multiple" model's sunlight factor on the ground at world points p: the column's
+        delta-Eddington total transmission T towards the sun, its diffuse part (T less the delta-scaled
+        direct beam T_dir) weighted by ``shadow_diffuse``: T_dir + shadow_diffuse (T - T_dir)."""
+        import drjit as dr
+        direct, _ = self.sun.lookup(p, log_direct=True, active=active)
+        tau_vertical = -dr.log(dr.maximum(direct, 1e-30)) * self.mu0
+        total = ground_transmission(dr, tau_vertical, self.mu0, self.g)
+        direct_beam = dr.exp(-(1.0 - self.g * self.g) * tau_vertical / self.mu0)  # delta-scaled (f = g^2)
+        return direct_beam + self.shadow_diffuse * (total - direct_beam)
 
 
 def diffusion_profile(dr, tau, tau_col, scale):
