@@ -87,7 +87,6 @@ class LightModel:
     below: bool = False        # the lit ground lights the medium from below, through the column under it
     flux: object = 0.0         # the diffused light's flux term towards the eye (diffusion_flux, "multiple")
     below_shadow: object = 0.0   # the light from below comes from the shadowed ground beneath ("multiple")
-    shadow_diffuse: object = 1.0  # the part of a column's diffuse transmission reaching the ground under it
     ground_z: object = 0.0       # the ground's height (m), where the light from below is read
     diffusion_lobe: object = 0.0  # the part of the diffused light scattered with the phase function ("multiple")
 
@@ -146,8 +145,9 @@ class LightModel:
             tau = dr.clip(tau + slab.sigma * k_d * slab.mean_offset(), 0.0, tau_col)  # at the mean position
         diffused = diffused_towards_eye(dr, tau, tau_col, self.diffusion_scale, self.diffusion_gain,
                                         self.leak_gain, self.leak_rate, self.flux, mu)
-        A = A + self.diffusion_lobe * diffused
-        B = (1.0 - column) * B + (1.0 - self.diffusion_lobe) * diffused
+        lobe = self.diffusion_lobe * dr.exp(-self.diffusion_scale * tau)
+        A = A + lobe * diffused
+        B = (1.0 - column) * B + (1.0 - lobe) * diffused
         occ, occ_below = 1.0, 0.0
         if self.sky is not None:  # the sky through the column above p, the lit ground through the column below
             up, _ = self.sky.lookup(p, log_direct=True, active=active)
@@ -175,15 +175,12 @@ class LightModel:
         return self.ground_sun(p), occ
 
     def ground_sun(self, p, active=True):
-        """The "multiple" model's sunlight factor on the ground at world points p: the column's
-        delta-Eddington total transmission T towards the sun, its diffuse part (T less the delta-scaled
-        direct beam T_dir) weighted by ``shadow_diffuse``: T_dir + shadow_diffuse (T - T_dir)."""
+        """The "multiple" model's sunlight factor on the ground at world points p: the delta-Eddington
+        total transmission of the column towards the sun (``ground_transmission``)."""
         import drjit as dr
         direct, _ = self.sun.lookup(p, log_direct=True, active=active)
         tau_vertical = -dr.log(dr.maximum(direct, 1e-30)) * self.mu0
-        total = ground_transmission(dr, tau_vertical, self.mu0, self.g)
-        direct_beam = dr.exp(-(1.0 - self.g * self.g) * tau_vertical / self.mu0)  # delta-scaled (f = g^2)
-        return direct_beam + self.shadow_diffuse * (total - direct_beam)
+        return ground_transmission(dr, tau_vertical, self.mu0, self.g)
 
 
 def diffusion_profile(dr, tau, tau_col, scale):

@@ -76,8 +76,7 @@ class MultipleLight:
     leak_rate: object       # its decay per transport depth (leak_rate), unitless
     flux: object            # weight of the diffused light's flux towards the eye (diffusion_flux), unitless
     below_shadow: object    # how much of the ground's shadow dims the light from below (below_shadow), unitless
-    shadow_diffuse: object  # the part of a column's diffuse transmission under it (shadow_diffuse), unitless
-    diffusion_lobe: object        # the octaves' least optical-depth factor (diffusion_lobe), unitless
+    diffusion_lobe: object  # the diffused light's part scattered with the phase function (diffusion_lobe), unitless
     ground_z: object        # the flat ground's height (m; the lowest box face without a ground)
 
 

@@ -73,7 +73,7 @@ MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple"
 MULTIPLE_DEFAULTS = {"ms_extinction": 0.1662, "ms_contribution": 0.2373, "ms_eccentricity": 0.9318,
                      "sky_gain": 0.4785, "sky_extinction": 0.0122, "diffusion_gain": 0.9821,
                      "diffusion_scale": 0.485, "leak_gain": 0.765, "leak_rate": 1.0927, "diffusion_flux": 0.2826,
-                     "below_shadow": 0.0, "shadow_diffuse": 1.0, "diffusion_lobe": 0.0}
+                     "below_shadow": 0.0, "diffusion_lobe": 0.0}
 
 
 DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail field, detail.field(amplitude=0.5))
@@ -142,11 +142,13 @@ class SliceParams:
         the point, in the storm's shadow: its radiance x (1 - below_shadow (1 - S)), S the sunlight factor
         of the ground straight below (the same delta-Eddington column transmission that lights the ground
         the eye sees); 0: the ground in the open everywhere.
-    shadow_diffuse : float, default MULTIPLE_DEFAULTS["shadow_diffuse"]
-        "multiple" light, in [0, 1]: the part of a column's diffuse transmission (the delta-Eddington layer
-        less its direct beam) that reaches the ground beneath it, T_dir + shadow_diffuse (T - T_dir): a
-        finite cloud loses its diffusely transmitted light through its sides, so that its shadow is darker
-        than a plane-parallel layer's; 1: the plane-parallel layer.
+    diffusion_lobe : float, default MULTIPLE_DEFAULTS["diffusion_lobe"]
+        "multiple" light, in [0, 1]: the part of the diffused light (diffusion and leak terms) that is still
+        travelling along the sunlight and is scattered towards the eye with the phase function instead of
+        isotropically, diffusion_lobe x exp(-x) at transport depth x = diffusion_scale x tau (the sunlight's
+        direction is forgotten over a transport mean free path; eye.LightModel.terms): front- and
+        side-lit it dims the diffused light (P(Theta) < 1 / (4 pi) there), back-lit it makes the forward
+        lobe of silver linings and lit cores; 0: isotropic.
     slab_jitter : float, default 0.0
         In [0, 1]: each pixel's slabs are offset by up to +-slab_jitter / 2 slice (jitter.py), which
         turns the terraces of the slab planes on lit faces into fine grain (0: aligned slabs, as before;
@@ -183,7 +185,6 @@ class SliceParams:
     leak_rate: float = MULTIPLE_DEFAULTS["leak_rate"]
     diffusion_flux: float = MULTIPLE_DEFAULTS["diffusion_flux"]
     below_shadow: float = MULTIPLE_DEFAULTS["below_shadow"]
-    shadow_diffuse: float = MULTIPLE_DEFAULTS["shadow_diffuse"]
     diffusion_lobe: float = MULTIPLE_DEFAULTS["diffusion_lobe"]
     slab_jitter: float = 0.0
     jitter_frame: int = 0
@@ -201,7 +202,7 @@ class SliceParams:
         if number(self.blur_length_m) and not self.blur_length_m >= 0.0:
             raise ValueError(f"blur_length_m must be >= 0, got {self.blur_length_m}")
         for name in ("ms_extinction", "ms_contribution", "ms_eccentricity", "diffusion_scale", "slab_jitter",
-                     "diffusion_flux", "below_shadow", "shadow_diffuse", "diffusion_lobe"):
+                     "diffusion_flux", "below_shadow", "diffusion_lobe"):
             v = getattr(self, name)
             if number(v) and not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {v}")
