@@ -27,7 +27,13 @@ refitted). Both diffusion terms are scattered towards the eye with their flux al
 (``diffused_towards_eye``: the P1 radiance (phi + 3 F . w) / (4 pi), weight ``flux``): light flowing through a
 cloud away from the sun brightens its shadowed side seen against the sun (back-lit rims and cores, which
 the residuals by region found 23% and 11% too dark in the held-out back-lit views); at a thick cloud's faces
-it is Eddington's law I(mu) / I(0) = 1 + 3/2 mu. The medium is the one the path tracer renders: phase-function peaks within 3 deg count as
+it is Eddington's law I(mu) / I(0) = 1 + 3/2 mu. In a cloud of
+asymmetry g ~ 0.85 the diffused light keeps travelling along the sunlight for about a transport mean free
+path before its direction is forgotten: a part ``diffusion_lobe`` x exp(-x) of it (x: transport depth from
+the sun's side) is scattered with the phase function instead of isotropically (moved from B to A, the
+energy unchanged), so that front- and side-lit faces, where P(Theta) < 1 / (4 pi), are dimmer and back-lit
+rims and thin cores brighter (issue 41: the held-out front- and side-lit cumuli were 12-15% too bright, the
+back-lit ones 18-19% too dark; median CIEDE2000 4.34 -> see validation/README.md). The medium is the one the path tracer renders: phase-function peaks within 3 deg count as
 unscattered light (delta-M, ``weather_mi.optics.forward_peak``; ``SliceRenderer(forward_peak_deg=)``). The model reads optical depths from the
 light volumes interpolated as depths (``LightVolume.lookup(log_direct=True)``: linear between two planes of a
 homogeneous slab, where the light is not), and takes the diffusion profile, which is linear in depth, at the
@@ -41,7 +47,9 @@ sky's mean radiance times ``ambient`` (paper modes, unshadowed). The "multiple" 
 T(k tau_down)], tau_up the optical depth towards the zenith (the zenith light volume), tau_down the column
 below (that volume's whole column less tau_up), T the delta-Eddington transmission of diffuse light
 (``ground_transmission`` at the diffusivity cosine) and k = ``sky_extinction``: the sky lights a cloud from
-above and the ground from below (cloud bases), and inside a cloud both dim as diffuse light does, slowly in
+above and the ground from below (cloud bases; with ``below_shadow``, the ground beneath the point, dimmed
+by the same column transmission that lights the ground the eye sees: a cloud's base looks down on its own
+shadow), and inside a cloud both dim as diffuse light does, slowly in
 the optical depth (an exponential exp(-k tau) was refitted to k ~ 0.006, no occlusion at all). Held-out
 median CIEDE2000 4.72 -> 4.31 with it, refitted (validation/calibrate_slicer.py).
 
