@@ -75,6 +75,9 @@ class MultipleLight:
     leak_gain: object       # weight of the leaking diffusion (leak_gain), unitless
     leak_rate: object       # its decay per transport depth (leak_rate), unitless
     flux: object            # weight of the diffused light's flux towards the eye (diffusion_flux), unitless
+    below_shadow: object    # how much of the ground's shadow dims the light from below (below_shadow), unitless
+    diffusion_lobe: object  # the diffused light's part scattered with the phase function (diffusion_lobe), unitless
+    ground_z: object        # the flat ground's height (m; the lowest box face without a ground)
 
 
 @dataclass

@@ -456,7 +456,8 @@ class SliceRenderer:
             model = MultipleLight(*(kernel_scalar(mi, v) for v in (
                 params.ms_extinction, params.ms_contribution, params.ms_eccentricity, params.sky_extinction,
                 params.diffusion_gain, params.diffusion_scale, max(float(spec.sun.to_sun[2]), 1e-3), params.leak_gain,
-                params.leak_rate, params.diffusion_flux)))
+                params.leak_rate, params.diffusion_flux, params.below_shadow, params.diffusion_lobe,
+                self.grid_box[0][2] if spec.ground is None else spec.ground.height)))
             gain = params.sky_gain
         else:
             gain = params.ambient
@@ -483,7 +484,8 @@ class SliceRenderer:
             model = LightModel(self.light, self.sky_light, self.mode.octaves, m.a, m.b, m.c, m.sky_extinction,
                                m.diffusion_gain, m.diffusion_scale, g=self.g_scattering, mu0=m.mu0,
                                carry=(inputs.tex_light, e.grid), leak_gain=m.leak_gain, leak_rate=m.leak_rate,
-                               below=e.below is not None, flux=m.flux)
+                               below=e.below is not None, flux=m.flux, below_shadow=m.below_shadow,
+                               diffusion_lobe=m.diffusion_lobe, ground_z=m.ground_z)
         else:
             model = LightModel(self.light, log_forward=self.mode.light == "translucent")
         offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
