@@ -45,7 +45,7 @@ from .periodic import PeriodicSlicing
 from .rays import Scalars, f32, phase_index, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
 from .sun_air import sun_air_input
-from .texture_storage import replace_storage
+from .texture_storage import ChannelTextures, replace_storage
 from .view import ViewCache
 
 # the cone angle whose spread sets the light pass's blur steps (independent of the interactive cone angle)
@@ -182,8 +182,10 @@ class SliceRenderer:
         eye_channels = 1 if self.one_scattering_ratio else 1 + len(self.groups)
         texture = (lambda t: mi.Texture3f(t, use_accel=False)) if self.periodic is None else \
             (lambda t: self.periodic.texture(mi, t))  # periodic: wrapping in x and y
-        self.tex_eye = texture(mi.TensorXf(np.zeros(self.shape + (eye_channels,), np.float32)))
-        self.tex_light_src = texture(mi.TensorXf(np.zeros(self.shape + (self.light_channels,), np.float32)))
+        # one voxel each until the first frame builds them (no grid of zeros made and let go); the eye's channels
+        # as power-of-two textures (6 as 4 + 2: Dr.Jit pads a texture's channels to a power of two)
+        self.tex_eye = ChannelTextures.zeros(texture, mi, eye_channels)
+        self.tex_light_src = ChannelTextures.zeros(texture, mi, self.light_channels).parts[0]
 
     # ------------------------------------------------------------------ per-frame volume data
     def _species_vectors(self, params: SliceParams):
