@@ -66,13 +66,13 @@ def test_channel_textures_read_as_one_padded_texture():
 @pytest.mark.parametrize("mode", ["per-species/multiple", "per-species/translucent"])
 def test_slicer_reads_the_volumes_grids_without_copies(mode):
     """The slicer's per-species grids are the volume's own float32 memory (no (z, y, x, S) copy), and after a frame
-    its eye texture is power-of-two parts holding 1 + groups channels."""
+    its eye texture is power-of-two parts holding the groups' beta_sca alone."""
     vol = wm.optical_volume(wm.synthetic.cumulus(), phase_quality="test")
     r = SliceRenderer(vol, MODES[mode], slices=16, light_res=16)
     for s in range(len(vol.species)):
         assert np.shares_memory(r.beta_s[s].numpy(), vol.beta_ext[s])
     r.frame(wm.scene.spec.default_spec(vol, 24, 18))
     channels = [int(t.shape[-1]) for t in r.tex_eye.parts]
-    assert sum(channels) == (1 if r.one_scattering_ratio else 1 + len(r.groups))
+    assert sum(channels) == len(r.groups)  # beta_sca per group; beta is the light source's first channel
     assert all(c & (c - 1) == 0 for c in channels)
     assert tuple(r.tex_eye.parts[0].shape[:3]) == r.shape

@@ -170,16 +170,19 @@ class SliceRenderer:
         self._constants = KernelConstants(self)  # all of the renderer that its frame's kernels see
 
     def _make_textures(self, mode: SliceMode):
-        """The eye's texture (beta and beta_sca per group) and the light pass's source ((beta, beta_f), or
+        """The eye's texture (beta_sca per group; beta first where the frame is differentiated, the eye pass
+        reading beta from the light pass's source otherwise) and the light pass's source ((beta, beta_f), or
         beta alone where no light is scattered forward). One phase function and albedos that agree within
         UNIFORM_ALBEDO_SPREAD make beta_sca / beta and beta_f / beta one number each over the medium
-        (``mean_albedo``): both textures then hold beta alone (the eye's where there is one group)."""
+        (``mean_albedo``): the light's source then holds beta alone, and the eye's no beta_sca (where there is
+        one group)."""
         mi = self.mi
         uniform = mode.phase == "uniform" and _albedos_agree(self.albedo_rgb)
         self.one_scattering_ratio = uniform and len(self.groups) == 1  # beta_sca = omega_bar beta
         self.uniform_forward = mode.light == "translucent" and uniform  # beta_f = f omega_bar beta
         self.light_channels = 2 if mode.light == "translucent" and not self.uniform_forward else 1
-        eye_channels = 1 if self.one_scattering_ratio else 1 + len(self.groups)
+        # the eye pass reads beta from the light pass's source, and from the eye's texture only where differentiated
+        eye_channels = int(self.differentiable) + (0 if self.one_scattering_ratio else len(self.groups))
         texture = (lambda t: mi.Texture3f(t, use_accel=False)) if self.periodic is None else \
             (lambda t: self.periodic.texture(mi, t))  # periodic: wrapping in x and y
         # one voxel each until the first frame builds them (no grid of zeros made and let go); the eye's channels
@@ -245,7 +248,7 @@ class SliceRenderer:
         return [float(params.detail.get(n, DEFAULT_DETAIL)) for n in self.vol.species]
 
     def _build_textures(self, build: TextureBuild, d: FrameInputs):
-        """Eye texture [beta_ext, beta_sca per group] and light source [beta_ext, beta_forward] (1/m) from
+        """Eye texture [(beta_ext,) beta_sca per group] and light source [beta_ext, beta_forward] (1/m) from
         ``build``; ``d``: the frame's inputs (the arrays read, the textures written)."""
         mi = self.mi
         import drjit as dr
@@ -267,7 +270,7 @@ class SliceRenderer:
             for si in members[1:]:
                 g_sca = g_sca + sca[si]
             grouped.append(g_sca)
-        eye = [ext] if self.one_scattering_ratio else [ext] + grouped
+        eye = ([ext] if self.differentiable else []) + ([] if self.one_scattering_ratio else grouped)
         replace_storage(mi, [(d.tex_eye, eye), (d.tex_light, [ext, beta_fwd][:self.light_channels])], self.shape)
 
     # ------------------------------------------------------------------ public
