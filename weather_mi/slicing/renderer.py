@@ -170,24 +170,19 @@ class SliceRenderer:
         self._constants = KernelConstants(self)  # all of the renderer that its frame's kernels see
 
     def _make_textures(self, mode: SliceMode):
-        """The eye's texture (beta_sca per group; beta first where the frame is differentiated, the eye pass
-        reading beta from the light pass's source otherwise) and the light pass's source ((beta, beta_f), or
-        beta alone where no light is scattered forward). One phase function and albedos that agree within
-        UNIFORM_ALBEDO_SPREAD make beta_sca / beta and beta_f / beta one number each over the medium
-        (``mean_albedo``): the light's source then holds beta alone, and the eye's no beta_sca (where there is
-        one group)."""
+        """One voxel each until a frame builds them: the eye's texture (beta_sca per group, after beta where
+        differentiated) and the light pass's source ((beta, beta_f), or beta where no light is scattered forward).
+        One phase function and albedos that agree within UNIFORM_ALBEDO_SPREAD make beta_sca / beta and beta_f /
+        beta one number each (``mean_albedo``): the source holds beta alone, the eye's nothing for one group."""
         mi = self.mi
         uniform = mode.phase == "uniform" and _albedos_agree(self.albedo_rgb)
         self.one_scattering_ratio = uniform and len(self.groups) == 1  # beta_sca = omega_bar beta
         self.uniform_forward = mode.light == "translucent" and uniform  # beta_f = f omega_bar beta
         self.light_channels = 2 if mode.light == "translucent" and not self.uniform_forward else 1
-        # the eye pass reads beta from the light pass's source, and from the eye's texture only where differentiated
         eye_channels = int(self.differentiable) + (0 if self.one_scattering_ratio else len(self.groups))
         texture = (lambda t: mi.Texture3f(t, use_accel=False)) if self.periodic is None else \
             (lambda t: self.periodic.texture(mi, t))  # periodic: wrapping in x and y
-        # one voxel each until the first frame builds them (no grid of zeros made and let go); the eye's channels
-        # as power-of-two textures (6 as 4 + 2: Dr.Jit pads a texture's channels to a power of two)
-        self.tex_eye = ChannelTextures.zeros(texture, mi, eye_channels)
+        self.tex_eye = ChannelTextures.zeros(texture, mi, eye_channels)  # unpadded (texture_storage.py)
         self.tex_light_src = ChannelTextures.zeros(texture, mi, self.light_channels).parts[0]
 
     # ------------------------------------------------------------------ per-frame volume data
