@@ -363,16 +363,17 @@ def _release(hyd: xr.Dataset, names, kinds) -> None:
 
 
 def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool = False,
-                   release: tuple = ()):
+                   release: tuple = (), weights_kept: bool = True):
     """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32: beyond its
     outputs (56 bytes per cell) this takes one or two float32 grids of temporaries (Eq. 4's). ``release``: the
-    kinds of field ("q", "r_eff") dropped from ``hyd`` (in place) once used, freeing their memory."""
+    kinds of field ("q", "r_eff") dropped from ``hyd`` (in place) once used, freeing their memory; without
+    ``weights_kept`` the weights are None, computed a block of voxels at a time into a scratch block and
+    dropped (20 bytes per cell less at the peak; the other grids the same floats)."""
     rho = np.ascontiguousarray(hyd["rho_air"].values, np.float32)
     shape = rho.shape
     n_s = len(SPECIES_NAMES)
     beta_ext = np.empty((n_s,) + shape, np.float32)
-    weights = np.empty((n_s,) + shape, np.float32)
-    from .mixture_kernels import finish_albedo, mix
+    from .mixture_kernels import finish_albedo
     radii = {}
     for i, s in enumerate(sp):
         q = np.ascontiguousarray(hyd[f"q_{s.name}"].values, np.float32)
@@ -388,8 +389,9 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
     mean_albedo = np.asarray([np.float32(np.mean(s.albedo_rgb)) for s in sp], np.float32)
     beta_total = np.empty(shape, np.float32)
     albedo = np.empty(shape + (3,), np.float32)
-    mix(beta_ext.reshape(n_s, -1), rgb, mean_albedo, beta_total.reshape(-1), albedo.reshape(-1, 3),
-        weights.reshape(n_s, -1))
+    weights = _mix(beta_ext.reshape(n_s, -1), rgb, mean_albedo, beta_total.reshape(-1), albedo.reshape(-1, 3),
+                   weights_kept)
+    weights = None if weights is None else weights.reshape((n_s,) + shape)
     _voxel_albedo(radii, sp, beta_ext, albedo.reshape(-1, 3))
     del radii
     # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
@@ -401,12 +403,32 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
     return beta_ext, beta_total, albedo, weights
 
 
+MIX_BLOCK = 1 << 20  # voxels per block of the weights' scratch where the volume keeps no weights
+
+
+def _mix(beta_ext, rgb, mean_albedo, beta_total, albedo_sum, weights_kept: bool):
+    """``mixture_kernels.mix`` over (S, N) ``beta_ext`` into ``beta_total`` and ``albedo_sum``; returns the (S, N)
+    weights, or None without ``weights_kept`` (computed by blocks of MIX_BLOCK voxels into one scratch block: the
+    kernel is per voxel, so the other outputs are the same floats)."""
+    from .mixture_kernels import mix
+    if weights_kept:
+        weights = np.empty(beta_ext.shape, np.float32)
+        mix(beta_ext, rgb, mean_albedo, beta_total, albedo_sum, weights)
+        return weights
+    n = beta_ext.shape[1]
+    scratch = np.empty((beta_ext.shape[0], min(MIX_BLOCK, n)), np.float32)
+    for a in range(0, n, MIX_BLOCK):
+        b = min(a + MIX_BLOCK, n)
+        mix(beta_ext[:, a:b], rgb, mean_albedo, beta_total[a:b], albedo_sum[a:b], scratch[:, :b - a])
+    return None
+
+
 def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    scale: Mapping[str, float] | None = None, *, phase: str = "per_species",
                    phase_tables: Sequence | None = None, model_radii: bool | None = None,
                    phase_quality: str = "default", sizes: str | None = None,
                    size_classes: int | None = None, periodic: bool | str | None = None,
-                   release: bool = False, keep: tuple = ("beta_ext", "weights")) -> OpticalVolume:
+                   release: bool | tuple = False, keep: tuple = ("beta_ext", "weights")) -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
     Parameters
@@ -440,10 +462,11 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     periodic : bool or "transport", optional
         Horizontal boundaries (``OpticalVolume.periodic``); default: "transport" where the hydrometeors say
         they are periodic (``attrs["periodic"]``: the LES reader's doubly periodic domains), else False.
-    release : bool, default False
+    release : bool or tuple of str, default False
         Drop the mixing ratios and effective radii from ``hyd`` (in place) once their optics are computed, so
         that their memory goes while the volume's grids are built (the command line, which needs them no more;
-        ``rho_air`` and the coordinates stay).
+        ``rho_air`` and the coordinates stay); a tuple: those kinds of field alone ("q", "r_eff"; the viewer
+        keeps the mixing ratios for its read-out).
     keep : tuple of str, default ("beta_ext", "weights")
         The per-species grids the volume keeps; one left out is a :class:`ReleasedGrid` (its memory freed
         once the total, the albedo and the weights exist): the path tracer reads no ``beta_ext`` (4 bytes per
@@ -468,15 +491,17 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                                repr(size_classes))  # before the optics (and ``release``) touch hyd
     check_fits(str(hyd.attrs.get("source", "hydrometeors")), hyd["rho_air"].shape, "optics")  # before allocating
     split_later = size_classes is not None and size_classes != 1 and use_model  # size_classes.split reads r_eff
-    kinds = (("q",) if split_later else ("q", "r_eff")) if release else ()
+    released = ("q", "r_eff") if release is True else tuple(release or ())
+    kinds = tuple(k for k in released if not (split_later and k == "r_eff"))
     beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model, voxel_albedo=sizes == "scheme",
-                                                           release=kinds)
+                                                           release=kinds,
+                                                           weights_kept="weights" in keep or split_later)
     names, components, attrs_classes = SPECIES_NAMES, None, {}
     if size_classes is not None and int(size_classes) > 1 and use_model:
         from .size_classes import split
         names, beta_ext, weights, components = split(hyd, sp, beta_ext, weights, int(size_classes))
         attrs_classes = {"size_classes": int(size_classes)}
-    _release(hyd, [f"r_eff_{s.name}" for s in sp], ("r_eff",) if release else ())
+    _release(hyd, [f"r_eff_{s.name}" for s in sp], ("r_eff",) if "r_eff" in released else ())
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
@@ -486,7 +511,7 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     if "beta_ext" not in keep:
         beta_ext = ReleasedGrid("beta_ext", beta_ext.shape)
     if "weights" not in keep:
-        weights = ReleasedGrid("weights", weights.shape)
+        weights = ReleasedGrid("weights", beta_ext.shape if weights is None else weights.shape)
     return OpticalVolume(names, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
                          Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic,

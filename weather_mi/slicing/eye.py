@@ -347,8 +347,9 @@ class _InScattering:
     """The light scattered towards the eye at a sample (``composite``'s arguments of the same names)."""
 
     def __init__(self, mi, dr, model, tex_eye, phase_colour, diffuse_colour, ambient, sca_ratio, ambient_below, tile,
-                 sun_air=None):
+                 sun_air=None, eye_first: int = 1):
         self.mi, self.dr, self.model, self.tex_eye = mi, dr, model, tex_eye
+        self.eye_first = eye_first  # the eye texture's channel of the first group (1: after beta; 0: groups alone)
         self.phase_colour, self.diffuse_colour, self.ambient = phase_colour, diffuse_colour, ambient
         self.sca_ratio, self.ambient_below, self.tile, self.sun_air = sca_ratio, ambient_below, tile, sun_air
 
@@ -371,7 +372,7 @@ class _InScattering:
         src = mi.Color3f(0.0)
         sca = mi.Float(0.0)
         for gi in range(len(self.phase_colour)):
-            bs = ext * self.sca_ratio if self.sca_ratio is not None else dr.maximum(vals[1 + gi], 0.0)
+            bs = ext * self.sca_ratio if self.sca_ratio is not None else dr.maximum(vals[self.eye_first + gi], 0.0)
             sca += bs
             src += bs * (self.phase_colour[gi] * A + self.diffuse_colour[gi] * B)
         if self.sun_air is not None:  # the sun after the air above p (sun_air.py)
@@ -412,13 +413,14 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
     offset         : None, or each ray's slab offset j in slice units (mi.Float, |j| <= 1/2, see jitter.py):
                      its slabs are [k + j - 1/2, k + j + 1/2] instead of [k - 1/2, k + 1/2], so that the
                      terraces the slab planes leave on lit faces fall at a different depth in every pixel
-    sca_ratio      : None, or beta_sca / beta of the one group where ``tex_eye`` holds beta alone
+    sca_ratio      : None, or beta_sca / beta of the one group where ``tex_eye`` holds no beta_sca
     ambient_below  : None, or mi.Color3f: the light from the ground below, before occlusion ("multiple")
     tile           : None, or (lo, hi): the medium is seen only where x and y's texture coordinates lie in
                      [lo, hi] (a periodic volume's own tile, slicing/periodic.py)
-    tex_ext        : None, or a texture of fewer channels whose first is the extinction of ``tex_eye``'s
-                     first (the light pass's source): every sample reads it, and only samples that scatter
-                     light read ``tex_eye`` (not when ``differentiable``)
+    tex_ext        : None, or a texture whose first channel is the extinction (the light pass's source): every
+                     sample reads it, and only samples that scatter light read ``tex_eye``, which then holds
+                     the groups' beta_sca alone (none with ``sca_ratio``); None (``differentiable``): ``tex_eye``
+                     holds beta first, then the groups'
     sun_air        : None, or a ``sun_air.SunAir``: the sunlight (and the ground's) times the sun's colour
                      after the air above the point (``spec.atmosphere``)
     depth          : return (radiance, transmittance, background, cloud depth) (module docstring above)
@@ -452,7 +454,7 @@ def composite(mi, f: LookupFrame, n_slices: int, rays, tex_eye, grid_box, phase_
     M = EYE_SPLIT
 
     scattering = _InScattering(mi, dr, model, tex_eye, phase_colour, diffuse_colour, ambient, sca_ratio,
-                               ambient_below, tile, sun_air)
+                               ambient_below, tile, sun_air, eye_first=1 if tex_ext is None else 0)
     seen, in_scattered = scattering.seen, scattering
 
     def body(i, part, T, C, active, *dist):

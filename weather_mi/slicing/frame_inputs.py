@@ -106,7 +106,8 @@ class FrameInputs:
 
     beta_s: list           # per species: extinction at scaling 1 (1/m), (z, y, x) flattened, mi.Float (constant data)
     noise: object          # None, or the unit-variance detail noise n, (z, y, x) flattened, mi.Float
-    tex_eye: object        # the eye's texture (z, y, x, 1 or 1 + groups): beta (, beta_sca per group), 1/m
+    tex_eye: object        # the eye's texture (texture_storage.ChannelTextures (z, y, x, C)): beta_sca per group,
+    #                        after beta where differentiated (none: one group whose beta_sca is omega_bar beta), 1/m
     tex_light: object      # the light pass's source (z, y, x, 1 or 2): beta (, beta_f), 1/m
     build: TextureBuild | None  # the frame rebuilds both textures from these; None: they are the last frame's
     sun: SweepPlan         # the sun's light pass (rays, slab path, blur, the store's LookupFrame)
