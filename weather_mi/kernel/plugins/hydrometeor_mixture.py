@@ -51,8 +51,9 @@ albedo at a lane's wavelength (:meth:`HydrometeorMixture.albedo_at`), used by ``
 Properties (Python dict scenes): ``nodes`` (TensorXf, N ascending versines 1 - cos in [0, 2]), ``values``
 (TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S: beta_sca,s per voxel, >= 0; or packed as
 :func:`pack_weights` makes them, z x y x x x P x 4, kept as given; with ``weights_tail``, TensorXf z x y x x,
-the last species' coefficients, the packets hold the first 4 P = S - 1) and ``to_world`` (the bounding box
-as a transform of the unit cube). From XML: ``filename``, an ``.npz`` written by
+the last species' coefficients, the packets hold the first 4 P = S - 1), ``air_weights`` (optional, TensorXf,
+levels x A: the box's air per level of the grid, the coefficients of the last A of the S tables, which the grid
+then leaves out: ``air_levels.parse_weights``) and ``to_world`` (the bounding box as a transform of the unit cube). From XML: ``filename``, an ``.npz`` written by
 :func:`save_npz` with the same arrays plus ``bbox``.
 """
 from __future__ import annotations
@@ -63,6 +64,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..jitarrays import aligned_empty, aligned_float
+from . import air_levels
 from .mixture_tables import (GUIDE_THETA0, alias_table, angle_warp, channel_mean_pdf, common_nodes,  # noqa: F401
                              guide_table, prepare_tables, segment_masses)
 from .variant_class import variant_class
@@ -180,22 +182,25 @@ class HydrometeorMixture:
             weights = props["weights"]  # a TensorXf in dict scenes: kept as it is, not copied
             tail = props["weights_tail"] if "weights_tail" in props else None
             to_world = props["to_world"] if "to_world" in props else mi.ScalarTransform4f()
+        # the box's air per level (``air_weights``, levels x A): the last A of the S tables, not in the grid
+        self.air_weights = air_levels.parse_weights(props, int(values.shape[0]), weights.shape[0], PLUGIN_NAME)
+        n_grid = int(values.shape[0]) - (0 if self.air_weights is None else self.air_weights.shape[1])
         if values.ndim != 3 or values.shape[1] != nodes.size or values.shape[2] != 3:
             raise ValueError(f"{PLUGIN_NAME}: 'values' must be S x N x 3 with N = len(nodes) = {nodes.size}; "
                              f"got {values.shape}")
-        packets = max(1, -(-int(values.shape[0]) // 4))
+        packets = max(1, -(-n_grid // 4))
         if tail is not None:
-            packets = (int(values.shape[0]) - 1) // 4
-            if int(values.shape[0]) % 4 != 1 or packets < 1 or tuple(weights.shape[3:]) != (packets, 4) or \
+            packets = (n_grid - 1) // 4
+            if n_grid % 4 != 1 or packets < 1 or tuple(weights.shape[3:]) != (packets, 4) or \
                     tuple(tail.shape) != tuple(weights.shape[:3]):
                 raise ValueError(f"{PLUGIN_NAME}: with 'weights_tail' (z x y x x), S = 4 P + 1 and 'weights' packed "
-                                 f"z x y x x x P x 4; got S = {values.shape[0]}, {tuple(weights.shape)} and "
+                                 f"z x y x x x P x 4; got S = {n_grid}, {tuple(weights.shape)} and "
                                  f"{tuple(tail.shape)}")
-        elif not (len(weights.shape) == 4 and weights.shape[3] == values.shape[0]) and \
+        elif not (len(weights.shape) == 4 and weights.shape[3] == n_grid) and \
                 tuple(weights.shape[3:]) != (packets, 4):
-            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {values.shape[0]}, or packed "
+            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {n_grid}, or packed "
                              f"z x y x x x {packets} x 4 (pack_weights); got {tuple(weights.shape)}")
-        self.n_species, self.n_nodes = int(values.shape[0]), int(nodes.size)
+        self.n_species, self.n_grid, self.n_nodes = int(values.shape[0]), n_grid, int(nodes.size)
         self.periodic = bool(props.get("periodic", False))  # x and y wrap (a periodic medium); else clamped
         inverse = np.linalg.inv(np.array(to_world.matrix, dtype=np.float64).reshape(4, 4))
         self.to_local = mi.Transform4f(mi.ScalarTransform4f(inverse.astype(np.float32).tolist()))
@@ -242,6 +247,7 @@ class HydrometeorMixture:
             pack_weights(weights, out=flat)
             self.weights4 = mi.Float(flat)
         self.weights = None
+        self.air_w = None if self.air_weights is None else _storage(self.air_weights)
 
     def _set_spectral_tables(self, props, n_nodes: int):
         """Spectral variants with ``spectral_values`` (S x N x K on the mixture's nodes) and ``spectral_nm`` (K uniform
@@ -352,7 +358,11 @@ class HydrometeorMixture:
             w += [dr.maximum(v[c], 0.0) for c in range(4)]
         if self.tail is not None:
             w.append(dr.maximum(trilinear(lambda z, y, x: _gather(self.tail, mi.UInt32((z * ny + y) * nx + x))), 0.0))
-        w = w[: self.n_species]
+        w = w[: self.n_grid]
+        if self.air_weights is not None:  # constant in x and y: the trilinear lookup is the levels' lerp in z
+            n_a = self.air_weights.shape[1]
+            w += [lerp(_gather(self.air_w, mi.UInt32(z0 * n_a + a)), _gather(self.air_w, mi.UInt32(z1 * n_a + a)), fz)
+                  for a in range(n_a)]
         total = w[0]
         for wi in w[1:]:
             total = total + wi
@@ -475,15 +485,15 @@ class HydrometeorMixture:
     def traverse(self, cb):
         if self.weights is None:  # the parameter as given (negative values as 0), from the packed copy
             tail = None if self.tail is None else np.asarray(self.tail, np.float32)
-            self.weights = mi.TensorXf(unpack_weights(self.weights4, self.grid_shape, self.n_species, tail))
+            self.weights = mi.TensorXf(unpack_weights(self.weights4, self.grid_shape, self.n_grid, tail))
         cb.put("weights", self.weights, mi.ParamFlags.NonDifferentiable)
 
     def parameters_changed(self, keys=None):
         if keys and "weights" not in keys:
             return
         w = np.array(self.weights, np.float32).reshape(tuple(self.weights.shape))
-        if w.ndim != 4 or w.shape[3] != self.n_species:
-            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {self.n_species}; "
+        if w.ndim != 4 or w.shape[3] != self.n_grid:
+            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {self.n_grid}; "
                              f"got {w.shape}")
         self._set_weights(w)  # repacked
 

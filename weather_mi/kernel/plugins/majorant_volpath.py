@@ -124,7 +124,8 @@ class MajorantVolpath:
        - Probability of a multiple-vertex NEE chain (:mod:`.mvnee`; exclusive as the aureole) and its length.
      * - air_extinction
        - |tensor|
-       - (levels, 3) the air's extinction per level of the sigma_t grid (1/m), which that grid holds added
+       - (levels, 3) the air's extinction per level of the sigma_t grid (1/m), which a 3-channel grid holds added
+         and which is added to a grey (1-channel) one (its albedo grid then the mixture's: ``MediumSetup.add_air``)
          (:mod:`.air_levels`): its cells are crossed as empty space, with the air's majorant.
      * - periodic, periodic_tiles
        - |string|, |int|
@@ -211,8 +212,13 @@ class MajorantVolpath:
             key = (data.array.index, ms.scale, self.cell)
             if key != self._auto_key:
                 grid = np.asarray(data)  # in place (llvm): a copy only where scaled
-                self.majorant = mi.TensorXf(majorant_grid(grid if ms.scale == 1.0 else grid * ms.scale, self.cell))
+                maj = majorant_grid(grid if ms.scale == 1.0 else grid * ms.scale, self.cell)
+                if self.air_levels is not None:  # a bound of the hydrometeors' and the air's sum either way
+                    maj = air_levels.with_coarse_air(maj, self.air_levels, self.cell)
+                self.majorant = mi.TensorXf(maj)
                 self._auto_key = key
+        if self.air_levels is not None and vol is not None and int(volume_data(vol).shape[-1]) == 1:
+            ms.add_air(air_levels.AirLevels(self.air_levels), to_local, int(vol.resolution()[2]))  # a grey grid: added
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"
         texel, texel_data = self._grids.texel(vol, ms.scale, self.reach if periodic else None, self.air_levels)
