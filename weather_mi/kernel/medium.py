@@ -93,6 +93,20 @@ def air_weights(air) -> np.ndarray:
     return np.ascontiguousarray(air.scattering_levels.mean(axis=-1).T)
 
 
+def integrator_air_albedo(vol: OpticalVolume, air) -> dict:
+    """``majorant_volpath``'s ``air_albedo`` (the hydrometeors' albedo grid, (z, y, x, C), the volume's own array,
+    used in place; levels padded where periodic) and ``air_scattering`` (the air's scattering per level and
+    channel, molecules and aerosol summed, 1/m) (``kernel.plugins.air_albedo``)."""
+    import mitsuba as mi
+    albedo = np.asarray(vol.albedo)
+    albedo = albedo if albedo.ndim == 4 else albedo[..., None]
+    sca = air.scattering_levels.sum(axis=0)
+    if vol.periodic:
+        albedo, sca = pad_levels(albedo), pad_levels(sca)
+    return {"air_albedo": mi.TensorXf(np.ascontiguousarray(albedo, np.float32)),
+            "air_scattering": mi.TensorXf(np.ascontiguousarray(sca, np.float32))}
+
+
 def air_by_integrator(integrator: dict) -> bool:
     """Whether the integrator of this dict adds the box's air per level itself (``majorant_volpath``: the medium's
     grids then hold the hydrometeors' extinction and coefficients alone); stock ``volpath`` needs it in them."""
@@ -217,28 +231,30 @@ def medium_dict(vol: OpticalVolume, air_in_grid: bool = True) -> dict:
     the volume's bounding box (grids indexed [z, y, x, channel], last axis world x). A periodic volume's
     grids wrap in x and y (``wrap_mode`` repeat; their levels padded: ``optics.periodic``).
 
-    With the air in the box (``air_in_medium``) the albedo grid is the mixture's of the hydrometeors and the air
-    (``optics.air.inside.medium_grids``); its extinction and Eq. 8 coefficients are in the sigma_t grid (RGB)
-    and the phase's weights grid where ``air_in_grid`` (for stock ``volpath``), otherwise one value per level
-    that ``majorant_volpath`` adds (``air_extinction``, ``air_weights``; :func:`air_by_integrator`): the sigma_t
-    grid stays the hydrometeors' grey one, used in place, and the weights their 20 bytes per cell."""
+    With the air in the box (``air_in_medium``) and ``air_in_grid`` (for stock ``volpath``) the sigma_t grid (RGB),
+    the albedo grid and the phase's weights grid are the mixture's of the hydrometeors and the air
+    (``optics.air.inside.medium_grids``); otherwise the air is one value per level that ``majorant_volpath``
+    adds (``air_extinction``, ``air_weights``; :func:`air_by_integrator`): the sigma_t grid stays the
+    hydrometeors' grey one, used in place, the weights their 20 bytes per cell, and the medium holds no albedo
+    grid (a constant 1, unread): the integrator reads the hydrometeors' in place and mixes in the air's
+    (:func:`integrator_air_albedo`)."""
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     to_world = bbox_transform(grid_bbox(vol))
     beta, albedo = vol.beta_total[..., None], vol.albedo
     air = air_in_medium(vol)
-    if air is not None:  # RGB extinction (molecules ~ lambda^-4) and albedo of the hydrometeors and the air
+    if air is not None and air_in_grid:  # RGB extinction (molecules ~ lambda^-4) and albedo of the cloud and the air
         from ..optics.air.inside import medium_grids
-        want = ("sigma_t", "albedo") if air_in_grid else ("albedo",)
-        sigma_t, albedo, _ = medium_grids(vol.beta_total, vol.albedo, vol.weights, air, want=want)
-        beta = beta if sigma_t is None else sigma_t
-    if mi.is_spectral:  # the 550 nm albedo, made spectral by the phase function (``spectral_phase_properties``)
+        beta, albedo, _ = medium_grids(vol.beta_total, vol.albedo, vol.weights, air, want=("sigma_t", "albedo"))
+    if air is not None and not air_in_grid:  # majorant_volpath's: the albedo its (``integrator_air_albedo``)
+        albedo = None
+    elif mi.is_spectral:  # the 550 nm albedo, made spectral by the phase function (``spectral_phase_properties``)
         albedo = np.ascontiguousarray(albedo[..., 1:2])
     else:
         albedo = grey_or_rgb(albedo)
     wrap = {}
     if vol.periodic:
-        beta, albedo, wrap = pad_levels(beta), pad_levels(albedo), {"wrap_mode": "repeat"}
+        beta, albedo, wrap = pad_levels(beta), None if albedo is None else pad_levels(albedo), {"wrap_mode": "repeat"}
     # accel False: on CUDA the grids' hardware texture units interpolate with 8-bit weights, while
     # majorant_volpath's trackers interpolate the same texels in float32 (weather_mi/kernel/plugins/dda.py): one medium for
     # both only in software. LLVM has no texture units: no effect there.
@@ -246,8 +262,8 @@ def medium_dict(vol: OpticalVolume, air_in_grid: bool = True) -> dict:
         "type": "heterogeneous",
         "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(beta),
                     "to_world": to_world, "filter_type": "trilinear", "accel": False, **wrap},
-        "albedo": {"type": "gridvolume", "data": mi.TensorXf(albedo), "to_world": to_world,
-                   "filter_type": "trilinear", "accel": False, **wrap},
+        "albedo": 1.0 if albedo is None else {"type": "gridvolume", "data": mi.TensorXf(albedo), "to_world": to_world,
+                                              "filter_type": "trilinear", "accel": False, **wrap},
         "scale": 1.0,
         "has_spectral_extinction": air is not None and air_in_grid,
         "phase": phase_dict(vol, air_in_grid),

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .medium import air_by_integrator, air_in_medium, grid_bbox, medium_dict
+from .medium import air_by_integrator, air_in_medium, grid_bbox, integrator_air_albedo, medium_dict
 from ..optics.periodic import PATH_TILES, extended_box, pad_levels, require_flat_ground
 from ..optics.volume import OpticalVolume
 from ..scene.spec import Camera, SceneSpec, Sky, Sun
@@ -441,8 +441,8 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
              "majorant": mi.TensorXf(majorant), "to_world": bbox_transform(grid_bbox(vol))}
         if vol.periodic:
             d.update({"periodic": "transport" if vol.periodic == "transport" else "view", "periodic_tiles": PATH_TILES})
-        if levels is not None:
-            d["air_extinction"] = mi.TensorXf(levels)
+        if levels is not None:  # and its albedo with the hydrometeors' (where the medium leaves the air to it)
+            d.update({"air_extinction": mi.TensorXf(levels), **integrator_air_albedo(vol, air)})
         if sun is not None:
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
         if atmosphere is not None:

@@ -64,7 +64,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..jitarrays import aligned_empty, aligned_float
-from . import air_levels
+from . import air_levels, grid_lookup
 from .mixture_tables import (GUIDE_THETA0, alias_table, angle_warp, channel_mean_pdf, common_nodes,  # noqa: F401
                              guide_table, prepare_tables, segment_masses)
 from .variant_class import variant_class
@@ -326,31 +326,14 @@ class HydrometeorMixture:
             return [mi.Float(1.0)]  # renormalised weights of one species are 1: no lookup
         p = self.to_local @ mei.p
         nz, ny, nx = self.grid_shape
-        corner, frac = [], []
-        for axis, (coord, n) in enumerate(((p.z, nz), (p.y, ny), (p.x, nx))):
-            u = coord * n - 0.5
-            u0 = dr.floor(u)
-            i0 = mi.Int32(u0)
-            if self.periodic and axis > 0:  # indices modulo n (as the grid volumes' wrap_mode "repeat")
-                i0 = i0 % n
-                i0 = dr.select(i0 < 0, i0 + n, i0)
-                corner.append((i0, dr.select(i0 + 1 == n, 0, i0 + 1)))
-            else:
-                corner.append((dr.clip(i0, 0, n - 1), dr.clip(i0 + 1, 0, n - 1)))
-            frac.append(u - u0)
-        (z0, z1), (y0, y1), (x0, x1) = corner
-        fz, fy, fx = frac
+        corner, frac = grid_lookup.corners(p, self.grid_shape, self.periodic)
+        z0, z1 = corner[0]
+        fz = frac[0]
         npk = self.n_packets
-
-        def lerp(a, b, t):
-            return dr.fma(b - a, t, a)
+        lerp = grid_lookup.lerp
 
         def trilinear(texel):  # the same operations on a packet of 4 and on one value (the tail)
-            c00 = lerp(texel(z0, y0, x0), texel(z0, y0, x1), fx)
-            c01 = lerp(texel(z0, y1, x0), texel(z0, y1, x1), fx)
-            c10 = lerp(texel(z1, y0, x0), texel(z1, y0, x1), fx)
-            c11 = lerp(texel(z1, y1, x0), texel(z1, y1, x1), fx)
-            return lerp(lerp(c00, c01, fy), lerp(c10, c11, fy), fz)
+            return grid_lookup.trilinear(texel, corner, frac)
 
         w = []
         for k in range(npk):

@@ -66,7 +66,7 @@ class MediumSetup:
         self.volume = None
         self.scale = 1.0
         self.spectral = self.spectral_albedo = False
-        self.air = self.albedo_volume = None
+        self.air = self.air_albedo = None
         if self.medium is None:
             return
         self.spectral = bool(self.medium.has_spectral_extinction())
@@ -77,17 +77,17 @@ class MediumSetup:
             self.volume = ch["sigma_t"][0]
             value, cpptype = ch["scale"]
             self.scale = float(mi.get_property(value, cpptype, self.medium)) if cpptype is not None else float(value)
-        if "albedo" in ch and isinstance(ch["albedo"][0], mi.Volume):
-            self.albedo_volume = ch["albedo"][0]
 
-    def add_air(self, levels, to_local, n_levels: int) -> None:
-        """The box's air per level (``air_levels.AirLevels``) added to the grey sigma_t grid (``n_levels`` levels,
-        the unit cube by ``to_local``): sigma_t = the grid's + the air's at the point's height, per channel (the
-        extinction is then spectral), the albedo grid the mixture's (``optics.air.inside.medium_grids``)."""
-        if self.volume is None or self.albedo_volume is None or self.scale != 1.0:
+    def add_air(self, levels, albedo, to_local, periodic: bool) -> None:
+        """The box's air per level (``air_levels.AirLevels``) added to the grey sigma_t grid (the unit cube by
+        ``to_local``): sigma_t = the grid's + the air's at the point's height, per channel (the extinction is then
+        spectral); the albedo the mixture's (``air_albedo.MixtureAlbedo``) on the same grid."""
+        rx, ry, rz = (int(v) for v in self.volume.resolution()) if self.volume is not None else (0, 0, 0)
+        if self.volume is None or albedo is None or self.scale != 1.0 or tuple(albedo.shape) != (rz, ry, rx):
             raise RuntimeError(f"{PLUGIN_NAME}: the air added per level ('air_extinction' with a grey sigma_t grid) "
-                               f"needs a heterogeneous medium with sigma_t and albedo grids and scale 1")
-        self.air, self.air_to_local, self.air_levels = levels, to_local, int(n_levels)
+                               "needs a heterogeneous medium with a sigma_t grid, scale 1, and 'air_albedo' on its grid")
+        self.air, self.air_albedo, self.air_to_local, self.air_levels = levels, albedo, to_local, rz
+        self.air_periodic, self.beta = bool(periodic), volume_data(self.volume).array
         self.spectral = True
 
     def air_at(self, p, active):
@@ -178,7 +178,8 @@ def scattering_event(ms, ray, t, active):
     mei = medium_interaction(ms, ray, ray.o + ray.d * t, t, active)
     if ms.air is not None:  # sigma_t with the air per level (:func:`sigma_t_at`); the albedo grid the mixture's
         sigma_t = sigma_t_at(ms, mei.p, ray, active)
-        albedo = dr.select(sigma_t > 0.0, mi.Color3f(ms.albedo_volume.eval(_interaction(mei.p, ray), active)), 0.0)
+        albedo = ms.air_albedo.at(ms.air_to_local @ mei.p, ms.beta, ms.air_periodic, active)
+        albedo = dr.select(sigma_t > 0.0, albedo, 0.0)
         mei.sigma_s, mei.sigma_t = albedo * sigma_t, sigma_t
         return mei, albedo
     sigma_s, _, sigma_t = ms.medium.get_scattering_coefficients(mei, active)
