@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .medium import air_in_medium, grid_bbox, medium_dict, medium_extinction
+from .medium import air_by_integrator, air_in_medium, grid_bbox, integrator_air_albedo, medium_dict
 from ..optics.periodic import PATH_TILES, extended_box, pad_levels, require_flat_ground
 from ..optics.volume import OpticalVolume
 from ..scene.spec import Camera, SceneSpec, Sky, Sun
@@ -294,12 +294,12 @@ def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.nda
     return lo, hi
 
 
-def medium_shape_dict(vol: OpticalVolume, floor_m: float | None = None) -> dict:
+def medium_shape_dict(vol: OpticalVolume, floor_m: float | None = None, air_in_grid: bool = True) -> dict:
     """The medium's box (:func:`medium_box`) as a ``cube`` with a null BSDF holding the medium."""
     import mitsuba as mi
     lo, hi = medium_box(vol, floor_m)
     to_world = mi.ScalarTransform4f().translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist())
-    return {"type": "cube", "to_world": to_world, "bsdf": {"type": "null"}, "interior": medium_dict(vol)}
+    return {"type": "cube", "to_world": to_world, "bsdf": {"type": "null"}, "interior": medium_dict(vol, air_in_grid)}
 
 
 def integrator_sun(sun: Sun, guiding: float = 0.0, aureole: float = 0.0, mvnee: float = 0.0) -> dict:
@@ -426,17 +426,21 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
         from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid
         ensure_registered()
         cell = DEFAULT_CELL if cell is None else cell
-        beta = medium_extinction(vol)
-        beta = pad_levels(beta) if vol.periodic else beta  # the medium's grids (medium.py)
-        d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
-             "majorant": mi.TensorXf(majorant_grid(beta, cell=int(cell))),
-             "to_world": bbox_transform(grid_bbox(vol))}
-        if vol.periodic:
-            d.update({"periodic": "transport" if vol.periodic == "transport" else "view", "periodic_tiles": PATH_TILES})
+        from .plugins.air_levels import with_coarse_air
+        beta = pad_levels(vol.beta_total) if vol.periodic else vol.beta_total  # the medium's grids (medium.py)
+        majorant = majorant_grid(beta, cell=int(cell))
         air = air_in_medium(vol)
+        levels = None
         if air is not None:  # the air's levels, which the trackers cross as empty space (plugins/air_levels.py)
             levels = air.extinction_levels
-            d["air_extinction"] = mi.TensorXf(np.ascontiguousarray(pad_levels(levels) if vol.periodic else levels))
+            levels = np.ascontiguousarray(pad_levels(levels) if vol.periodic else levels)
+            majorant = with_coarse_air(majorant, levels, int(cell))  # a bound of the hydrometeors' and the air's sum
+        d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
+             "majorant": mi.TensorXf(majorant), "to_world": bbox_transform(grid_bbox(vol))}
+        if vol.periodic:
+            d.update({"periodic": "transport" if vol.periodic == "transport" else "view", "periodic_tiles": PATH_TILES})
+        if levels is not None:  # and its albedo with the hydrometeors' (where the medium leaves the air to it)
+            d.update({"air_extinction": mi.TensorXf(levels), **integrator_air_albedo(vol, air)})
         if sun is not None:
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
         if atmosphere is not None:
@@ -465,7 +469,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
     require_flat_ground(vol, vol.periodic)
     terrain = getattr(vol, "terrain", None) if spec.ground is not None else None
     floor = None if spec.ground is None else spec.ground.height  # over a terrain medium_box uses the terrain
-    box = medium_shape_dict(vol, floor)
+    box = medium_shape_dict(vol, floor, not air_by_integrator(integrator))
     sensor = sensor_dict(spec)
     d = {"type": "scene", "integrator": integrator, "sensor": sensor, "medium_box": box}
     if "sun_direction" not in integrator:

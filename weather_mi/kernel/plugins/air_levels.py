@@ -111,3 +111,46 @@ class AirLevels:
         length = mi.Float64(t1) - mi.Float64(t0)
         inv = dr.select(flat, 0.0, length / dr.select(flat, 1.0, dq))
         return mi.Color3f(*(dr.select(flat, mid[c] * (t1 - t0), mi.Float((cb[c] - ca[c]) * inv)) for c in range(3)))
+
+
+WEIGHTS_PROPERTY = "air_weights"
+
+
+def parse_weights(props, n_tables: int, n_levels: int, plugin: str):
+    """``hydrometeor_mixture``'s ``air_weights`` (n_levels, A): the Eq. 8 scattering coefficients (1/m, channel mean)
+    of the box's air per level of the weights grid, the components of its last A tables, as float32 numpy; None
+    without it. Constant in x and y, their trilinear lookup is the levels' linear interpolation in z, the same
+    floats as of a grid that held them in every voxel (a lerp between equal values is exact)."""
+    if WEIGHTS_PROPERTY not in props:
+        return None
+    a = np.asarray(props[WEIGHTS_PROPERTY], np.float32)
+    if a.ndim != 2 or a.shape[0] != int(n_levels) or not 1 <= a.shape[1] < int(n_tables) or \
+            not np.all(np.isfinite(a)) or a.min() < 0.0:
+        raise ValueError(f"{plugin}: '{WEIGHTS_PROPERTY}' must be a finite, non-negative (levels, A) tensor with the "
+                         f"weights grid's {n_levels} levels and A below the {n_tables} tables; got shape {a.shape}")
+    return np.ascontiguousarray(a)
+
+
+def with_coarse_air(majorant: np.ndarray, air: np.ndarray, cell: int, safety: float = SAFETY) -> np.ndarray:
+    """``majorant`` ((Z, Y, X), ``majorants.majorant_grid``'s of the hydrometeors' sigma_t, 1/m) plus the air's bound in
+    each coarse cell: ``safety`` x the largest air extinction (over channels) of the levels whose texels enter the
+    cell ([K cell - 1, (K + 1) cell], clipped), in place: a majorant of the hydrometeors' and the air's sum."""
+    e = np.asarray(air, np.float32).reshape(air.shape[0], -1).max(axis=1)
+    n = e.shape[0]
+    for k in range(majorant.shape[0]):
+        lo, hi = max(0, k * cell - 1), min(n, (k + 1) * cell + 1)
+        majorant[k] += np.float32(safety) * e[lo:hi].max()
+    return majorant
+
+
+def with_texel_air(majorant: np.ndarray, air: np.ndarray, safety: float = SAFETY) -> np.ndarray:
+    """``majorant`` ((nz + 1, ...), ``majorants.texel_majorant_grid``'s of the hydrometeors' sigma_t alone) with the
+    air: its cells with a cloud texel (> 0) plus ``safety`` x the air's largest extinction on the cell's two levels
+    (a bound of the sum); the others 0 (the air's alone: the trackers cross them with the air's own majorant),
+    in place, a level at a time."""
+    a = np.asarray(air, np.float32).reshape(air.shape[0], -1).max(axis=1)
+    n = a.shape[0]
+    for i, level in enumerate(majorant):  # texel cell i - 1: between levels i - 1 and i (clamped)
+        e = np.float32(safety) * max(a[min(max(i - 1, 0), n - 1)], a[min(i, n - 1)])
+        np.add(level, e, out=level, where=level > 0.0)
+    return majorant
