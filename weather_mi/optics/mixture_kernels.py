@@ -4,10 +4,12 @@ same order as the numpy expressions they replace (``optics.volume``'s images sta
 those expressions in tests/test_optics.py).
 
 The pass reads each voxel's air density, mixing ratios and radii once and writes only what is kept: numpy took
-about 50 passes over 4-byte grids for these, and on this machine most of the time of a large domain went to the
-first touch of the fresh pages of its temporaries. The per-species grids and the total start as zeros (pages
-the operating system maps on first write) and a voxel without mass writes nothing to them: the empty part of a
-storm domain (most of it) is never touched there.
+about 50 passes over 4-byte grids for these, and on this machine much of the time of a large domain went to the
+first touch of the fresh pages of its temporaries. The per-species grids and the total start as zeros (pages the
+operating system maps on first write) and a chunk of voxels without mass writes nothing to them: the empty part
+of a storm domain is never touched there. The pass is serial: as a numba ``prange`` its loops over voxels did
+not vectorise (3 times the CPU time of the serial loops, measured at 400 x 400 x 51), which two shared cores
+do not win back.
 """
 from __future__ import annotations
 
@@ -17,18 +19,7 @@ import numpy as np
 from numba import njit, prange
 
 GRID, SCALAR = 1, 0  # Eq. 4's radius: the voxel's own (a grid, the species' where <= 0) or the species' one
-
-
-@njit(inline="always")
-def _eq4(rho_v, q, r, s, v, mode, c3, denom, d2, rdef):  # pragma: no cover - compiled
-    """Eq. 4 of species s at voxel v as ``Species.beta_ext_per_m(rho, q, r, out=...)`` computes it in float32:
-    (rho (3 scale)) q, divided by 2 rho_p R (R the voxel's radius where > 0, else the species'; with ``mode``
-    SCALAR, ``denom``: the species' 2 rho_p R)."""
-    b = (rho_v * c3[s]) * q[s][v]
-    if mode[s] == GRID:
-        rr = r[s][v]
-        return b / ((rr if rr > 0 else rdef[s]) * d2[s])
-    return b / denom[s]
+CHUNK = 2048  # voxels a task of the parallel pass takes at a time (its per-species scratch: 8 kB a species)
 
 
 @njit(inline="always")
@@ -37,57 +28,100 @@ def _not_plus_zero(x):  # pragma: no cover - compiled
     return x != 0 or math.copysign(1.0, x) < 0
 
 
-@njit(parallel=True, cache=True)
+@njit(inline="always")
+def _eq4(rho, q, r, mode, c3, denom, d2, rdef, lo, m, out):  # pragma: no cover - compiled
+    """out[:m] = Eq. 4 of one species on voxels lo..lo+m, as ``Species.beta_ext_per_m(rho, q, r, out=...)``
+    computes it in float32: (rho (3 scale)) q, divided by 2 rho_p R (R the voxel's radius where > 0, else the
+    species' ``rdef``, times ``d2`` = 2 rho_p; with ``mode`` SCALAR, by ``denom``: the species' 2 rho_p R)."""
+    if mode == GRID:
+        for j in range(m):
+            rr = r[lo + j]
+            out[j] = ((rho[lo + j] * c3) * q[lo + j]) / ((rr if rr > 0 else rdef) * d2)
+    else:
+        for j in range(m):
+            out[j] = ((rho[lo + j] * c3) * q[lo + j]) / denom
+
+
+@njit(inline="always")
+def _add_albedo_of_radius(b, r, lo, m, radius_scale, wavelengths, k_abs, n_term, albedo64,
+                          acc):  # pragma: no cover - compiled
+    """acc[c, j] += (omega_c(r) - omega_c) b where b > 0 and the voxel's radius r = r[lo + j] > 0: the
+    weak-absorption albedo of the radius (``species.albedo_of_radius``: x = 2 pi r' / lambda, Q_abs =
+    min(8/3 x k n_term, 1), omega = 1 - Q_abs / 2, r' = r radius_scale), in float64, added in float32."""
+    two_pi, eight_thirds = 2.0 * np.pi, 8.0 / 3.0
+    for c in range(3):
+        a, wl, k, nt, alb = acc[c], wavelengths[c], k_abs[c], n_term[c], albedo64[c]
+        for j in range(m):
+            x = two_pi * (np.float64(r[lo + j]) * radius_scale) / wl
+            q_abs = min(eight_thirds * x * k * nt, 1.0)
+            term = np.float32(((1.0 - q_abs / 2.0) - alb) * np.float64(b[j]))
+            a[j] = a[j] + term if b[j] > 0 and r[lo + j] > 0 else a[j]
+
+
+@njit(cache=True)
 def voxel_optics(rho, q, r, mode, c3, denom, d2, rdef, rgb, mean_albedo, by_radius, radius_scale, wavelengths,
                  k_abs, n_term, albedo64, beta_ext, keep_beta, weights, keep_weights, beta_total,
                  albedo_sum):  # pragma: no cover - compiled
-    """Per voxel v of the flat grids: beta_s (Eq. 4, as ``_eq4``) of each species s; beta_total = sum_s beta_s
-    (Eq. 6, in species order); albedo_sum (N, 3) = sum_s beta_s omega_s (Eq. 5's numerator; written only where
-    beta_total > 0) plus, for each species with ``by_radius``, (omega_c(r) - omega_s,c) beta_s where beta_s > 0
-    and its radius r > 0 (the weak-absorption albedo of the voxel's radius, ``species.albedo_of_radius``: x = 2 pi
-    r' / lambda, Q_abs = min(8/3 x k n_term, 1), omega = 1 - Q_abs / 2, r' = r radius_scale; in float64, added in
-    float32 after the sum); weights (S, N) = beta_s w_s / sum_s beta_s w_s (Eq. 8, w_s the channel-mean albedo;
-    0 where nothing scatters); beta_ext (S, N) = beta_s when ``keep_beta``.
+    """Per voxel v of the flat grids: beta_s (Eq. 4, ``_eq4``) of each species s; beta_total = sum_s beta_s
+    (Eq. 6, in species order); albedo_sum (N, 3) = sum_s beta_s omega_s (Eq. 5's numerator) plus, for each
+    species with ``by_radius`` (in species order, after the sum), the difference the albedo of the voxel's
+    radius makes (``_add_albedo_of_radius``); weights (S, N) = beta_s w_s / sum_s beta_s w_s (Eq. 8, w_s the
+    channel-mean albedo; 0 where nothing scatters); beta_ext (S, N) = beta_s when ``keep_beta``.
 
-    q, r: tuples of S flat float32 grids (r a 1-element placeholder where ``mode`` is SCALAR); beta_ext, weights
-    and beta_total zeroed by the caller (what is +0.0 is not written); ``n_term``: n^3 - (n^2 - 1)^1.5."""
+    In chunks of CHUNK voxels, species by species (the loops over voxels vectorise). q, r: tuples of S flat
+    float32 grids (r a 1-element placeholder where ``mode`` is SCALAR); beta_ext, weights and beta_total zeroed
+    by the caller: a chunk whose values are all +0.0 there is not written (its pages stay untouched);
+    ``n_term``: n^3 - (n^2 - 1)^1.5."""
     n_s = len(q)
     n = rho.shape[0]
-    two_pi, eight_thirds = 2.0 * np.pi, 8.0 / 3.0
-    for v in prange(n):
-        rho_v = rho[v]
-        total = np.float32(0.0)
-        sca = np.float32(0.0)
+    b = np.empty((n_s, CHUNK), np.float32)
+    total = np.empty(CHUNK, np.float32)
+    sca = np.empty(CHUNK, np.float32)
+    acc = np.empty((3, CHUNK), np.float32)
+    has = np.zeros(n_s, np.bool_)  # species s has a value other than +0.0 in the chunk
+    for chunk in range((n + CHUNK - 1) // CHUNK):
+        lo = chunk * CHUNK
+        m = min(CHUNK, n - lo)
         for s in range(n_s):
-            b = _eq4(rho_v, q, r, s, v, mode, c3, denom, d2, rdef)
-            if keep_beta and _not_plus_zero(b):
-                beta_ext[s, v] = b
-            w = b * mean_albedo[s]
-            total = b if s == 0 else total + b
-            sca = w if s == 0 else sca + w
-        if _not_plus_zero(total):
-            beta_total[v] = total
-        if not total > 0:
-            continue  # no extinction: weights 0 (as zeroed), the albedo the volume's fill (``finish_albedo``)
+            bs = b[s]
+            _eq4(rho, q[s], r[s], mode[s], c3[s], denom[s], d2[s], rdef[s], lo, m, bs)
+            ma = mean_albedo[s]
+            if s == 0:
+                for j in range(m):
+                    total[j] = bs[j]
+                    sca[j] = bs[j] * ma
+            else:
+                for j in range(m):
+                    total[j] = total[j] + bs[j]
+                    sca[j] = sca[j] + bs[j] * ma
+            for c in range(3):
+                a, col = acc[c], rgb[s, c]
+                if s == 0:
+                    for j in range(m):
+                        a[j] = bs[j] * col
+                else:
+                    for j in range(m):
+                        a[j] = a[j] + bs[j] * col
+            nz = False
+            for j in range(m):
+                nz = nz | _not_plus_zero(bs[j])
+            has[s] = nz
+            if keep_beta and nz:
+                beta_ext[s, lo:lo + m] = bs[:m]
+        if not has.any():
+            continue  # total, weights 0 (as zeroed); the albedo the volume's fill (``finish_albedo``)
+        beta_total[lo:lo + m] = total[:m]
+        for s in range(n_s):
+            bs = b[s]
+            if keep_weights and has[s]:
+                ma = mean_albedo[s]
+                for j in range(m):
+                    weights[s, lo + j] = (bs[j] * ma) / sca[j] if sca[j] > 0 else np.float32(0.0)
+            if by_radius[s] and has[s]:
+                _add_albedo_of_radius(bs, r[s], lo, m, radius_scale[s], wavelengths, k_abs[s], n_term[s],
+                                      albedo64[s], acc)
         for c in range(3):
-            acc = np.float32(0.0)
-            for s in range(n_s):
-                b = _eq4(rho_v, q, r, s, v, mode, c3, denom, d2, rdef)
-                acc = b * rgb[s, c] if s == 0 else acc + b * rgb[s, c]
-            albedo_sum[v, c] = acc
-        for s in range(n_s):
-            b = _eq4(rho_v, q, r, s, v, mode, c3, denom, d2, rdef)
-            if keep_weights:
-                w = (b * mean_albedo[s]) / sca if sca > 0 else np.float32(0.0)
-                if _not_plus_zero(w):
-                    weights[s, v] = w
-            if by_radius[s] and b > 0 and r[s][v] > 0:
-                rad = np.float64(r[s][v]) * radius_scale[s]
-                b64 = np.float64(b)
-                for c in range(3):
-                    x = two_pi * rad / wavelengths[c]
-                    q_abs = min(eight_thirds * x * k_abs[s, c] * n_term[s, c], 1.0)
-                    albedo_sum[v, c] = albedo_sum[v, c] + np.float32(((1.0 - q_abs / 2.0) - albedo64[s, c]) * b64)
+            albedo_sum[lo:lo + m, c] = acc[c, :m]
 
 
 @njit(cache=True)
