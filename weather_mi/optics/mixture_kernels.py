@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit, prange
 
 GRID, SCALAR = 1, 0  # Eq. 4's radius: the voxel's own (a grid, the species' where <= 0) or the species' one
-CHUNK = 2048  # voxels a task of the parallel pass takes at a time (its per-species scratch: 8 kB a species)
+CHUNK = 2048  # voxels the pass takes at a time (its scratch: 8 kB a species, 12 kB of albedo sums)
 
 
 @njit(inline="always")
