@@ -16,19 +16,19 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 GRID, SCALAR = 1, 0  # Eq. 4's radius: the voxel's own (a grid, the species' where <= 0) or the species' one
 CHUNK = 2048  # voxels the pass takes at a time (its scratch: 8 kB a species, 12 kB of albedo sums)
 
 
-@njit(inline="always")
+@njit(cache=True)
 def _not_plus_zero(x):  # pragma: no cover - compiled
     """Whether float32 ``x`` differs from +0.0 in its bits (a -0.0 is written into a zeroed grid, a +0.0 not)."""
     return x != 0 or math.copysign(1.0, x) < 0
 
 
-@njit(inline="always")
+@njit(cache=True)
 def _eq4(rho, q, r, mode, c3, denom, d2, rdef, lo, m, out):  # pragma: no cover - compiled
     """out[:m] = Eq. 4 of one species on voxels lo..lo+m, as ``Species.beta_ext_per_m(rho, q, r, out=...)``
     computes it in float32: (rho (3 scale)) q, divided by 2 rho_p R (R the voxel's radius where > 0, else the
@@ -42,7 +42,7 @@ def _eq4(rho, q, r, mode, c3, denom, d2, rdef, lo, m, out):  # pragma: no cover 
             out[j] = ((rho[lo + j] * c3) * q[lo + j]) / denom
 
 
-@njit(inline="always")
+@njit(cache=True)
 def _add_albedo_of_radius(b, r, lo, m, radius_scale, wavelengths, k_abs, n_term, albedo64,
                           acc):  # pragma: no cover - compiled
     """acc[c, j] += (omega_c(r) - omega_c) b where b > 0 and the voxel's radius r = r[lo + j] > 0: the
@@ -82,35 +82,33 @@ def voxel_optics(rho, q, r, mode, c3, denom, d2, rdef, rgb, mean_albedo, by_radi
     for chunk in range((n + CHUNK - 1) // CHUNK):
         lo = chunk * CHUNK
         m = min(CHUNK, n - lo)
+        any_mass = False
         for s in range(n_s):
             bs = b[s]
             _eq4(rho, q[s], r[s], mode[s], c3[s], denom[s], d2[s], rdef[s], lo, m, bs)
-            ma = mean_albedo[s]
+            ma, col0, col1, col2 = mean_albedo[s], rgb[s, 0], rgb[s, 1], rgb[s, 2]
+            nz = False
             if s == 0:
                 for j in range(m):
-                    total[j] = bs[j]
-                    sca[j] = bs[j] * ma
+                    x = bs[j]
+                    total[j], sca[j] = x, x * ma
+                    acc[0, j], acc[1, j], acc[2, j] = x * col0, x * col1, x * col2
+                    nz = nz | _not_plus_zero(x)
             else:
                 for j in range(m):
-                    total[j] = total[j] + bs[j]
-                    sca[j] = sca[j] + bs[j] * ma
-            for c in range(3):
-                a, col = acc[c], rgb[s, c]
-                if s == 0:
-                    for j in range(m):
-                        a[j] = bs[j] * col
-                else:
-                    for j in range(m):
-                        a[j] = a[j] + bs[j] * col
-            nz = False
-            for j in range(m):
-                nz = nz | _not_plus_zero(bs[j])
+                    x = bs[j]
+                    total[j], sca[j] = total[j] + x, sca[j] + x * ma
+                    acc[0, j], acc[1, j], acc[2, j] = acc[0, j] + x * col0, acc[1, j] + x * col1, acc[2, j] + x * col2
+                    nz = nz | _not_plus_zero(x)
             has[s] = nz
+            any_mass = any_mass | nz
             if keep_beta and nz:
-                beta_ext[s, lo:lo + m] = bs[:m]
-        if not has.any():
+                for j in range(m):
+                    beta_ext[s, lo + j] = bs[j]
+        if not any_mass:
             continue  # total, weights 0 (as zeroed); the albedo the volume's fill (``finish_albedo``)
-        beta_total[lo:lo + m] = total[:m]
+        for j in range(m):
+            beta_total[lo + j] = total[j]
         for s in range(n_s):
             bs = b[s]
             if keep_weights and has[s]:
@@ -120,8 +118,9 @@ def voxel_optics(rho, q, r, mode, c3, denom, d2, rdef, rgb, mean_albedo, by_radi
             if by_radius[s] and has[s]:
                 _add_albedo_of_radius(bs, r[s], lo, m, radius_scale[s], wavelengths, k_abs[s], n_term[s],
                                       albedo64[s], acc)
-        for c in range(3):
-            albedo_sum[lo:lo + m, c] = acc[c, :m]
+        for j in range(m):
+            for c in range(3):
+                albedo_sum[lo + j, c] = acc[c, j]
 
 
 @njit(cache=True)
@@ -137,11 +136,11 @@ def albedo_sums(albedo_sum, beta_total):  # pragma: no cover - compiled
     return acc
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
 def finish_albedo(albedo, beta_total, fill):  # pragma: no cover - compiled
     """albedo (N, 3): albedo_sum / beta_total where there is extinction, ``fill`` (3,) elsewhere, clipped to
     [0, 1], in place."""
-    for v in prange(beta_total.shape[0]):
+    for v in range(beta_total.shape[0]):
         t = beta_total[v]
         for c in range(3):
             a = albedo[v, c] / t if t > 0 else fill[c]
