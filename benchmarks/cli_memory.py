@@ -39,6 +39,8 @@ COMMANDS = {
     "info": ["info", "{file}"],
     "render": ["render", "{file}", "--spp", "8", "--size", "64x48", "--camera", "orbit", "--sky", "constant",
                "-o", "{out}/render.exr"],
+    "render_noair": ["render", "{file}", "--spp", "8", "--size", "64x48", "--camera", "orbit", "--sky", "constant",
+                     "--atmosphere", "none", "-o", "{out}/render.exr"],  # render without its default air
     "satellite": ["satellite", "{file}", "--lat", "35", "--lon", "-97", "--date", "2024-05-20T21:00:00Z",
                   "--resolution", "{resolution}", "--spp", "4", "-o", "{out}/sat.nc"],
 }

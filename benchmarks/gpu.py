@@ -173,11 +173,13 @@ def slicer_frames(vol, mode_name: str, w: int, h: int, slices: int, frames: int,
     import mitsuba as mi
     from weather_mi.optics import detail
     from weather_mi.slicing import MODES, SliceParams, SliceRenderer
+    from weather_mi.slicing.texture_storage import ChannelTextures
     mode = MODES[mode_name]
     field = detail.field(vol.shape, seed=0, spacing_m=vol.spacing) if mode.detail else None
     r = SliceRenderer(vol, mode, slices=slices, light_res=128, detail_field=field)
     if accel:  # the texture units' 8-bit interpolation weights, for the comparison only
-        r.tex_eye = mi.Texture3f(mi.TensorXf(np.zeros(r.tex_eye.shape, np.float32)), use_accel=True)
+        r.tex_eye = ChannelTextures(tuple(mi.Texture3f(mi.TensorXf(np.zeros((1, 1, 1) + t.shape[-1:], np.float32)),
+                                                   use_accel=True) for t in r.tex_eye.parts))
         r.tex_light_src = mi.Texture3f(mi.TensorXf(np.zeros(r.tex_light_src.shape, np.float32)), use_accel=True)
     spec = wm.scene.spec.default_spec(vol, w, h)
     img = r.frame(spec)  # warm-up: compiles the frame ...

@@ -122,10 +122,11 @@ def fixed_cost(vol, frames):
     return rows
 
 
-def bench(vol, width, height, slices, light_res, frames, rounds=1, traced=False, air=False, modes=None):
+def bench(vol, width, height, slices, light_res, frames, rounds=1, traced=False, air=False, modes=None, cases=CASES):
     """{mode: {(case, frozen): seconds per frame}}: the median over ``rounds`` of each case's median
     (``seconds_per_frame``), the cases (and traced / frozen) taking turns round after round; with ``air``,
-    also {mode + " + air": ...}: the same with the clear atmosphere, in turn with the frames without it."""
+    also {mode + " + air": ...}: the same with the clear atmosphere, in turn with the frames without it;
+    ``cases``: those of ``CASES`` to measure."""
     global ATMOSPHERE
     spec = default_spec(vol, width, height)
     out = {}
@@ -138,7 +139,7 @@ def bench(vol, width, height, slices, light_res, frames, rounds=1, traced=False,
                             detail_field=detail_field(vol) if mode.detail else None) for _ in airs]
         t = {}
         for k in range(rounds):
-            for case in CASES:
+            for case in cases:
                 for frozen in ((False, True) if traced else (True,)):
                     for a, r in zip(airs, rs):
                         ATMOSPHERE = a
@@ -165,6 +166,7 @@ def main():
     ap.add_argument("--atmosphere", default="none", choices=("none", "clear"),
                     help="clear: also every mode with the clear atmosphere (paired rounds)")
     ap.add_argument("--modes", default=None, help="comma-separated modes (default all)")
+    ap.add_argument("--cases", default=",".join(CASES), help=f"comma-separated cases of {CASES} (default all)")
     args = ap.parse_args()
     variant = wm.set_variant(args.variant)
     vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
@@ -182,10 +184,11 @@ def main():
         print(f"\n{w} x {h}, {slices} slices, frames per second (frozen; median of {rounds} rounds of "
               f"{frames}-frame medians)")
         print(f"{'mode':<32}{'drag':>8}{'scaling':>9}{'camera':>8}{'sun':>8}{'drag vs paper':>15}{'target':>8}")
+        cases = tuple(c for c in CASES if c in args.cases.split(","))
         rows = bench(vol, w, h, slices, args.light_res, frames, rounds, args.traced, args.atmosphere == "clear",
-                     None if args.modes is None else args.modes.split(","))
+                     None if args.modes is None else args.modes.split(","), cases)
         for name, t in rows.items():
-            fps = {c: 1.0 / t[(c, True)] for c in CASES}
+            fps = {c: 1.0 / t[(c, True)] if (c, True) in t else float("nan") for c in CASES}
             ratio = f"{fps['drag'] / PAPER_FPS[name.split(' + ')[0]]:.1f}x" if paper else "-"
             target = f"{10 * PAPER_FPS[name.split(' + ')[0]]:.0f}" if paper else "-"
             print(f"{name:<32}{fps['drag']:>8.1f}{fps['scaling']:>9.1f}{fps['camera']:>8.1f}{fps['sun']:>8.1f}"
@@ -193,7 +196,7 @@ def main():
         if args.traced:
             print(f"\ntraced every frame (fps): {'mode':<32}" + "".join(f"{c:>9}" for c in CASES))
             for name, t in rows.items():
-                print(f"{'':<26}{name:<32}" + "".join(f"{1.0 / t[(c, False)]:>9.1f}" for c in CASES))
+                print(f"{'':<26}{name:<32}" + "".join(f"{1.0 / t[(c, False)]:>9.1f}" for c in cases))
 
 
 if __name__ == "__main__":

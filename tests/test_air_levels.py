@@ -65,10 +65,11 @@ def test_air_cells_are_empty_space_and_their_optical_depth_is_the_interpolants()
     ray = mi.Ray3f(mi.Point3f(*(o[:, k].astype(np.float32) for k in range(3))),
                    mi.Vector3f(*(d[:, k].astype(np.float32) for k in range(3))))
     got = np.array(exact_transmittance(integ._tk, ray, mi.Float(t_end.astype(np.float32)), mi.Bool(True)))
+    grids = np.concatenate([sigma[..., :3], np.broadcast_to(air[:, None, None, 2], cloud.shape)[..., None]], -1)
+    tau = optical_depth_numpy(grids, o, d, t_end)  # the three channels and the air's blue in one pass
     for c in range(3):
-        tau = optical_depth_numpy(sigma[..., c], o, d, t_end)
-        np.testing.assert_allclose(got[c], np.exp(-tau), rtol=2e-3, atol=1e-6)
-    tau_air = optical_depth_numpy(np.broadcast_to(air[:, None, None, 2], cloud.shape), o, d, t_end)
+        np.testing.assert_allclose(got[c], np.exp(-tau[:, c]), rtol=2e-3, atol=1e-6)
+    tau_air = tau[:, 3]
     assert (tau_air > 0.3).sum() > n // 10  # the air matters on many of these rays
 
 
@@ -121,32 +122,34 @@ def test_render_reference_puts_the_atmosphere_into_the_box():
     assert np.array_equal(alone.radiance, boxed.radiance)
 
 
+
+GREY_ALBEDO = np.array([0.95, 0.9, 0.8], np.float32)  # test_majorant_volpath.scene_dict's default
+
+
 def grey_cloud_in_air(shape=(16, 32, 32)):
-    """As :func:`cloud_in_air` with the air's G channel in all three (a satellite's single band): sigma_t
-    (z, y, x, 1), the medium's extinction grey (``kernel.medium.grey_air``)."""
-    cloud = blobs(shape)
-    air = np.repeat(air_profile(shape[0])[:, 1:2], 3, axis=1)
-    return (cloud[..., None] + air[:, None, None, :1]).astype(np.float32), cloud, air
+    """(The cloud (z, y, x), the air (z, 3) with its G channel in all three: a satellite's single band)."""
+    return blobs(shape), np.repeat(air_profile(shape[0])[:, 1:2], 3, axis=1)
 
 
-def grey_air_scene(sigma_grey, integrator, **kw):
-    d = scene_dict(sigma_grey[..., 0], integrator, **kw)
-    d["cloud"]["sigma_t"]["data"] = mi.TensorXf(sigma_grey)
-    return d
+def ours_grey_air(cloud, air, **kw):
+    """majorant_volpath with the air added per level to the cloud's grey grid (``air_albedo``: the cloud's albedo,
+    ``air_scattering``: the air scattering with the same albedo, so the mixture's is the scene's constant)."""
+    alb = np.broadcast_to(GREY_ALBEDO, cloud.shape + (3,)).copy()
+    return {**ours_air(cloud, air, **kw), "air_albedo": mi.TensorXf(alb),
+            "air_scattering": mi.TensorXf((air * GREY_ALBEDO[None, :]).astype(np.float32))}
 
 
 def test_a_grey_air_is_tracked_grey_with_its_optical_depth_the_interpolants():
-    """A grey air (three equal channels) over a one-channel grid: the trackers stay grey (no spectral tracking),
-    ``AirLevels`` holds one channel whose values are the three-channel one's to the bit, and the exact
-    transmittance is the fine midpoint integral of the grid's trilinear interpolant (numpy)."""
+    """A grey air (three equal channels) added per level to a one-channel grid: the trackers stay grey (no
+    spectral tracking), ``AirLevels`` holds one channel whose values are the three-channel one's to the bit, and
+    the exact transmittance is the fine midpoint integral of the trilinear interpolant of cloud plus air (numpy)."""
     from weather_mi.kernel.plugins.air_levels import AirLevels
-    sigma, cloud, air = grey_cloud_in_air()
-    scene = mi.load_dict(grey_air_scene(sigma, ours_air(sigma, air)))
+    cloud, air = grey_cloud_in_air()
+    scene = mi.load_dict(scene_dict(cloud, ours_grey_air(cloud, air)))
     integ = scene.integrator()
     integ._setup(scene, None)
     tk = integ._tk
-    assert not tk.ms.spectral and tk.texel.air is not None and tk.texel.air.c == 1
-    assert np.array(tk.texel.empty).max() >= 2
+    assert not tk.ms.spectral and tk.ms.air.c == 1 and tk.texel.air.c == 1 and tk.texel_data is None
     rng = np.random.default_rng(7)
     n = 1200
     o = LO - 2.0 + rng.random((n, 3)) * (HI - LO + 4.0)
@@ -157,7 +160,8 @@ def test_a_grey_air_is_tracked_grey_with_its_optical_depth_the_interpolants():
     ray = mi.Ray3f(mi.Point3f(*(o[:, k].astype(np.float32) for k in range(3))),
                    mi.Vector3f(*(d[:, k].astype(np.float32) for k in range(3))))
     got = np.array(exact_transmittance(tk, ray, mi.Float(t_end.astype(np.float32)), mi.Bool(True)))
-    tau = optical_depth_numpy(sigma[..., 0], o, d, t_end)
+    tau = optical_depth_numpy(cloud + air[:, None, None, 0], o, d, t_end)
+    assert (optical_depth_numpy(np.broadcast_to(air[:, None, None, 0], cloud.shape), o, d, t_end) > 0.1).sum() > n // 10
     for c in range(3):
         np.testing.assert_allclose(got[c], np.exp(-tau), rtol=2e-3, atol=1e-6)
     q = mi.Float(np.linspace(-2.0, 18.0, 301, dtype=np.float32))
@@ -171,11 +175,12 @@ def test_a_grey_air_is_tracked_grey_with_its_optical_depth_the_interpolants():
 
 @pytest.mark.parametrize("transmittance", ["exact", "ratio"])
 def test_a_cloud_in_a_grey_air_agrees_with_volpath(transmittance):
-    """Free flights in a grey air (the cloud cells' collisions from their 8 texels) and shadow rays against stock
-    volpath on the same one-channel grid, with a ground."""
-    sigma, _, air = grey_cloud_in_air()
-    a = passes(mi.load_dict(grey_air_scene(sigma, {"type": "volpath", "max_depth": 4}, ground=True)), 16, 16)
-    b = passes(mi.load_dict(grey_air_scene(sigma, ours_air(sigma, air, max_depth=4, transmittance=transmittance),
-                                           ground=True)), 16, 16, seed0=1000)
+    """Free flights and shadow rays in a grey air added per level against stock volpath on the grid that holds
+    cloud plus air (one channel), with a ground."""
+    cloud, air = grey_cloud_in_air()
+    total = (cloud + air[:, None, None, 0]).astype(np.float32)
+    a = passes(mi.load_dict(scene_dict(total, {"type": "volpath", "max_depth": 4}, ground=True)), 16, 16)
+    b = passes(mi.load_dict(scene_dict(cloud, ours_grey_air(cloud, air, max_depth=4, transmittance=transmittance),
+                                       ground=True)), 16, 16, seed0=1000)
     assert np.all(np.isfinite(b)) and b.min() >= 0
     assert_agree(a, b)

@@ -208,3 +208,21 @@ def report(most: int = 12) -> str:
 
 if __name__ == "__main__":  # python tests/test_architecture.py: the figures these tests check
     print(report())
+
+
+def test_no_merge_conflict_markers_left_in_tracked_text():
+    """A merge left ``<<<<<<<``/``>>>>>>>`` lines in docs/design.md once; git lists the tracked files."""
+    import subprocess
+    files = subprocess.run(["git", "ls-files", "*.py", "*.md", "*.toml", "*.txt", "*.sh", "*.cfg"], cwd=ROOT,
+                           capture_output=True, text=True).stdout.split()
+    if not files:
+        pytest.skip("not a git checkout")
+    marked = []
+    for name in files:
+        path = ROOT / name
+        if not path.is_file():
+            continue
+        for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+            if line.startswith(("<<<<<<< ", ">>>>>>> ")) or line == "=======" and name.endswith(".py"):
+                marked.append(f"{name}:{n}")
+    assert not marked, f"merge conflict markers: {marked}"

@@ -32,9 +32,12 @@ SKY = np.array([0.3, 0.45, 0.7])
 
 def trilinear_numpy(grid_zyx: np.ndarray, p_unit: np.ndarray) -> np.ndarray:
     """Reference trilinear interpolant with Mitsuba's ``gridvolume`` convention at unit-cube points
-    ``p_unit`` (..., 3) given as (x, y, z): texel centres at (i + 0.5)/N, indices clamped at borders."""
+    ``p_unit`` (..., 3) given as (x, y, z): texel centres at (i + 0.5)/N, indices clamped at borders.
+    ``grid_zyx`` (nz, ny, nx) or (nz, ny, nx, C): (...) or (..., C), the C channels sharing one set of
+    corner indices and weights (gathered from the flattened grid)."""
     g = np.asarray(grid_zyx, np.float64)
-    nz, ny, nx = g.shape
+    nz, ny, nx = g.shape[:3]
+    channels = [np.ascontiguousarray(g[..., c]).ravel() for c in range(g.shape[3])] if g.ndim == 4 else [g.ravel()]
     p = np.asarray(p_unit, np.float64)
     out_idx, out_w = [], []
     for k, n in enumerate((nx, ny, nz)):
@@ -46,12 +49,16 @@ def trilinear_numpy(grid_zyx: np.ndarray, p_unit: np.ndarray) -> np.ndarray:
         out_w.append(w)
     (x0, x1), (y0, y1), (z0, z1) = out_idx
     wx, wy, wz = out_w
-    r = 0.0
+    r = [np.zeros(p.shape[:-1]) for _ in channels]
     for zi, wzz in ((z0, 1 - wz), (z1, wz)):
         for yi, wyy in ((y0, 1 - wy), (y1, wy)):
+            row, wzy = (zi * ny + yi) * nx, wzz * wyy
             for xi, wxx in ((x0, 1 - wx), (x1, wx)):
-                r = r + g[zi, yi, xi] * wzz * wyy * wxx
-    return r
+                idx, w = row + xi, wzy * wxx
+                for rc, flat in zip(r, channels):
+                    rc += flat.take(idx) * w
+    return np.stack(r, -1) if g.ndim == 4 else r[0]
+
 
 def bbox_tf(lo=LO, hi=HI):
     return bbox_transform((lo, hi))
@@ -226,13 +233,15 @@ def test_agrees_with_volpath_under_a_hot_voxel():
     """One voxel 10x denser than the blobs: volpath's global majorant is 10x the local ones almost
     everywhere, so this exercises the DDA where the coarse grid and the global majorant differ most.
     Roulette off in both (volpath plays it at every null collision, which makes its multiple
-    scattering a rare-event estimator that reads low at test sample counts)."""
+    scattering a rare-event estimator that reads low at test sample counts). Stock volpath tracks the 10x
+    majorant (about 20x our time per pass): 16 passes of it against 64 of ours, combined standard errors
+    1.12x those of 32 + 32 at 60 % of the time; a majorant grid that misses the hot voxel fails."""
     s = blobs()
     s[1, 30, 30] = 60.0
     kw = dict(albedo=(1.0, 1.0, 1.0))
     extra = {"rr_depth": 100, "max_depth": 40}
-    a = passes(mi.load_dict(scene_dict(s, {"type": "volpath", **extra}, **kw)), 32, 16)
-    b = passes(mi.load_dict(scene_dict(s, ours(s, **extra), **kw)), 32, 16, seed0=1000)
+    a = passes(mi.load_dict(scene_dict(s, {"type": "volpath", **extra}, **kw)), 16, 16)
+    b = passes(mi.load_dict(scene_dict(s, ours(s, **extra), **kw)), 64, 16, seed0=1000)
     assert_agree(a, b)
 
 
@@ -361,14 +370,17 @@ def test_medium_scale_and_default_to_world():
 def optical_depth_numpy(s, o, d, t_end, steps=8_000):
     """Optical depth of the rays o + t d, t in [0, t_end], through the trilinear interpolant of ``s`` on
     the box [LO, HI] (``trilinear_numpy``), by the midpoint rule over ``steps`` steps: independent of
-    the plugin."""
-    tau = np.zeros(len(o))
+    the plugin. ``s`` (nz, ny, nx): (n,); (nz, ny, nx, C): (n, C), the channels in one pass."""
+    tau = np.zeros((len(o),) + np.shape(s)[3:])
     for chunk in np.array_split(np.arange(len(o)), max(1, len(o) // 200)):
         t = (np.arange(steps) + 0.5)[None, :] / steps * t_end[chunk, None]
         p = o[chunk, None, :] + t[..., None] * d[chunk, None, :]
         unit = (p - LO) / (HI - LO)
         inside = np.all((unit >= 0.0) & (unit <= 1.0), axis=-1)
-        tau[chunk] = (trilinear_numpy(s, unit) * inside).sum(axis=1) * t_end[chunk] / steps
+        if np.ndim(s) == 4:
+            inside = inside[..., None]
+        tau[chunk] = (trilinear_numpy(s, unit) * inside).sum(axis=1) * (t_end[chunk] / steps).reshape(
+            (-1,) + (1,) * (tau.ndim - 1))
     return tau
 
 

@@ -45,7 +45,7 @@ def test_spans_hold_every_lit_point_and_frames_are_unchanged():
     ts = t0[:, None] + (t1 - t0)[:, None] * np.linspace(0.0, 1.0, 400)[None]  # a fine march of every ray
     p = o[:, None] + ts[..., None] * d[:, None]
     q = (p - lo) / (hi - lo)
-    ext = np.asarray(r.tex_eye.eval(mi.Point3f(*(mi.Float(q[..., i].ravel()) for i in range(3))))[0]).reshape(ts.shape)
+    ext = np.asarray(r.tex_light_src.eval(mi.Point3f(*(mi.Float(q[..., i].ravel()) for i in range(3))))[0]).reshape(ts.shape)
     lit = (ext > 0) & (t1 > t0)[:, None]
     assert lit.any()
     assert np.all(ts[lit] >= np.broadcast_to(ta[:, None], ts.shape)[lit] - 1e-3)

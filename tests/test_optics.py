@@ -189,26 +189,86 @@ def numpy_voxel_albedo(hyd, sp, beta_ext, albedo_sum):
             albedo_sum[idx, c] += ((omegas[c] - s.albedo_rgb[c]) * b).astype(np.float32)
 
 
-def test_voxel_albedo_compiled_equals_the_numpy_expressions():
-    """Each voxel's albedo from its radius (``sizes="scheme"``) in one compiled pass is the numpy expressions'
-    (written out above), bit for bit, and differs from the species' fixed albedo where the radii differ from
-    the species'."""
-    import weather_mi.optics.volume as volume
+def numpy_optics(hyd, sp, use_model, voxel_albedo):
+    """``optics.volume``'s four grids (beta_ext, beta_total, albedo, weights) as the numpy expressions of
+    weather-mi before the compiled voxel pass: Eq. 4 by ``Species.beta_ext_per_m`` (the radius grid's zeros the
+    species' radius), Eq. 6, 5, 8 summed species after species in float32, each voxel's albedo from its radius
+    (``numpy_voxel_albedo``), the clear voxels filled with the volume's mean albedo, clipped to [0, 1]."""
+    rho = hyd["rho_air"].values.astype(np.float32)
+    beta = np.empty((len(sp),) + rho.shape, np.float32)
+    for i, s in enumerate(sp):
+        r = s.radius_m
+        if use_model and f"r_eff_{s.name}" in hyd:
+            r = hyd[f"r_eff_{s.name}"].values.astype(np.float32)
+            r = np.where(r > 0, r, np.float32(s.radius_m))
+        s.beta_ext_per_m(rho, hyd[f"q_{s.name}"].values.astype(np.float32), r, out=beta[i])
+    rgb = np.asarray([s.albedo_rgb for s in sp], np.float32)
+    mean_albedo = np.asarray([np.float32(np.mean(s.albedo_rgb)) for s in sp], np.float32)
+    total, albedo_sum = beta[0].copy(), np.stack([beta[0] * rgb[0, c] for c in range(3)], axis=-1)
+    w = beta * mean_albedo[:, None, None, None]
+    sca = w[0].copy()
+    for i in range(1, len(sp)):
+        total = total + beta[i]
+        albedo_sum = albedo_sum + np.stack([beta[i] * rgb[i, c] for c in range(3)], axis=-1)
+        sca = sca + w[i]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        weights = np.where(sca > 0, w / sca, np.float32(0.0))
+    if voxel_albedo and use_model:
+        numpy_voxel_albedo(hyd, sp, beta, albedo_sum.reshape(-1, 3))
+    total_ext = float(total.sum(dtype=np.float64))
+    fill = albedo_sum.reshape(-1, 3).sum(axis=0, dtype=np.float64) / total_ext
+    with np.errstate(divide="ignore", invalid="ignore"):
+        albedo = np.where(total[..., None] > 0, albedo_sum / total[..., None], fill.astype(np.float32))
+    return beta, total, np.clip(albedo, 0, 1), weights
+
+
+def bits(a):
+    return np.asarray(a).view(np.uint32)
+
+
+@pytest.mark.parametrize("species,sizes,scale", [
+    ("paper", "scheme", None), ("physical", "scheme", {"ice": 2.0}), ("physical", None, None),
+    ("paper", "paper", None), ("physical", "physical", None), (preset("physical", albedo=0.9), "scheme", None)])
+@pytest.mark.parametrize("keep", [("beta_ext", "weights"), ("weights",), ("beta_ext",)])
+def test_compiled_voxel_pass_equals_the_numpy_expressions(species, sizes, scale, keep):
+    """The one compiled pass (``optics.mixture_kernels.voxel_optics``) gives the numpy expressions' grids
+    (written out above) bit for bit, signed zeros included, for each species table, particle sizes, scaling and
+    set of kept grids; a grid not kept is released (never built); the albedo of each voxel's radius differs from
+    the species' fixed one."""
     hyd = wm.synthetic.cumulus()
     rng = np.random.default_rng(2)
     for s in wm.SPECIES_NAMES:
-        hyd[f"r_eff_{s}"] = hyd[f"q_{s}"].copy(data=rng.uniform(1e-5, 5e-4, hyd[f"q_{s}"].shape).astype(np.float32))
-    whole = wm.optical_volume(hyd, "physical", sizes="scheme", phase_quality="test")
-    sp = wm.species.preset("physical")
-    start = rng.uniform(0, 1e-3, (hyd["rho_air"].size, 3)).astype(np.float32)
-    compiled, reference = start.copy(), start.copy()
-    beta_ext = np.asarray(whole.beta_ext)
-    radii = {s.name: volume._albedo_radii(hyd, s, beta_ext[i]) for i, s in enumerate(sp)}
-    assert all(r is not None for r in radii.values())
-    assert 0 < radii["cloud"][0].size < beta_ext[0].size  # the voxels with mass only
-    volume._voxel_albedo(radii, sp, beta_ext, compiled)
-    numpy_voxel_albedo(hyd, sp, np.asarray(whole.beta_ext), reference)
-    assert not np.array_equal(reference, start)
-    np.testing.assert_array_equal(compiled, reference)
-    fixed = wm.optical_volume(hyd, "physical", sizes="physical", phase_quality="test")
-    assert not np.array_equal(fixed.albedo, whole.albedo)
+        r = rng.uniform(1e-5, 5e-4, hyd[f"q_{s}"].shape).astype(np.float32)
+        r[rng.random(r.shape) < 0.2] = 0  # the species' radius there
+        if s != "snow":  # a species without radii: the table's
+            hyd[f"r_eff_{s}"] = hyd[f"q_{s}"].copy(data=r)
+    q = hyd["q_rain"].values.copy()
+    q[(q == 0) & (rng.random(q.shape) < 0.01)] = -0.0  # signed zeros pass validate and reach the grids
+    hyd["q_rain"] = hyd["q_rain"].copy(data=q)
+    vol = wm.optical_volume(hyd, species, scale=scale, sizes=sizes, phase_quality="test", keep=keep)
+    sp, use_model = wm.optics.volume._species_setup(species, scale, None, sizes)
+    expected = dict(zip(("beta_ext", "beta_total", "albedo", "weights"),
+                        numpy_optics(hyd, sp, use_model, sizes == "scheme")))
+    assert np.any(np.signbit(expected["beta_ext"]) & (expected["beta_ext"] == 0))
+    for name, grid in expected.items():
+        if name in ("beta_total", "albedo") or name in keep:
+            np.testing.assert_array_equal(bits(getattr(vol, name)), bits(grid), err_msg=name)
+        else:
+            released = getattr(vol, name)
+            assert isinstance(released, wm.optics.volume.ReleasedGrid) and released.shape == grid.shape
+    if sizes == "scheme" and not isinstance(species, wm.species.SpeciesSet):
+        fixed = wm.optical_volume(hyd, species, scale=scale, sizes="physical", phase_quality="test")
+        assert not np.array_equal(fixed.albedo, vol.albedo)
+
+
+def test_albedo_sums_is_numpys_sum_over_voxels():
+    """``mixture_kernels.albedo_sums`` (the voxels with extinction only) is numpy's float64 sum over axis 0,
+    bit for bit, on sums of widely spread magnitudes (a different order of the additions would show)."""
+    from weather_mi.optics.mixture_kernels import albedo_sums
+    rng = np.random.default_rng(5)
+    for n in (7, 8193, 300_001):
+        a = (rng.standard_normal((n, 3)) * np.exp(5 * rng.standard_normal((n, 3)))).astype(np.float32)
+        total = rng.random(n).astype(np.float32)
+        total[rng.random(n) < 0.5] = 0
+        a[total == 0] = 0
+        np.testing.assert_array_equal(albedo_sums(a, total), a.sum(axis=0, dtype=np.float64))

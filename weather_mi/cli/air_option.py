@@ -63,7 +63,8 @@ def in_box(vol, spec):
     return scene_air(vol, spec.atmosphere)
 
 
-VIEW_DEFAULT = "none"  # ``view --atmosphere``'s default (benchmarks/viewer.py decides it: docs in the report)
+VIEW_DEFAULT = "none"  # ``view --atmosphere``'s default: "clear" once every drag target holds with the air
+# (benchmarks/slicing_air.py: the uniform modes do not yet, benchmarks/README.md; benchmarks/viewer.py)
 
 
 def add_view_options(p) -> None:

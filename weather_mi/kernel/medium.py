@@ -28,6 +28,12 @@ def phase_arrays(vol: OpticalVolume, packed: bool = False):
             return nodes, values, coeffs
         lanes = 4 * max(1, -(-coeffs.shape[-1] // 4))
         return nodes, values, pack_weights(coeffs, out=aligned_empty(coeffs[..., 0].size * lanes))
+    return _hydrometeor_arrays(vol, nodes, values, packed)
+
+
+def _hydrometeor_arrays(vol: OpticalVolume, nodes=None, values=None, packed: bool = True):
+    """``phase_arrays`` of the hydrometeors alone (without the box's air's components)."""
+    from .plugins.hydrometeor_mixture import pack_weights
     n_s, shape = len(vol.weights), tuple(vol.beta_total.shape)
     lanes = 4 * max(1, -(-n_s // 4)) if packed else n_s
     weights = aligned_empty(int(np.prod(shape)) * lanes).reshape(shape + (lanes,))
@@ -38,14 +44,16 @@ def phase_arrays(vol: OpticalVolume, packed: bool = False):
     return nodes, values, pack_weights(weights[..., :n_s], out=weights)  # in place: padding 0, clipped
 
 
-def kernel_weights(vol: OpticalVolume):
+def kernel_weights(vol: OpticalVolume, air_in_grid: bool = True):
     """(packets (z, y, x, P, 4), tail (z, y, x) or None): the plugin's coefficients as ``phase_dict`` hands them,
-    in 64-byte aligned memory. S = 4 P + 1 species without the box's air (the five hydrometeors): the last
-    species' grid of its own (``weights_tail``: 20 bytes per cell for five, not 32); otherwise
-    ``phase_arrays(packed=True)``'s padded packets and no tail. The same values either way."""
+    in 64-byte aligned memory: the hydrometeors' alone (the box's air, one value per level, goes to the plugin
+    as ``air_weights``: :func:`air_weights`) unless ``air_in_grid``. S = 4 P + 1 species without the air in the
+    grid (the five hydrometeors): the last species' grid of its own (``weights_tail``: 20 bytes per cell for
+    five, not 32); otherwise ``phase_arrays(packed=True)``'s padded packets and no tail. The same values either
+    way."""
     n_s = len(vol.weights)
-    if air_in_medium(vol) is not None or n_s % 4 != 1 or n_s == 1:
-        return phase_arrays(vol, packed=True)[2], None
+    if (air_in_grid and air_in_medium(vol) is not None) or n_s % 4 != 1 or n_s == 1:
+        return (phase_arrays(vol, packed=True) if air_in_grid else _hydrometeor_arrays(vol))[2], None
     shape, n = tuple(vol.beta_total.shape), int(np.prod(vol.beta_total.shape))
     packets = aligned_empty(n * (n_s - 1)).reshape(-1, n_s - 1)
     tail = aligned_empty(n)
@@ -76,6 +84,33 @@ def _scattering_coefficients(vol: OpticalVolume, out: list) -> None:
         ws = vol.weights.chunk(part) if deferred else w[:, part]
         for s in range(n_s):
             np.multiply(ws[s], sca, out=out[s][part])
+
+
+def air_weights(air) -> np.ndarray:
+    """(levels, 2) float32: the Eq. 8 scattering coefficients of the air's two components per level (1/m, the
+    channel mean, as ``optics.air.inside.medium_grids`` puts them into every voxel), ``hydrometeor_mixture``'s
+    ``air_weights``."""
+    return np.ascontiguousarray(air.scattering_levels.mean(axis=-1).T)
+
+
+def integrator_air_albedo(vol: OpticalVolume, air) -> dict:
+    """``majorant_volpath``'s ``air_albedo`` (the hydrometeors' albedo grid, (z, y, x, C), the volume's own array,
+    used in place; levels padded where periodic) and ``air_scattering`` (the air's scattering per level and
+    channel, molecules and aerosol summed, 1/m) (``kernel.plugins.air_albedo``)."""
+    import mitsuba as mi
+    albedo = np.asarray(vol.albedo)
+    albedo = albedo if albedo.ndim == 4 else albedo[..., None]
+    sca = air.scattering_levels.sum(axis=0)
+    if vol.periodic:
+        albedo, sca = pad_levels(albedo), pad_levels(sca)
+    return {"air_albedo": mi.TensorXf(np.ascontiguousarray(albedo, np.float32)),
+            "air_scattering": mi.TensorXf(np.ascontiguousarray(sca, np.float32))}
+
+
+def air_by_integrator(integrator: dict) -> bool:
+    """Whether the integrator of this dict adds the box's air per level itself (``majorant_volpath``: the medium's
+    grids then hold the hydrometeors' extinction and coefficients alone); stock ``volpath`` needs it in them."""
+    return integrator.get("type") == "majorant_volpath"
 
 
 def air_in_medium(vol: OpticalVolume):
@@ -111,20 +146,27 @@ def grid_bbox(vol: OpticalVolume):
     return padded_bbox(vol.bbox, vol.shape[0]) if vol.periodic else vol.bbox
 
 
-def phase_dict(vol: OpticalVolume) -> dict:
-    """``hydrometeor_mixture`` phase function for ``vol`` (periodic: x and y wrapped, levels padded)."""
+def phase_dict(vol: OpticalVolume, air_in_grid: bool = True) -> dict:
+    """``hydrometeor_mixture`` phase function for ``vol`` (periodic: x and y wrapped, levels padded); the box's
+    air per level (``air_weights``) unless ``air_in_grid`` (its components in every voxel)."""
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     ensure_registered()
     nodes, values = phase_arrays_tables(vol)
-    weights, tail = kernel_weights(vol)
+    weights, tail = kernel_weights(vol, air_in_grid)
+    air = None if air_in_grid else air_in_medium(vol)
     if vol.periodic:
         weights, tail = (None if a is None else _aligned_copy(pad_levels(a)) for a in (weights, tail))
+    if air is not None:
+        d_air = air_weights(air)
+        d_air = {"air_weights": mi.TensorXf(np.ascontiguousarray(pad_levels(d_air)) if vol.periodic else d_air)}
     d = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
          "weights": mi.TensorXf(weights),  # packed, used in place (llvm)
          "to_world": bbox_transform(grid_bbox(vol))}
     if tail is not None:
         d["weights_tail"] = mi.TensorXf(tail)
+    if air is not None:
+        d.update(d_air)
     if vol.periodic:
         d["periodic"] = True
     if mi.is_spectral:
@@ -197,28 +239,38 @@ def spectral_phase_values(vol: OpticalVolume, nodes, species=None) -> np.ndarray
     return prepare_spectral(nodes, stacks)
 
 
-def medium_dict(vol: OpticalVolume) -> dict:
+def medium_dict(vol: OpticalVolume, air_in_grid: bool = True) -> dict:
     """``heterogeneous`` medium: sigma_t = beta_total (1/m, grey), RGB albedo, mixture phase, all on
     the volume's bounding box (grids indexed [z, y, x, channel], last axis world x). A periodic volume's
-    grids wrap in x and y (``wrap_mode`` repeat; their levels padded: ``optics.periodic``)."""
+    grids wrap in x and y (``wrap_mode`` repeat; their levels padded: ``optics.periodic``).
+
+    With the air in the box (``air_in_medium``) and ``air_in_grid`` (for stock ``volpath``) the sigma_t grid (RGB),
+    the albedo grid and the phase's weights grid are the mixture's of the hydrometeors and the air
+    (``optics.air.inside.medium_grids``); otherwise the air is one value per level that ``majorant_volpath``
+    adds (``air_extinction``, ``air_weights``; :func:`air_by_integrator`): the sigma_t grid stays the
+    hydrometeors' grey one, used in place, the weights their 20 bytes per cell, and the medium holds no albedo
+    grid (a constant 1, unread): the integrator reads the hydrometeors' in place and mixes in the air's
+    (:func:`integrator_air_albedo`)."""
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     to_world = bbox_transform(grid_bbox(vol))
     beta, albedo = vol.beta_total[..., None], vol.albedo
     air = air_in_medium(vol)
-    if air is not None:  # RGB extinction (molecules ~ lambda^-4) and albedo of the hydrometeors and the air
+    if air is not None and air_in_grid:  # RGB extinction (molecules ~ lambda^-4) and albedo of the cloud and the air
         from ..optics.air.inside import medium_grids
         grey = grey_air(air)  # one extinction channel: no 3-channel sigma_t grid built (medium_extinction's)
         beta, albedo, _ = medium_grids(vol.beta_total, vol.albedo, vol.weights, air,
                                        want=("albedo",) if grey else ("sigma_t", "albedo"))
         beta = medium_extinction(vol) if grey else beta
-    if mi.is_spectral:  # the 550 nm albedo, made spectral by the phase function (``spectral_phase_properties``)
+    if air is not None and not air_in_grid:  # majorant_volpath's: the albedo its (``integrator_air_albedo``)
+        albedo = None
+    elif mi.is_spectral:  # the 550 nm albedo, made spectral by the phase function (``spectral_phase_properties``)
         albedo = np.ascontiguousarray(albedo[..., 1:2])
     else:
         albedo = grey_or_rgb(albedo)
     wrap = {}
     if vol.periodic:
-        beta, albedo, wrap = pad_levels(beta), pad_levels(albedo), {"wrap_mode": "repeat"}
+        beta, albedo, wrap = pad_levels(beta), None if albedo is None else pad_levels(albedo), {"wrap_mode": "repeat"}
     # accel False: on CUDA the grids' hardware texture units interpolate with 8-bit weights, while
     # majorant_volpath's trackers interpolate the same texels in float32 (weather_mi/kernel/plugins/dda.py): one medium for
     # both only in software. LLVM has no texture units: no effect there.
@@ -226,9 +278,9 @@ def medium_dict(vol: OpticalVolume) -> dict:
         "type": "heterogeneous",
         "sigma_t": {"type": "gridvolume", "data": mi.TensorXf(beta),
                     "to_world": to_world, "filter_type": "trilinear", "accel": False, **wrap},
-        "albedo": {"type": "gridvolume", "data": mi.TensorXf(albedo), "to_world": to_world,
-                   "filter_type": "trilinear", "accel": False, **wrap},
+        "albedo": 1.0 if albedo is None else {"type": "gridvolume", "data": mi.TensorXf(albedo), "to_world": to_world,
+                                              "filter_type": "trilinear", "accel": False, **wrap},
         "scale": 1.0,
-        "has_spectral_extinction": air is not None and beta.shape[-1] > 1,
-        "phase": phase_dict(vol),
+        "has_spectral_extinction": air is not None and air_in_grid and beta.shape[-1] > 1,
+        "phase": phase_dict(vol, air_in_grid),
     }

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .medium import air_in_medium, grid_bbox, medium_dict, medium_extinction
+from .medium import air_by_integrator, air_in_medium, grid_bbox, integrator_air_albedo, medium_dict
 from ..optics.periodic import PATH_TILES, extended_box, pad_levels, require_flat_ground
 from ..optics.volume import OpticalVolume
 from ..scene.spec import Camera, SceneSpec, Sky, Sun
@@ -271,14 +271,14 @@ def _sea_bsdf(terrain) -> dict:
 
 
 def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(lo, hi) of the box that holds the medium: the volume's bbox, starting above a ground at ``floor_m``
-    by three times Mitsuba's ray offset g (coincident or too close faces of the box and the ground make rays
-    skip the ground); with the air in the box (``air_in_medium``) and its floor below that, from g below the
-    ground (or its own floor) instead (the ground inside the box, as over a terrain: the air down to the ground; a
-    floor g above it lost the lowest g, 270 m of air in a periodic box 2,000 km wide: the -3 % against
-    DISORT of issue 38; without air the old floor keeps the renders bit-identical); with a ground over a
-    terrain (``vol.terrain``; ``floor_m`` then unused) from ``terrain_gap_m`` below its lowest height (the
-    whole mesh inside the box). The grids keep the full bbox."""
+    """(lo, hi) of the box that holds the medium: the volume's bbox; where its floor lies below three times
+    Mitsuba's ray offset g above a ground at ``floor_m`` (coincident or too close faces of the box and the
+    ground make rays skip the ground), from g below the ground (or its own floor, if lower) instead: the
+    ground inside the box, as over a terrain, the medium down to the ground (a floor g above it lost the
+    lowest g of hydrometeors and air alike: 13 m in the demo, 270 m in a periodic box 2,000 km wide, the
+    -3 % against DISORT of issue 38; tests/test_box_floor.py); with a ground over a terrain (``vol.terrain``;
+    ``floor_m`` then unused) from ``terrain_gap_m`` below its lowest height (the whole mesh inside the box).
+    The grids keep the full bbox."""
     lo, hi = (np.asarray(p, dtype=np.float64) for p in vol.bbox)
     if vol.periodic:  # over PATH_TILES periods on each side (optics/periodic.py)
         lo, hi = extended_box(lo, hi, PATH_TILES)
@@ -287,21 +287,19 @@ def medium_box(vol: OpticalVolume, floor_m: float | None = None) -> tuple[np.nda
         lo[2] = terrain_floor_m(terrain) - terrain_gap_m(terrain, vol.bbox)
     elif floor_m is not None:
         gap = 3.0 * RAY_EPSILON * (1.0 + float(np.max(np.abs(np.r_[lo, hi]))))
-        if lo[2] < floor_m + gap and air_in_medium(vol) is not None:
+        if lo[2] < floor_m + gap:
             lo[2] = min(lo[2], floor_m - gap)
-        else:
-            lo[2] = max(lo[2], floor_m + gap)
         if hi[2] <= floor_m + gap:
             raise ValueError(f"the volume lies entirely below the ground at {floor_m} m")
     return lo, hi
 
 
-def medium_shape_dict(vol: OpticalVolume, floor_m: float | None = None) -> dict:
+def medium_shape_dict(vol: OpticalVolume, floor_m: float | None = None, air_in_grid: bool = True) -> dict:
     """The medium's box (:func:`medium_box`) as a ``cube`` with a null BSDF holding the medium."""
     import mitsuba as mi
     lo, hi = medium_box(vol, floor_m)
     to_world = mi.ScalarTransform4f().translate(((lo + hi) / 2).tolist()).scale(((hi - lo) / 2).tolist())
-    return {"type": "cube", "to_world": to_world, "bsdf": {"type": "null"}, "interior": medium_dict(vol)}
+    return {"type": "cube", "to_world": to_world, "bsdf": {"type": "null"}, "interior": medium_dict(vol, air_in_grid)}
 
 
 def integrator_sun(sun: Sun, guiding: float = 0.0, aureole: float = 0.0, mvnee: float = 0.0) -> dict:
@@ -428,17 +426,21 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
         from .plugins.majorant_volpath import DEFAULT_CELL, majorant_grid
         ensure_registered()
         cell = DEFAULT_CELL if cell is None else cell
-        beta = medium_extinction(vol)
-        beta = pad_levels(beta) if vol.periodic else beta  # the medium's grids (medium.py)
-        d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
-             "majorant": mi.TensorXf(majorant_grid(beta, cell=int(cell))),
-             "to_world": bbox_transform(grid_bbox(vol))}
-        if vol.periodic:
-            d.update({"periodic": "transport" if vol.periodic == "transport" else "view", "periodic_tiles": PATH_TILES})
+        from .plugins.air_levels import with_coarse_air
+        beta = pad_levels(vol.beta_total) if vol.periodic else vol.beta_total  # the medium's grids (medium.py)
+        majorant = majorant_grid(beta, cell=int(cell))
         air = air_in_medium(vol)
+        levels = None
         if air is not None:  # the air's levels, which the trackers cross as empty space (plugins/air_levels.py)
             levels = air.extinction_levels
-            d["air_extinction"] = mi.TensorXf(np.ascontiguousarray(pad_levels(levels) if vol.periodic else levels))
+            levels = np.ascontiguousarray(pad_levels(levels) if vol.periodic else levels)
+            majorant = with_coarse_air(majorant, levels, int(cell))  # a bound of the hydrometeors' and the air's sum
+        d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
+             "majorant": mi.TensorXf(majorant), "to_world": bbox_transform(grid_bbox(vol))}
+        if vol.periodic:
+            d.update({"periodic": "transport" if vol.periodic == "transport" else "view", "periodic_tiles": PATH_TILES})
+        if levels is not None:  # and its albedo with the hydrometeors' (where the medium leaves the air to it)
+            d.update({"air_extinction": mi.TensorXf(levels), **integrator_air_albedo(vol, air)})
         if sun is not None:
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))
         if atmosphere is not None:
@@ -467,7 +469,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
     require_flat_ground(vol, vol.periodic)
     terrain = getattr(vol, "terrain", None) if spec.ground is not None else None
     floor = None if spec.ground is None else spec.ground.height  # over a terrain medium_box uses the terrain
-    box = medium_shape_dict(vol, floor)
+    box = medium_shape_dict(vol, floor, not air_by_integrator(integrator))
     sensor = sensor_dict(spec)
     d = {"type": "scene", "integrator": integrator, "sensor": sensor, "medium_box": box}
     if "sun_direction" not in integrator:

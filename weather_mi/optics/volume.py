@@ -322,37 +322,35 @@ def level_density(rho_air_kg_m3) -> np.ndarray:
     return mean
 
 
-def _albedo_radii(hyd: xr.Dataset, s, beta: np.ndarray):
-    """(voxels (flat indices), radii (m, float32)) of species ``s`` where beta > 0 and its ``r_eff_<species>`` > 0,
-    for :func:`_voxel_albedo`, kept instead of the radius grid (8 bytes per voxel with mass, not 4 per cell: the
-    grid goes once its Eq. 4 is done); None where ``hyd`` has no radius or the species' albedo is not the
-    physical one of its radius (an overridden, artistic albedo is kept)."""
-    var = f"r_eff_{s.name}"
-    physical = tuple(float(a) for a in physical_albedo(s.phase_class, np.float64(s.radius_m), s.density_kg_m3))
-    if var not in hyd or tuple(s.albedo_rgb) != physical:
-        return None
-    r = np.asarray(hyd[var].values).reshape(-1)
-    idx = np.flatnonzero((beta.reshape(-1) > 0) & (r > 0))
-    idx = idx.astype(np.int32) if r.size < 2 ** 31 else idx
-    return idx, r[idx]
-
-
-def _voxel_albedo(radii: dict, sp: SpeciesSet, beta_ext: np.ndarray, albedo_sum: np.ndarray) -> None:
-    """Eq. 5's numerator with each voxel's own albedo: sum_s omega_s(r_eff) beta_s, the weak-absorption albedo
-    (``species.physical_albedo``) of the model's radius in place of the species' one, added to ``albedo_sum``
-    ((N, 3), in place) for the species of ``radii`` ({name: :func:`_albedo_radii`}), in species order, in one
-    compiled pass each (float64 inside, float32 sums). The Eq. 8 weights keep the species' albedo (co-albedos
-    < 1e-3)."""
-    from .mixture_kernels import add_voxel_albedo
+def _species_constants(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool) -> dict:
+    """``mixture_kernels.voxel_optics``'s per-species constants, each as numpy computes it in the expressions the
+    pass replaces: Eq. 4's float32 factors (``Species.beta_ext_per_m``: 3 scale; 2 rho_p R, or 2 rho_p and R
+    where the voxel has its own radius, ``_radius_field``), the mixture's albedos, and where each voxel's albedo
+    comes from its radius (``voxel_albedo``, with the model's radii: the species with ``r_eff_<species>`` whose
+    albedo is the physical one of its radius; an overridden, artistic albedo is kept) the weak-absorption
+    constants of ``species.albedo_of_radius``."""
+    from .mixture_kernels import GRID, SCALAR
+    n_s = len(sp)
+    k = {"mode": np.zeros(n_s, np.int8), "by_radius": np.zeros(n_s, np.bool_), "radius_scale": np.ones(n_s),
+         "k_abs": np.zeros((n_s, 3)), "n_term": np.zeros((n_s, 3))}
     for i, s in enumerate(sp):
-        if radii.get(s.name) is None:
-            continue
-        idx, r = radii[s.name]
-        scale, n_rgb, k_rgb = absorbing_material(s.phase_class, s.density_kg_m3)
-        n_term = np.array([n ** 3 - (n * n - 1.0) ** 1.5 for n in n_rgb])  # species.albedo_of_radius's
-        add_voxel_albedo(idx, beta_ext[i].reshape(-1), r, 1.0 if scale is None else scale,
-                         np.asarray(RGB_WAVELENGTHS_M, np.float64), np.asarray(k_rgb, np.float64), n_term,
-                         np.asarray(s.albedo_rgb, np.float64), albedo_sum)
+        grid = use_model and f"r_eff_{s.name}" in hyd
+        k["mode"][i] = GRID if grid else SCALAR
+        physical = tuple(float(a) for a in physical_albedo(s.phase_class, np.float64(s.radius_m), s.density_kg_m3))
+        if grid and voxel_albedo and tuple(s.albedo_rgb) == physical:
+            scale, n_rgb, k_rgb = absorbing_material(s.phase_class, s.density_kg_m3)
+            k["by_radius"][i], k["radius_scale"][i] = True, 1.0 if scale is None else scale
+            k["k_abs"][i] = k_rgb
+            k["n_term"][i] = [n ** 3 - (n * n - 1.0) ** 1.5 for n in n_rgb]  # species.albedo_of_radius's
+    k["c3"] = np.array([np.float32(s.scale * 3.0) for s in sp], np.float32)
+    k["denom"] = np.array([np.float32(2.0 * s.density_kg_m3 * s.radius_m) for s in sp], np.float32)
+    k["d2"] = np.array([np.float32(2.0 * s.density_kg_m3) for s in sp], np.float32)
+    k["rdef"] = np.array([np.float32(s.radius_m) for s in sp], np.float32)
+    k["rgb"] = np.asarray([s.albedo_rgb for s in sp], np.float32)
+    k["mean_albedo"] = np.asarray([np.float32(np.mean(s.albedo_rgb)) for s in sp], np.float32)
+    k["albedo64"] = np.asarray([s.albedo_rgb for s in sp], np.float64)
+    k["wavelengths"] = np.asarray(RGB_WAVELENGTHS_M, np.float64)
+    return k
 
 
 def _release(hyd: xr.Dataset, names, kinds) -> None:
@@ -362,43 +360,43 @@ def _release(hyd: xr.Dataset, names, kinds) -> None:
             del hyd[name]
 
 
+def _flat32(hyd: xr.Dataset, var: str) -> np.ndarray:
+    """The field ``var`` of ``hyd`` as a flat float32 array (its own memory where it is float32 already)."""
+    return np.ascontiguousarray(hyd[var].values, np.float32).reshape(-1)
+
+
 def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool = False,
-                   release: tuple = ()):
-    """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32: beyond its
-    outputs (56 bytes per cell) this takes one or two float32 grids of temporaries (Eq. 4's). ``release``: the
-    kinds of field ("q", "r_eff") dropped from ``hyd`` (in place) once used, freeing their memory."""
-    rho = np.ascontiguousarray(hyd["rho_air"].values, np.float32)
-    shape = rho.shape
-    n_s = len(SPECIES_NAMES)
-    beta_ext = np.empty((n_s,) + shape, np.float32)
-    weights = np.empty((n_s,) + shape, np.float32)
-    from .mixture_kernels import finish_albedo, mix
-    radii = {}
-    for i, s in enumerate(sp):
-        q = np.ascontiguousarray(hyd[f"q_{s.name}"].values, np.float32)
-        s.beta_ext_per_m(rho, q, _radius_field(hyd, s.name, s.radius_m, use_model), out=beta_ext[i])  # Eq. 4
-        del q
-        if voxel_albedo and use_model:  # the radii of the voxels with mass, for the albedo after the mixture
-            radii[s.name] = _albedo_radii(hyd, s, beta_ext[i])
-        _release(hyd, [f"q_{s.name}", f"r_eff_{s.name}"], release)
-    # Eq. 6, Eq. 5's numerator sum omega_s beta_s and the Eq. 8 weights from the scattering coefficients
-    # beta_sca,s = omega_s beta_s (channel-mean albedo; the channels differ by < 1e-3 for every hydrometeor),
-    # in one pass (optics.mixture_kernels)
-    rgb = np.asarray([s.albedo_rgb for s in sp], np.float32)
-    mean_albedo = np.asarray([np.float32(np.mean(s.albedo_rgb)) for s in sp], np.float32)
-    beta_total = np.empty(shape, np.float32)
-    albedo = np.empty(shape + (3,), np.float32)
-    mix(beta_ext.reshape(n_s, -1), rgb, mean_albedo, beta_total.reshape(-1), albedo.reshape(-1, 3),
-        weights.reshape(n_s, -1))
-    _voxel_albedo(radii, sp, beta_ext, albedo.reshape(-1, 3))
-    del radii
+                   release: tuple = (), keep: tuple = ("beta_ext", "weights")):
+    """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32, in one compiled
+    pass (``mixture_kernels.voxel_optics``) and the albedo's finish: a per-species grid not in ``keep`` is never
+    built (a :class:`ReleasedGrid` of its shape). Beyond the kept outputs (16 bytes per cell and 4 per kept
+    species grid, their pages touched where there is mass) nothing of the grid's size is allocated.
+    ``release``: the kinds of field ("q", "r_eff") dropped from ``hyd`` (in place) once the pass is done."""
+    from .mixture_kernels import albedo_sums, finish_albedo, voxel_optics
+    rho = _flat32(hyd, "rho_air")
+    shape = hyd["rho_air"].shape
+    grids = (len(SPECIES_NAMES),) + tuple(shape)
+    k = _species_constants(hyd, sp, use_model, voxel_albedo)
+    placeholder = np.zeros(1, np.float32)
+    q = tuple(_flat32(hyd, f"q_{s.name}") for s in sp)
+    r = tuple(_flat32(hyd, f"r_eff_{s.name}") if k["mode"][i] else placeholder for i, s in enumerate(sp))
+    out = {name: np.zeros(grids if name in keep else (grids[0], 1), np.float32) for name in ("beta_ext", "weights")}
+    beta_total = np.zeros(shape, np.float32)  # zeros: pages without mass are never written (mixture_kernels)
+    albedo = np.empty(tuple(shape) + (3,), np.float32)
+    voxel_optics(rho, q, r, k["mode"], k["c3"], k["denom"], k["d2"], k["rdef"], k["rgb"], k["mean_albedo"],
+                 k["by_radius"], k["radius_scale"], k["wavelengths"], k["k_abs"], k["n_term"], k["albedo64"],
+                 out["beta_ext"].reshape(grids[0], -1), "beta_ext" in keep, out["weights"].reshape(grids[0], -1),
+                 "weights" in keep, beta_total.reshape(-1), albedo.reshape(-1, 3))
+    del q, r
+    _release(hyd, [f"{kind}_{s.name}" for s in sp for kind in ("q", "r_eff")], release)
     # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
     # trilinear interpolation at cloud edges does not blend in a dark value
     total_ext = float(beta_total.sum(dtype=np.float64))
-    fill = (albedo.reshape(-1, 3).sum(axis=0, dtype=np.float64) / total_ext) if total_ext > 0 \
+    fill = (albedo_sums(albedo.reshape(-1, 3), beta_total.reshape(-1)) / total_ext) if total_ext > 0 \
         else np.mean([s.albedo_rgb for s in sp], axis=0)
     finish_albedo(albedo.reshape(-1, 3), beta_total.reshape(-1), fill.astype(np.float32))
-    return beta_ext, beta_total, albedo, weights
+    kept = {name: out[name] if name in keep else ReleasedGrid(name, grids) for name in out}
+    return kept["beta_ext"], beta_total, albedo, kept["weights"]
 
 
 def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
@@ -406,7 +404,7 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                    phase_tables: Sequence | None = None, model_radii: bool | None = None,
                    phase_quality: str = "default", sizes: str | None = None,
                    size_classes: int | None = None, periodic: bool | str | None = None,
-                   release: bool = False, keep: tuple = ("beta_ext", "weights")) -> OpticalVolume:
+                   release: bool | tuple = False, keep: tuple = ("beta_ext", "weights")) -> OpticalVolume:
     """Optics of ``hyd`` (Eq. 1-6, 8).
 
     Parameters
@@ -440,10 +438,11 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     periodic : bool or "transport", optional
         Horizontal boundaries (``OpticalVolume.periodic``); default: "transport" where the hydrometeors say
         they are periodic (``attrs["periodic"]``: the LES reader's doubly periodic domains), else False.
-    release : bool, default False
+    release : bool or tuple of str, default False
         Drop the mixing ratios and effective radii from ``hyd`` (in place) once their optics are computed, so
         that their memory goes while the volume's grids are built (the command line, which needs them no more;
-        ``rho_air`` and the coordinates stay).
+        ``rho_air`` and the coordinates stay); a tuple: those kinds of field alone ("q", "r_eff"; the viewer
+        keeps the mixing ratios for its read-out).
     keep : tuple of str, default ("beta_ext", "weights")
         The per-species grids the volume keeps; one left out is a :class:`ReleasedGrid` (its memory freed
         once the total, the albedo and the weights exist): the path tracer reads no ``beta_ext`` (4 bytes per
@@ -468,15 +467,16 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
                                repr(size_classes))  # before the optics (and ``release``) touch hyd
     check_fits(str(hyd.attrs.get("source", "hydrometeors")), hyd["rho_air"].shape, "optics")  # before allocating
     split_later = size_classes is not None and size_classes != 1 and use_model  # size_classes.split reads r_eff
-    kinds = (("q",) if split_later else ("q", "r_eff")) if release else ()
+    released = ("q", "r_eff") if release is True else tuple(release or ())
+    kinds = tuple(k for k in released if not (split_later and k == "r_eff"))
     beta_ext, beta_total, albedo, weights = _optics_arrays(hyd, sp, use_model, voxel_albedo=sizes == "scheme",
-                                                           release=kinds)
+                                                           release=kinds, keep=GRIDS if split_later else keep)
     names, components, attrs_classes = SPECIES_NAMES, None, {}
     if size_classes is not None and int(size_classes) > 1 and use_model:
         from .size_classes import split
         names, beta_ext, weights, components = split(hyd, sp, beta_ext, weights, int(size_classes))
         attrs_classes = {"size_classes": int(size_classes)}
-    _release(hyd, [f"r_eff_{s.name}" for s in sp], ("r_eff",) if release else ())
+    _release(hyd, [f"r_eff_{s.name}" for s in sp], ("r_eff",) if "r_eff" in released else ())
     attrs = {k: v for k, v in hyd.attrs.items()}
     attrs["species_preset"] = sp.preset_name
     attrs["model_radii"] = use_model
@@ -486,7 +486,7 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     if "beta_ext" not in keep:
         beta_ext = ReleasedGrid("beta_ext", beta_ext.shape)
     if "weights" not in keep:
-        weights = ReleasedGrid("weights", weights.shape)
+        weights = ReleasedGrid("weights", beta_ext.shape if weights is None else weights.shape)
     return OpticalVolume(names, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
                          Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic,

@@ -105,10 +105,12 @@ def _measure(scene_parts: dict, vol: OpticalVolume, sun, integrator: str, max_de
     """Mean and standard error (over passes) of the 1-pixel sensor's channel-mean value."""
     import mitsuba as mi
 
+    from ..kernel.medium import air_by_integrator
     from ..kernel.scene_dict import integrator_dict, medium_shape_dict, sun_dict
     from ..reference.passes import pass_seed
-    d = {"type": "scene", "integrator": integrator_dict(vol, integrator, max_depth, rr_depth),
-         "sun": sun_dict(sun), "slab": medium_shape_dict(vol)}
+    integ = integrator_dict(vol, integrator, max_depth, rr_depth)
+    d = {"type": "scene", "integrator": integ, "sun": sun_dict(sun),
+         "slab": medium_shape_dict(vol, None, not air_by_integrator(integ))}
     d.update(scene_parts)
     scene = mi.load_dict(d)
     per = max(1, -(-spp // passes))

@@ -69,6 +69,25 @@ def noise_stats(radiance: np.ndarray, stderr: np.ndarray, cloud: np.ndarray) -> 
             "worst_se_over_mean": float(se[ok].max() / m)}
 
 
+Y_OF_LINEAR_SRGB = np.array([0.2126729, 0.7151522, 0.0721750])  # CIE Y of linear sRGB (D65; IEC 61966-2-1)
+
+
+def luminance_rse(means, cloud: np.ndarray) -> float:
+    """Mean over the ``cloud`` pixels (H, W) of se(Y) / Y, Y the luminance of linear sRGB: each pass's image
+    recovered from the running means after 1, 2, ... P passes (``means``: (H, W, 3) each, as ``on_pass`` gives
+    them), se the sample standard deviation of the passes' Y over sqrt(P). Unlike ``noise_stats``' rse_mean
+    (the channels' mean se), it does not count the colour noise that the spectral mode's R, G, B get from its
+    X, Y, Z through sRGB's matrix."""
+    n = len(means)
+    if n < 2:
+        raise ValueError(f"luminance_rse needs at least 2 passes, got {n}")
+    y = np.stack([(i + 1) * np.asarray(m, np.float64) @ Y_OF_LINEAR_SRGB for i, m in enumerate(means)])
+    y[1:] -= y[:-1].copy()  # pass i = (i + 1) mean_i - i mean_(i-1), in Y (linear)
+    ym, se = y.mean(axis=0), y.std(axis=0, ddof=1) / np.sqrt(n)
+    ok = np.asarray(cloud, bool) & (ym > 0)
+    return float(np.mean(se[ok] / ym[ok])) if np.any(ok) else float("nan")
+
+
 def view_optical_depth(spec: SceneSpec, vol: OpticalVolume) -> np.ndarray:
     """Optical depth (H, W) of the full extinction (not delta-scaled) along each pixel's central camera
     ray of the scene's sensor (``eye_optical_depth``), in the current Mitsuba variant (or the default)."""

@@ -31,7 +31,9 @@ map on the same segments: within 2.4-4.4% (tests/test_slicing_air.py; the light 
 rim is lighter). None for a periodic field (as ``display.aerial``).
 Not included: light scattered more than once by the air, the light the storm scatters into its shadow, and
 the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
-(``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing.
+(``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing. Frames of 96 px a side or
+more integrate all this on every 4th pixel's ray and read it per pixel (``eye_air_coarse``); the tables' rows
+are packets of 4 floats (one gather each, ``packed``).
 """
 from __future__ import annotations
 
@@ -56,10 +58,11 @@ class EyeAir:
     """The air's tables and the scene's values, as the frame's kernels read them (opaque Dr.Jit values; the
     ints and bools are part of a recording's structure)."""
 
-    air: object         # mi.Float (n_h x 9): per height, extinction, molecules' and aerosol's scattering (R, G, B), 1/m
+    air: object         # mi.Float (n_h x 12): per height, extinction, molecules' and aerosol's scattering (R, G, B,
+                        # each padded to a packet of 4), 1/m (``packed``)
     h_step: object      # mi.Float: 1 / the height table's step (1/m); its heights start at sea level
     n_h: int            # rows of the height table
-    sun_rgb: object     # mi.Float (n_mu x n_s x 3): the direct sun's linear sRGB by (mu, height) (``wide_sun_table``)
+    sun_rgb: object     # mi.Float (n_mu x n_s x 4): the direct sun's linear sRGB by (mu, height), padded (``sun_table``)
     sun_mu: object      # (mi.Float lowest mu, mi.Float 1 / mu step, mi.Float 1 / height step (1/m))
     n_mu: int
     n_s: int
@@ -72,6 +75,8 @@ class EyeAir:
     ground: bool        # whether there is a ground
     ambient: object     # mi.Color3f: the diffuse light on the air in the box, W/m^2/sr per unit phase (``diffuse_light``)
     shadow: bool = True  # whether the storm shadows the air (False for a periodic field, as ``display.aerial``)
+    width: int = 0      # the frame's pixels (row-major rays): the coarse grid of ``eye_air_coarse``; 0: none
+    height: int = 0
 
 
 @functools.lru_cache(maxsize=4)
@@ -128,13 +133,12 @@ def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0), shadow: bo
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
     if cache.get("atm", (None,))[0] != atm:
         table = sun_table(atm)
-        cache["atm"] = (atm, mi.Float(np.ascontiguousarray(height_table(atm), np.float32).ravel()), table,
-                        mi.Float(np.ascontiguousarray(table.rgb, np.float32).ravel()))
+        cache["atm"] = (atm, mi.Float(packed(height_table(atm))), table, mi.Float(packed(table.rgb)))
     air, table, rgb = cache["atm"][1:]
     (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in bbox)
     floor = None if spec.ground is None else float(spec.ground.height)
     lo = (x0, y0, max(z0, floor) if floor is not None else z0)
-    return EyeAir(air, op(1.0 / HEIGHT_STEP_M), dr.width(air) // 9, rgb,
+    return EyeAir(air, op(1.0 / HEIGHT_STEP_M), dr.width(air) // 12, rgb,
                   (op(table.mu[0]), op((table.mu.size - 1) / (table.mu[-1] - table.mu[0])),
                    op((table.heights_m.size - 1) / (table.heights_m[-1] - table.heights_m[0]))),
                   int(table.mu.size), int(table.heights_m.size),
@@ -142,17 +146,32 @@ def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0), shadow: bo
                   op(atm.aerosol_g), mi.Point3f(op((x0 + x1) / 2), op((y0 + y1) / 2), op(0.0)),
                   (mi.Point3f(*(op(v) for v in lo)), mi.Point3f(op(x1), op(y1), op(z1))),
                   op(0.0 if floor is None else floor), floor is not None,
-                  mi.Color3f(*(op(v) for v in diffuse_light(spec, e_sky))), bool(shadow))
+                  mi.Color3f(*(op(v) for v in diffuse_light(spec, e_sky))), bool(shadow), int(spec.width),
+                  int(spec.height))
+
+
+def packed(table) -> np.ndarray:
+    """``table`` (..., 3 k) as float32 with each group of 3 padded to 4 (a packet the kernels gather at once),
+    flat."""
+    t = np.asarray(table, np.float32)
+    t = t.reshape(t.shape[:-1] + (t.shape[-1] // 3, 3))
+    return np.ascontiguousarray(np.concatenate([t, np.zeros(t.shape[:-1] + (1,), np.float32)], axis=-1)).ravel()
+
+
+def _packet(mi, dr, table, i):
+    """Packet i of a ``packed`` table (a mi.Color3f)."""
+    v = dr.gather(mi.Vector4f, table, i)
+    return mi.Color3f(v.x, v.y, v.z)
 
 
 def _lerp_rows(mi, dr, table, f, n, width, offset):
-    """Linear interpolation between rows of ``table`` (rows of ``width`` floats) at fractional rows f, the
-    3 floats from ``offset`` in each row (a mi.Color3f)."""
+    """Linear interpolation between rows of the ``packed`` ``table`` (rows of ``width`` packets) at fractional
+    rows f, packet ``offset`` of each row (a mi.Color3f)."""
     f = dr.clip(f, 0.0, float(n - 1))
     i = dr.minimum(mi.UInt32(f), n - 2)
     t = f - mi.Float(i)
-    a = mi.Color3f(*(dr.gather(mi.Float, table, i * width + offset + c) for c in range(3)))
-    b = mi.Color3f(*(dr.gather(mi.Float, table, (i + 1) * width + offset + c) for c in range(3)))
+    a = _packet(mi, dr, table, i * width + offset)
+    b = _packet(mi, dr, table, (i + 1) * width + offset)
     return a * (1.0 - t) + b * t
 
 
@@ -168,8 +187,7 @@ def _sun_colour(mi, dr, air: EyeAir, h, mu):
     ih, th = cell(h * inv_dh, air.n_s)
 
     def at(row, col):
-        k = (row * air.n_s + col) * 3
-        return mi.Color3f(*(dr.gather(mi.Float, air.sun_rgb, k + c) for c in range(3)))
+        return _packet(mi, dr, air.sun_rgb, row * air.n_s + col)
     lo = at(im, ih) * (1.0 - th) + at(im, ih + 1) * th
     hi = at(im + 1, ih) * (1.0 - th) + at(im + 1, ih + 1) * th
     return lo * (1.0 - tm) + hi * tm
@@ -184,6 +202,30 @@ def _phases(dr, air: EyeAir, cos_t):
     return p_r, (1.0 - g * g) / (4.0 * np.pi * dr.power(dr.maximum(1.0 + g * g - 2.0 * g * cos_t, 1e-6), 1.5))
 
 
+def _source(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
+    """point(s) -> (extinction, source) (mi.Color3f, 1/m and 1/m/sr per unit irradiance above the air) at o + s d:
+    the integrand of ``segment`` (its arguments)."""
+    import drjit as dr
+    p_r, p_a = _phases(dr, air, dr.dot(d, air.to_sun))
+    q0 = o - air.centre + mi.Vector3f(0.0, 0.0, EARTH_RADIUS_M)  # from the Earth's centre
+    ambient = air.ambient * (1.0 / (4.0 * np.pi)) / dr.maximum(air.irradiance, 1e-30) if diffuse else None
+
+    def at(s):
+        q = q0 + s * d
+        r = dr.norm(q)
+        h = dr.maximum(r - EARTH_RADIUS_M, 0.0)
+        fh = h * air.h_step
+        ext = _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 0)
+        sca_r, sca_a = _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 1), _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 2)
+        src = (sca_r * p_r + sca_a * p_a) * _sun_colour(mi, dr, air, h, dr.dot(q, air.to_sun) / r)
+        if shadow is not None:  # the storm's shadow on the direct sun
+            src *= shadow(o + s * d)
+        if diffuse:
+            src += (sca_r + sca_a) * ambient
+        return ext, src
+    return at
+
+
 def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse: bool = False, shadow=None):
     """(T, S) (mi.Color3f) of the rays o + s d over [t0, t1] (module docstring; S per unit irradiance above
     the air, 1/sr; T = 1, S = 0 where t1 <= t0); o in the scene's frame. ``diffuse``: S also holds the
@@ -192,25 +234,12 @@ def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse:
     mi.Float), a factor on the sun's colour C(h, mu) (``eye_path.segment_air``'s ``shadow``)."""
     import drjit as dr
     length = dr.maximum(t1 - t0, 0.0)
-    p_r, p_a = _phases(dr, air, dr.dot(d, air.to_sun))
-    q0 = o - air.centre + mi.Vector3f(0.0, 0.0, EARTH_RADIUS_M)  # from the Earth's centre
-    ambient = air.ambient * (1.0 / (4.0 * np.pi)) / dr.maximum(air.irradiance, 1e-30) if diffuse else None
+    source = _source(mi, air, o, d, shadow, diffuse)
 
     def point(i):
         x = mi.Float(i) * (1.0 / (samples - 1))
         s = t0 + length * (x * x if squared else x)
-        q = q0 + s * d
-        r = dr.norm(q)
-        h = dr.maximum(r - EARTH_RADIUS_M, 0.0)
-        fh = h * air.h_step
-        ext = _lerp_rows(mi, dr, air.air, fh, air.n_h, 9, 0)
-        sca_r, sca_a = _lerp_rows(mi, dr, air.air, fh, air.n_h, 9, 3), _lerp_rows(mi, dr, air.air, fh, air.n_h, 9, 6)
-        src = (sca_r * p_r + sca_a * p_a) * _sun_colour(mi, dr, air, h, dr.dot(q, air.to_sun) / r)
-        if shadow is not None:  # the storm's shadow on the direct sun
-            src *= shadow(o + s * d)
-        if diffuse:
-            src += (sca_r + sca_a) * ambient
-        return s, ext, src
+        return (s, *source(s))
 
     n = dr.width(t0)
     s, ext, src = point(mi.UInt32(0))
@@ -227,6 +256,28 @@ def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse:
     return dr.exp(-tau), S
 
 
+def profile(mi, air: EyeAir, o, d, t0, t1, samples: int, emit, shadow=None) -> None:
+    """The cumulative ``segment`` (uniform, with the diffuse light, the same trapezoids) of the rays o + s d over
+    [t0, t0 + x_k (t1 - t0)] at each of its points x_k = k / (samples - 1): ``emit(k, T_k, S_k)`` for k = 1 ..
+    samples - 1 (k a mi.UInt32; T_0 = 1, S_0 = 0), called inside a symbolic loop (side effects only, e.g.
+    ``dr.scatter``: all of them one kernel)."""
+    import drjit as dr
+    length = dr.maximum(t1 - t0, 0.0)
+    source = _source(mi, air, o, d, shadow, True)
+    n = dr.width(t0)
+    ext, src = source(t0)
+    ds = length * (1.0 / (samples - 1))
+
+    def body(k, ext, src, tau, S):
+        ext_next, src_next = source(t0 + length * (mi.Float(k) * (1.0 / (samples - 1))))
+        tau_next = tau + 0.5 * (ext + ext_next) * ds
+        S = S + 0.5 * (src * dr.exp(-tau) + src_next * dr.exp(-tau_next)) * ds
+        emit(k, dr.exp(-tau_next), S)
+        return k + 1, ext_next, src_next, tau_next, S
+    dr.while_loop((dr.full(mi.UInt32, 1, n), ext, src, dr.zeros(mi.Color3f, n), dr.zeros(mi.Color3f, n)),
+                  lambda k, *_: k < samples, body)
+
+
 def box_interval(mi, air: EyeAir, o, d):
     """(t_in, t_out) of the rays against the model's box (t >= 0; t_out <= t_in: a miss)."""
     import drjit as dr
@@ -237,13 +288,11 @@ def box_interval(mi, air: EyeAir, o, d):
     return dr.maximum(dr.maximum(dr.maximum(a.x, a.y), a.z), 0.0), dr.minimum(dr.minimum(b.x, b.y), b.z)
 
 
-def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background, depth, shadow=None):
-    """The eye pass's ``radiance`` (C + T L_bg, mi.Color3f) of ``rays`` seen through the air (module
-    docstring), from its cloud ``transmittance`` T, ``background`` L_bg and cloud ``depth`` t_c (m);
-    ``shadow``: the sun's direct light through the storm at world points (``segment``), used where
-    ``air.shadow``."""
+def ray_ends(mi, air: EyeAir, o, d):
+    """(t_in, t_out, t_end, hit, t_ground) of the rays: the box's chord (t_out clipped to t_end), where the
+    ray ends (the ground or the top of the air), whether it crosses the box before it ends, the ground's
+    distance (inf where the ray misses the ground)."""
     import drjit as dr
-    o, d = rays.origin, rays.direction
     t_in, t_out = box_interval(mi, air, o, d)
     q = o - air.centre + mi.Vector3f(0.0, 0.0, EARTH_RADIUS_M)
     b = dr.dot(q, d)
@@ -254,7 +303,17 @@ def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background,
         t_ground = dr.select(d.z < 0, (air.floor - o.z) / dr.select(d.z < 0, d.z, -1.0), dr.inf)
     t_end = dr.minimum(t_ground, t_top)
     hit = (t_out > t_in) & (t_in < t_end)
-    t_out = dr.minimum(t_out, t_end)
+    return t_in, dr.minimum(t_out, t_end), t_end, hit, t_ground
+
+
+def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background, depth, shadow=None):
+    """The eye pass's ``radiance`` (C + T L_bg, mi.Color3f) of ``rays`` seen through the air (module
+    docstring), from its cloud ``transmittance`` T, ``background`` L_bg and cloud ``depth`` t_c (m);
+    ``shadow``: the sun's direct light through the storm at world points (``segment``), used where
+    ``air.shadow``."""
+    import drjit as dr
+    o, d = rays.origin, rays.direction
+    t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
     # the box: split at the cloud's depth (the box's entry where the ray meets no cloud)
     t_c = dr.clip(dr.select(transmittance < 1.0, depth, t_in), t_in, t_out)
     shadow = shadow if air.shadow else None
@@ -304,4 +363,4 @@ def _top_m() -> float:
 
 
 __all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "SAMPLES_OUTSIDE", "box_interval", "eye_air_input",
-           "height_table", "light_shadow", "seen_through_air", "segment"]
+           "height_table", "light_shadow", "profile", "ray_ends", "seen_through_air", "segment"]

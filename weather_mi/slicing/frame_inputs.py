@@ -75,6 +75,9 @@ class MultipleLight:
     leak_gain: object       # weight of the leaking diffusion (leak_gain), unitless
     leak_rate: object       # its decay per transport depth (leak_rate), unitless
     flux: object            # weight of the diffused light's flux towards the eye (diffusion_flux), unitless
+    below_shadow: object    # how much of the ground's shadow dims the light from below (below_shadow), unitless
+    diffusion_lobe: object  # the diffused light's part scattered with the phase function (diffusion_lobe), unitless
+    ground_z: object        # the flat ground's height (m; the lowest box face without a ground)
 
 
 @dataclass
@@ -103,7 +106,8 @@ class FrameInputs:
 
     beta_s: list           # per species: extinction at scaling 1 (1/m), (z, y, x) flattened, mi.Float (constant data)
     noise: object          # None, or the unit-variance detail noise n, (z, y, x) flattened, mi.Float
-    tex_eye: object        # the eye's texture (z, y, x, 1 or 1 + groups): beta (, beta_sca per group), 1/m
+    tex_eye: object        # the eye's texture (texture_storage.ChannelTextures (z, y, x, C)): beta_sca per group,
+    #                        after beta where differentiated (none: one group whose beta_sca is omega_bar beta), 1/m
     tex_light: object      # the light pass's source (z, y, x, 1 or 2): beta (, beta_f), 1/m
     build: TextureBuild | None  # the frame rebuilds both textures from these; None: they are the last frame's
     sun: SweepPlan         # the sun's light pass (rays, slab path, blur, the store's LookupFrame)

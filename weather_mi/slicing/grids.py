@@ -14,7 +14,10 @@ def set_grids(renderer, vol, mode, detail_field, detail_noise):
     slicing/periodic.py)."""
     mi = renderer.mi
     renderer.shape = tuple(vol.beta_total.shape)
-    beta_s = beta_s_in = np.moveaxis(vol.beta_ext, 0, -1).astype(np.float32)
+    # a (z, y, x, S) float32 copy of the grids only where detail or padding changes them, or they are not float32
+    own = vol.beta_ext.dtype == np.float32 and not (detail_field is not None and mode.detail) and \
+        renderer.periodic is None
+    beta_s = None if own else np.moveaxis(vol.beta_ext, 0, -1).astype(np.float32)
     if detail_field is not None and mode.detail:
         detail = np.asarray(detail_field, dtype=np.float32)
         if detail.shape != renderer.shape:
@@ -26,15 +29,16 @@ def set_grids(renderer, vol, mode, detail_field, detail_noise):
         if n.shape != renderer.shape:
             raise ValueError(f"detail_noise must have the volume's shape {renderer.shape}, got {n.shape}")
         renderer.detail_noise = mi.Float(np.ascontiguousarray(n).ravel())
-    renderer.beta_sum_s = beta_s.reshape(-1, renderer.n_species).sum(axis=0, dtype=np.float64)  # 1/m, over all voxels
+    # 1/m, over all voxels (numpy sums each species' voxels in the same order from either layout)
+    renderer.beta_sum_s = vol.beta_ext.reshape(renderer.n_species, -1).sum(axis=1, dtype=np.float64) if own else \
+        beta_s.reshape(-1, renderer.n_species).sum(axis=0, dtype=np.float64)
     renderer.grid_box = tuple(np.asarray(p, dtype=np.float64) for p in vol.bbox)  # texture coordinates
     if renderer.periodic is not None:  # the grids' levels padded (slicing/periodic.py)
         beta_s, renderer.grid_box = renderer.periodic.pad(beta_s), renderer.periodic.grid_box
         renderer.shape = tuple(beta_s.shape[:3])
         if renderer.detail_noise is not None:
             renderer.detail_noise = mi.Float(renderer.periodic.pad(np.asarray(detail_noise, np.float32)).ravel())
-    # (z, y, x) each; unchanged by detail or padding: the volume's own float32 grids, which the kernel maps, not copies
-    own = beta_s is beta_s_in and vol.beta_ext.dtype == np.float32
+    # (z, y, x) each; unchanged by detail or padding: the volume's own float32 grids
     renderer.beta_s = [mi.Float(np.ascontiguousarray(vol.beta_ext[si] if own else beta_s[..., si]).ravel())
                        for si in range(renderer.n_species)]
     # the grid as kernel vectors (lo corner, 1 / span), for the light carried through the medium (periodic:

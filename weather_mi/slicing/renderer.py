@@ -33,6 +33,7 @@ from ..kernel.sky import sky_irradiance_horizontal
 from .blur import variance_per_metre
 from .eye import LightModel, composite
 from .eye_air import eye_air_input, light_shadow, seen_through_air
+from .eye_air_coarse import applies, seen_through_coarse_air
 from .recording import freeze_kernels, raise_recording_error, without_gc
 from .frame_inputs import EyeInputs, EyeRays, FrameInputs, KernelConstants, MultipleLight, TextureBuild
 from .geometry import slice_geometry, slicing_box
@@ -45,7 +46,7 @@ from .periodic import PeriodicSlicing
 from .rays import Scalars, f32, phase_index, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
 from .sun_air import sun_air_input
-from .texture_storage import replace_storage
+from .texture_storage import ChannelTextures, replace_storage
 from .view import ViewCache
 
 # the cone angle whose spread sets the light pass's blur steps (independent of the interactive cone angle)
@@ -170,20 +171,20 @@ class SliceRenderer:
         self._constants = KernelConstants(self)  # all of the renderer that its frame's kernels see
 
     def _make_textures(self, mode: SliceMode):
-        """The eye's texture (beta and beta_sca per group) and the light pass's source ((beta, beta_f), or
-        beta alone where no light is scattered forward). One phase function and albedos that agree within
-        UNIFORM_ALBEDO_SPREAD make beta_sca / beta and beta_f / beta one number each over the medium
-        (``mean_albedo``): both textures then hold beta alone (the eye's where there is one group)."""
+        """One voxel each until a frame builds them: the eye's texture (beta_sca per group, after beta where
+        differentiated) and the light pass's source ((beta, beta_f), or beta where no light is scattered forward).
+        One phase function and albedos that agree within UNIFORM_ALBEDO_SPREAD make beta_sca / beta and beta_f /
+        beta one number each (``mean_albedo``): the source holds beta alone, the eye's nothing for one group."""
         mi = self.mi
         uniform = mode.phase == "uniform" and _albedos_agree(self.albedo_rgb)
         self.one_scattering_ratio = uniform and len(self.groups) == 1  # beta_sca = omega_bar beta
         self.uniform_forward = mode.light == "translucent" and uniform  # beta_f = f omega_bar beta
         self.light_channels = 2 if mode.light == "translucent" and not self.uniform_forward else 1
-        eye_channels = 1 if self.one_scattering_ratio else 1 + len(self.groups)
+        eye_channels = int(self.differentiable) + (0 if self.one_scattering_ratio else len(self.groups))
         texture = (lambda t: mi.Texture3f(t, use_accel=False)) if self.periodic is None else \
             (lambda t: self.periodic.texture(mi, t))  # periodic: wrapping in x and y
-        self.tex_eye = texture(mi.TensorXf(np.zeros(self.shape + (eye_channels,), np.float32)))
-        self.tex_light_src = texture(mi.TensorXf(np.zeros(self.shape + (self.light_channels,), np.float32)))
+        self.tex_eye = ChannelTextures.zeros(texture, mi, eye_channels)  # unpadded (texture_storage.py)
+        self.tex_light_src = ChannelTextures.zeros(texture, mi, self.light_channels).parts[0]
 
     # ------------------------------------------------------------------ per-frame volume data
     def _species_vectors(self, params: SliceParams):
@@ -243,7 +244,7 @@ class SliceRenderer:
         return [float(params.detail.get(n, DEFAULT_DETAIL)) for n in self.vol.species]
 
     def _build_textures(self, build: TextureBuild, d: FrameInputs):
-        """Eye texture [beta_ext, beta_sca per group] and light source [beta_ext, beta_forward] (1/m) from
+        """Eye texture [(beta_ext,) beta_sca per group] and light source [beta_ext, beta_forward] (1/m) from
         ``build``; ``d``: the frame's inputs (the arrays read, the textures written)."""
         mi = self.mi
         import drjit as dr
@@ -265,7 +266,7 @@ class SliceRenderer:
             for si in members[1:]:
                 g_sca = g_sca + sca[si]
             grouped.append(g_sca)
-        eye = [ext] if self.one_scattering_ratio else [ext] + grouped
+        eye = ([ext] if self.differentiable else []) + ([] if self.one_scattering_ratio else grouped)
         replace_storage(mi, [(d.tex_eye, eye), (d.tex_light, [ext, beta_fwd][:self.light_channels])], self.shape)
 
     # ------------------------------------------------------------------ public
@@ -455,7 +456,8 @@ class SliceRenderer:
             model = MultipleLight(*(kernel_scalar(mi, v) for v in (
                 params.ms_extinction, params.ms_contribution, params.ms_eccentricity, params.sky_extinction,
                 params.diffusion_gain, params.diffusion_scale, max(float(spec.sun.to_sun[2]), 1e-3), params.leak_gain,
-                params.leak_rate, params.diffusion_flux)))
+                params.leak_rate, params.diffusion_flux, params.below_shadow, params.diffusion_lobe,
+                self.grid_box[0][2] if spec.ground is None else spec.ground.height)))
             gain = params.sky_gain
         else:
             gain = params.ambient
@@ -482,7 +484,8 @@ class SliceRenderer:
             model = LightModel(self.light, self.sky_light, self.mode.octaves, m.a, m.b, m.c, m.sky_extinction,
                                m.diffusion_gain, m.diffusion_scale, g=self.g_scattering, mu0=m.mu0,
                                carry=(inputs.tex_light, e.grid), leak_gain=m.leak_gain, leak_rate=m.leak_rate,
-                               below=e.below is not None, flux=m.flux)
+                               below=e.below is not None, flux=m.flux, below_shadow=m.below_shadow,
+                               diffusion_lobe=m.diffusion_lobe, ground_z=m.ground_z)
         else:
             model = LightModel(self.light, log_forward=self.mode.light == "translucent")
         offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
@@ -493,7 +496,8 @@ class SliceRenderer:
         if e.eye_air is None:
             return out
         shadow = light_shadow(mi, self.light, e.eye_air.to_sun)  # the storm's shadow on the air
-        return seen_through_air(mi, e.eye_air, e.rays, *out, shadow=shadow), out[1]  # the air in and out of the box
+        through = seen_through_coarse_air if applies(e.eye_air, e.rays.n) else seen_through_air
+        return through(mi, e.eye_air, e.rays, *out, shadow=shadow), out[1]  # the air in and out of the box
 
 
 FROZEN_FRAMES = True

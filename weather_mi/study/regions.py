@@ -32,7 +32,8 @@ BACKLIT_DEG = 60.0  # scattering angles below this: the pixel sees sunlight scat
 def eye_surface(r, spec, step_m: float | None = None):
     """(p1, tau): per pixel (H, W, 3) the world point where the optical depth along the eye ray reaches 1
     (NaN where it does not), and the ray's total optical depth through the slicing box (H, W); marched
-    through ``r``'s eye texture (a ``SliceRenderer`` after a frame) in steps of ``step_m`` (default a
+    through ``r``'s extinction (its light source texture's first channel; a ``SliceRenderer`` after a frame) in
+    steps of ``step_m`` (default a
     quarter of the grid's finest spacing), the crossing interpolated linearly within a step."""
     import drjit as dr
     mi = r.mi
@@ -43,7 +44,7 @@ def eye_surface(r, spec, step_m: float | None = None):
     o, d = rays.origin, rays.direction
 
     def body(t, tau, t_hit):
-        ext = dr.maximum(r.tex_eye.eval((o + (t + 0.5 * dt) * d - glo) * inv)[0], 0.0)
+        ext = dr.maximum(r.tex_light_src.eval((o + (t + 0.5 * dt) * d - glo) * inv)[0], 0.0)
         tau2 = tau + ext * dt
         crossing = (tau < 1.0) & (tau2 >= 1.0)
         t_hit = dr.select(crossing, t + dt * (1.0 - tau) / dr.maximum(tau2 - tau, 1e-30), t_hit)

@@ -139,10 +139,12 @@ class Storm:
     def _build(self, t: int):
         """(The OpticalVolume of time ``t``, its DenseMixingRatios); its Hydrometeors are let go. The volume keeps
         what the slicer and the read-out read: the per-species extinction and the total; the albedo grid only where
-        the species have no table (``SliceRenderer`` reads the table's)."""
+        the species have no table (``SliceRenderer`` reads the table's). Hydrometeors read for this build alone (not
+        a series' or a notebook's Dataset, which stay whole) let their effective radii go as they are used."""
         from .pick import DenseMixingRatios
         hyd = self.hydrometeors(t)
-        vol = self.recipe.volume(hyd=hyd, keep=("beta_ext",))
+        own = self._series is None and self.recipe.dataset is None  # read from the file (or a demo) for this build
+        vol = self.recipe.volume(hyd=hyd, keep=("beta_ext",), release=("r_eff",) if own else ())
         dense = DenseMixingRatios(hyd, vol)
         if vol.species_set is not None:
             vol.release("albedo")

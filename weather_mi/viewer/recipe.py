@@ -56,14 +56,16 @@ class VolumeRecipe:
     def _wrf(self) -> bool:
         return sources.kind(self.path, self.demo, self.dataset) == "wrf"
 
-    def volume(self, scale: Mapping[str, float] | None = None, hyd=None, keep: tuple = ("beta_ext", "weights")):
+    def volume(self, scale: Mapping[str, float] | None = None, hyd=None, keep: tuple = ("beta_ext", "weights"),
+               release: tuple = ()):
         """The OpticalVolume (Eq. 1-6, 8) of the (scaled) storm; ``hyd``: its Hydrometeors if already read;
-        ``keep``: its per-species grids (``optical_volume``: the slicer reads no weights)."""
+        ``keep``: its per-species grids (``optical_volume``: the slicer reads no weights); ``release``: the kinds
+        of field ("q", "r_eff") dropped from ``hyd`` once used (``optical_volume``)."""
         from ..optics.volume import default_sizes, optical_volume
         hyd = self.hydrometeors() if hyd is None else hyd
         return optical_volume(hyd, species=self.preset, scale=dict(scale or {}) or None, phase=self.phase,
                               sizes=self.sizes or default_sizes(hyd),
-                              periodic=self.periodic, keep=keep)
+                              periodic=self.periodic, keep=keep, release=release)
 
     def times(self) -> list[str]:
         """The labels of the input's times (one for a demo or an LES file; every time of a WRF file)."""

@@ -79,7 +79,7 @@ class VolumeFrame:
         self.bbox = vol.bbox
         self.spacing = vol.spacing
         self._occupied = vol.occupied_bbox()
-        self.beta_total = np.asarray(vol.beta_total, np.float64).sum(axis=0)[None]  # (1, y, x): the columns
+        self.beta_total = np.sum(vol.beta_total, axis=0, dtype=np.float64)[None]  # (1, y, x): the columns
 
     def occupied_bbox(self):
         return self._occupied

@@ -40,16 +40,14 @@ def parse(props, check):
 
 def cloud_cells(data: np.ndarray, air: np.ndarray, periodic: bool) -> np.ndarray:
     """Texel cells (the shape of ``majorants.texel_majorant_grid``'s) that hold more than the air: where one of
-    the cell's 8 texels differs from its level's air in a channel. ``data`` (z, y, x, 3) the medium's sigma_t, or
-    (z, y, x, 1) with a grey air (:func:`is_grey`)."""
+    the cell's 8 texels differs from its level's air in a channel. ``data`` (z, y, x, 3) the medium's sigma_t."""
     from .majorants import texel_majorant_grid
-    c = data.shape[3] if data.ndim == 4 else 0
-    if air.shape[0] != data.shape[0] or c not in (1, 3) or (c == 1 and not is_grey(air)):
+    if air.shape[0] != data.shape[0] or data.ndim != 4 or data.shape[3] != 3:
         raise RuntimeError(f"majorant_volpath: '{PROPERTY}' has {air.shape[0]} levels, the sigma_t grid is "
-                           f"{data.shape}: they must be the same levels, with 3 channels (1 for a grey air)")
+                           f"{data.shape}: they must be the same levels, with 3 channels")
     occupied = np.empty(data.shape[:3], np.float32)
     for k, level in enumerate(data):  # a level at a time: no whole-grid temporaries
-        occupied[k] = np.any(level != air[k, :c], axis=-1)
+        occupied[k] = np.any(level != air[k], axis=-1)
     return texel_majorant_grid(occupied, safety=1.0, periodic=periodic) > 0.0
 
 
@@ -121,7 +119,8 @@ class AirLevels:
         return out
 
     def tau(self, qz0, dqz, t0, t1, active):
-        """Optical depth (Color3f, or Float where grey) along a ray whose z texel coordinate is qz0 + dqz t, over [t0, t1]."""
+        """Optical depth (Color3f, or Float where grey) along a ray whose z texel coordinate is qz0 + dqz t, over
+        [t0, t1]."""
         dq = mi.Float64(dqz) * (mi.Float64(t1) - mi.Float64(t0))
         qa = mi.Float64(qz0) + mi.Float64(dqz) * mi.Float64(t0)
         flat = dr.abs(dq) < FLAT_DQ
@@ -131,3 +130,46 @@ class AirLevels:
         inv = dr.select(flat, 0.0, length / dr.select(flat, 1.0, dq))
         mid = [mid] if self.c == 1 else mid
         return self._out([dr.select(flat, mid[c] * (t1 - t0), mi.Float((cb[c] - ca[c]) * inv)) for c in range(self.c)])
+
+
+WEIGHTS_PROPERTY = "air_weights"
+
+
+def parse_weights(props, n_tables: int, n_levels: int, plugin: str):
+    """``hydrometeor_mixture``'s ``air_weights`` (n_levels, A): the Eq. 8 scattering coefficients (1/m, channel mean)
+    of the box's air per level of the weights grid, the components of its last A tables, as float32 numpy; None
+    without it. Constant in x and y, their trilinear lookup is the levels' linear interpolation in z, the same
+    floats as of a grid that held them in every voxel (a lerp between equal values is exact)."""
+    if WEIGHTS_PROPERTY not in props:
+        return None
+    a = np.asarray(props[WEIGHTS_PROPERTY], np.float32)
+    if a.ndim != 2 or a.shape[0] != int(n_levels) or not 1 <= a.shape[1] < int(n_tables) or \
+            not np.all(np.isfinite(a)) or a.min() < 0.0:
+        raise ValueError(f"{plugin}: '{WEIGHTS_PROPERTY}' must be a finite, non-negative (levels, A) tensor with the "
+                         f"weights grid's {n_levels} levels and A below the {n_tables} tables; got shape {a.shape}")
+    return np.ascontiguousarray(a)
+
+
+def with_coarse_air(majorant: np.ndarray, air: np.ndarray, cell: int, safety: float = SAFETY) -> np.ndarray:
+    """``majorant`` ((Z, Y, X), ``majorants.majorant_grid``'s of the hydrometeors' sigma_t, 1/m) plus the air's bound in
+    each coarse cell: ``safety`` x the largest air extinction (over channels) of the levels whose texels enter the
+    cell ([K cell - 1, (K + 1) cell], clipped), in place: a majorant of the hydrometeors' and the air's sum."""
+    e = np.asarray(air, np.float32).reshape(air.shape[0], -1).max(axis=1)
+    n = e.shape[0]
+    for k in range(majorant.shape[0]):
+        lo, hi = max(0, k * cell - 1), min(n, (k + 1) * cell + 1)
+        majorant[k] += np.float32(safety) * e[lo:hi].max()
+    return majorant
+
+
+def with_texel_air(majorant: np.ndarray, air: np.ndarray, safety: float = SAFETY) -> np.ndarray:
+    """``majorant`` ((nz + 1, ...), ``majorants.texel_majorant_grid``'s of the hydrometeors' sigma_t alone) with the
+    air: its cells with a cloud texel (> 0) plus ``safety`` x the air's largest extinction on the cell's two levels
+    (a bound of the sum); the others 0 (the air's alone: the trackers cross them with the air's own majorant),
+    in place, a level at a time."""
+    a = np.asarray(air, np.float32).reshape(air.shape[0], -1).max(axis=1)
+    n = a.shape[0]
+    for i, level in enumerate(majorant):  # texel cell i - 1: between levels i - 1 and i (clamped)
+        e = np.float32(safety) * max(a[min(max(i - 1, 0), n - 1)], a[min(i, n - 1)])
+        np.add(level, e, out=level, where=level > 0.0)
+    return majorant

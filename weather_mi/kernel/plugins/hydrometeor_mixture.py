@@ -51,8 +51,9 @@ albedo at a lane's wavelength (:meth:`HydrometeorMixture.albedo_at`), used by ``
 Properties (Python dict scenes): ``nodes`` (TensorXf, N ascending versines 1 - cos in [0, 2]), ``values``
 (TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S: beta_sca,s per voxel, >= 0; or packed as
 :func:`pack_weights` makes them, z x y x x x P x 4, kept as given; with ``weights_tail``, TensorXf z x y x x,
-the last species' coefficients, the packets hold the first 4 P = S - 1) and ``to_world`` (the bounding box
-as a transform of the unit cube). From XML: ``filename``, an ``.npz`` written by
+the last species' coefficients, the packets hold the first 4 P = S - 1), ``air_weights`` (optional, TensorXf,
+levels x A: the box's air per level of the grid, the coefficients of the last A of the S tables, which the grid
+then leaves out: ``air_levels.parse_weights``) and ``to_world`` (the bounding box as a transform of the unit cube). From XML: ``filename``, an ``.npz`` written by
 :func:`save_npz` with the same arrays plus ``bbox``.
 """
 from __future__ import annotations
@@ -63,103 +64,14 @@ import drjit as dr
 import mitsuba as mi
 
 from ..jitarrays import aligned_empty, aligned_float
+from . import air_levels, grid_lookup
+from .mixture_tables import (GUIDE_THETA0, alias_table, angle_warp, channel_mean_pdf, common_nodes,  # noqa: F401
+                             guide_table, prepare_tables, segment_masses)
+from . import spectral_albedo
+from .spectral_phase import from_properties, pack_pdf, spectral_pdf, spectral_value
 from .variant_class import variant_class
 
 PLUGIN_NAME = "hydrometeor_mixture"
-GUIDE_THETA0 = 1e-3  # rad: the guide table's angle warp is linear below, logarithmic above
-
-
-# ---------------------------------------------------------------- numpy side: table preparation
-
-def common_nodes(tables, max_nodes: int = 16384) -> np.ndarray:
-    """Ascending versine nodes v = 1 - cos(theta): the union of the tables' theta grids (thinned if
-    too many), distinct in float32."""
-    theta = np.unique(np.concatenate([np.asarray(t.theta, np.float64) for t in tables] + [[0.0, np.pi]]))
-    theta = theta[(theta >= 0) & (theta <= np.pi)]
-    if theta.size > max_nodes:
-        keep = np.unique(np.round(np.linspace(0, theta.size - 1, max_nodes)).astype(int))
-        theta = theta[keep]
-    v = np.unique((2.0 * np.sin(theta / 2) ** 2).astype(np.float32)).astype(np.float64)  # 1 - cos, accurately
-    v[0], v[-1] = 0.0, 2.0
-    return v
-
-
-def _normalise(v: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Scale p (N, ...) so that 2 pi * trapezoid(p, v) = 1 (piecewise linear in v = 1 - cos)."""
-    integral = 2 * np.pi * np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(v)[:, None], axis=0)
-    return p / integral
-
-
-def prepare_tables(tables, max_nodes: int = 16384):
-    """(nodes v = 1 - cos (N,), values (S, N, 3)) in 1/sr from PhaseTable-like objects (``theta``
-    ascending in radians, ``values`` (len(theta), 3) in 1/sr), resampled linearly in v."""
-    v = common_nodes(tables, max_nodes)
-    out = np.empty((len(tables), v.size, 3))
-    for s, t in enumerate(tables):
-        th = np.asarray(t.theta, np.float64)
-        vals = np.asarray(t.values, np.float64).reshape(th.size, -1)
-        if vals.shape[1] == 1:
-            vals = np.repeat(vals, 3, axis=1)
-        tv = 2.0 * np.sin(th / 2) ** 2
-        for c in range(3):
-            out[s, :, c] = np.interp(v, tv, vals[:, c])
-        out[s] = _normalise(v, out[s])
-    return v.astype(np.float32), out.astype(np.float32)
-
-
-def channel_mean_pdf(v: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """(S, N) channel-mean density pbar of every species (1/sr, 2 pi * integral dv = 1): the density
-    the sampler draws from."""
-    return _normalise(np.asarray(v, np.float64), np.asarray(values, np.float64).mean(axis=2).T).T
-
-
-def segment_masses(v: np.ndarray, pbar: np.ndarray) -> np.ndarray:
-    """(S, N - 1) probability of every node segment under the piecewise-linear density pbar (S, N)."""
-    seg = 0.5 * (pbar[:, 1:] + pbar[:, :-1]) * np.diff(np.asarray(v, np.float64))[None]
-    return seg / seg.sum(axis=1, keepdims=True)
-
-
-def alias_table(p: np.ndarray):
-    """Walker's alias table (Vose's construction) of the discrete distribution p (M,): (prob (M,),
-    alias (M,)). Bucket j, drawn uniformly, keeps j when a uniform coin is below prob[j] and takes
-    alias[j] otherwise; that draws j with probability p[j] exactly (up to float rounding)."""
-    p = np.asarray(p, np.float64)
-    m = p.size
-    scaled = p * (m / p.sum())
-    prob, alias = np.ones(m), np.arange(m)
-    small = [j for j in range(m) if scaled[j] < 1.0]
-    large = [j for j in range(m) if scaled[j] >= 1.0]
-    while small and large:
-        j, k = small.pop(), large.pop()
-        prob[j], alias[j] = scaled[j], k
-        scaled[k] -= 1.0 - scaled[j]
-        (small if scaled[k] < 1.0 else large).append(k)
-    return prob, alias  # leftovers (rounding) keep prob 1
-
-
-def angle_warp(v, theta0: float = GUIDE_THETA0):
-    """Guide-table coordinate in [0, 1] of versines v: asinh(Theta / theta0) / asinh(pi / theta0),
-    linear in Theta below theta0 and logarithmic above, as the tables' angle grids are."""
-    theta = 2.0 * np.arcsin(np.sqrt(np.clip(np.asarray(v, np.float64), 0.0, 2.0) / 2.0))
-    return np.arcsinh(theta / theta0) / np.arcsinh(np.pi / theta0)
-
-
-def guide_table(v: np.ndarray, max_steps: int = 3, theta0: float = GUIDE_THETA0):
-    """(bounds (M, 2) uint32, steps): bucket j of M equal buckets in :func:`angle_warp` holds versines
-    whose node segment lies in [bounds[j, 0], bounds[j, 1]] (widened by one segment either side for
-    float32 rounding), found in ``steps`` bisection steps. M grows from 2 N (doubling, up to 64 N)
-    until steps <= max_steps."""
-    t = angle_warp(v, theta0)
-    n_seg = v.size - 1
-    m = 2 * v.size
-    while True:
-        start = np.clip(np.searchsorted(t, np.arange(m + 1) / m, side="right") - 1, 0, n_seg - 1)
-        lo = np.clip(start[:-1] - 1, 0, n_seg - 1)
-        hi = np.clip(start[1:] + 1, 0, n_seg - 1)
-        steps = int(np.ceil(np.log2(np.max(hi - lo) + 1)))
-        if steps <= max_steps or m >= 64 * v.size:
-            return np.stack([lo, hi], axis=1).astype(np.uint32), steps
-        m *= 2
 
 
 def pack_weights(weights: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
@@ -272,22 +184,25 @@ class HydrometeorMixture:
             weights = props["weights"]  # a TensorXf in dict scenes: kept as it is, not copied
             tail = props["weights_tail"] if "weights_tail" in props else None
             to_world = props["to_world"] if "to_world" in props else mi.ScalarTransform4f()
+        # the box's air per level (``air_weights``, levels x A): the last A of the S tables, not in the grid
+        self.air_weights = air_levels.parse_weights(props, int(values.shape[0]), weights.shape[0], PLUGIN_NAME)
+        n_grid = int(values.shape[0]) - (0 if self.air_weights is None else self.air_weights.shape[1])
         if values.ndim != 3 or values.shape[1] != nodes.size or values.shape[2] != 3:
             raise ValueError(f"{PLUGIN_NAME}: 'values' must be S x N x 3 with N = len(nodes) = {nodes.size}; "
                              f"got {values.shape}")
-        packets = max(1, -(-int(values.shape[0]) // 4))
+        packets = max(1, -(-n_grid // 4))
         if tail is not None:
-            packets = (int(values.shape[0]) - 1) // 4
-            if int(values.shape[0]) % 4 != 1 or packets < 1 or tuple(weights.shape[3:]) != (packets, 4) or \
+            packets = (n_grid - 1) // 4
+            if n_grid % 4 != 1 or packets < 1 or tuple(weights.shape[3:]) != (packets, 4) or \
                     tuple(tail.shape) != tuple(weights.shape[:3]):
                 raise ValueError(f"{PLUGIN_NAME}: with 'weights_tail' (z x y x x), S = 4 P + 1 and 'weights' packed "
-                                 f"z x y x x x P x 4; got S = {values.shape[0]}, {tuple(weights.shape)} and "
+                                 f"z x y x x x P x 4; got S = {n_grid}, {tuple(weights.shape)} and "
                                  f"{tuple(tail.shape)}")
-        elif not (len(weights.shape) == 4 and weights.shape[3] == values.shape[0]) and \
+        elif not (len(weights.shape) == 4 and weights.shape[3] == n_grid) and \
                 tuple(weights.shape[3:]) != (packets, 4):
-            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {values.shape[0]}, or packed "
+            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {n_grid}, or packed "
                              f"z x y x x x {packets} x 4 (pack_weights); got {tuple(weights.shape)}")
-        self.n_species, self.n_nodes = int(values.shape[0]), int(nodes.size)
+        self.n_species, self.n_grid, self.n_nodes = int(values.shape[0]), n_grid, int(nodes.size)
         self.periodic = bool(props.get("periodic", False))  # x and y wrap (a periodic medium); else clamped
         inverse = np.linalg.inv(np.array(to_world.matrix, dtype=np.float64).reshape(4, 4))
         self.to_local = mi.Transform4f(mi.ScalarTransform4f(inverse.astype(np.float32).tolist()))
@@ -304,6 +219,7 @@ class HydrometeorMixture:
         # (N, S, 4): R, G, B value and the channel-mean pdf of every node and species, read as one packet
         table = np.concatenate([np.asarray(values, np.float32), pbar[:, :, None]], axis=2)
         self.table4 = _storage(np.transpose(table, (1, 0, 2)))
+        self.spectral_pdf = None if self.spectral_values is None else _storage(pack_pdf(pbar))  # spectral_phase
         # (4, S, N - 1, 2): alias tables of the segment probabilities of every species under the density
         # of each row of table4 (R, G, B, channel mean) (prob, alias as float)
         rows = [np.asarray(values, np.float64)[:, :, c] for c in range(3)] + [pbar]
@@ -334,20 +250,13 @@ class HydrometeorMixture:
             pack_weights(weights, out=flat)
             self.weights4 = mi.Float(flat)
         self.weights = None
+        self.air_w = None if self.air_weights is None else _storage(self.air_weights)
 
     def _set_spectral_tables(self, props, n_nodes: int):
-        """Spectral variants with ``spectral_values`` (S x N x K on the mixture's nodes) and ``spectral_nm`` (K uniform
-        wavelengths, nm): the phase tables by wavelength (``spectral_phase``); else None (R, G, B interpolated)."""
-        self.spectral_values = self.spectral_table = None
-        if not (mi.is_spectral and "spectral_values" in props):
-            return
-        from .spectral_phase import check_spectral, pack_spectral
-        values = np.asarray(props["spectral_values"], np.float32)
-        grid = np.asarray(props["spectral_nm"], np.float64).ravel()
-        check_spectral(values, grid, self.n_species, n_nodes, PLUGIN_NAME)
-        self.spectral_values = values
-        self.spectral_table = _storage(pack_spectral(values))
-        self.spectral_grid = (float(grid[0]), float(1.0 / (grid[1] - grid[0])), int(grid.size))
+        """Spectral variants with ``spectral_values`` and ``spectral_nm``: the phase tables by wavelength
+        (``spectral_phase.from_properties``); else None (R, G, B interpolated)."""
+        self.spectral_values, self.spectral_table, self.spectral_grid = from_properties(
+            props, self.n_species, n_nodes, PLUGIN_NAME, _storage)
 
     def _set_spectral(self, props):
         """Spectral variants: the channels' wavelengths (nm) and the species' co-albedo spectra."""
@@ -367,9 +276,8 @@ class HydrometeorMixture:
             raise ValueError(f"{PLUGIN_NAME}: 'coalbedo' must be S x (K + 1) in [0, 1] with S = {self.n_species} "
                              f"and K the wavelengths of the uniform grid 'coalbedo_nm' (K >= 2); got {c.shape}, "
                              f"{grid.size}")
-        self.coalbedo = _storage(c)
-        self.coalbedo_k = int(grid.size)
-        self.coalbedo_map = (float(grid[0]), float(1.0 / (grid[1] - grid[0])))
+        self.coalbedo = _storage(spectral_albedo.pack_coalbedo(c))
+        self.coalbedo_grid = (float(grid[0]), float(1.0 / (grid[1] - grid[0])), int(grid.size))
 
     # ------------------------------------------------------------ helpers
     def _at_wavelengths(self, value, mei):
@@ -384,26 +292,10 @@ class HydrometeorMixture:
         ``coalbedo``), from the medium's albedo at the reference wavelength ``albedo_ref`` (Float):
         1 - (1 - albedo_ref) sum_s w_s c_s(lambda) / sum_s w_s c_s(ref), c_s the species' co-albedo spectra
         (``optics.spectral``) and w_s their scattering weights (extinction weights to within the co-albedo,
-        <= 1e-3): the medium's own albedo at the reference, the species' mix of spectral shapes elsewhere."""
-        w = self._weights_at(mei)
-        lo, inv_step = self.coalbedo_map
-        k = self.coalbedo_k
-        ref = mi.Float(0.0)
-        for s in range(self.n_species):
-            ref += w[s] * _gather(self.coalbedo, s * (k + 1) + k)
-        inv_ref = dr.select(ref > 0.0, dr.rcp(ref), 0.0)
-        out = []
-        for lane in range(4):
-            u = dr.clip((mei.wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
-            i = mi.UInt32(u)
-            t = u - mi.Float(i)
-            co = mi.Float(0.0)
-            for s in range(self.n_species):
-                c0 = _gather(self.coalbedo, s * (k + 1) + i)
-                co += w[s] * dr.fma(_gather(self.coalbedo, s * (k + 1) + i + 1) - c0, t, c0)
-            ratio = dr.select(ref > 0.0, co * inv_ref, 1.0)
-            out.append(1.0 - (1.0 - albedo_ref) * ratio)
-        return mi.Spectrum(*out)
+        <= 1e-3): the medium's own albedo at the reference, the species' mix of spectral shapes elsewhere
+        (``spectral_albedo``)."""
+        return spectral_albedo.albedo_at(self.coalbedo, self.coalbedo_grid, self.n_species, self._weights_at(mei),
+                                         mei.wavelengths, albedo_ref, _gather4)
 
     def _weights_at(self, mei):
         """w_s(x) for s = 0..S-1: the coefficients trilinear on the bbox grid (texel centres at
@@ -412,31 +304,14 @@ class HydrometeorMixture:
             return [mi.Float(1.0)]  # renormalised weights of one species are 1: no lookup
         p = self.to_local @ mei.p
         nz, ny, nx = self.grid_shape
-        corner, frac = [], []
-        for axis, (coord, n) in enumerate(((p.z, nz), (p.y, ny), (p.x, nx))):
-            u = coord * n - 0.5
-            u0 = dr.floor(u)
-            i0 = mi.Int32(u0)
-            if self.periodic and axis > 0:  # indices modulo n (as the grid volumes' wrap_mode "repeat")
-                i0 = i0 % n
-                i0 = dr.select(i0 < 0, i0 + n, i0)
-                corner.append((i0, dr.select(i0 + 1 == n, 0, i0 + 1)))
-            else:
-                corner.append((dr.clip(i0, 0, n - 1), dr.clip(i0 + 1, 0, n - 1)))
-            frac.append(u - u0)
-        (z0, z1), (y0, y1), (x0, x1) = corner
-        fz, fy, fx = frac
+        corner, frac = grid_lookup.corners(p, self.grid_shape, self.periodic)
+        z0, z1 = corner[0]
+        fz = frac[0]
         npk = self.n_packets
-
-        def lerp(a, b, t):
-            return dr.fma(b - a, t, a)
+        lerp = grid_lookup.lerp
 
         def trilinear(texel):  # the same operations on a packet of 4 and on one value (the tail)
-            c00 = lerp(texel(z0, y0, x0), texel(z0, y0, x1), fx)
-            c01 = lerp(texel(z0, y1, x0), texel(z0, y1, x1), fx)
-            c10 = lerp(texel(z1, y0, x0), texel(z1, y0, x1), fx)
-            c11 = lerp(texel(z1, y1, x0), texel(z1, y1, x1), fx)
-            return lerp(lerp(c00, c01, fy), lerp(c10, c11, fy), fz)
+            return grid_lookup.trilinear(texel, corner, frac)
 
         w = []
         for k in range(npk):
@@ -444,7 +319,11 @@ class HydrometeorMixture:
             w += [dr.maximum(v[c], 0.0) for c in range(4)]
         if self.tail is not None:
             w.append(dr.maximum(trilinear(lambda z, y, x: _gather(self.tail, mi.UInt32((z * ny + y) * nx + x))), 0.0))
-        w = w[: self.n_species]
+        w = w[: self.n_grid]
+        if self.air_weights is not None:  # constant in x and y: the trilinear lookup is the levels' lerp in z
+            n_a = self.air_weights.shape[1]
+            w += [lerp(_gather(self.air_w, mi.UInt32(z0 * n_a + a)), _gather(self.air_w, mi.UInt32(z1 * n_a + a)), fz)
+                  for a in range(n_a)]
         total = w[0]
         for wi in w[1:]:
             total = total + wi
@@ -474,12 +353,11 @@ class HydrometeorMixture:
     def _mix_at(self, w, idx, t, mei):
         """(the variant's Spectrum value, pdf) of the mixture: :meth:`_mix`'s channels (at the lanes'
         wavelengths in spectral variants), or the tables by wavelength (``spectral_phase``) where given."""
-        value, pdf = self._mix(w, idx, t)
         if self.spectral_table is None:
+            value, pdf = self._mix(w, idx, t)
             return self._at_wavelengths(value, mei), pdf
-        from .spectral_phase import spectral_value
-        return spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
-                              _gather4), pdf
+        return (spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
+                               _gather4), spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4))
 
     def _mix(self, w, idx, t):
         """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t."""
@@ -567,15 +445,15 @@ class HydrometeorMixture:
     def traverse(self, cb):
         if self.weights is None:  # the parameter as given (negative values as 0), from the packed copy
             tail = None if self.tail is None else np.asarray(self.tail, np.float32)
-            self.weights = mi.TensorXf(unpack_weights(self.weights4, self.grid_shape, self.n_species, tail))
+            self.weights = mi.TensorXf(unpack_weights(self.weights4, self.grid_shape, self.n_grid, tail))
         cb.put("weights", self.weights, mi.ParamFlags.NonDifferentiable)
 
     def parameters_changed(self, keys=None):
         if keys and "weights" not in keys:
             return
         w = np.array(self.weights, np.float32).reshape(tuple(self.weights.shape))
-        if w.ndim != 4 or w.shape[3] != self.n_species:
-            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {self.n_species}; "
+        if w.ndim != 4 or w.shape[3] != self.n_grid:
+            raise ValueError(f"{PLUGIN_NAME}: 'weights' must be z x y x x x S with S = {self.n_grid}; "
                              f"got {w.shape}")
         self._set_weights(w)  # repacked
 

@@ -39,7 +39,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from . import air_levels, mvnee, sun, sun_properties
+from . import air_albedo, air_levels, mvnee, sun, sun_properties
 from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
 from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401 (re-exported)
 from .medium_setup import GridCache, MediumSetup, Tracking, phase_ctx, scattering_event, unit_cube_to_world, volume_data
@@ -124,9 +124,11 @@ class MajorantVolpath:
        - Probability of a multiple-vertex NEE chain (:mod:`.mvnee`; exclusive as the aureole) and its length.
      * - air_extinction
        - |tensor|
-       - (levels, 3) the air's extinction per level of the sigma_t grid (1/m), which that grid holds added
-         (:mod:`.air_levels`): its cells are crossed as empty space, with the air's majorant. A one-channel grid
-         takes an air whose three channels are equal (a satellite band's): tracked grey.
+       - (levels, 3) the air's extinction per level of the sigma_t grid (1/m), which a 3-channel grid holds added
+         and which is added to a grey (1-channel) one, the albedo then the mixture's of ``air_albedo`` and
+         ``air_scattering`` (:mod:`.air_albedo`, ``MediumSetup.add_air``) (:mod:`.air_levels`): its cells are
+         crossed as empty space, with the air's majorant. An air whose three channels are equal (a satellite
+         band's) is tracked grey (``air_levels.is_grey``).
      * - periodic, periodic_tiles
        - |string|, |int|
        - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each
@@ -169,6 +171,7 @@ class MajorantVolpath:
         _check(self.periodic == "none" or (self.reach >= 1 and self.track_mode == "texel"),
                f"periodic needs periodic_tiles >= 1 and tracking_grid 'texel', got {self.reach}, {self.track_mode!r}")
         self.air_levels = air_levels.parse(props, _check)  # the air in the box, per level (optional)
+        self.air_albedo = air_albedo.parse(props, self.air_levels, _check)  # with its albedo, where added
         sun_properties.parse(self, props)  # the integrator's own sun (optional)
 
     # ------------------------------------------------------------ Mitsuba object interface
@@ -212,13 +215,20 @@ class MajorantVolpath:
             key = (data.array.index, ms.scale, self.cell)
             if key != self._auto_key:
                 grid = np.asarray(data)  # in place (llvm): a copy only where scaled
-                self.majorant = mi.TensorXf(majorant_grid(grid if ms.scale == 1.0 else grid * ms.scale, self.cell))
+                maj = majorant_grid(grid if ms.scale == 1.0 else grid * ms.scale, self.cell)
+                if self.air_levels is not None:  # a bound of the hydrometeors' and the air's sum either way
+                    maj = air_levels.with_coarse_air(maj, self.air_levels, self.cell)
+                self.majorant = mi.TensorXf(maj)
                 self._auto_key = key
+        if self.air_levels is not None and vol is not None and int(volume_data(vol).shape[-1]) == 1:
+            grey = air_levels.is_grey(self.air_levels)  # a satellite band's: tracked grey (not spectral)
+            ms.add_air(air_levels.AirLevels(self.air_levels, grey), self.air_albedo, to_local, self.periodic != "none")
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"
         texel, texel_data = self._grids.texel(vol, ms.scale, self.reach if periodic else None, self.air_levels,
                                               grey_air=not ms.spectral)
         track = texel if (texel is not None and self.track_mode == "texel") else coarse
+        texel_data = None if ms.air is not None else texel_data  # the grid's texels lack the air added per level
         self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data, self.periodic, self.reach)
 
     # ------------------------------------------------------------ main entry

@@ -44,7 +44,8 @@ def _key(obj):
 class MediumSetup:
     """The scene's one medium (shapes' and sensors' media and ``sensor_medium``; more than one raises):
     ``medium`` (None: none), its ``sigma_t`` ``volume`` (None unless a ``heterogeneous`` medium), the
-    medium's ``scale`` and whether its extinction is ``spectral``. Built at each render."""
+    medium's ``scale`` and whether its extinction is ``spectral``. Built at each render. ``air``: the box's air
+    per level that the integrator adds to a grey sigma_t grid (:meth:`add_air`; None: none, or in the grid)."""
 
     def __init__(self, scene, sensor_medium):
         media = {}
@@ -65,6 +66,7 @@ class MediumSetup:
         self.volume = None
         self.scale = 1.0
         self.spectral = self.spectral_albedo = False
+        self.air = self.air_albedo = None
         if self.medium is None:
             return
         self.spectral = bool(self.medium.has_spectral_extinction())
@@ -75,6 +77,25 @@ class MediumSetup:
             self.volume = ch["sigma_t"][0]
             value, cpptype = ch["scale"]
             self.scale = float(mi.get_property(value, cpptype, self.medium)) if cpptype is not None else float(value)
+
+    def add_air(self, levels, albedo, to_local, periodic: bool) -> None:
+        """The box's air per level (``air_levels.AirLevels``) added to the grey sigma_t grid (the unit cube by
+        ``to_local``): sigma_t = the grid's + the air's at the point's height, per channel (the extinction is then
+        spectral, unless the air is grey: ``levels.c`` 1, a satellite band's); the albedo the mixture's
+        (``air_albedo.MixtureAlbedo``) on the same grid."""
+        rx, ry, rz = (int(v) for v in self.volume.resolution()) if self.volume is not None else (0, 0, 0)
+        if self.volume is None or albedo is None or self.scale != 1.0 or tuple(albedo.shape) != (rz, ry, rx):
+            raise RuntimeError(f"{PLUGIN_NAME}: the air added per level ('air_extinction' with a grey sigma_t grid) "
+                               "needs a heterogeneous medium with a sigma_t grid, scale 1, and 'air_albedo' on its grid")
+        self.air, self.air_albedo, self.air_to_local, self.air_levels = levels, albedo, to_local, rz
+        self.air_periodic, self.beta = bool(periodic), volume_data(self.volume).array
+        self.spectral = levels.c > 1
+
+    def air_at(self, p, active):
+        """The air's extinction (Color3f, or Float where grey; 1/m) at world point p: linear between the level
+        centres (the trilinear lookup of a grid that held it in every voxel)."""
+        q = (self.air_to_local @ p).z * self.air_levels - 0.5
+        return self.air.sigma_at(q, active)
 
 
 def check_bbox(to_world, vol):
@@ -120,16 +141,23 @@ def volume_data(vol):
 def sigma_t_at(ms, p, ray, active):
     """sigma_t (1/m) of the medium ``ms`` at world point p (Spectrum if spectral extinction, else Float)."""
     if ms.volume is not None:
-        it = dr.zeros(mi.Interaction3f)
-        it.p = p
-        it.time = ray.time
-        it.wavelengths = ray.wavelengths
+        it = _interaction(p, ray)
+        if ms.air is not None:  # the grey grid's and the air's at the point's level
+            return ms.air_at(p, active) + ms.volume.eval_1(it, active)
         if ms.spectral:
             return ms.volume.eval(it, active) * ms.scale
         return ms.volume.eval_1(it, active) * ms.scale
     mei = medium_interaction(ms, ray, p, mi.Float(0.0), active)
     sigma_t = ms.medium.get_scattering_coefficients(mei, active)[2]
     return sigma_t if ms.spectral else sigma_t[0]
+
+
+def _interaction(p, ray):
+    it = dr.zeros(mi.Interaction3f)
+    it.p = p
+    it.time = ray.time
+    it.wavelengths = ray.wavelengths
+    return it
 
 
 def medium_interaction(ms, ray, p, t, active):
@@ -149,6 +177,12 @@ def scattering_event(ms, ray, t, active):
     """The medium interaction at distance ``t`` along ``ray`` (with sigma_s and sigma_t set) and its
     single-scattering albedo sigma_s / sigma_t (0 where sigma_t = 0)."""
     mei = medium_interaction(ms, ray, ray.o + ray.d * t, t, active)
+    if ms.air is not None:  # sigma_t with the air per level (:func:`sigma_t_at`); the albedo grid the mixture's
+        sigma_t = sigma_t_at(ms, mei.p, ray, active)
+        albedo = ms.air_albedo.at(ms.air_to_local @ mei.p, ms.beta, ms.air_periodic, active)
+        albedo = dr.select(sigma_t > 0.0, albedo, 0.0)
+        mei.sigma_s, mei.sigma_t = albedo * sigma_t, sigma_t
+        return mei, albedo
     sigma_s, _, sigma_t = ms.medium.get_scattering_coefficients(mei, active)
     mei.sigma_s, mei.sigma_t = sigma_s, sigma_t
     albedo = dr.select(sigma_t > 0.0, sigma_s / dr.select(sigma_t > 0.0, sigma_t, 1.0), 0.0)
@@ -259,7 +293,10 @@ class GridCache:
             if air is not None:
                 if scale != 1.0:
                     raise RuntimeError(f"{PLUGIN_NAME}: the medium's air ('air_extinction') needs its scale 1, got {scale}")
-                maj[~air_levels.cloud_cells(grid, air, periodic)] = 0.0
+                if grid.ndim == 3 or grid.shape[-1] == 1:  # a grey grid of the hydrometeors: the air added per level
+                    air_levels.with_texel_air(maj, air)
+                else:  # the air in the grid
+                    maj[~air_levels.cloud_cells(grid, air, periodic)] = 0.0
             del grid
             empty = empty_space_radius(maj, periodic=True) if periodic else empty_space_radius(maj)
             self.texel_arrays = (mi.Float(maj.ravel()), mi.Int32(empty.ravel()))

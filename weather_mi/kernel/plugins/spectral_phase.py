@@ -9,6 +9,11 @@ the R, G, B ones) and held as one Vector4f per (node segment i, wavelength segme
 (:func:`pack_spectral`), so a lane's bilinear value (linear in v between nodes, linear in wavelength between
 the grid's wavelengths, held beyond its ends) is one packet load per species and lane (:func:`spectral_value`).
 Memory: 16 (N - 1)(K - 1) S bytes (about 3 MB for 5 species on 2000 nodes and 21 wavelengths).
+
+The density directions are drawn from (the species' mean over the K wavelengths, pbar_s) is read for MIS at
+every evaluation; :func:`pack_pdf` holds it per node segment as (pbar_s(v_i) for every s, pbar_s(v_i+1) for
+every s), so the mixture's pdf is ceil(S / 2) packet loads (:func:`spectral_pdf`; 3 for 5 species) instead of
+the 2 S of the R, G, B table ``table4`` (whose colour channels a spectral lane does not read).
 """
 from __future__ import annotations
 
@@ -35,6 +40,40 @@ def prepare_spectral(v: np.ndarray, stacks) -> np.ndarray:
         integral = 2 * np.pi * np.sum(0.5 * (out[s, 1:] + out[s, :-1]) * np.diff(v)[:, None], axis=0)
         out[s] /= integral
     return out.astype(np.float32)
+
+
+def from_properties(props, n_species: int, n_nodes: int, name: str, storage):
+    """(values S x N x K, the packed table (``storage`` of :func:`pack_spectral`), (first nm, 1 / step, K)) from
+    ``spectral_values`` and ``spectral_nm`` in ``props`` (spectral variants), checked; (None, None, None) else."""
+    if not (mi.is_spectral and "spectral_values" in props):
+        return None, None, None
+    values = np.asarray(props["spectral_values"], np.float32)
+    grid = np.asarray(props["spectral_nm"], np.float64).ravel()
+    check_spectral(values, grid, n_species, n_nodes, name)
+    return values, storage(pack_spectral(values)), (float(grid[0]), float(1.0 / (grid[1] - grid[0])), int(grid.size))
+
+
+def pack_pdf(pbar: np.ndarray) -> np.ndarray:
+    """(N - 1, 4 Q) float32 from the densities ``pbar`` (S, N): per node segment i, pbar_s(v_i) for s = 0..S-1,
+    then pbar_s(v_i+1), then zeros to Q = ceil(2 S / 4) packets."""
+    p = np.asarray(pbar, np.float32)
+    n_s, q = p.shape[0], -(-2 * p.shape[0] // 4)
+    out = np.zeros((p.shape[1] - 1, 4 * q), np.float32)
+    out[:, :n_s], out[:, n_s:2 * n_s] = p[:, :-1].T, p[:, 1:].T
+    return out
+
+
+def spectral_pdf(table, n_species: int, w, idx, t, gather4):
+    """sum_s w_s pbar_s(v), v at fraction ``t`` of node segment ``idx``; ``table`` from :func:`pack_pdf` (flat)."""
+    q = -(-2 * n_species // 4)
+    e = []
+    for k in range(q):
+        packet = gather4(table, idx * q + k)
+        e += [packet[c] for c in range(4)]
+    pdf = mi.Float(0.0)
+    for s in range(n_species):
+        pdf += w[s] * (e[s] + (e[n_species + s] - e[s]) * t)  # as the R, G, B table's pdf (``_mix``)
+    return pdf
 
 
 def pack_spectral(values: np.ndarray) -> np.ndarray:
@@ -74,4 +113,5 @@ def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4)
     return mi.Spectrum(*out)
 
 
-__all__ = ["prepare_spectral", "pack_spectral", "check_spectral", "spectral_value"]
+__all__ = ["prepare_spectral", "pack_spectral", "check_spectral", "spectral_value", "from_properties", "pack_pdf",
+           "spectral_pdf"]

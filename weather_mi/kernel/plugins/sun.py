@@ -28,6 +28,7 @@ import mitsuba as mi
 
 from . import air
 from .medium_setup import phase_ctx, scattering_event
+from .spectral_sun import spectrum_table
 from .trackers import delta_tracking
 
 
@@ -78,8 +79,8 @@ def parse_air(sun, props, check) -> None:
           f"'sun_air' must be a finite, non-negative (n_mu >= 2, n_h >= 2, {n_c}) tensor, got shape {t.shape}")
     h0, h1, mu0, mu1, radius = (float(props[n]) for n in AIR_PROPERTIES[1:])
     check(h1 > h0 and mu1 > mu0 and radius > 0.0, "'sun_air' needs h1 > h0, mu1 > mu0 and a positive radius")
-    if sun.spectrum is not None:  # one Texture3f over (lambda, h, mu) in place of the top-of-atmosphere one
-        sun.spectrum, sun.spectrum_air = _spectrum_texture(t), True
+    if sun.spectrum is not None:  # one table over (mu, h, lambda) in place of the top-of-atmosphere one
+        sun.spectrum_air = True
     else:
         sun.air = mi.Texture2f(mi.TensorXf(t), use_accel=False,  # CUDA: float interpolation weights, not 8-bit
                                filter_mode=dr.FilterMode.Linear, wrap_mode=dr.WrapMode.Clamp)
@@ -88,13 +89,9 @@ def parse_air(sun, props, check) -> None:
     sun.air_map = [mi.Float(v) for v in (h0, (n_h - 1) / (n_h * (h1 - h0)), 0.5 / n_h,
                                          mu0, (n_mu - 1) / (n_mu * (mu1 - mu0)), 0.5 / n_mu, radius)]
     dr.make_opaque(*sun.air_map)
+    if sun.spectrum is not None:
+        sun.spectrum = spectrum_table(t, sun.spectrum_nm, (h0, h1), (mu0, mu1))
     air.parse_box(sun, props, check)  # the air inside the box is tracked: the table where the sun ray leaves it
-
-
-def _spectrum_texture(t):
-    """A (n_mu, n_h, n_lambda) table as a linear, clamped Texture3f (x: wavelength, y: height, z: mu)."""
-    return mi.Texture3f(mi.TensorXf(np.ascontiguousarray(t, np.float32)[..., None]), use_accel=False,
-                        filter_mode=dr.FilterMode.Linear, wrap_mode=dr.WrapMode.Clamp)
 
 
 def parse_spectrum(sun, props, check) -> None:
@@ -112,10 +109,8 @@ def parse_spectrum(sun, props, check) -> None:
     check(e.size >= 2 and np.all(np.isfinite(e)) and e.min() >= 0.0 and nm.size == 2 and nm[1] > nm[0],
           f"'sun_spectrum' must be >= 2 finite values >= 0 on 'sun_spectrum_nm' = (first, last) nm; got {e.size}, {nm}")
     sun.spectrum_shape = (1, 1, e.size)
-    sun.spectrum = _spectrum_texture(e.reshape(1, 1, -1))
-    # texel centres at (i + 0.5) / n: coordinate = (lambda - l0) / (l1 - l0) (n - 1) / n + 0.5 / n
-    sun.spectrum_map = [mi.Float(v) for v in (nm[0], (e.size - 1) / (e.size * (nm[1] - nm[0])), 0.5 / e.size)]
-    dr.make_opaque(*sun.spectrum_map)
+    sun.spectrum_nm = (float(nm[0]), float(nm[1]))
+    sun.spectrum = spectrum_table(e.reshape(1, 1, -1), sun.spectrum_nm)
 
 
 def _height_mu(sun, p):
@@ -132,15 +127,11 @@ def _height_mu(sun, p):
 
 def _spectral_radiance(sun, p, wavelengths):
     """The sun's value at the lanes' ``wavelengths``: ``sun_value`` x the spectrum (after the air at p)."""
-    l0, l_scale, l_off = sun.spectrum_map
-    if not sun.spectrum_air:  # the top-of-atmosphere spectrum only: one texel in height and mu
-        y = z = mi.Float(0.5)
+    if not sun.spectrum_air:  # the top-of-atmosphere spectrum only: one row in height and mu
+        hm = mi.Float(0.0), mi.Float(0.0)
     else:
-        h0, h_scale, h_off, mu0, mu_scale, mu_off, _ = sun.air_map
-        h, mu = _height_mu(sun, p)
-        y, z = (h - h0) * h_scale + h_off, (mu - mu0) * mu_scale + mu_off
-    lanes = [sun.spectrum.eval(mi.Point3f((wavelengths[i] - l0) * l_scale + l_off, y, z))[0] for i in range(4)]
-    return mi.Spectrum(*lanes) * sun.sun_value
+        hm = _height_mu(sun, p)
+    return mi.Spectrum(*sun.spectrum.eval(hm[0], hm[1], wavelengths)) * sun.sun_value
 
 
 def radiance_at(sun, p, wavelengths=None):

@@ -58,10 +58,8 @@ class _Walk:
         tc = t + dt
         collide = active & (tc < seg_end)
         if grid.air is not None:  # sigma_t in the air's cells from its levels, elsewhere the medium's lookup
-            cloud = collide & ~empty  # (a grey medium's: the interpolant of the cell's 8 texels)
-            s_c = self.sigma_t(tc, cloud) if self.texels is None else \
-                cell_interpolant(self.texels, grid, q0, dq, cells, (tc,), cloud)[0]
-            s_t = dr.select(empty, grid.air.sigma_at(q0[2] + dq[2] * tc, collide & empty), s_c)
+            s_t = dr.select(empty, grid.air.sigma_at(q0[2] + dq[2] * tc, collide & empty),
+                            self.sigma_t(tc, collide & ~empty))
         elif self.texels is None:
             s_t = self.sigma_t(tc, collide)
         else:  # in a texel cell: the interpolant of its 8 texels

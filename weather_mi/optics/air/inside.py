@@ -9,8 +9,11 @@
 * Aerosol: the 1-D atmosphere's profile and Angstrom law (``Atmosphere.aerosol_extinction_550_per_m``),
   single-scattering albedo ``aerosol_ssa``, Henyey-Greenstein phase function of asymmetry ``aerosol_g``.
 
-The extinction differs by channel (Rayleigh ~ lambda^-4): the medium's sigma_t becomes an RGB grid (spectral
-extinction, tracked by history-aware spectral tracking, Kutz et al. 2017, ``kernel.plugins.trackers``).
+The extinction differs by channel (Rayleigh ~ lambda^-4): spectral extinction, tracked by history-aware spectral
+tracking (Kutz et al. 2017, ``kernel.plugins.trackers``). ``majorant_volpath`` adds the air per level itself (the
+medium's sigma_t grid stays the hydrometeors' grey one, the air's Eq. 8 coefficients a table per level,
+``kernel.plugins.air_levels``, the mixture's albedo at a point ``kernel.plugins.air_albedo``); for stock
+``volpath`` :func:`medium_grids` puts it into RGB grids (``kernel.medium.medium_dict(air_in_grid=True)``).
 The phase functions enter the Eq. 8 mixture as two more components, weighted by their scattering
 coefficients (channel mean, as the hydrometeors' weights are: within a channel the mixture of air and
 aerosol is then that of the channel mean, exact for molecules alone or a cloud with molecules).
