@@ -149,7 +149,7 @@ def test_a_grey_air_is_tracked_grey_with_its_optical_depth_the_interpolants():
     integ = scene.integrator()
     integ._setup(scene, None)
     tk = integ._tk
-    assert not tk.ms.spectral and tk.ms.air.c == 1 and tk.texel.air.c == 1 and tk.texel_data is None
+    assert not tk.ms.spectral and tk.ms.air.grey and tk.texel.air.grey and tk.texel_data is None
     rng = np.random.default_rng(7)
     n = 1200
     o = LO - 2.0 + rng.random((n, 3)) * (HI - LO + 4.0)

@@ -57,18 +57,17 @@ def is_grey(air: np.ndarray) -> bool:
 
 
 class AirLevels:
-    """The air's per-level tables on Dr.Jit arrays: ``sigma`` (levels x C, float32), the cube bounds, the
-    cumulative C(q) per segment (float64). ``grey``: one channel (C = 1, the air :func:`is_grey`), its values
-    Float (the trackers' grey extinction), else C = 3 and Color3f."""
+    """The air's per-level tables on Dr.Jit arrays: ``sigma`` (levels x 3, float32), the cube bounds, the
+    cumulative C(q) per segment (float64)."""
 
     def __init__(self, air: np.ndarray, grey: bool = False):
-        if grey and not is_grey(air):
-            raise RuntimeError(f"majorant_volpath: '{PROPERTY}' differs between channels: a grey sigma_t grid needs "
+        if grey and not is_grey(air):  # ``grey``: one channel (the air :func:`is_grey`), sigma_at and tau Floats
+            raise RuntimeError(f"majorant_volpath: '{PROPERTY}' differs between channels: grey tracking needs "
                                "the air's channels equal")
+        self.grey = bool(grey)
         air = np.ascontiguousarray(np.asarray(air)[:, :1]) if grey else air
-        self.c = int(air.shape[1])
         a = np.asarray(air, np.float64)
-        n = a.shape[0]
+        n, self.channels = a.shape[0], a.shape[1]  # 3 (R, G, B), or a wavelength grid's K (.spectral_air)
         self.n = dr.opaque(mi.Int32, n)
         self.sigma = mi.Float(np.asarray(air, np.float32).ravel())
         # texel cells -1 .. n - 1 (array index i = cell + 1) lie between levels i - 1 and i (clamped)
@@ -81,7 +80,7 @@ class AirLevels:
         s_right = a[np.clip(np.arange(n + 1), 0, n - 1)]
         width = np.concatenate([[0.5], np.ones(n - 1), [0.5]])
         slope = np.where(np.arange(n + 1)[:, None] % n == 0, 0.0, s_right - s_left)  # per unit q; 0 in the end halves
-        c = np.concatenate([[np.zeros(self.c)], np.cumsum((s_left + 0.5 * slope * width[:, None]) * width[:, None], axis=0)])
+        c = np.concatenate([[np.zeros(self.channels)], np.cumsum((s_left + 0.5 * slope * width[:, None]) * width[:, None], axis=0)])
         self.knot = mi.Float64(knots)
         self.s_left, self.slope, self.c_left = (mi.Float64(v[:n + 1].ravel()) for v in (s_left, slope, c))
 
@@ -90,29 +89,31 @@ class AirLevels:
         i = dr.clip(cz - k - lo, 0, self.n)
         return dr.gather(mi.Float, self.bound, mi.UInt32(i), active)
 
-    def _out(self, values):
-        """Per-channel values as the trackers take them: Float (grey) or Color3f."""
-        return values[0] if self.c == 1 else mi.Color3f(*values)
-
     def sigma_at(self, q, active):
         """sigma (Color3f, or Float where grey; 1/m) at texel-centre coordinate q: linear between the level
         centres, clamped."""
+        if self.grey:
+            return self.sigma_channels(q, (0,), active)[0]
+        return mi.Color3f(*self.sigma_channels(q, range(3), active))
+
+    def sigma_channels(self, q, channels, active):
+        """sigma (1/m) at q of each of ``channels`` (ints, or UInt32 per lane): a list of Floats."""
         qc = dr.clip(q, 0.0, mi.Float(self.n - 1))
         i0 = dr.clip(mi.Int32(dr.floor(qc)), 0, self.n - 1)
         i1 = dr.minimum(i0 + 1, self.n - 1)
         f = qc - mi.Float(i0)
-        nc = self.c
-        return self._out([dr.lerp(dr.gather(mi.Float, self.sigma, mi.UInt32(i0 * nc + c), active),
-                                  dr.gather(mi.Float, self.sigma, mi.UInt32(i1 * nc + c), active), f) for c in range(nc)])
+        k = self.channels
+        return [dr.lerp(dr.gather(mi.Float, self.sigma, mi.UInt32(i0 * k + c), active),
+                        dr.gather(mi.Float, self.sigma, mi.UInt32(i1 * k + c), active), f) for c in channels]
 
-    def _cumulative(self, q, active):
-        """C(q) per channel (float64), q in float64."""
-        n = self.n
+    def _cumulative(self, q, active, channels=range(3)):
+        """C(q) per channel of ``channels`` (float64), q in float64."""
+        n, k = self.n, self.channels
         j = dr.clip(mi.Int32(dr.floor(q)) + 1, 0, n)
         x = dr.clip(q, -0.5, mi.Float64(n) - 0.5) - dr.gather(mi.Float64, self.knot, mi.UInt32(j), active)
         out = []
-        for c in range(self.c):
-            idx = mi.UInt32(j * self.c + c)
+        for c in channels:
+            idx = mi.UInt32(j * k + c)
             s0 = dr.gather(mi.Float64, self.s_left, idx, active)
             sl = dr.gather(mi.Float64, self.slope, idx, active)
             out.append(dr.gather(mi.Float64, self.c_left, idx, active) + x * (s0 + 0.5 * sl * x))
@@ -121,15 +122,21 @@ class AirLevels:
     def tau(self, qz0, dqz, t0, t1, active):
         """Optical depth (Color3f, or Float where grey) along a ray whose z texel coordinate is qz0 + dqz t, over
         [t0, t1]."""
+        if self.grey:
+            return self.tau_channels(qz0, dqz, t0, t1, (0,), active)[0]
+        return mi.Color3f(*self.tau_channels(qz0, dqz, t0, t1, range(3), active))
+
+    def tau_channels(self, qz0, dqz, t0, t1, channels, active):
+        """Optical depth of each of ``channels`` (ints, or UInt32 per lane) over [t0, t1] (``tau``): Floats."""
         dq = mi.Float64(dqz) * (mi.Float64(t1) - mi.Float64(t0))
         qa = mi.Float64(qz0) + mi.Float64(dqz) * mi.Float64(t0)
         flat = dr.abs(dq) < FLAT_DQ
-        mid = self.sigma_at(mi.Float(qa + 0.5 * dq), active & flat)
-        ca, cb = self._cumulative(qa, active & ~flat), self._cumulative(qa + dq, active & ~flat)
+        mid = self.sigma_channels(mi.Float(qa + 0.5 * dq), channels, active & flat)
+        ca = self._cumulative(qa, active & ~flat, channels)
+        cb = self._cumulative(qa + dq, active & ~flat, channels)
         length = mi.Float64(t1) - mi.Float64(t0)
         inv = dr.select(flat, 0.0, length / dr.select(flat, 1.0, dq))
-        mid = [mid] if self.c == 1 else mid
-        return self._out([dr.select(flat, mid[c] * (t1 - t0), mi.Float((cb[c] - ca[c]) * inv)) for c in range(self.c)])
+        return [dr.select(flat, m * (t1 - t0), mi.Float((b - a) * inv)) for m, a, b in zip(mid, ca, cb)]
 
 
 WEIGHTS_PROPERTY = "air_weights"

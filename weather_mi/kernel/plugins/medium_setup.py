@@ -81,7 +81,7 @@ class MediumSetup:
     def add_air(self, levels, albedo, to_local, periodic: bool) -> None:
         """The box's air per level (``air_levels.AirLevels``) added to the grey sigma_t grid (the unit cube by
         ``to_local``): sigma_t = the grid's + the air's at the point's height, per channel (the extinction is then
-        spectral, unless the air is grey: ``levels.c`` 1, a satellite band's); the albedo the mixture's
+        spectral, unless the air is grey: ``levels.grey``, a satellite band's); the albedo the mixture's
         (``air_albedo.MixtureAlbedo``) on the same grid."""
         rx, ry, rz = (int(v) for v in self.volume.resolution()) if self.volume is not None else (0, 0, 0)
         if self.volume is None or albedo is None or self.scale != 1.0 or tuple(albedo.shape) != (rz, ry, rx):
@@ -89,7 +89,7 @@ class MediumSetup:
                                "needs a heterogeneous medium with a sigma_t grid, scale 1, and 'air_albedo' on its grid")
         self.air, self.air_albedo, self.air_to_local, self.air_levels = levels, albedo, to_local, rz
         self.air_periodic, self.beta = bool(periodic), volume_data(self.volume).array
-        self.spectral = levels.c > 1
+        self.spectral = not levels.grey
 
     def air_at(self, p, active):
         """The air's extinction (Color3f, or Float where grey; 1/m) at world point p: linear between the level

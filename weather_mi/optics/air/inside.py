@@ -41,7 +41,10 @@ class BoxAir:
     per channel R, G, B, in 1/m, float32, on a grid of ``shape`` (z, y, x); ``phase_tables`` the Rayleigh
     and the aerosol's Henyey-Greenstein tables; ``atmosphere`` the 1-D atmosphere of ozone and aerosol;
     ``band_nm`` the wavelength of each channel where each is one wavelength (a satellite's bands,
-    ``band_box_air``: the sun on its path is then the transmittance there), None for the RGB mode's colours.
+    ``band_box_air``: the sun on its path is then the transmittance there), None for the RGB mode's colours;
+    ``air_number_density_levels`` (z,) molecules per m^3 and ``heights_m`` (z,) the levels' heights, from which
+    :func:`level_components` gives the same air at any wavelength (the spectral variants' tables,
+    ``optics.air.spectral_levels``).
     ``extinction`` and ``scattering`` are the same broadcast onto the grid (read-only views, no memory)."""
 
     extinction_levels: np.ndarray
@@ -50,6 +53,8 @@ class BoxAir:
     atmosphere: Atmosphere
     phase_tables: tuple = field(repr=False, default=())
     band_nm: tuple | None = None
+    air_number_density_levels: np.ndarray | None = field(repr=False, default=None)
+    heights_m: np.ndarray | None = field(repr=False, default=None)
 
     @property
     def extinction(self) -> np.ndarray:
@@ -78,15 +83,26 @@ def box_air(atm: Atmosphere, rho_air_kg_m3, z_m, wavelengths_nm=CHANNEL_NM, shap
     if len(shape) != 3 or z.size != rho.size or shape[0] != rho.size:
         raise ValueError(f"rho_air must be (z, y, x) or (z,) with one height per level on a (z, y, x) grid; got "
                          f"{rho_in.shape}, {z.size} heights and the grid {shape}")
-    wl = np.asarray(wavelengths_nm, np.float64)
-    molecules = (rho * (AVOGADRO / M_AIR_KG_MOL))[:, None] * rayleigh_cross_section_m2(wl * 1e-9)   # (z, 3)
-    ozone = atm.ozone_number_density_m3(z)[:, None] * ozone_cross_section_m2(wl)                     # (z, 3)
-    aerosol = atm.aerosol_extinction_550_per_m(z)[:, None] * atm.aerosol_factor(wl)                  # (z, 3)
+    n_air = rho * (AVOGADRO / M_AIR_KG_MOL)
+    extinction, scattering = level_components(atm, n_air, z, wavelengths_nm)
     from ..phase.analytic import henyey_greenstein
     from ..rayleigh import phase_table
-    return BoxAir(extinction_levels=(molecules + ozone + aerosol).astype(np.float32),
-                  scattering_levels=np.stack([molecules, aerosol * atm.aerosol_ssa]).astype(np.float32),
-                  shape=shape, atmosphere=atm, phase_tables=(phase_table(), henyey_greenstein(atm.aerosol_g)))
+    return BoxAir(extinction_levels=extinction, scattering_levels=scattering, shape=shape, atmosphere=atm,
+                  phase_tables=(phase_table(), henyey_greenstein(atm.aerosol_g)), air_number_density_levels=n_air,
+                  heights_m=z)
+
+
+def level_components(atm: Atmosphere, n_air_m3, z_m, wavelengths_nm):
+    """(extinction (z, n), scattering of molecules and aerosol (2, z, n)), float32, 1/m: the air of levels with
+    ``n_air_m3`` (z,) molecules per m^3 at heights ``z_m`` (z,) (m) at ``wavelengths_nm`` (n,): molecules
+    (Bodhaine's cross section), ozone and aerosol from ``atm``'s profiles (module docstring)."""
+    wl = np.asarray(wavelengths_nm, np.float64)
+    z = np.asarray(z_m, np.float64)
+    molecules = np.asarray(n_air_m3, np.float64)[:, None] * rayleigh_cross_section_m2(wl * 1e-9)   # (z, n)
+    ozone = atm.ozone_number_density_m3(z)[:, None] * ozone_cross_section_m2(wl)                   # (z, n)
+    aerosol = atm.aerosol_extinction_550_per_m(z)[:, None] * atm.aerosol_factor(wl)                # (z, n)
+    return ((molecules + ozone + aerosol).astype(np.float32),
+            np.stack([molecules, aerosol * atm.aerosol_ssa]).astype(np.float32))
 
 
 def with_box_air(vol, hyd, atm: Atmosphere, band_nm=None):
@@ -170,5 +186,5 @@ def medium_grids(beta_total, albedo, weights, air: BoxAir, want=("sigma_t", "alb
     return out["sigma_t"], out["albedo"], out["coeffs"]
 
 
-__all__ = ["BoxAir", "CHANNEL_NM", "NAMES", "box_air", "level_density", "medium_extinction", "medium_grids", "scene_air",
+__all__ = ["BoxAir", "CHANNEL_NM", "NAMES", "box_air", "level_components", "level_density", "medium_extinction", "medium_grids", "scene_air",
            "with_box_air"]
