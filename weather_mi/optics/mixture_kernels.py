@@ -1,15 +1,19 @@
-"""The per-voxel optics of the species (Eq. 4, 5, 6, 8 and each voxel's albedo from its radius) in one compiled
-pass over the grid (numba), with the same float32 (and, for the albedo of a radius, float64) operations in the
+"""The per-voxel optics of the species (Eq. 4, 5, 6, 8 and each voxel's albedo from its radius) in compiled
+passes over the grid (numba), with the same float32 (and, for the albedo of a radius, float64) operations in the
 same order as the numpy expressions they replace (``optics.volume``'s images stay bit-identical; tested against
 those expressions in tests/test_optics.py).
 
-The pass reads each voxel's air density, mixing ratios and radii once and writes only what is kept: numpy took
-about 50 passes over 4-byte grids for these, and on this machine much of the time of a large domain went to the
-first touch of the fresh pages of its temporaries. The per-species grids and the total start as zeros (pages the
-operating system maps on first write) and a chunk of voxels without mass writes nothing to them: the empty part
-of a storm domain is never touched there. The pass is serial: as a numba ``prange`` its loops over voxels did
-not vectorise (3 times the CPU time of the serial loops, measured at 400 x 400 x 51), which two shared cores
-do not win back.
+``species_pass`` takes one species at a time (Eq. 4 into the total and the albedo's numerator, in species
+order), so that the caller frees each species' mixing ratio and radii before it reads the next: one pass over
+all species at once held every input together with all the outputs (``render`` 84 -> 77 and ``view`` 85 -> 76
+bytes per cell at the peak on 800 x 800 x 51, benchmarks/README.md). ``mixture_pass`` then gives the Eq. 8 weights and the albedo of each voxel's radius
+from the beta_s kept in the weights' (or beta_ext's) own grid and the radii of the voxels with extinction.
+numpy took about 50 passes over 4-byte grids for these, and on this machine much of the time of a large domain
+went to the first touch of the fresh pages of its temporaries. The per-species grids and the total start as
+zeros (pages the operating system maps on first write) and a chunk of voxels without mass writes nothing to
+them: the empty part of a storm domain is never touched there. The passes are serial: as a numba ``prange`` the
+loops over voxels did not vectorise (3 times the CPU time of the serial loops, measured at 400 x 400 x 51), which
+two shared cores do not win back.
 """
 from __future__ import annotations
 
