@@ -6,8 +6,9 @@ those expressions in tests/test_optics.py).
 ``species_pass`` takes one species at a time (Eq. 4 into the total and the albedo's numerator, in species
 order), so that the caller frees each species' mixing ratio and radii before it reads the next: one pass over
 all species at once held every input together with all the outputs (``render`` 84 -> 77 and ``view`` 85 -> 76
-bytes per cell at the peak on 800 x 800 x 51, benchmarks/README.md). ``mixture_pass`` then gives the Eq. 8 weights and the albedo of each voxel's radius
-from the beta_s kept in the weights' (or beta_ext's) own grid and the radii of the voxels with extinction.
+bytes per cell at the peak on 800 x 800 x 51, benchmarks/README.md). ``mixture_pass`` then gives the Eq. 8
+weights and the albedo of each voxel's radius from the beta_s kept in the weights' (or beta_ext's) own grid and
+the radii of the voxels with extinction.
 numpy took about 50 passes over 4-byte grids for these, and on this machine much of the time of a large domain
 went to the first touch of the fresh pages of its temporaries. The per-species grids and the total start as
 zeros (pages the operating system maps on first write) and a chunk of voxels without mass writes nothing to
