@@ -270,8 +270,10 @@ def test_each_species_inputs_released_before_the_next_is_read(monkeypatch):
     for s in wm.SPECIES_NAMES:
         hyd[f"r_eff_{s}"] = hyd[f"q_{s}"].copy(data=np.full(hyd[f"q_{s}"].shape, 2e-5, np.float32))
     held, real = [], mixture_kernels.species_pass
-    monkeypatch.setattr(mixture_kernels, "species_pass",
-                        lambda *a: (held.append(sorted(n for n in hyd.data_vars if n[:2] in ("q_", "r_"))), real(*a))[1])
+    def spy(*a):
+        held.append(sorted(n for n in hyd.data_vars if n[:2] in ("q_", "r_")))
+        return real(*a)
+    monkeypatch.setattr(mixture_kernels, "species_pass", spy)
     wm.optical_volume(hyd, "physical", sizes="scheme", phase_quality="test", release=True, keep=("weights",))
     assert held == [sorted(f"{k}_{s}" for s in wm.SPECIES_NAMES[i:] for k in ("q", "r_eff"))
                     for i in range(len(wm.SPECIES_NAMES))]
