@@ -74,6 +74,14 @@ def species_pass(rho, q, r, mode, c3, denom, d2, rdef, col, ma, first, keep_beta
                 x = b[j]
                 beta_total[lo + j] = x
                 albedo_sum[lo + j, 0], albedo_sum[lo + j, 1], albedo_sum[lo + j, 2] = x * c0, x * c1, x * c2
+        elif touched[chunk] and not nz:  # + (+0.0) changes only a -0.0 (to +0.0)
+            for j in range(m):
+                v = lo + j
+                if beta_total[v] == 0:
+                    beta_total[v] = beta_total[v] + np.float32(0.0)
+                for c in range(3):
+                    if albedo_sum[v, c] == 0:
+                        albedo_sum[v, c] = albedo_sum[v, c] + np.float32(0.0)
         elif nz or touched[chunk]:
             for j in range(m):
                 x, v = b[j], lo + j
@@ -90,18 +98,23 @@ def species_pass(rho, q, r, mode, c3, denom, d2, rdef, col, ma, first, keep_beta
 
 
 @njit(cache=True)
-def radii_with_extinction(beta, r):  # pragma: no cover - compiled
+def radii_with_extinction(beta, r, has):  # pragma: no cover - compiled
     """The radii r[v] of the voxels with beta[v] > 0, in voxel order (float32): all ``mixture_pass`` needs of a
-    species' radius grid once the grid itself is gone."""
+    species' radius grid once the grid itself is gone (only the chunks of CHUNK voxels where ``has`` is read)."""
+    n = beta.shape[0]
     count = 0
-    for v in range(beta.shape[0]):
-        count += beta[v] > 0
+    for chunk in range(has.shape[0]):
+        if has[chunk]:
+            for v in range(chunk * CHUNK, min(chunk * CHUNK + CHUNK, n)):
+                count += beta[v] > 0
     out = np.empty(count, np.float32)
     i = 0
-    for v in range(beta.shape[0]):
-        if beta[v] > 0:
-            out[i] = r[v]
-            i += 1
+    for chunk in range(has.shape[0]):
+        if has[chunk]:
+            for v in range(chunk * CHUNK, min(chunk * CHUNK + CHUNK, n)):
+                if beta[v] > 0:
+                    out[i] = r[v]
+                    i += 1
     return out
 
 

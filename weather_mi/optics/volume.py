@@ -397,7 +397,7 @@ def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albed
                      k["mean_albedo"][i], i == 0, "beta_ext" in keep, flat["beta_ext"][i], second, store[i],
                      beta_total.reshape(-1), albedo.reshape(-1, 3), touched, has[i])
         if k["by_radius"][i]:
-            radii[i] = radii_with_extinction(store[i], r)
+            radii[i] = radii_with_extinction(store[i], r, has[i])
         del q, r
         _release(hyd, [f"{kind}_{s.name}" for kind in ("q", "r_eff")], release)
     if second:
