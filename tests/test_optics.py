@@ -229,7 +229,7 @@ def bits(a):
 @pytest.mark.parametrize("species,sizes,scale", [
     ("paper", "scheme", None), ("physical", "scheme", {"ice": 2.0}), ("physical", None, None),
     ("paper", "paper", None), ("physical", "physical", None), (preset("physical", albedo=0.9), "scheme", None)])
-@pytest.mark.parametrize("keep", [("beta_ext", "weights"), ("weights",), ("beta_ext",)])
+@pytest.mark.parametrize("keep", [("beta_ext", "weights"), ("weights",), ("beta_ext",), ()])
 def test_compiled_voxel_pass_equals_the_numpy_expressions(species, sizes, scale, keep):
     """The one compiled pass (``optics.mixture_kernels.voxel_optics``) gives the numpy expressions' grids
     (written out above) bit for bit, signed zeros included, for each species table, particle sizes, scaling and
@@ -259,6 +259,25 @@ def test_compiled_voxel_pass_equals_the_numpy_expressions(species, sizes, scale,
     if sizes == "scheme" and not isinstance(species, wm.species.SpeciesSet):
         fixed = wm.optical_volume(hyd, species, scale=scale, sizes="physical", phase_quality="test")
         assert not np.array_equal(fixed.albedo, vol.albedo)
+
+
+def test_each_species_inputs_released_before_the_next_is_read(monkeypatch):
+    """With ``release``, the optics drop each species' mixing ratio and radii from the dataset before the next
+    species' pass reads its own (``mixture_kernels.species_pass``): the peak holds one species' inputs, not
+    all five with the outputs."""
+    from weather_mi.optics import mixture_kernels
+    hyd = wm.synthetic.cumulus()
+    for s in wm.SPECIES_NAMES:
+        hyd[f"r_eff_{s}"] = hyd[f"q_{s}"].copy(data=np.full(hyd[f"q_{s}"].shape, 2e-5, np.float32))
+    held, real = [], mixture_kernels.species_pass
+    def spy(*a):
+        held.append(sorted(n for n in hyd.data_vars if n[:2] in ("q_", "r_")))
+        return real(*a)
+    monkeypatch.setattr(mixture_kernels, "species_pass", spy)
+    wm.optical_volume(hyd, "physical", sizes="scheme", phase_quality="test", release=True, keep=("weights",))
+    assert held == [sorted(f"{k}_{s}" for s in wm.SPECIES_NAMES[i:] for k in ("q", "r_eff"))
+                    for i in range(len(wm.SPECIES_NAMES))]
+    assert not any(n[:2] in ("q_", "r_") for n in hyd.data_vars)
 
 
 def test_albedo_sums_is_numpys_sum_over_voxels():

@@ -1,15 +1,20 @@
-"""The per-voxel optics of the species (Eq. 4, 5, 6, 8 and each voxel's albedo from its radius) in one compiled
-pass over the grid (numba), with the same float32 (and, for the albedo of a radius, float64) operations in the
+"""The per-voxel optics of the species (Eq. 4, 5, 6, 8 and each voxel's albedo from its radius) in compiled
+passes over the grid (numba), with the same float32 (and, for the albedo of a radius, float64) operations in the
 same order as the numpy expressions they replace (``optics.volume``'s images stay bit-identical; tested against
 those expressions in tests/test_optics.py).
 
-The pass reads each voxel's air density, mixing ratios and radii once and writes only what is kept: numpy took
-about 50 passes over 4-byte grids for these, and on this machine much of the time of a large domain went to the
-first touch of the fresh pages of its temporaries. The per-species grids and the total start as zeros (pages the
-operating system maps on first write) and a chunk of voxels without mass writes nothing to them: the empty part
-of a storm domain is never touched there. The pass is serial: as a numba ``prange`` its loops over voxels did
-not vectorise (3 times the CPU time of the serial loops, measured at 400 x 400 x 51), which two shared cores
-do not win back.
+``species_pass`` takes one species at a time (Eq. 4 into the total and the albedo's numerator, in species
+order), so that the caller frees each species' mixing ratio and radii before it reads the next: one pass over
+all species at once held every input together with all the outputs (``render`` 84 -> 77 and ``view`` 85 -> 76
+bytes per cell at the peak on 800 x 800 x 51, benchmarks/README.md). ``mixture_pass`` then gives the Eq. 8
+weights and the albedo of each voxel's radius from the beta_s kept in the weights' (or beta_ext's) own grid and
+the radii of the voxels with extinction.
+numpy took about 50 passes over 4-byte grids for these, and on this machine much of the time of a large domain
+went to the first touch of the fresh pages of its temporaries. The per-species grids and the total start as
+zeros (pages the operating system maps on first write) and a chunk of voxels without mass writes nothing to
+them: the empty part of a storm domain is never touched there. The passes are serial: as a numba ``prange`` the
+loops over voxels did not vectorise (3 times the CPU time of the serial loops, measured at 400 x 400 x 51), which
+two shared cores do not win back.
 """
 from __future__ import annotations
 
@@ -43,81 +48,135 @@ def _eq4(rho, q, r, mode, c3, denom, d2, rdef, lo, m, out):  # pragma: no cover 
 
 
 @njit(cache=True)
-def _add_albedo_of_radius(b, r, lo, m, radius_scale, wavelengths, k_abs, n_term, albedo64,
-                          acc):  # pragma: no cover - compiled
-    """acc[c, j] += (omega_c(r) - omega_c) b where b > 0 and the voxel's radius r = r[lo + j] > 0: the
-    weak-absorption albedo of the radius (``species.albedo_of_radius``: x = 2 pi r' / lambda, Q_abs =
-    min(8/3 x k n_term, 1), omega = 1 - Q_abs / 2, r' = r radius_scale), in float64, added in float32."""
-    two_pi, eight_thirds = 2.0 * np.pi, 8.0 / 3.0
-    for c in range(3):
-        a, wl, k, nt, alb = acc[c], wavelengths[c], k_abs[c], n_term[c], albedo64[c]
-        for j in range(m):
-            x = two_pi * (np.float64(r[lo + j]) * radius_scale) / wl
-            q_abs = min(eight_thirds * x * k * nt, 1.0)
-            term = np.float32(((1.0 - q_abs / 2.0) - alb) * np.float64(b[j]))
-            a[j] = a[j] + term if b[j] > 0 and r[lo + j] > 0 else a[j]
-
-
-@njit(cache=True)
-def voxel_optics(rho, q, r, mode, c3, denom, d2, rdef, rgb, mean_albedo, by_radius, radius_scale, wavelengths,
-                 k_abs, n_term, albedo64, beta_ext, keep_beta, weights, keep_weights, beta_total,
-                 albedo_sum):  # pragma: no cover - compiled
-    """Per voxel v of the flat grids: beta_s (Eq. 4, ``_eq4``) of each species s; beta_total = sum_s beta_s
-    (Eq. 6, in species order); albedo_sum (N, 3) = sum_s beta_s omega_s (Eq. 5's numerator) plus, for each
-    species with ``by_radius`` (in species order, after the sum), the difference the albedo of the voxel's
-    radius makes (``_add_albedo_of_radius``); weights (S, N) = beta_s w_s / sum_s beta_s w_s (Eq. 8, w_s the
-    channel-mean albedo; 0 where nothing scatters); beta_ext (S, N) = beta_s when ``keep_beta``.
-
-    In chunks of CHUNK voxels, species by species (the loops over voxels vectorise). q, r: tuples of S flat
-    float32 grids (r a 1-element placeholder where ``mode`` is SCALAR); beta_ext, weights and beta_total zeroed
-    by the caller: a chunk whose values are all +0.0 there is not written (its pages stay untouched);
-    ``n_term``: n^3 - (n^2 - 1)^1.5."""
-    n_s = len(q)
+def species_pass(rho, q, r, mode, c3, denom, d2, rdef, col, ma, first, keep_beta, beta_ext, keep_store, store,
+                 beta_total, albedo_sum, touched, has):  # pragma: no cover - compiled
+    """One species' part of the mixture, species after species (its q and r can go before the next is read):
+    beta_s (Eq. 4, ``_eq4``) added to beta_total (Eq. 6) and beta_s col (the species' albedo, N, 3) to
+    albedo_sum (Eq. 5's numerator), chunk by chunk of CHUNK voxels, with the float32 operations of the mixture
+    in voxel order: the first species (``first``) sets them, a later one adds to them where an earlier species
+    or this one has a value other than +0.0 in the chunk (``touched``, per chunk, updated); beta_s written to
+    ``beta_ext`` (``keep_beta``) and ``store`` (``keep_store``: the rows ``mixture_pass`` reads back) where the
+    species has such a value in the chunk (``has``, per chunk, set). The grids are zeroed by the caller: a chunk
+    of +0.0 everywhere so far is never written (its pages stay untouched)."""
     n = rho.shape[0]
-    b = np.empty((n_s, CHUNK), np.float32)
-    total = np.empty(CHUNK, np.float32)
-    sca = np.empty(CHUNK, np.float32)
-    acc = np.empty((3, CHUNK), np.float32)
-    has = np.zeros(n_s, np.bool_)  # species s has a value other than +0.0 in the chunk
+    b = np.empty(CHUNK, np.float32)
+    c0, c1, c2 = col[0], col[1], col[2]
     for chunk in range((n + CHUNK - 1) // CHUNK):
         lo = chunk * CHUNK
         m = min(CHUNK, n - lo)
-        any_mass = False
-        for s in range(n_s):
-            bs = b[s]
-            _eq4(rho, q[s], r[s], mode[s], c3[s], denom[s], d2[s], rdef[s], lo, m, bs)
-            ma, col0, col1, col2 = mean_albedo[s], rgb[s, 0], rgb[s, 1], rgb[s, 2]
-            nz = False
-            if s == 0:
-                for j in range(m):
-                    x = bs[j]
-                    total[j], sca[j] = x, x * ma
-                    acc[0, j], acc[1, j], acc[2, j] = x * col0, x * col1, x * col2
-                    nz = nz | _not_plus_zero(x)
-            else:
-                for j in range(m):
-                    x = bs[j]
-                    total[j], sca[j] = total[j] + x, sca[j] + x * ma
-                    acc[0, j], acc[1, j], acc[2, j] = acc[0, j] + x * col0, acc[1, j] + x * col1, acc[2, j] + x * col2
-                    nz = nz | _not_plus_zero(x)
-            has[s] = nz
-            any_mass = any_mass | nz
-            if keep_beta and nz:
-                for j in range(m):
-                    beta_ext[s, lo + j] = bs[j]
-        if not any_mass:
-            continue  # total, weights 0 (as zeroed); the albedo the volume's fill (``finish_albedo``)
+        _eq4(rho, q, r, mode, c3, denom, d2, rdef, lo, m, b)
+        nz = False
         for j in range(m):
-            beta_total[lo + j] = total[j]
+            nz = nz | _not_plus_zero(b[j])
+        has[chunk] = nz
+        if first and nz:
+            for j in range(m):
+                x = b[j]
+                beta_total[lo + j] = x
+                albedo_sum[lo + j, 0], albedo_sum[lo + j, 1], albedo_sum[lo + j, 2] = x * c0, x * c1, x * c2
+        elif touched[chunk] and not nz:  # + (+0.0) changes only a -0.0 (to +0.0)
+            for j in range(m):
+                v = lo + j
+                if beta_total[v] == 0:
+                    beta_total[v] = beta_total[v] + np.float32(0.0)
+                for c in range(3):
+                    if albedo_sum[v, c] == 0:
+                        albedo_sum[v, c] = albedo_sum[v, c] + np.float32(0.0)
+        elif nz or touched[chunk]:
+            for j in range(m):
+                x, v = b[j], lo + j
+                beta_total[v] = beta_total[v] + x
+                albedo_sum[v, 0] = albedo_sum[v, 0] + x * c0
+                albedo_sum[v, 1] = albedo_sum[v, 1] + x * c1
+                albedo_sum[v, 2] = albedo_sum[v, 2] + x * c2
+        touched[chunk] = touched[chunk] | nz
+        if nz:
+            if keep_beta:
+                beta_ext[lo:lo + m] = b[:m]
+            if keep_store:
+                store[lo:lo + m] = b[:m]
+
+
+@njit(cache=True)
+def radii_with_extinction(beta, r, has):  # pragma: no cover - compiled
+    """The radii r[v] of the voxels with beta[v] > 0, in voxel order (float32): all ``mixture_pass`` needs of a
+    species' radius grid once the grid itself is gone (only the chunks of CHUNK voxels where ``has`` is read)."""
+    n = beta.shape[0]
+    count = 0
+    for chunk in range(has.shape[0]):
+        if has[chunk]:
+            for v in range(chunk * CHUNK, min(chunk * CHUNK + CHUNK, n)):
+                count += beta[v] > 0
+    out = np.empty(count, np.float32)
+    i = 0
+    for chunk in range(has.shape[0]):
+        if has[chunk]:
+            for v in range(chunk * CHUNK, min(chunk * CHUNK + CHUNK, n)):
+                if beta[v] > 0:
+                    out[i] = r[v]
+                    i += 1
+    return out
+
+
+@njit(cache=True)
+def _add_albedo_of_radius(b, radii, cursor, m, radius_scale, wavelengths, k_abs, n_term, albedo64,
+                          acc):  # pragma: no cover - compiled
+    """acc[c, j] += (omega_c(r) - omega_c) b where b = b[j] > 0 and the voxel's radius r > 0 (r the next of
+    ``radii``, the radii of the voxels with b > 0 in voxel order, from ``cursor``): the weak-absorption albedo of
+    the radius (``species.albedo_of_radius``: x = 2 pi r' / lambda, Q_abs = min(8/3 x k n_term, 1),
+    omega = 1 - Q_abs / 2, r' = r radius_scale), in float64, added in float32. Returns the cursor after the
+    chunk."""
+    two_pi, eight_thirds = 2.0 * np.pi, 8.0 / 3.0
+    for j in range(m):
+        if b[j] > 0:
+            rr = radii[cursor]
+            cursor += 1
+            if rr > 0:
+                for c in range(3):
+                    x = two_pi * (np.float64(rr) * radius_scale) / wavelengths[c]
+                    q_abs = min(eight_thirds * x * k_abs[c] * n_term[c], 1.0)
+                    acc[c, j] = acc[c, j] + np.float32(((1.0 - q_abs / 2.0) - albedo64[c]) * np.float64(b[j]))
+    return cursor
+
+
+@njit(cache=True)
+def mixture_pass(store, mean_albedo, keep_weights, weights, by_radius, radii, radius_scale, wavelengths, k_abs,
+                 n_term, albedo64, albedo_sum, touched, has):  # pragma: no cover - compiled
+    """After ``species_pass`` of every species: weights (S, N) = beta_s w_s / sum_s beta_s w_s (Eq. 8, w_s
+    the channel-mean albedo, the sum in species order; 0 where nothing scatters) from the species' beta_s in
+    ``store`` (S, N; it may be ``weights`` itself: each chunk is read before it is overwritten), and, for each
+    species with ``by_radius`` in species order, the difference the albedo of the voxel's radius makes added to
+    albedo_sum (``_add_albedo_of_radius``; ``radii[s]``: ``radii_with_extinction``). Chunks that no species
+    touched are skipped (weights 0 as zeroed; the albedo the volume's fill, ``finish_albedo``)."""
+    n_s, n = store.shape[0], store.shape[1]
+    b = np.empty((n_s, CHUNK), np.float32)
+    sca = np.empty(CHUNK, np.float32)
+    acc = np.empty((3, CHUNK), np.float32)
+    cursor = np.zeros(n_s, np.int64)
+    for chunk in range((n + CHUNK - 1) // CHUNK):
+        if not touched[chunk]:
+            continue
+        lo = chunk * CHUNK
+        m = min(CHUNK, n - lo)
         for s in range(n_s):
-            bs = b[s]
-            if keep_weights and has[s]:
+            ma = mean_albedo[s]
+            for j in range(m):
+                x = store[s, lo + j]
+                b[s, j] = x
+                sca[j] = x * ma if s == 0 else sca[j] + x * ma
+        for j in range(m):
+            for c in range(3):
+                acc[c, j] = albedo_sum[lo + j, c]
+        for s in range(n_s):
+            if not has[s, chunk]:
+                continue
+            if keep_weights:
                 ma = mean_albedo[s]
                 for j in range(m):
-                    weights[s, lo + j] = (bs[j] * ma) / sca[j] if sca[j] > 0 else np.float32(0.0)
-            if by_radius[s] and has[s]:
-                _add_albedo_of_radius(bs, r[s], lo, m, radius_scale[s], wavelengths, k_abs[s], n_term[s],
-                                      albedo64[s], acc)
+                    weights[s, lo + j] = (b[s, j] * ma) / sca[j] if sca[j] > 0 else np.float32(0.0)
+            if by_radius[s]:
+                cursor[s] = _add_albedo_of_radius(b[s], radii[s], cursor[s], m, radius_scale[s], wavelengths,
+                                                  k_abs[s], n_term[s], albedo64[s], acc)
         for j in range(m):
             for c in range(3):
                 albedo_sum[lo + j, c] = acc[c, j]

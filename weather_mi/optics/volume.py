@@ -367,28 +367,44 @@ def _flat32(hyd: xr.Dataset, var: str) -> np.ndarray:
 
 def _optics_arrays(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool = False,
                    release: tuple = (), keep: tuple = ("beta_ext", "weights")):
-    """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32, in one compiled
-    pass (``mixture_kernels.voxel_optics``) and the albedo's finish: a per-species grid not in ``keep`` is never
-    built (a :class:`ReleasedGrid` of its shape). Beyond the kept outputs (16 bytes per cell and 4 per kept
-    species grid, their pages touched where there is mass) nothing of the grid's size is allocated.
-    ``release``: the kinds of field ("q", "r_eff") dropped from ``hyd`` (in place) once the pass is done."""
-    from .mixture_kernels import albedo_sums, finish_albedo, voxel_optics
+    """(beta_ext (S, z, y, x), beta_total, albedo (z, y, x, 3), weights (S, z, y, x)), float32, in compiled
+    passes: species after species (``mixture_kernels.species_pass``; the fields of the ``release`` kinds, "q"
+    and "r_eff", dropped from ``hyd`` in place as each species is done, so that they go while the outputs are
+    built), then the mixture (``mixture_pass``) and the albedo's finish. A per-species grid not in ``keep`` is
+    never built (a :class:`ReleasedGrid` of its shape). Beyond the kept outputs (16 bytes per cell and 4 per
+    kept species grid, their pages touched where there is mass) the species' beta_s are held in the weights
+    (or beta_ext) grid, or in a grid of them where neither is kept and a voxel's radius sets its albedo."""
+    from .mixture_kernels import (CHUNK, albedo_sums, finish_albedo, mixture_pass, radii_with_extinction,
+                                  species_pass)
     rho = _flat32(hyd, "rho_air")
     shape = hyd["rho_air"].shape
     grids = (len(SPECIES_NAMES),) + tuple(shape)
     k = _species_constants(hyd, sp, use_model, voxel_albedo)
-    placeholder = np.zeros(1, np.float32)
-    q = tuple(_flat32(hyd, f"q_{s.name}") for s in sp)
-    r = tuple(_flat32(hyd, f"r_eff_{s.name}") if k["mode"][i] else placeholder for i, s in enumerate(sp))
     out = {name: np.zeros(grids if name in keep else (grids[0], 1), np.float32) for name in ("beta_ext", "weights")}
+    flat = {name: grid.reshape(grids[0], -1) for name, grid in out.items()}
+    second = "weights" in keep or bool(k["by_radius"].any())  # the mixture's pass: the weights, radii's albedo
+    store = flat["beta_ext"] if "beta_ext" in keep else flat["weights"] if "weights" in keep else \
+        np.zeros((grids[0], rho.size) if second else (grids[0], 1), np.float32)
     beta_total = np.zeros(shape, np.float32)  # zeros: pages without mass are never written (mixture_kernels)
-    albedo = np.empty(tuple(shape) + (3,), np.float32)
-    voxel_optics(rho, q, r, k["mode"], k["c3"], k["denom"], k["d2"], k["rdef"], k["rgb"], k["mean_albedo"],
-                 k["by_radius"], k["radius_scale"], k["wavelengths"], k["k_abs"], k["n_term"], k["albedo64"],
-                 out["beta_ext"].reshape(grids[0], -1), "beta_ext" in keep, out["weights"].reshape(grids[0], -1),
-                 "weights" in keep, beta_total.reshape(-1), albedo.reshape(-1, 3))
-    del q, r
-    _release(hyd, [f"{kind}_{s.name}" for s in sp for kind in ("q", "r_eff")], release)
+    albedo = np.zeros(tuple(shape) + (3,), np.float32)
+    n_chunks = (rho.size + CHUNK - 1) // CHUNK
+    touched, has = np.zeros(n_chunks, np.bool_), np.zeros((grids[0], n_chunks), np.bool_)
+    radii = [np.zeros(0, np.float32) for _ in sp]
+    for i, s in enumerate(sp):
+        q = _flat32(hyd, f"q_{s.name}")
+        r = _flat32(hyd, f"r_eff_{s.name}") if k["mode"][i] else np.zeros(1, np.float32)
+        species_pass(rho, q, r, k["mode"][i], k["c3"][i], k["denom"][i], k["d2"][i], k["rdef"][i], k["rgb"][i],
+                     k["mean_albedo"][i], i == 0, "beta_ext" in keep, flat["beta_ext"][i], second, store[i],
+                     beta_total.reshape(-1), albedo.reshape(-1, 3), touched, has[i])
+        if k["by_radius"][i]:
+            radii[i] = radii_with_extinction(store[i], r, has[i])
+        del q, r
+        _release(hyd, [f"{kind}_{s.name}" for kind in ("q", "r_eff")], release)
+    if second:
+        mixture_pass(store, k["mean_albedo"], "weights" in keep, flat["weights"], k["by_radius"], tuple(radii),
+                     k["radius_scale"], k["wavelengths"], k["k_abs"], k["n_term"], k["albedo64"],
+                     albedo.reshape(-1, 3), touched, has)
+    del store, radii
     # mixture albedo (Eq. 5 over the mixture); clear voxels get the mean albedo of the volume so that
     # trilinear interpolation at cloud edges does not blend in a dark value
     total_ext = float(beta_total.sum(dtype=np.float64))
