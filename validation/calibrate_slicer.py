@@ -13,7 +13,9 @@ beside the paper's Table IV modes.
    defaults were fitted to --spp 128), held-out views to
    --target-rse:
    training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
-   its condensate x 0.15), front-, side- and back-lit;
+   its condensate x 0.15), and the real WRF supercell at 01:00 and 02:00 (wrf/wrfout_quarter_ss_series.nc,
+   the held-out one's run at other times), front-, side- and back-lit; a training field that is a held-out
+   one (the same file and time, or the same mixing ratios in another file) is refused (check_held_out);
    held-out: the real WRF supercell, the WRF Tibetan Plateau file, BOMEX and RICO (from --data),
    front-, side- and back-lit (the sun behind the storm: silver linings, dark cores).
 2. Fit the model's parameters with Dr.Jit reverse-mode AD on the training views
