@@ -47,11 +47,12 @@ needs_data = pytest.mark.skipif(not (DATA / "wrf" / "wrfout_quarter_ss_series.nc
 
 
 def test_training_set_has_real_storms_at_other_times():
-    """The real WRF supercell trains at 01:00 and 02:00; its held-out view is the 01:30 file."""
+    """The real WRF supercell trains at 01:00 and 02:00 (its held-out view: the 01:30 file), the plateau at
+    00:00 (held out: its last time, 09:00)."""
     from weather_mi.study.runs import DATA_SCENES, DATA_TIMES
     real = [s for s in cs.TRAIN_SCENES if s in DATA_SCENES]
-    assert real == ["wrf-supercell-0100", "wrf-supercell-0200"]
-    assert {DATA_TIMES[s] for s in real} == {"0001-01-01_01:00:00", "0001-01-01_02:00:00"}
+    assert real == ["wrf-supercell-0100", "wrf-supercell-0200", "wrf-plateau-0000"]
+    assert {DATA_TIMES[s] for s in real} == {"0001-01-01_01:00:00", "0001-01-01_02:00:00", "2005-09-21_00:00:00"}
     assert not {s for s, _ in cs.TRAIN} & {s for s, _ in cs.HELD_OUT}
     assert {l for s, l in cs.TRAIN if s in real} == {"front", "side", "back"}
 
@@ -63,7 +64,7 @@ def test_no_held_out_field_is_trained_on(monkeypatch):
     01:30 field read from the series file, and one that is a held-out scene itself."""
     train = {cs.field_of(s, DATA) for s, _ in cs.TRAIN} - {None}
     held = {cs.field_of(s, DATA) for s, _ in cs.HELD_OUT} - {None}
-    assert len(train) == 2 and len(held) == 4
+    assert len(train) == 3 and len(held) == 4
     assert not {f[:2] for f in train} & {f[:2] for f in held}
     assert not {f[2] for f in train} & {f[2] for f in held}
     cs.check_held_out(cs.TRAIN, cs.HELD_OUT, DATA)  # the shipped sets pass

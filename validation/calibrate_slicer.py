@@ -13,8 +13,9 @@ beside the paper's Table IV modes.
    defaults were fitted to --spp 128), held-out views to
    --target-rse:
    training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
-   its condensate x 0.15), and the real WRF supercell at 01:00 and 02:00 (wrf/wrfout_quarter_ss_series.nc,
-   the held-out one's run at other times), front-, side- and back-lit; a training field that is a held-out
+   its condensate x 0.15), the real WRF supercell at 01:00 and 02:00 (wrf/wrfout_quarter_ss_series.nc,
+   the held-out one's run at other times) and the WRF plateau at 00:00 (held out: its last time, 09:00,
+   with a fifth of the cloud cover), front-, side- and back-lit; a training field that is a held-out
    one (the same file and time, or the same mixing ratios in another file) is refused (check_held_out);
    held-out: the real WRF supercell, the WRF Tibetan Plateau file, BOMEX and RICO (from --data),
    front-, side- and back-lit (the sun behind the storm: silver linings, dark cores).
@@ -61,7 +62,8 @@ from weather_mi.study.report import side_by_side  # noqa: E402
 from weather_mi.io.times import select_times, time_strings  # noqa: E402
 from weather_mi.study.runs import DATA_SCENES, DATA_TIMES, StudyConfig, eye_transmittance, load_scene, view  # noqa: E402
 
-TRAIN_SCENES = ("demo-supercell", "demo-cumulus", "demo-cumulus-thin", "wrf-supercell-0100", "wrf-supercell-0200")
+TRAIN_SCENES = ("demo-supercell", "demo-cumulus", "demo-cumulus-thin", "wrf-supercell-0100", "wrf-supercell-0200",
+                "wrf-plateau-0000")
 TRAIN = [(s, l) for s in TRAIN_SCENES for l in ("front", "side", "back")]
 HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") for l in ("front", "side", "back")]
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"

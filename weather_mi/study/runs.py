@@ -73,9 +73,13 @@ DATA_SCENES = {
     # storms: validation/calibrate_slicer.py TRAIN)
     "wrf-supercell-0100": ("wrf/wrfout_quarter_ss_series.nc", "real WRF supercell (em_quarter_ss, WSM6, 1 km, 01:00)"),
     "wrf-supercell-0200": ("wrf/wrfout_quarter_ss_series.nc", "real WRF supercell (em_quarter_ss, WSM6, 1 km, 02:00)"),
+    # the plateau file's first time: 9 h before the held-out last, 5x its cloud cover (3.3% of the cells above
+    # 1e-5 kg/kg of cloud water against 0.65%) and 6x its largest cloud water (0.88 against 0.14 g/kg)
+    "wrf-plateau-0000": ("wrf/wrf_d01_allvars_cropped.nc", "real WRF, Tibetan Plateau (Thompson, 30 km, 00:00)"),
 }
 # the WRF time (a timestamp, weather_mi.io.times) of a data scene from a file of several times; absent: the last
-DATA_TIMES = {"wrf-supercell-0100": "0001-01-01_01:00:00", "wrf-supercell-0200": "0001-01-01_02:00:00"}
+DATA_TIMES = {"wrf-supercell-0100": "0001-01-01_01:00:00", "wrf-supercell-0200": "0001-01-01_02:00:00",
+              "wrf-plateau-0000": "2005-09-21_00:00:00"}
 THIN_FACTOR = 0.15  # demo-cumulus-thin: the demo cumulus with its condensate scaled by this (optically thin)
 _COARSE_CUMULUS = {"shape": (40, 48, 48), "spacing_m": (100.0, 100.0, 100.0)}
 # the demo storms: scene name -> (demo, its grid, scalings of the species, description)
