@@ -39,3 +39,39 @@ def test_fitted_column_is_named_after_its_file(tmp_path):
     text = (out / "calibration.md").read_text()
     assert "| multiple (defaults) | multiple (earlier_fit) |" in text
     assert "Parameters of an earlier fit" in text and "Fitted on" not in text
+
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+needs_data = pytest.mark.skipif(not (DATA / "wrf" / "wrfout_quarter_ss_series.nc").is_file(),
+                                reason="needs ../shared/data (the WRF supercell series)")
+
+
+def test_training_set_has_real_storms_at_other_times():
+    """The real WRF supercell trains at 01:00 and 02:00 (its held-out view: the 01:30 file), the plateau at
+    00:00 (held out: its last time, 09:00)."""
+    from weather_mi.study.runs import DATA_SCENES, DATA_TIMES
+    real = [s for s in cs.TRAIN_SCENES if s in DATA_SCENES]
+    assert real == ["wrf-supercell-0100", "wrf-supercell-0200", "wrf-plateau-0000"]
+    assert {DATA_TIMES[s] for s in real} == {"0001-01-01_01:00:00", "0001-01-01_02:00:00", "2005-09-21_00:00:00"}
+    assert not {s for s, _ in cs.TRAIN} & {s for s, _ in cs.HELD_OUT}
+    assert {l for s, l in cs.TRAIN if s in real} == {"front", "side", "back"}
+
+
+@needs_data
+def test_no_held_out_field_is_trained_on(monkeypatch):
+    """Every training field differs from every held-out one: by file and time, and by content (the held-out
+    01:30 supercell is also the series file's third time). The check refuses a training scene that is the
+    01:30 field read from the series file, and one that is a held-out scene itself."""
+    train = {cs.field_of(s, DATA) for s, _ in cs.TRAIN} - {None}
+    held = {cs.field_of(s, DATA) for s, _ in cs.HELD_OUT} - {None}
+    assert len(train) == 3 and len(held) == 4
+    assert not {f[:2] for f in train} & {f[:2] for f in held}
+    assert not {f[2] for f in train} & {f[2] for f in held}
+    cs.check_held_out(cs.TRAIN, cs.HELD_OUT, DATA)  # the shipped sets pass
+    from weather_mi.study import runs
+    monkeypatch.setitem(runs.DATA_SCENES, "wrf-supercell-0130", ("wrf/wrfout_quarter_ss_series.nc", "01:30"))
+    monkeypatch.setitem(runs.DATA_TIMES, "wrf-supercell-0130", "0001-01-01_01:30:00")
+    with pytest.raises(SystemExit, match=r"wrf-supercell-0130 .* held-out field of wrf-supercell"):
+        cs.check_held_out(cs.TRAIN + [("wrf-supercell-0130", "front")], cs.HELD_OUT, DATA)
+    with pytest.raises(SystemExit, match=r"training scene bomex .* held-out field of bomex"):
+        cs.check_held_out(cs.TRAIN + [("bomex", "back")], cs.HELD_OUT, DATA)

@@ -13,7 +13,10 @@ beside the paper's Table IV modes.
    defaults were fitted to --spp 128), held-out views to
    --target-rse:
    training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
-   its condensate x 0.15), front-, side- and back-lit;
+   its condensate x 0.15), the real WRF supercell at 01:00 and 02:00 (wrf/wrfout_quarter_ss_series.nc,
+   the held-out one's run at other times) and the WRF plateau at 00:00 (held out: its last time, 09:00,
+   with a fifth of the cloud cover), front-, side- and back-lit; a training field that is a held-out
+   one (the same file and time, or the same mixing ratios in another file) is refused (check_held_out);
    held-out: the real WRF supercell, the WRF Tibetan Plateau file, BOMEX and RICO (from --data),
    front-, side- and back-lit (the sun behind the storm: silver linings, dark cores).
 2. Fit the model's parameters with Dr.Jit reverse-mode AD on the training views
@@ -39,6 +42,7 @@ beside the paper's Table IV modes.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import sys
 import time
@@ -55,11 +59,45 @@ from weather_mi.io.image import Image, auto_exposure  # noqa: E402
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
 from weather_mi.slicing.calibrate import FIT_START, MULTIPLE_PARAMS, TrainingView, calibrate  # noqa: E402
 from weather_mi.study.report import side_by_side  # noqa: E402
-from weather_mi.study.runs import StudyConfig, eye_transmittance, load_scene, view  # noqa: E402
+from weather_mi.io.times import select_times, time_strings  # noqa: E402
+from weather_mi.study.runs import DATA_SCENES, DATA_TIMES, StudyConfig, eye_transmittance, load_scene, view  # noqa: E402
 
-TRAIN = [(s, l) for s in ("demo-supercell", "demo-cumulus", "demo-cumulus-thin") for l in ("front", "side", "back")]
+TRAIN_SCENES = ("demo-supercell", "demo-cumulus", "demo-cumulus-thin", "wrf-supercell-0100", "wrf-supercell-0200",
+                "wrf-plateau-0000")
+TRAIN = [(s, l) for s in TRAIN_SCENES for l in ("front", "side", "back")]
 HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") for l in ("front", "side", "back")]
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+def field_of(scene: str, data) -> tuple | None:
+    """(file, timestamp, digest of its mixing ratios at that time) of a data scene; None for a demo storm or
+    a file absent from ``data``. The digest names the field whatever file holds it (the held-out 01:30
+    supercell is also the series file's third time)."""
+    if scene not in DATA_SCENES or not (Path(data) / DATA_SCENES[scene][0]).is_file():
+        return None
+    path = Path(data) / DATA_SCENES[scene][0]
+    if path.suffix != ".nc":  # an LES text file: one field
+        return path.resolve(), None, hashlib.sha256(path.read_bytes()).hexdigest()
+    import xarray as xr
+    with xr.open_dataset(path) as ds:
+        labels = time_strings(ds)
+        i = select_times(labels, DATA_TIMES.get(scene, -1), str(path))[0]
+        digest = hashlib.sha256()
+        for name in sorted(v for v in ds.data_vars if v.startswith("Q") and "Time" in ds[v].dims):
+            digest.update(np.ascontiguousarray(ds[name].isel(Time=i).values).tobytes())
+    return path.resolve(), labels[i], digest.hexdigest()
+
+
+def check_held_out(train, held_out, data) -> None:
+    """SystemExit naming the scenes where a training view's field (the same file and time, or the same
+    mixing ratios in another file) is a held-out one."""
+    held = {s: field_of(s, data) for s in {s for s, _ in held_out}}
+    for scene in sorted({s for s, _ in train}):
+        mine = field_of(scene, data)
+        for other, theirs in held.items():
+            if mine and theirs and (mine[:2] == theirs[:2] or mine[2] == theirs[2]):
+                raise SystemExit(f"calibrate_slicer: training scene {scene} ({mine[0]}, time {mine[1]}) is the "
+                                 f"held-out field of {other} ({theirs[0]}, time {theirs[1]}): train on other times")
 
 
 def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_rse=None,
@@ -216,6 +254,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     cfg = StudyConfig(width=width, height=height, phase_quality="test")
     noise = {}
+    check_held_out(TRAIN, HELD_OUT, args.data)
     train = load_views(TRAIN, out, cfg, args.data, args.spp, noise=noise, target_rse=args.train_target_rse,
                        max_seconds=args.max_seconds if args.train_target_rse else None)
     if args.references_only:

@@ -4,7 +4,7 @@ figures, findings)."""
 from __future__ import annotations
 
 from .report import side_by_side
-from .runs import CONFIGS, DATA_SCENES, DEMO_SCENES, METRIC_KEYS, StudyConfig, eye_transmittance, load_scene, load_scenes, run, view
+from .runs import CONFIGS, DATA_SCENES, DATA_TIMES, DEMO_SCENES, METRIC_KEYS, StudyConfig, eye_transmittance, load_scene, load_scenes, run, view
 
-__all__ = ["CONFIGS", "DATA_SCENES", "DEMO_SCENES", "METRIC_KEYS", "StudyConfig", "eye_transmittance", "load_scene", "load_scenes",
+__all__ = ["CONFIGS", "DATA_SCENES", "DATA_TIMES", "DEMO_SCENES", "METRIC_KEYS", "StudyConfig", "eye_transmittance", "load_scene", "load_scenes",
            "run", "side_by_side", "view"]

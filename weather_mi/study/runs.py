@@ -69,7 +69,17 @@ DATA_SCENES = {
     "wrf-plateau": ("wrf/wrf_d01_allvars_cropped.nc", "real WRF, Tibetan Plateau (Thompson, 30 km, last time)"),
     "bomex": ("les/bomex_50m.txt", "BOMEX trade cumulus (LES, 50 m)"),
     "rico": ("les/rico_20m.txt", "RICO trade cumuli (LES, 20 m)"),
+    # the same WRF supercell run at other times than the held-out 01:30 (the slicer calibration's real training
+    # storms: validation/calibrate_slicer.py TRAIN)
+    "wrf-supercell-0100": ("wrf/wrfout_quarter_ss_series.nc", "real WRF supercell (em_quarter_ss, WSM6, 1 km, 01:00)"),
+    "wrf-supercell-0200": ("wrf/wrfout_quarter_ss_series.nc", "real WRF supercell (em_quarter_ss, WSM6, 1 km, 02:00)"),
+    # the plateau file's first time: 9 h before the held-out last, 5x its cloud cover (3.3% of the cells above
+    # 1e-5 kg/kg of cloud water against 0.65%) and 6x its largest cloud water (0.88 against 0.14 g/kg)
+    "wrf-plateau-0000": ("wrf/wrf_d01_allvars_cropped.nc", "real WRF, Tibetan Plateau (Thompson, 30 km, 00:00)"),
 }
+# the WRF time (a timestamp, weather_mi.io.times) of a data scene from a file of several times; absent: the last
+DATA_TIMES = {"wrf-supercell-0100": "0001-01-01_01:00:00", "wrf-supercell-0200": "0001-01-01_02:00:00",
+              "wrf-plateau-0000": "2005-09-21_00:00:00"}
 THIN_FACTOR = 0.15  # demo-cumulus-thin: the demo cumulus with its condensate scaled by this (optically thin)
 _COARSE_CUMULUS = {"shape": (40, 48, 48), "spacing_m": (100.0, 100.0, 100.0)}
 # the demo storms: scene name -> (demo, its grid, scalings of the species, description)
@@ -94,7 +104,7 @@ def load_scene(name: str, cfg: StudyConfig, data_dir=None):
         path = Path(data_dir) / rel if data_dir is not None else None
         if path is None or not path.is_file():
             return None
-        hyd = sources.open_source(path)
+        hyd = sources.open_source(path, time=DATA_TIMES.get(name))
     elif name in DEMO_STORMS:
         demo, grid, scale, desc = DEMO_STORMS[name]
         hyd = sources.open_demo(demo, **grid)
