@@ -46,6 +46,20 @@ def ours_air(sigma_rgb, air, **kw):
             "to_world": bbox_tf(), "air_extinction": mi.TensorXf(air), **kw}
 
 
+def random_rays(seed: int, n: int):
+    """``n`` rays from around the box (a fifth nearly horizontal) with lengths up to 16: numpy origins,
+    directions and lengths, and the Mitsuba ray."""
+    rng = np.random.default_rng(seed)
+    o = LO - 2.0 + rng.random((n, 3)) * (HI - LO + 4.0)
+    d = rng.normal(size=(n, 3))
+    d[: n // 5, 2] *= 1e-3  # nearly horizontal
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    t_end = rng.random(n) * 16.0
+    ray = mi.Ray3f(mi.Point3f(*(o[:, k].astype(np.float32) for k in range(3))),
+                   mi.Vector3f(*(d[:, k].astype(np.float32) for k in range(3))))
+    return o, d, t_end, ray
+
+
 def test_air_cells_are_empty_space_and_their_optical_depth_is_the_interpolants():
     """Exact transmittance (sampler None: deterministic) per channel against the fine midpoint integral of the
     trilinear interpolant of each channel's grid, on rays inside and outside the box, nearly horizontal ones
@@ -55,15 +69,8 @@ def test_air_cells_are_empty_space_and_their_optical_depth_is_the_interpolants()
     integ = scene.integrator()
     integ._setup(scene, None)
     assert integ._tk.texel.air is not None and np.array(integ._tk.texel.empty).max() >= 2
-    rng = np.random.default_rng(5)
     n = 1500
-    o = LO - 2.0 + rng.random((n, 3)) * (HI - LO + 4.0)
-    d = rng.normal(size=(n, 3))
-    d[: n // 5, 2] *= 1e-3  # nearly horizontal
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    t_end = rng.random(n) * 16.0
-    ray = mi.Ray3f(mi.Point3f(*(o[:, k].astype(np.float32) for k in range(3))),
-                   mi.Vector3f(*(d[:, k].astype(np.float32) for k in range(3))))
+    o, d, t_end, ray = random_rays(5, n)
     got = np.array(exact_transmittance(integ._tk, ray, mi.Float(t_end.astype(np.float32)), mi.Bool(True)))
     grids = np.concatenate([sigma[..., :3], np.broadcast_to(air[:, None, None, 2], cloud.shape)[..., None]], -1)
     tau = optical_depth_numpy(grids, o, d, t_end)  # the three channels and the air's blue in one pass
@@ -150,15 +157,8 @@ def test_a_grey_air_is_tracked_grey_with_its_optical_depth_the_interpolants():
     integ._setup(scene, None)
     tk = integ._tk
     assert not tk.ms.spectral and tk.ms.air.grey and tk.texel.air.grey and tk.texel_data is None
-    rng = np.random.default_rng(7)
     n = 1200
-    o = LO - 2.0 + rng.random((n, 3)) * (HI - LO + 4.0)
-    d = rng.normal(size=(n, 3))
-    d[: n // 5, 2] *= 1e-3  # nearly horizontal
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    t_end = rng.random(n) * 16.0
-    ray = mi.Ray3f(mi.Point3f(*(o[:, k].astype(np.float32) for k in range(3))),
-                   mi.Vector3f(*(d[:, k].astype(np.float32) for k in range(3))))
+    o, d, t_end, ray = random_rays(7, n)
     got = np.array(exact_transmittance(tk, ray, mi.Float(t_end.astype(np.float32)), mi.Bool(True)))
     tau = optical_depth_numpy(cloud + air[:, None, None, 0], o, d, t_end)
     assert (optical_depth_numpy(np.broadcast_to(air[:, None, None, 0], cloud.shape), o, d, t_end) > 0.1).sum() > n // 10
