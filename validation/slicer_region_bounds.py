@@ -20,11 +20,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
 
-from validation.calibrate_slicer import DEFAULT_DATA, HELD_OUT, TRAIN, read_fitted, reference  # noqa: E402
+from validation.calibrate_slicer import reference  # noqa: E402
+from validation.slicer_residuals import add_view_options, view_setup  # noqa: E402
 from weather_mi.display import metrics  # noqa: E402
-from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
+from weather_mi.slicing import MODES, SliceRenderer  # noqa: E402
 from weather_mi.study.regions import pixel_regions  # noqa: E402
-from weather_mi.study.runs import StudyConfig, eye_transmittance, load_scene, view  # noqa: E402
+from weather_mi.study.runs import eye_transmittance, load_scene, view  # noqa: E402
 
 # the regions replaced together (a row each); "none": the model as it is
 SETS = {"none": (), "ground in shadow": ("ground in shadow",), "back-lit rim": ("back-lit rim",),
@@ -34,24 +35,10 @@ SETS = {"none": (), "ground in shadow": ("ground in shadow",), "back-lit rim": (
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("-o", "--output", default="out/slicer_calibration")
-    ap.add_argument("--data", default=str(DEFAULT_DATA))
-    ap.add_argument("--views", default="held-out", choices=("train", "held-out", "all"))
-    ap.add_argument("--params", default=None, help="a fitted.json (default: the shipped defaults)")
-    ap.add_argument("--target-rse", type=float, default=0.02)
-    ap.add_argument("--max-seconds", type=float, default=300.0)
-    ap.add_argument("--size", default="64x48")
-    ap.add_argument("--slices", type=int, default=128)
-    ap.add_argument("--supersample", type=int, default=2)
-    ap.add_argument("--slab-jitter", type=float, default=1.0)
+    add_view_options(ap, "held-out")
     args = ap.parse_args(argv)
-    width, height = (int(v) for v in args.size.lower().split("x"))
-    out = Path(args.output)
-    out.mkdir(parents=True, exist_ok=True)
-    cfg = StudyConfig(width=width, height=height, phase_quality="test")
-    params = SliceParams() if args.params is None else SliceParams().updated(**read_fitted(Path(args.params)))
+    out, cfg, params, names = view_setup(args)
     params = params.updated(slab_jitter=args.slab_jitter)
-    names = {"train": TRAIN, "held-out": HELD_OUT, "all": TRAIN + HELD_OUT}[args.views]
     rows = {k: [] for k in SETS}
     vols, renderers = {}, {}
     for scene, lighting in names:

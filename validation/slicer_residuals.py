@@ -18,7 +18,6 @@ shipped defaults). --lightings: only the views of these lightings (e.g. back). -
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -26,7 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
 
-from validation.calibrate_slicer import DEFAULT_DATA, HELD_OUT, TRAIN, reference  # noqa: E402
+from validation.calibrate_slicer import DEFAULT_DATA, HELD_OUT, TRAIN, read_fitted, reference  # noqa: E402
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
 from weather_mi.study.regions import REGIONS, pixel_regions, region_residuals  # noqa: E402
 from weather_mi.study.runs import StudyConfig, load_scene, view  # noqa: E402
@@ -48,28 +47,39 @@ def pooled(rows_per_view):
     return out
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def add_view_options(ap, views: str) -> None:
+    """The options the residual scripts share: output folder, data, views, references, frame size and slicing."""
     ap.add_argument("-o", "--output", default="out/slicer_calibration")
     ap.add_argument("--data", default=str(DEFAULT_DATA))
-    ap.add_argument("--views", default="train", choices=("train", "held-out", "all"))
-    ap.add_argument("--lightings", default="front,side,back", help="only the views of these lightings")
+    ap.add_argument("--views", default=views, choices=("train", "held-out", "all"))
+    ap.add_argument("--params", default=None, help="a fitted.json (default: the shipped defaults)")
     ap.add_argument("--target-rse", type=float, default=0.02)
     ap.add_argument("--max-seconds", type=float, default=300.0)
     ap.add_argument("--size", default="64x48")
     ap.add_argument("--slices", type=int, default=128)
-    ap.add_argument("--params", default=None)
-    ap.add_argument("--modes", default="per-species/multiple,per-species/translucent")
     ap.add_argument("--supersample", type=int, default=2)
     ap.add_argument("--slab-jitter", type=float, default=1.0)
-    args = ap.parse_args(argv)
+
+
+def view_setup(args):
+    """(output folder (made), StudyConfig of --size, the fitted or default SliceParams, the views' names)."""
     width, height = (int(v) for v in args.size.lower().split("x"))
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     cfg = StudyConfig(width=width, height=height, phase_quality="test")
+    params = SliceParams() if args.params is None else SliceParams().updated(**read_fitted(Path(args.params)))
     names = {"train": TRAIN, "held-out": HELD_OUT, "all": TRAIN + HELD_OUT}[args.views]
+    return out, cfg, params, names
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_view_options(ap, "train")
+    ap.add_argument("--lightings", default="front,side,back", help="only the views of these lightings")
+    ap.add_argument("--modes", default="per-species/multiple,per-species/translucent")
+    args = ap.parse_args(argv)
+    out, cfg, fitted, names = view_setup(args)
     names = [(s, l) for s, l in names if l in args.lightings.split(",")]
-    fitted = SliceParams() if args.params is None else SliceParams().updated(**json.loads(Path(args.params).read_text()))
     modes = args.modes.split(",")
     per_mode = {m: [] for m in modes}
     worst = []
@@ -95,7 +105,7 @@ def main(argv=None) -> int:
             if big is not None:
                 worst.append((m, scene, lighting, big))
     for m in modes:
-        print(f"\n{m}: residuals by region, pooled over {len(per_mode[m])} views ({width} x {height}, {args.slices} slices)")
+        print(f"\n{m}: residuals by region, pooled over {len(per_mode[m])} views ({args.size}, {args.slices} slices)")
         print(f"{'region':<18}{'pixels':>8}{'bias':>9}{'rel RMS':>9}{'CIEDE2000':>11}")
         for name, (n, bias, rms, de) in pooled(per_mode[m]).items():
             print(f"{name:<18}{n:>8}{bias:>+9.3f}{rms:>9.3f}{de:>11.2f}")

@@ -132,3 +132,14 @@ def add_source(parser) -> None:
     parser.add_argument("file", nargs="?", help="wrfout NetCDF or LES text file")
     parser.add_argument("--demo", choices=DEMOS, help="a built-in demo storm")
     parser.add_argument("--time", default=None, help="time index or timestamp (WRF files; default the last)")
+
+
+def refuse_for_tiles(args, bad, what: str) -> None:
+    """ValueError naming every option in ``bad`` ((condition, option text) pairs) that a ``--tile-size`` render
+    (``what``: what it renders) cannot take, and an input that is not a wrfout file (tiles read WRF sub-boxes)."""
+    found = [why for cond, why in bad if cond]
+    if found:
+        raise ValueError(f"--tile-size {args.tile_size}: not with {', '.join(found)}; {what}")
+    from ..io.sources import kind
+    if kind(args.file) != "wrf":
+        raise ValueError(f"--tile-size: {args.file} is not a wrfout file (a tiled render reads WRF sub-boxes)")

@@ -8,6 +8,8 @@ from __future__ import annotations
 from contextlib import contextmanager
 from pathlib import Path
 
+from .options import refuse_for_tiles
+
 # what does not change a tiled product's pixels: not recorded for --resume
 NOT_RECORDED = ("scheduler", "workers", "resume", "output", "denoise", "exposure", "func", "command", "fps")
 
@@ -49,13 +51,8 @@ def check_render_tile_options(args) -> None:
            (periodic_value(args) not in (None, False), "--periodic"),
            (getattr(args, "target_rse", None) is not None, "--target-rse"),
            (getattr(args, "max_seconds", None) is not None, "--max-seconds")]
-    found = [why for cond, why in bad if cond]
-    if found:
-        raise ValueError(f"--tile-size {args.tile_size}: not with {', '.join(found)}; a tiled render is an aerial "
-                         "view (a camera above the grid) of one time of one wrfout file, at --spp")
-    from ..io.sources import kind
-    if kind(args.file) != "wrf":
-        raise ValueError(f"--tile-size: {args.file} is not a wrfout file (a tiled render reads WRF sub-boxes)")
+    refuse_for_tiles(args, bad, "a tiled render is an aerial view (a camera above the grid) of one time of one "
+                                "wrfout file, at --spp")
 
 
 def render_tiles_command(args, exr: Path, png: Path) -> Path:

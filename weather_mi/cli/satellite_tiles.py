@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .options import refuse_for_tiles
+
 
 def add_tile_options(p) -> None:
     """``--tile-size`` and ``--halo`` on the ``satellite`` parser."""
@@ -29,13 +31,7 @@ def check_tile_options(args) -> None:
            (args.demo is None and wants_loop(args), "several files or times"),
            (args.rgb and args.rayleigh, "--rgb --rayleigh (the Rayleigh correction needs the whole domain's air)"),
            (getattr(args, "periodic", None) not in (None, "off"), "--periodic")]
-    found = [why for cond, why in bad if cond]
-    if found:
-        raise ValueError(f"--tile-size {args.tile_size}: not with {', '.join(found)}; a tiled render is one band "
-                         "(or --rgb) of one time of one wrfout file")
-    from ..io.sources import kind
-    if kind(args.file) != "wrf":
-        raise ValueError(f"--tile-size: {args.file} is not a wrfout file (a tiled render reads WRF sub-boxes)")
+    refuse_for_tiles(args, bad, "a tiled render is one band (or --rgb) of one time of one wrfout file")
 
 
 def satellite_tiles_command(args, resolution: float, nc: Path, exr: Path, png: Path, estimator: dict) -> Path:
