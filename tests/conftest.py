@@ -1,6 +1,7 @@
 """Shared test helpers: the location of ../shared/data and a factory for small synthetic wrfout files."""
 from __future__ import annotations
 
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -67,3 +68,21 @@ def variant_restored():
     yield
     if before:
         weather_mi.set_variant(before)
+
+
+@contextmanager
+def kernels_compiled():
+    """A list, filled when the block ends, of the Dr.Jit kernels the block did not find in memory: compiled, or
+    loaded from Dr.Jit's disk cache (a kernel traced anew each frame, a value baked into it, is counted whether or
+    not an earlier run left it on disk; only an in-memory hit, ``cache_hit`` without ``cache_disk``, is not)."""
+    import drjit as dr
+    found = []
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    dr.kernel_history()  # clear
+    try:
+        yield found
+    finally:
+        history = dr.kernel_history()
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+        found.extend(k for k in history if k.get("type") == dr.KernelType.JIT
+                     and (k.get("cache_disk") or not k.get("cache_hit")))

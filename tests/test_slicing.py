@@ -8,6 +8,7 @@ import pytest
 
 import weather_mi as wm
 from weather_mi.slicing import SliceMode, SliceParams, SliceRenderer, render_slices
+from conftest import kernels_compiled
 
 
 def hg_table(g):
@@ -132,19 +133,15 @@ def test_no_recompilation_when_sliders_move(light):
     r = SliceRenderer(vol, SliceMode("per_species", light), slices=32, light_res=32)
     r.frame(spec)
     r.frame(spec, SliceParams(scale={"ice": 1.5}))  # warm-up of every code path
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
-    dr.kernel_history()  # clear
-    changes = [SliceParams(scale={"ice": 2.0, "cloud": 0.5}), SliceParams(albedo=0.9),
-               SliceParams(cone_angle_deg=5.0), SliceParams(forward_fraction=0.9), SliceParams(ambient=0.5),
-               SliceParams(ms_extinction=0.4, ms_contribution=0.3, ms_eccentricity=0.2, sky_gain=2.0, sky_extinction=0.1)]
-    for i, params in enumerate(changes):
-        camera = wm.Camera.orbit(vol, azimuth=180 + 7 * i, elevation=15)  # an orbiting camera
-        moved = wm.SceneSpec(camera=camera, sun=wm.Sun(200 + 10 * i, 30 + 5 * i), sky=spec.sky,
-                             ground=spec.ground, width=32, height=24)
-        r.frame(moved, params)
-    compiled = [k for k in dr.kernel_history() if k.get("type") == dr.KernelType.JIT
-                and not k.get("cache_hit") and not k.get("cache_disk")]
-    dr.set_flag(dr.JitFlag.KernelHistory, False)
+    with kernels_compiled() as compiled:
+        changes = [SliceParams(scale={"ice": 2.0, "cloud": 0.5}), SliceParams(albedo=0.9),
+                   SliceParams(cone_angle_deg=5.0), SliceParams(forward_fraction=0.9), SliceParams(ambient=0.5),
+                   SliceParams(ms_extinction=0.4, ms_contribution=0.3, ms_eccentricity=0.2, sky_gain=2.0, sky_extinction=0.1)]
+        for i, params in enumerate(changes):
+            camera = wm.Camera.orbit(vol, azimuth=180 + 7 * i, elevation=15)  # an orbiting camera
+            moved = wm.SceneSpec(camera=camera, sun=wm.Sun(200 + 10 * i, 30 + 5 * i), sky=spec.sky,
+                                 ground=spec.ground, width=32, height=24)
+            r.frame(moved, params)
     assert compiled == [], f"{len(compiled)} kernels compiled after the first frame"
 
 

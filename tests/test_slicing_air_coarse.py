@@ -9,6 +9,7 @@ import pytest
 import weather_mi as wm
 from weather_mi.optics.air import Atmosphere
 from weather_mi.slicing import MODES, SliceRenderer
+from conftest import kernels_compiled
 
 
 @pytest.fixture(scope="module")
@@ -47,16 +48,10 @@ def test_the_coarse_air_is_every_pixels_own(supercell, monkeypatch):
 
 def test_the_coarse_air_recompiles_nothing_when_the_sun_and_camera_move(supercell):
     """At the grid's size too, frames of a drag (the camera and the sun moving) after the first compile no kernel."""
-    import drjit as dr
     r = SliceRenderer(supercell, MODES["uniform/translucent"], slices=32, light_res=32)
     for i in range(2):
         r.frame(_spec(supercell, i, 128, Atmosphere()))
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
-    dr.kernel_history()  # clear
-    for i in range(2, 5):
-        r.frame(_spec(supercell, i, 128, Atmosphere()))
-    history = dr.kernel_history()
-    dr.set_flag(dr.JitFlag.KernelHistory, False)
-    compiled = [k for k in history if k.get("type") == dr.KernelType.JIT and not k.get("cache_hit")
-                and not k.get("cache_disk")]
+    with kernels_compiled() as compiled:
+        for i in range(2, 5):
+            r.frame(_spec(supercell, i, 128, Atmosphere()))
     assert compiled == [], f"{len(compiled)} kernels compiled after the first frames"

@@ -8,12 +8,12 @@ from __future__ import annotations
 
 import math
 
-import drjit as dr
 import numpy as np
 import pytest
 
 import weather_mi as wm
 from weather_mi.slicing import SliceMode, SliceParams, SliceRenderer
+from conftest import kernels_compiled
 
 MULTIPLE = SliceMode("per_species", "multiple")
 
@@ -115,13 +115,8 @@ def test_the_new_parameters_are_checked_and_compile_nothing():
                         ground=wm.Ground(0.3, height=0.0), width=8, height=6)
     for i in range(3):  # warm-up: records (literal values made opaque)
         r.frame(spec, SliceParams(diffusion_lobe=0.1 * i, below_shadow=0.2 * i))
-    dr.set_flag(dr.JitFlag.KernelHistory, True)
-    dr.kernel_history()  # clear
-    images = {r.frame(spec, SliceParams(diffusion_lobe=0.3 + 0.2 * i, below_shadow=0.9 - 0.3 * i)).radiance.tobytes()
-              for i in range(3)}
-    history = dr.kernel_history()
-    dr.set_flag(dr.JitFlag.KernelHistory, False)
-    compiled = [k for k in history if k.get("type") == dr.KernelType.JIT and not k.get("cache_hit")
-                and not k.get("cache_disk")]
+    with kernels_compiled() as compiled:
+        images = {r.frame(spec, SliceParams(diffusion_lobe=0.3 + 0.2 * i, below_shadow=0.9 - 0.3 * i)).radiance.tobytes()
+                  for i in range(3)}
     assert compiled == [], f"{len(compiled)} kernels compiled after the first frames"
     assert len(images) == 3

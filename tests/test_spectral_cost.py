@@ -26,12 +26,12 @@ def test_sun_table_is_trilinear_and_clamped_as_scipy(spectral):
     """T(mu, h, lambda) at random points inside and beyond the grids' ends (held there): scipy's
     RegularGridInterpolator on the clamped coordinates, to float32 rounding."""
     from scipy.interpolate import RegularGridInterpolator
-    from weather_mi.kernel.plugins.spectral_sun import spectrum_table
+    from weather_mi.kernel.plugins.spectral_sun import SpectrumTable
     mi = spectral
     rng = np.random.default_rng(3)
     t = rng.random((6, 9, 95)).astype(np.float32)
     nm, h, mu = (360.0, 830.0), (0.0, 14000.0), (0.05, 0.45)
-    table = spectrum_table(t, nm, h, mu)
+    table = SpectrumTable(t, nm, h, mu)
     n = 2000
     hs, mus = rng.uniform(-2000, 16000, n), rng.uniform(0.0, 0.5, n)
     wl = rng.uniform(350.0, 840.0, (4, n))
@@ -40,7 +40,7 @@ def test_sun_table_is_trilinear_and_clamped_as_scipy(spectral):
     want = np.stack([f(np.stack([np.clip(mus, *mu), np.clip(hs, *h), np.clip(w, *nm)], axis=-1)) for w in wl])
     assert np.abs(got - want).max() < 2e-5
     # the top-of-atmosphere spectrum alone (one height, one mu): linear in wavelength, as np.interp
-    toa = spectrum_table(t[:1, :1], nm)
+    toa = SpectrumTable(t[:1, :1], nm)
     got = np.array(toa.eval(mi.Float(0.0), mi.Float(0.0), _lanes(mi, wl)))
     assert np.abs(got - np.stack([np.interp(w, np.linspace(*nm, 95), t[0, 0]) for w in wl])).max() < 2e-5
 

@@ -124,8 +124,8 @@ def grey_air(air) -> bool:
     """Whether the box's air has one extinction in every channel at every level (a satellite's single band: its
     three channels the same wavelength): the medium's extinction is then grey (one channel), which the trackers
     follow without spectral tracking and interpolate from the texels (issue 38 part 5)."""
-    from .plugins.air_levels import is_grey as grey_levels
-    return grey_levels(np.asarray(air.extinction_levels))
+    from .plugins.air_levels import equal_channels
+    return equal_channels(np.asarray(air.extinction_levels))
 
 
 def medium_extinction(vol: OpticalVolume) -> np.ndarray:

@@ -341,8 +341,9 @@ def light_shadow(mi, light, to_sun):
     import drjit as dr
     lo, hi = (mi.Point3f(*(float(v) for v in c)) for c in (light.lo, light.hi))
 
+    inv = dr.rcp(dr.select(dr.abs(to_sun) < 1e-12, 1e-12, to_sun))  # once per frame, not per sample
+
     def shadow(p):
-        inv = dr.rcp(dr.select(dr.abs(to_sun) < 1e-12, 1e-12, to_sun))
         t0, t1 = (lo - p) * inv, (hi - p) * inv
         a, b = dr.minimum(t0, t1), dr.maximum(t0, t1)
         t_in = dr.maximum(dr.maximum(dr.maximum(a.x, a.y), a.z), 0.0)

@@ -51,7 +51,7 @@ def cloud_cells(data: np.ndarray, air: np.ndarray, periodic: bool) -> np.ndarray
     return texel_majorant_grid(occupied, safety=1.0, periodic=periodic) > 0.0
 
 
-def is_grey(air: np.ndarray) -> bool:
+def equal_channels(air: np.ndarray) -> bool:
     """Whether the air (levels, 3) has one extinction in every channel (a satellite's single band)."""
     return bool(np.array_equal(air[:, 0], air[:, 1]) and np.array_equal(air[:, 0], air[:, 2]))
 
@@ -61,7 +61,7 @@ class AirLevels:
     cumulative C(q) per segment (float64)."""
 
     def __init__(self, air: np.ndarray, grey: bool = False):
-        if grey and not is_grey(air):  # ``grey``: one channel (the air :func:`is_grey`), sigma_at and tau Floats
+        if grey and not equal_channels(air):  # ``grey``: one channel (the air :func:`equal_channels`), sigma_at and tau Floats
             raise RuntimeError(f"majorant_volpath: '{PROPERTY}' differs between channels: grey tracking needs "
                                "the air's channels equal")
         self.grey = bool(grey)
@@ -76,8 +76,7 @@ class AirLevels:
         self.bound = mi.Float(np.maximum.accumulate(cell[::-1])[::-1].copy())  # max over the cells at or above
         # segments j = 0 .. n: [-0.5, 0], [0, 1], ..., [n - 2, n - 1], [n - 1, n - 0.5]; their left knots
         knots = np.concatenate([[-0.5], np.arange(n, dtype=np.float64)])
-        s_left = a[np.clip(np.arange(n + 1) - 1, 0, n - 1)]
-        s_right = a[np.clip(np.arange(n + 1), 0, n - 1)]
+        s_left, s_right = lo, hi  # each segment's end values
         width = np.concatenate([[0.5], np.ones(n - 1), [0.5]])
         slope = np.where(np.arange(n + 1)[:, None] % n == 0, 0.0, s_right - s_left)  # per unit q; 0 in the end halves
         c = np.concatenate([[np.zeros(self.channels)], np.cumsum((s_left + 0.5 * slope * width[:, None]) * width[:, None], axis=0)])

@@ -128,7 +128,7 @@ class MajorantVolpath:
          and which is added to a grey (1-channel) one, the albedo then the mixture's of ``air_albedo`` and
          ``air_scattering`` (:mod:`.air_albedo`, ``MediumSetup.add_air``) (:mod:`.air_levels`): its cells are
          crossed as empty space, with the air's majorant. An air whose three channels are equal (a satellite
-         band's) is tracked grey (``air_levels.is_grey``).
+         band's) is tracked grey (``air_levels.equal_channels``).
      * - periodic, periodic_tiles
        - |string|, |int|
        - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each
@@ -221,7 +221,7 @@ class MajorantVolpath:
                 self.majorant = mi.TensorXf(maj)
                 self._auto_key = key
         if self.air_levels is not None and vol is not None and int(volume_data(vol).shape[-1]) == 1:
-            grey = air_levels.is_grey(self.air_levels)  # a satellite band's: tracked grey (not spectral)
+            grey = air_levels.equal_channels(self.air_levels)  # a satellite band's: tracked grey (not spectral)
             ms.add_air(air_levels.AirLevels(self.air_levels, grey), self.air_albedo, to_local, self.periodic != "none")
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"

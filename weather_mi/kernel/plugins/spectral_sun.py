@@ -27,7 +27,9 @@ def _index(x, n_minus_1):
 
 
 class SpectrumTable:
-    """T(mu, h, lambda) on uniform grids (``spectrum_table``); :meth:`eval` at a point's height and mu."""
+    """T(mu, h, lambda), the table ``t`` (n_mu, n_h, n_lambda) on uniform grids: wavelengths ``nm`` = (first, last)
+    nm, heights ``h`` = (first, last) m and ``mu`` = (first, last) cos zenith (ignored where the table has one row);
+    :meth:`eval` at a point's height and mu."""
 
     def __init__(self, t: np.ndarray, nm, h=(0.0, 1.0), mu=(0.0, 1.0)):
         t = np.asarray(t, np.float32)
@@ -64,10 +66,4 @@ class SpectrumTable:
         return out
 
 
-def spectrum_table(t, nm, h=(0.0, 1.0), mu=(0.0, 1.0)) -> SpectrumTable:
-    """The table ``t`` (n_mu, n_h, n_lambda) on uniform grids: wavelengths ``nm`` = (first, last) nm, heights
-    ``h`` = (first, last) m and ``mu`` = (first, last) cos zenith (ignored where the table has one row)."""
-    return SpectrumTable(t, nm, h, mu)
-
-
-__all__ = ["SpectrumTable", "spectrum_table"]
+__all__ = ["SpectrumTable"]

@@ -28,7 +28,7 @@ import mitsuba as mi
 
 from . import air
 from .medium_setup import phase_ctx, scattering_event
-from .spectral_sun import spectrum_table
+from .spectral_sun import SpectrumTable
 from .trackers import delta_tracking
 
 
@@ -90,7 +90,7 @@ def parse_air(sun, props, check) -> None:
                                          mu0, (n_mu - 1) / (n_mu * (mu1 - mu0)), 0.5 / n_mu, radius)]
     dr.make_opaque(*sun.air_map)
     if sun.spectrum is not None:
-        sun.spectrum = spectrum_table(t, sun.spectrum_nm, (h0, h1), (mu0, mu1))
+        sun.spectrum = SpectrumTable(t, sun.spectrum_nm, (h0, h1), (mu0, mu1))
     air.parse_box(sun, props, check)  # the air inside the box is tracked: the table where the sun ray leaves it
 
 
@@ -110,7 +110,7 @@ def parse_spectrum(sun, props, check) -> None:
           f"'sun_spectrum' must be >= 2 finite values >= 0 on 'sun_spectrum_nm' = (first, last) nm; got {e.size}, {nm}")
     sun.spectrum_shape = (1, 1, e.size)
     sun.spectrum_nm = (float(nm[0]), float(nm[1]))
-    sun.spectrum = spectrum_table(e.reshape(1, 1, -1), sun.spectrum_nm)
+    sun.spectrum = SpectrumTable(e.reshape(1, 1, -1), sun.spectrum_nm)
 
 
 def _height_mu(sun, p):
