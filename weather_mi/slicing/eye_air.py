@@ -42,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..kernel.jitarrays import aligned_float
 from ..optics.air.shell import EARTH_RADIUS_M
 from .eye import OPAQUE_T
 
@@ -133,7 +134,7 @@ def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0), shadow: bo
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
     if cache.get("atm", (None,))[0] != atm:
         table = sun_table(atm)
-        cache["atm"] = (atm, mi.Float(packed(height_table(atm))), table, mi.Float(packed(table.rgb)))
+        cache["atm"] = (atm, aligned_float(mi, packed(height_table(atm))), table, aligned_float(mi, packed(table.rgb)))
     air, table, rgb = cache["atm"][1:]
     (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in bbox)
     floor = None if spec.ground is None else float(spec.ground.height)

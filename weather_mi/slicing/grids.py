@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernel.jitarrays import kernel_scalar
+from ..kernel.jitarrays import aligned_float, kernel_scalar
 
 
 def set_grids(renderer, vol, mode, detail_field, detail_noise):
@@ -28,7 +28,7 @@ def set_grids(renderer, vol, mode, detail_field, detail_noise):
         n = np.asarray(detail_noise, dtype=np.float32)
         if n.shape != renderer.shape:
             raise ValueError(f"detail_noise must have the volume's shape {renderer.shape}, got {n.shape}")
-        renderer.detail_noise = mi.Float(np.ascontiguousarray(n).ravel())
+        renderer.detail_noise = aligned_float(mi, n)
     # 1/m, over all voxels (numpy sums each species' voxels in the same order from either layout)
     renderer.beta_sum_s = vol.beta_ext.reshape(renderer.n_species, -1).sum(axis=1, dtype=np.float64) if own else \
         beta_s.reshape(-1, renderer.n_species).sum(axis=0, dtype=np.float64)
@@ -37,7 +37,7 @@ def set_grids(renderer, vol, mode, detail_field, detail_noise):
         beta_s, renderer.grid_box = renderer.periodic.pad(beta_s), renderer.periodic.grid_box
         renderer.shape = tuple(beta_s.shape[:3])
         if renderer.detail_noise is not None:
-            renderer.detail_noise = mi.Float(renderer.periodic.pad(np.asarray(detail_noise, np.float32)).ravel())
+            renderer.detail_noise = aligned_float(mi, renderer.periodic.pad(np.asarray(detail_noise, np.float32)))
     # (z, y, x) each; unchanged by detail or padding: the volume's own float32 grids
     renderer.beta_s = [mi.Float(np.ascontiguousarray(vol.beta_ext[si] if own else beta_s[..., si]).ravel())
                        for si in range(renderer.n_species)]

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..kernel.jitarrays import aligned_float
+
 TOP_ABOVE_BOX_M = 2000.0  # the table reaches this far above the box (as the path tracer's, kernel.scene_dict)
 COLUMN_SAMPLES = 128  # the slant columns' points per segment (``shell.slant_columns``: the colour within 1e-3)
 
@@ -50,7 +52,7 @@ def sun_air_input(mi, spec, grid_box) -> SunAir | None:
     heights, rgb = sun_by_height(spec, grid_box[1][2])
     step = float(heights[1] - heights[0])
     return SunAir(dr.opaque(mi.Float, float(heights[0])), dr.opaque(mi.Float, 1.0 / step),
-                  mi.Float(np.ascontiguousarray(rgb, np.float32).ravel()), int(heights.size))
+                  aligned_float(mi, np.asarray(rgb, np.float32)), int(heights.size))
 
 
 def sun_colour_at(mi, air: SunAir, z):

@@ -14,6 +14,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from ..jitarrays import aligned_float
 from . import grid_lookup
 
 ALBEDO_PROPERTY, SCATTERING_PROPERTY = "air_albedo", "air_scattering"
@@ -26,8 +27,8 @@ class MixtureAlbedo:
         self.shape = tuple(int(n) for n in albedo.shape[:3])
         self.channels = int(albedo.shape[3]) if len(albedo.shape) == 4 else 1
         self.albedo = albedo.array
-        self.sca = mi.Float(np.ascontiguousarray(scattering, np.float32).ravel())
-        self.ext = mi.Float(np.ascontiguousarray(extinction, np.float32).ravel())
+        self.sca = aligned_float(mi, np.asarray(scattering, np.float32))
+        self.ext = aligned_float(mi, np.asarray(extinction, np.float32))
 
     def at(self, p_local, beta, periodic: bool, active):
         """The albedo (Color3f) at the unit-cube point ``p_local``; ``beta`` the grey sigma_t grid's data (flat)."""

@@ -21,6 +21,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from ..jitarrays import aligned_float
 from .majorants import SAFETY
 
 PROPERTY = "air_extinction"
@@ -69,11 +70,11 @@ class AirLevels:
         a = np.asarray(air, np.float64)
         n, self.channels = a.shape[0], a.shape[1]  # 3 (R, G, B), or a wavelength grid's K (.spectral_air)
         self.n = dr.opaque(mi.Int32, n)
-        self.sigma = mi.Float(np.asarray(air, np.float32).ravel())
+        self.sigma = aligned_float(mi, np.asarray(air, np.float32))
         # texel cells -1 .. n - 1 (array index i = cell + 1) lie between levels i - 1 and i (clamped)
         lo, hi = a[np.clip(np.arange(n + 1) - 1, 0, n - 1)], a[np.clip(np.arange(n + 1), 0, n - 1)]
         cell = (np.maximum(lo, hi).max(axis=1) * SAFETY).astype(np.float32)
-        self.bound = mi.Float(np.maximum.accumulate(cell[::-1])[::-1].copy())  # max over the cells at or above
+        self.bound = aligned_float(mi, np.maximum.accumulate(cell[::-1])[::-1])  # max over the cells at or above
         # segments j = 0 .. n: [-0.5, 0], [0, 1], ..., [n - 2, n - 1], [n - 1, n - 0.5]; their left knots
         knots = np.concatenate([[-0.5], np.arange(n, dtype=np.float64)])
         s_left, s_right = lo, hi  # each segment's end values
