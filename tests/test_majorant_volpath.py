@@ -475,7 +475,8 @@ def test_the_path_loops_stages_set_the_vertex_in_the_declared_order():
     import ast
     from pathlib import Path
     from weather_mi.kernel.plugins.path_state import Vertex
-    tree = ast.parse(Path(mv.__file__).read_text())
+    from weather_mi.kernel.plugins import path_loop
+    tree = ast.parse(Path(path_loop.__file__).read_text())
     loop = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "PathLoop")
     methods = {f.name: f for f in loop.body if isinstance(f, ast.FunctionDef)}
     calls = [c for st in methods["body"].body for c in ast.walk(st) if isinstance(c, ast.Call)]  # one a statement

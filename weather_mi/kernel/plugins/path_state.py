@@ -42,7 +42,7 @@ def path_state_class() -> type:
 
 
 class Vertex:
-    """What the stages of one iteration of the path loop (``majorant_volpath.PathLoop.body``) pass on to
+    """What the stages of one iteration of the path loop (``path_loop.PathLoop.body``) pass on to
     the later ones: made anew by every iteration (``free_flight``), not loop state, so a plain class, its
     fields declared as its annotations (its ``__slots__``): a field not declared here cannot be set, and one that no stage has set
     yet cannot be read (AttributeError while tracing). Dr.Jit types of the variant, one lane per path.
