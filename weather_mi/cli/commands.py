@@ -41,7 +41,7 @@ def check_scene_options(args) -> None:
     parse_size(args.size)
     if args.fov is not None:
         check_fov_deg(args.fov)
-    air = atmosphere_of(args.atmosphere, args.aod, args.ozone)
+    air = atmosphere_of(args.atmosphere, args.aod, args.ozone, args.water_vapour)
     if air is not None and getattr(args, "integrator", None) == "volpath":
         raise ValueError("--atmosphere clear colours the sun of --integrator majorant (the default), not volpath's")
     check_spectral_options(args)
