@@ -1,8 +1,6 @@
 """The 1-D atmosphere and the sun's path through it (weather_mi.optics.air), against numbers that do not
 come from this code: the Chapman function's closed form at 90 degrees, the Kasten-Young air mass,
 Bodhaine et al.'s Rayleigh optical depth, and Bird & Riordan's SPCTRL2 (pvlib) direct beam."""
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,8 +9,6 @@ from weather_mi.optics import spectrum
 from weather_mi.optics.air import Atmosphere, sun_air_table, sun_xyz, transmittance
 from weather_mi.optics.air.atmosphere import TOP_M
 from weather_mi.optics.air.shell import EARTH_RADIUS_M, horizon_mu, slant_columns
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
 def test_chapman_at_90_degrees_is_the_closed_form():

@@ -70,13 +70,12 @@ def headline_scene(vol, size=(160, 120), elevation=4.0, atmosphere="none"):
                       atmosphere=atmosphere)
 
 
-def demo_volume(with_hyd: bool = False):
-    """The demo supercell's OpticalVolume (and its Hydrometeors with ``with_hyd``)."""
+def demo_volume():
+    """The demo supercell's OpticalVolume (which keeps the model's air density per level for the air in the box,
+    ``optics.air.inside.scene_air``)."""
     from weather_mi.io.sources import open_source
     from weather_mi.optics.volume import optical_volume
-    hyd = open_source(demo="supercell")
-    vol = optical_volume(hyd, species="physical")
-    return (hyd, vol) if with_hyd else vol
+    return optical_volume(open_source(demo="supercell"), species="physical")
 
 
 def lit_cloud_xy(spec, vol, spp: int, eye_air: bool = False, sky_air: bool = False):

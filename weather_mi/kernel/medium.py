@@ -6,6 +6,7 @@ import numpy as np
 
 from ..optics.forward_peak import is_grey
 from ..optics.periodic import pad_levels, padded_bbox
+from ..optics.scattering_coefficients import scattering_coefficients
 from ..optics.volume import OpticalVolume
 from .jitarrays import aligned_empty
 from .variant import ensure_registered
@@ -38,7 +39,7 @@ def _hydrometeor_arrays(vol: OpticalVolume, nodes=None, values=None, packed: boo
     lanes = 4 * max(1, -(-n_s // 4)) if packed else n_s
     weights = aligned_empty(int(np.prod(shape)) * lanes).reshape(shape + (lanes,))
     flat = weights.reshape(-1, lanes)
-    _scattering_coefficients(vol, [flat[:, s] for s in range(n_s)])
+    scattering_coefficients(vol.beta_total, vol.albedo, vol.weights, [flat[:, s] for s in range(n_s)])
     if not packed:
         return nodes, values, weights
     return nodes, values, pack_weights(weights[..., :n_s], out=weights)  # in place: padding 0, clipped
@@ -57,33 +58,11 @@ def kernel_weights(vol: OpticalVolume, air_in_grid: bool = True):
     shape, n = tuple(vol.beta_total.shape), int(np.prod(vol.beta_total.shape))
     packets = aligned_empty(n * (n_s - 1)).reshape(-1, n_s - 1)
     tail = aligned_empty(n)
-    _scattering_coefficients(vol, [packets[:, s] for s in range(n_s - 1)] + [tail])
-    big = np.finfo(np.float32).max  # as pack_weights: negative values as 0, infinite ones as float32's largest
-    for a in (packets, tail):
-        np.clip(a, 0.0, big, out=a)
-    return packets.reshape(shape + ((n_s - 1) // 4, 4)), tail.reshape(shape)
-
-
-def _scattering_coefficients(vol: OpticalVolume, out: list) -> None:
-    """beta_sca,s = w_s x (channel-mean albedo x beta_total) into ``out[s]`` ((z y x,) float32 each, views), a
-    chunk of voxels at a time: no grid-sized temporaries, and the weights of a ``forward_peak.ScaledWeights``
-    computed as read."""
-    from ..optics.forward_peak import CHUNK
-    deferred = getattr(vol.weights, "deferred", False)
-    n_s = len(vol.weights)
-    w = None if deferred else np.asarray(vol.weights).reshape(n_s, -1)
-    beta = np.asarray(vol.beta_total, np.float32).reshape(-1)
-    grey = is_grey(vol.albedo)  # one channel: read as three (the same mean as of three equal channels)
-    albedo = np.asarray(vol.albedo, np.float32)
-    albedo = albedo[..., 0].reshape(-1, 1) if grey else albedo.reshape(-1, albedo.shape[-1])
-    for start in range(0, beta.size, CHUNK):
-        part = slice(start, min(start + CHUNK, beta.size))
-        a = np.broadcast_to(albedo[part], (part.stop - start, 3)) if grey else albedo[part]
-        sca = a.mean(axis=-1)
-        sca *= beta[part]
-        ws = vol.weights.chunk(part) if deferred else w[:, part]
-        for s in range(n_s):
-            np.multiply(ws[s], sca, out=out[s][part])
+    scattering_coefficients(vol.beta_total, vol.albedo, vol.weights, [packets[:, s] for s in range(n_s - 1)] + [tail])
+    from .plugins.hydrometeor_mixture import pack_weights
+    packets = pack_weights(packets.reshape(shape + (n_s - 1,)), out=packets)  # in place (whole packets: no padding)
+    np.clip(tail, 0.0, np.finfo(np.float32).max, out=tail)  # as pack_weights clips, in place (not padded to 4)
+    return packets, tail.reshape(shape)
 
 
 def air_weights(air) -> np.ndarray:

@@ -173,12 +173,11 @@ class ViewState:
 def _reference_lines(state: ViewState) -> str:
     """The snippet's reference render: with the atmosphere, its air inside the box (in the medium) and along the
     eye rays outside it, as the viewer's reference (``reference_job.with_air``)."""
-    call = "wm.render_reference(spec, {}, spp=spp, target_rse=target_rse, max_seconds=max_seconds)"
+    call = "wm.render_reference(spec, ref_vol, spp=spp, target_rse=target_rse, max_seconds=max_seconds)"
     if state.atmosphere == "none":
-        return f"    return {call.format('ref_vol')}\n"
+        return f"    return {call}\n"
     return ("    from weather_mi.display.aerial import with_eye_air\n"
-            "    from weather_mi.optics.air.inside import with_box_air\n"
-            f"    image = {call.format('with_box_air(ref_vol, hyd, spec.atmosphere)')}  # the air in the box\n"
+            f"    image = {call}  # with spec.atmosphere's air in the box\n"
             "    return with_eye_air(image, spec, ref_vol)  # and along the eye rays outside it\n")
 
 
