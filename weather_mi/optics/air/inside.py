@@ -15,8 +15,9 @@ medium's sigma_t grid stays the hydrometeors' grey one, the air's Eq. 8 coeffici
 ``kernel.plugins.air_levels``, the mixture's albedo at a point ``kernel.plugins.air_albedo``); for stock
 ``volpath`` :func:`medium_grids` puts it into RGB grids (``kernel.medium.medium_dict(air_in_grid=True)``).
 The phase functions enter the Eq. 8 mixture as two more components, weighted by their scattering
-coefficients (channel mean, as the hydrometeors' weights are: within a channel the mixture of air and
-aerosol is then that of the channel mean, exact for molecules alone or a cloud with molecules).
+coefficients per colour channel (``kernel.medium.air_weights``: each channel's mixture its own, as Eq. 8 holds
+per wavelength; the hydrometeors' coefficients are one for all channels). With channel means a cloud inside a
+Rayleigh column was 5% too bright in red and 3% too dark in blue against DISORT (``tests/test_clear_sky_disort.py``).
 """
 from __future__ import annotations
 
