@@ -33,7 +33,7 @@ Not included: light scattered more than once by the air, the light the storm sca
 the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
 (``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing. Frames of 96 px a side or
 more integrate all this on every 4th pixel's ray and read it per pixel (``eye_air_coarse``); the tables' rows
-are packets of 4 floats (one gather each, ``packed``).
+are packets of 4 floats (one gather each, ``packets.packed``).
 """
 from __future__ import annotations
 
@@ -45,6 +45,7 @@ import numpy as np
 from ..kernel.jitarrays import aligned_float
 from ..optics.air.shell import EARTH_RADIUS_M
 from .eye import OPAQUE_T
+from .packets import lerp_rows, packed, packet
 
 HEIGHT_STEP_M = 250.0   # the height table's step (m): the aerosol's 1.2 km scale height within 0.5%
 SAMPLES_OUTSIDE = 33    # points on the segment outside the box (x^2 spacing, as eye_path's 257: S within 1%)
@@ -60,7 +61,7 @@ class EyeAir:
     ints and bools are part of a recording's structure)."""
 
     air: object         # mi.Float (n_h x 12): per height, extinction, molecules' and aerosol's scattering (R, G, B,
-                        # each padded to a packet of 4), 1/m (``packed``)
+                        # each padded to a packet of 4), 1/m (``packets.packed``)
     h_step: object      # mi.Float: 1 / the height table's step (1/m); its heights start at sea level
     n_h: int            # rows of the height table
     sun_rgb: object     # mi.Float (n_mu x n_s x 4): the direct sun's linear sRGB by (mu, height), padded (``sun_table``)
@@ -151,31 +152,6 @@ def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0), shadow: bo
                   int(spec.height))
 
 
-def packed(table) -> np.ndarray:
-    """``table`` (..., 3 k) as float32 with each group of 3 padded to 4 (a packet the kernels gather at once),
-    flat."""
-    t = np.asarray(table, np.float32)
-    t = t.reshape(t.shape[:-1] + (t.shape[-1] // 3, 3))
-    return np.ascontiguousarray(np.concatenate([t, np.zeros(t.shape[:-1] + (1,), np.float32)], axis=-1)).ravel()
-
-
-def _packet(mi, dr, table, i):
-    """Packet i of a ``packed`` table (a mi.Color3f)."""
-    v = dr.gather(mi.Vector4f, table, i)
-    return mi.Color3f(v.x, v.y, v.z)
-
-
-def _lerp_rows(mi, dr, table, f, n, width, offset):
-    """Linear interpolation between rows of the ``packed`` ``table`` (rows of ``width`` packets) at fractional
-    rows f, packet ``offset`` of each row (a mi.Color3f)."""
-    f = dr.clip(f, 0.0, float(n - 1))
-    i = dr.minimum(mi.UInt32(f), n - 2)
-    t = f - mi.Float(i)
-    a = _packet(mi, dr, table, i * width + offset)
-    b = _packet(mi, dr, table, (i + 1) * width + offset)
-    return a * (1.0 - t) + b * t
-
-
 def _sun_colour(mi, dr, air: EyeAir, h, mu):
     """The direct sun's colour at heights h and local zenith cosines mu (bilinear, clamped)."""
     mu_lo, inv_dmu, inv_dh = air.sun_mu
@@ -188,7 +164,7 @@ def _sun_colour(mi, dr, air: EyeAir, h, mu):
     ih, th = cell(h * inv_dh, air.n_s)
 
     def at(row, col):
-        return _packet(mi, dr, air.sun_rgb, row * air.n_s + col)
+        return packet(mi, dr, air.sun_rgb, row * air.n_s + col)
     lo = at(im, ih) * (1.0 - th) + at(im, ih + 1) * th
     hi = at(im + 1, ih) * (1.0 - th) + at(im + 1, ih + 1) * th
     return lo * (1.0 - tm) + hi * tm
@@ -216,8 +192,8 @@ def _source(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
         r = dr.norm(q)
         h = dr.maximum(r - EARTH_RADIUS_M, 0.0)
         fh = h * air.h_step
-        ext = _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 0)
-        sca_r, sca_a = _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 1), _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 2)
+        ext = lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 0)
+        sca_r, sca_a = lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 1), lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 2)
         src = (sca_r * p_r + sca_a * p_a) * _sun_colour(mi, dr, air, h, dr.dot(q, air.to_sun) / r)
         if shadow is not None:  # the storm's shadow on the direct sun
             src *= shadow(o + s * d)
@@ -244,17 +220,19 @@ def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse:
 
     n = dr.width(t0)
     s, ext, src = point(mi.UInt32(0))
-    state = (dr.full(mi.UInt32, 1, n), s, ext, src, dr.zeros(mi.Color3f, n), dr.zeros(mi.Color3f, n), length > 0)
+    state = (dr.full(mi.UInt32, 1, n), s, ext, src, dr.zeros(mi.Color3f, n), dr.full(mi.Color3f, 1.0, n),
+             dr.zeros(mi.Color3f, n), length > 0)
 
-    def body(i, s_prev, ext_prev, src_prev, tau, S, active):
+    def body(i, s_prev, ext_prev, src_prev, tau, trans, S, active):  # trans = exp(-tau), carried: one exp a point
         s, ext, src = point(i)
         ds = s - s_prev
         tau_next = tau + 0.5 * (ext + ext_prev) * ds
-        S = S + 0.5 * (src_prev * dr.exp(-tau) + src * dr.exp(-tau_next)) * ds
-        return i + 1, s, ext, src, tau_next, S, active & (i + 1 < samples)
+        trans_next = dr.exp(-tau_next)
+        S = S + 0.5 * (src_prev * trans + src * trans_next) * ds
+        return i + 1, s, ext, src, tau_next, trans_next, S, active & (i + 1 < samples)
 
-    _, _, _, _, tau, S, _ = dr.while_loop(state, lambda *st: st[-1], body)
-    return dr.exp(-tau), S
+    trans, S = dr.while_loop(state, lambda *st: st[-1], body)[5:7]
+    return trans, S
 
 
 def profile(mi, air: EyeAir, o, d, t0, t1, samples: int, emit, shadow=None) -> None:
@@ -269,14 +247,15 @@ def profile(mi, air: EyeAir, o, d, t0, t1, samples: int, emit, shadow=None) -> N
     ext, src = source(t0)
     ds = length * (1.0 / (samples - 1))
 
-    def body(k, ext, src, tau, S):
+    def body(k, ext, src, tau, trans, S):  # trans = exp(-tau), carried: one exp a point
         ext_next, src_next = source(t0 + length * (mi.Float(k) * (1.0 / (samples - 1))))
         tau_next = tau + 0.5 * (ext + ext_next) * ds
-        S = S + 0.5 * (src * dr.exp(-tau) + src_next * dr.exp(-tau_next)) * ds
-        emit(k, dr.exp(-tau_next), S)
-        return k + 1, ext_next, src_next, tau_next, S
-    dr.while_loop((dr.full(mi.UInt32, 1, n), ext, src, dr.zeros(mi.Color3f, n), dr.zeros(mi.Color3f, n)),
-                  lambda k, *_: k < samples, body)
+        trans_next = dr.exp(-tau_next)
+        S = S + 0.5 * (src * trans + src_next * trans_next) * ds
+        emit(k, trans_next, S)
+        return k + 1, ext_next, src_next, tau_next, trans_next, S
+    dr.while_loop((dr.full(mi.UInt32, 1, n), ext, src, dr.zeros(mi.Color3f, n), dr.full(mi.Color3f, 1.0, n),
+                   dr.zeros(mi.Color3f, n)), lambda k, *_: k < samples, body)
 
 
 def box_interval(mi, air: EyeAir, o, d):
