@@ -60,6 +60,8 @@ def _column(profiles, z0, dz, r0, mu, s_a, s_b, radius_m, top_m, t, out, i):  # 
     """Adds |trapezoid(profile(z(s)), s)| over s = s_a + (s_b - s_a) t^2 of the ray at radius r0, cos(zenith)
     mu to out[:, i] (``shell._segment``)."""
     n_p, k = profiles.shape[0], t.shape[0]
+    if s_a == s_b:  # an empty segment (a sun above the horizon: none before the point) adds 0
+        return
     acc = np.zeros(n_p)
     prev = np.zeros(n_p)
     s_prev = 0.0
