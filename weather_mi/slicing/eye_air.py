@@ -235,14 +235,19 @@ def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse:
     return trans, S
 
 
-def profile(mi, air: EyeAir, o, d, t0, t1, samples: int, emit, shadow=None) -> None:
+def profile(mi, air: EyeAir, o, d, t0, t1, samples: int, emit, shadow=None, active=None) -> None:
     """The cumulative ``segment`` (uniform, with the diffuse light, the same trapezoids) of the rays o + s d over
     [t0, t0 + x_k (t1 - t0)] at each of its points x_k = k / (samples - 1): ``emit(k, T_k, S_k)`` for k = 1 ..
     samples - 1 (k a mi.UInt32; T_0 = 1, S_0 = 0), called inside a symbolic loop (side effects only, e.g.
-    ``dr.scatter``: all of them one kernel)."""
+    ``dr.scatter``: all of them one kernel). ``active``: None, or the rays whose segment may be longer than 0
+    (the others evaluate no point past t0: T = 1, S = 0 as their empty segment's; LLVM skips a packet of them)."""
     import drjit as dr
     length = dr.maximum(t1 - t0, 0.0)
     source = _source(mi, air, o, d, shadow, True)
+    if active is not None:
+        zero = mi.Color3f(0.0)
+        source_all = source
+        source = lambda s: dr.if_stmt((s,), active, source_all, lambda s: (zero, zero))  # noqa: E731
     n = dr.width(t0)
     ext, src = source(t0)
     ds = length * (1.0 / (samples - 1))

@@ -73,7 +73,9 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
     o, d = dr.gather(mi.Point3f, o, pixel), dr.gather(mi.Vector3f, d, pixel)
     t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
     kind = _kind(dr, hit, t_ground)
-    t_a, s_a = segment(mi, air, o, d, 0.0 * t_in, dr.select(hit, t_in, t_end), SAMPLES_OUTSIDE, True, shadow=shadow)
+    # A: not where the ray ends on the sky model's sky without crossing the box (no pixel of that kind uses it)
+    t_a, s_a = segment(mi, air, o, d, 0.0 * t_in, dr.select(hit, t_in, dr.select(kind == 2.0, 0.0, t_end)),
+                       SAMPLES_OUTSIDE, True, shadow=shadow)
     rows = BOX_POINTS + 1
     out = dr.empty(mi.Float, nx * ny * rows * ROW)  # (every float written below)
     base = j * (rows * 2)  # in packets of 4 floats
@@ -86,7 +88,7 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
         dr.scatter(out, mi.Vector4f(1.0, 1.0, 1.0, 0.0), base + 1, first)
         dr.scatter(out, mi.Vector4f(s_a.x, s_a.y, s_a.z, kind), base + 2 * BOX_POINTS, first)
         dr.scatter(out, mi.Vector4f(t_a.x, t_a.y, t_a.z, 0.0), base + 2 * BOX_POINTS + 1, first)
-    profile(mi, air, o, d, dr.select(hit, t_in, 0.0), dr.select(hit, t_out, 0.0), BOX_POINTS, emit, shadow)
+    profile(mi, air, o, d, dr.select(hit, t_in, 0.0), dr.select(hit, t_out, 0.0), BOX_POINTS, emit, shadow, hit)
     return out
 
 
