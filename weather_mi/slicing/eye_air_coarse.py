@@ -117,11 +117,23 @@ def _corners(mi, dr, w: int, h: int):
 
 def seen_through_coarse_air(mi, air: EyeAir, rays, radiance, transmittance, background, depth, shadow=None):
     """``eye_air.seen_through_air`` with the air read from the coarse grid (module docstring); the same
-    arguments."""
+    arguments. Pixels whose ray ends on the sky model's sky without crossing the box see no air of ours: their
+    radiance as it is (LLVM skips a packet of them)."""
     import drjit as dr
     o, d = rays.origin, rays.direction
     table = coarse_air(mi, air, o, d, shadow if air.shadow else None)
     t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
+    sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
+    w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
+    return dr.if_stmt((radiance, transmittance, background, depth), (w > 0) | hit,
+                      lambda *a: _blend(mi, dr, air, table, *a, (t_in, t_out, hit, t_ground, w)),
+                      lambda r, *_: mi.Color3f(r))
+
+
+def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, depth, ends):
+    """``seen_through_coarse_air``'s pixels (module docstring): the coarse neighbours' air read at the pixel's
+    cloud depth; ``ends``: (t_in, t_out, hit, t_ground, w) of the pixels' rays (``eye_air.ray_ends``)."""
+    t_in, t_out, hit, t_ground, w = ends
     t_c = dr.clip(dr.select(transmittance < 1.0, depth, t_in), t_in, t_out)
     f = dr.clip((t_c - t_in) / dr.maximum(t_out - t_in, 1e-6), 0.0, 1.0) * (BOX_POINTS - 1)
     i0 = dr.minimum(mi.UInt32(f), BOX_POINTS - 2)
@@ -138,8 +150,6 @@ def seen_through_coarse_air(mi, air: EyeAir, rays, radiance, transmittance, back
     zero = dr.zeros(mi.Color3f, dr.width(t_in))
     s_a, t_a, s_f, t_f, s_1, t_1 = zero, zero, zero, zero, zero, zero
     total, plain = mi.Float(0.0), []
-    sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
-    w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
     # what each pixel reads: A where it counts (w > 0), the box at the cloud's depth where there is cloud, the
     # whole box where the cloud lets light through (elsewhere: S = 0, T = 1 in front of the cloud, nothing seen
     # behind it)
