@@ -123,33 +123,40 @@ def diffuse_light(spec, e_sky) -> np.ndarray:
     return 0.5 * (sky / np.pi + below)
 
 
-def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0), shadow: bool = True) -> EyeAir | None:
+def eye_air_input(mi, spec, bbox, reuse, e_sky=(0.0, 0.0, 0.0), shadow: bool = True) -> EyeAir | None:
     """The frame's ``EyeAir`` for ``spec`` (None without ``spec.atmosphere``) and the model's box ``bbox``
-    ((lo, hi) corners, m); ``cache``: a dict kept between frames (the tables of the last atmosphere and sun);
-    ``e_sky``: the sky's irradiance on a horizontal plane (W/m^2, RGB; ``diffuse_light``); ``shadow``:
-    whether the storm shadows the air (``EyeAir.shadow``)."""
+    ((lo, hi) corners, m); ``reuse``: the renderer's ``SliceRenderer._reuse`` (the tables and values of the last
+    atmosphere and ground kept; a frame uploads the sun's and the diffuse light's alone); ``e_sky``: the sky's
+    irradiance on a horizontal plane (W/m^2, RGB; ``diffuse_light``); ``shadow``: whether the storm shadows the
+    air (``EyeAir.shadow``)."""
     atm = getattr(spec, "atmosphere", None)
     if atm is None:
         return None
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
-    if cache.get("atm", (None,))[0] != atm:
-        table = sun_table(atm)
-        cache["atm"] = (atm, aligned_float(mi, packed(height_table(atm))), table, aligned_float(mi, packed(table.rgb)))
-    air, table, rgb = cache["atm"][1:]
-    (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in bbox)
     floor = None if spec.ground is None else float(spec.ground.height)
+    fixed = reuse("eye air", (atm, floor), lambda: _fixed_inputs(mi, atm, bbox, floor))
+    return EyeAir(**fixed, to_sun=mi.Vector3f(*(op(v) for v in spec.sun.to_sun)),
+                  irradiance=mi.Color3f(*(op(v) for v in spec.sun.irradiance)),
+                  ambient=mi.Color3f(*(op(v) for v in diffuse_light(spec, e_sky))), shadow=bool(shadow),
+                  width=int(spec.width), height=int(spec.height))
+
+
+def _fixed_inputs(mi, atm, bbox, floor) -> dict:
+    """The ``EyeAir`` fields of an atmosphere, a box and a ground height (None: no ground), uploaded once."""
+    import drjit as dr
+    op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
+    table = sun_table(atm)
+    air, rgb = aligned_float(mi, packed(height_table(atm))), aligned_float(mi, packed(table.rgb))
+    (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in bbox)
     lo = (x0, y0, max(z0, floor) if floor is not None else z0)
-    return EyeAir(air, op(1.0 / HEIGHT_STEP_M), dr.width(air) // 12, rgb,
-                  (op(table.mu[0]), op((table.mu.size - 1) / (table.mu[-1] - table.mu[0])),
-                   op((table.heights_m.size - 1) / (table.heights_m[-1] - table.heights_m[0]))),
-                  int(table.mu.size), int(table.heights_m.size),
-                  mi.Vector3f(*(op(v) for v in spec.sun.to_sun)), mi.Color3f(*(op(v) for v in spec.sun.irradiance)),
-                  op(atm.aerosol_g), mi.Point3f(op((x0 + x1) / 2), op((y0 + y1) / 2), op(0.0)),
-                  (mi.Point3f(*(op(v) for v in lo)), mi.Point3f(op(x1), op(y1), op(z1))),
-                  op(0.0 if floor is None else floor), floor is not None,
-                  mi.Color3f(*(op(v) for v in diffuse_light(spec, e_sky))), bool(shadow), int(spec.width),
-                  int(spec.height))
+    return dict(air=air, h_step=op(1.0 / HEIGHT_STEP_M), n_h=dr.width(air) // 12, sun_rgb=rgb,
+                sun_mu=(op(table.mu[0]), op((table.mu.size - 1) / (table.mu[-1] - table.mu[0])),
+                        op((table.heights_m.size - 1) / (table.heights_m[-1] - table.heights_m[0]))),
+                n_mu=int(table.mu.size), n_s=int(table.heights_m.size), aerosol_g=op(atm.aerosol_g),
+                centre=mi.Point3f(op((x0 + x1) / 2), op((y0 + y1) / 2), op(0.0)),
+                box=(mi.Point3f(*(op(v) for v in lo)), mi.Point3f(op(x1), op(y1), op(z1))),
+                floor=op(0.0 if floor is None else floor), ground=floor is not None)
 
 
 def _sun_colour(mi, dr, air: EyeAir, h, mu):
