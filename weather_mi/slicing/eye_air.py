@@ -179,11 +179,9 @@ def _sun_colour(mi, dr, air: EyeAir, h, mu):
 
 def _phases(dr, air: EyeAir, cos_t):
     """(Rayleigh's phase function with depolarisation, the aerosol's Henyey-Greenstein) at cos_t, 1/sr."""
-    from ..optics.rayleigh import DEPOLARISATION
-    gamma = DEPOLARISATION / (2.0 - DEPOLARISATION)
-    p_r = 3.0 / (16.0 * np.pi * (1.0 + 2.0 * gamma)) * ((1.0 + 3.0 * gamma) + (1.0 - gamma) * cos_t * cos_t)
-    g = air.aerosol_g
-    return p_r, (1.0 - g * g) / (4.0 * np.pi * dr.power(dr.maximum(1.0 + g * g - 2.0 * g * cos_t, 1e-6), 1.5))
+    from ..optics.phase.analytic import hg_value
+    from ..optics.rayleigh import phase_value
+    return phase_value(cos_t), hg_value(air.aerosol_g, cos_t)
 
 
 def _source(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):

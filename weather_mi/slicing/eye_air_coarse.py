@@ -32,9 +32,13 @@ saves, even branched per packet. The grid's size is part of the frame's structur
 frame's size only): a new view compiles nothing. Frames smaller than ``MIN_PIXELS`` a side integrate every
 pixel (``eye_air.seen_through_air``).
 
+Coarse rays that miss the box evaluate no point of its profile (their rows: T = 1, S = 0), those that end on
+the sky model's sky without crossing the box integrate no air outside it (no pixel of their kind reads it), and
+pixels of that kind keep the eye pass's radiance: each a branch LLVM takes per packet of lanes (the same floats).
+
 The cost (benchmarks/slicing_air.py, the drag at 300 x 300, 128 slices, frame by frame against no air): the
-rate with the air at 0.75-0.93 of the rate without it, 0.53-0.65 when every pixel integrated its own (and
-the box's rows were scattered one kernel each).
+rate with the air at 0.89-0.94 of the rate without it in the uniform modes (benchmarks/README.md, issue 38
+part 3), 0.53-0.65 when every pixel integrated its own (and the box's rows were scattered one kernel each).
 """
 from __future__ import annotations
 
