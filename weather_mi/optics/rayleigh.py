@@ -53,9 +53,11 @@ def beta_per_m(wavelength_m: float, rho_air_kg_m3) -> np.ndarray:
 
 
 def phase_value(mu) -> np.ndarray:
-    """Rayleigh phase function with depolarisation (1/sr) at cos(theta) ``mu`` (module docstring)."""
+    """Rayleigh phase function with depolarisation (1/sr) at cos(theta) ``mu`` (module docstring; ``mu`` may be a
+    Dr.Jit array: ``phase.analytic.values_of``)."""
+    from .phase.analytic import values_of
     gamma = DEPOLARISATION / (2.0 - DEPOLARISATION)
-    mu = np.asarray(mu, np.float64)
+    mu = values_of(mu)
     return 3.0 / (16.0 * np.pi * (1.0 + 2.0 * gamma)) * ((1.0 + 3.0 * gamma) + (1.0 - gamma) * mu * mu)
 
 

@@ -33,7 +33,7 @@ Not included: light scattered more than once by the air, the light the storm sca
 the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
 (``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing. Frames of 96 px a side or
 more integrate all this on every 4th pixel's ray and read it per pixel (``eye_air_coarse``); the tables' rows
-are packets of 4 floats (one gather each, ``packed``).
+are packets of 4 floats (one gather each, ``packets.packed``).
 """
 from __future__ import annotations
 
@@ -45,6 +45,7 @@ import numpy as np
 from ..kernel.jitarrays import aligned_float
 from ..optics.air.shell import EARTH_RADIUS_M
 from .eye import OPAQUE_T
+from .packets import lerp_rows, packed, packet
 
 HEIGHT_STEP_M = 250.0   # the height table's step (m): the aerosol's 1.2 km scale height within 0.5%
 SAMPLES_OUTSIDE = 33    # points on the segment outside the box (x^2 spacing, as eye_path's 257: S within 1%)
@@ -60,7 +61,7 @@ class EyeAir:
     ints and bools are part of a recording's structure)."""
 
     air: object         # mi.Float (n_h x 12): per height, extinction, molecules' and aerosol's scattering (R, G, B,
-                        # each padded to a packet of 4), 1/m (``packed``)
+                        # each padded to a packet of 4), 1/m (``packets.packed``)
     h_step: object      # mi.Float: 1 / the height table's step (1/m); its heights start at sea level
     n_h: int            # rows of the height table
     sun_rgb: object     # mi.Float (n_mu x n_s x 4): the direct sun's linear sRGB by (mu, height), padded (``sun_table``)
@@ -122,58 +123,40 @@ def diffuse_light(spec, e_sky) -> np.ndarray:
     return 0.5 * (sky / np.pi + below)
 
 
-def eye_air_input(mi, spec, bbox, cache: dict, e_sky=(0.0, 0.0, 0.0), shadow: bool = True) -> EyeAir | None:
+def eye_air_input(mi, spec, bbox, reuse, e_sky=(0.0, 0.0, 0.0), shadow: bool = True) -> EyeAir | None:
     """The frame's ``EyeAir`` for ``spec`` (None without ``spec.atmosphere``) and the model's box ``bbox``
-    ((lo, hi) corners, m); ``cache``: a dict kept between frames (the tables of the last atmosphere and sun);
-    ``e_sky``: the sky's irradiance on a horizontal plane (W/m^2, RGB; ``diffuse_light``); ``shadow``:
-    whether the storm shadows the air (``EyeAir.shadow``)."""
+    ((lo, hi) corners, m); ``reuse``: the renderer's ``SliceRenderer._reuse`` (the tables and values of the last
+    atmosphere and ground kept; a frame uploads the sun's and the diffuse light's alone); ``e_sky``: the sky's
+    irradiance on a horizontal plane (W/m^2, RGB; ``diffuse_light``); ``shadow``: whether the storm shadows the
+    air (``EyeAir.shadow``)."""
     atm = getattr(spec, "atmosphere", None)
     if atm is None:
         return None
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
-    if cache.get("atm", (None,))[0] != atm:
-        table = sun_table(atm)
-        cache["atm"] = (atm, aligned_float(mi, packed(height_table(atm))), table, aligned_float(mi, packed(table.rgb)))
-    air, table, rgb = cache["atm"][1:]
-    (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in bbox)
     floor = None if spec.ground is None else float(spec.ground.height)
+    fixed = reuse("eye air", (atm, floor), lambda: _fixed_inputs(mi, atm, bbox, floor))
+    return EyeAir(**fixed, to_sun=mi.Vector3f(*(op(v) for v in spec.sun.to_sun)),
+                  irradiance=mi.Color3f(*(op(v) for v in spec.sun.irradiance)),
+                  ambient=mi.Color3f(*(op(v) for v in diffuse_light(spec, e_sky))), shadow=bool(shadow),
+                  width=int(spec.width), height=int(spec.height))
+
+
+def _fixed_inputs(mi, atm, bbox, floor) -> dict:
+    """The ``EyeAir`` fields of an atmosphere, a box and a ground height (None: no ground), uploaded once."""
+    import drjit as dr
+    op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
+    table = sun_table(atm)
+    air, rgb = aligned_float(mi, packed(height_table(atm))), aligned_float(mi, packed(table.rgb))
+    (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in bbox)
     lo = (x0, y0, max(z0, floor) if floor is not None else z0)
-    return EyeAir(air, op(1.0 / HEIGHT_STEP_M), dr.width(air) // 12, rgb,
-                  (op(table.mu[0]), op((table.mu.size - 1) / (table.mu[-1] - table.mu[0])),
-                   op((table.heights_m.size - 1) / (table.heights_m[-1] - table.heights_m[0]))),
-                  int(table.mu.size), int(table.heights_m.size),
-                  mi.Vector3f(*(op(v) for v in spec.sun.to_sun)), mi.Color3f(*(op(v) for v in spec.sun.irradiance)),
-                  op(atm.aerosol_g), mi.Point3f(op((x0 + x1) / 2), op((y0 + y1) / 2), op(0.0)),
-                  (mi.Point3f(*(op(v) for v in lo)), mi.Point3f(op(x1), op(y1), op(z1))),
-                  op(0.0 if floor is None else floor), floor is not None,
-                  mi.Color3f(*(op(v) for v in diffuse_light(spec, e_sky))), bool(shadow), int(spec.width),
-                  int(spec.height))
-
-
-def packed(table) -> np.ndarray:
-    """``table`` (..., 3 k) as float32 with each group of 3 padded to 4 (a packet the kernels gather at once),
-    flat."""
-    t = np.asarray(table, np.float32)
-    t = t.reshape(t.shape[:-1] + (t.shape[-1] // 3, 3))
-    return np.ascontiguousarray(np.concatenate([t, np.zeros(t.shape[:-1] + (1,), np.float32)], axis=-1)).ravel()
-
-
-def _packet(mi, dr, table, i):
-    """Packet i of a ``packed`` table (a mi.Color3f)."""
-    v = dr.gather(mi.Vector4f, table, i)
-    return mi.Color3f(v.x, v.y, v.z)
-
-
-def _lerp_rows(mi, dr, table, f, n, width, offset):
-    """Linear interpolation between rows of the ``packed`` ``table`` (rows of ``width`` packets) at fractional
-    rows f, packet ``offset`` of each row (a mi.Color3f)."""
-    f = dr.clip(f, 0.0, float(n - 1))
-    i = dr.minimum(mi.UInt32(f), n - 2)
-    t = f - mi.Float(i)
-    a = _packet(mi, dr, table, i * width + offset)
-    b = _packet(mi, dr, table, (i + 1) * width + offset)
-    return a * (1.0 - t) + b * t
+    return dict(air=air, h_step=op(1.0 / HEIGHT_STEP_M), n_h=dr.width(air) // 12, sun_rgb=rgb,
+                sun_mu=(op(table.mu[0]), op((table.mu.size - 1) / (table.mu[-1] - table.mu[0])),
+                        op((table.heights_m.size - 1) / (table.heights_m[-1] - table.heights_m[0]))),
+                n_mu=int(table.mu.size), n_s=int(table.heights_m.size), aerosol_g=op(atm.aerosol_g),
+                centre=mi.Point3f(op((x0 + x1) / 2), op((y0 + y1) / 2), op(0.0)),
+                box=(mi.Point3f(*(op(v) for v in lo)), mi.Point3f(op(x1), op(y1), op(z1))),
+                floor=op(0.0 if floor is None else floor), ground=floor is not None)
 
 
 def _sun_colour(mi, dr, air: EyeAir, h, mu):
@@ -188,7 +171,7 @@ def _sun_colour(mi, dr, air: EyeAir, h, mu):
     ih, th = cell(h * inv_dh, air.n_s)
 
     def at(row, col):
-        return _packet(mi, dr, air.sun_rgb, row * air.n_s + col)
+        return packet(mi, dr, air.sun_rgb, row * air.n_s + col)
     lo = at(im, ih) * (1.0 - th) + at(im, ih + 1) * th
     hi = at(im + 1, ih) * (1.0 - th) + at(im + 1, ih + 1) * th
     return lo * (1.0 - tm) + hi * tm
@@ -196,11 +179,9 @@ def _sun_colour(mi, dr, air: EyeAir, h, mu):
 
 def _phases(dr, air: EyeAir, cos_t):
     """(Rayleigh's phase function with depolarisation, the aerosol's Henyey-Greenstein) at cos_t, 1/sr."""
-    from ..optics.rayleigh import DEPOLARISATION
-    gamma = DEPOLARISATION / (2.0 - DEPOLARISATION)
-    p_r = 3.0 / (16.0 * np.pi * (1.0 + 2.0 * gamma)) * ((1.0 + 3.0 * gamma) + (1.0 - gamma) * cos_t * cos_t)
-    g = air.aerosol_g
-    return p_r, (1.0 - g * g) / (4.0 * np.pi * dr.power(dr.maximum(1.0 + g * g - 2.0 * g * cos_t, 1e-6), 1.5))
+    from ..optics.phase.analytic import hg_value
+    from ..optics.rayleigh import phase_value
+    return phase_value(cos_t), hg_value(air.aerosol_g, cos_t)
 
 
 def _source(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
@@ -216,8 +197,8 @@ def _source(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
         r = dr.norm(q)
         h = dr.maximum(r - EARTH_RADIUS_M, 0.0)
         fh = h * air.h_step
-        ext = _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 0)
-        sca_r, sca_a = _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 1), _lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 2)
+        ext = lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 0)
+        sca_r, sca_a = lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 1), lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 2)
         src = (sca_r * p_r + sca_a * p_a) * _sun_colour(mi, dr, air, h, dr.dot(q, air.to_sun) / r)
         if shadow is not None:  # the storm's shadow on the direct sun
             src *= shadow(o + s * d)
@@ -244,39 +225,47 @@ def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse:
 
     n = dr.width(t0)
     s, ext, src = point(mi.UInt32(0))
-    state = (dr.full(mi.UInt32, 1, n), s, ext, src, dr.zeros(mi.Color3f, n), dr.zeros(mi.Color3f, n), length > 0)
+    state = (dr.full(mi.UInt32, 1, n), s, ext, src, dr.zeros(mi.Color3f, n), dr.full(mi.Color3f, 1.0, n),
+             dr.zeros(mi.Color3f, n), length > 0)
 
-    def body(i, s_prev, ext_prev, src_prev, tau, S, active):
+    def body(i, s_prev, ext_prev, src_prev, tau, trans, S, active):  # trans = exp(-tau), carried: one exp a point
         s, ext, src = point(i)
         ds = s - s_prev
         tau_next = tau + 0.5 * (ext + ext_prev) * ds
-        S = S + 0.5 * (src_prev * dr.exp(-tau) + src * dr.exp(-tau_next)) * ds
-        return i + 1, s, ext, src, tau_next, S, active & (i + 1 < samples)
+        trans_next = dr.exp(-tau_next)
+        S = S + 0.5 * (src_prev * trans + src * trans_next) * ds
+        return i + 1, s, ext, src, tau_next, trans_next, S, active & (i + 1 < samples)
 
-    _, _, _, _, tau, S, _ = dr.while_loop(state, lambda *st: st[-1], body)
-    return dr.exp(-tau), S
+    trans, S = dr.while_loop(state, lambda *st: st[-1], body)[5:7]
+    return trans, S
 
 
-def profile(mi, air: EyeAir, o, d, t0, t1, samples: int, emit, shadow=None) -> None:
+def profile(mi, air: EyeAir, o, d, t0, t1, samples: int, emit, shadow=None, active=None) -> None:
     """The cumulative ``segment`` (uniform, with the diffuse light, the same trapezoids) of the rays o + s d over
     [t0, t0 + x_k (t1 - t0)] at each of its points x_k = k / (samples - 1): ``emit(k, T_k, S_k)`` for k = 1 ..
     samples - 1 (k a mi.UInt32; T_0 = 1, S_0 = 0), called inside a symbolic loop (side effects only, e.g.
-    ``dr.scatter``: all of them one kernel)."""
+    ``dr.scatter``: all of them one kernel). ``active``: None, or the rays whose segment may be longer than 0
+    (the others evaluate no point past t0: T = 1, S = 0 as their empty segment's; LLVM skips a packet of them)."""
     import drjit as dr
     length = dr.maximum(t1 - t0, 0.0)
     source = _source(mi, air, o, d, shadow, True)
+    if active is not None:
+        zero = mi.Color3f(0.0)
+        source_all = source
+        source = lambda s: dr.if_stmt((s,), active, source_all, lambda s: (zero, zero))  # noqa: E731
     n = dr.width(t0)
     ext, src = source(t0)
     ds = length * (1.0 / (samples - 1))
 
-    def body(k, ext, src, tau, S):
+    def body(k, ext, src, tau, trans, S):  # trans = exp(-tau), carried: one exp a point
         ext_next, src_next = source(t0 + length * (mi.Float(k) * (1.0 / (samples - 1))))
         tau_next = tau + 0.5 * (ext + ext_next) * ds
-        S = S + 0.5 * (src * dr.exp(-tau) + src_next * dr.exp(-tau_next)) * ds
-        emit(k, dr.exp(-tau_next), S)
-        return k + 1, ext_next, src_next, tau_next, S
-    dr.while_loop((dr.full(mi.UInt32, 1, n), ext, src, dr.zeros(mi.Color3f, n), dr.zeros(mi.Color3f, n)),
-                  lambda k, *_: k < samples, body)
+        trans_next = dr.exp(-tau_next)
+        S = S + 0.5 * (src * trans + src_next * trans_next) * ds
+        emit(k, trans_next, S)
+        return k + 1, ext_next, src_next, tau_next, trans_next, S
+    dr.while_loop((dr.full(mi.UInt32, 1, n), ext, src, dr.zeros(mi.Color3f, n), dr.full(mi.Color3f, 1.0, n),
+                   dr.zeros(mi.Color3f, n)), lambda k, *_: k < samples, body)
 
 
 def box_interval(mi, air: EyeAir, o, d):

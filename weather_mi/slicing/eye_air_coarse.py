@@ -32,9 +32,13 @@ saves, even branched per packet. The grid's size is part of the frame's structur
 frame's size only): a new view compiles nothing. Frames smaller than ``MIN_PIXELS`` a side integrate every
 pixel (``eye_air.seen_through_air``).
 
+Coarse rays that miss the box evaluate no point of its profile (their rows: T = 1, S = 0), those that end on
+the sky model's sky without crossing the box integrate no air outside it (no pixel of their kind reads it), and
+pixels of that kind keep the eye pass's radiance: each a branch LLVM takes per packet of lanes (the same floats).
+
 The cost (benchmarks/slicing_air.py, the drag at 300 x 300, 128 slices, frame by frame against no air): the
-rate with the air at 0.75-0.93 of the rate without it, 0.53-0.65 when every pixel integrated its own (and
-the box's rows were scattered one kernel each).
+rate with the air at 0.89-0.94 of the rate without it in the uniform modes (benchmarks/README.md, issue 38
+part 3), 0.53-0.65 when every pixel integrated its own (and the box's rows were scattered one kernel each).
 """
 from __future__ import annotations
 
@@ -73,7 +77,9 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
     o, d = dr.gather(mi.Point3f, o, pixel), dr.gather(mi.Vector3f, d, pixel)
     t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
     kind = _kind(dr, hit, t_ground)
-    t_a, s_a = segment(mi, air, o, d, 0.0 * t_in, dr.select(hit, t_in, t_end), SAMPLES_OUTSIDE, True, shadow=shadow)
+    # A: not where the ray ends on the sky model's sky without crossing the box (no pixel of that kind uses it)
+    t_a, s_a = segment(mi, air, o, d, 0.0 * t_in, dr.select(hit, t_in, dr.select(kind == 2.0, 0.0, t_end)),
+                       SAMPLES_OUTSIDE, True, shadow=shadow)
     rows = BOX_POINTS + 1
     out = dr.empty(mi.Float, nx * ny * rows * ROW)  # (every float written below)
     base = j * (rows * 2)  # in packets of 4 floats
@@ -86,7 +92,7 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
         dr.scatter(out, mi.Vector4f(1.0, 1.0, 1.0, 0.0), base + 1, first)
         dr.scatter(out, mi.Vector4f(s_a.x, s_a.y, s_a.z, kind), base + 2 * BOX_POINTS, first)
         dr.scatter(out, mi.Vector4f(t_a.x, t_a.y, t_a.z, 0.0), base + 2 * BOX_POINTS + 1, first)
-    profile(mi, air, o, d, dr.select(hit, t_in, 0.0), dr.select(hit, t_out, 0.0), BOX_POINTS, emit, shadow)
+    profile(mi, air, o, d, dr.select(hit, t_in, 0.0), dr.select(hit, t_out, 0.0), BOX_POINTS, emit, shadow, hit)
     return out
 
 
@@ -115,11 +121,23 @@ def _corners(mi, dr, w: int, h: int):
 
 def seen_through_coarse_air(mi, air: EyeAir, rays, radiance, transmittance, background, depth, shadow=None):
     """``eye_air.seen_through_air`` with the air read from the coarse grid (module docstring); the same
-    arguments."""
+    arguments. Pixels whose ray ends on the sky model's sky without crossing the box see no air of ours: their
+    radiance as it is (LLVM skips a packet of them)."""
     import drjit as dr
     o, d = rays.origin, rays.direction
     table = coarse_air(mi, air, o, d, shadow if air.shadow else None)
     t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
+    sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
+    w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
+    return dr.if_stmt((radiance, transmittance, background, depth), (w > 0) | hit,
+                      lambda *a: _blend(mi, dr, air, table, *a, (t_in, t_out, hit, t_ground, w)),
+                      lambda r, *_: mi.Color3f(r))
+
+
+def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, depth, ends):
+    """``seen_through_coarse_air``'s pixels (module docstring): the coarse neighbours' air read at the pixel's
+    cloud depth; ``ends``: (t_in, t_out, hit, t_ground, w) of the pixels' rays (``eye_air.ray_ends``)."""
+    t_in, t_out, hit, t_ground, w = ends
     t_c = dr.clip(dr.select(transmittance < 1.0, depth, t_in), t_in, t_out)
     f = dr.clip((t_c - t_in) / dr.maximum(t_out - t_in, 1e-6), 0.0, 1.0) * (BOX_POINTS - 1)
     i0 = dr.minimum(mi.UInt32(f), BOX_POINTS - 2)
@@ -136,8 +154,6 @@ def seen_through_coarse_air(mi, air: EyeAir, rays, radiance, transmittance, back
     zero = dr.zeros(mi.Color3f, dr.width(t_in))
     s_a, t_a, s_f, t_f, s_1, t_1 = zero, zero, zero, zero, zero, zero
     total, plain = mi.Float(0.0), []
-    sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
-    w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
     # what each pixel reads: A where it counts (w > 0), the box at the cloud's depth where there is cloud, the
     # whole box where the cloud lets light through (elsewhere: S = 0, T = 1 in front of the cloud, nothing seen
     # behind it)

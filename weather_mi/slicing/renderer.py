@@ -160,7 +160,7 @@ class SliceRenderer:
         self.g_scattering = float(np.sum(sca * gs) / np.sum(sca)) if np.sum(sca) > 0 else 0.85
         self._texture_key = None  # the per-species inputs of the textures last built (plain numbers)
         self._last = {}  # per-frame numpy work kept from the last frame (``_reuse``)
-        self._air_cache = {} if eye_air else None  # the air's tables of the last atmosphere and sun (eye_air.py)
+        self._eye_air = eye_air  # the air along the eye rays with spec.atmosphere (eye_air.py)
         self.timing = {}
         self._t_light = None
         # frames whose inputs keep their structure launch the recorded kernels without tracing Python
@@ -474,8 +474,8 @@ class SliceRenderer:
                          kernel_scalar(mi, params.slab_jitter), kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
                          sca_ratio, below, self._reuse("sun air", (spec.atmosphere, float(spec.sun.mu0)),
                                                        lambda: sun_air_input(mi, spec, self.grid_box)),
-                         None if self._air_cache is None else eye_air_input(mi, spec, self.vol.bbox, self._air_cache, e_sky,
-                                                                            not self.vol.periodic))
+                         None if not self._eye_air else eye_air_input(mi, spec, self.vol.bbox, self._reuse, e_sky,
+                                                                      not self.vol.periodic))
 
     def _eye_pass(self, inputs: FrameInputs):
         import drjit as dr

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kernel.jitarrays import aligned_float
+from .packets import lerp_rows, packed
 
 TOP_ABOVE_BOX_M = 2000.0  # the table reaches this far above the box (as the path tracer's, kernel.scene_dict)
 COLUMN_SAMPLES = 128  # the slant columns' points per segment (``shell.slant_columns``: the colour within 1e-3)
@@ -27,7 +28,7 @@ class SunAir:
 
     h0: object      # mi.Float: the table's lowest height (m above sea level)
     inv_dh: object  # mi.Float: 1 / its height step (1/m)
-    rgb: object     # mi.Float (n x 3): the sun's linear sRGB per height, interleaved
+    rgb: object     # mi.Float (n x 4): the sun's linear sRGB per height, padded (``packets.packed``)
     n: int          # the number of heights
 
 
@@ -52,19 +53,14 @@ def sun_air_input(mi, spec, grid_box) -> SunAir | None:
     heights, rgb = sun_by_height(spec, grid_box[1][2])
     step = float(heights[1] - heights[0])
     return SunAir(dr.opaque(mi.Float, float(heights[0])), dr.opaque(mi.Float, 1.0 / step),
-                  aligned_float(mi, np.asarray(rgb, np.float32)), int(heights.size))
+                  aligned_float(mi, packed(rgb)), int(heights.size))
 
 
 def sun_colour_at(mi, air: SunAir, z):
     """The sun's colour (mi.Color3f) at heights z (mi.Float, m above sea level), linear in height between
     the table's rows, clamped to its ends (inside a kernel)."""
     import drjit as dr
-    f = dr.clip((z - air.h0) * air.inv_dh, 0.0, float(air.n - 1))
-    i = dr.minimum(mi.UInt32(f), air.n - 2)
-    t = f - mi.Float(i)
-    lo = dr.gather(mi.Color3f, air.rgb, i)
-    hi = dr.gather(mi.Color3f, air.rgb, i + 1)
-    return lo * (1.0 - t) + hi * t
+    return lerp_rows(mi, dr, air.rgb, (z - air.h0) * air.inv_dh, air.n)
 
 
 __all__ = ["SunAir", "sun_by_height", "sun_air_input", "sun_colour_at"]

@@ -13,9 +13,16 @@ def _check_g(g: float) -> float:
     return g
 
 
+def values_of(mu):
+    """``mu`` as float64 numpy values, or as it is where it is a kernel's array (Dr.Jit: the slicer evaluates the
+    same closed forms inside its kernels)."""
+    return mu if type(mu).__module__.startswith("drjit") else np.asarray(mu, np.float64)
+
+
 def hg_value(g: float, mu) -> np.ndarray:
-    """Henyey-Greenstein p(mu) = (1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2)) in 1/sr."""
-    mu = np.asarray(mu, np.float64)
+    """Henyey-Greenstein p(mu) = (1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^(3/2)) in 1/sr (``mu``, and ``g``, may be
+    Dr.Jit arrays: ``values_of``)."""
+    mu = values_of(mu)
     return (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * mu) ** 1.5)
 
 
@@ -82,5 +89,5 @@ def isotropic() -> PhaseTable:
     return PhaseTable.from_values(np.array([0.0, np.pi]), np.full(2, 1 / (4 * np.pi)), name="isotropic")
 
 
-__all__ = ["henyey_greenstein", "cornette_shanks", "isotropic", "cornette_shanks_cone_fraction",
+__all__ = ["values_of", "henyey_greenstein", "cornette_shanks", "isotropic", "cornette_shanks_cone_fraction",
            "cornette_shanks_mean_cosine", "hg_cone_fraction", "hg_value", "cornette_shanks_value", "angle_grid"]
