@@ -93,9 +93,10 @@ def check_spectral(values: np.ndarray, grid_nm: np.ndarray, n_species: int, n_no
                          f"{grid_nm.size} wavelengths")
 
 
-def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4):
+def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4, lane_w=None):
     """mi.Spectrum: per lane of ``wavelengths`` (nm), sum_s w_s p_s(v, lambda) with v at fraction ``t`` of node
-    segment ``idx``; ``table`` from :func:`pack_spectral` (flat), ``grid`` = (first nm, 1 / step, K)."""
+    segment ``idx``; ``table`` from :func:`pack_spectral` (flat), ``grid`` = (first nm, 1 / step, K). ``lane_w``:
+    each lane's own weights (4 lists of S Floats: the air's by wavelength, ``spectral_air_weights``) in place of w."""
     lo, inv_step, k = grid
     out = []
     for lane in range(4):
@@ -104,11 +105,12 @@ def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4)
         tl = u - mi.Float(j)
         base = (idx * (k - 1) + j) * n_species
         acc = mi.Float(0.0)
+        ws = w if lane_w is None else lane_w[lane]
         for s in range(n_species):
             e = gather4(table, base + s)
             near = dr.fma(e[1] - e[0], tl, e[0])
             far = dr.fma(e[3] - e[2], tl, e[2])
-            acc += w[s] * dr.fma(far - near, t, near)
+            acc += ws[s] * dr.fma(far - near, t, near)
         out.append(acc)
     return mi.Spectrum(*out)
 
