@@ -4,7 +4,7 @@ wavelength (``kernel/spectral_air.py``, ``kernel/plugins/spectral_air.py``, ``sp
 that do not come from our code: the kernel's optical depth at fixed wavelengths against the RGB medium's per channel
 and against Bodhaine et al. (1999)'s cross section (Eq. 2, written out in ``test_box_air``) x the number density;
 the direct sun through the box (Beer-Lambert) at one wavelength; the nadir reflectance's CIE X, Y, Z against DISORT
-solved every 10 nm and integrated over the ASTM G173 sun and the CIE 1931 functions here. Every test puts the variant
+solved every 5 nm and integrated over the ASTM G173 sun and the CIE 1931 functions here. Every test puts the variant
 back as it found it."""
 from __future__ import annotations
 
@@ -130,10 +130,10 @@ def test_sun_seen_through_the_box_is_beer_lambert_over_the_spectrum(variant_rest
 
 def test_rayleigh_slab_xyz_against_disort(variant_restored):
     """All orders of scattering in the pure molecular slab: the nadir reflectance's CIE X, Y, Z from the spectral
-    variant against DISORT (Rayleigh's Legendre moments) solved every 10 nm at Bodhaine's tau(lambda), integrated over
+    variant against DISORT (Rayleigh's Legendre moments) solved every 5 nm at Bodhaine's tau(lambda), integrated over
     the ASTM G173 sun and the CIE 1931 functions (luminance 1 for the sun): within 3 se and 2 %."""
     img = _render(_nadir_camera(), _point_sun(), spp=2048, passes=8, normalize="reflectance")
-    wl = np.arange(360.0, 830.1, 10.0)
+    wl = np.arange(360.0, 830.1, 5.0)
     refl = np.array([_disort_rayleigh(_tau(w))[0] for w in wl])
     s, cmf = _astm_toa(wl), _cmfs(wl)
     expect = (s * refl) @ cmf / (s @ cmf[:, 1])
