@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..optics.air.spectral_levels import spectral_air_levels
+from ..optics.air.spectral_levels import factored_air_levels, spectral_air_levels
 from ..optics.periodic import pad_levels
 from ..optics.volume import OpticalVolume
 
@@ -19,24 +19,26 @@ def _levels(a: np.ndarray, periodic) -> np.ndarray:
 
 
 def integrator_properties(vol: OpticalVolume, air) -> dict:
-    """``majorant_volpath``'s spectral air: ``air_extinction`` and ``air_scattering`` (levels, K; molecules and aerosol
-    summed), 1/m, on the wavelengths ``air_nm`` (K,), and ``air_albedo`` the hydrometeors' 550 nm albedo (z, y, x, 1);
-    levels padded where periodic."""
+    """``majorant_volpath``'s spectral air (``optics.air.spectral_levels.factored_air_levels``): ``air_extinction``
+    (levels, 3) the profiles of molecules, ozone and aerosol (1/m), ``air_spectra`` (K, 3) their spectra on the
+    wavelengths ``air_nm`` (K,), ``air_component_albedo`` (3,), and ``air_albedo`` the hydrometeors' 550 nm albedo
+    (z, y, x, 1); levels padded where periodic."""
     import mitsuba as mi
-    tables = spectral_air_levels(air)
+    f = factored_air_levels(air)
     albedo = np.asarray(vol.albedo)
     albedo = albedo[..., None] if albedo.ndim == 3 else albedo
     albedo = albedo[..., 1:2] if albedo.shape[-1] == 3 else albedo[..., :1]  # 650 / 550 / 450 nm: the 550 nm one
-    return {"air_extinction": mi.TensorXf(_levels(tables.extinction, vol.periodic)),
-            "air_scattering": mi.TensorXf(_levels(tables.scattering.sum(axis=0), vol.periodic)),
-            "air_nm": mi.TensorXf(tables.wavelengths_nm.astype(np.float32)),
+    return {"air_extinction": mi.TensorXf(_levels(f.profiles, vol.periodic)),
+            "air_spectra": mi.TensorXf(f.spectra), "air_nm": mi.TensorXf(f.wavelengths_nm.astype(np.float32)),
+            "air_component_albedo": mi.TensorXf(f.albedo.astype(np.float32)),
             "air_albedo": mi.TensorXf(_levels(albedo, vol.periodic))}
 
 
 def extinction_levels(vol: OpticalVolume, air) -> np.ndarray:
-    """(levels, K) the air's extinction over wavelength (1/m; levels padded where periodic): the trackers' majorants
-    bound it at every wavelength of the grid (molecules at 360 nm are 2.4x those at 450 nm)."""
-    return _levels(spectral_air_levels(air).extinction, vol.periodic)
+    """(levels, K) the air's extinction over wavelength (1/m; levels padded where periodic), as the kernel's
+    ``spectral_air.ComponentAirLevels`` holds it: the trackers' majorants bound it at every wavelength of the grid
+    (molecules at 360 nm are 2.4x those at 450 nm)."""
+    return _levels(factored_air_levels(air).extinction(), vol.periodic)
 
 
 def phase_properties(vol: OpticalVolume, air) -> dict:

@@ -113,8 +113,9 @@ class MajorantVolpath:
          and which is added to a grey (1-channel) one, the albedo then the mixture's of ``air_albedo`` and
          ``air_scattering`` (:mod:`.air_albedo`, ``MediumSetup.add_air``) (:mod:`.air_levels`): its cells are
          crossed as empty space, with the air's majorant. An air whose three channels are equal (a satellite
-         band's) is tracked grey (``air_levels.equal_channels``). Spectral variants with ``air_nm`` (K,): (levels,
-         K) over those wavelengths, read at the path's (:mod:`.spectral_air`; the albedo :mod:`.spectral_air_albedo`).
+         band's) is tracked grey (``air_levels.equal_channels``). Spectral variants, with ``air_spectra``, ``air_nm``
+         and ``air_component_albedo``: (levels, M) the profiles of the air's components, read at the path's
+         wavelengths (:mod:`.spectral_air`; the albedo :mod:`.spectral_air_albedo`).
      * - periodic, periodic_tiles
        - |string|, |int|
        - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each
@@ -156,11 +157,10 @@ class MajorantVolpath:
         self.reach = int(get("periodic_tiles", 0))
         _check(self.periodic == "none" or (self.reach >= 1 and self.track_mode == "texel"),
                f"periodic needs periodic_tiles >= 1 and tracking_grid 'texel', got {self.reach}, {self.track_mode!r}")
-        spectral = spectral_air.parse(props, _check)  # spectral variants: the air over wavelength (air_nm)
-        self.air_nm = None if spectral is None else spectral[1]
-        if spectral is not None:
-            self.air_levels = spectral[0]
-            self.air_albedo = spectral_air_albedo.parse(props, self.air_levels, self.air_nm, _check)
+        self.air_spectral = spectral_air.parse(props, _check)  # spectral variants: the air over wavelength
+        if self.air_spectral is not None:
+            self.air_levels = self.air_spectral.full  # (levels, K): what the majorants bound
+            self.air_albedo = spectral_air_albedo.parse(props, _check)
         else:
             self.air_levels = air_levels.parse(props, _check)  # the air in the box, per level (optional)
             self.air_albedo = air_albedo.parse(props, self.air_levels, _check)  # with its albedo, where added
@@ -213,8 +213,8 @@ class MajorantVolpath:
                 self.majorant = mi.TensorXf(maj)
                 self._auto_key = key
         if self.air_levels is not None and vol is not None and int(volume_data(vol).shape[-1]) == 1:
-            if self.air_nm is not None:  # spectral variants: the air at the path's wavelengths
-                levels = spectral_air.SpectralAirLevels(self.air_levels, self.air_nm)
+            if self.air_spectral is not None:  # spectral variants: the air at the path's wavelengths
+                levels = self.air_spectral
             else:
                 grey = air_levels.equal_channels(self.air_levels)  # a satellite band's: tracked grey (not spectral)
                 levels = air_levels.AirLevels(self.air_levels, grey)
@@ -222,7 +222,7 @@ class MajorantVolpath:
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"
         texel, texel_data = self._grids.texel(vol, ms.scale, self.reach if periodic else None, self.air_levels,
-                                              grey_air=not ms.spectral, air_nm=self.air_nm)
+                                              grey_air=not ms.spectral, levels=self.air_spectral)
         track = texel if (texel is not None and self.track_mode == "texel") else coarse
         texel_data = None if ms.air is not None else texel_data  # the grid's texels lack the air added per level
         self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data, self.periodic, self.reach)

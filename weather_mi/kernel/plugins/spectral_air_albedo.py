@@ -5,8 +5,8 @@ hydrometeors' grey sigma_t grid: the spectral counterpart of ``air_albedo`` (the
 At a point p and a lane's wavelength lambda, with beta(p) the grid's extinction (trilinear), omega_550(p) the
 hydrometeors' albedo at 550 nm (``air_albedo``, the volume's 550 nm channel (z, y, x, 1), trilinear), omega_h its
 spectral form (``HydrometeorMixture.albedo_at``: the species' co-albedo spectra; grey without them) and the air's
-extinction e(z, lambda) and scattering s(z, lambda) of molecules and aerosol (linear between level centres and
-between the 5 nm grid's nodes, as ``spectral_air.SpectralAirLevels``):
+extinction e(z, lambda) and scattering s(z, lambda) (``spectral_air.ComponentAirLevels``: its components' profiles
+read once, e = sum_m p_m F_m, s = sum_m omega_m p_m F_m, linear between level centres and the 5 nm grid's nodes):
 
     sigma_t = beta + e,   omega = (omega_h beta + s) / sigma_t  (0 where sigma_t = 0),
 
@@ -16,24 +16,20 @@ spectral mode's albedo without air exactly.
 """
 from __future__ import annotations
 
-import numpy as np
-
 import drjit as dr
 import mitsuba as mi
 
 from . import grid_lookup
-from .air_albedo import ALBEDO_PROPERTY, SCATTERING_PROPERTY
+from .air_albedo import ALBEDO_PROPERTY
 from .medium_setup import medium_interaction
-from .spectral_air import SpectralAirLevels
 
 
 class SpectralMixtureAlbedo:
-    """The hydrometeors' 550 nm albedo grid (held as given) and the air's scattering per level over wavelength."""
+    """The hydrometeors' 550 nm albedo grid (held as given); the air's is ``MediumSetup.air``'s."""
 
-    def __init__(self, albedo, scattering: np.ndarray, grid_nm):
+    def __init__(self, albedo):
         self.shape = tuple(int(n) for n in albedo.shape[:3])
         self.albedo = albedo.array
-        self.sca = SpectralAirLevels(scattering, grid_nm)  # read as the extinction: per level and lane
 
     def omega_550(self, p_local, periodic: bool, active):
         """The hydrometeors' albedo at 550 nm (Float) at the unit-cube point ``p_local``, trilinear."""
@@ -50,8 +46,7 @@ class SpectralMixtureAlbedo:
         p_local = ms.air_to_local @ mei.p
         q = p_local.z * ms.air_levels - 0.5
         beta = ms.volume.eval_1(mei, active)
-        ext = ms.air.sigma_at(q, active, wl)
-        sca_air = self.sca.sigma_at(q, active, wl)
+        ext, sca_air = ms.air.extinction_scattering(q, active, ms.air.factors(wl))
         omega = self.omega_550(p_local, ms.air_periodic, active)
         omega_h = ms.medium.phase_function().albedo_at(mei, omega) if ms.spectral_albedo else mi.Spectrum(omega)
         sigma_t = ext + beta
@@ -61,19 +56,14 @@ class SpectralMixtureAlbedo:
         return mei, mi.Spectrum(albedo)
 
 
-def parse(props, extinction, grid_nm, check):
-    """``air_albedo`` (z, y, x, 1: the 550 nm albedo) and ``air_scattering`` (levels, K, shaped as ``extinction``) as a
-    :class:`SpectralMixtureAlbedo`; both are required with the spectral air."""
-    check(ALBEDO_PROPERTY in props and SCATTERING_PROPERTY in props,
-          f"the spectral air ('air_nm') needs '{ALBEDO_PROPERTY}' and '{SCATTERING_PROPERTY}'")
+def parse(props, check):
+    """``air_albedo`` (z, y, x, 1: the hydrometeors' 550 nm albedo) as a :class:`SpectralMixtureAlbedo`; required with
+    the spectral air."""
+    check(ALBEDO_PROPERTY in props, f"the spectral air needs '{ALBEDO_PROPERTY}'")
     albedo = props[ALBEDO_PROPERTY]
-    sca = np.asarray(props[SCATTERING_PROPERTY], np.float32)
     check(len(albedo.shape) == 4 and int(albedo.shape[3]) == 1,
           f"'{ALBEDO_PROPERTY}' with the spectral air must be (z, y, x, 1) (the 550 nm albedo), got {tuple(albedo.shape)}")
-    check(sca.shape == tuple(extinction.shape) and np.all(np.isfinite(sca)) and sca.min() >= 0.0,
-          f"'{SCATTERING_PROPERTY}' must be finite, non-negative and shaped as 'air_extinction' "
-          f"{tuple(extinction.shape)}, got {sca.shape}")
-    return SpectralMixtureAlbedo(albedo, sca, grid_nm)
+    return SpectralMixtureAlbedo(albedo)
 
 
 __all__ = ["SpectralMixtureAlbedo", "parse"]

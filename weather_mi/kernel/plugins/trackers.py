@@ -36,6 +36,7 @@ class _Walk:
     def __init__(self, tk, grid, texels, ray, t_end, active, tile_only=None):
         self.tk, self.grid, self.texels, self.ray = tk, grid, texels, ray
         self.air = bind_air(grid.air, ray.wavelengths)
+        self.bound_air = None if self.air is grid.air else self.air  # spectral: for the medium's lookups too
         o_l, d_l, self.t_near, self.t_max, self.active = ray_box(tk.to_local, ray, t_end, active, tk.bounds(tile_only))
         self.q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
         self.dq = [d_l[k] * grid.scale[k] for k in range(3)]
@@ -43,7 +44,7 @@ class _Walk:
 
     def sigma_t(self, t, active):
         """sigma_t at distance t (in the current texel cell ``cells`` when interpolating texels)."""
-        return sigma_t_at(self.tk.ms, self.ray.o + self.ray.d * t, self.ray, active)
+        return sigma_t_at(self.tk.ms, self.ray.o + self.ray.d * t, self.ray, active, self.bound_air)
 
     def tentative(self, sampler, active, t, cells, nexts):
         """One step of a tracker in the current cell: (majorant, k, end of the segment in this cell,
