@@ -18,8 +18,9 @@ spectral mode's R, G, B come from X, Y, Z through sRGB's matrix, whose chroma no
 
 ``--atmosphere clear`` (default, as ``render`` runs): both modes have the air inside the box as well as on the
 sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``none``: no air. ``--three-nodes``
-adds the spectral mode as it was before the tables every 25 nm; ``--without-box-air`` the spectral mode as it was
-before the box's air (the air on the sun's path only: ``kernel.medium.air_in_medium`` None, a different scene).
+adds the spectral mode as it was before the tables every 25 nm; ``--without-box-air`` both modes without the box's
+air (the air on the sun's path only: ``kernel.medium.air_in_medium`` None, a different scene; the spectral mode as it
+was before its box air was wired).
 
 ``--phase``: the mixture plugin alone in ``llvm_ad_spectral``, ``eval_pdf`` and ``sample`` on the demo
 supercell's five species (their tables at "test" quality, a random 16^3 weight grid) at random directions and
@@ -120,7 +121,7 @@ def main(argv=None):
     ap.add_argument("--three-nodes", action="store_true",
                     help="also the spectral mode with the R, G, B tables interpolated (as before the 25 nm tables)")
     ap.add_argument("--without-box-air", action="store_true",
-                    help="also the spectral mode without the box's air (as before it was wired)")
+                    help="also both modes without the box's air (the spectral one as before it was wired)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
     args = ap.parse_args(argv)
     if args.phase:
@@ -138,6 +139,7 @@ def main(argv=None):
     if args.three_nodes:
         modes["spectral, 3 nodes"] = "llvm_ad_spectral"
     if args.without_box_air:
+        modes["rgb, no box air"] = "llvm_ad_rgb"
         modes["spectral, no box air"] = "llvm_ad_spectral"
     for mode, variant in modes.items():  # compile (and build the spectral tables) first, as measured: the kernels
         with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")):  # of 1 spp differ

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from test_box_air import AVOGADRO, H_M, M_AIR, MU0, RHO, _clear_slab, _disort_rayleigh, _nadir_camera, _point_sun, \
+from test_box_air import AVOGADRO, DEPOL, H_M, M_AIR, MU0, RHO, _clear_slab, _nadir_camera, _point_sun, \
     _sigma_physical_m2, _tau
 from test_spectral import SPECTRAL, _astm_toa, _cmfs
 
@@ -128,13 +128,24 @@ def test_sun_seen_through_the_box_is_beer_lambert_over_the_spectrum(variant_rest
     assert expect[2] / white[2] < 0.8 * expect[0] / white[0]  # reddened by the air: the check can fail
 
 
+def _disort_nadir(tau):
+    """DISORT (disortpp): a conservative Rayleigh slab over a black surface, pi I / mu0 upward at nadir at the top
+    (Legendre moments 1, 0, (1 - g) / (10 (1 + 2 g)), g = DEPOL / (2 - DEPOL))."""
+    from weather_mi.plane_parallel.disort import solve
+    g = DEPOL / (2 - DEPOL)
+    moments = np.zeros(33)
+    moments[0], moments[2] = 1.0, (1 - g) / (10 * (1 + 2 * g))
+    res = solve([tau], [1.0], MU0, [1.0], [0.0], [0.0], moments=moments[None], n_streams=32)  # up (mu 1) at the top
+    return math.pi * res.intensities(0, 0, 0) / MU0
+
+
 def test_rayleigh_slab_xyz_against_disort(variant_restored):
     """All orders of scattering in the pure molecular slab: the nadir reflectance's CIE X, Y, Z from the spectral
     variant against DISORT (Rayleigh's Legendre moments) solved every 5 nm at Bodhaine's tau(lambda), integrated over
     the ASTM G173 sun and the CIE 1931 functions (luminance 1 for the sun): within 3 se and 2 %."""
     img = _render(_nadir_camera(), _point_sun(), spp=2048, passes=8, normalize="reflectance")
     wl = np.arange(360.0, 830.1, 5.0)
-    refl = np.array([_disort_rayleigh(_tau(w))[0] for w in wl])
+    refl = np.array([_disort_nadir(_tau(w)) for w in wl])
     s, cmf = _astm_toa(wl), _cmfs(wl)
     expect = (s * refl) @ cmf / (s @ cmf[:, 1])
     got = img.xyz.reshape(-1, 3).astype(np.float64).mean(axis=0)
@@ -152,3 +163,26 @@ def test_air_in_the_grid_is_refused_in_a_spectral_variant(variant_restored):
     set_variant(SPECTRAL)
     with pytest.raises(ValueError, match="majorant_volpath"):
         medium_dict(_clear_slab(), air_in_grid=True)
+
+
+def test_a_flat_species_read_once_gives_the_same_values(variant_restored):
+    """``spectral_phase.spectral_value`` reads a species whose tables are the same at every wavelength (the air's
+    Rayleigh and Henyey-Greenstein) once for the 4 lanes: the same floats as reading it per lane."""
+    from weather_mi.kernel.variant import set_variant
+    set_variant(SPECTRAL)
+    import drjit as dr
+    import mitsuba as mi
+    from weather_mi.kernel.plugins.spectral_phase import flat_species, pack_spectral, spectral_value
+    rng = np.random.default_rng(3)
+    values = rng.random((3, 50, 21)).astype(np.float32)
+    values[1] = values[1][:, :1]  # species 1 flat in wavelength
+    assert flat_species(values) == (1,)
+    table = mi.Float(pack_spectral(values).ravel())
+    n = 256
+    idx, t = mi.UInt32(rng.integers(0, 49, n).astype(np.uint32)), mi.Float(rng.random(n).astype(np.float32))
+    wl = mi.Spectrum(*(mi.Float((340.0 + 520.0 * rng.random(n)).astype(np.float32)) for _ in range(4)))
+    w = [mi.Float(rng.random(n).astype(np.float32)) for _ in range(3)]
+    grid = (350.0, 1.0 / 25.0, 21)
+    a = spectral_value(table, grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i))
+    b = spectral_value(table, grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i), flat=(1,))
+    np.testing.assert_array_equal(np.array(a), np.array(b))

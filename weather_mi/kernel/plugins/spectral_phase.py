@@ -93,12 +93,23 @@ def check_spectral(values: np.ndarray, grid_nm: np.ndarray, n_species: int, n_no
                          f"{grid_nm.size} wavelengths")
 
 
-def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4, lane_w=None):
+def flat_species(values: np.ndarray) -> tuple:
+    """The species whose tables ``values`` (S, N, K) are the same at every wavelength (Rayleigh's, a
+    Henyey-Greenstein's: the box's air), which :func:`spectral_value` reads once for all lanes."""
+    v = np.asarray(values)
+    return tuple(s for s in range(v.shape[0]) if np.array_equal(v[s], np.broadcast_to(v[s][:, :1], v[s].shape)))
+
+
+def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4, lane_w=None, flat=()):
     """mi.Spectrum: per lane of ``wavelengths`` (nm), sum_s w_s p_s(v, lambda) with v at fraction ``t`` of node
     segment ``idx``; ``table`` from :func:`pack_spectral` (flat), ``grid`` = (first nm, 1 / step, K). ``lane_w``:
-    each lane's own weights (4 lists of S Floats: the air's by wavelength, ``spectral_air_weights``) in place of w."""
+    each lane's own weights (4 lists of S Floats: the air's by wavelength, ``spectral_air_weights``) in place of w.
+    ``flat``: species the same at every wavelength (:func:`flat_species`), one packet load for the 4 lanes."""
     lo, inv_step, k = grid
-    out = []
+    out, shared = [], {}
+    for s in flat:  # wavelength cell 0: the same values as any other
+        e = gather4(table, idx * ((k - 1) * n_species) + s)
+        shared[s] = dr.fma(e[2] - e[0], t, e[0])
     for lane in range(4):
         u = dr.clip((wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
         j = mi.UInt32(u)
@@ -107,6 +118,9 @@ def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4,
         acc = mi.Float(0.0)
         ws = w if lane_w is None else lane_w[lane]
         for s in range(n_species):
+            if s in shared:
+                acc += ws[s] * shared[s]
+                continue
             e = gather4(table, base + s)
             near = dr.fma(e[1] - e[0], tl, e[0])
             far = dr.fma(e[3] - e[2], tl, e[2])
@@ -115,5 +129,5 @@ def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4,
     return mi.Spectrum(*out)
 
 
-__all__ = ["prepare_spectral", "pack_spectral", "check_spectral", "spectral_value", "from_properties", "pack_pdf",
+__all__ = ["flat_species", "prepare_spectral", "pack_spectral", "check_spectral", "spectral_value", "from_properties", "pack_pdf",
            "spectral_pdf"]
