@@ -186,3 +186,56 @@ def test_a_flat_species_read_once_gives_the_same_values(variant_restored):
     a = spectral_value(table, grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i))
     b = spectral_value(table, grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i), flat=(1,))
     np.testing.assert_array_equal(np.array(a), np.array(b))
+
+
+def test_albedo_with_the_air_at_voxel_centres(variant_restored):
+    """A small supercell with the box's air (AOD 0.3), in the spectral variant: at voxel centres (in the cloud and
+    in the air alone) the medium's sigma_t and albedo at 4 wavelengths equal, within 1e-4, what is computed here in
+    numpy: sigma_t = beta + e(lambda), omega = (omega_h(lambda) beta + s(lambda)) / sigma_t, omega_h = 1 - (1 -
+    omega_550) sum_s w_s c_s(lambda) / sum_s w_s c_s(550) from the species' co-albedo table, e and s the air's tables
+    (``spectral_air_levels``) at the voxel's level."""
+    import mitsuba as mi
+    import weather_mi as wm
+    from weather_mi.kernel.plugins.medium_setup import scattering_event
+    from weather_mi.kernel.scene_dict import integrator_dict, scene_dict
+    from weather_mi.kernel.variant import set_variant
+    from weather_mi.optics.air import Atmosphere
+    from weather_mi.optics.air.inside import scene_air
+    from weather_mi.optics.air.spectral_levels import spectral_air_levels
+    from weather_mi.optics.spectral import COALBEDO_NM, coalbedo_table
+    vol = scene_air(wm.optical_volume(wm.synthetic.supercell(shape=(12, 16, 16)), phase_quality="test"),
+                    Atmosphere(aod_550=0.3))
+    set_variant(SPECTRAL)
+    spec = wm.SceneSpec(camera=wm.Camera.orbit(vol, azimuth=200, elevation=8, fov=45), sun=wm.Sun(240.0, 30.0),
+                        width=4, height=4)
+    scene = mi.load_dict(scene_dict(spec, vol, integrator_dict(vol, "majorant", -1, sun=spec.sun)))
+    integ = scene.integrator()
+    integ._setup(scene, None)
+    beta = np.asarray(vol.beta_total, np.float64)
+    cloud = np.argwhere(beta > 0.5 * beta.max())[:6]
+    clear = np.argwhere(beta == 0.0)[:: max(1, int((beta == 0).sum()) // 6)][:6]
+    vox = np.concatenate([cloud, clear])
+    shape = np.array(beta.shape)
+    (lo, hi) = (np.asarray(v, np.float64) for v in vol.bbox)
+    p = lo + (vox[:, ::-1] + 0.5) / shape[::-1] * (hi - lo)                           # x, y, z of the centres
+    lanes = (420.0, 505.0, 610.0, 700.0)
+    n = len(vox)
+    ray = mi.Ray3f(mi.Point3f(p[:, 0].astype(np.float32), p[:, 1].astype(np.float32), (p[:, 2] + 1.0).astype(np.float32)),
+                   mi.Vector3f(0.0, 0.0, -1.0))
+    ray.wavelengths = mi.Spectrum(*(mi.Float(np.full(n, w, np.float32)) for w in lanes))
+    mei, albedo = scattering_event(integ._ms, ray, mi.Float(np.ones(n, np.float32)), mi.Bool(True))
+    got_a, got_t = np.array(albedo), np.array(mei.sigma_t)
+    species = [vol.species_set[s] for s in vol.species]
+    c = coalbedo_table(species)
+    c_l = np.stack([np.interp(lanes, COALBEDO_NM, c[s, :-1]) for s in range(len(species))])  # (S, 4)
+    tables = spectral_air_levels(vol.air)
+    ext, sca = tables.at(lanes)
+    for i, (z, y, x) in enumerate(vox):
+        w = np.array([np.asarray(vol.weights[s])[z, y, x] for s in range(len(species))], np.float64)
+        ref = w @ c[:, -1]
+        omega_h = 1 - (1 - float(vol.albedo[z, y, x, 1])) * (w @ c_l / ref if ref > 0 else 1.0)
+        sigma_t = beta[z, y, x] + ext[z]
+        expect = (omega_h * beta[z, y, x] + sca[:, z].sum(axis=0)) / sigma_t
+        np.testing.assert_allclose(got_t[:, i], sigma_t, rtol=1e-5)
+        np.testing.assert_allclose(got_a[:, i], expect, rtol=1e-4, atol=1e-7)
+    assert np.ptp(got_a[:, len(cloud):], axis=0).max() > 0.01  # the air's albedo differs by wavelength (ozone)
