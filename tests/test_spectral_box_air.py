@@ -167,12 +167,13 @@ def test_air_in_the_grid_is_refused_in_a_spectral_variant(variant_restored):
 
 def test_a_flat_species_read_once_gives_the_same_values(variant_restored):
     """``spectral_phase.spectral_value`` reads a species whose tables are the same at every wavelength (the air's
-    Rayleigh and Henyey-Greenstein) once for the 4 lanes: the same floats as reading it per lane."""
+    Rayleigh and Henyey-Greenstein) once for the 4 lanes, from the whole table or from one of its own
+    (``split_flat``): the same floats as reading it per lane."""
     from weather_mi.kernel.variant import set_variant
     set_variant(SPECTRAL)
     import drjit as dr
     import mitsuba as mi
-    from weather_mi.kernel.plugins.spectral_phase import flat_species, pack_spectral, spectral_value
+    from weather_mi.kernel.plugins.spectral_phase import flat_species, pack_spectral, spectral_value, split_flat
     rng = np.random.default_rng(3)
     values = rng.random((3, 50, 21)).astype(np.float32)
     values[1] = values[1][:, :1]  # species 1 flat in wavelength
@@ -186,6 +187,10 @@ def test_a_flat_species_read_once_gives_the_same_values(variant_restored):
     a = spectral_value(table, grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i))
     b = spectral_value(table, grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i), flat=(1,))
     np.testing.assert_array_equal(np.array(a), np.array(b))
+    flat, rest, flat_table = split_flat(values, lambda x: mi.Float(x.ravel()))  # the flat one in a table of its own
+    c = spectral_value(rest, grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i), flat=flat,
+                       flat_table=flat_table)
+    np.testing.assert_array_equal(np.array(a), np.array(c))
 
 
 def test_albedo_with_the_air_at_voxel_centres(variant_restored):

@@ -68,7 +68,7 @@ from . import air_levels, grid_lookup
 from .mixture_tables import (GUIDE_THETA0, alias_table, angle_warp, channel_mean_pdf, common_nodes,  # noqa: F401
                              guide_table, prepare_tables, segment_masses)
 from . import spectral_air_weights, spectral_albedo
-from .spectral_phase import flat_species, from_properties, pack_pdf, spectral_pdf, spectral_value
+from .spectral_phase import from_properties, pack_pdf, spectral_pdf, spectral_value, split_flat
 from .variant_class import variant_class
 
 PLUGIN_NAME = "hydrometeor_mixture"
@@ -262,7 +262,11 @@ class HydrometeorMixture:
         (``spectral_phase.from_properties``); else None (R, G, B interpolated)."""
         self.spectral_values, self.spectral_table, self.spectral_grid = from_properties(
             props, self.n_species, n_nodes, PLUGIN_NAME, _storage)
-        self.spectral_flat = () if self.spectral_values is None else flat_species(self.spectral_values)
+        self.spectral_flat, self.spectral_flat_table = (), None
+        if self.spectral_values is not None:  # species flat in wavelength (the box's air) apart: read once
+            flat, rest, flat_table = split_flat(self.spectral_values, _storage)
+            if flat:
+                self.spectral_flat, self.spectral_table, self.spectral_flat_table = flat, rest, flat_table
 
     def _set_spectral(self, props):
         """Spectral variants: the channels' wavelengths (nm) and the species' co-albedo spectra."""
@@ -368,7 +372,7 @@ class HydrometeorMixture:
         lane_w = None if self.air_spectral is None else \
             spectral_air_weights.by_lane(self.air_spectral, w, mei.wavelengths, _gather4)  # the value's, by wavelength
         return (spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
-                               _gather4, lane_w, self.spectral_flat), spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4))
+                               _gather4, lane_w, self.spectral_flat, self.spectral_flat_table), spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4))
 
     def _mix(self, w, idx, t):
         """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t."""
