@@ -32,7 +32,7 @@ def main(argv=None):
     from validation.sun_colour import demo_volume
     from weather_mi.scene.framing import scene_spec
     from weather_mi.optics.air import Atmosphere, sun_air_table
-    from weather_mi.optics.air.inside import with_box_air
+    from weather_mi.optics.air.inside import scene_air
     from weather_mi.reference.render import render_reference
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--size", default="160x120")
@@ -44,12 +44,12 @@ def main(argv=None):
     t0 = time.perf_counter()
     sun_air_table(Atmosphere(), np.sin(np.radians(args.elevation)), top_m=22e3, half_width_m=70e3)
     table_s = time.perf_counter() - t0
-    hyd, vol = demo_volume(with_hyd=True)
+    vol = demo_volume()
     cases = {}
     for name, (atmosphere, sky) in CASES.items():
         spec = scene_spec(vol, size, sun_elevation=args.elevation, sun_azimuth=260.0, camera_azimuth=290.0,
                           atmosphere=atmosphere, sky=sky)
-        cases[name] = (spec, vol if spec.atmosphere is None else with_box_air(vol, hyd, spec.atmosphere))
+        cases[name] = (spec, scene_air(vol, spec.atmosphere))  # the air in the box from the model's rho_air
     for spec, v in cases.values():  # compile the kernels first
         render_reference(spec, v, spp=2, progress=False)
     times, rse, last = {a: [] for a in cases}, {a: [] for a in cases}, {}

@@ -1,7 +1,7 @@
 """The clear air inside the model's box (``optics.air.inside``, issue 38 part 1): a box of air without
 hydrometeors against closed forms (Beer-Lambert through the Rayleigh optical depth of the column, the
-single-scattering radiance of a Rayleigh slab) and DISORT (a pure-Rayleigh slab), in the green (550 nm) and
-blue (450 nm) channels; and the sun's colour where the sun ray leaves the box."""
+single-scattering radiance of a Rayleigh slab), in the green (550 nm) and blue (450 nm) channels; and the sun's
+colour where the sun ray leaves the box. All orders against DISORT: ``tests/test_clear_sky_disort.py``."""
 from __future__ import annotations
 
 import math
@@ -14,25 +14,11 @@ from weather_mi.optics.air import Atmosphere, sun_rgb
 from weather_mi.optics.air.inside import box_air, medium_grids, with_box_air
 from weather_mi.optics.phase.analytic import isotropic
 from weather_mi.optics.volume import OpticalVolume
+from validation.clear_sky_disort import AVOGADRO, DEPOL, M_AIR, bodhaine_cross_section_m2 as _sigma_physical_m2
 
 H_M, WIDE_M, RHO = 10e3, 400e3, 1.2     # a 10 km slab of constant density, 400 km wide
-AVOGADRO, M_AIR = 6.02214076e23, 28.9595e-3
-DEPOL = 0.0279                          # Young (1980)
 MU0 = 0.5
 GREEN, BLUE = 1, 2
-
-
-def _sigma_physical_m2(lam_nm):
-    """Rayleigh cross section from its definition (Bodhaine et al. 1999, Eq. 2), written out here: Peck &
-    Reeder's index of standard air, N_s = 2.546899e19 /cm^3 and the King factor of Bates (1984) for 360 ppm."""
-    lam = lam_nm * 1e-3
-    inv2 = lam ** -2
-    n = 1 + (1e-8 * (8060.51 + 2480990.0 / (132.274 - inv2) + 17455.7 / (39.32957 - inv2))) * (1 + 0.54 * (360e-6 - 3e-4))
-    f_n2, f_o2 = 1.034 + 3.17e-4 * inv2, 1.096 + 1.385e-3 * inv2 + 1.448e-4 * inv2 ** 2
-    c = 0.036
-    king = (78.084 * f_n2 + 20.946 * f_o2 + 0.934 + c * 1.15) / (78.084 + 20.946 + 0.934 + c)
-    lam_cm, ns = lam * 1e-4, 2.546899e19
-    return 24 * math.pi ** 3 * (n * n - 1) ** 2 / (lam_cm ** 4 * ns ** 2 * (n * n + 2) ** 2) * king * 1e-4
 
 
 def _tau(lam_nm):
@@ -117,30 +103,6 @@ def test_single_scattering_of_the_air_is_the_rayleigh_closed_form():
     for c, lam in ((GREEN, 550.0), (BLUE, 450.0)):
         closed = math.pi * _rayleigh_p(-MU0) / (MU0 + 1.0) * (1.0 - math.exp(-_tau(lam) * (1 / MU0 + 1.0)))
         assert abs(r[c] - closed) < 3 * se[c] and abs(r[c] - closed) < 0.03 * closed, (lam, r[c], closed, se[c])
-
-
-def _disort_rayleigh(tau):
-    """DISORT (disortpp) for a conservative Rayleigh slab over a black surface: (pi I / mu0) upward at nadir
-    at the top, downward at the zenith at the bottom. Legendre moments 1, 0, (1 - g) / (10 (1 + 2 g))."""
-    from weather_mi.plane_parallel.disort import solve
-    g = DEPOL / (2 - DEPOL)
-    moments = np.zeros(33)
-    moments[0], moments[2] = 1.0, (1 - g) / (10 * (1 + 2 * g))
-    res = solve([tau], [1.0], MU0, [-1.0, 1.0], [0.0, tau], [0.0], moments=moments[None], n_streams=32)
-    return math.pi * res.intensities(1, 0, 0) / MU0, math.pi * res.intensities(0, 1, 0) / MU0
-
-
-def test_rayleigh_slab_against_disort():
-    """All orders of scattering: the nadir reflectance above and the zenith sky below, within max(3 se, 1 %)
-    and 2 %."""
-    from weather_mi.scene.spec import Camera
-    up, se_up = _render(_nadir_camera(), _point_sun(), spp=8192, passes=8, normalize="reflectance")
-    below = Camera.orthographic(center=(0.0, 0.0, -10.0), direction=(0.0, 0.0, 1.0), width=100.0, height=100.0)
-    down, se_down = _render(below, _point_sun(), spp=8192, passes=8, normalize="reflectance")
-    for c, lam in ((GREEN, 550.0), (BLUE, 450.0)):
-        ref_up, ref_down = _disort_rayleigh(_tau(lam))
-        for mc, se, ref in ((up[c], se_up[c], ref_up), (down[c], se_down[c], ref_down)):
-            assert abs(mc - ref) < max(3 * se, 0.01 * ref) and abs(mc - ref) < 0.02 * ref, (lam, mc, ref, se)
 
 
 def test_sun_colour_is_the_tables_where_the_sun_ray_leaves_the_box():

@@ -1,13 +1,10 @@
 """validation/calibrate_slicer.py's evaluation of an earlier fit (--fitted) and its refusal of a bad file."""
 import json
-import sys
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from validation import calibrate_slicer as cs  # noqa: E402
+from validation import calibrate_slicer as cs
 
 
 def test_fitted_file_is_checked(tmp_path):

@@ -110,16 +110,17 @@ def test_eye_air_on_an_image_is_the_segments_air():
     """``display.aerial``: a ground pixel gets E S + T L along camera-to-ground, a box pixel camera-to-box;
     a sky pixel keeps the sky model's value with ``sunsky`` and gets the air's sky with ``--sky air``, blue away
     from the sun."""
-    from weather_mi.display.aerial import _box_interval, with_eye_air
+    from weather_mi.display.aerial import with_eye_air
     from weather_mi.io.image import Image
     from weather_mi.optics.air.eye_path import wide_sun_table
-    from weather_mi.slicing.geometry import camera_rays
+    from weather_mi.slicing.geometry import camera_rays, ray_box
     spec, vol = _scene("sunsky")
     flat = np.full((12, 16, 3), 0.02, np.float32)
     img = Image(radiance=flat, stderr=flat * 0.1, transmittance=np.zeros((12, 16), np.float32))  # opaque box
     out = with_eye_air(img, spec, vol)
     o, d = (a.reshape(-1, 3) for a in camera_rays(spec))
-    t_in, _, hit = _box_interval(o, d, np.array([-5e3, -5e3, 0.0]), np.array([5e3, 5e3, 10e3]))
+    t_in, t_out = ray_box(o, d, (np.array([-5e3, -5e3, 0.0]), np.array([5e3, 5e3, 10e3])))
+    hit = t_out > t_in
     e = np.asarray(spec.sun.irradiance)
     table = wide_sun_table(spec.atmosphere, spec.sun.mu0)
     sky = (~hit) & (d[:, 2] > 0)

@@ -6,6 +6,8 @@ with and without the savings.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -124,6 +126,32 @@ def test_a_render_that_releases_its_volume_renders_the_same_image(storm):
             np.asarray(getattr(mine, name))
     assert mine.bbox == storm.bbox
     np.asarray(storm.weights)  # the other volume over the same arrays keeps them
+
+
+@pytest.mark.parametrize("kind", ["rgb", "grey", "deferred"])
+def test_the_species_coefficients_with_the_air_in_the_grid_are_the_kernels(storm, small_chunks, monkeypatch, kind):
+    """Eq. 8's w_s beta omega (``optics.scattering_coefficients``) as ``medium_grids`` puts them before the box's
+    air's (a slab of levels at a time, slabs ending mid-chunk) and as the kernel hands the hydrometeors' alone
+    (``kernel.medium._hydrometeor_arrays``): both the whole-grid float32 expression w * (mean albedo * beta), bit
+    for bit, for a three-channel albedo, a grey one (read as three) and deferred (delta-scaled) weights."""
+    from weather_mi.kernel.medium import _hydrometeor_arrays
+    from weather_mi.optics.air import Atmosphere
+    from weather_mi.optics.air import inside
+    vol = storm
+    if kind == "grey":
+        vol = replace(vol, albedo=grey_albedo(np.asarray(vol.albedo)[..., 1]))
+    if kind == "deferred":
+        vol = delta_scaled(vol, 3.0, species_extinction=False, deferred_weights=True)
+    cells = vol.shape[1] * vol.shape[2]
+    monkeypatch.setattr(inside, "SLAB_CELLS", 3 * cells)
+    air = inside.scene_air(vol, Atmosphere()).air
+    coeffs = inside.medium_grids(vol.beta_total, vol.albedo, vol.weights, air, want=("coeffs",))[2]
+    sca = np.asarray(vol.albedo).mean(axis=-1) * vol.beta_total
+    expected = np.moveaxis(np.asarray(vol.weights) * sca[None], 0, -1)
+    n_s = len(vol.species)
+    np.testing.assert_array_equal(coeffs[..., :n_s], expected)
+    np.testing.assert_array_equal(_hydrometeor_arrays(vol, packed=False)[2], expected)
+    assert expected.max() > 0 and np.all(coeffs[..., n_s:] > 0)  # and the air's after them
 
 
 def test_five_species_hand_the_plugin_a_packet_and_a_tail_with_the_same_values(storm, small_chunks):

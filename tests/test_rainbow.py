@@ -8,15 +8,10 @@ rain phase table (Mie, miepython, 0.7 mm drops) and a path-traced rain shaft: th
 """
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from validation import rainbow as rb  # noqa: E402
+from validation import rainbow as rb
 
 # Daimon & Masumura 2007 (Appl. Opt. 46, 3811), distilled water at 21.5 C, relative to vacuum:
 # n^2 - 1 = sum_j B_j L^2 / (L^2 - C_j), L in um (their Table 4, 4-term Sellmeier)

@@ -164,7 +164,7 @@ def test_natural_view_of_a_grey_sea_is_blue_with_the_air():
 
 
 def _args(**kw):
-    base = dict(atmosphere=None, aod=None, ozone=None, view="reflectance", rayleigh=False, tile_size=None,
+    base = dict(atmosphere=None, aod=None, ozone=None, water_vapour=None, view="reflectance", rayleigh=False, tile_size=None,
                 band=None, rgb=False, file=None, time=None, demo="cumulus")
     return argparse.Namespace(**{**base, **kw})
 
@@ -183,6 +183,11 @@ def test_the_options_resolve_and_refuse_before_rendering():
         satellite_atmosphere(_args(atmosphere="none", aod=0.2))
     with pytest.raises(ValueError, match="aerosol optical depth"):
         satellite_atmosphere(_args(atmosphere="clear", aod=5.0))
+    assert satellite_atmosphere(_args(atmosphere="clear", water_vapour=3.0)).water_vapour_cm == 3.0
+    with pytest.raises(ValueError, match="--water-vapour"):
+        satellite_atmosphere(_args(atmosphere="clear", water_vapour=-1.0))
+    with pytest.raises(ValueError, match="--water-vapour describe"):
+        satellite_atmosphere(_args(atmosphere="none", water_vapour=2.0))
     with pytest.raises(ValueError, match="--view natural: not with --band 0.64, --rgb"):
         check_natural_view(_args(view="natural", band="0.64", rgb=True), loop=False)
     with pytest.raises(ValueError, match="several files or times"):
@@ -193,6 +198,8 @@ def test_a_loop_records_its_atmosphere():
     from weather_mi.cli.satellite_air_option import air_options
     assert air_options(_args(atmosphere="clear", aod=0.2)) == {"atmosphere": "clear", "aod": 0.2, "ozone": None}
     assert air_options(_args(atmosphere="none")) == {}  # as loops recorded before the option
+    assert air_options(_args(atmosphere="clear", water_vapour=2.5)) == {"atmosphere": "clear", "aod": None,
+                                                                        "ozone": None, "water_vapour": 2.5}
 
 
 def test_satellite_view_natural_writes_xyz_srgb_and_a_png(tmp_path, capsys):

@@ -314,6 +314,30 @@ def test_nssl_graupel_and_hail_combined_as_calc_eff_radius(tmp_path):
     assert np.all(hyd.r_eff_graupel.values[has] > 0)
 
 
+def test_nssl_hail_with_its_own_volume_reads_each_field_once(tmp_path):
+    """Graupel and hail both of predicted volume (QVGRAUPEL, QVHAIL: their densities q / V): the combined radius
+    is calc_eff_radius's, and every field the rules need is read once."""
+    shape = (1, 6, 4, 5)
+    qg, qh = np.full(shape, 2e-3), np.full(shape, 1e-3)
+    vg, vh = np.full(shape, 2e-3 / 650.0), np.full(shape, 1e-3 / 800.0)
+    path = write_wrfout(tmp_path / "n.nc", mp_physics=18, override={
+        "QGRAUP": qg, "QHAIL": qh, "QNGRAUPEL": np.full(shape, 5e3), "QNHAIL": np.full(shape, 200.0),
+        "QVGRAUPEL": vg, "QVHAIL": vh})
+    ds = xr.open_dataset(path)
+    reads = []
+    reader = SizeReader(ds, str(path), lambda var, shp: reads.append(var) or ds[var].values[0].astype(np.float32),
+                        18, "MP_PHYSICS=18", ["graupel"], True)
+    rho = np.full(shape[1:], 0.9, np.float32)
+    r = reader.radius("graupel", (qg[0] * rho).astype(np.float32), rho, shape[1:], (qh[0] * rho).astype(np.float32))
+    assert sorted(reads) == ["QNGRAUPEL", "QNHAIL", "QVGRAUPEL", "QVHAIL"]
+    lam_h = ((pi * 3 * 2 * 1) / 6 * 650.0 * 5e3 * 0.9 / (2e-3 * 0.9)) ** (1 / 3)
+    lam_hl = ((pi * 4 * 3 * 2) / 6 * 800.0 * 200 * 0.9 / (1e-3 * 0.9)) ** (1 / 3)
+    cx_h, cx_hl = 5e3 * 0.9, 200 * 0.9
+    numh, numhl = cx_h * 3 * 2 * 1 / lam_h ** 3, cx_hl * 4 * 3 * 2 / lam_hl ** 3
+    denomh, denomhl = cx_h * 2 * 1 / lam_h ** 2, cx_hl * 3 * 2 / lam_hl ** 2
+    np.testing.assert_allclose(r, 0.5 * (numh + numhl) / (denomh + denomhl), rtol=1e-4)
+
+
 def test_wsm7_hail_exponential_combined(tmp_path):
     shape = (1, 6, 4, 5)
     path = write_wrfout(tmp_path / "w7.nc", mp_physics=24, override={"QGRAUP": np.full(shape, 1e-3),

@@ -4,9 +4,6 @@ not through the slicer's table), on the lit ground and on a thin cloud layer; an
 against the path tracer's at a low sun."""
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -16,8 +13,7 @@ from weather_mi.optics.air.sunlight import sun_rgb
 from weather_mi.slicing import MODES, SliceRenderer
 from conftest import kernels_compiled
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from validation.slicer_air import ball  # noqa: E402
+from validation.slicer_air import ball
 
 ELEV = 4.0
 
@@ -69,7 +65,6 @@ def test_a_thin_layer_is_lit_by_the_sun_at_its_height(z):
     np.testing.assert_allclose(aired / plain, c, rtol=1e-2)
 
 
-
 def test_the_air_adds_no_error_to_the_slicers_cloud_and_the_box_air_is_there_at_a_low_sun():
     """A cloud ball seen from 30 km, sun 4 deg high behind it, --atmosphere clear in both
     (``validation/slicer_air.py``): the path tracer with the air inside its box (US 1976 molecules on the box's
@@ -112,22 +107,20 @@ def test_a_clear_box_shows_its_air(elevation):
     tracer with the box's air in its medium (molecules from the US 1976 density on the box's levels, multiple
     scattering included: 5-9% above single scattering at 20 and 4 deg, 2-3% standard error at 64 spp), within
     12% and 3 standard errors."""
-    from validation.slicer_air import with_standard_air
-    from weather_mi.display.aerial import _box_interval
     from weather_mi.optics.air.eye_path import segment_air, wide_sun_table
     from weather_mi.reference.render import render_reference
-    from weather_mi.slicing.geometry import camera_rays
+    from weather_mi.slicing.geometry import camera_rays, ray_box
     vol, atm = _clear_box(), Atmosphere()
     spec = wm.SceneSpec(camera=wm.Camera(origin=(0.0, -30e3, 6e3), target=(0.0, 0.0, 6e3), fov=12.0),
                         sun=wm.Sun(azimuth=60.0, elevation=elevation), sky=None, ground=None, width=12, height=12,
                         atmosphere=atm)
     sliced = SliceRenderer(vol, MODES["per-species/multiple"], slices=32).frame(spec).radiance.reshape(-1, 3)
     o, d = (a.reshape(-1, 3).astype(np.float64) for a in camera_rays(spec))
-    t_in, t_out, hit = _box_interval(o, d, *(np.asarray(p, np.float64) for p in vol.bbox))
-    assert hit.all()
+    t_in, t_out = ray_box(o, d, vol.bbox)
+    assert np.all(t_out > t_in)
     _, s = segment_air(atm, spec.sun.to_sun, o, d, t_in, t_out, wide_sun_table(atm, spec.sun.mu0))
     np.testing.assert_allclose(sliced.mean(axis=0), (s * np.asarray(spec.sun.irradiance)).mean(axis=0), rtol=0.01)
-    ref = render_reference(spec, with_standard_air(vol, atm), spp=64, progress=False)
+    ref = render_reference(spec, vol, spp=64, progress=False)  # the box's air from the US 1976 density (scene_air)
     mean = ref.radiance.reshape(-1, 3).mean(axis=0)
     se = np.sqrt((ref.stderr.reshape(-1, 3) ** 2).sum(axis=0)) / (spec.width * spec.height)
     assert np.all(np.abs(sliced.mean(axis=0) - mean) < 0.12 * mean + 3 * se), (sliced.mean(axis=0), mean, se)

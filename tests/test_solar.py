@@ -124,3 +124,20 @@ def test_render_sun_from_time_writes_it(tmp_path, monkeypatch, capsys):
     seen.clear()
     assert cli.main([*args, "--date", "2013-05-20T08:00", "-o", str(tmp_path / "b.exr")]) == 2
     assert "below the horizon" in capsys.readouterr().err and not seen
+
+
+def test_a_tiled_render_takes_the_same_sun_from_time(tmp_path, capsys):
+    """``render --tile-size --sun-from-time`` lights the scene as the one-process render does (one
+    ``cli.sun_option.with_sun_from_time``): the same line printed, the same sun in the EXR's metadata, the
+    solar position of NREL's SPA at the data's place and time."""
+    path = str(_ideal_wrfout(tmp_path))
+    args = ["render", path, "--size", "8x6", "--spp", "1", "--lat", "35.2", "--lon", "-97.4", "--sun-from-time",
+            "--date", "2013-05-20T20:00", "--camera", "orbit", "--camera-elevation", "60", "--no-denoise"]
+    assert cli.main([*args, "--tile-size", "4", "-o", str(tmp_path / "t.exr")]) == 0
+    tiled = capsys.readouterr().out
+    meta = read_exr(tmp_path / "t.exr")[2]["sun_from_time"]
+    p = solar_position("2013-05-20T20:00Z", 35.2, -97.4)
+    assert meta["valid_time"] == "2013-05-20T20:00:00Z"
+    assert meta["centre_lat"] == pytest.approx(35.2) and meta["centre_lon"] == pytest.approx(-97.4)
+    line = next(s for s in tiled.splitlines() if s.startswith("sun from the time:"))
+    assert f"elevation {p.elevation_deg:.2f} deg, azimuth {p.azimuth_deg:.2f} deg" in line

@@ -4,9 +4,6 @@ are named before rendering, and the headline: the lit cloud of the demo supercel
 colour of SPCTRL2's direct sunlight at the cloud's height."""
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -15,8 +12,6 @@ from weather_mi.cli import commands as cli
 from weather_mi.kernel.scene_dict import integrator_dict, recentred
 from weather_mi.optics.air import Atmosphere, sun_rgb
 from weather_mi.reference import render as reference_module
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 LAYER = ((-4000.0, -4000.0, 6000.0), (4000.0, 4000.0, 6100.0))
 DOWN = wm.Camera.orthographic(center=(0.0, 0.0, 9000.0), direction=(0.0, 0.0, -1.0), width=6000, height=6000)

@@ -325,21 +325,35 @@ def test_the_air_control_switches_the_slicer_frame(cumulus_storm):
     assert aired[0] / aired[2] > 1.3 * plain[0] / plain[2], (plain, aired)
 
 
-def test_the_reference_sees_the_same_air(cumulus_storm):
-    """The reference job's volume holds the box's air (molecules from the storm's rho_air) and its estimates
-    get the eye rays' air outside the box; without an atmosphere both are as before."""
+def test_the_reference_sees_the_same_air(cumulus_storm, monkeypatch):
+    """The reference job's volume holds the box's air (molecules from the storm's rho_air, its mean per level:
+    Avogadro's number over the molar mass of dry air) and its estimates get the eye rays' air outside the box;
+    without an atmosphere both are as before. The exported snippet's ground truth renders the same: the
+    atmosphere's air in the box (``render_reference`` puts it there) and the eye rays' air on the image."""
+    import weather_mi as wm
     from weather_mi.io.image import Image
     from weather_mi.viewer.reference_job import with_air
     state = small_state(cumulus_storm, atmosphere="clear", sun_elevation=10.0)
     spec = state.spec(cumulus_storm.frame, cumulus_storm.ground_m, 16, 12)
     vol, seen = with_air(cumulus_storm.recipe, None, spec)
     assert vol.air is not None and vol.air.extinction.shape == tuple(vol.shape) + (3,)
+    rho = cumulus_storm.recipe.hydrometeors()["rho_air"].values.astype(np.float64).mean(axis=(1, 2))
+    np.testing.assert_allclose(vol.air.air_number_density_levels, rho * 6.02214076e23 / 28.9595e-3, rtol=1e-12)
     img = Image(np.zeros((12, 16, 3), np.float32), np.zeros((12, 16, 3), np.float32), {})
     assert np.any(seen(img).radiance > 0)  # the eye rays' air adds light (the ground's pixels)
     vol0, seen0 = with_air(cumulus_storm.recipe, None, small_state(cumulus_storm).spec(cumulus_storm.frame, 0.0))
     assert getattr(vol0, "air", None) is None and seen0(img) is img
     code = python_snippet(state, cumulus_storm.recipe, spec)
-    assert "with_box_air" in code and "with_eye_air" in code
+    calls = []
+    monkeypatch.setattr(wm, "render_reference", lambda s, v, **kw: calls.append((s, v)) or img)
+    ns = {"__name__": "snippet"}
+    exec(compile(code, "weather_mi_view.py", "exec"), ns)
+    truth = ns["ground_truth"]()
+    (s_ref, v_ref), = calls
+    assert s_ref.atmosphere == spec.atmosphere and v_ref.air_density is not None  # the storm's air in the box
+    viewer = seen(img)  # the eye rays' air as the viewer's (its coarser sun table and samples: within 1%)
+    assert truth.metadata["eye_air"] == viewer.metadata["eye_air"]
+    np.testing.assert_allclose(truth.radiance, viewer.radiance, rtol=0.02, atol=1e-3 * float(viewer.radiance.max()))
 
 
 def test_view_air_options_are_checked_before_serving(capsys):

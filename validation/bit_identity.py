@@ -4,7 +4,8 @@ frames and a satellite view, save them (``--save DIR``) and compare a later chec
     .venv/bin/python validation/bit_identity.py --save /tmp/bits-before     # on the old commit
     .venv/bin/python validation/bit_identity.py --check /tmp/bits-before    # on the new one
 
-Every case is rendered in this process from the built-in demo storms; ``--check`` prints one row per
+Every case is rendered in this process from the built-in demo storms (the clear atmosphere in a reference, a slicer
+frame and a satellite true-colour view); ``--check`` prints one row per
 case (identical, or the largest absolute difference) and exits 1 when any image differs by a bit. This
 is a regression check of code moves (the same estimator must give the same floats), not a validation.
 """
@@ -55,7 +56,15 @@ def reference_cases(wm, storms):
         ("ref/orbit/target", lambda: wm.render_reference(views["orbit"], sc, spp=4, passes=2, target_rse=0.5,
                                                          max_seconds=60, **quiet)),
         ("ref/orbit/volpath", lambda: wm.render_reference(point, sc, spp=4, integrator="volpath", **quiet)),
+        # the clear atmosphere (the box's air per level and channel, the sun's colour by height), a low sun
+        ("ref/ground/air", lambda: wm.render_reference(_with_air(wm, views["ground"]), sc, spp=4, **quiet)),
     ]
+
+
+def _with_air(wm, spec):
+    """``spec`` with the default clear atmosphere, the sun at 6 deg, the air's own sky (no sky emitter)."""
+    from dataclasses import replace
+    return replace(spec, atmosphere=wm.Atmosphere(), sun=wm.Sun(azimuth=240, elevation=6), sky=None)
 
 
 def slicer_cases(wm, storms):
@@ -69,6 +78,9 @@ def slicer_cases(wm, storms):
                       lambda mode=mode, kw=kw: wm.render_slices(views["orbit"], sc, mode, slices=64, **kw)))
     cases.append(("slices/ground/per-species/multiple",
                   lambda: wm.render_slices(views["ground"], sc, wm.slicing.MODES["per-species/multiple"], slices=64)))
+    cases.append(("slices/ground/per-species/multiple/air",
+                  lambda: wm.render_slices(_with_air(wm, views["ground"]), sc, wm.slicing.MODES["per-species/multiple"],
+                                           slices=64)))
     return cases
 
 
@@ -79,7 +91,10 @@ def satellite_cases(wm):
     hyd = assume_place(wm.synthetic.cumulus(), lat=20.0, lon=-60.0, date="2024-07-01T15:00:00Z")
     vol = wm.optical_volume(hyd)
     scene = satellite_scene(hyd, vol, "goes-east", "0.64", resolution_km=2.0, rayleigh=True)
-    return [("satellite/goes-east/0.64", lambda: render_satellite(scene, spp=4, progress=False)[1])]
+    rgb = satellite_scene(hyd, wm.optical_volume(hyd), "goes-east", "0.64", resolution_km=2.0, rgb=True,
+                          atmosphere=wm.Atmosphere())
+    return [("satellite/goes-east/0.64", lambda: render_satellite(scene, spp=4, progress=False)[1]),
+            ("satellite/goes-east/rgb-air", lambda: render_satellite(rgb, spp=4, progress=False)[1])]
 
 
 def render_all() -> dict[str, np.ndarray]:

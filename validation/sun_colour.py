@@ -46,12 +46,15 @@ def spectrl2_direct_xy(elevation_deg: float, pressure_hpa: float, water_cm: floa
     return np.asarray(colour.XYZ_to_xy(colour.sd_to_XYZ(sd, method="Integration")))
 
 
-def spectrl2_at_height(elevation_deg: float, height_m: float, water_cm: float = 0.0) -> np.ndarray:
-    """SPCTRL2's direct sun at a height: the standard atmosphere's pressure there and the turbidity of the
-    aerosol above it (0.1 at sea level, scale height 1.2 km: SPCTRL2 itself has no aerosol profile)."""
+def spectrl2_at_height(elevation_deg: float, height_m: float, water_cm: float = 1.4) -> np.ndarray:
+    """SPCTRL2's direct sun at a height: the standard atmosphere's pressure there, the turbidity of the aerosol
+    above it (0.1 at sea level, scale height 1.2 km) and the precipitable water above it (``water_cm`` at sea
+    level, scale height 2 km): SPCTRL2 itself has no profiles; these are our atmosphere's defaults."""
     from weather_mi.io.standard_atmosphere import standard_temperature_pressure
+    from weather_mi.optics.air.water_vapour import SCALE_HEIGHT_M
     pressure_hpa = float(standard_temperature_pressure(height_m)[1]) / 100.0
-    return spectrl2_direct_xy(elevation_deg, pressure_hpa, water_cm, turbidity_500=0.1 * np.exp(-height_m / 1200.0))
+    return spectrl2_direct_xy(elevation_deg, pressure_hpa, water_cm * np.exp(-height_m / SCALE_HEIGHT_M),
+                              turbidity_500=0.1 * np.exp(-height_m / 1200.0))
 
 
 def own_direct_xy(elevation_deg: float, height_m: float) -> np.ndarray:
@@ -67,13 +70,12 @@ def headline_scene(vol, size=(160, 120), elevation=4.0, atmosphere="none"):
                       atmosphere=atmosphere)
 
 
-def demo_volume(with_hyd: bool = False):
-    """The demo supercell's OpticalVolume (and its Hydrometeors with ``with_hyd``)."""
+def demo_volume():
+    """The demo supercell's OpticalVolume (which keeps the model's air density per level for the air in the box,
+    ``optics.air.inside.scene_air``)."""
     from weather_mi.io.sources import open_source
     from weather_mi.optics.volume import optical_volume
-    hyd = open_source(demo="supercell")
-    vol = optical_volume(hyd, species="physical")
-    return (hyd, vol) if with_hyd else vol
+    return optical_volume(open_source(demo="supercell"), species="physical")
 
 
 def lit_cloud_xy(spec, vol, spp: int, eye_air: bool = False, sky_air: bool = False):

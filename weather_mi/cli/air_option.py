@@ -24,11 +24,15 @@ def add_options(p) -> None:
 
 
 def add_aod_ozone(p) -> None:
-    """``--aod`` and ``--ozone``: the clear atmosphere's aerosol and ozone (render, animate, satellite)."""
+    """``--aod``, ``--ozone`` and ``--water-vapour``: the clear atmosphere's aerosol, ozone and water (render,
+    animate, satellite)."""
     p.add_argument("--aod", type=float, default=None,
                    help="with --atmosphere clear: aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
     p.add_argument("--ozone", type=float, default=None,
                    help="with --atmosphere clear: ozone column in atm-cm, in [0, 0.6] (default 0.3)")
+    p.add_argument("--water-vapour", type=float, default=None,
+                   help="with --atmosphere clear: precipitable water in cm, in [0, 10] (default 1.4): its bands near "
+                        "593 and 720 nm on the sun's path (the sun's colour; none at 450/550/650 nm)")
 
 
 def on_by_default(p) -> None:
@@ -75,17 +79,21 @@ def add_view_options(p) -> None:
                         f"inside the model's box and out, in the slicer and in the reference; default {VIEW_DEFAULT}")
     p.add_argument("--aod", type=float, default=0.1, help="aerosol optical depth at 550 nm, in [0, 3] (default 0.1)")
     p.add_argument("--ozone", type=float, default=0.3, help="ozone column in atm-cm, in [0, 0.6] (default 0.3)")
+    p.add_argument("--water-vapour", type=float, default=1.4,
+                   help="precipitable water in cm, in [0, 10] (default 1.4)")
 
 
 def view_air(args) -> dict:
-    """The ``ViewState`` fields of ``view``'s air options, checked (a ValueError names --aod or --ozone)."""
+    """The ``ViewState`` fields of ``view``'s air options, checked (a ValueError names --aod, --ozone or
+    --water-vapour)."""
     from ..optics.air.atmosphere import AOD_RANGE, OZONE_RANGE_ATM_CM, Atmosphere
     try:
-        Atmosphere(aod_550=args.aod, ozone_atm_cm=args.ozone)
+        Atmosphere(aod_550=args.aod, ozone_atm_cm=args.ozone, water_vapour_cm=args.water_vapour)
     except ValueError as exc:
-        raise ValueError(f"--aod must be in {list(AOD_RANGE)} and --ozone in {list(OZONE_RANGE_ATM_CM)} atm-cm: "
-                         f"{exc}") from None
-    return {"atmosphere": args.atmosphere, "aod": float(args.aod), "ozone": float(args.ozone)}
+        raise ValueError(f"--aod must be in {list(AOD_RANGE)}, --ozone in {list(OZONE_RANGE_ATM_CM)} atm-cm and "
+                         f"--water-vapour in [0, 10] cm: {exc}") from None
+    return {"atmosphere": args.atmosphere, "aod": float(args.aod), "ozone": float(args.ozone),
+            "water_vapour": float(args.water_vapour)}
 
 
 def eye_rays_air(spec, vol, args):

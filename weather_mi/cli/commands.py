@@ -27,6 +27,7 @@ from .satellite_command import add_satellite_parser, satellite_command
 from .satellite_tiles import add_tile_options
 from .spectral_option import add_spectral_options, check_spectral_options, save_png, variant_of
 from .summary import info_text
+from .sun_option import add_sun_from_time_option, with_sun_from_time
 from ..optics.volume import default_sizes
 
 ANIMATE_ESTIMATOR = ("spp", "target_rse", "max_seconds")  # per frame, with --renderer reference
@@ -41,7 +42,7 @@ def check_scene_options(args) -> None:
     parse_size(args.size)
     if args.fov is not None:
         check_fov_deg(args.fov)
-    air = atmosphere_of(args.atmosphere, args.aod, args.ozone)
+    air = atmosphere_of(args.atmosphere, args.aod, args.ozone, args.water_vapour)
     if air is not None and getattr(args, "integrator", None) == "volpath":
         raise ValueError("--atmosphere clear colours the sun of --integrator majorant (the default), not volpath's")
     check_spectral_options(args)
@@ -79,7 +80,7 @@ def _render(args, out, png_path, ckpt) -> Path:
     vol = air_option.in_box(vol, spec)  # the air inside the box (--atmosphere clear), from the model's rho_air
     hyd = hyd.drop_vars(list(hyd.data_vars))  # its fields are in vol now; the place and time stay
     if args.sun_from_time:
-        spec, sun_meta = _sun_from_time(spec, hyd)
+        spec, sun_meta = with_sun_from_time(spec, hyd)
     eye_air = air_option.eye_rays_air(spec, vol, args)  # before the render releases vol's grids
     from ..reference.cluster import session
     with session(args.scheduler, args.workers) as client:
@@ -111,20 +112,6 @@ def scene_spec(args, vol):
     """The SceneSpec of the scene options (camera, sun, sky, ground, size, seed) for ``vol``."""
     from ..scene.framing import SCENE_OPTIONS, scene_spec
     return scene_spec(vol, parse_size(args.size), **{k: getattr(args, k) for k in SCENE_OPTIONS})
-
-
-def _sun_from_time(spec, hyd):
-    """``spec`` lit by the sun at ``hyd``'s centre at its valid time (``place.sun_from_time``), and the
-    metadata the image keeps of it."""
-    import dataclasses
-    from ..io.projection import latlon_text
-    from ..scene.place import sun_from_time
-    azimuth, elevation, meta = sun_from_time(hyd)
-    sun = dataclasses.replace(spec.sun, azimuth=azimuth, elevation=elevation)
-    print(f"sun from the time: {meta['valid_time']} at {latlon_text(meta['centre_lat'], meta['centre_lon'], 3)}: "
-          f"elevation {elevation:.2f} deg, azimuth {azimuth:.2f} deg in the grid's frame; one sun for the domain, "
-          f"up to {meta['one_sun_max_error_deg']:.2f} deg from a column's own")
-    return dataclasses.replace(spec, sun=sun), meta
 
 
 def animate_command(args) -> Path:
@@ -177,9 +164,7 @@ def _add_render_parser(sub) -> None:
     # --aureole-nee): declared with its options (weather_mi.reference.options)
     add_flags(render.add_argument_group("reference estimator"))
     add_place_options(render)
-    render.add_argument("--sun-from-time", action="store_true",
-                        help="the sun where and when the data is (its centre, its valid time; NREL SPA), instead "
-                             "of --sun-azimuth/--sun-elevation")
+    add_sun_from_time_option(render)
     add_surface_options(render, "albedo")
     render.add_argument("--seed", type=int, default=0)
     render.add_argument("--exposure", type=float, default=None, help="PNG exposure (default: automatic)")

@@ -98,7 +98,7 @@ def add_scene_options(p) -> None:
     p.add_argument("--camera-height", type=float, default=1500.0, help="ground camera: height above ground (m)")
     p.add_argument("--fov", type=float, default=None,
                    help="horizontal field of view (degrees; default 70 ground, 45 orbit)")
-    air_option.add_options(p)  # --sky, --atmosphere, --aod, --ozone
+    air_option.add_options(p)  # --sky, --atmosphere, --aod, --ozone, --water-vapour
     p.add_argument("--ground-albedo", type=float, default=0.15, help="negative: no ground")
     p.add_argument("--size", default="320x240", help="WIDTHxHEIGHT")
 

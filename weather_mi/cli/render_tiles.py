@@ -9,6 +9,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from .options import refuse_for_tiles
+from .sun_option import with_sun_from_time
 
 # what does not change a tiled product's pixels: not recorded for --resume
 NOT_RECORDED = ("scheduler", "workers", "resume", "output", "denoise", "exposure", "func", "command", "fps")
@@ -68,12 +69,9 @@ def render_tiles_command(args, exr: Path, png: Path) -> Path:
     from .options import parse_scale, parse_size
     outline = domain_outline(args.file, parse_time(args.time), lat=args.lat, lon=args.lon, date=args.date)
     spec = scene_spec(tr.OutlineBox(outline.bbox), parse_size(args.size), **{k: getattr(args, k) for k in SCENE_OPTIONS})
+    sun_meta = None
     if args.sun_from_time:
-        from dataclasses import replace
-
-        from ..scene.place import sun_from_time
-        azimuth, elevation, _ = sun_from_time(outline.dataset)
-        spec = replace(spec, sun=replace(spec.sun, azimuth=azimuth, elevation=elevation))
+        spec, sun_meta = with_sun_from_time(spec, outline.dataset)
     plan = tr.plan_render(outline, spec, args.tile_size, args.halo)
     store = TileStore(tiles_folder(exr))
     store.check(recorded_options(args), args.resume)
@@ -90,6 +88,8 @@ def render_tiles_command(args, exr: Path, png: Path) -> Path:
                                     on_tile=lambda r: print(f"  tile {r['tile'].index + 1}/{len(plan.tiles)}: grid "
                                                             f"{r['grid_shape']}, {r['seconds']:.1f} s, worker peak "
                                                             f"{r['peak_rss_bytes'] / 1e9:.2f} GB", flush=True))
+    if sun_meta:
+        img.metadata["sun_from_time"] = sun_meta
     img.save(exr)
     img.save_png(png, exposure=args.exposure)
     store.remove()

@@ -1,4 +1,4 @@
-"""``satellite``'s ``--atmosphere none|clear``, ``--aod``, ``--ozone`` (the clear 1-D atmosphere in, above and
+"""``satellite``'s ``--atmosphere none|clear``, ``--aod``, ``--ozone``, ``--water-vapour`` (the clear 1-D atmosphere in, above and
 around the model's box, on the sun's path: ``satellite.air``) and ``--view reflectance|natural`` (what an
 astronaut's eye would see: ``satellite.natural``)."""
 from __future__ import annotations
@@ -45,7 +45,7 @@ def satellite_atmosphere(args):
     if kind == "clear" and getattr(args, "tile_size", None) is not None:
         raise ValueError("--tile-size: a tiled render has no clear atmosphere yet: give --atmosphere none, or render "
                          "without tiles")
-    return atmosphere_of(kind, args.aod, args.ozone)
+    return atmosphere_of(kind, args.aod, args.ozone, args.water_vapour)
 
 
 def check_natural_view(args, loop: bool) -> None:
@@ -65,10 +65,11 @@ def check_natural_view(args, loop: bool) -> None:
 
 def air_options(args) -> dict:
     """What a loop records of its atmosphere (``satellite_loop.loop_options``): the clear one with its aerosol and
-    ozone; nothing for none (so that a loop recorded before the option resumes)."""
+    ozone, and its water vapour where given; nothing for none (so that a loop recorded before the option resumes)."""
     if atmosphere_kind(args) == "none":
         return {}
-    return {"atmosphere": "clear", "aod": args.aod, "ozone": args.ozone}
+    water = {} if args.water_vapour is None else {"water_vapour": args.water_vapour}
+    return {"atmosphere": "clear", "aod": args.aod, "ozone": args.ozone, **water}
 
 
 __all__ = ["DEFAULT_ATMOSPHERE", "add_satellite_air_options", "atmosphere_kind", "satellite_atmosphere",

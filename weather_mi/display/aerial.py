@@ -30,16 +30,6 @@ import numpy as np
 CHUNK = 2048  # rays per call of ``segment_air`` (memory: CHUNK x 257 samples x 3 channels x a few arrays)
 
 
-def _box_interval(o, d, lo, hi):
-    """(t_in, t_out, hit) of rays (n, 3) against the box [lo, hi] (slab method, t >= 0)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / np.where(np.abs(d) < 1e-12, 1e-12, d)
-        t0, t1 = (lo - o) * inv, (hi - o) * inv
-    t_in = np.maximum(np.max(np.minimum(t0, t1), axis=-1), 0.0)
-    t_out = np.min(np.maximum(t0, t1), axis=-1)
-    return t_in, t_out, t_out > t_in
-
-
 def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
     """Per pixel: (T_A, E S_A, E S_B (H, W, 3) of the module docstring, whether the ray ends on the sky
     model's sky, whether it meets the box (H, W)). ``table``: the sun's (``eye_path.wide_sun_table``);
@@ -47,7 +37,7 @@ def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
     the cost: a viewer's reference)."""
     from ..optics.air.eye_path import SAMPLES, segment_air, top_distance, wide_sun_table
     samples = SAMPLES if samples is None else int(samples)
-    from ..slicing.geometry import camera_rays
+    from ..slicing.geometry import camera_rays, ray_box
     atm, sun = spec.atmosphere, spec.sun
     table = wide_sun_table(atm, sun.mu0) if table is None else table
     o, d = (a.reshape(-1, 3).astype(np.float64) for a in camera_rays(spec))
@@ -57,7 +47,8 @@ def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
     floor = None if spec.ground is None else float(spec.ground.height)
     lo = np.array([x0, y0, max(z0, floor if floor is not None else z0)]) - centre
     hi = np.array([x1, y1, z1]) - centre
-    t_in, t_out, hit = _box_interval(o, d, lo, hi)
+    t_in, t_out = ray_box(o, d, (lo, hi))  # the slab method, t_in >= 0
+    hit = t_out > t_in
     with np.errstate(divide="ignore", invalid="ignore"):
         t_ground = np.where((d[:, 2] < 0) & (floor is not None), ((floor or 0.0) - o[:, 2]) / d[:, 2], np.inf)
     t_end = np.minimum(t_ground, top_distance(o, d))

@@ -29,7 +29,7 @@ from math import gamma, pi
 
 import numpy as np
 
-from .size_distributions import masked, sel
+from .size_distributions import gamma_radius, masked, sel
 
 NSSL_FAMILY = {17: "NSSL 2-moment", 18: "NSSL 2-moment + CCN", 22: "NSSL 2-moment (no hail)"}
 CXMIN = 1.0e-8          # m^-3
@@ -67,9 +67,8 @@ def radius(name, rho_q, number, rho, volume=None) -> np.ndarray:
         if kind == "volume":  # calc_eff_radius t1..t3
             lam = (n * pi / 6.0 * dens * gamma(2.0 + shape) / (rq * gamma(1.0 + shape))) ** (1.0 / 3.0)
             r = 0.5 * (1.0 + shape) * gamma(1.0 + shape) / gamma(5.0 / 3.0 + shape) / lam
-        else:  # gamma in diameter
-            lam = (pi / 6.0 * dens * n * (shape + 1.0) * (shape + 2.0) * (shape + 3.0) / rq) ** (1.0 / 3.0)
-            r = 0.5 * (shape + 3.0) / lam
+        else:  # gamma in diameter, as the other schemes' (N floored at 1e-30, not 1e-6)
+            r = gamma_radius(rq, n, dens, shape)
         ok = rq / sel(rho, has) > q_min
         if check_n:
             ok &= sel(number, has) > CXMIN

@@ -66,17 +66,20 @@ class SizeReader:
         return r
 
     def _rule_radius(self, rule, rho_q, rho, shape, hail=None):
-        inputs = {k: self._input(k, rho, shape) for k in rule.inputs}
-        number = self._number(rule.number_var, rho, shape) if rule.number_var is not None else None
-        r = rule.radius(rho_q, number, self.t_k, **inputs)
-        del number
+        r, inputs = self._sized(rule, rho_q, rho, shape)
         if hail is not None and self.hail_rule is not None and np.any(hail > 0):
             h = self.hail_rule
-            r_hail = self._rule_radius(h, hail, rho, shape)
-            parts = [(r, self._volume(rule, rho_q, inputs)), (r_hail, self._volume(h, hail, rho, shape))]
+            r_hail, hail_inputs = self._sized(h, hail, rho, shape)  # each field read once (its volume's too)
+            parts = [(r, self._volume(rule, rho_q, inputs)), (r_hail, self._volume(h, hail, hail_inputs))]
             both = combined_radius(parts)
             r = np.where(hail > 0, np.where(rho_q > 0, both, r_hail), r)
         return r
+
+    def _sized(self, rule, rho_q, rho, shape):
+        """(``rule``'s radius of the mass content ``rho_q``, the inputs it read: ``_volume`` reuses them)."""
+        inputs = {k: self._input(k, rho, shape) for k in rule.inputs}
+        number = self._number(rule.number_var, rho, shape) if rule.number_var is not None else None
+        return rule.radius(rho_q, number, self.t_k, **inputs), inputs
 
     def _number(self, var, rho, shape):
         """Number concentration ``var`` (m^-3), checked >= 0."""
@@ -106,11 +109,11 @@ class SizeReader:
                                    f"values (minimum {float(field.min()):.3g})")
         return field
 
-    def _volume(self, rule, rho_q, inputs_or_rho, shape=None):
+    @staticmethod
+    def _volume(rule, rho_q, inputs):
         """The particle volume per m^3 of air of ``rule``'s category: its predicted volume where the file has
-        one (above 1e-30), else rho_q over the rule's density."""
-        inputs = inputs_or_rho if isinstance(inputs_or_rho, dict) else \
-            {k: self._input(k, inputs_or_rho, shape) for k in ((rule.volume_var,) if rule.volume_var else ())}
+        one (above 1e-30; ``inputs``: what the rule read, its ``volume_var`` among them), else rho_q over the
+        rule's density."""
         fixed = np.asarray(rho_q, np.float64) / rule.density
         if rule.volume_var and inputs.get(rule.volume_var) is not None:
             v = np.asarray(inputs[rule.volume_var], np.float64)

@@ -68,14 +68,20 @@ def exponential_fixed_n0(rho_q, n0_per_m4, rho_p, lam_max=np.inf, lam_min=0.0) -
     return masked(rho_q, f)
 
 
+def gamma_radius(rq, n, rho_p, mu=0.0, lam_min=0.0, lam_max=np.inf) -> np.ndarray:
+    """r_eff = (mu + 3) / (2 lambda) (m, float64) of gamma distributions in diameter (module docstring), lambda =
+    (pi rho_p N Gamma(mu+4) / (6 Gamma(mu+1) rho_q))^(1/3) clipped to [lam_min, lam_max] (1/m), from the mass
+    content ``rq`` (kg/m^3, > 0), the number ``n`` (m^-3, > 0) and the particle density ``rho_p`` (kg/m^3), all
+    float64 (numbers or arrays alike): no mask, no floor (:func:`gamma_from_number`, ``nssl_sizes``)."""
+    lam = (pi * rho_p / 6.0 * (gamma(mu + 4.0) / gamma(mu + 1.0)) * n / rq) ** (1.0 / 3.0)
+    return (mu + 3.0) / (2.0 * np.clip(lam, lam_min, lam_max))
+
+
 def gamma_from_number(rho_q, n_per_m3, rho_p, mu=0.0, lam_min=0.0, lam_max=np.inf) -> np.ndarray:
-    """r_eff = (mu + 3) / (2 lambda), lambda = (pi rho_p N Gamma(mu+4) / (6 Gamma(mu+1) rho_q))^(1/3) clipped
-    to [lam_min, lam_max] (1/m); N (m^-3) floored at 1e-6 as WRF's R2; rho_p a number or a grid like rho_q."""
-    g = gamma(mu + 4.0) / gamma(mu + 1.0)
+    """:func:`gamma_radius` where rho_q > 0 (float32, 0 elsewhere); N (m^-3) floored at 1e-6 as WRF's R2; rho_p a
+    number or a grid like rho_q."""
     def f(rq, has):
-        n = np.maximum(sel(n_per_m3, has), 1e-6)
-        lam = (pi * sel(rho_p, has) / 6.0 * g * n / rq) ** (1.0 / 3.0)
-        return (mu + 3.0) / (2.0 * np.clip(lam, lam_min, lam_max))
+        return gamma_radius(rq, np.maximum(sel(n_per_m3, has), 1e-6), sel(rho_p, has), mu, lam_min, lam_max)
     return masked(rho_q, f)
 
 

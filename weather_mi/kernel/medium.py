@@ -6,6 +6,7 @@ import numpy as np
 
 from ..optics.forward_peak import is_grey
 from ..optics.periodic import pad_levels, padded_bbox
+from ..optics.scattering_coefficients import scattering_coefficients
 from ..optics.volume import OpticalVolume
 from .jitarrays import aligned_empty
 from .variant import ensure_registered
@@ -38,7 +39,7 @@ def _hydrometeor_arrays(vol: OpticalVolume, nodes=None, values=None, packed: boo
     lanes = 4 * max(1, -(-n_s // 4)) if packed else n_s
     weights = aligned_empty(int(np.prod(shape)) * lanes).reshape(shape + (lanes,))
     flat = weights.reshape(-1, lanes)
-    _scattering_coefficients(vol, [flat[:, s] for s in range(n_s)])
+    scattering_coefficients(vol.beta_total, vol.albedo, vol.weights, [flat[:, s] for s in range(n_s)])
     if not packed:
         return nodes, values, weights
     return nodes, values, pack_weights(weights[..., :n_s], out=weights)  # in place: padding 0, clipped
@@ -57,40 +58,23 @@ def kernel_weights(vol: OpticalVolume, air_in_grid: bool = True):
     shape, n = tuple(vol.beta_total.shape), int(np.prod(vol.beta_total.shape))
     packets = aligned_empty(n * (n_s - 1)).reshape(-1, n_s - 1)
     tail = aligned_empty(n)
-    _scattering_coefficients(vol, [packets[:, s] for s in range(n_s - 1)] + [tail])
-    big = np.finfo(np.float32).max  # as pack_weights: negative values as 0, infinite ones as float32's largest
-    for a in (packets, tail):
-        np.clip(a, 0.0, big, out=a)
-    return packets.reshape(shape + ((n_s - 1) // 4, 4)), tail.reshape(shape)
-
-
-def _scattering_coefficients(vol: OpticalVolume, out: list) -> None:
-    """beta_sca,s = w_s x (channel-mean albedo x beta_total) into ``out[s]`` ((z y x,) float32 each, views), a
-    chunk of voxels at a time: no grid-sized temporaries, and the weights of a ``forward_peak.ScaledWeights``
-    computed as read."""
-    from ..optics.forward_peak import CHUNK
-    deferred = getattr(vol.weights, "deferred", False)
-    n_s = len(vol.weights)
-    w = None if deferred else np.asarray(vol.weights).reshape(n_s, -1)
-    beta = np.asarray(vol.beta_total, np.float32).reshape(-1)
-    grey = is_grey(vol.albedo)  # one channel: read as three (the same mean as of three equal channels)
-    albedo = np.asarray(vol.albedo, np.float32)
-    albedo = albedo[..., 0].reshape(-1, 1) if grey else albedo.reshape(-1, albedo.shape[-1])
-    for start in range(0, beta.size, CHUNK):
-        part = slice(start, min(start + CHUNK, beta.size))
-        a = np.broadcast_to(albedo[part], (part.stop - start, 3)) if grey else albedo[part]
-        sca = a.mean(axis=-1)
-        sca *= beta[part]
-        ws = vol.weights.chunk(part) if deferred else w[:, part]
-        for s in range(n_s):
-            np.multiply(ws[s], sca, out=out[s][part])
+    scattering_coefficients(vol.beta_total, vol.albedo, vol.weights, [packets[:, s] for s in range(n_s - 1)] + [tail])
+    from .plugins.hydrometeor_mixture import pack_weights
+    packets = pack_weights(packets.reshape(shape + (n_s - 1,)), out=packets)  # in place (whole packets: no padding)
+    np.clip(tail, 0.0, np.finfo(np.float32).max, out=tail)  # as pack_weights clips, in place (not padded to 4)
+    return packets, tail.reshape(shape)
 
 
 def air_weights(air) -> np.ndarray:
-    """(levels, 2) float32: the Eq. 8 scattering coefficients of the air's two components per level (1/m, the
-    channel mean, as ``optics.air.inside.medium_grids`` puts them into every voxel), ``hydrometeor_mixture``'s
-    ``air_weights``."""
-    return np.ascontiguousarray(air.scattering_levels.mean(axis=-1).T)
+    """``hydrometeor_mixture``'s ``air_weights``: the Eq. 8 scattering coefficients of the air's two components per
+    level (1/m), (levels, 2, 3) by colour channel: Eq. 8 holds per wavelength, and in a cloud the molecules'
+    share of the scattering is ~4x larger at 450 than at 650 nm (with channel means the cloud's blue was ~3% too
+    dark and its red ~5% too bright under a Rayleigh column, ``tests/test_clear_sky_disort.py``); (levels, 2) where
+    the channels are equal (a satellite's single band, :func:`grey_air`)."""
+    sca = np.asarray(air.scattering_levels, np.float32)  # (2, levels, channels)
+    if grey_air(air):
+        return np.ascontiguousarray(sca.mean(axis=-1).T)
+    return np.ascontiguousarray(np.transpose(sca, (1, 0, 2)))
 
 
 def integrator_air_albedo(vol: OpticalVolume, air) -> dict:
@@ -154,20 +138,21 @@ def grid_bbox(vol: OpticalVolume):
     return padded_bbox(vol.bbox, vol.shape[0]) if vol.periodic else vol.bbox
 
 
-def phase_dict(vol: OpticalVolume, air_in_grid: bool = True) -> dict:
+def phase_dict(vol: OpticalVolume) -> dict:
     """``hydrometeor_mixture`` phase function for ``vol`` (periodic: x and y wrapped, levels padded); the box's
-    air per level (``air_weights``) unless ``air_in_grid`` (its components in every voxel)."""
+    air per level and colour channel (``air_weights``), whichever integrator reads the medium's grids."""
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     ensure_registered()
     nodes, values = phase_arrays_tables(vol)
-    weights, tail = kernel_weights(vol, air_in_grid)
-    air = None if air_in_grid else air_in_medium(vol)
-    _spectral_air_in_grid(air_in_medium(vol), air_in_grid)
+    weights, tail = kernel_weights(vol, air_in_grid=False)
+    air = air_in_medium(vol)
     if vol.periodic:
         weights, tail = (None if a is None else _aligned_copy(pad_levels(a)) for a in (weights, tail))
     if air is not None:
         d_air = air_weights(air)
+        if mi.is_spectral and d_air.ndim == 3:  # the density directions are drawn from; by wavelength: spectral_air
+            d_air = np.ascontiguousarray(d_air.mean(axis=-1))
         d_air = {"air_weights": mi.TensorXf(np.ascontiguousarray(pad_levels(d_air)) if vol.periodic else d_air)}
     d = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
          "weights": mi.TensorXf(weights),  # packed, used in place (llvm)
@@ -264,13 +249,13 @@ def medium_dict(vol: OpticalVolume, air_in_grid: bool = True) -> dict:
     the volume's bounding box (grids indexed [z, y, x, channel], last axis world x). A periodic volume's
     grids wrap in x and y (``wrap_mode`` repeat; their levels padded: ``optics.periodic``).
 
-    With the air in the box (``air_in_medium``) and ``air_in_grid`` (for stock ``volpath``) the sigma_t grid (RGB),
-    the albedo grid and the phase's weights grid are the mixture's of the hydrometeors and the air
+    With the air in the box (``air_in_medium``) the phase takes the air's Eq. 8 weights per level and colour
+    channel (``air_weights``; :func:`phase_dict`). With ``air_in_grid`` (for stock ``volpath``) the sigma_t grid
+    (RGB) and the albedo grid are the mixture's of the hydrometeors and the air
     (``optics.air.inside.medium_grids``); otherwise the air is one value per level that ``majorant_volpath``
-    adds (``air_extinction``, ``air_weights``; :func:`air_by_integrator`): the sigma_t grid stays the
-    hydrometeors' grey one, used in place, the weights their 20 bytes per cell, and the medium holds no albedo
-    grid (a constant 1, unread): the integrator reads the hydrometeors' in place and mixes in the air's
-    (:func:`integrator_air_albedo`)."""
+    adds (``air_extinction``; :func:`air_by_integrator`): the sigma_t grid stays the hydrometeors' grey one, used
+    in place, the weights their 20 bytes per cell, and the medium holds no albedo grid (a constant 1, unread): the
+    integrator reads the hydrometeors' in place and mixes in the air's (:func:`integrator_air_albedo`)."""
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     to_world = bbox_transform(grid_bbox(vol))
@@ -303,5 +288,5 @@ def medium_dict(vol: OpticalVolume, air_in_grid: bool = True) -> dict:
                                               "filter_type": "trilinear", "accel": False, **wrap},
         "scale": 1.0,
         "has_spectral_extinction": air is not None and air_in_grid and beta.shape[-1] > 1,
-        "phase": phase_dict(vol, air_in_grid),
+        "phase": phase_dict(vol),
     }

@@ -195,10 +195,12 @@ def satellite_dataset(scene: SatelliteScene, img, channel: int | None = None):
 
 
 def _atmosphere_attrs(atm) -> dict:
-    """``atmosphere`` ("none" or "clear") and, where clear, its aerosol optical depth and ozone column."""
+    """``atmosphere`` ("none" or "clear") and, where clear, its aerosol optical depth, ozone column and precipitable
+    water."""
     if atm is None:
         return {"atmosphere": "none"}
-    return {"atmosphere": "clear", "aerosol_optical_depth_550nm": atm.aod_550, "ozone_column_atm_cm": atm.ozone_atm_cm}
+    return {"atmosphere": "clear", "aerosol_optical_depth_550nm": atm.aod_550, "ozone_column_atm_cm": atm.ozone_atm_cm,
+            "precipitable_water_cm": atm.water_vapour_cm}
 
 
 def _surface_var(scene: SatelliteScene, dims, gm) -> dict:

@@ -9,7 +9,7 @@ from .spec import Camera, Ground, SceneSpec, Sky, Sun
 # the keyword arguments of ``scene_spec`` besides the volume and the size, as the CLI names its options
 SCENE_OPTIONS = ("camera", "camera_azimuth", "camera_elevation", "distance", "camera_distance_km", "camera_height",
                  "fov", "sun_azimuth", "sun_elevation", "sun_diameter", "sky", "ground_albedo", "seed",
-                 "atmosphere", "aod", "ozone")
+                 "atmosphere", "aod", "ozone", "water_vapour")
 
 
 def default_ground_distance_km(vol) -> float:
@@ -39,7 +39,7 @@ def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground
                camera_height: float = 1500.0, fov: float | None = None, sun_azimuth: float = 290.0,
                sun_elevation: float = 35.0, sun_diameter: float = 0.53, sky: str = "sunsky",
                ground_albedo: float = 0.15, seed: int = 0, atmosphere: str = "none", aod: float | None = None,
-               ozone: float | None = None) -> SceneSpec:
+               ozone: float | None = None, water_vapour: float | None = None) -> SceneSpec:
     """The SceneSpec of the scene options for ``vol``.
 
     Parameters
@@ -73,15 +73,16 @@ def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground
         The path tracer's seed.
     atmosphere : {"none", "clear"}
         "clear": the sun coloured by a clear atmosphere on its path (``optics.air.Atmosphere``; the
-        path tracer, and the slicer's sun per height) with aerosol optical depth ``aod`` at 550 nm and ozone column
-        ``ozone`` (atm-cm) (None: the Atmosphere's defaults, 0.1 and 0.3); "none": no air outside the box.
+        path tracer, and the slicer's sun per height) with aerosol optical depth ``aod`` at 550 nm, ozone column
+        ``ozone`` (atm-cm) and precipitable water ``water_vapour`` (cm) (None: the Atmosphere's defaults, 0.1, 0.3
+        and 1.4); "none": no air outside the box.
 
     Returns
     -------
     SceneSpec
     """
     width, height = size
-    air = atmosphere_of(atmosphere, aod, ozone)
+    air = atmosphere_of(atmosphere, aod, ozone, water_vapour)
     if camera == "auto":
         (x0, y0, _), (x1, y1, _) = vol.bbox
         regional = max(x1 - x0, y1 - y0) > REGIONAL_DOMAIN_KM * 1e3
@@ -105,17 +106,20 @@ def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground
                      sky=sky_, ground=ground, width=width, height=height, seed=seed, atmosphere=air)
 
 
-def atmosphere_of(kind: str, aod: float | None, ozone: float | None):
-    """The Atmosphere of the options ``--atmosphere``, ``--aod``, ``--ozone`` (ValueError naming them)."""
+def atmosphere_of(kind: str, aod: float | None, ozone: float | None, water_vapour: float | None = None):
+    """The Atmosphere of the options ``--atmosphere``, ``--aod``, ``--ozone``, ``--water-vapour`` (ValueError naming
+    them)."""
     from ..optics.air import Atmosphere
     if kind not in ("none", "clear"):
         raise ValueError(f"--atmosphere must be 'none' or 'clear', got {kind!r}")
     if kind == "none":
-        given = [name for name, v in (("--aod", aod), ("--ozone", ozone)) if v is not None]
+        given = [name for name, v in (("--aod", aod), ("--ozone", ozone), ("--water-vapour", water_vapour))
+                 if v is not None]
         if given:
             raise ValueError(f"{' and '.join(given)} describe the air: give them with --atmosphere clear")
         return None
-    kw = {k: v for k, v in (("aod_550", aod), ("ozone_atm_cm", ozone)) if v is not None}
+    kw = {k: v for k, v in (("aod_550", aod), ("ozone_atm_cm", ozone), ("water_vapour_cm", water_vapour))
+          if v is not None}
     return Atmosphere(**kw)
 
 

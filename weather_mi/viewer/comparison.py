@@ -16,7 +16,7 @@ from .frames import jpeg_url
 from .state import ViewState
 
 PHYSICAL_FIELDS = ("camera", "sun_azimuth", "sun_elevation", "sun_diameter_deg", "width", "height", "scale", "time",
-                   "sky", "ground_albedo", "atmosphere", "aod", "ozone")  # what the path tracer sees
+                   "sky", "ground_albedo", "atmosphere", "aod", "ozone", "water_vapour")  # what the path tracer sees
 DIFF_MAX_DE = 20.0  # the difference map's colour scale: CIEDE2000 0 .. 20
 SHOW_CHOICES = ["A: slicer", "B: reference", "B: denoised", "difference"]  # B denoised: OIDN, display only
 

@@ -118,19 +118,19 @@ EYE_AIR_SAMPLES, EYE_AIR_MU = 33, 17  # the reference's eye-ray air: points per 
 def with_air(recipe: VolumeRecipe, scale, spec: SceneSpec):
     """(The OpticalVolume to path-trace, a function from its estimates to the picture): with
     ``spec.atmosphere``, as ``weather-mi render --atmosphere clear`` does, the air inside the box in the medium
-    (``optics.air.inside.with_box_air``, molecules from the storm's ``rho_air``) and the air along the eye rays
-    outside it put on every estimate (``display.aerial.with_eye_air``, computed once)."""
+    (``optics.air.inside.scene_air``, molecules from the storm's ``rho_air`` as the volume keeps it per level:
+    the storm is read once) and the air along the eye rays outside it put on every estimate
+    (``display.aerial.with_eye_air``, computed once)."""
+    vol = recipe.volume(scale)
     if spec.atmosphere is None:
-        return recipe.volume(scale), lambda img: img
+        return vol, lambda img: img
     from ..display.aerial import eye_air, with_eye_air
     from ..optics.air.eye_path import wide_sun_table
-    from ..optics.air.inside import with_box_air
-    hyd = recipe.hydrometeors()
-    vol = recipe.volume(scale, hyd=hyd)
+    from ..optics.air.inside import scene_air
     # a coarser sun table and 33 points a ray (the slicer's, slicing/eye_air.py): S within ~1% at an eighth of
     # the time, so that the first estimate comes soon
     air = eye_air(spec, vol, False, wide_sun_table(spec.atmosphere, spec.sun.mu0, n_mu=EYE_AIR_MU), EYE_AIR_SAMPLES)
-    return with_box_air(vol, hyd, spec.atmosphere), lambda img: with_eye_air(img, spec, vol, air=air)
+    return scene_air(vol, spec.atmosphere), lambda img: with_eye_air(img, spec, vol, air=air)
 
 
 def _child_main(conn, parent_pid: int, recipe: VolumeRecipe, spec: SceneSpec, scale, spp: int,

@@ -49,7 +49,7 @@ def initial_time(storm, time_option) -> int:
 def prepare(recipe: VolumeRecipe, time_option=None, progress=print, size: tuple[int, int] = (320, 240),
             warm: bool = True, air: dict | None = None):
     """The Storm (input read and checked, optics of the starting time) and the first ViewState (``air``: its
-    ``atmosphere``, ``aod``, ``ozone``; default none). With
+    ``atmosphere``, ``aod``, ``ozone``, ``water_vapour``; default none). With
     ``warm``, the slicer is warmed up for that view (kernels compiled, rays cached) before returning;
     ``serve`` warms it in the background instead, while the browser loads the page."""
     from .frames import Storm

@@ -112,13 +112,14 @@ class ViewState:
     atmosphere: str = "none"      # "clear": the 1-D atmosphere (optics.air) on the sun's and the eye's paths
     aod: float = 0.1              # its aerosol optical depth at 550 nm
     ozone: float = 0.3            # its ozone column, atm-cm
+    water_vapour: float = 1.4     # its precipitable water, cm
 
     def __post_init__(self):
         if self.mode not in MODES:
             raise ValueError(f"unknown slicer mode {self.mode!r}; expected one of {list(MODES)}")
         if self.atmosphere not in ("none", "clear"):
             raise ValueError(f"ViewState atmosphere must be 'none' or 'clear', got {self.atmosphere!r}")
-        self.air()  # range checks of --aod and --ozone now
+        self.air()  # range checks of --aod, --ozone and --water-vapour now
         SliceParams(**self._param_kw())  # range checks now, before anything renders
 
     def updated(self, **kw) -> "ViewState":
@@ -142,8 +143,11 @@ class ViewState:
         return SliceParams(**self._param_kw())
 
     def air(self) -> Atmosphere | None:
-        """The view's atmosphere (None for "none"); a ValueError names --aod or --ozone out of range."""
-        return Atmosphere(aod_550=self.aod, ozone_atm_cm=self.ozone) if self.atmosphere == "clear" else None
+        """The view's atmosphere (None for "none"); a ValueError names --aod, --ozone or --water-vapour out of
+        range."""
+        if self.atmosphere != "clear":
+            return None
+        return Atmosphere(aod_550=self.aod, ozone_atm_cm=self.ozone, water_vapour_cm=self.water_vapour)
 
     def spec(self, frame, ground_m: float, width: int | None = None, height: int | None = None) -> SceneSpec:
         """The SceneSpec of this view (``width``/``height``: another resolution of the same view)."""
@@ -169,12 +173,11 @@ class ViewState:
 def _reference_lines(state: ViewState) -> str:
     """The snippet's reference render: with the atmosphere, its air inside the box (in the medium) and along the
     eye rays outside it, as the viewer's reference (``reference_job.with_air``)."""
-    call = "wm.render_reference(spec, {}, spp=spp, target_rse=target_rse, max_seconds=max_seconds)"
+    call = "wm.render_reference(spec, ref_vol, spp=spp, target_rse=target_rse, max_seconds=max_seconds)"
     if state.atmosphere == "none":
-        return f"    return {call.format('ref_vol')}\n"
+        return f"    return {call}\n"
     return ("    from weather_mi.display.aerial import with_eye_air\n"
-            "    from weather_mi.optics.air.inside import with_box_air\n"
-            f"    image = {call.format('with_box_air(ref_vol, hyd, spec.atmosphere)')}  # the air in the box\n"
+            f"    image = {call}  # with spec.atmosphere's air in the box\n"
             "    return with_eye_air(image, spec, ref_vol)  # and along the eye rays outside it\n")
 
 

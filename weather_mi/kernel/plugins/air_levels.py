@@ -143,17 +143,20 @@ WEIGHTS_PROPERTY = "air_weights"
 
 
 def parse_weights(props, n_tables: int, n_levels: int, plugin: str):
-    """``hydrometeor_mixture``'s ``air_weights`` (n_levels, A): the Eq. 8 scattering coefficients (1/m, channel mean)
-    of the box's air per level of the weights grid, the components of its last A tables, as float32 numpy; None
-    without it. Constant in x and y, their trilinear lookup is the levels' linear interpolation in z, the same
-    floats as of a grid that held them in every voxel (a lerp between equal values is exact)."""
+    """``hydrometeor_mixture``'s ``air_weights`` (n_levels, A) or (n_levels, A, 3): the Eq. 8 scattering
+    coefficients (1/m; one value, or one per colour channel R, G, B) of the box's air per level of the weights grid,
+    the components of its last A tables, as float32 numpy (n_levels, A, C), C = 1 or 3; None without it. Constant in
+    x and y, their trilinear lookup is the levels' linear interpolation in z, the same floats as of a grid that held
+    them in every voxel (a lerp between equal values is exact)."""
     if WEIGHTS_PROPERTY not in props:
         return None
     a = np.asarray(props[WEIGHTS_PROPERTY], np.float32)
-    if a.ndim != 2 or a.shape[0] != int(n_levels) or not 1 <= a.shape[1] < int(n_tables) or \
-            not np.all(np.isfinite(a)) or a.min() < 0.0:
-        raise ValueError(f"{plugin}: '{WEIGHTS_PROPERTY}' must be a finite, non-negative (levels, A) tensor with the "
-                         f"weights grid's {n_levels} levels and A below the {n_tables} tables; got shape {a.shape}")
+    a = a[..., None] if a.ndim == 2 else a
+    if a.ndim != 3 or a.shape[0] != int(n_levels) or not 1 <= a.shape[1] < int(n_tables) or a.shape[2] not in (1, 3) \
+            or not np.all(np.isfinite(a)) or a.min() < 0.0:
+        raise ValueError(f"{plugin}: '{WEIGHTS_PROPERTY}' must be a finite, non-negative (levels, A) or (levels, A, 3) "
+                         f"tensor with the weights grid's {n_levels} levels and A below the {n_tables} tables; got "
+                         f"shape {np.shape(props[WEIGHTS_PROPERTY])}")
     return np.ascontiguousarray(a)
 
 

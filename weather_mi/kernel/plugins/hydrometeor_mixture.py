@@ -52,8 +52,10 @@ Properties (Python dict scenes): ``nodes`` (TensorXf, N ascending versines 1 - c
 (TensorXf, S x N x 3, 1/sr), ``weights`` (TensorXf, z x y x x x S: beta_sca,s per voxel, >= 0; or packed as
 :func:`pack_weights` makes them, z x y x x x P x 4, kept as given; with ``weights_tail``, TensorXf z x y x x,
 the last species' coefficients, the packets hold the first 4 P = S - 1), ``air_weights`` (optional, TensorXf,
-levels x A: the box's air per level of the grid, the coefficients of the last A of the S tables, which the grid
-then leaves out: ``air_levels.parse_weights``) and ``to_world`` (the bounding box as a transform of the unit cube). From XML: ``filename``, an ``.npz`` written by
+levels x A, or levels x A x 3 by colour channel: the box's air per level of the grid, the coefficients of the last
+A of the S tables, which the grid then leaves out: ``air_levels.parse_weights``; by channel, each channel's
+mixture has its own weights, as Eq. 8 holds per wavelength: molecules scatter 4x more at 450 than at 650 nm, so
+inside a cloud their share differs by channel) and ``to_world`` (the bounding box as a transform of the unit cube). From XML: ``filename``, an ``.npz`` written by
 :func:`save_npz` with the same arrays plus ``bbox``.
 """
 from __future__ import annotations
@@ -163,6 +165,42 @@ def lerp_channels(value, wavelengths, channel_nm):
         t_lo = dr.clip((lam - l2) / (l1 - l2), 0.0, 1.0)   # 450 -> 550: channel 2 -> 1
         out.append(dr.select(lam >= l1, dr.lerp(value[1], value[0], t_hi), dr.lerp(value[2], value[1], t_lo)))
     return mi.Spectrum(*out)
+
+
+class ByChannel:
+    """Eq. 8 weights by colour channel: ``channels[c][s]`` species s's share of channel c's scattering, and
+    ``mean[s]`` their mean over the channels (the weights of the channel-mean density directions are drawn from)."""
+
+    def __init__(self, channels):
+        self.channels = channels
+        self.mean = [(channels[0][s] + channels[1][s] + channels[2][s]) * (1.0 / 3.0) for s in range(len(channels[0]))]
+
+    def of_row(self, row):
+        """The weights of table4's row ``row`` (UInt32 per lane: 0..2 a channel, 3 the channel mean)."""
+        ch = self.channels
+        return [dr.select(row == 0, ch[0][s], dr.select(row == 1, ch[1][s], dr.select(row == 2, ch[2][s], m)))
+                for s, m in enumerate(self.mean)]
+
+
+def _normalised_by_channel(w, air, n_species: int) -> ByChannel:
+    """Eq. 8 per colour channel c: w_s / (sum_s w_s + sum_a air_a,c) for the grid's species (one coefficient for
+    every channel) and air_a,c / (...) for the air's components (``air``: A lists of 3), 1/S where nothing
+    scatters."""
+    channels = []
+    for c in range(3):
+        wc = list(w) + [a[c] for a in air]
+        total = wc[0]
+        for wi in wc[1:]:
+            total = total + wi
+        scattering = total > 0.0
+        inv = dr.rcp(dr.select(scattering, total, 1.0))
+        channels.append([dr.select(scattering, wi * inv, 1.0 / n_species) for wi in wc])
+    return ByChannel(channels)
+
+
+def _channel_mean(w):
+    """The weights of one density: the channel mean of weights by channel, or the weights as they are."""
+    return w.mean if isinstance(w, ByChannel) else w
 
 
 class HydrometeorMixture:
@@ -304,7 +342,8 @@ class HydrometeorMixture:
         (``optics.spectral``) and w_s their scattering weights (extinction weights to within the co-albedo,
         <= 1e-3): the medium's own albedo at the reference, the species' mix of spectral shapes elsewhere
         (``spectral_albedo``)."""
-        return spectral_albedo.albedo_at(self.coalbedo, self.coalbedo_grid, self.n_species, self._weights_at(mei),
+        return spectral_albedo.albedo_at(self.coalbedo, self.coalbedo_grid, self.n_species,
+                                         _channel_mean(self._weights_at(mei)),
                                          mei.wavelengths, albedo_ref, _gather4)
 
     def _weights_at(self, mei):
@@ -331,9 +370,13 @@ class HydrometeorMixture:
             w.append(dr.maximum(trilinear(lambda z, y, x: _gather(self.tail, mi.UInt32((z * ny + y) * nx + x))), 0.0))
         w = w[: self.n_grid]
         if self.air_weights is not None:  # constant in x and y: the trilinear lookup is the levels' lerp in z
-            n_a = self.air_weights.shape[1]
-            w += [lerp(_gather(self.air_w, mi.UInt32(z0 * n_a + a)), _gather(self.air_w, mi.UInt32(z1 * n_a + a)), fz)
-                  for a in range(n_a)]
+            n_a, n_c = self.air_weights.shape[1:]
+            air = [[lerp(_gather(self.air_w, mi.UInt32((z0 * n_a + a) * n_c + c)),
+                         _gather(self.air_w, mi.UInt32((z1 * n_a + a) * n_c + c)), fz) for c in range(n_c)]
+                   for a in range(n_a)]
+            if n_c == 3:
+                return _normalised_by_channel(w, air, self.n_species)
+            w += [a[0] for a in air]
         total = w[0]
         for wi in w[1:]:
             total = total + wi
@@ -369,23 +412,29 @@ class HydrometeorMixture:
         if self.spectral_table is None:
             value, pdf = self._mix(w, idx, t)
             return self._at_wavelengths(value, mei), pdf
+        w = _channel_mean(w)  # (a spectral variant's air weights are one value: ``Weights`` as they are)
         lane_w = None if self.air_spectral is None else \
             spectral_air_weights.by_lane(self.air_spectral, w, mei.wavelengths, _gather4)  # the value's, by wavelength
         return (spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
-                               _gather4, lane_w, self.spectral_flat, self.spectral_flat_table), spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4))
+                               _gather4, lane_w, self.spectral_flat, self.spectral_flat_table),
+                spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4))
 
     def _mix(self, w, idx, t):
-        """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t."""
+        """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t (weights by
+        channel, ``_normalised_by_channel``: each channel's value with its own, the pdf, of the channel-mean
+        density the sampler draws from, with their means)."""
         value = [mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)]
         pdf = mi.Float(0.0)
         n_s = self.n_species
+        by_channel = isinstance(w, ByChannel)
+        w_mean = w.mean if by_channel else w
         for s in range(n_s):
             k = idx * n_s + s
             f0 = _gather4(self.table4, k)
             f = f0 + (_gather4(self.table4, k + n_s) - f0) * t
             for c in range(3):
-                value[c] += w[s] * f[c]
-            pdf += w[s] * f[3]
+                value[c] += (w.channels[c][s] if by_channel else w[s]) * f[c]
+            pdf += w_mean[s] * f[3]
         return mi.Color3f(value[0], value[1], value[2]), pdf
 
     # ------------------------------------------------------------ PhaseFunction interface
@@ -407,16 +456,18 @@ class HydrometeorMixture:
         """(wo, per-channel value, channel-mean pdf) of a direction drawn from the density in ``row``
         of table4 (0..2: a colour channel; 3: the channel mean)."""
         w = self._weights_at(mei)
+        # the weights of the row's density: by channel, that channel's (row 0..2) or their mean (row 3)
+        w_row = w.of_row(row) if isinstance(w, ByChannel) else w
         # species s with probability w_s (sample1); what is left of sample1 (uniform) is the coin of
         # the alias table
         species = mi.UInt32(0)
-        acc, lower, w_sel = mi.Float(0.0), mi.Float(0.0), w[0]
+        acc, lower, w_sel = mi.Float(0.0), mi.Float(0.0), w_row[0]
         for s in range(self.n_species - 1):
-            acc += w[s]
+            acc += w_row[s]
             above = sample1 >= acc
             species += mi.UInt32(dr.select(above, 1, 0))
             lower = dr.select(above, acc, lower)
-            w_sel = dr.select(above, w[s + 1], w_sel)
+            w_sel = dr.select(above, w_row[s + 1], w_sel)
         coin = dr.clip((sample1 - lower) / dr.maximum(w_sel, 1e-30), 0.0, 1.0)
         # node segment of that species from its alias table (sample2.x picks the bucket; what is
         # left of it, uniform and independent of the choice, places v within the segment)

@@ -49,12 +49,14 @@ def parse(props, air_weights, name: str, storage):
         return None
     t = np.asarray(props[TABLE_PROPERTY], np.float32) if TABLE_PROPERTY in props else np.zeros((0,))
     nm = np.asarray(props[NM_PROPERTY], np.float64).ravel() if NM_PROPERTY in props else np.zeros(0)
-    ok = (mi.is_spectral and air_weights is not None and t.ndim == 3 and t.shape[0] == air_weights.shape[0]
+    ok = (mi.is_spectral and air_weights is not None and (air_weights.ndim == 2 or air_weights.shape[2] == 1)
+          and t.ndim == 3 and t.shape[0] == air_weights.shape[0]
           and t.shape[2] == air_weights.shape[1] and t.shape[1] == nm.size >= 2 and np.all(np.diff(nm) > 0)
           and np.allclose(np.diff(nm), nm[1] - nm[0]) and np.all(np.isfinite(t)) and t.min() >= 0.0)
     if not ok:
         raise ValueError(f"{name}: '{TABLE_PROPERTY}' must be a finite, non-negative (levels, K, A) tensor with "
-                         f"'air_weights'' levels and A, on the K uniform ascending wavelengths '{NM_PROPERTY}', in a "
+                         f"'air_weights'' levels and A (one value per component), on the K uniform ascending wavelengths "
+                         f"'{NM_PROPERTY}', in a "
                          f"spectral variant; got {t.shape} on {nm.size} wavelengths in {mi.variant()!r}")
     return storage(pack(t)), (float(nm[0]), float(1.0 / (nm[1] - nm[0])), int(nm.size)), int(t.shape[2])
 

@@ -15,8 +15,13 @@ wavelength (nm).
   ``aerosol_ssa`` (0.945, SPCTRL2's rural value at 400 nm) and asymmetry ``aerosol_g`` (0.65, SPCTRL2's)
   describe its scattering where the air enters a medium; the sun's transmittance needs extinction only.
 
-Water vapour is not modelled (its visible bands at 590, 650 and 720 nm are weak; SPCTRL2 with 1.4 cm
-moves the setting sun's chromaticity by about 0.005).
+* Water vapour: ``water_vapour_cm`` of precipitable water from sea level to space (default 1.4 cm, SPCTRL2's
+  and the issue's reference; the US Standard 1976 column is similar) in an exponential profile of scale height
+  2 km, absorbing by SPCTRL2's band model (``air.water_vapour``: near 593 nm and 690-740 nm in the visible, zero
+  at 450, 550 and 650 nm). A band model holds for whole paths: it enters the sun's transmittance
+  (``optical_depths`` of slant columns) and so the sun's colour (with 1.4 cm the setting sun's chromaticity moves
+  by about 0.005); the air's extinction at a point (``extinction_per_m``: the box's medium, the eye rays) leaves it
+  out.
 """
 from __future__ import annotations
 
@@ -26,6 +31,7 @@ import numpy as np
 
 from ...io.standard_atmosphere import standard_density
 from ..rayleigh import AVOGADRO, M_AIR_KG_MOL, cross_section_m2 as rayleigh_cross_section_m2
+from . import water_vapour
 from .ozone import ATM_CM_M2, cross_section_m2 as ozone_cross_section_m2
 
 TOP_M = 80e3                 # top of the atmosphere (the air above holds < 2e-5 of the column)
@@ -48,7 +54,8 @@ def _in_range(value, lo, hi, what):
 class Atmosphere:
     """A clear atmosphere (module docstring): aerosol optical depth at 550 nm (sea level to space, in
     [0, 3]), ozone column (atm-cm, in [0, 0.6]), Angstrom exponent, aerosol scale height (m), aerosol
-    single-scattering albedo and asymmetry. A ValueError names the parameter out of range."""
+    single-scattering albedo and asymmetry, precipitable water (cm, in [0, 10]). A ValueError names the parameter
+    out of range."""
 
     aod_550: float = 0.1
     ozone_atm_cm: float = 0.3
@@ -56,6 +63,7 @@ class Atmosphere:
     aerosol_scale_height_m: float = 1200.0
     aerosol_ssa: float = 0.945
     aerosol_g: float = 0.65
+    water_vapour_cm: float = 1.4
 
     def __post_init__(self):
         for name, lo, hi, what in (("aod_550", *AOD_RANGE, "aerosol optical depth at 550 nm (--aod)"),
@@ -63,7 +71,9 @@ class Atmosphere:
                                    ("angstrom", 0.0, 3.0, "Angstrom exponent"),
                                    ("aerosol_scale_height_m", 100.0, 10e3, "aerosol scale height (m)"),
                                    ("aerosol_ssa", 0.0, 1.0, "aerosol single-scattering albedo"),
-                                   ("aerosol_g", -1.0, 1.0, "aerosol asymmetry")):
+                                   ("aerosol_g", -1.0, 1.0, "aerosol asymmetry"),
+                                   ("water_vapour_cm", *water_vapour.RANGE_CM,
+                                    "precipitable water in cm (--water-vapour)")):
             object.__setattr__(self, name, _in_range(getattr(self, name), lo, hi, what))
 
     # ---------------------------------------------------------------- per height
@@ -100,16 +110,24 @@ class Atmosphere:
 
     def optical_depths(self, wavelength_nm, columns: dict) -> np.ndarray:
         """Optical depth (..., n) of slant ``columns`` (``shell.slant_columns``: air and ozone in molecules
-        per m^2, aerosol as its optical depth at 550 nm) at wavelengths (n,)."""
+        per m^2, aerosol as its optical depth at 550 nm, water as precipitable cm, by the band model) at wavelengths
+        (n,)."""
         wl = np.asarray(wavelength_nm, np.float64)
-        return (np.asarray(columns["air"])[..., None] * rayleigh_cross_section_m2(wl * 1e-9)
-                + np.asarray(columns["ozone"])[..., None] * ozone_cross_section_m2(wl)
-                + np.asarray(columns["aerosol"])[..., None] * self.aerosol_factor(wl))
+        tau = (np.asarray(columns["air"])[..., None] * rayleigh_cross_section_m2(wl * 1e-9)
+               + np.asarray(columns["ozone"])[..., None] * ozone_cross_section_m2(wl)
+               + np.asarray(columns["aerosol"])[..., None] * self.aerosol_factor(wl))
+        if "water" in columns:
+            tau = tau + water_vapour.band_optical_depth(wl, columns["water"])  # Bird & Riordan Eq. 2-8
+        return tau
 
     def profiles(self, z_m) -> dict:
-        """The three constituents at heights z_m: air and ozone (molecules/m^3), aerosol (1/m at 550 nm)."""
-        return {"air": self.air_number_density_m3(z_m), "ozone": self.ozone_number_density_m3(z_m),
-                "aerosol": self.aerosol_extinction_550_per_m(z_m)}
+        """The constituents at heights z_m: air and ozone (molecules/m^3), aerosol (1/m at 550 nm), water vapour
+        (precipitable cm per m; only where ``water_vapour_cm`` > 0)."""
+        out = {"air": self.air_number_density_m3(z_m), "ozone": self.ozone_number_density_m3(z_m),
+               "aerosol": self.aerosol_extinction_550_per_m(z_m)}
+        if self.water_vapour_cm > 0.0:
+            out["water"] = water_vapour.column_density_cm_per_m(self.water_vapour_cm, z_m)
+        return out
 
 
 __all__ = ["Atmosphere", "TOP_M", "AOD_RANGE", "OZONE_RANGE_ATM_CM"]

@@ -15,8 +15,9 @@ medium's sigma_t grid stays the hydrometeors' grey one, the air's Eq. 8 coeffici
 ``kernel.plugins.air_levels``, the mixture's albedo at a point ``kernel.plugins.air_albedo``); for stock
 ``volpath`` :func:`medium_grids` puts it into RGB grids (``kernel.medium.medium_dict(air_in_grid=True)``).
 The phase functions enter the Eq. 8 mixture as two more components, weighted by their scattering
-coefficients (channel mean, as the hydrometeors' weights are: within a channel the mixture of air and
-aerosol is then that of the channel mean, exact for molecules alone or a cloud with molecules).
+coefficients per colour channel (``kernel.medium.air_weights``: each channel's mixture its own, as Eq. 8 holds
+per wavelength; the hydrometeors' coefficients are one for all channels). With channel means a cloud inside a
+Rayleigh column was 5% too bright in red and 3% too dark in blue against DISORT (``tests/test_clear_sky_disort.py``).
 """
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ import numpy as np
 
 from ..phase.table import RGB_WAVELENGTHS_M
 from ..rayleigh import AVOGADRO, M_AIR_KG_MOL, cross_section_m2 as rayleigh_cross_section_m2
+from ..scattering_coefficients import scattering_coefficients
 from ..volume import level_density
 from .atmosphere import Atmosphere
 from .ozone import cross_section_m2 as ozone_cross_section_m2
@@ -191,12 +193,8 @@ def medium_grids(beta_total, albedo, weights, air: BoxAir, want=("sigma_t", "alb
                 a = np.divide(sca, sigma_t, out=np.ones_like(sigma_t), where=sigma_t > 0)
                 out["albedo"][lv] = np.clip(a, 0.0, 1.0)
         if out["coeffs"] is not None:
-            sca_h = b * alb.mean(axis=-1)                                     # the hydrometeors' beta omega
-            part = slice(z0 * cells, lv.stop * cells)
-            w = weights.chunk(part) if hasattr(weights, "chunk") else \
-                np.asarray(weights, np.float32).reshape(n_s, -1)[:, part]
-            c = out["coeffs"][lv].reshape(-1, n_s + 2)
-            c[:, :n_s] = (w * sca_h.reshape(1, -1)).T                         # Eq. 8's w_s beta omega
+            c = out["coeffs"][lv].reshape(-1, n_s + 2)                       # Eq. 8's w_s beta omega, the air's
+            scattering_coefficients(beta, albedo, weights, [c[:, s] for s in range(n_s)], z0 * cells, lv.stop * cells)
             c[:, n_s:] = np.broadcast_to(sca_air.mean(axis=-1)[:, :, 0, 0][:, :, None],
                                          (2, lv.stop - z0, cells)).reshape(2, -1).T
     return out["sigma_t"], out["albedo"], out["coeffs"]
