@@ -16,10 +16,11 @@ time to the same RSE over the RGB mode's is (t RSE^2)_spectral / (t RSE^2)_RGB (
 the figure with ``Image.metadata["noise"]["rse_mean"]`` (the R, G, B channels' mean se over their mean: the
 spectral mode's R, G, B come from X, Y, Z through sRGB's matrix, whose chroma noise it counts).
 
-``--atmosphere clear`` (default, as ``render`` runs): the RGB mode has the air inside the box as well as on
-the sun's path, the spectral mode only on the sun's path (``kernel.medium.air_in_medium``), so the two render
-different images; ``none``: the same scene in both. ``--three-nodes`` adds the spectral mode as it was before
-the tables every 25 nm.
+``--atmosphere clear`` (default, as ``render`` runs): both modes have the air inside the box as well as on the
+sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``none``: no air. ``--three-nodes``
+adds the spectral mode as it was before the tables every 25 nm; ``--without-box-air`` both modes without the box's
+air (the air on the sun's path only: ``kernel.medium.air_in_medium`` None, a different scene; the spectral mode as it
+was before its box air was wired).
 
 ``--phase``: the mixture plugin alone in ``llvm_ad_spectral``, ``eval_pdf`` and ``sample`` on the demo
 supercell's five species (their tables at "test" quality, a random 16^3 weight grid) at random directions and
@@ -119,6 +120,8 @@ def main(argv=None):
     ap.add_argument("--phase", action="store_true", help="the phase plugin alone (module docstring)")
     ap.add_argument("--three-nodes", action="store_true",
                     help="also the spectral mode with the R, G, B tables interpolated (as before the 25 nm tables)")
+    ap.add_argument("--without-box-air", action="store_true",
+                    help="also both modes without the box's air (the spectral one as before it was wired)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
     args = ap.parse_args(argv)
     if args.phase:
@@ -135,9 +138,13 @@ def main(argv=None):
     modes = dict(MODES)
     if args.three_nodes:
         modes["spectral, 3 nodes"] = "llvm_ad_spectral"
-    for mode, variant in modes.items():  # compile (and build the spectral tables) first
-        with three_nodes(mode.endswith("3 nodes")):
-            render_reference(replace(spec, seed=99), vol, spp=1, passes=1, progress=False, variant=variant)
+    if args.without_box_air:
+        modes["rgb, no box air"] = "llvm_ad_rgb"
+        modes["spectral, no box air"] = "llvm_ad_spectral"
+    for mode, variant in modes.items():  # compile (and build the spectral tables) first, as measured: the kernels
+        with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")):  # of 1 spp differ
+            render_reference(replace(spec, seed=99), vol, spp=args.spp, passes=args.passes, progress=False,
+                             variant=variant)
     print(f"demo supercell, {args.lighting} view, sun {args.elevation:g} deg, {w}x{h}, {args.spp} spp in "
           f"{args.passes} passes, --atmosphere {args.atmosphere}, {int(cloud.sum())} cloud pixels")
     print("| round | mode | wall s | CPU s | luminance RSE | CPU time ratio to RGB | time to the same RSE over RGB's "
@@ -148,7 +155,7 @@ def main(argv=None):
     for r in range(args.rounds):
         got = {}
         for mode, variant in (list(modes.items()) if r % 2 == 0 else list(modes.items())[::-1]):  # alternate
-            with three_nodes(mode.endswith("3 nodes")):
+            with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")):
                 got[mode] = timed_render(replace(spec, seed=r), vol, args.spp, args.passes, variant, cloud)
         b = got["rgb"]
         for mode, g in got.items():
@@ -181,6 +188,22 @@ def three_nodes(on: bool):
         yield
     finally:
         medium.spectral_phase_properties = own
+
+
+@contextlib.contextmanager
+def no_box_air(on: bool):
+    """With ``on``: the box's air left out of the medium (``air_in_medium`` None, as the spectral mode was before
+    its air was wired; the air on the sun's path stays)."""
+    if not on:
+        yield
+        return
+    from weather_mi.kernel import medium, scene_dict
+    own = medium.air_in_medium
+    medium.air_in_medium = scene_dict.air_in_medium = lambda vol: None
+    try:
+        yield
+    finally:
+        medium.air_in_medium = scene_dict.air_in_medium = own
 
 
 if __name__ == "__main__":

@@ -120,3 +120,60 @@ def test_kernel_optical_depth_at_lane_wavelengths(variant_restored):
     np.testing.assert_allclose(tau_s[3], expect, rtol=1e-5)
     np.testing.assert_allclose(sig_s[3], np.interp(np.array(q), np.arange(N_LEVELS), k503), rtol=1e-6)
     assert dr.all(mi.Float(tau_s[3]) > 0.0)
+
+
+def test_factored_air_is_the_tables(variant_restored):
+    """The kernel's factored air (``spectral_levels.factored_air_levels``: molecules, ozone and aerosol, each a profile
+    times a spectrum; ``ComponentAirLevels``) holds the tables' extinction and scattering on the grid to float
+    rounding, and gives the tables' (``SpectralAirLevels``') extinction and optical depth at random lanes' wavelengths
+    (1e-5 relative); its cube bounds are the tables'."""
+    from weather_mi.optics.air.spectral_levels import factored_air_levels
+    air = rgb_air()
+    tables, f = spectral_air_levels(air), factored_air_levels(air)
+    np.testing.assert_allclose(f.extinction(), tables.extinction, rtol=2e-6)
+    sca = np.asarray(f.profiles, np.float64)[:, None, :] * np.asarray(f.spectra, np.float64)[None] * f.albedo
+    np.testing.assert_allclose(sca.sum(axis=-1), tables.scattering.sum(axis=0), rtol=2e-6)
+    wm.set_variant(SPECTRAL)
+    import mitsuba as mi
+    from weather_mi.kernel.plugins.spectral_air import ComponentAirLevels, SpectralAirLevels
+    ref = SpectralAirLevels(tables.extinction, tables.wavelengths_nm)
+    kern = ComponentAirLevels(f.profiles, f.spectra, f.wavelengths_nm, f.albedo)
+    np.testing.assert_allclose(np.array(kern.bound), np.array(ref.bound), rtol=2e-6)
+    rng = np.random.default_rng(4)
+    n = 64
+    wl = mi.Spectrum(*(mi.Float((355.0 + 480.0 * rng.random(n)).astype(np.float32)) for _ in range(4)))
+    q0, dq = rng.uniform(-1.0, N_LEVELS, n), rng.uniform(-0.5, 0.5, n)
+    t0, t1 = rng.uniform(0.0, 5.0, n), rng.uniform(5.0, 40.0, n)
+    args = [mi.Float(a.astype(np.float32)) for a in (q0, dq, t0, t1)]
+    on = mi.Bool(True)
+    got, expect = np.array(kern.tau(*args, on, wavelengths=wl)), np.array(ref.tau(*args, on, wavelengths=wl))
+    np.testing.assert_allclose(got, expect, rtol=1e-5)
+    q = mi.Float(rng.uniform(-1.0, N_LEVELS, n).astype(np.float32))
+    np.testing.assert_allclose(np.array(kern.sigma_at(q, on, wl)), np.array(ref.sigma_at(q, on, wl)), rtol=1e-5)
+    assert np.ptp(expect) > 0.1 * expect.max()  # lanes that differ: the check can fail
+
+
+def test_a_rays_air_majorant_bounds_its_wavelengths(variant_restored):
+    """``ComponentAirLevels.bind``'s cube bound: at least the air's extinction at every level at or above the cube
+    and every lane's wavelength (the numpy tables, read here), and below the bound over the whole grid where the
+    lanes are red (fewer null collisions)."""
+    from weather_mi.optics.air.spectral_levels import factored_air_levels
+    wm.set_variant(SPECTRAL)
+    import drjit as dr
+    import mitsuba as mi
+    from weather_mi.kernel.plugins.spectral_air import ComponentAirLevels
+    air = rgb_air()
+    tables, f = spectral_air_levels(air), factored_air_levels(air)
+    kern = ComponentAirLevels(f.profiles, f.spectra, f.wavelengths_nm, f.albedo)
+    rng = np.random.default_rng(5)
+    n = 200
+    lanes = [(420.0 + 400.0 * rng.random(n)).astype(np.float32) for _ in range(4)]
+    bound = kern.bind(mi.Spectrum(*(mi.Float(v) for v in lanes)))
+    cz, k = rng.integers(-1, N_LEVELS, n), rng.integers(0, 4, n)
+    got = np.array(bound.cube_bound(mi.Int32(cz.astype(np.int32)), mi.Int32(k.astype(np.int32)), -1, mi.Bool(True)))
+    ext = np.stack([tables.at(np.asarray(v, np.float64))[0] for v in lanes])  # (4, levels, n)
+    for i in range(n):
+        z0 = max(int(cz[i] - k[i]), 0)
+        assert got[i] >= ext[:, z0:, i].max() * (1 - 1e-6), i
+    whole = np.array(kern.cube_bound(mi.Int32(cz.astype(np.int32)), mi.Int32(k.astype(np.int32)), -1, mi.Bool(True)))
+    assert np.all(got <= whole * (1 + 1e-6)) and np.median(got / whole) < 0.6

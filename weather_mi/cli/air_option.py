@@ -109,8 +109,8 @@ def eye_rays_air(spec, vol, args):
 def on_eye_rays(img, spec, vol, args, air=None):
     """``img`` seen through the air outside the box (``display.aerial.with_eye_air``; ``air``: its
     :func:`eye_rays_air`, computed before ``vol``'s grids were released), with the air's sky for ``--sky air``;
-    ``img`` itself without an atmosphere, and in the spectral mode (``--spectral``: there the air colours the sun
-    only, as the medium leaves it out: ``kernel.medium.air_in_medium``)."""
+    ``img`` itself without an atmosphere, and in the spectral mode (``--spectral``: the air inside the box and on
+    the sun's path are in its render, ``kernel/spectral_air.py``; along the eye rays outside the box not yet)."""
     if spec.atmosphere is None or img.xyz is not None:
         return img
     from ..display.aerial import with_eye_air

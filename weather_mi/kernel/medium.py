@@ -98,10 +98,18 @@ def air_by_integrator(integrator: dict) -> bool:
 
 
 def air_in_medium(vol: OpticalVolume):
-    """The air in the box (``OpticalVolume.air``, ``optics.air.inside.BoxAir``) where the medium holds it: in
-    RGB variants; None without air or in spectral variants (there the air colours the sun only)."""
+    """The air in the box (``OpticalVolume.air``, ``optics.air.inside.BoxAir``) where the medium holds it; None
+    without air. Spectral variants take it over wavelength, added per level by ``majorant_volpath``
+    (``kernel.spectral_air``)."""
+    return getattr(vol, "air", None)
+
+
+def _spectral_air_in_grid(air, air_in_grid: bool) -> None:
+    """A ValueError for the box's air in the grids (stock ``volpath``) in a spectral variant: its grids are RGB."""
     import mitsuba as mi
-    return None if getattr(vol, "air", None) is None or mi.is_spectral else vol.air
+    if air is not None and air_in_grid and mi.is_spectral:
+        raise ValueError(f"the box's air in {mi.variant()!r} is added per level by majorant_volpath; stock volpath's "
+                         "grids hold it at 650 / 550 / 450 nm only (use integrator 'majorant', or no atmosphere)")
 
 
 def grey_air(air) -> bool:
@@ -143,6 +151,8 @@ def phase_dict(vol: OpticalVolume) -> dict:
         weights, tail = (None if a is None else _aligned_copy(pad_levels(a)) for a in (weights, tail))
     if air is not None:
         d_air = air_weights(air)
+        if mi.is_spectral and d_air.ndim == 3:  # the density directions are drawn from; by wavelength: spectral_air
+            d_air = np.ascontiguousarray(d_air.mean(axis=-1))
         d_air = {"air_weights": mi.TensorXf(np.ascontiguousarray(pad_levels(d_air)) if vol.periodic else d_air)}
     d = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
          "weights": mi.TensorXf(weights),  # packed, used in place (llvm)
@@ -155,6 +165,9 @@ def phase_dict(vol: OpticalVolume) -> dict:
         d["periodic"] = True
     if mi.is_spectral:
         d.update(spectral_phase_properties(vol, nodes))
+        if air is not None:  # the air's weights by wavelength (the hydrometeors' are grey)
+            from .spectral_air import phase_properties
+            d.update(phase_properties(vol, air))
     return d
 
 
@@ -198,7 +211,11 @@ def spectral_phase_properties(vol: OpticalVolume, nodes=None) -> dict:
              "spectral_nm": mi.TensorXf(SPECTRAL_NM.astype(np.float32))}
     if species is None:
         return d
-    return {**d, "coalbedo": mi.TensorXf(coalbedo_table(species).astype(np.float32)),
+    c = coalbedo_table(species)
+    air = air_in_medium(vol)
+    if air is not None:  # the air's components absorb nothing here: its albedo is kernel.plugins.spectral_air_albedo's
+        c = np.concatenate([c, np.zeros((len(air.phase_tables), c.shape[1]))])
+    return {**d, "coalbedo": mi.TensorXf(c.astype(np.float32)),
             "coalbedo_nm": mi.TensorXf(COALBEDO_NM.astype(np.float32))}
 
 
@@ -220,6 +237,10 @@ def spectral_phase_values(vol: OpticalVolume, nodes, species=None) -> np.ndarray
     if cone:
         stacks = [[truncated_table(t, cone, f) for t in stack] if f > 0 and sp is not None else stack
                   for stack, sp, f in zip(stacks, own, (float(fractions.get(n, 0.0)) for n in vol.species))]
+    air = air_in_medium(vol)
+    if air is not None:  # the air's two components after the species (``kernel.spectral_air``)
+        from .spectral_air import air_stacks
+        stacks = list(stacks) + air_stacks(air, SPECTRAL_NM)
     return prepare_spectral(nodes, stacks)
 
 
@@ -240,6 +261,7 @@ def medium_dict(vol: OpticalVolume, air_in_grid: bool = True) -> dict:
     to_world = bbox_transform(grid_bbox(vol))
     beta, albedo = vol.beta_total[..., None], vol.albedo
     air = air_in_medium(vol)
+    _spectral_air_in_grid(air, air_in_grid)
     if air is not None and air_in_grid:  # RGB extinction (molecules ~ lambda^-4) and albedo of the cloud and the air
         from ..optics.air.inside import medium_grids
         grey = grey_air(air)  # one extinction channel: no 3-channel sigma_t grid built (medium_extinction's)

@@ -434,12 +434,18 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
         if air is not None:  # the air's levels, which the trackers cross as empty space (plugins/air_levels.py)
             levels = air.extinction_levels
             levels = np.ascontiguousarray(pad_levels(levels) if vol.periodic else levels)
+            if mi.is_spectral:  # over wavelength (kernel/spectral_air.py): the majorant bounds every wavelength's
+                from .spectral_air import extinction_levels
+                levels = extinction_levels(vol, air)
             majorant = with_coarse_air(majorant, levels, int(cell))  # a bound of the hydrometeors' and the air's sum
         d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
              "majorant": mi.TensorXf(majorant), "to_world": bbox_transform(grid_bbox(vol))}
         if vol.periodic:
             d.update({"periodic": "transport" if vol.periodic == "transport" else "view", "periodic_tiles": PATH_TILES})
-        if levels is not None:  # and its albedo with the hydrometeors' (where the medium leaves the air to it)
+        if levels is not None and mi.is_spectral:  # the air over wavelength (kernel/spectral_air.py)
+            from .spectral_air import integrator_properties
+            d.update(integrator_properties(vol, air))
+        elif levels is not None:  # and its albedo with the hydrometeors' (where the medium leaves the air to it)
             d.update({"air_extinction": mi.TensorXf(levels), **integrator_air_albedo(vol, air)})
         if sun is not None:
             d.update(integrator_sun(sun, sun_guiding, aureole_nee, mvnee))

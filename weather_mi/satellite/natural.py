@@ -4,9 +4,8 @@ top-of-atmosphere spectrum of every pixel as CIE XYZ and linear sRGB (D65).
 The spectrum. The reflectance factor R(lambda) = pi L / (E0 mu0) is path-traced at ``NATURAL_NM`` (9
 wavelengths, 400-700 nm, every 37.5 nm), three to a render (``imagery.satellite_scene`` with one wavelength per
 channel: the hydrometeors' optics there, ``bands.rgb_volume``; the clear atmosphere's air in the box at each,
-on the sun's path and outside the box, ``satellite.air``). RGB variants carry the air in the medium (its
-extinction per channel), which the spectral variants do not yet (``kernel.medium.air_in_medium``), so the
-wavelengths are rendered as channels rather than sampled by ``llvm_ad_spectral``. R is linear in wavelength
+on the sun's path and outside the box, ``satellite.air``). The satellite's ``raytable`` sensor is not spectral
+(``docs/spectral.md``), so the wavelengths are rendered as channels rather than sampled by ``llvm_ad_spectral``. R is linear in wavelength
 between the nodes (the air's, the clouds' and the ground's reflectance are smooth over 37.5 nm) and held at its
 end values outside them.
 

@@ -69,8 +69,8 @@ from ..jitarrays import aligned_empty, aligned_float
 from . import air_levels, grid_lookup
 from .mixture_tables import (GUIDE_THETA0, alias_table, angle_warp, channel_mean_pdf, common_nodes,  # noqa: F401
                              guide_table, prepare_tables, segment_masses)
-from . import spectral_albedo
-from .spectral_phase import from_properties, pack_pdf, spectral_pdf, spectral_value
+from . import spectral_air_weights, spectral_albedo
+from .spectral_phase import from_properties, pack_pdf, spectral_pdf, spectral_value, split_flat
 from .variant_class import variant_class
 
 PLUGIN_NAME = "hydrometeor_mixture"
@@ -224,6 +224,8 @@ class HydrometeorMixture:
             to_world = props["to_world"] if "to_world" in props else mi.ScalarTransform4f()
         # the box's air per level (``air_weights``, levels x A): the last A of the S tables, not in the grid
         self.air_weights = air_levels.parse_weights(props, int(values.shape[0]), weights.shape[0], PLUGIN_NAME)
+        # spectral variants: the air's weights by wavelength (a lane's phase value; ``spectral_air_weights``)
+        self.air_spectral = spectral_air_weights.parse(props, self.air_weights, PLUGIN_NAME, _storage)
         n_grid = int(values.shape[0]) - (0 if self.air_weights is None else self.air_weights.shape[1])
         if values.ndim != 3 or values.shape[1] != nodes.size or values.shape[2] != 3:
             raise ValueError(f"{PLUGIN_NAME}: 'values' must be S x N x 3 with N = len(nodes) = {nodes.size}; "
@@ -248,6 +250,9 @@ class HydrometeorMixture:
         self._set_tables(nodes, values)
         self._set_weights(weights, tail)
         self._set_spectral(props)
+        if self.air_spectral is not None and self.spectral_table is None:
+            raise ValueError(f"{PLUGIN_NAME}: '{spectral_air_weights.TABLE_PROPERTY}' needs the tables by wavelength "
+                             "('spectral_values', 'spectral_nm')")
         self.m_flags = mi.PhaseFunctionFlags.Anisotropic
 
     def _set_tables(self, nodes, values):
@@ -295,6 +300,11 @@ class HydrometeorMixture:
         (``spectral_phase.from_properties``); else None (R, G, B interpolated)."""
         self.spectral_values, self.spectral_table, self.spectral_grid = from_properties(
             props, self.n_species, n_nodes, PLUGIN_NAME, _storage)
+        self.spectral_flat, self.spectral_flat_table = (), None
+        if self.spectral_values is not None:  # species flat in wavelength (the box's air) apart: read once
+            flat, rest, flat_table = split_flat(self.spectral_values, _storage)
+            if flat:
+                self.spectral_flat, self.spectral_table, self.spectral_flat_table = flat, rest, flat_table
 
     def _set_spectral(self, props):
         """Spectral variants: the channels' wavelengths (nm) and the species' co-albedo spectra."""
@@ -372,7 +382,10 @@ class HydrometeorMixture:
             total = total + wi
         scattering = total > 0.0
         inv = dr.rcp(dr.select(scattering, total, 1.0))
-        return [dr.select(scattering, wi * inv, 1.0 / self.n_species) for wi in w]
+        out = [dr.select(scattering, wi * inv, 1.0 / self.n_species) for wi in w]
+        if self.air_spectral is not None:  # the point's levels, for the air's weights by wavelength
+            return spectral_air_weights.Weights(out, (z0, z1, fz, inv, scattering))
+        return out
 
     def _segment(self, v):
         """Node index i with v_i <= v < v_i+1 and the linear weight t in [0, 1]: the guide bucket of
@@ -399,9 +412,12 @@ class HydrometeorMixture:
         if self.spectral_table is None:
             value, pdf = self._mix(w, idx, t)
             return self._at_wavelengths(value, mei), pdf
-        w = _channel_mean(w)
+        w = _channel_mean(w)  # (a spectral variant's air weights are one value: ``Weights`` as they are)
+        lane_w = None if self.air_spectral is None else \
+            spectral_air_weights.by_lane(self.air_spectral, w, mei.wavelengths, _gather4)  # the value's, by wavelength
         return (spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
-                               _gather4), spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4))
+                               _gather4, lane_w, self.spectral_flat, self.spectral_flat_table),
+                spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4))
 
     def _mix(self, w, idx, t):
         """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t (weights by

@@ -37,7 +37,7 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
-from . import air_albedo, air_levels, sun_properties
+from . import air_albedo, air_levels, spectral_air, spectral_air_albedo, sun_properties
 from .lanes import MAX_JOBS_PER_LAUNCH, render_passes
 from .majorants import DEFAULT_CELL, SAFETY, empty_space_radius, majorant_grid, texel_majorant_grid  # noqa: F401 (re-exported)
 from .medium_setup import GridCache, MediumSetup, Tracking, unit_cube_to_world, volume_data
@@ -113,7 +113,9 @@ class MajorantVolpath:
          and which is added to a grey (1-channel) one, the albedo then the mixture's of ``air_albedo`` and
          ``air_scattering`` (:mod:`.air_albedo`, ``MediumSetup.add_air``) (:mod:`.air_levels`): its cells are
          crossed as empty space, with the air's majorant. An air whose three channels are equal (a satellite
-         band's) is tracked grey (``air_levels.equal_channels``).
+         band's) is tracked grey (``air_levels.equal_channels``). Spectral variants, with ``air_spectra``, ``air_nm``
+         and ``air_component_albedo``: (levels, M) the profiles of the air's components, read at the path's
+         wavelengths (:mod:`.spectral_air`; the albedo :mod:`.spectral_air_albedo`).
      * - periodic, periodic_tiles
        - |string|, |int|
        - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each
@@ -155,8 +157,13 @@ class MajorantVolpath:
         self.reach = int(get("periodic_tiles", 0))
         _check(self.periodic == "none" or (self.reach >= 1 and self.track_mode == "texel"),
                f"periodic needs periodic_tiles >= 1 and tracking_grid 'texel', got {self.reach}, {self.track_mode!r}")
-        self.air_levels = air_levels.parse(props, _check)  # the air in the box, per level (optional)
-        self.air_albedo = air_albedo.parse(props, self.air_levels, _check)  # with its albedo, where added
+        self.air_spectral = spectral_air.parse(props, _check)  # spectral variants: the air over wavelength
+        if self.air_spectral is not None:
+            self.air_levels = self.air_spectral.full  # (levels, K): what the majorants bound
+            self.air_albedo = spectral_air_albedo.parse(props, _check)
+        else:
+            self.air_levels = air_levels.parse(props, _check)  # the air in the box, per level (optional)
+            self.air_albedo = air_albedo.parse(props, self.air_levels, _check)  # with its albedo, where added
         sun_properties.parse(self, props)  # the integrator's own sun (optional)
 
     # ------------------------------------------------------------ Mitsuba object interface
@@ -206,12 +213,16 @@ class MajorantVolpath:
                 self.majorant = mi.TensorXf(maj)
                 self._auto_key = key
         if self.air_levels is not None and vol is not None and int(volume_data(vol).shape[-1]) == 1:
-            grey = air_levels.equal_channels(self.air_levels)  # a satellite band's: tracked grey (not spectral)
-            ms.add_air(air_levels.AirLevels(self.air_levels, grey), self.air_albedo, to_local, self.periodic != "none")
+            if self.air_spectral is not None:  # spectral variants: the air at the path's wavelengths
+                levels = self.air_spectral
+            else:
+                grey = air_levels.equal_channels(self.air_levels)  # a satellite band's: tracked grey (not spectral)
+                levels = air_levels.AirLevels(self.air_levels, grey)
+            ms.add_air(levels, self.air_albedo, to_local, self.periodic != "none")
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"
         texel, texel_data = self._grids.texel(vol, ms.scale, self.reach if periodic else None, self.air_levels,
-                                              grey_air=not ms.spectral)
+                                              grey_air=not ms.spectral, levels=self.air_spectral)
         track = texel if (texel is not None and self.track_mode == "texel") else coarse
         texel_data = None if ms.air is not None else texel_data  # the grid's texels lack the air added per level
         self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data, self.periodic, self.reach)

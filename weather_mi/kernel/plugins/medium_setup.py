@@ -10,6 +10,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import air_levels
+from .spectral_air import bind_air
 from .dda import Grid
 from .majorants import empty_space_radius, texel_majorant_grid
 from .variant_class import variant_class
@@ -91,11 +92,13 @@ class MediumSetup:
         self.air_periodic, self.beta = bool(periodic), volume_data(self.volume).array
         self.spectral = not levels.grey
 
-    def air_at(self, p, active):
+    def air_at(self, p, active, wavelengths=None, bound=None):
         """The air's extinction (Color3f, or Float where grey; 1/m) at world point p: linear between the level
-        centres (the trilinear lookup of a grid that held it in every voxel)."""
+        centres (the trilinear lookup of a grid that held it in every voxel); a spectral air
+        (``spectral_air.ComponentAirLevels``) at the lanes' ``wavelengths`` (mi.Spectrum), or ``bound`` to them
+        already (``spectral_air.bind_air``)."""
         q = (self.air_to_local @ p).z * self.air_levels - 0.5
-        return self.air.sigma_at(q, active)
+        return (bind_air(self.air, wavelengths) if bound is None else bound).sigma_at(q, active)
 
 
 def check_bbox(to_world, vol):
@@ -138,12 +141,13 @@ def volume_data(vol):
     raise RuntimeError(f"{PLUGIN_NAME}: cannot read the sigma_t grid data")
 
 
-def sigma_t_at(ms, p, ray, active):
-    """sigma_t (1/m) of the medium ``ms`` at world point p (Spectrum if spectral extinction, else Float)."""
+def sigma_t_at(ms, p, ray, active, air=None):
+    """sigma_t (1/m) of the medium ``ms`` at world point p (Spectrum if spectral extinction, else Float); ``air``:
+    the box's spectral air bound to the ray's wavelengths (a tracker's walk's), else bound here."""
     if ms.volume is not None:
         it = _interaction(p, ray)
         if ms.air is not None:  # the grey grid's and the air's at the point's level
-            return ms.air_at(p, active) + ms.volume.eval_1(it, active)
+            return ms.air_at(p, active, ray.wavelengths, air) + ms.volume.eval_1(it, active)
         if ms.spectral:
             return ms.volume.eval(it, active) * ms.scale
         return ms.volume.eval_1(it, active) * ms.scale
@@ -177,6 +181,8 @@ def scattering_event(ms, ray, t, active):
     """The medium interaction at distance ``t`` along ``ray`` (with sigma_s and sigma_t set) and its
     single-scattering albedo sigma_s / sigma_t (0 where sigma_t = 0)."""
     mei = medium_interaction(ms, ray, ray.o + ray.d * t, t, active)
+    if ms.air is not None and hasattr(ms.air_albedo, "event"):  # spectral: the air at the lanes' wavelengths
+        return ms.air_albedo.event(ms, ray, t, active)  # (``spectral_air_albedo``)
     if ms.air is not None:  # sigma_t with the air per level (:func:`sigma_t_at`); the albedo grid the mixture's
         sigma_t = sigma_t_at(ms, mei.p, ray, active)
         albedo = ms.air_albedo.at(ms.air_to_local @ mei.p, ms.beta, ms.air_periodic, active)
@@ -273,7 +279,7 @@ class GridCache:
             self.skip_key = maj_key
         return Grid(majorant.array, self.skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
 
-    def texel(self, vol, scale: float, reach: int | None = None, air=None, grey_air: bool = False):
+    def texel(self, vol, scale: float, reach: int | None = None, air=None, grey_air: bool = False, levels=None):
         """(The texel-centre grid, (data, scale) of a grey grid or None); (None, None) without a sigma_t
         grid. Its cells lie between 2 x 2 x 2 texel centres (cells -1 .. N - 1 per axis, the first and last
         halves cut by the box), where the trilinear interpolant is one trilinear polynomial; majorant =
@@ -281,7 +287,9 @@ class GridCache:
         ``reach``: periodic in x and y, walked over that many periods on each side (cells 0 .. N - 1 there,
         between texels i and i + 1 modulo N). ``air``: the box's air per level (``air_levels``), whose cells
         count as empty (majorant 0 here; the trackers use the air's own); ``grey_air``: the trackers' extinction is
-        grey (not spectral), the air's one channel (``air_levels.AirLevels`` grey)."""
+        grey (not spectral), the air's one channel (``air_levels.AirLevels`` grey); ``levels``: the trackers' air
+        object where not ``AirLevels(air)`` (spectral variants: ``spectral_air.ComponentAirLevels``, ``air`` then its
+        (levels, K) table over wavelength, which the majorants bound)."""
         if vol is None:
             return None, None
         data = volume_data(vol)
@@ -305,5 +313,5 @@ class GridCache:
         texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
         dims = (rx, ry, rz + 1) if periodic else (rx + 1, ry + 1, rz + 1)
         grid = Grid(*self.texel_arrays, dims, (rx, ry, rz), shift=-0.5, lo=-1, reach=reach)
-        grid.air = None if air is None else air_levels.AirLevels(air, grey=grey_air)
+        grid.air = None if air is None else levels if levels is not None else air_levels.AirLevels(air, grey=grey_air)
         return grid, texel_data

@@ -93,25 +93,57 @@ def check_spectral(values: np.ndarray, grid_nm: np.ndarray, n_species: int, n_no
                          f"{grid_nm.size} wavelengths")
 
 
-def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4):
+def flat_species(values: np.ndarray) -> tuple:
+    """The species whose tables ``values`` (S, N, K) are the same at every wavelength (Rayleigh's, a
+    Henyey-Greenstein's: the box's air), which :func:`spectral_value` reads once for all lanes."""
+    v = np.asarray(values)
+    return tuple(s for s in range(v.shape[0]) if np.array_equal(v[s], np.broadcast_to(v[s][:, :1], v[s].shape)))
+
+
+def split_flat(values: np.ndarray, storage):
+    """(flat species (:func:`flat_species`), ``storage`` of :func:`pack_spectral` of the others' tables, ``storage`` of
+    the flat ones' (their first two wavelengths: (N - 1, 1, F, 4))), for :func:`spectral_value`'s ``flat_table``:
+    the per-lane records then hold the species that change with wavelength alone (80 bytes for the five
+    hydrometeors, where the box's air's two flat tables made them 112)."""
+    v = np.asarray(values, np.float32)
+    flat = flat_species(v)
+    rest = [s for s in range(v.shape[0]) if s not in flat]
+    return flat, storage(pack_spectral(v[rest])), storage(pack_spectral(v[list(flat)][:, :, :2]))
+
+
+def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4, lane_w=None, flat=(),
+                   flat_table=None):
     """mi.Spectrum: per lane of ``wavelengths`` (nm), sum_s w_s p_s(v, lambda) with v at fraction ``t`` of node
-    segment ``idx``; ``table`` from :func:`pack_spectral` (flat), ``grid`` = (first nm, 1 / step, K)."""
+    segment ``idx``; ``table`` from :func:`pack_spectral` (flat), ``grid`` = (first nm, 1 / step, K). ``lane_w``:
+    each lane's own weights (4 lists of S Floats: the air's by wavelength, ``spectral_air_weights``) in place of w.
+    ``flat``: species the same at every wavelength (:func:`flat_species`), one packet load for the 4 lanes; with
+    ``flat_table`` (:func:`split_flat`) they are read from it, and ``table`` holds the other species only."""
     lo, inv_step, k = grid
-    out = []
+    out, shared = [], {}
+    for f, s in enumerate(flat):  # wavelength cell 0: the same values as any other
+        e = gather4(table, idx * ((k - 1) * n_species) + s) if flat_table is None else \
+            gather4(flat_table, idx * len(flat) + f)
+        shared[s] = dr.fma(e[2] - e[0], t, e[0])
+    stride = n_species if flat_table is None else n_species - len(flat)
+    slot = {s: (s if flat_table is None else s - sum(1 for f in flat if f < s)) for s in range(n_species)}
     for lane in range(4):
         u = dr.clip((wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
         j = mi.UInt32(u)
         tl = u - mi.Float(j)
-        base = (idx * (k - 1) + j) * n_species
+        base = (idx * (k - 1) + j) * stride
         acc = mi.Float(0.0)
+        ws = w if lane_w is None else lane_w[lane]
         for s in range(n_species):
-            e = gather4(table, base + s)
+            if s in shared:
+                acc += ws[s] * shared[s]
+                continue
+            e = gather4(table, base + slot[s])
             near = dr.fma(e[1] - e[0], tl, e[0])
             far = dr.fma(e[3] - e[2], tl, e[2])
-            acc += w[s] * dr.fma(far - near, t, near)
+            acc += ws[s] * dr.fma(far - near, t, near)
         out.append(acc)
     return mi.Spectrum(*out)
 
 
-__all__ = ["prepare_spectral", "pack_spectral", "check_spectral", "spectral_value", "from_properties", "pack_pdf",
+__all__ = ["flat_species", "split_flat", "prepare_spectral", "pack_spectral", "check_spectral", "spectral_value", "from_properties", "pack_pdf",
            "spectral_pdf"]

@@ -18,6 +18,7 @@ import mitsuba as mi
 
 from .dda import cell_end, cell_interpolant, cell_of, dda_step, locate, ray_box
 from .medium_setup import sigma_t_at
+from .spectral_air import bind_air
 
 RR_THRESHOLD = 0.1    # ratio tracking: roulette once max(T) drops below this ...
 RR_SURVIVE = 0.5      # ... surviving with this probability
@@ -30,10 +31,12 @@ TAU_ZERO = 50.0       # exact transmittance: 0 beyond this optical depth (e^-50 
 class _Walk:
     """A ray in a grid's coordinates: q(t) = q0 + dq t, the DDA state where it enters the grid's box
     within [0, t_end] (``cells``, ``nexts``, ``t_near``), ``t_max`` where it leaves, ``active`` where it
-    meets the box."""
+    meets the box; ``air`` the grid's air at the ray's wavelengths (``spectral_air.bind_air``)."""
 
     def __init__(self, tk, grid, texels, ray, t_end, active, tile_only=None):
         self.tk, self.grid, self.texels, self.ray = tk, grid, texels, ray
+        self.air = bind_air(grid.air, ray.wavelengths)
+        self.bound_air = None if self.air is grid.air else self.air  # spectral: for the medium's lookups too
         o_l, d_l, self.t_near, self.t_max, self.active = ray_box(tk.to_local, ray, t_end, active, tk.bounds(tile_only))
         self.q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
         self.dq = [d_l[k] * grid.scale[k] for k in range(3)]
@@ -41,7 +44,7 @@ class _Walk:
 
     def sigma_t(self, t, active):
         """sigma_t at distance t (in the current texel cell ``cells`` when interpolating texels)."""
-        return sigma_t_at(self.tk.ms, self.ray.o + self.ray.d * t, self.ray, active)
+        return sigma_t_at(self.tk.ms, self.ray.o + self.ray.d * t, self.ray, active, self.bound_air)
 
     def tentative(self, sampler, active, t, cells, nexts):
         """One step of a tracker in the current cell: (majorant, k, end of the segment in this cell,
@@ -51,14 +54,14 @@ class _Walk:
         empty = maj <= 0.0
         t_cell, k = cell_end(grid, q0, dq, cells, nexts, idx, empty, active)
         seg_end = dr.minimum(t_cell, self.t_max)
-        if grid.air is not None:  # the air's cells: the cube's air majorant (.air_levels)
-            maj = dr.select(empty, grid.air.cube_bound(cells[2], k, grid.lo, active & empty), maj)
+        if self.air is not None:  # the air's cells: the cube's air majorant (.air_levels)
+            maj = dr.select(empty, self.air.cube_bound(cells[2], k, grid.lo, active & empty), maj)
         u = sampler.next_1d(active)
         dt = dr.select(maj > 0.0, -dr.log(1.0 - u) / maj, dr.inf)
         tc = t + dt
         collide = active & (tc < seg_end)
-        if grid.air is not None:  # sigma_t in the air's cells from its levels, elsewhere the medium's lookup
-            s_t = dr.select(empty, grid.air.sigma_at(q0[2] + dq[2] * tc, collide & empty),
+        if self.air is not None:  # sigma_t in the air's cells from its levels, elsewhere the medium's lookup
+            s_t = dr.select(empty, self.air.sigma_at(q0[2] + dq[2] * tc, collide & empty),
                             self.sigma_t(tc, collide & ~empty))
         elif self.texels is None:
             s_t = self.sigma_t(tc, collide)
@@ -231,7 +234,7 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
     spectral = tk.ms.spectral
     walk = _Walk(tk, tk.texel, None if spectral else tk.texel_data, ray, t_end, active)
     grid, texels, q0, dq, t_max = walk.grid, walk.texels, walk.q0, walk.dq, walk.t_max
-    air = grid.air
+    air = walk.air
     t_near, active, cells, nexts = walk.t_near, walk.active, walk.cells, walk.nexts
     s0 = walk.sigma_t(t_near, active)
     tau = dr.zeros(mi.Spectrum) if spectral else mi.Float(0.0)

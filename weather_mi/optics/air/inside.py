@@ -94,15 +94,31 @@ def box_air(atm: Atmosphere, rho_air_kg_m3, z_m, wavelengths_nm=CHANNEL_NM, shap
                   heights_m=z)
 
 
+def components(atm: Atmosphere, n_air_m3, z_m, wavelengths_nm):
+    """(profiles (z, 3), spectra (n, 3)), float64: the air's three components, molecules, ozone and aerosol, as a
+    density per level times a cross section per wavelength, whose products are their extinctions (1/m): molecules
+    ``n_air_m3`` (z,) per m^3 x Bodhaine's cross section (m^2), ozone ``atm``'s number density at ``z_m`` (z,) (m) x
+    the Chappuis band's cross section (m^2), aerosol its extinction at 550 nm (1/m) x Angstrom's factor."""
+    wl = np.asarray(wavelengths_nm, np.float64)
+    z = np.asarray(z_m, np.float64)
+    profiles = np.stack([np.asarray(n_air_m3, np.float64), atm.ozone_number_density_m3(z),
+                         atm.aerosol_extinction_550_per_m(z)], axis=1)
+    spectra = np.stack([rayleigh_cross_section_m2(wl * 1e-9), ozone_cross_section_m2(wl), atm.aerosol_factor(wl)],
+                       axis=1)
+    return profiles, spectra
+
+
+def component_albedo(atm: Atmosphere) -> np.ndarray:
+    """(3,) the single-scattering albedo of :func:`components`' molecules (1), ozone (0) and aerosol."""
+    return np.array([1.0, 0.0, atm.aerosol_ssa])
+
+
 def level_components(atm: Atmosphere, n_air_m3, z_m, wavelengths_nm):
     """(extinction (z, n), scattering of molecules and aerosol (2, z, n)), float32, 1/m: the air of levels with
     ``n_air_m3`` (z,) molecules per m^3 at heights ``z_m`` (z,) (m) at ``wavelengths_nm`` (n,): molecules
-    (Bodhaine's cross section), ozone and aerosol from ``atm``'s profiles (module docstring)."""
-    wl = np.asarray(wavelengths_nm, np.float64)
-    z = np.asarray(z_m, np.float64)
-    molecules = np.asarray(n_air_m3, np.float64)[:, None] * rayleigh_cross_section_m2(wl * 1e-9)   # (z, n)
-    ozone = atm.ozone_number_density_m3(z)[:, None] * ozone_cross_section_m2(wl)                   # (z, n)
-    aerosol = atm.aerosol_extinction_550_per_m(z)[:, None] * atm.aerosol_factor(wl)                # (z, n)
+    (Bodhaine's cross section), ozone and aerosol from ``atm``'s profiles (module docstring; :func:`components`)."""
+    profiles, spectra = components(atm, n_air_m3, z_m, wavelengths_nm)
+    molecules, ozone, aerosol = (profiles[:, m][:, None] * spectra[:, m] for m in range(3))   # (z, n) each
     return ((molecules + ozone + aerosol).astype(np.float32),
             np.stack([molecules, aerosol * atm.aerosol_ssa]).astype(np.float32))
 
@@ -184,5 +200,5 @@ def medium_grids(beta_total, albedo, weights, air: BoxAir, want=("sigma_t", "alb
     return out["sigma_t"], out["albedo"], out["coeffs"]
 
 
-__all__ = ["BoxAir", "CHANNEL_NM", "NAMES", "box_air", "level_components", "level_density", "medium_extinction", "medium_grids", "scene_air",
+__all__ = ["BoxAir", "CHANNEL_NM", "NAMES", "box_air", "components", "component_albedo", "level_components", "level_density", "medium_extinction", "medium_grids", "scene_air",
            "with_box_air"]
