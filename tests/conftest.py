@@ -14,6 +14,23 @@ import weather_mi
 # cuda_ad_rgb itself
 weather_mi.set_variant("llvm_ad_rgb" if weather_mi.kernel.variant.llvm_usable() else None)
 
+SUITE_WORKERS = 2  # worker processes for the whole suite: CI's 2 cores (one process kept them ~55% busy)
+
+
+def pytest_xdist_auto_num_workers(config):
+    """``-n auto`` (pyproject's addopts): the whole suite (``pytest -q``, the tests from ``testpaths``) runs in
+    SUITE_WORKERS processes (pytest-xdist, whole files to a worker: ``--dist loadfile``), at most one per core;
+    tests or files named on the command line run in this process as before (no workers to start).
+    ``PYTEST_XDIST_AUTO_NUM_WORKERS`` or an explicit ``-n N`` overrides."""
+    import os
+    if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
+        return None  # pytest-xdist's own hook reads it
+    if config.args_source != pytest.Config.ArgsSource.TESTPATHS:
+        return 0
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return min(SUITE_WORKERS, cores) if cores > 1 else 0
+
+
 SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 WRF_SUPERCELL = SHARED_DATA / "wrf" / "wrfout_quarter_ss_0130.nc"
 WRF_THOMPSON = SHARED_DATA / "wrf" / "wrf_d01_allvars_cropped.nc"
@@ -68,6 +85,30 @@ def variant_restored():
     yield
     if before:
         weather_mi.set_variant(before)
+
+
+@contextmanager
+def storm_shadows_reused():
+    """Within the block, ``optics.air.storm_shadow.storm_shadow`` (a pure function of the extinction grid, the box,
+    the sun and the spacing) computes each distinct input once and hands the same result back for a repeat: a
+    test module that renders the same demo cloud under the same sun many times through the CLI (whose eye rays'
+    air computes the storm's shadow anew each time, most of a tiny render's time) pays for it once. The key is
+    the grid's bytes, so a changed grid, box or sun is computed anew."""
+    import hashlib
+
+    from weather_mi.optics.air import storm_shadow as module
+    real, done = module.storm_shadow, {}
+
+    def reused(beta_total, bbox, to_sun, spacing_m=None):
+        beta = np.ascontiguousarray(beta_total, np.float32)
+        key = (hashlib.sha256(beta.tobytes()).hexdigest(), beta.shape, np.asarray(bbox, np.float64).tobytes(),
+               np.asarray(to_sun, np.float64).tobytes(), spacing_m)
+        if key not in done:
+            done[key] = real(beta_total, bbox, to_sun, spacing_m)
+        return done[key]
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(module, "storm_shadow", reused)
+        yield done
 
 
 @contextmanager

@@ -16,6 +16,16 @@ from weather_mi.cli import commands as cli
 from weather_mi.reference import render as reference_module
 from weather_mi.io.image import Image, read_exr
 
+from conftest import storm_shadows_reused
+
+
+@pytest.fixture(scope="module", autouse=True)
+def one_storm_shadow():
+    """Every render here is the demo cumulus under the default sun, with the eye rays' air on (``render``'s
+    default): its storm shadow, the same arrays each time, is computed once (``conftest.storm_shadows_reused``)."""
+    with storm_shadows_reused() as done:
+        yield done
+
 
 @pytest.fixture
 def no_render(monkeypatch):
