@@ -113,3 +113,64 @@ def test_a_cloud_free_box_lit_by_the_air_sky_gives_disorts_ground():
     assert np.all(np.abs(r - ref) < 0.02 * ref + 4 * se), (r / ref, se / ref)
     r0, _, _ = _ground_radiance(None, spp=64)
     assert r0[2] < 0.85 * ref[2]
+
+
+def _box_in_the_view():
+    """A cloud-free box 6 km wide and 3 km high 12 km ahead of a camera 2.5 km up looking 6 deg down (no aerosol,
+    single scattering: the outside air's eye-ray terms are single scattering too), with --sky air."""
+    from weather_mi.optics.phase.analytic import isotropic
+    from weather_mi.optics.volume import OpticalVolume
+    from weather_mi.scene.spec import Camera, Ground, SceneSpec, Sky, Sun
+    vol = OpticalVolume.from_arrays(np.zeros((8, 4, 4), np.float32), 1.0, isotropic(),
+                                    ((-3e3, -3e3, 0.0), (3e3, 3e3, 3e3)))
+    dep = math.radians(6.0)
+    cam = Camera(origin=(-12e3, 0.0, 2500.0), target=(-12e3 + math.cos(dep) * 1e3, 0.0, 2500.0 - math.sin(dep) * 1e3),
+                 fov=60.0)
+    spec = SceneSpec(camera=cam, sun=Sun(azimuth=200.0, elevation=30.0, irradiance=1.0, angular_diameter_deg=0.0),
+                     sky=Sky("air"), ground=Ground(albedo=0.3), width=24, height=6, atmosphere=Atmosphere(aod_550=0.0),
+                     seed=5)
+    return spec, vol
+
+
+def test_the_ground_behind_a_clear_box_is_dimmed_by_the_air_beyond_it():
+    """Segment B: an eye ray through a cloud-free box to the ground beyond it shows what the rays beside the box
+    show (the box's air is the outside air): within 5 % of the mean of its row's neighbours left and right of the
+    box (linear across the row), on the ground's rows. Without the ground's terms (the ground undimmed by B, the
+    open ground without its sky) the box stands out by 15 % or more in blue. And the ground's term of a ray through the box
+    is T_B L_full - L_render with T_B Beer-Lambert along B, integrated here from the atmosphere's extinction."""
+    from scipy.integrate import quad
+    from weather_mi.display.aerial import eye_air, with_eye_air
+    from weather_mi.optics.air.shell import EARTH_RADIUS_M
+    from weather_mi.reference.render import render_reference
+    from weather_mi.slicing.geometry import camera_rays
+    spec, vol = _box_in_the_view()
+    img = render_reference(spec, vol, spp=256, progress=False, variant="llvm_ad_rgb", max_depth=2)
+    air = eye_air(spec, vol, True)
+    hit = air[4]
+    cols = np.flatnonzero(hit[2])
+    left, right = cols[0] - 1, cols[-1] + 1
+    old = air[:5] + (np.ones_like(air[5]), np.zeros_like(air[6]))
+    for terms, lo, hi, channels in ((air, 0.95, 1.05, slice(None)), (old, 1.15, np.inf, 2)):
+        out = with_eye_air(img, spec, vol, sky_air=True, air=terms).radiance.astype(np.float64)
+        for row in (1, 2):
+            f = (cols - left) / (right - left)
+            beside = out[row, left][None, :] * (1 - f)[:, None] + out[row, right][None, :] * f[:, None]
+            ratio = (out[row, cols] / beside).mean(axis=0)
+            assert np.all((ratio[channels] > lo) & (ratio[channels] < hi)), (row, ratio, lo, hi)
+    # T_B of one ray through the box, against Beer-Lambert integrated here
+    o, d = (a.reshape(-1, 3).astype(np.float64) for a in camera_rays(spec))
+    i = int(np.flatnonzero(hit.ravel())[len(cols) // 2 + 2 * spec.width])
+    t_out = (3e3 - o[i, 0]) / d[i, 0]
+    t_ground = -o[i, 2] / d[i, 2]
+
+    def beta(t, wl):
+        q = o[i] + t * d[i] + [0.0, 0.0, EARTH_RADIUS_M]
+        return float(spec.atmosphere.extinction_per_m([wl], np.linalg.norm(q) - EARTH_RADIUS_M)[0])
+    assert t_ground > t_out
+    from weather_mi.optics.air.inside import CHANNEL_NM
+    tb = np.array([math.exp(-quad(beta, t_out, t_ground, args=(wl,), limit=200)[0]) for wl in CHANNEL_NM])
+    from weather_mi.optics.air.eye_path import segment_air
+    from weather_mi.optics.air.eye_path import wide_sun_table
+    t_seg, _ = segment_air(spec.atmosphere, spec.sun.to_sun, o[i:i + 1], d[i:i + 1], [t_out], [t_ground],
+                           wide_sun_table(spec.atmosphere, spec.sun.mu0))
+    assert t_seg[0] == pytest.approx(tb, rel=2e-3)

@@ -85,6 +85,20 @@ def air_sky_dict(spec, bbox, reference_m: float | None = None) -> dict:
             "to_world": mi.ScalarTransform4f(mi.ScalarMatrix4f(TO_WORLD))}
 
 
+def open_ground_sky(spec, bbox) -> tuple[np.ndarray, np.ndarray]:
+    """(The envmap's irradiance on the open ground (a horizontal plane, nothing in the way), the 1-D atmosphere's
+    diffuse irradiance there (DISORT's flux)), RGB, times the sun's irradiance: the second less the first is the
+    skylight that the render's vacuum outside the box leaves out of the open ground (``display.aerial``)."""
+    from ..optics.air.skylight import sky_table
+    bitmap = sky_bitmap(spec, bbox)
+    ground = 0.0 if spec.ground is None else max(float(spec.ground.height), 0.0)
+    albedo = 0.0 if spec.ground is None else float(np.mean(spec.ground.albedo))
+    if spec.sun.mu0 <= 0.0:
+        return np.zeros(3), np.zeros(3)
+    table = sky_table(spec.atmosphere, float(spec.sun.mu0), [ground], ground_m=ground, albedo=albedo)
+    return horizontal_irradiance(bitmap), table.diffuse_rgb[0] * np.asarray(spec.sun.irradiance, np.float64)
+
+
 def horizontal_irradiance(bitmap: np.ndarray) -> np.ndarray:
     """Irradiance (RGB) of an envmap's bitmap (H, W, 3) (``pixel_directions``' layout) on an upward-facing
     horizontal plane: the integral of L cos(theta) over the upper hemisphere (trapezoidal in theta, the
@@ -97,4 +111,4 @@ def horizontal_irradiance(bitmap: np.ndarray) -> np.ndarray:
     return 2.0 * np.pi * np.trapezoid(ring, zen[up], axis=0)
 
 
-__all__ = ["air_sky_dict", "sky_bitmap", "exit_heights", "pixel_directions", "horizontal_irradiance", "ENV_SIZE"]
+__all__ = ["air_sky_dict", "sky_bitmap", "open_ground_sky", "exit_heights", "pixel_directions", "horizontal_irradiance", "ENV_SIZE"]
