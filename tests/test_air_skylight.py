@@ -174,3 +174,12 @@ def test_the_ground_behind_a_clear_box_is_dimmed_by_the_air_beyond_it():
     t_seg, _ = segment_air(spec.atmosphere, spec.sun.to_sun, o[i:i + 1], d[i:i + 1], [t_out], [t_ground],
                            wide_sun_table(spec.atmosphere, spec.sun.mu0))
     assert t_seg[0] == pytest.approx(tb, rel=2e-3)
+
+
+def test_the_air_sky_needs_an_atmosphere_and_the_sun_up():
+    from dataclasses import replace
+    from weather_mi.optics.air.skylight import sky_table
+    with pytest.raises(ValueError, match="atmosphere"):
+        replace(_spec(), atmosphere=None)
+    with pytest.raises(ValueError, match="sun above the horizon"):
+        sky_table(Atmosphere(), -0.1, [0.0])

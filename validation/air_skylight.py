@@ -59,6 +59,25 @@ def shaded_and_lit(img) -> tuple[float, float]:
     return float(np.median(y[shaded])), float(y[lit_cloud_pixels(img.radiance, img.transmittance)].mean())
 
 
+def lit_colour(img, spec, vol, elevation: float) -> str:
+    """The lit cloud's xy and its CIEDE2000 at equal lightness to issue 38's targets (``validation.sun_colour``):
+    the direct sun at the height its light comes from (ours, SPCTRL2's) and, at a high sun, SPCTRL2's sun and sky
+    (global horizontal) at 1013 and 850 hPa."""
+    from validation.sun_colour import own_direct_xy, spectrl2_at_height, spectrl2_global_xy
+    from weather_mi.display.cloud_colour import (delta_e_equal_lightness, lit_cloud_pixels, visible_height_m,
+                                                 xy_of_linear_srgb)
+    mask = lit_cloud_pixels(img.radiance, img.transmittance)
+    xy = xy_of_linear_srgb(np.asarray(img.radiance, np.float64)[mask].mean(axis=0))
+    height = float(np.nanmedian(visible_height_m(spec, vol, mask)))
+    text = (f"lit cloud xy ({xy[0]:.3f}, {xy[1]:.3f}) from {height:.0f} m; CIEDE2000 to the direct sun there "
+            f"{delta_e_equal_lightness(xy, own_direct_xy(elevation, height)):.1f} (ours), "
+            f"{delta_e_equal_lightness(xy, spectrl2_at_height(elevation, height)):.1f} (SPCTRL2)")
+    if elevation > 30.0:
+        text += "; to SPCTRL2's sun and sky " + ", ".join(
+            f"{p:.0f} hPa {delta_e_equal_lightness(xy, spectrl2_global_xy(elevation, p)):.1f}" for p in (1013.25, 850.0))
+    return text
+
+
 def demo(size, spp, out: Path):
     from validation.sun_colour import demo_volume
     from weather_mi.display.aerial import with_eye_air
@@ -80,6 +99,8 @@ def demo(size, spp, out: Path):
         for label, img in imgs.items():
             write_png(out / f"supercell_sun{elevation:.0f}_{label}.png", img.radiance, exposure)
         (sb, lb), (sa, la) = shaded_and_lit(imgs["before"]), shaded_and_lit(imgs["after"])
+        for label, img in imgs.items():
+            print(f"   sun {elevation:4.0f} deg, {label}: {lit_colour(img, spec, vol, elevation)}")
         print(f"   sun {elevation:4.0f} deg: shaded {sb:.4f} -> {sa:.4f} (x{sa / sb:.2f}), lit {lb:.4f} -> {la:.4f} "
               f"(x{la / lb:.2f}); {imgs['after'].metadata.get('seconds', float('nan')):.0f} s vs "
               f"{imgs['before'].metadata.get('seconds', float('nan')):.0f} s; pictures {out}/supercell_sun"
