@@ -481,7 +481,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
             sensor["medium"] = {"type": "ref", "id": "weather_medium"}
     if spec.sky is not None and spec.sky.kind == "air":  # the air's diffuse sky into the box, not seen directly
         import mitsuba as mi
-        if "spectral" not in mi.variant():                # (the spectral variants: the air colours the sun only)
+        if "spectral" not in mi.variant() and spec.sun.mu0 > 0.0:  # (spectral variants: the air colours the sun only)
             from .air_sky import air_sky_dict
             d["sky"] = air_sky_dict(spec, vol.bbox)
             d["integrator"] = {**integrator, "hide_emitters": True}
