@@ -116,8 +116,8 @@ def test_a_cloud_free_box_lit_by_the_air_sky_gives_disorts_ground():
 
 
 def _box_in_the_view():
-    """A cloud-free box 6 km wide and 3 km high 12 km ahead of a camera 2.5 km up looking 6 deg down (no aerosol,
-    single scattering: the outside air's eye-ray terms are single scattering too), with --sky air."""
+    """A cloud-free box 6 km wide and 3 km high 12 km ahead of a camera 2.5 km up looking 6 deg down (no aerosol),
+    with --sky air."""
     from weather_mi.optics.phase.analytic import isotropic
     from weather_mi.optics.volume import OpticalVolume
     from weather_mi.scene.spec import Camera, Ground, SceneSpec, Sky, Sun
@@ -144,7 +144,7 @@ def test_the_ground_behind_a_clear_box_is_dimmed_by_the_air_beyond_it():
     from weather_mi.reference.render import render_reference
     from weather_mi.slicing.geometry import camera_rays
     spec, vol = _box_in_the_view()
-    img = render_reference(spec, vol, spp=256, progress=False, variant="llvm_ad_rgb", max_depth=2)
+    img = render_reference(spec, vol, spp=512, progress=False, variant="llvm_ad_rgb")
     air = eye_air(spec, vol, True)
     hit = air[4]
     cols = np.flatnonzero(hit[2])
@@ -183,3 +183,30 @@ def test_the_air_sky_needs_an_atmosphere_and_the_sun_up():
         replace(_spec(), atmosphere=None)
     with pytest.raises(ValueError, match="sun above the horizon"):
         sky_table(Atmosphere(), -0.1, [0.0])
+
+
+@pytest.mark.parametrize("sza", [30.0, 60.0])
+def test_the_outside_airs_sky_with_multiple_scattering_against_disort(sza):
+    """The sky radiance at the ground (zenith, 30/60/75 deg towards and away from the sun in the principal plane,
+    450/550/650 nm): single scattering along the eye ray (``eye_path.segment_air``) plus the isotropic diffuse
+    source (``skylight.diffuse_source_table``) within -8 %..+22 % of DISORT's all orders, and closer to it than
+    single scattering alone (39-95 % of it) in every case."""
+    from weather_mi.optics.air.eye_path import segment_air, top_distance, wide_sun_table
+    from weather_mi.optics.air.skylight import diffuse_source_table, spectral_sky
+    atm, mu0 = Atmosphere(), math.cos(math.radians(sza))
+    to_sun = np.array([0.0, math.sin(math.radians(sza)), mu0])  # the sun in the north
+    zen = np.array([0.0, 30.0, 60.0, 75.0, 30.0, 60.0, 75.0])
+    az = np.array([0.0, 0.0, 0.0, 0.0, 180.0, 180.0, 180.0])
+    d = np.stack([np.sin(np.radians(zen)) * np.sin(np.radians(az)), np.sin(np.radians(zen)) * np.cos(np.radians(az)),
+                  np.cos(np.radians(zen))], -1)
+    o = np.zeros_like(d) + [0.0, 0.0, 1.0]
+    t1, t0 = top_distance(o, d), np.zeros(len(d))
+    _, ss = segment_air(atm, to_sun, o, d, t0, t1, wide_sun_table(atm, mu0, band_nm=WL), wavelengths_nm=WL)
+    _, ms = segment_air(atm, to_sun, o, d, t0, t1, diffuse_source_table(atm, mu0, 0.0, 0.2, band_nm=WL),
+                        wavelengths_nm=WL, isotropic=True)
+    uz = np.unique(zen)
+    i, _, _ = spectral_sky(atm, mu0, [0.0], uz, [0.0, 180.0], 0.0, 0.2, wavelengths_nm=WL)
+    ref = np.array([i[:, 0, int(np.searchsorted(uz, z)), 0 if a == 0.0 else 1] for z, a in zip(zen, az)])
+    both = (ss + ms) / ref
+    assert np.all((both > 0.92) & (both < 1.22)), both
+    assert np.all(np.abs(both - 1.0) < np.abs(ss / ref - 1.0)), (both, ss / ref)

@@ -7,7 +7,11 @@ atmosphere of ``spec.atmosphere`` is horizontally homogeneous, and each pixel's 
 (``optics.air.eye_path``; heights above sea level, the Earth's centre under the box's centre):
 
 * A = [camera, box entry] (or [camera, ground or top] where the ray misses the box):
-  L = E S_A + T_A L_render                                              (single scattering of the air)
+  L = E S_A + T_A L_render          (single scattering of the air; with ``sky_air`` all orders: S_A and S_B
+  hold the air's multiple scattering too, its source beta_s J(h) with J the mean intensity of the 1-D
+  atmosphere's diffuse light at the height (DISORT, ``skylight.diffuse_source_table``), scattered
+  isotropically: against DISORT's sky radiance at the ground, single scattering alone is 39-95 % of it in the
+  principal plane, with this 93-120 %, tests/test_air_skylight.py)
 * ``sky_air`` (``--sky air``: the render's sky is the air's diffuse light into the box, ``kernel.air_sky``, not
   seen by the camera): the rays that miss the box and the ground see the air's single-scattering sky E S_A;
   behind the box B = [box exit, ground or top]:
@@ -28,9 +32,9 @@ atmosphere of ``spec.atmosphere`` is horizontally homogeneous, and each pixel's 
 
 E is the scene's sun irradiance above the air (the RGB mode's sun with an atmosphere, ``sun_rgb`` = 1 in
 luminance there). The storm shadows the direct sun at the samples of A and B and on the ground
-(``optics.air.storm_shadow``: the hydrometeors' chord towards the sun; not for a periodic field). Not included:
-light scattered more than once by the outside air along the eye rays, the light the storm scatters into the
-outside air, the storm's blocking of the open ground's sky.
+(``optics.air.storm_shadow``: the hydrometeors' chord towards the sun; not for a periodic field; not on the
+diffuse light's source). Not included: the light the storm scatters into the outside air, the storm's blocking of
+the open ground's sky and of the outside air's diffuse light.
 """
 from __future__ import annotations
 
@@ -82,19 +86,21 @@ def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
         from ..optics.air.storm_shadow import storm_shadow
         sh = storm_shadow(vol.beta_total, vol.bbox, sun.to_sun)
         shadow = lambda p: sh.transmittance(p + centre)  # noqa: E731  (the frame's points in the volume's)
+    ms = _diffuse_table(spec) if sky_air else None  # the outside air's multiple scattering (--sky air)
     t_a, s_a, s_b = np.ones((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
     t_air, t_b = np.ones((n, 3)), np.ones((n, 3))
     for i in range(0, n, CHUNK):
         sl = slice(i, i + CHUNK)
-        t_a[sl], s = segment_air(atm, sun.to_sun, o[sl], d[sl], np.zeros(a_end[sl].shape), a_end[sl], table,
-                                 shadow=shadow, samples=samples)
-        s_a[sl] = s * e
+
+        def seg(t0, t1, tab=table, **kw):
+            return segment_air(atm, sun.to_sun, o[sl], d[sl], t0, t1, tab, samples=samples, **kw)
+        t_a[sl], s = seg(np.zeros(a_end[sl].shape), a_end[sl], shadow=shadow)
+        s_a[sl] = (s if ms is None else s + seg(np.zeros(a_end[sl].shape), a_end[sl], ms, isotropic=True)[1]) * e
         if sky_air:
             b0, b1 = np.where(hit[sl], t_out[sl], 0.0), np.where(hit[sl], t_end[sl], 0.0)  # B: none where no box
-            t_b[sl], s = segment_air(atm, sun.to_sun, o[sl], d[sl], b0, b1, table, shadow=shadow, samples=samples)
-            s_b[sl] = s * e
-            t_air[sl], _ = segment_air(atm, sun.to_sun, o[sl], d[sl], np.where(hit[sl], t_in[sl], 0.0), b0, table,
-                                       samples=samples)
+            t_b[sl], s = seg(b0, b1, shadow=shadow)
+            s_b[sl] = (s + seg(b0, b1, ms, isotropic=True)[1]) * e
+            t_air[sl], _ = seg(np.where(hit[sl], t_in[sl], 0.0), b0)
     ground = np.zeros((n, 3))
     if sky_air and floor is not None and getattr(vol, "terrain", None) is None:
         on_ground = np.isfinite(t_ground) & (t_ground <= t_end)
@@ -107,6 +113,17 @@ def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
     sky_end = ~np.isfinite(t_ground) & (not sky_air)  # ends on the sky model's sky
     return (t_a.reshape(shape + (3,)), s_a.reshape(shape + (3,)), s_b.reshape(shape + (3,)),
             sky_end.reshape(shape), hit.reshape(shape), t_air.reshape(shape + (3,)), ground.reshape(shape + (3,)))
+
+
+def _diffuse_table(spec):
+    """The diffuse light's mean intensity by height (``optics.air.skylight.diffuse_source_table``) for ``spec``'s
+    atmosphere, sun and ground (albedo: its channel mean); None with the sun below the horizon."""
+    from ..optics.air.skylight import diffuse_source_table
+    if spec.sun.mu0 <= 0.0:
+        return None
+    ground = 0.0 if spec.ground is None else max(float(spec.ground.height), 0.0)
+    albedo = 0.0 if spec.ground is None else float(np.mean(spec.ground.albedo))
+    return diffuse_source_table(spec.atmosphere, float(spec.sun.mu0), ground, albedo)
 
 
 def _ground_radiance(spec, vol, table, points, shadow):

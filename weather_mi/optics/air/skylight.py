@@ -83,18 +83,54 @@ def _sky_table(atm, mu0, heights, zenith, phi, ground_m, albedo) -> SkyTable:
     zen = np.minimum(np.asarray(zenith, np.float64), 90.0 - HORIZON_ELEVATION_DEG)
     phi = np.asarray(phi, np.float64)
     radiance, diffuse, direct = spectral_sky(atm, mu0, heights, zen, phi, ground_m, albedo)
-    wl = spectrum.WAVELENGTHS_NM
-    toa = spectrum.solar_toa_w_m2_nm(wl)
-    y_toa = float(spectrum.xyz(toa, wl)[1])
-
-    def rgb(values):  # (n_wl, ...) on SKY_WAVELENGTHS_NM -> (..., 3)
-        v = np.moveaxis(np.log(np.maximum(values, 1e-30)), 0, -1)
-        lo = np.clip(np.searchsorted(SKY_WAVELENGTHS_NM, wl, side="right") - 1, 0, SKY_WAVELENGTHS_NM.size - 2)
-        f = np.clip((wl - SKY_WAVELENGTHS_NM[lo]) / np.diff(SKY_WAVELENGTHS_NM)[lo], 0.0, 1.0)
-        fine = np.exp(v[..., lo] * (1.0 - f) + v[..., lo + 1] * f)
-        return spectrum.linear_srgb(spectrum.xyz(fine * toa, wl) / y_toa)
     return SkyTable(heights_m=heights, zenith_deg=np.asarray(zenith, np.float64), phi_deg=phi,
                     rgb=rgb(radiance), diffuse_rgb=rgb(diffuse), direct_rgb=rgb(direct))
+
+
+def rgb(values) -> np.ndarray:
+    """Linear sRGB (..., 3) per unit luminance of the sun above the air of quantities (n_wl, ...) per unit
+    irradiance of the sun at ``SKY_WAVELENGTHS_NM`` (module docstring: linear in log between them, times the
+    top-of-atmosphere sun's spectrum, projected)."""
+    wl = spectrum.WAVELENGTHS_NM
+    toa = spectrum.solar_toa_w_m2_nm(wl)
+    v = np.moveaxis(np.log(np.maximum(np.asarray(values, np.float64), 1e-30)), 0, -1)
+    lo = np.clip(np.searchsorted(SKY_WAVELENGTHS_NM, wl, side="right") - 1, 0, SKY_WAVELENGTHS_NM.size - 2)
+    f = np.clip((wl - SKY_WAVELENGTHS_NM[lo]) / np.diff(SKY_WAVELENGTHS_NM)[lo], 0.0, 1.0)
+    fine = np.exp(v[..., lo] * (1.0 - f) + v[..., lo + 1] * f)
+    return spectrum.linear_srgb(spectrum.xyz(fine * toa, wl) / float(spectrum.xyz(toa, wl)[1]))
+
+
+DIFFUSE_TOP_M, DIFFUSE_STEP_M = 30e3, 500.0  # the diffuse light's table (above 30 km the air scatters < 1 %)
+
+
+def diffuse_source_table(atm: Atmosphere, mu0: float, ground_m: float = 0.0, albedo: float = 0.15, band_nm=None):
+    """The mean intensity J(h) = (1/4 pi) int L_diffuse dOmega of the diffuse light (down and up, all orders;
+    DISORT) per unit irradiance of the sun above the air, on heights ``ground_m`` .. ``DIFFUSE_TOP_M`` every
+    ``DIFFUSE_STEP_M``: a ``SunAirTable`` independent of mu (two identical rows), the source of the air's multiple
+    scattering along an eye ray, beta_s J (an isotropic phase function: ``eye_path.segment_air(isotropic=True)``).
+    Per channel: linear sRGB (``rgb``), or at the wavelengths ``band_nm`` (3,)."""
+    from .sunlight import SunAirTable
+    if not 0.0 < mu0 <= 1.0:
+        raise ValueError(f"the sky of the air needs the sun above the horizon (cos(zenith) in (0, 1]), got {mu0}")
+    key = None if band_nm is None else tuple(float(w) for w in band_nm)
+    return _diffuse_table(atm, round(float(mu0), 9), round(float(ground_m), 3), round(float(albedo), 6), key,
+                          SunAirTable)
+
+
+@functools.lru_cache(maxsize=8)
+def _diffuse_table(atm, mu0, ground_m, albedo, band_nm, table_class):
+    from ...plane_parallel.disort import solve
+    heights = np.arange(ground_m, DIFFUSE_TOP_M + 1.0, DIFFUSE_STEP_M)
+    wls = SKY_WAVELENGTHS_NM if band_nm is None else np.asarray(band_nm, np.float64)
+    j = []
+    for wl in wls:
+        tau, ssa, moments = air_layers(atm, float(wl), ground_m, split_m=heights)
+        res = solve(tau, ssa, mu0, [-1.0], _tau_at(tau, ground_m, heights), [0.0], moments=moments,
+                    surface_albedo=albedo, n_streams=N_STREAMS)
+        j.append((np.asarray(res.mean_intensity_down) + np.asarray(res.mean_intensity_up))[::-1])
+    values = rgb(np.asarray(j)) if band_nm is None else np.asarray(j).T
+    return table_class(heights_m=heights, mu=np.array([-1.0, 1.0]),
+                       rgb=np.stack([values, values]).astype(np.float32))
 
 
 def spectral_sky(atm: Atmosphere, mu0: float, heights_m, zenith_deg, phi_deg, ground_m: float = 0.0,
@@ -130,4 +166,4 @@ def _tau_at(tau, ground_m: float, heights) -> list:
     return [float(cum_from_top[int(np.argmin(np.abs(top_down - h)))]) for h in heights[::-1]]
 
 
-__all__ = ["SkyTable", "sky_table", "spectral_sky", "SKY_WAVELENGTHS_NM"]
+__all__ = ["SkyTable", "sky_table", "spectral_sky", "diffuse_source_table", "rgb", "SKY_WAVELENGTHS_NM"]
