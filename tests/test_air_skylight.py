@@ -90,15 +90,16 @@ def test_the_envmap_is_oriented_as_the_sun():
     assert np.all(val[:, 0] > 1.5 * val[:, 1])
 
 
-def _ground_radiance(sky, spp=256):
-    """The path tracer's radiance of the ground under a cloud-free box 10 km wide and 2 km high (its own air:
-    ``optics.air.inside``), the sun at 30 deg, against DISORT's rho / pi (direct + diffuse) at the ground."""
+def _ground_radiance(sky, spp=256, width_m=10e3, height_m=2e3):
+    """The path tracer's radiance of the ground under a cloud-free box ``width_m`` wide and ``height_m`` high
+    (its own air: ``optics.air.inside``), the sun at 30 deg, against DISORT's rho / pi (direct + diffuse) at the
+    ground."""
     from weather_mi.optics.air.skylight import sky_table
     from weather_mi.optics.phase.analytic import isotropic
     from weather_mi.optics.volume import OpticalVolume
     from weather_mi.reference.render import render_reference
     vol = OpticalVolume.from_arrays(np.zeros((16, 4, 4), np.float32), 1.0, isotropic(),
-                                    ((-5e3, -5e3, 0.0), (5e3, 5e3, 2e3)))
+                                    ((-width_m / 2, -width_m / 2, 0.0), (width_m / 2, width_m / 2, height_m)))
     img = render_reference(_spec(sky), vol, spp=spp, progress=False, variant="llvm_ad_rgb")
     r = img.radiance.reshape(-1, 3).astype(np.float64).mean(axis=0)
     se = np.sqrt((img.stderr.reshape(-1, 3).astype(np.float64) ** 2).sum(axis=0)) / 16

@@ -44,10 +44,11 @@ def disort_vs_spectrl2():
 def cloud_free_ground():
     from tests.test_air_skylight import _ground_radiance
     print("2. ground radiance under a cloud-free box / DISORT's rho/pi (direct + diffuse), sun at 30 deg (R G B):")
-    for label, sky in (("with the envmap   ", "air"), ("without (before)  ", None)):
-        r, se, ref = _ground_radiance(sky, spp=512)
-        print(f"   10 km x 2 km box, {label}: " + " ".join(f"{v:.3f}" for v in r / ref)
-              + " (se " + " ".join(f"{v:.3f}" for v in se / ref) + ")")
+    for width, height in ((10e3, 2e3), (80e3, 16e3)):
+        for label, sky in (("with the envmap   ", "air"), ("without (before)  ", None)):
+            r, se, ref = _ground_radiance(sky, spp=512, width_m=width, height_m=height)
+            print(f"   {width / 1e3:.0f} km x {height / 1e3:.0f} km box, {label}: " + " ".join(f"{v:.3f}" for v in r / ref)
+                  + " (se " + " ".join(f"{v:.3f}" for v in se / ref) + ")", flush=True)
 
 
 def shaded_and_lit(img) -> tuple[float, float]:
