@@ -25,6 +25,9 @@ import numpy as np
 
 ENV_SIZE = (256, 129)     # (W, H): 1.4 deg a pixel; H odd, a row at the horizon
 LEVEL_STEP_M = 1500.0     # the sky's table: a level every 1.5 km from the reference height to the box's top
+EMITTER_NEE = 0.03        # the share of shadow rays towards this sky (majorant_volpath's emitter_nee; its default
+                          # 0.1 is for a sky model): it lights the storm with 1-20 % of the sun's irradiance, and
+                          # the phase function's own directions find a sky this broad (MIS: unbiased at any share)
 TO_WORLD = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]  # +Y up -> +Z
 
 
@@ -111,4 +114,4 @@ def horizontal_irradiance(bitmap: np.ndarray) -> np.ndarray:
     return 2.0 * np.pi * np.trapezoid(ring, zen[up], axis=0)
 
 
-__all__ = ["air_sky_dict", "sky_bitmap", "open_ground_sky", "exit_heights", "pixel_directions", "horizontal_irradiance", "ENV_SIZE"]
+__all__ = ["EMITTER_NEE", "air_sky_dict", "sky_bitmap", "open_ground_sky", "exit_heights", "pixel_directions", "horizontal_irradiance", "ENV_SIZE"]
