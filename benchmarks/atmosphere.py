@@ -25,7 +25,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-CASES = {"none": ("none", "sunsky"), "clear": ("clear", "sunsky"), "clear, --sky air": ("clear", "air")}
+CASES = {"none": ("none", "sunsky"), "clear": ("clear", "sunsky"), "clear, --sky air": ("clear", "air"),
+         "clear, --sky none": ("clear", "none")}  # --sky air's render before its envmap (kernel.air_sky)
 
 
 def main(argv=None):

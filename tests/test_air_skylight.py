@@ -137,8 +137,8 @@ def test_the_ground_behind_a_clear_box_is_dimmed_by_the_air_beyond_it():
     """Segment B: an eye ray through a cloud-free box to the ground beyond it shows what the rays beside the box
     show (the box's air is the outside air): within 5 % of the mean of its row's neighbours left and right of the
     box (linear across the row), on the ground's rows. Without the ground's terms (the ground undimmed by B, the
-    open ground without its sky) the box stands out by 15 % or more in blue. And the ground's term of a ray through the box
-    is T_B L_full - L_render with T_B Beer-Lambert along B, integrated here from the atmosphere's extinction."""
+    open ground without its sky) the box stands out by 15 % or more in blue. And the ground's term of a ray through
+    the box    is T_B L_full - L_render with T_B Beer-Lambert along B, integrated here from the atmosphere's extinction."""
     from scipy.integrate import quad
     from weather_mi.display.aerial import eye_air, with_eye_air
     from weather_mi.optics.air.shell import EARTH_RADIUS_M

@@ -47,7 +47,8 @@ def cloud_free_ground():
     for width, height in ((10e3, 2e3), (80e3, 16e3)):
         for label, sky in (("with the envmap   ", "air"), ("without (before)  ", None)):
             r, se, ref = _ground_radiance(sky, spp=512, width_m=width, height_m=height)
-            print(f"   {width / 1e3:.0f} km x {height / 1e3:.0f} km box, {label}: " + " ".join(f"{v:.3f}" for v in r / ref)
+            print(f"   {width / 1e3:.0f} km x {height / 1e3:.0f} km box, {label}: "
+                  + " ".join(f"{v:.3f}" for v in r / ref)
                   + " (se " + " ".join(f"{v:.3f}" for v in se / ref) + ")", flush=True)
 
 
@@ -75,7 +76,8 @@ def lit_colour(img, spec, vol, elevation: float) -> str:
             f"{delta_e_equal_lightness(xy, spectrl2_at_height(elevation, height)):.1f} (SPCTRL2)")
     if elevation > 30.0:
         text += "; to SPCTRL2's sun and sky " + ", ".join(
-            f"{p:.0f} hPa {delta_e_equal_lightness(xy, spectrl2_global_xy(elevation, p)):.1f}" for p in (1013.25, 850.0))
+            f"{p:.0f} hPa {delta_e_equal_lightness(xy, spectrl2_global_xy(elevation, p)):.1f}"
+            for p in (1013.25, 850.0))
     return text
 
 

@@ -43,6 +43,7 @@ from dataclasses import replace
 import numpy as np
 
 CHUNK = 2048  # rays per call of ``segment_air`` (memory: CHUNK x 257 samples x 3 channels x a few arrays)
+SMOOTH_SAMPLES = 65  # points per segment for the multiple scattering and the box's air (no storm shadow in them)
 
 
 def _box_interval(o, d, lo, hi):
@@ -58,7 +59,8 @@ def _box_interval(o, d, lo, hi):
 def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
     """Per pixel: (T_A, E S_A, E S_B (H, W, 3) of the module docstring, whether the ray ends on the sky
     model's sky, whether it meets the box (H, W), T_air (H, W, 3), the ground's terms (H, W, 3): T_B L_g - L_g'
-    where the ray meets the box, G where it meets the ground outside it; 0 without ``sky_air``). ``table``: the sun's (``eye_path.wide_sun_table``);
+    where the ray meets the box, G where it meets the ground outside it; 0 without ``sky_air``). ``table``: the
+    sun's (``eye_path.wide_sun_table``);
     ``samples``: points per segment (default ``eye_path.SAMPLES``; 33 keep S within about 1%, at an eighth of
     the cost: a viewer's reference)."""
     from ..optics.air.eye_path import SAMPLES, segment_air, top_distance, wide_sun_table
@@ -92,15 +94,18 @@ def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
     for i in range(0, n, CHUNK):
         sl = slice(i, i + CHUNK)
 
-        def seg(t0, t1, tab=table, **kw):
-            return segment_air(atm, sun.to_sun, o[sl], d[sl], t0, t1, tab, samples=samples, **kw)
+        def seg(t0, t1, tab=table, n=samples, **kw):
+            return segment_air(atm, sun.to_sun, o[sl], d[sl], t0, t1, tab, samples=n, **kw)
+        coarse = min(samples, SMOOTH_SAMPLES)  # the diffuse source and the box's air: smooth along the ray
         t_a[sl], s = seg(np.zeros(a_end[sl].shape), a_end[sl], shadow=shadow)
-        s_a[sl] = (s if ms is None else s + seg(np.zeros(a_end[sl].shape), a_end[sl], ms, isotropic=True)[1]) * e
+        if ms is not None:
+            s = s + seg(np.zeros(a_end[sl].shape), a_end[sl], ms, coarse, isotropic=True)[1]
+        s_a[sl] = s * e
         if sky_air:
             b0, b1 = np.where(hit[sl], t_out[sl], 0.0), np.where(hit[sl], t_end[sl], 0.0)  # B: none where no box
             t_b[sl], s = seg(b0, b1, shadow=shadow)
-            s_b[sl] = (s + seg(b0, b1, ms, isotropic=True)[1]) * e
-            t_air[sl], _ = seg(np.where(hit[sl], t_in[sl], 0.0), b0)
+            s_b[sl] = (s + seg(b0, b1, ms, coarse, isotropic=True)[1]) * e
+            t_air[sl], _ = seg(np.where(hit[sl], t_in[sl], 0.0), b0, n=coarse)
     ground = np.zeros((n, 3))
     if sky_air and floor is not None and getattr(vol, "terrain", None) is None:
         on_ground = np.isfinite(t_ground) & (t_ground <= t_end)
@@ -147,7 +152,8 @@ def _ground_radiance(spec, vol, table, points, shadow):
 def with_eye_air(img, spec, vol, sky_air: bool = False, air=None):
     """``img`` (a reference ``Image`` of ``spec`` and ``vol``) seen through the air outside the box (module
     docstring): radiance E S_A + T_A (L + T_box T_air (E S_B + T_B L_g - L_g')) or E S_A + T_A (L + G) (weighted by
-    the box's opacity where the ray ends on a sky model's sky), the standard error scaled alike (the added terms are exact).
+    the box's opacity where the ray ends on a sky model's sky), the standard error scaled alike (the added terms
+    are exact).
     Needs ``spec.atmosphere`` (a ValueError otherwise). ``air``: ``eye_air(spec, vol, sky_air)`` if already
     computed (a progressive render's passes share it)."""
     if spec.atmosphere is None:

@@ -114,4 +114,5 @@ def horizontal_irradiance(bitmap: np.ndarray) -> np.ndarray:
     return 2.0 * np.pi * np.trapezoid(ring, zen[up], axis=0)
 
 
-__all__ = ["EMITTER_NEE", "air_sky_dict", "sky_bitmap", "open_ground_sky", "exit_heights", "pixel_directions", "horizontal_irradiance", "ENV_SIZE"]
+__all__ = ["EMITTER_NEE", "air_sky_dict", "sky_bitmap", "open_ground_sky", "exit_heights", "pixel_directions",
+           "horizontal_irradiance", "ENV_SIZE"]
