@@ -1,8 +1,9 @@
 """The cost of the atmosphere (issue 38: at most 1.3x the time without it, to the same luminance RSE): the
 reference renderer with ``--atmosphere clear`` (the sun's colour along its path and the air inside the box,
 ``optics.air.inside``; the air along the eye rays outside the box is added after the path tracer and is not
-timed) against ``none``, with the sky model and with ``--sky air`` (render's default now: no sky emitter, the air's
-own sky), on issue 38's headline view (demo supercell, sun at 4 deg elevation, azimuth 260,
+timed) against ``none``, with the sky model, with ``--sky air`` (render's default: the air's diffuse sky as an envmap
+into the box, ``kernel.air_sky``) and with ``--sky none`` (no sky emitter: ``--sky air``'s render before its envmap),
+on issue 38's headline view (demo supercell, sun at 4 deg elevation, azimuth 260,
 camera azimuth 290), in one process, kernels compiled first, in paired rounds (the order reverses each round;
 each round its own seed). The air along the eye rays (``display.aerial.with_eye_air``) is timed once apart.
 
@@ -25,7 +26,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-CASES = {"none": ("none", "sunsky"), "clear": ("clear", "sunsky"), "clear, --sky air": ("clear", "air")}
+CASES = {"none": ("none", "sunsky"), "clear": ("clear", "sunsky"), "clear, --sky air": ("clear", "air"),
+         "clear, --sky none": ("clear", "none")}  # --sky air's render before its envmap (kernel.air_sky)
 
 
 def main(argv=None):

@@ -168,7 +168,7 @@ def test_the_storms_shadow_darkens_the_slicers_air_as_the_numpy_segments(mode, m
     vol = ball()
     spec = dataclasses.replace(view(vol, 32), sky=None, ground=wm.Ground(0.0))
     sliced = SliceRenderer(vol, MODES[mode], slices=128).frame(spec).radiance.reshape(-1, 3).astype(np.float64)
-    _, s_a, _, sky_end, hit = eye_air(spec, vol, False)
+    _, s_a, _, sky_end, hit, *_ = eye_air(spec, vol, False)
     ground = (~hit & ~sky_end).ravel()
     assert ground.sum() > 40
     numpy_air = s_a.reshape(-1, 3)[ground].mean(axis=0)

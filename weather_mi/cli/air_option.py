@@ -1,6 +1,7 @@
 """``--atmosphere clear`` in ``render``: the air inside the model's box (part of the path tracer's medium,
 ``optics.air.inside``) and along the eye rays outside it (``display.aerial``; ``--sky air``: the air's own
-single-scattering sky in place of a sky model)."""
+sky in place of a sky model: its diffuse light into the box, ``kernel.air_sky``, and its single-scattering sky
+along the eye rays)."""
 from __future__ import annotations
 
 
@@ -12,8 +13,10 @@ def add_options(p) -> None:
     p.add_argument("--sky", default="sunsky", choices=("sunsky", "constant", "none", "air"),
                    help="sunsky: Hosek-Wilkie (the default without the atmosphere; with --atmosphere clear the "
                         "air in the box counts part of the sky model's air twice); air: the clear atmosphere's "
-                        "own sky, from the path tracer inside the box and single scattering along the eye rays "
-                        "outside it (render's default with --atmosphere clear)")
+                        "own sky: its diffuse light (all orders, DISORT) into the box as an envmap the camera does "
+                        "not see, the box's own air in the path tracer, single scattering along the eye rays "
+                        "outside it, the ground beyond the box dimmed by that air (render's default with "
+                        "--atmosphere clear)")
     p.add_argument("--atmosphere", default="none", choices=("none", "clear"),
                    help="clear: a clear 1-D atmosphere (molecules, ozone, aerosol) on the sun's path, inside the "
                         "model's box (render: part of the medium) and along the eye rays outside it (render; animate "

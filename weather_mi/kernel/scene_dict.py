@@ -485,7 +485,14 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
         box["interior"] = {"type": "ref", "id": "weather_medium"}
         if _inside(spec.camera.origin, medium_box(vol, floor)):
             sensor["medium"] = {"type": "ref", "id": "weather_medium"}
-    if spec.sky is not None:
+    if spec.sky is not None and spec.sky.kind == "air":  # the air's diffuse sky into the box, not seen directly
+        import mitsuba as mi
+        if "spectral" not in mi.variant() and spec.sun.mu0 > 0.0:  # (spectral variants: the air colours the sun only)
+            from .air_sky import EMITTER_NEE, air_sky_dict
+            d["sky"] = air_sky_dict(spec, vol.bbox)
+            nee = {"emitter_nee": EMITTER_NEE} if integrator.get("type") == "majorant_volpath" else {}
+            d["integrator"] = {**nee, **integrator, "hide_emitters": True}
+    elif spec.sky is not None:
         d["sky"] = sky_dict(spec.sky, spec.sun if spec.atmosphere is None else sun_below_air(spec))
     if terrain is not None:  # the terrain mesh and a flat surround (Ground.height unused; its albedo too)
         d.update(terrain_ground_dicts(terrain, {"type": "ref", "id": "weather_medium"}, vol.bbox))

@@ -1,6 +1,8 @@
 """The sky as Mitsuba's emitter gives it, for what renders outside Mitsuba's path loop (the slicer's
 background and ground light, the denoiser's features): radiance along rays and irradiance on a horizontal
-surface, the same as the reference's sky."""
+surface, the same as the reference's sky. ``Sky("air")`` (the clear atmosphere's own sky) is none here: the
+slicer puts the air's sky on its frames itself (``slicing.eye_air``), and its light into the box is the path
+tracer's alone (``kernel.air_sky``)."""
 from __future__ import annotations
 
 import numpy as np
@@ -11,6 +13,11 @@ from ..scene.spec import SceneSpec
 def _ground_height(spec: SceneSpec):
     """The ground's height (m), or None: with an atmosphere the sky is scaled to the sun there."""
     return None if spec.ground is None else float(spec.ground.height)
+
+
+def _no_model(spec: SceneSpec) -> bool:
+    """No sky model here: no sky, or the air's (module docstring)."""
+    return spec.sky is None or spec.sky.kind == "air"
 
 
 def _sky_emitter(spec: SceneSpec, cache: dict | None):
@@ -41,7 +48,7 @@ def _sky_emitter(spec: SceneSpec, cache: dict | None):
 def sky_radiance(spec: SceneSpec, dirs: np.ndarray, cache: dict | None = None) -> np.ndarray:
     """Sky radiance (N, 3) seen along unit directions (N, 3); zero without a sky."""
     dirs = np.asarray(dirs, dtype=np.float64).reshape(-1, 3)
-    if spec.sky is None or dirs.shape[0] == 0:  # no pixel sees the sky: Mitsuba cannot evaluate 0 lanes
+    if _no_model(spec) or dirs.shape[0] == 0:  # no pixel sees the sky: Mitsuba cannot evaluate 0 lanes
         return np.zeros_like(dirs)
     if spec.sky.kind == "constant":
         return np.broadcast_to(np.asarray(spec.sky.radiance), dirs.shape).copy()
@@ -69,7 +76,7 @@ def sky_radiance_arrays(spec: SceneSpec, dirs, cache: dict | None = None, active
     import drjit as dr
     import mitsuba as mi
     n = dr.width(dirs)
-    if spec.sky is None:
+    if _no_model(spec):
         return dr.zeros(mi.Color3f, n)
     if spec.sky.kind == "constant":
         value = mi.Color3f(*(dr.opaque(mi.Float, float(v)) for v in spec.sky.radiance)) + dr.zeros(mi.Color3f, n)
@@ -99,7 +106,7 @@ def sky_radiance_arrays(spec: SceneSpec, dirs, cache: dict | None = None, active
 def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | None = None) -> np.ndarray:
     """Irradiance (W/m^2, RGB) of the sky on a horizontal surface: pi L for a constant sky; for the
     Hosek-Wilkie sky, pi x the mean radiance over cosine-distributed directions (stratified)."""
-    if spec.sky is None:
+    if _no_model(spec):
         return np.zeros(3)
     if spec.sky.kind == "constant":
         return np.pi * np.asarray(spec.sky.radiance)

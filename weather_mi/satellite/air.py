@@ -30,35 +30,9 @@ from dataclasses import replace
 
 import numpy as np
 
-TOP_LAYERS_M = (0.0, 30e3, 80e3)  # DISORT layers: LAYER_M up to 30 km, 5 km above
-LAYER_M = 1000.0
+from ..optics.air.layers import N_STREAMS, air_layers, layer_edges as _layer_edges  # noqa: F401  (moved there)
+
 ALBEDOS = (0.0, 0.1, 0.5)         # the surface albedos of the three DISORT solves (R_0, then K and s)
-N_STREAMS = 16                    # Rayleigh needs 4; the aerosol's forward peak is left to DISORT's corrections
-
-
-def air_layers(atm, wavelength_nm: float, ground_m: float = 0.0, split_m: float | None = None):
-    """The 1-D atmosphere from ``ground_m`` to its top as DISORT layers (top first): (optical depth, single-
-    scattering albedo, Legendre moments (layers, N_STREAMS + 1)) at ``wavelength_nm``: molecules (Rayleigh with
-    depolarisation, ``optics.rayleigh``), ozone (absorbing), aerosol (Henyey-Greenstein of ``atm.aerosol_g``,
-    albedo ``atm.aerosol_ssa``); ``split_m``: a layer edge there (the layers above it come first)."""
-    from ..optics.air.ozone import cross_section_m2 as ozone_sigma
-    from ..optics.rayleigh import DEPOLARISATION, cross_section_m2 as rayleigh_sigma
-    edges = _layer_edges(ground_m, split_m)
-    wl = float(wavelength_nm)
-    z = np.linspace(edges[:-1], edges[1:], 41, axis=-1)          # (layers, 41)
-    p = atm.profiles(z)
-    t_r, t_o, t_a = (np.trapezoid(p[k], z, axis=-1)[::-1] * f   # top first
-                     for k, f in (("air", float(rayleigh_sigma(wl * 1e-9))), ("ozone", float(ozone_sigma(wl))),
-                                  ("aerosol", float(atm.aerosol_factor(wl)))))
-    sca_a = atm.aerosol_ssa * t_a
-    tau = t_r + t_o + t_a
-    gamma = DEPOLARISATION / (2.0 - DEPOLARISATION)
-    chi_r = np.zeros(N_STREAMS + 1)
-    chi_r[0], chi_r[2] = 1.0, (1.0 - gamma) / (10.0 * (1.0 + 2.0 * gamma))
-    chi_a = atm.aerosol_g ** np.arange(N_STREAMS + 1)
-    sca = t_r + sca_a
-    moments = (t_r[:, None] * chi_r + sca_a[:, None] * chi_a) / np.maximum(sca, 1e-30)[:, None]
-    return tau, np.clip(sca / np.maximum(tau, 1e-30), 0.0, 1.0 - 1e-7), moments
 
 
 def plane_parallel_terms(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_nodes, ground_m: float = 0.0,
@@ -105,14 +79,6 @@ def above_box_coupling(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_node
     full, below, above = refl(slice(None), albedo), refl(slice(n_above, None), albedo), refl(slice(0, n_above), 0.0)
     t_dir = np.exp(-tau_above / mu0) * np.exp(-tau_above / mu_nodes)[:, None]
     return full - t_dir * below - above
-
-
-def _layer_edges(ground_m: float, split_m: float | None = None) -> np.ndarray:
-    """The heights (m, ascending) of ``air_layers``' layer edges: every ``LAYER_M`` to 30 km, every 5 km above,
-    and ``split_m``."""
-    lo, mid, top = TOP_LAYERS_M
-    edges = np.r_[np.arange(max(ground_m, lo), mid, LAYER_M), np.arange(mid, top + 1.0, 5000.0)]
-    return np.unique(np.r_[edges, [] if split_m is None else [min(max(split_m, ground_m), top)]])
 
 
 def _layers_above(ground_m: float, top_m: float) -> int:

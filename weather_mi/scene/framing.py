@@ -91,7 +91,7 @@ def scene_spec(vol, size: tuple[int, int] = (320, 240), *, camera: str = "ground
             camera_elevation = AERIAL_ELEVATION_DEG
     if sky == "air" and air is None:
         raise ValueError("--sky air is the clear atmosphere's own sky: give it with --atmosphere clear")
-    sky_ = None if sky in ("none", "air") else Sky(sky)  # "air": composed after the render (display.aerial)
+    sky_ = None if sky == "none" else Sky(sky)  # "air": its light into the box (kernel.air_sky), along eye rays display.aerial
     ground = None if ground_albedo < 0 else Ground(albedo=ground_albedo, height=min(0.0, vol.bbox[0][2]))
     if camera == "orbit":
         cam = Camera.orbit(vol, azimuth=camera_azimuth, elevation=camera_elevation, distance=distance,

@@ -125,9 +125,11 @@ class Sky:
 
     Parameters
     ----------
-    kind : {"sunsky", "constant"}, default "sunsky"
+    kind : {"sunsky", "constant", "air"}, default "sunsky"
         "sunsky": Hosek-Wilkie (Mitsuba's ``sunsky``), oriented by the Sun and scaled so that its sun
-        would give this scene's sun irradiance; "constant": a uniform ``radiance``.
+        would give this scene's sun irradiance; "constant": a uniform ``radiance``; "air": the scene's
+        clear atmosphere's own sky (``--sky air``: its diffuse light into the box, ``kernel.air_sky``; the
+        sky seen along the eye rays is composited after the render, ``display.aerial``).
     radiance : float or tuple of 3 float, default (0.05, 0.07, 0.1)
         The constant sky's radiance (W/m^2/sr, RGB), >= 0.
     turbidity : float, default 3.0
@@ -147,8 +149,8 @@ class Sky:
     ground_albedo: float = 0.3
 
     def __post_init__(self):
-        if self.kind not in ("sunsky", "constant"):
-            raise ValueError(f"Sky kind must be 'sunsky' or 'constant', got {self.kind!r}")
+        if self.kind not in ("sunsky", "constant", "air"):
+            raise ValueError(f"Sky kind must be 'sunsky', 'constant' or 'air', got {self.kind!r}")
         object.__setattr__(self, "radiance", _rgb(self.radiance, "Sky radiance"))
         if not 1.0 <= float(self.turbidity) <= 10.0:
             raise ValueError(f"Sky turbidity must be in [1, 10], got {self.turbidity}")
@@ -491,6 +493,8 @@ class SceneSpec:
     def __post_init__(self):
         if self.atmosphere is not None and not isinstance(self.atmosphere, Atmosphere):
             raise ValueError(f"SceneSpec atmosphere must be an optics.air.Atmosphere or None, got {self.atmosphere!r}")
+        if self.sky is not None and self.sky.kind == "air" and self.atmosphere is None:
+            raise ValueError("SceneSpec sky 'air' is the clear atmosphere's own sky: it needs an atmosphere")
         object.__setattr__(self, "width", _positive_int(self.width, "Image size (width, pixels)"))
         object.__setattr__(self, "height", _positive_int(self.height, "Image size (height, pixels)"))
         object.__setattr__(self, "seed", _positive_int(self.seed, "SceneSpec seed", minimum=0))

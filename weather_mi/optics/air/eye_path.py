@@ -57,11 +57,14 @@ def top_distance(origins, dirs, top_m: float = TOP_M) -> np.ndarray:
 
 
 def segment_air(atm: Atmosphere, to_sun, origins, dirs, t0, t1, table: SunAirTable,
-                wavelengths_nm=CHANNEL_NM, samples: int = SAMPLES, shadow=None) -> tuple[np.ndarray, np.ndarray]:
+                wavelengths_nm=CHANNEL_NM, samples: int = SAMPLES, shadow=None,
+                isotropic: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """(T (n, c), S (n, c)) of the segments [t0, t1] (n,) of the rays (n, 3) (module docstring; S in 1/sr per
     unit irradiance of the sun above the air); T = 1, S = 0 where t1 <= t0. ``shadow``: the direct sun's
     transmittance through the storm at points (..., 3) of the frame (``storm_shadow.StormShadow.transmittance``),
-    a factor on C(h, mu); None: no storm."""
+    a factor on C(h, mu); None: no storm. ``isotropic``: the phase functions 1 in place of p_R and p_HG, so that
+    with the diffuse light's mean intensity as ``table`` (``skylight.diffuse_source_table``) S is the air's
+    multiple scattering along the segment, its diffuse source taken as isotropic."""
     o, d = np.asarray(origins, np.float64).reshape(-1, 3), np.asarray(dirs, np.float64).reshape(-1, 3)
     sun = np.asarray(to_sun, np.float64) / np.linalg.norm(to_sun)
     t0 = np.broadcast_to(np.asarray(t0, np.float64), o.shape[:1])
@@ -84,7 +87,8 @@ def segment_air(atm: Atmosphere, to_sun, origins, dirs, t0, t1, table: SunAirTab
     t, s = march_kernels.segment_air(
         o, d, np.ascontiguousarray(t0), length, sun, x, 0.0, PROFILE_STEP_M,
         np.stack([atm.air_number_density_m3(z), atm.ozone_number_density_m3(z), atm.aerosol_extinction_550_per_m(z)]),
-        *per_channel, float(atm.aerosol_ssa), phase_value(cos_t), hg_value(atm.aerosol_g, cos_t),
+        *per_channel, float(atm.aerosol_ssa), *((np.ones_like(cos_t),) * 2 if isotropic else
+                                                (phase_value(cos_t), hg_value(atm.aerosol_g, cos_t))),
         np.asarray(table.heights_m, np.float64), np.asarray(table.mu, np.float64), np.ascontiguousarray(tab[..., own]),
         lit, float(EARTH_RADIUS_M))
     return t[:, first], s[:, first]
