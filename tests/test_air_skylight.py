@@ -9,24 +9,8 @@ import math
 import numpy as np
 import pytest
 
+from validation.air_skylight import WL, ground_radiance as _ground_radiance, spectrl2_horizontal as _spectrl2, view_down as _spec
 from weather_mi.optics.air import Atmosphere
-
-WL = [450.0, 550.0, 650.0]
-
-
-def _spectrl2(sza: float, albedo: float):
-    """SPCTRL2's (direct horizontal, diffuse horizontal) over the extraterrestrial normal irradiance at WL: its
-    aerosol turbidity at 500 nm is ours at 550 nm through Angstrom's law (exponent 1.14, SPCTRL2's rural one)."""
-    pvlib = pytest.importorskip("pvlib")
-    am = float(pvlib.atmosphere.get_relative_airmass(sza, "kastenyoung1989"))
-    out = pvlib.spectrum.spectrl2(apparent_zenith=np.array([sza]), aoi=np.array([sza]), surface_tilt=0.0,
-                                  ground_albedo=albedo, surface_pressure=101325.0, relative_airmass=np.array([am]),
-                                  precipitable_water=0.0, ozone=0.3, aerosol_turbidity_500nm=0.1 * (500 / 550) ** -1.14,
-                                  dayofyear=1)
-    lam = out["wavelength"]
-    e0, dni, dhi = (np.interp(WL, lam, out[k][:, 0]) for k in ("dni_extra", "dni", "dhi"))
-    return math.cos(math.radians(sza)) * dni / e0, dhi / e0
-
 
 @pytest.mark.parametrize("sza, tol_diffuse", [(30.0, 0.06), (60.0, 0.09)])
 def test_disort_sky_at_the_ground_against_spectrl2(sza, tol_diffuse):
@@ -39,15 +23,6 @@ def test_disort_sky_at_the_ground_against_spectrl2(sza, tol_diffuse):
     assert direct[:, 0] == pytest.approx(dir_ref, rel=0.01)
     assert np.all(np.abs(down[:, 0] / dif_ref - 1.0) < tol_diffuse), down[:, 0] / dif_ref
     assert np.all(down[:, 0] > 0.3 * direct[:, 0] * (450.0 / np.array(WL)) ** 4)  # a blue sky: more diffuse in blue
-
-
-def _spec(sky="air", ground=0.3, elevation=30.0, sun_azimuth=200.0):
-    from weather_mi.scene.spec import Camera, Ground, SceneSpec, Sky, Sun
-    cam = Camera.orthographic(center=(0.0, 0.0, 20.0), direction=(0.0, 0.0, -1.0), width=100.0, height=100.0)
-    return SceneSpec(camera=cam, sun=Sun(azimuth=sun_azimuth, elevation=elevation, irradiance=1.0,
-                                         angular_diameter_deg=0.0),
-                     sky=None if sky is None else Sky(sky), ground=Ground(albedo=ground), width=4, height=4,
-                     atmosphere=Atmosphere(), seed=5)
 
 
 def test_the_envmap_at_the_ground_holds_disorts_diffuse_irradiance():
@@ -88,23 +63,6 @@ def test_the_envmap_is_oriented_as_the_sun():
     si.wi = mi.Vector3f(*(mi.Float(-np.array([towards[i], away[i]], np.float32)) for i in range(3)))
     val = np.asarray(emitter.eval(si))
     assert np.all(val[:, 0] > 1.5 * val[:, 1])
-
-
-def _ground_radiance(sky, spp=256, width_m=10e3, height_m=2e3):
-    """The path tracer's radiance of the ground under a cloud-free box ``width_m`` wide and ``height_m`` high
-    (its own air: ``optics.air.inside``), the sun at 30 deg, against DISORT's rho / pi (direct + diffuse) at the
-    ground."""
-    from weather_mi.optics.air.skylight import sky_table
-    from weather_mi.optics.phase.analytic import isotropic
-    from weather_mi.optics.volume import OpticalVolume
-    from weather_mi.reference.render import render_reference
-    vol = OpticalVolume.from_arrays(np.zeros((16, 4, 4), np.float32), 1.0, isotropic(),
-                                    ((-width_m / 2, -width_m / 2, 0.0), (width_m / 2, width_m / 2, height_m)))
-    img = render_reference(_spec(sky), vol, spp=spp, progress=False, variant="llvm_ad_rgb")
-    r = img.radiance.reshape(-1, 3).astype(np.float64).mean(axis=0)
-    se = np.sqrt((img.stderr.reshape(-1, 3).astype(np.float64) ** 2).sum(axis=0)) / 16
-    table = sky_table(Atmosphere(), 0.5, [0.0], ground_m=0.0, albedo=0.3)
-    return r, se, 0.3 / math.pi * (table.direct_rgb[0] + table.diffuse_rgb[0])
 
 
 def test_a_cloud_free_box_lit_by_the_air_sky_gives_disorts_ground():

@@ -27,26 +27,71 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
+WL = [450.0, 550.0, 650.0]
+
+
+def spectrl2_horizontal(sza: float, albedo: float):
+    """SPCTRL2's (direct horizontal, diffuse horizontal) over the extraterrestrial normal irradiance at WL: its
+    aerosol turbidity at 500 nm is ours at 550 nm through Angstrom's law (exponent 1.14, SPCTRL2's rural one)."""
+    import pvlib
+    am = float(pvlib.atmosphere.get_relative_airmass(sza, "kastenyoung1989"))
+    out = pvlib.spectrum.spectrl2(apparent_zenith=np.array([sza]), aoi=np.array([sza]), surface_tilt=0.0,
+                                  ground_albedo=albedo, surface_pressure=101325.0, relative_airmass=np.array([am]),
+                                  precipitable_water=0.0, ozone=0.3, aerosol_turbidity_500nm=0.1 * (500 / 550) ** -1.14,
+                                  dayofyear=1)
+    lam = out["wavelength"]
+    e0, dni, dhi = (np.interp(WL, lam, out[k][:, 0]) for k in ("dni_extra", "dni", "dhi"))
+    return math.cos(math.radians(sza)) * dni / e0, dhi / e0
+
+
+def view_down(sky="air", ground=0.3, elevation=30.0, sun_azimuth=200.0):
+    """A 4 x 4 orthographic view straight down from 20 m over a Lambertian ground of albedo ``ground``, the sun
+    (a point, irradiance 1) at ``elevation``, the default clear atmosphere, ``sky`` (None: no sky)."""
+    from weather_mi.optics.air import Atmosphere
+    from weather_mi.scene.spec import Camera, Ground, SceneSpec, Sky, Sun
+    cam = Camera.orthographic(center=(0.0, 0.0, 20.0), direction=(0.0, 0.0, -1.0), width=100.0, height=100.0)
+    return SceneSpec(camera=cam, sun=Sun(azimuth=sun_azimuth, elevation=elevation, irradiance=1.0,
+                                         angular_diameter_deg=0.0),
+                     sky=None if sky is None else Sky(sky), ground=Ground(albedo=ground), width=4, height=4,
+                     atmosphere=Atmosphere(), seed=5)
+
+
+def ground_radiance(sky, spp=256, width_m=10e3, height_m=2e3):
+    """The path tracer's radiance of the ground under a cloud-free box ``width_m`` wide and ``height_m`` high
+    (its own air: ``optics.air.inside``), the sun at 30 deg, against DISORT's rho / pi (direct + diffuse) at the
+    ground."""
+    from weather_mi.optics.air import Atmosphere
+    from weather_mi.optics.air.skylight import sky_table
+    from weather_mi.optics.phase.analytic import isotropic
+    from weather_mi.optics.volume import OpticalVolume
+    from weather_mi.reference.render import render_reference
+    vol = OpticalVolume.from_arrays(np.zeros((16, 4, 4), np.float32), 1.0, isotropic(),
+                                    ((-width_m / 2, -width_m / 2, 0.0), (width_m / 2, width_m / 2, height_m)))
+    img = render_reference(view_down(sky), vol, spp=spp, progress=False, variant="llvm_ad_rgb")
+    r = img.radiance.reshape(-1, 3).astype(np.float64).mean(axis=0)
+    se = np.sqrt((img.stderr.reshape(-1, 3).astype(np.float64) ** 2).sum(axis=0)) / 16
+    table = sky_table(Atmosphere(), 0.5, [0.0], ground_m=0.0, albedo=0.3)
+    return r, se, 0.3 / math.pi * (table.direct_rgb[0] + table.diffuse_rgb[0])
+
+
 def disort_vs_spectrl2():
-    from tests.test_air_skylight import WL, _spectrl2
     from weather_mi.optics.air import Atmosphere
     from weather_mi.optics.air.skylight import spectral_sky
     print("1. DISORT (ours) / SPCTRL2 at the ground, albedo 0.2, at 450 / 550 / 650 nm:")
     for sza in (30.0, 60.0, 75.0):
         _, down, direct = spectral_sky(Atmosphere(), math.cos(math.radians(sza)), [0.0], [0.0], [0.0], 0.0, 0.2,
                                        wavelengths_nm=WL)
-        d_ref, f_ref = _spectrl2(sza, 0.2)
+        d_ref, f_ref = spectrl2_horizontal(sza, 0.2)
         print(f"   SZA {sza:4.0f}: direct " + " ".join(f"{v:.3f}" for v in direct[:, 0] / d_ref)
               + "; diffuse " + " ".join(f"{v:.3f}" for v in down[:, 0] / f_ref)
               + " (ours " + " ".join(f"{v:.4f}" for v in down[:, 0]) + " per unit normal irradiance)")
 
 
 def cloud_free_ground():
-    from tests.test_air_skylight import _ground_radiance
     print("2. ground radiance under a cloud-free box / DISORT's rho/pi (direct + diffuse), sun at 30 deg (R G B):")
     for width, height in ((10e3, 2e3), (80e3, 16e3)):
         for label, sky in (("with the envmap   ", "air"), ("without (before)  ", None)):
-            r, se, ref = _ground_radiance(sky, spp=512, width_m=width, height_m=height)
+            r, se, ref = ground_radiance(sky, spp=512, width_m=width, height_m=height)
             print(f"   {width / 1e3:.0f} km x {height / 1e3:.0f} km box, {label}: "
                   + " ".join(f"{v:.3f}" for v in r / ref)
                   + " (se " + " ".join(f"{v:.3f}" for v in se / ref) + ")", flush=True)
