@@ -2,8 +2,8 @@
 (issue 38 part 3; no refit: the "multiple" model's shipped parameters, ``slicing/modes.py``).
 
 Views: ``validation/calibrate_slicer.py``'s held-out storms (the real WRF supercell, the WRF Tibetan Plateau
-file, BOMEX, RICO; from --data) front- and side-lit at the calibration size (64 x 48), the sun moved down to
---elevations (default 4 and 8 deg). Each view twice:
+file, BOMEX, RICO; from --data) front-, side- (and back-) lit at the calibration size (64 x 48), the sun moved
+down to --elevations (default 4 and 8 deg). Each view twice:
 
 * ``--atmosphere clear`` (RGB mode): the path tracer with the air inside the box in its medium (molecules from
   the storm's rho_air, ``optics.air.inside.with_box_air``) and along the eye rays outside it
@@ -15,11 +15,15 @@ file, BOMEX, RICO; from --data) front- and side-lit at the calibration size (64 
   ``display.aerial.with_eye_air``).
 
 The slicer's frames are the refined viewer frames the calibration judges (2 x 2 points per pixel, slab
-jitter 1, 128 slices). CIEDE2000 and FLIP over the cloud pixels (``display.metrics.compare``), and the
-reference's own noise (its mean relative standard error over them). References are cached as EXR in --out.
+jitter 1, 128 slices), with the shipped defaults or the parameters of --fitted. CIEDE2000 and FLIP over the
+cloud pixels (``display.metrics.compare``), and the reference's own noise (its mean relative standard error over
+them). References are cached as EXR in --out (--spp samples, or passes of --spp to --target-rse, at most
+--max-seconds each; --references-only renders them alone). The table of issue 38 part 3: --elevations 6
+--lightings front,side,back --spp 64 --target-rse 0.03 --max-seconds 150 (validation/README.md).
 
     python validation/slicer_low_sun.py [--data ../shared/data] [--size 64x48] [--spp 64] [--elevations 4,8]
-        [--scenes wrf-supercell,wrf-plateau,bomex,rico] [--lightings front,side] [--out DIR]
+        [--scenes wrf-supercell,wrf-plateau,bomex,rico] [--lightings front,side,back] [--out DIR]
+        [--target-rse R --max-seconds S] [--references-only] [--fitted fitted.json]
 """
 from __future__ import annotations
 
@@ -95,6 +99,9 @@ def main(argv=None) -> int:
     ap.add_argument("--max-seconds", type=float, default=None, help="with --target-rse: at most this long a view")
     ap.add_argument("--references-only", action="store_true",
                     help="render (and cache) the references, judge nothing (to run beside other work)")
+    ap.add_argument("--fitted", default=None,
+                    help="a fitted.json (validation/calibrate_slicer.py): the \"multiple\" model's parameters instead "
+                         "of the shipped defaults")
     ap.add_argument("--out", default="validation-low-sun")
     args = ap.parse_args(argv)
     width, height = (int(v) for v in args.size.split("x"))
@@ -102,6 +109,9 @@ def main(argv=None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     params = SliceParams(slab_jitter=1.0)
+    if args.fitted is not None:
+        from validation.calibrate_slicer import read_fitted
+        params = params.updated(**read_fitted(Path(args.fitted)))
     rows = []
     for name in args.scenes.split(","):
         if not (Path(args.data) / DATA_SCENES[name][0]).is_file():

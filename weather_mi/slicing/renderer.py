@@ -45,7 +45,7 @@ from .occupancy import OccupancyMap
 from .periodic import PeriodicSlicing
 from .rays import Scalars, f32, phase_index, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
-from .sun_air import sun_air_input
+from .sun_air import sun_air_input, sun_at_height
 from .texture_storage import ChannelTextures, replace_storage
 from .view import ViewCache
 
@@ -467,7 +467,10 @@ class SliceRenderer:
             from_sun, from_sky = ground_radiance(spec, e_sky, None if rays.ground_sun is None else np.ones(3))
             ground = (_colour(mi, from_sun), _colour(mi, from_sky))
             if model is not None and self.sky_light is not None:  # "multiple": it lights the medium from below
-                below = _colour(mi, sum(ground_radiance(spec, e_sky))) * kernel_scalar(mi, gain)
+                sun_g, sky_g = ground_radiance(spec, e_sky)  # the ground's sun after the air above it (sun_air.py)
+                sun_g = sun_g * self._reuse("sun at ground", (spec.atmosphere, float(spec.sun.mu0), spec.ground.height),
+                                            lambda: sun_at_height(spec, spec.ground.height))
+                below = _colour(mi, sun_g + sky_g) * kernel_scalar(mi, gain)
         names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern", "span_a",
                  "span_b", "n", "ground_sun", "ground_sky")
         return EyeInputs(EyeRays(**{k: getattr(rays, k) for k in names}), self._grid_scalars, phase_colour,
