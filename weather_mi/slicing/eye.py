@@ -33,7 +33,14 @@ path before its direction is forgotten: a part ``diffusion_lobe`` x exp(-x) of i
 the sun's side) is scattered with the phase function instead of isotropically (moved from B to A, the
 energy unchanged), so that front- and side-lit faces, where P(Theta) < 1 / (4 pi), are dimmer and back-lit
 rims and thin cores brighter (issue 41: the held-out front- and side-lit cumuli were 12-15% too bright, the
-back-lit ones 18-19% too dark; median CIEDE2000 4.34 -> see validation/README.md). The medium is the one the path tracer renders: phase-function peaks within 3 deg count as
+back-lit ones 18-19% too dark; median CIEDE2000 4.34 -> see validation/README.md). The diffused light
+entered its cloud through a lit face, and the flux through a face is E cos i, i the sun's angle from its
+normal (``diffusion_incidence``, ``incidence_cosine``, Eq. D2: cos i from the optical depths towards the sun and
+the zenith, mu0 throughout a horizontal layer): the diffusion runs along that normal, depths x cos i, and
+carries cos i of the face-on light (``diffusion_profile``, Eq. D1; the exponential source's exact solution
+beyond its mean depth). Without it, a wide layer under a 6 deg sun is lit as if its top faced the sun:
+its interior diffused light ~20x the plane-parallel value (mu0 (mu0 + z0) / (1 + z0) = 0.046), which made the
+held-out storms at a low sun too bright and, with the air's reddened sun, too red (issue 38). The medium is the one the path tracer renders: phase-function peaks within 3 deg count as
 unscattered light (delta-M, ``weather_mi.optics.forward_peak``; ``SliceRenderer(forward_peak_deg=)``). The model reads optical depths from the
 light volumes interpolated as depths (``LightVolume.lookup(log_direct=True)``: linear between two planes of a
 homogeneous slab, where the light is not), and takes the diffusion profile, which is linear in depth, at the
