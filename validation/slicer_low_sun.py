@@ -142,7 +142,9 @@ def main(argv=None) -> int:
                 if not args.references_only:
                     rows.append(row)
                     print(row, flush=True)
-    print(f"\n### The slicer against the path tracer at a low sun ({width} x {height}, references {args.spp} spp; "
+    plan = f"{args.spp} spp" if args.target_rse is None else \
+        f"to a cloud RSE of {args.target_rse:g} (at most {args.max_seconds} s), passes of {args.spp} spp"
+    print(f"\n### The slicer against the path tracer at a low sun ({width} x {height}, references {plan}; "
           "CIEDE2000 / FLIP over cloud pixels; reference noise: mean RSE)\n")
     print("| storm | lighting | sun elevation | with the atmosphere | the same, slicer without the box's air | "
           "without the atmosphere | reference RSE (with / without) |")
