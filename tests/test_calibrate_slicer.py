@@ -2,6 +2,7 @@
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from validation import calibrate_slicer as cs
@@ -51,7 +52,25 @@ def test_training_set_has_real_storms_at_other_times():
     assert real == ["wrf-supercell-0100", "wrf-supercell-0200", "wrf-plateau-0000"]
     assert {DATA_TIMES[s] for s in real} == {"0001-01-01_01:00:00", "0001-01-01_02:00:00", "2005-09-21_00:00:00"}
     assert not {s for s, _ in cs.TRAIN} & {s for s, _ in cs.HELD_OUT}
-    assert {l for s, l in cs.TRAIN if s in real} == {"front", "side", "back"}
+    assert {l for s, l in cs.TRAIN if s in real} == {"front", "side", "back", "front" + cs.LOW_SUN, "side" + cs.LOW_SUN}
+
+
+def test_the_low_sun_training_views_have_the_air_and_a_low_sun():
+    """Issue 38: training views with the sun at LOW_SUN_DEG and the clear atmosphere (the held-out low-sun
+    table's conditions, on training storms only); the other lightings are study.runs.view's."""
+    import weather_mi as wm
+    from weather_mi.study.runs import StudyConfig, view
+    vol = wm.OpticalVolume.from_arrays(np.full((4, 4, 4), 1e-3, np.float32), 1.0, wm.phase.henyey_greenstein(0.85),
+                                       ((0.0, 0.0, 1000.0), (4e3, 4e3, 5e3)))
+    cfg = StudyConfig(width=16, height=12)
+    low = [(s, l) for s, l in cs.TRAIN if l.endswith(cs.LOW_SUN)]
+    assert len(low) == 7 and not {s for s, _ in low} & {s for s, _ in cs.HELD_OUT}
+    for lighting in ("front", "side"):
+        spec = cs.view_of(vol, lighting + cs.LOW_SUN, cfg)
+        assert spec.atmosphere is not None and spec.sun.elevation == pytest.approx(cs.LOW_SUN_DEG)
+        plain = cs.view_of(vol, lighting, cfg)
+        assert plain == view(vol, lighting, cfg) and plain.atmosphere is None
+        assert spec.sun.azimuth == pytest.approx(plain.sun.azimuth)
 
 
 @needs_data

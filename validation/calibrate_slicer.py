@@ -15,7 +15,9 @@ beside the paper's Table IV modes.
    training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
    its condensate x 0.15), the real WRF supercell at 01:00 and 02:00 (wrf/wrfout_quarter_ss_series.nc,
    the held-out one's run at other times) and the WRF plateau at 00:00 (held out: its last time, 09:00,
-   with a fifth of the cloud cover), front-, side- and back-lit; a training field that is a held-out
+   with a fifth of the cloud cover), front-, side- and back-lit, and seven views with the sun at 6 deg and the
+   clear atmosphere (LOW_SUN: the demo supercell and the WRF supercell at 01:00 and the plateau at 00:00 front-
+   and side-lit, the demo cumulus front-lit; issue 38); a training field that is a held-out
    one (the same file and time, or the same mixing ratios in another file) is refused (check_held_out);
    held-out: the real WRF supercell, the WRF Tibetan Plateau file, BOMEX and RICO (from --data),
    front-, side- and back-lit (the sun behind the storm: silver linings, dark cores).
@@ -59,12 +61,23 @@ from weather_mi.io.image import Image, auto_exposure  # noqa: E402
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
 from weather_mi.slicing.calibrate import FIT_START, MULTIPLE_PARAMS, TrainingView, calibrate  # noqa: E402
 from weather_mi.study.report import side_by_side  # noqa: E402
+from weather_mi.display.aerial import with_eye_air  # noqa: E402
+from weather_mi.optics.air import Atmosphere  # noqa: E402
+from weather_mi.optics.air.inside import with_box_air  # noqa: E402
+from validation.slicer_low_sun import low_sun_view  # noqa: E402
 from weather_mi.io.times import select_times, time_strings  # noqa: E402
 from weather_mi.study.runs import DATA_SCENES, DATA_TIMES, StudyConfig, eye_transmittance, load_scene, view  # noqa: E402
 
 TRAIN_SCENES = ("demo-supercell", "demo-cumulus", "demo-cumulus-thin", "wrf-supercell-0100", "wrf-supercell-0200",
                 "wrf-plateau-0000")
-TRAIN = [(s, l) for s in TRAIN_SCENES for l in ("front", "side", "back")]
+# the sun low (LOW_SUN_DEG) with the clear atmosphere (issue 38): the slicer's sun coloured by height, its sky
+# scaled and its eye rays' air, against the path tracer with the air in its box and along its eye rays
+LOW_SUN_DEG = 6.0
+LOW_SUN = f"-{LOW_SUN_DEG:g}deg-clear"
+TRAIN = [(s, l) for s in TRAIN_SCENES for l in ("front", "side", "back")] + \
+    [(s, l + LOW_SUN) for s, l in (("demo-supercell", "front"), ("demo-supercell", "side"), ("demo-cumulus", "front"),
+                                   ("wrf-supercell-0100", "front"), ("wrf-supercell-0100", "side"),
+                                   ("wrf-plateau-0000", "front"), ("wrf-plateau-0000", "side"))]
 HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") for l in ("front", "side", "back")]
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
@@ -100,6 +113,14 @@ def check_held_out(train, held_out, data) -> None:
                                  f"held-out field of {other} ({theirs[0]}, time {theirs[1]}): train on other times")
 
 
+def view_of(vol, lighting: str, cfg):
+    """``study.runs.view``'s view of a lighting, or, for a lighting ending in LOW_SUN, that lighting's with the
+    sun at LOW_SUN_DEG and the clear atmosphere (``slicer_low_sun.low_sun_view``)."""
+    if lighting.endswith(LOW_SUN):
+        return low_sun_view(vol, lighting[: -len(LOW_SUN)], cfg, LOW_SUN_DEG, Atmosphere())
+    return view(vol, lighting, cfg)
+
+
 def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_rse=None,
               max_seconds=None) -> Image:
     """The path-traced reference of a view: ``spp`` samples, or with ``target_rse`` passes added until the
@@ -110,7 +131,10 @@ def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_
     if path.is_file():
         return Image.load(path)
     t = time.perf_counter()
-    ref = wm.render_reference(spec, vol, spp=spp, progress=False, target_rse=target_rse, max_seconds=max_seconds)
+    medium = vol if spec.atmosphere is None else with_box_air(vol, None, spec.atmosphere)
+    ref = wm.render_reference(spec, medium, spp=spp, progress=False, target_rse=target_rse, max_seconds=max_seconds)
+    if spec.atmosphere is not None:  # the air along the eye rays outside the box (as slicer_low_sun.py)
+        ref = with_eye_air(ref, spec, vol)
     ref.save(path)
     noise = ref.metadata.get("noise") or {}
     print(f"  reference {scene} {lighting}: {time.perf_counter() - t:.0f} s, {ref.metadata['spp']} spp, "
@@ -130,7 +154,7 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
         if vols[scene] is None:
             continue
         vol = vols[scene][0]
-        spec = view(vol, lighting, cfg)
+        spec = view_of(vol, lighting, cfg)
         ref = reference(out, scene, lighting, vol, spec, spp, target_rse, max_seconds)
         if noise is not None:
             noise[(scene, lighting)] = (ref.metadata["spp"], (ref.metadata.get("noise") or {}).get("rse_mean"))

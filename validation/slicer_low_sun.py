@@ -2,8 +2,8 @@
 (issue 38 part 3; no refit: the "multiple" model's shipped parameters, ``slicing/modes.py``).
 
 Views: ``validation/calibrate_slicer.py``'s held-out storms (the real WRF supercell, the WRF Tibetan Plateau
-file, BOMEX, RICO; from --data) front- and side-lit at the calibration size (64 x 48), the sun moved down to
---elevations (default 4 and 8 deg). Each view twice:
+file, BOMEX, RICO; from --data) front-, side- (and back-) lit at the calibration size (64 x 48), the sun moved
+down to --elevations (default 4 and 8 deg). Each view twice:
 
 * ``--atmosphere clear`` (RGB mode): the path tracer with the air inside the box in its medium (molecules from
   the storm's rho_air, ``optics.air.inside.with_box_air``) and along the eye rays outside it
@@ -15,11 +15,15 @@ file, BOMEX, RICO; from --data) front- and side-lit at the calibration size (64 
   ``display.aerial.with_eye_air``).
 
 The slicer's frames are the refined viewer frames the calibration judges (2 x 2 points per pixel, slab
-jitter 1, 128 slices). CIEDE2000 and FLIP over the cloud pixels (``display.metrics.compare``), and the
-reference's own noise (its mean relative standard error over them). References are cached as EXR in --out.
+jitter 1, 128 slices), with the shipped defaults or the parameters of --fitted. CIEDE2000 and FLIP over the
+cloud pixels (``display.metrics.compare``), and the reference's own noise (its mean relative standard error over
+them). References are cached as EXR in --out (--spp samples, or passes of --spp to --target-rse, at most
+--max-seconds each; --references-only renders them alone). The table of issue 38 part 3: --elevations 6
+--lightings front,side,back --spp 64 --target-rse 0.03 --max-seconds 150 (validation/README.md).
 
     python validation/slicer_low_sun.py [--data ../shared/data] [--size 64x48] [--spp 64] [--elevations 4,8]
-        [--scenes wrf-supercell,wrf-plateau,bomex,rico] [--lightings front,side] [--out DIR]
+        [--scenes wrf-supercell,wrf-plateau,bomex,rico] [--lightings front,side,back] [--out DIR]
+        [--target-rse R --max-seconds S] [--references-only] [--fitted fitted.json]
 """
 from __future__ import annotations
 
@@ -57,24 +61,28 @@ def storm(name: str, data: Path, cfg: StudyConfig):
 def low_sun_view(vol, lighting: str, cfg: StudyConfig, elevation: float, atmosphere):
     """``study.runs.view``'s front- or side-lit view with the sun at ``elevation`` degrees."""
     spec = view(vol, lighting, cfg)
-    az = {"front": CAMERA_AZIMUTH, "side": CAMERA_AZIMUTH + 90.0}[lighting]
+    az = {"front": CAMERA_AZIMUTH, "side": CAMERA_AZIMUTH + 90.0, "back": CAMERA_AZIMUTH + 180.0}[lighting]
     return replace(spec, sun=Sun(az, elevation), atmosphere=atmosphere)
 
 
-def reference(out: Path, tag: str, spec, vol, hyd, spp: int) -> Image:
+def reference(out: Path, tag: str, spec, vol, hyd, spp: int, target_rse=None, max_seconds=None) -> Image:
     """The path-traced reference (cached as EXR): with ``spec.atmosphere``, the box's air in the medium and
-    the eye rays' air outside it, as ``weather-mi render --atmosphere clear``."""
-    path = out / f"{tag}_{spec.width}x{spec.height}_{spp}spp_reference.exr"
+    the eye rays' air outside it, as ``weather-mi render --atmosphere clear``. ``spp`` samples, or with
+    ``target_rse`` passes of ``spp`` added until the mean relative standard error over the cloud pixels
+    reaches it (or ``max_seconds``)."""
+    plan = f"{spp}spp" if target_rse is None else f"rse{target_rse:g}"
+    path = out / f"{tag}_{spec.width}x{spec.height}_{plan}_reference.exr"
     if path.is_file():
         return Image.load(path)
     t = time.perf_counter()
-    if spec.atmosphere is None:
-        img = wm.render_reference(spec, vol, spp=spp, progress=False)
-    else:
-        img = wm.render_reference(spec, with_box_air(vol, hyd, spec.atmosphere), spp=spp, progress=False)
+    medium = vol if spec.atmosphere is None else with_box_air(vol, hyd, spec.atmosphere)
+    img = wm.render_reference(spec, medium, spp=spp, progress=False, target_rse=target_rse, max_seconds=max_seconds)
+    if spec.atmosphere is not None:
         img = with_eye_air(img, spec, vol)
     img.save(path)
-    print(f"  reference {tag}: {time.perf_counter() - t:.0f} s", flush=True)
+    noise = img.metadata.get("noise") or {}
+    print(f"  reference {tag}: {time.perf_counter() - t:.0f} s, {img.metadata.get('spp')} spp, "
+          f"cloud RSE {noise.get('rse_mean', float('nan')):.3f}", flush=True)
     return img
 
 
@@ -86,6 +94,14 @@ def main(argv=None) -> int:
     ap.add_argument("--elevations", default="4,8")
     ap.add_argument("--scenes", default="wrf-supercell,wrf-plateau,bomex,rico")
     ap.add_argument("--lightings", default="front,side")
+    ap.add_argument("--target-rse", type=float, default=None,
+                    help="render each reference in passes of --spp until its mean RSE over cloud pixels reaches this")
+    ap.add_argument("--max-seconds", type=float, default=None, help="with --target-rse: at most this long a view")
+    ap.add_argument("--references-only", action="store_true",
+                    help="render (and cache) the references, judge nothing (to run beside other work)")
+    ap.add_argument("--fitted", default=None,
+                    help="a fitted.json (validation/calibrate_slicer.py): the \"multiple\" model's parameters instead "
+                         "of the shipped defaults")
     ap.add_argument("--out", default="validation-low-sun")
     args = ap.parse_args(argv)
     width, height = (int(v) for v in args.size.split("x"))
@@ -93,6 +109,9 @@ def main(argv=None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     params = SliceParams(slab_jitter=1.0)
+    if args.fitted is not None:
+        from validation.calibrate_slicer import read_fitted
+        params = params.updated(**read_fitted(Path(args.fitted)))
     rows = []
     for name in args.scenes.split(","):
         if not (Path(args.data) / DATA_SCENES[name][0]).is_file():
@@ -107,7 +126,9 @@ def main(argv=None) -> int:
                 for label, atm in (("clear", Atmosphere()), ("none", None)):
                     spec = low_sun_view(vol, lighting, cfg, elevation, atm)
                     tag = f"{name}_{lighting}_{elevation:g}deg_{label}"
-                    ref = reference(out, tag, spec, vol, hyd, args.spp)
+                    ref = reference(out, tag, spec, vol, hyd, args.spp, args.target_rse, args.max_seconds)
+                    if args.references_only:
+                        continue
                     mask = metrics.cloud_mask(eye_transmittance(vol, spec, 128))
                     img = slicer.frame(spec, params, supersample=2)
                     m = metrics.compare(ref.radiance, img.radiance, mask=mask if mask.any() else "all")
@@ -118,9 +139,12 @@ def main(argv=None) -> int:
                         old = with_eye_air(replace(old, transmittance=before.transmittance), spec, vol)
                         m = metrics.compare(ref.radiance, old.radiance, mask=mask if mask.any() else "all")
                         row["before"] = (m["ciede2000"], m["flip"])
-                rows.append(row)
-                print(row, flush=True)
-    print(f"\n### The slicer against the path tracer at a low sun ({width} x {height}, references {args.spp} spp; "
+                if not args.references_only:
+                    rows.append(row)
+                    print(row, flush=True)
+    plan = f"{args.spp} spp" if args.target_rse is None else \
+        f"to a cloud RSE of {args.target_rse:g} (at most {args.max_seconds} s), passes of {args.spp} spp"
+    print(f"\n### The slicer against the path tracer at a low sun ({width} x {height}, references {plan}; "
           "CIEDE2000 / FLIP over cloud pixels; reference noise: mean RSE)\n")
     print("| storm | lighting | sun elevation | with the atmosphere | the same, slicer without the box's air | "
           "without the atmosphere | reference RSE (with / without) |")

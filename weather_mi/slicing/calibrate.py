@@ -20,13 +20,13 @@ from .renderer import SliceRenderer
 MULTIPLE_PARAMS = {"ms_extinction": "unit", "ms_contribution": "unit", "ms_eccentricity": "unit",
                    "sky_gain": "positive", "sky_extinction": "positive", "diffusion_gain": "positive",
                    "diffusion_scale": "unit", "leak_gain": "positive", "leak_rate": "positive", "diffusion_flux": "unit",
-                   "below_shadow": "unit", "diffusion_lobe": "unit"}
+                   "below_shadow": "unit", "diffusion_lobe": "unit", "diffusion_incidence": "unit"}
 # where a fit starts from: close to single scattering with a faint, lightly shadowed sky and a faint
 # diffusion term whose transport optical depth is (1 - g) tau for g = 0.85, scattered with half its flux and
 # 0.3 of it in its forward lobe, the light from below half dimmed by the shadow beneath
 FIT_START = SliceParams(ms_extinction=0.5, ms_contribution=0.05, ms_eccentricity=0.5, sky_gain=0.05,
                         sky_extinction=0.5, diffusion_gain=0.5, diffusion_scale=0.15, leak_gain=0.2, leak_rate=1.0,
-                        diffusion_flux=0.5, below_shadow=0.5, diffusion_lobe=0.3)
+                        diffusion_flux=0.5, below_shadow=0.5, diffusion_lobe=0.3, diffusion_incidence=0.5)
 
 
 @dataclass

@@ -33,7 +33,14 @@ path before its direction is forgotten: a part ``diffusion_lobe`` x exp(-x) of i
 the sun's side) is scattered with the phase function instead of isotropically (moved from B to A, the
 energy unchanged), so that front- and side-lit faces, where P(Theta) < 1 / (4 pi), are dimmer and back-lit
 rims and thin cores brighter (issue 41: the held-out front- and side-lit cumuli were 12-15% too bright, the
-back-lit ones 18-19% too dark; median CIEDE2000 4.34 -> see validation/README.md). The medium is the one the path tracer renders: phase-function peaks within 3 deg count as
+back-lit ones 18-19% too dark; median CIEDE2000 4.34 -> see validation/README.md). The diffused light
+entered its cloud through a lit face, and the flux through a face is E cos i, i the sun's angle from its
+normal (``diffusion_incidence``, ``incidence_cosine``, Eq. D2: cos i from the optical depths towards the sun and
+the zenith, mu0 throughout a horizontal layer): the diffusion runs along that normal, depths x cos i, and
+carries cos i of the face-on light (``diffusion_profile``, Eq. D1; the exponential source's exact solution
+beyond its mean depth). Without it, a wide layer under a 6 deg sun is lit as if its top faced the sun:
+its interior diffused light ~20x the plane-parallel value (mu0 (mu0 + z0) / (1 + z0) = 0.046), which made the
+held-out storms at a low sun too bright and, with the air's reddened sun, too red (issue 38). The medium is the one the path tracer renders: phase-function peaks within 3 deg count as
 unscattered light (delta-M, ``weather_mi.optics.forward_peak``; ``SliceRenderer(forward_peak_deg=)``). The model reads optical depths from the
 light volumes interpolated as depths (``LightVolume.lookup(log_direct=True)``: linear between two planes of a
 homogeneous slab, where the light is not), and takes the diffusion profile, which is linear in depth, at the
@@ -97,6 +104,7 @@ class LightModel:
     below_shadow: object = 0.0   # the light from below comes from the shadowed ground beneath ("multiple")
     ground_z: object = 0.0       # the ground's height (m), where the light from below is read
     diffusion_lobe: object = 0.0  # the part of the diffused light scattered with the phase function ("multiple")
+    diffusion_incidence: object = None  # None, or the weight of the lit face's slope on the diffused light
 
     def terms(self, p, slab=None, ext=None, active=True, mu=None):
         """(A, B, occlusion of the sky, occlusion of the ground below) at world points p (mi.Point3f),
@@ -151,14 +159,21 @@ class LightModel:
         tau = -log_d
         if slab is not None:  # the profile is linear in tau: its eye-weighted mean over the segment is its value
             tau = dr.clip(tau + slab.sigma * k_d * slab.mean_offset(), 0.0, tau_col)  # at the mean position
+        up = None
+        incidence = None
+        if self.diffusion_incidence is not None and self.sky is not None:  # the lit face's slope (Eq. D2)
+            up, _ = self.sky.lookup(p, log_direct=True, active=active)
+            incidence = incidence_cosine(dr, -log_d, -dr.log(dr.maximum(up, 1e-30)), self.mu0,
+                                         self.diffusion_incidence)
         diffused = diffused_towards_eye(dr, tau, tau_col, self.diffusion_scale, self.diffusion_gain,
-                                        self.leak_gain, self.leak_rate, self.flux, mu)
+                                        self.leak_gain, self.leak_rate, self.flux, mu, incidence)
         lobe = self.diffusion_lobe * dr.exp(-self.diffusion_scale * tau)
         A = A + lobe * diffused
         B = (1.0 - column) * B + (1.0 - lobe) * diffused
         occ, occ_below = 1.0, 0.0
         if self.sky is not None:  # the sky through the column above p, the lit ground through the column below
-            up, _ = self.sky.lookup(p, log_direct=True, active=active)
+            if up is None:
+                up, _ = self.sky.lookup(p, log_direct=True, active=active)
             tau_up = -dr.log(dr.maximum(up, 1e-30))
             occ = ground_transmission(dr, self.sky_extinction * tau_up, DIFFUSE_MU, self.g)
             if self.below:
@@ -191,7 +206,7 @@ class LightModel:
         return ground_transmission(dr, tau_vertical, self.mu0, self.g)
 
 
-def diffusion_profile(dr, tau, tau_col, scale):
+def diffusion_profile(dr, tau, tau_col, scale, incidence=None):
     """Diffuse light inside a conservative cloud column lit along the sun ray (optical depth ``tau`` from
     the sun's side, ``tau_col`` the whole column's), relative to the lit face of a semi-infinite cloud:
     1-D diffusion in transport optical depths x = scale x tau (scale ~ 1 - g), X = scale x tau_col,
@@ -199,27 +214,55 @@ def diffusion_profile(dr, tau, tau_col, scale):
         J(x) = (1 - exp(-X)) (min(x, x_s) + z0) (X + z0 - max(x, x_s)) / ((X + 2 z0) z0)
     (the Green's function of the slab; 1 - exp(-X): the part of the beam that the column turns diffuse,
     so that thin clouds get little), rising from 1 at a thick cloud's lit face to (1 + z0) / z0 at
-    depth and falling linearly to the shadowed face."""
-    x, X = scale * tau, scale * tau_col
-    xs = dr.minimum(1.0, 0.5 * X)
+    depth and falling linearly to the shadowed face.
+    ``incidence``: None (the cloud's lit face normal to the sun ray), or the cosine i of the angle between
+    the sun and the lit face's normal (``incidence_cosine``): the same diffusion along that normal, depths
+    x cos i (the column's too) and the flux that enters the face E cos i, the beam turned diffuse at x_s =
+    min(cos i, X cos i / 2) -- (D1) J = cos i J_normal(x cos i, X cos i, x_s). Beyond x_s it is exact for the
+    sunlight's exponential source in a slab lit at cos i (the Green's function is linear in the source's
+    depth there, and the source's mean depth is cos i): deep in a thick layer 3 F0 cos i (cos i + z0)."""
+    x, X, xs, Xn = _transport_depths(dr, tau, tau_col, scale, incidence)
     near, far = dr.minimum(x, xs), dr.maximum(x, xs)
-    g = (near + DIFFUSION_Z0) * dr.maximum(X + DIFFUSION_Z0 - far, 0.0) / ((X + 2.0 * DIFFUSION_Z0) * DIFFUSION_Z0)
-    return (1.0 - dr.exp(-X)) * g
+    g = (near + DIFFUSION_Z0) * dr.maximum(Xn + DIFFUSION_Z0 - far, 0.0) / ((Xn + 2.0 * DIFFUSION_Z0) * DIFFUSION_Z0)
+    return (1.0 - dr.exp(-X)) * (g if incidence is None else g * incidence)
 
 
-def diffusion_flux(dr, tau, tau_col, scale):
+def incidence_cosine(dr, tau_sun, tau_up, mu0, weight):
+    """The cosine of the angle between the sun and the normal of the lit face through which the diffused
+    light at a point entered its cloud, from the optical depths from the point towards the sun (``tau_sun``)
+    and towards the zenith (``tau_up``) and the sun's zenith cosine ``mu0``:
+        cos i = clip((tau_up + mu0) / (tau_sun + 1), mu0, 1)                      (D2)
+    exactly mu0 at every depth of a horizontal layer (tau_sun = tau_up / mu0: its top is the lit face), 1
+    beside a sunlit side under a tall cloud (tau_up >> tau_sun); blended by ``weight`` in [0, 1]:
+    1 - weight (1 - cos i) (0: the face normal to the sun, as without it)."""
+    cos_i = dr.clip((tau_up + mu0) / (tau_sun + 1.0), mu0, 1.0)
+    return 1.0 - weight * (1.0 - cos_i)
+
+
+def _transport_depths(dr, tau, tau_col, scale, incidence):
+    """(x, X, x_s, X_n): the point's and the column's transport depths along the sun ray, where the beam
+    turns diffuse and the column's along the lit face's normal (``diffusion_profile``)."""
+    X = scale * tau_col
+    if incidence is None:
+        return scale * tau, X, dr.minimum(1.0, 0.5 * X), X
+    Xn = X * incidence
+    return scale * tau * incidence, X, dr.minimum(incidence, 0.5 * Xn), Xn
+
+
+def diffusion_flux(dr, tau, tau_col, scale, incidence=None):
     """-dJ/dx of ``diffusion_profile`` J in transport depths x = scale x tau: the profile's diffuse flux
     along the sun ray (Fick's law, 3 F = -dJ/dx), > 0 beyond the depth x_s where the sunlight turns
     diffuse (the light flows on, away from the sun), < 0 before it (out through the sunlit face), 0 past
-    the extrapolated far face."""
-    x, X = scale * tau, scale * tau_col
-    xs = dr.minimum(1.0, 0.5 * X)
-    slope = dr.select(x < xs, -(X + DIFFUSION_Z0 - xs), xs + DIFFUSION_Z0)
-    inside = x < X + DIFFUSION_Z0
-    return dr.select(inside, (1.0 - dr.exp(-X)) * slope / ((X + 2.0 * DIFFUSION_Z0) * DIFFUSION_Z0), 0.0)
+    the extrapolated far face. ``incidence``: ``diffusion_profile``'s (the flux along the face's normal)."""
+    x, X, xs, Xn = _transport_depths(dr, tau, tau_col, scale, incidence)
+    slope = dr.select(x < xs, -(Xn + DIFFUSION_Z0 - xs), xs + DIFFUSION_Z0)
+    if incidence is not None:
+        slope = slope * incidence
+    inside = x < Xn + DIFFUSION_Z0
+    return dr.select(inside, (1.0 - dr.exp(-X)) * slope / ((Xn + 2.0 * DIFFUSION_Z0) * DIFFUSION_Z0), 0.0)
 
 
-def diffused_towards_eye(dr, tau, tau_col, scale, gain, leak_gain, leak_rate, flux=0.0, mu=None):
+def diffused_towards_eye(dr, tau, tau_col, scale, gain, leak_gain, leak_rate, flux=0.0, mu=None, incidence=None):
     """The diffused sunlight scattered towards the eye (relative to E_sun / (4 pi)): gain J + leak_gain Q
     (``diffusion_profile`` J, ``leaking_diffusion`` Q) as isotropic radiance, plus their flux: in the
     diffusion (P1) approximation the radiance is (phi + 3 F . w) / (4 pi), and a phase function of
@@ -228,20 +271,23 @@ def diffused_towards_eye(dr, tau, tau_col, scale, gain, leak_gain, leak_rate, fl
         gain (J + flux mu (-dJ/dx)) + leak_gain Q (1 + flux mu leak_rate),   each at least 0
     (``flux`` ~ g: the fitted weight). Back-lit (mu > 0) the light flowing through a cloud away from the sun
     brightens its shadowed side (the dark cores' and thin edges' forward lobe); front-lit the light leaving
-    by the sunlit face brightens it and the leak's inflow darkens it."""
-    J = diffusion_profile(dr, tau, tau_col, scale)
-    Q = leaking_diffusion(dr, tau, tau_col, scale, leak_rate)
+    by the sunlit face brightens it and the leak's inflow darkens it. ``incidence``: ``diffusion_profile``'s,
+    for both terms."""
+    J = diffusion_profile(dr, tau, tau_col, scale, incidence)
+    Q = leaking_diffusion(dr, tau, tau_col, scale, leak_rate, incidence)
     if mu is None:
         return gain * J + leak_gain * Q
-    return gain * dr.maximum(J + flux * mu * diffusion_flux(dr, tau, tau_col, scale), 0.0) \
+    return gain * dr.maximum(J + flux * mu * diffusion_flux(dr, tau, tau_col, scale, incidence), 0.0) \
         + leak_gain * Q * dr.maximum(1.0 + flux * mu * leak_rate, 0.0)
 
 
-def leaking_diffusion(dr, tau, tau_col, scale, rate):
+def leaking_diffusion(dr, tau, tau_col, scale, rate, incidence=None):
     """Diffused sunlight in a finite cloud that loses light through its sides: in transport optical depths
     x = scale x tau along the sun ray (X = scale x tau_col for the column), (1 - exp(-X)) exp(-rate x) --
     brightest at the sunlit face and decaying into the cloud, where the 1-D profile (``diffusion_profile``)
-    of an infinite slab does not."""
+    of an infinite slab does not. ``incidence``: ``diffusion_profile``'s (depths along the face's normal)."""
+    if incidence is not None:  # along the face's normal, the flux into it cos i (diffusion_profile's Eq. D1)
+        return (1.0 - dr.exp(-scale * tau_col)) * dr.exp(-rate * scale * tau * incidence) * incidence
     return (1.0 - dr.exp(-scale * tau_col)) * dr.exp(-rate * scale * tau)
 
 

@@ -78,6 +78,7 @@ class MultipleLight:
     below_shadow: object    # how much of the ground's shadow dims the light from below (below_shadow), unitless
     diffusion_lobe: object  # the diffused light's part scattered with the phase function (diffusion_lobe), unitless
     ground_z: object        # the flat ground's height (m; the lowest box face without a ground)
+    incidence: object = None  # weight of the lit face's slope on the diffused light (diffusion_incidence); None: 0
 
 
 @dataclass

@@ -77,7 +77,7 @@ MODES = {**TABLE_IV, "per-species/multiple": SliceMode("per_species", "multiple"
 MULTIPLE_DEFAULTS = {"ms_extinction": 0.1529, "ms_contribution": 0.2545, "ms_eccentricity": 0.9526,
                      "sky_gain": 0.4531, "sky_extinction": 0.0072, "diffusion_gain": 1.05,
                      "diffusion_scale": 0.3826, "leak_gain": 1.5851, "leak_rate": 1.52, "diffusion_flux": 0.3402,
-                     "below_shadow": 0.7462, "diffusion_lobe": 0.31}
+                     "below_shadow": 0.7462, "diffusion_lobe": 0.31, "diffusion_incidence": 0.0}
 
 
 DEFAULT_DETAIL = 0.5  # the detail mode's noise amplitude (the study's detail field, detail.field(amplitude=0.5))
@@ -153,6 +153,13 @@ class SliceParams:
         direction is forgotten over a transport mean free path; eye.LightModel.terms): front- and
         side-lit it dims the diffused light (P(Theta) < 1 / (4 pi) there), back-lit it makes the forward
         lobe of silver linings and lit cores; 0: isotropic.
+    diffusion_incidence : float, default MULTIPLE_DEFAULTS["diffusion_incidence"]
+        "multiple" light, in [0, 1]: the diffused light (diffusion and leak terms) enters the cloud through a
+        lit face at incidence cosine cos i, estimated from the optical depths towards the sun and the zenith
+        (eye.incidence_cosine: mu0 inside a horizontal layer, 1 beside a sunlit side), and diffuses along its
+        normal with the flux E cos i (eye.diffusion_profile, Eq. D1): at a low sun a wide layer's top takes
+        mu0 of the sunlight a face turned to the sun takes; the weight blends cos i towards 1
+        (0: every face normal to the sun, as before).
     slab_jitter : float, default 0.0
         In [0, 1]: each pixel's slabs are offset by up to +-slab_jitter / 2 slice (jitter.py), which
         turns the terraces of the slab planes on lit faces into fine grain (0: aligned slabs, as before;
@@ -190,6 +197,7 @@ class SliceParams:
     diffusion_flux: float = MULTIPLE_DEFAULTS["diffusion_flux"]
     below_shadow: float = MULTIPLE_DEFAULTS["below_shadow"]
     diffusion_lobe: float = MULTIPLE_DEFAULTS["diffusion_lobe"]
+    diffusion_incidence: float = MULTIPLE_DEFAULTS["diffusion_incidence"]
     slab_jitter: float = 0.0
     jitter_frame: int = 0
     detail: dict = field(default_factory=dict)
@@ -206,7 +214,7 @@ class SliceParams:
         if number(self.blur_length_m) and not self.blur_length_m >= 0.0:
             raise ValueError(f"blur_length_m must be >= 0, got {self.blur_length_m}")
         for name in ("ms_extinction", "ms_contribution", "ms_eccentricity", "diffusion_scale", "slab_jitter",
-                     "diffusion_flux", "below_shadow", "diffusion_lobe"):
+                     "diffusion_flux", "below_shadow", "diffusion_lobe", "diffusion_incidence"):
             v = getattr(self, name)
             if number(v) and not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {v}")

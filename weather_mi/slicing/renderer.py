@@ -45,7 +45,7 @@ from .occupancy import OccupancyMap
 from .periodic import PeriodicSlicing
 from .rays import Scalars, f32, phase_index, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
-from .sun_air import sun_air_input
+from .sun_air import sun_air_input, sun_at_height
 from .texture_storage import ChannelTextures, replace_storage
 from .view import ViewCache
 
@@ -457,7 +457,8 @@ class SliceRenderer:
                 params.ms_extinction, params.ms_contribution, params.ms_eccentricity, params.sky_extinction,
                 params.diffusion_gain, params.diffusion_scale, max(float(spec.sun.to_sun[2]), 1e-3), params.leak_gain,
                 params.leak_rate, params.diffusion_flux, params.below_shadow, params.diffusion_lobe,
-                self.grid_box[0][2] if spec.ground is None else spec.ground.height)))
+                self.grid_box[0][2] if spec.ground is None else spec.ground.height)),
+                incidence=_optional_scalar(mi, params.diffusion_incidence))
             gain = params.sky_gain
         else:
             gain = params.ambient
@@ -466,7 +467,10 @@ class SliceRenderer:
             from_sun, from_sky = ground_radiance(spec, e_sky, None if rays.ground_sun is None else np.ones(3))
             ground = (_colour(mi, from_sun), _colour(mi, from_sky))
             if model is not None and self.sky_light is not None:  # "multiple": it lights the medium from below
-                below = _colour(mi, sum(ground_radiance(spec, e_sky))) * kernel_scalar(mi, gain)
+                sun_g, sky_g = ground_radiance(spec, e_sky)  # the ground's sun after the air above it (sun_air.py)
+                sun_g = sun_g * self._reuse("sun at ground", (spec.atmosphere, float(spec.sun.mu0), spec.ground.height),
+                                            lambda: sun_at_height(spec, spec.ground.height))
+                below = _colour(mi, sun_g + sky_g) * kernel_scalar(mi, gain)
         names = ("origin", "direction", "t0", "t1", "hit_ground", "ground", "background", "pattern", "span_a",
                  "span_b", "n", "ground_sun", "ground_sky")
         return EyeInputs(EyeRays(**{k: getattr(rays, k) for k in names}), self._grid_scalars, phase_colour,
@@ -485,7 +489,7 @@ class SliceRenderer:
                                m.diffusion_gain, m.diffusion_scale, g=self.g_scattering, mu0=m.mu0,
                                carry=(inputs.tex_light, e.grid), leak_gain=m.leak_gain, leak_rate=m.leak_rate,
                                below=e.below is not None, flux=m.flux, below_shadow=m.below_shadow,
-                               diffusion_lobe=m.diffusion_lobe, ground_z=m.ground_z)
+                               diffusion_lobe=m.diffusion_lobe, ground_z=m.ground_z, diffusion_incidence=m.incidence)
         else:
             model = LightModel(self.light, log_forward=self.mode.light == "translucent")
         offset = slab_offsets(dr, e.rays.pattern, e.jitter, e.jitter_rotation)
@@ -501,6 +505,12 @@ class SliceRenderer:
 
 
 FROZEN_FRAMES = True
+def _optional_scalar(mi, value):
+    """None for a plain 0 (the term left out of the kernel: it compiles once when first made nonzero), else
+    the opaque kernel scalar."""
+    return None if isinstance(value, (int, float)) and value == 0 else kernel_scalar(mi, value)
+
+
 def ground_radiance(spec: SceneSpec, e_sky, albedo=None) -> tuple[np.ndarray, np.ndarray]:
     """RGB radiance (W/m^2/sr) of ``spec``'s Lambertian ground in the open, from the sun and from the sky:
     rho / pi E_sun mu0 and rho / pi E_sky, E_sky the sky's irradiance on a horizontal plane

@@ -44,6 +44,16 @@ def sun_by_height(spec, z_top_m: float):
     return heights, sun_rgb(spec.atmosphere, heights, np.full(heights.shape, float(spec.sun.mu0)), samples=COLUMN_SAMPLES)
 
 
+def sun_at_height(spec, z_m: float) -> np.ndarray:
+    """The sun's linear sRGB (3,) at height ``z_m`` (m above sea level) after ``spec.atmosphere``'s air (as
+    ``sun_by_height``'s rows); (1, 1, 1) without an atmosphere."""
+    if getattr(spec, "atmosphere", None) is None:
+        return np.ones(3)
+    from ..optics.air import sun_rgb
+    return np.asarray(sun_rgb(spec.atmosphere, np.array([float(z_m)]), np.array([float(spec.sun.mu0)]),
+                              samples=COLUMN_SAMPLES), dtype=np.float64).reshape(3)
+
+
 def sun_air_input(mi, spec, grid_box) -> SunAir | None:
     """The frame's ``SunAir`` for ``spec`` in the box ``grid_box`` ((lo, hi) corners, m); None without an
     atmosphere."""
@@ -63,4 +73,4 @@ def sun_colour_at(mi, air: SunAir, z):
     return lerp_rows(mi, dr, air.rgb, (z - air.h0) * air.inv_dh, air.n)
 
 
-__all__ = ["SunAir", "sun_by_height", "sun_air_input", "sun_colour_at"]
+__all__ = ["SunAir", "sun_by_height", "sun_at_height", "sun_air_input", "sun_colour_at"]
