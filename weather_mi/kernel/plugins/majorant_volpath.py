@@ -205,15 +205,17 @@ class MajorantVolpath:
                     maj = air_levels.with_coarse_air(maj, self.air_levels, self.cell)
                 self.majorant = mi.TensorXf(maj)
                 self._auto_key = key
+        levels = None
         if self.air_levels is not None and vol is not None and int(volume_data(vol).shape[-1]) == 1:
             grey = air_levels.equal_channels(self.air_levels)  # a satellite band's: tracked grey (not spectral)
-            ms.add_air(air_levels.AirLevels(self.air_levels, grey), self.air_albedo, to_local, self.periodic != "none")
+            levels = air_levels.AirLevels(self.air_levels, grey)
+            ms.add_air(levels, self.air_albedo, to_local, self.periodic != "none")
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"
         texel, texel_data = self._grids.texel(vol, ms.scale, self.reach if periodic else None, self.air_levels,
-                                              grey_air=not ms.spectral)
+                                              grey_air=not ms.spectral, levels=levels)
         track = texel if (texel is not None and self.track_mode == "texel") else coarse
-        texel_data = None if ms.air is not None else texel_data  # the grid's texels lack the air added per level
+        # (a grey grid's texels lack the air added per level: the trackers add it, ``trackers``)
         self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data, self.periodic, self.reach)
 
     # ------------------------------------------------------------ main entry

@@ -273,7 +273,7 @@ class GridCache:
             self.skip_key = maj_key
         return Grid(majorant.array, self.skip, (nx, ny, nz), cells_per_unit, shift=0.0, lo=0)
 
-    def texel(self, vol, scale: float, reach: int | None = None, air=None, grey_air: bool = False):
+    def texel(self, vol, scale: float, reach: int | None = None, air=None, grey_air: bool = False, levels=None):
         """(The texel-centre grid, (data, scale) of a grey grid or None); (None, None) without a sigma_t
         grid. Its cells lie between 2 x 2 x 2 texel centres (cells -1 .. N - 1 per axis, the first and last
         halves cut by the box), where the trilinear interpolant is one trilinear polynomial; majorant =
@@ -281,7 +281,8 @@ class GridCache:
         ``reach``: periodic in x and y, walked over that many periods on each side (cells 0 .. N - 1 there,
         between texels i and i + 1 modulo N). ``air``: the box's air per level (``air_levels``), whose cells
         count as empty (majorant 0 here; the trackers use the air's own); ``grey_air``: the trackers' extinction is
-        grey (not spectral), the air's one channel (``air_levels.AirLevels`` grey)."""
+        grey (not spectral), the air's one channel (``air_levels.AirLevels`` grey); ``levels``: that
+        ``AirLevels`` where already built (the medium's, ``MediumSetup.add_air``)."""
         if vol is None:
             return None, None
         data = volume_data(vol)
@@ -305,5 +306,5 @@ class GridCache:
         texel_data = (data.array, dr.opaque(mi.Float, float(scale))) if data.shape[-1] == 1 else None
         dims = (rx, ry, rz + 1) if periodic else (rx + 1, ry + 1, rz + 1)
         grid = Grid(*self.texel_arrays, dims, (rx, ry, rz), shift=-0.5, lo=-1, reach=reach)
-        grid.air = None if air is None else air_levels.AirLevels(air, grey=grey_air)
+        grid.air = levels if levels is not None or air is None else air_levels.AirLevels(air, grey=grey_air)
         return grid, texel_data

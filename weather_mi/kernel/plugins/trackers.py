@@ -57,7 +57,10 @@ class _Walk:
         dt = dr.select(maj > 0.0, -dr.log(1.0 - u) / maj, dr.inf)
         tc = t + dt
         collide = active & (tc < seg_end)
-        if grid.air is not None:  # sigma_t in the air's cells from its levels, elsewhere the medium's lookup
+        if grid.air is not None and self.texels is not None:  # a grey grid's interpolant plus the air per level
+            grey = cell_interpolant(self.texels, grid, q0, dq, cells, (tc,), collide & ~empty)[0]
+            s_t = grid.air.sigma_at(q0[2] + dq[2] * tc, collide) + dr.select(empty, 0.0, grey)
+        elif grid.air is not None:  # sigma_t in the air's cells from its levels, elsewhere the medium's lookup
             s_t = dr.select(empty, grid.air.sigma_at(q0[2] + dq[2] * tc, collide & empty),
                             self.sigma_t(tc, collide & ~empty))
         elif self.texels is None:
@@ -77,9 +80,10 @@ class _Walk:
 
 
 def _tracking_walk(tk, ray, t_end, active, tile_only=None):
-    """The walk of free flights and ratio tracking: over ``tk.track``, texels interpolated in texel cells."""
+    """The walk of free flights and ratio tracking: over ``tk.track``, texels interpolated in texel cells (a grey
+    grid's: with the air added per level, the air's extinction added to them)."""
     grid = tk.track
-    texels = tk.texel_data if (grid is tk.texel and not tk.ms.spectral) else None
+    texels = tk.texel_data if (grid is tk.texel and (not tk.ms.spectral or grid.air is not None)) else None
     return _Walk(tk, grid, texels, ray, t_end, active, tile_only)
 
 
@@ -229,11 +233,22 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
         The transmittance (dimensionless), or its roulette estimate.
     """
     spectral = tk.ms.spectral
-    walk = _Walk(tk, tk.texel, None if spectral else tk.texel_data, ray, t_end, active)
+    air = tk.texel.air
+    # a grey grid with the air added per level: the air's optical depth over the whole segment in closed form (one
+    # evaluation: the air is horizontally homogeneous, the ray straight), the loop the hydrometeors' alone (grey,
+    # their interpolant from the texels), as without the air
+    split = air is not None and tk.texel_data is not None
+    walk = _Walk(tk, tk.texel, tk.texel_data if (split or not spectral) else None, ray, t_end, active)
     grid, texels, q0, dq, t_max = walk.grid, walk.texels, walk.q0, walk.dq, walk.t_max
-    air = grid.air
     t_near, active, cells, nexts = walk.t_near, walk.active, walk.cells, walk.nexts
-    s0 = walk.sigma_t(t_near, active)
+    tau_air, tau_air_min = None, 0.0
+    if split:
+        tau_air = dr.select(active, air.tau(q0[2], dq[2], t_near, t_max, active), 0.0)  # 0 where it misses the box
+        tau_air_min = tau_air if air.grey else dr.min(tau_air)
+        air, spectral = None, False  # the loop's: grey, without the air
+        s0 = cell_interpolant(texels, grid, q0, dq, cells, (t_near,), active)[0]
+    else:
+        s0 = walk.sigma_t(t_near, active)
     tau = dr.zeros(mi.Spectrum) if spectral else mi.Float(0.0)
 
     rr = sampler is not None and EXACT_RR_SURVIVE < 1.0
@@ -262,7 +277,7 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
             s0 = dr.select(lookup, s_1, air.sigma_at(q0[2] + dq[2] * seg_end, in_air))
         t = dr.select(active, seg_end, t)
         (cx, cy, cz), (tx, ty, tz), outside = dda_step(grid, q0, dq, t, cells, nexts, k, active)
-        tau_min = dr.min(tau) if spectral else tau
+        tau_min = (dr.min(tau) if spectral else tau) + tau_air_min
         if rr:  # Russian roulette each time T falls by another EXACT_RR_STEP (weights w)
             low = active & (tau_min > next_rr)
             survive = sampler.next_1d(low) < EXACT_RR_SURVIVE
@@ -280,6 +295,8 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
                                  nexts[0], nexts[1], nexts[2], s0, tau, mi.Float(1.0), mi.Float(EXACT_RR_TAU)),
                           cond=cond, body=body, label="majorant_volpath: exact transmittance")
     *_, tau, w, _ = state
+    if split:  # the air's part, over the segment the walk crossed
+        tau, spectral = tau + tau_air, tk.ms.spectral
     if rr:
         return mi.Spectrum(w * dr.exp(-tau))
     return mi.Spectrum(dr.select((dr.min(tau) if spectral else tau) > TAU_ZERO, 0.0, dr.exp(-tau)))
