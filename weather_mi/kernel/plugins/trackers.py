@@ -32,9 +32,14 @@ class _Walk:
     within [0, t_end] (``cells``, ``nexts``, ``t_near``), ``t_max`` where it leaves, ``active`` where it
     meets the box."""
 
-    def __init__(self, tk, grid, texels, ray, t_end, active, tile_only=None):
+    def __init__(self, tk, grid, texels, ray, t_end, active, tile_only=None, split_air: bool = False):
         self.tk, self.grid, self.texels, self.ray = tk, grid, texels, ray
         o_l, d_l, self.t_near, self.t_max, self.active = ray_box(tk.to_local, ray, t_end, active, tk.bounds(tile_only))
+        self.met = mi.Bool(active) & (self.t_near < self.t_max)  # (``active`` is the loops' state, updated in place)
+        # the air the walk tracks: the grid's, or (``split_air``) its largest channel, grey, the rest its ``excess``
+        self.air, self.excess = grid.air, None
+        if split_air:
+            self.air, self.excess = grid.air.split_max()
         self.q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
         self.dq = [d_l[k] * grid.scale[k] for k in range(3)]
         self.cells, self.nexts = locate(grid, self.q0, self.dq, self.t_near)
@@ -59,7 +64,7 @@ class _Walk:
         collide = active & (tc < seg_end)
         if grid.air is not None and self.texels is not None:  # a grey grid's interpolant plus the air per level
             grey = cell_interpolant(self.texels, grid, q0, dq, cells, (tc,), collide & ~empty)[0]
-            s_t = grid.air.sigma_at(q0[2] + dq[2] * tc, collide) + dr.select(empty, 0.0, grey)
+            s_t = self.air.sigma_at(q0[2] + dq[2] * tc, collide) + dr.select(empty, 0.0, grey)
         elif grid.air is not None:  # sigma_t in the air's cells from its levels, elsewhere the medium's lookup
             s_t = dr.select(empty, grid.air.sigma_at(q0[2] + dq[2] * tc, collide & empty),
                             self.sigma_t(tc, collide & ~empty))
@@ -84,7 +89,30 @@ def _tracking_walk(tk, ray, t_end, active, tile_only=None):
     grid's: with the air added per level, the air's extinction added to them)."""
     grid = tk.track
     texels = tk.texel_data if (grid is tk.texel and (not tk.ms.spectral or grid.air is not None)) else None
-    return _Walk(tk, grid, texels, ray, t_end, active, tile_only)
+    return _Walk(tk, grid, texels, ray, t_end, active, tile_only, split_air=_split_air(tk, grid, texels))
+
+
+def _split_air(tk, grid, texels) -> bool:
+    """Whether free flights and ratio tracking follow the air's largest channel, grey, and weight the channels by
+    its excess in closed form (:func:`_excess_weight`): a chromatic RGB air added per level to a grey grid whose
+    texels the walk interpolates (the only spectral part of the extinction is then the air's)."""
+    from .air_levels import AirLevels
+    air = grid.air
+    return (texels is not None and type(air) is AirLevels and not air.grey and air.channels == 3
+            and tk.ms.air is air)
+
+
+def _excess_weight(walk, end, at_collision, s_g, active):
+    """The channels' factor of a walk tracked grey against the air's largest channel (``_split_air``), over
+    [t_near, ``end``]: exp(-tau_excess) (<= 0 excess: >= 1), at a real collision (``at_collision``) times
+    sigma_c / sigma_g = 1 + excess_c / ``s_g`` (s_g the grey extinction the collision was drawn with). The
+    free flight's density and its escape probability are those of sigma_g; these factors make them sigma_c's
+    (Color3f; 1 where not ``active``)."""
+    ex, q0, dq = walk.excess, walk.q0, walk.dq
+    tau = ex.tau(q0[2], dq[2], walk.t_near, end, active)
+    at = ex.sigma_at(q0[2] + dq[2] * end, active & at_collision)
+    ratio = dr.select(at_collision, 1.0 + at * dr.rcp(dr.select(s_g > 0.0, s_g, 1.0)), 1.0)
+    return dr.select(active, ratio * dr.exp(-tau), 1.0)
 
 
 def _spectral_collision(tr, maj, s_t, xi, collide, found):
@@ -148,8 +176,9 @@ def delta_tracking(tk, ray, t_end, sampler, active, weight, tile_only=None):
         collisions (unbiased; the mean of the throughput is preserved).
     """
     walk = _tracking_walk(tk, ray, t_end, active, tile_only)
-    spectral = tk.ms.spectral
-    tr = mi.Spectrum(weight) if spectral else mi.Float(1.0)
+    split = walk.excess is not None  # grey against the air's largest channel (``_split_air``)
+    spectral = tk.ms.spectral and not split
+    tr = mi.Spectrum(weight) if spectral else mi.Float(0.0 if split else 1.0)
 
     def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
         cells, nexts = [cx, cy, cz], [tx, ty, tz]
@@ -160,10 +189,15 @@ def delta_tracking(tk, ray, t_end, sampler, active, weight, tile_only=None):
         else:
             stop = collide & (xi * maj < s_t)
             found |= stop
+            if split:  # tr: the grey extinction of the real collision
+                tr = dr.select(stop, s_t, tr)
         t, (cx, cy, cz), (tx, ty, tz), active = walk.advance(active, collide, tc, seg_end, cells, nexts, k, stop)
         return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
 
     _, _, t, _, _, _, _, _, _, found, tr = _walk_loop(walk, sampler, tr, body, "majorant_volpath: DDA delta tracking")
+    if split:
+        end = dr.select(found, t, walk.t_max)
+        return found, t, mi.Spectrum(weight) * _excess_weight(walk, end, found, tr, walk.met)
     return found, t, (tr if spectral else weight)
 
 
@@ -184,7 +218,8 @@ def ratio_tracking(tk, ray, t_end, sampler, active):
         The transmittance estimate (dimensionless).
     """
     walk = _tracking_walk(tk, ray, t_end, active)
-    spectral = tk.ms.spectral
+    split = walk.excess is not None  # grey against the air's largest channel (``_split_air``)
+    spectral = tk.ms.spectral and not split
     tr = mi.Spectrum(1.0) if spectral else mi.Float(1.0)
 
     def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
@@ -200,6 +235,8 @@ def ratio_tracking(tk, ray, t_end, sampler, active):
         return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
 
     *_, tr = _walk_loop(walk, sampler, tr, body, "majorant_volpath: DDA ratio tracking")
+    if split:
+        return mi.Spectrum(tr) * _excess_weight(walk, walk.t_max, mi.Bool(False), mi.Float(1.0), walk.met)
     return mi.Spectrum(tr) if not spectral else tr
 
 
