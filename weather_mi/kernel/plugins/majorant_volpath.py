@@ -113,7 +113,8 @@ class MajorantVolpath:
          and which is added to a grey (1-channel) one, the albedo then the mixture's of ``air_albedo`` and
          ``air_scattering`` (:mod:`.air_albedo`, ``MediumSetup.add_air``) (:mod:`.air_levels`): its cells are
          crossed as empty space, with the air's majorant. An air whose three channels are equal (a satellite
-         band's) is tracked grey (``air_levels.equal_channels``).
+         band's) is tracked grey (``air_levels.equal_channels``); a chromatic one's free flights follow its
+         largest channel, grey, the channels weighted in closed form (:mod:`.trackers`).
      * - periodic, periodic_tiles
        - |string|, |int|
        - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each

@@ -9,6 +9,14 @@ majorants, walked cell by cell with the DDA (:mod:`.dda`), empty cubes of cells 
 * :func:`exact_transmittance`: T = exp(-tau), tau integrated exactly by Simpson's rule per texel cell
   (the trilinear interpolant is a cubic along a ray there), with Russian roulette in a render.
 
+The box's air added per level to a grey grid (:mod:`.air_levels`; render's and ``satellite``'s default) costs the
+loops little: the walks interpolate the grey grid's texels and add the air's level values; exact transmittance
+takes the air's optical depth of the whole segment in closed form once (the air is horizontally homogeneous, the
+ray straight), its loop the hydrometeors' alone; a chromatic air's free flights and ratio tracking follow its
+largest channel, grey (sigma_g = the hydrometeors' + the air's largest), the channels weighted in closed form by
+its excess e_c = sigma_c - sigma_g <= 0 (:func:`_excess_weight`): exp(-integral e_c) over the flight, times
+sigma_c / sigma_g at a real collision: the density and escape probability drawn with sigma_g become sigma_c's.
+
 Every function takes the per-render :class:`.medium_setup.Tracking` ``tk``; distances are along the ray.
 """
 from __future__ import annotations
