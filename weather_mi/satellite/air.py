@@ -66,15 +66,8 @@ def plane_parallel_terms(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_no
     """(R_0, K, s) of the module docstring on the grid ``mu_nodes`` (ascending cos of the view zenith) x
     ``phi_nodes`` (deg, 0 forward scattering): three DISORT solves (``ALBEDOS``; ``albedos`` (0,): R_0 alone,
     K and s None); ``split_m``: ``air_layers``' layers split there."""
-    from ..plane_parallel.disort import solve
-    tau, ssa, moments = air_layers(atm, wavelength_nm, ground_m, split_m)
-    mu_nodes, phi_nodes = np.asarray(mu_nodes, np.float64), np.asarray(phi_nodes, np.float64)
-    refl = []
-    for a in albedos:
-        res = solve(tau, ssa, mu0, mu_nodes, [0.0], phi_nodes, moments=moments, surface_albedo=a,
-                    n_streams=N_STREAMS)
-        refl.append(np.array([[np.pi * res.intensities(m, 0, p) / mu0 for p in range(phi_nodes.size)]
-                              for m in range(mu_nodes.size)]))
+    layers = air_layers(atm, wavelength_nm, ground_m, split_m)
+    refl = [reflectance(layers, mu0, mu_nodes, phi_nodes, a) for a in albedos]
     if len(refl) == 1:
         return refl[0], None, None
     r0, (a1, a2) = refl[0], albedos[1:]
@@ -91,21 +84,28 @@ def above_box_coupling(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_node
     alone over a black surface): its diffuse light onto the box and the box's diffuse light scattered back into
     the line of sight. Added to every line of sight through the box (a cloud's own coupling taken as the clear
     column's). ``full``: R_full on the grid where known (``ColumnTerms.full``: no solve of the whole column)."""
-    from ..plane_parallel.disort import solve
-    mu_nodes, phi_nodes = np.asarray(mu_nodes, np.float64), np.asarray(phi_nodes, np.float64)
-    tau, ssa, moments = air_layers(atm, wavelength_nm, ground_m, split_m=top_m)
+    mu_nodes = np.asarray(mu_nodes, np.float64)
+    layers = air_layers(atm, wavelength_nm, ground_m, split_m=top_m)
     n_above = _layers_above(ground_m, top_m)
 
     def refl(sl, a):
-        res = solve(tau[sl], ssa[sl], mu0, mu_nodes, [0.0], phi_nodes, moments=moments[sl], surface_albedo=a,
-                    n_streams=N_STREAMS)
-        return np.array([[np.pi * res.intensities(m, 0, p) / mu0 for p in range(phi_nodes.size)]
-                         for m in range(mu_nodes.size)])
-    tau_above = float(tau[:n_above].sum())
+        return reflectance(tuple(v[sl] for v in layers), mu0, mu_nodes, phi_nodes, a)
+    tau_above = float(layers[0][:n_above].sum())
     full = refl(slice(None), albedo) if full is None else full
     below, above = refl(slice(n_above, None), albedo), refl(slice(0, n_above), 0.0)
     t_dir = np.exp(-tau_above / mu0) * np.exp(-tau_above / mu_nodes)[:, None]
     return full - t_dir * below - above
+
+
+def reflectance(layers, mu0: float, mu_nodes, phi_nodes, albedo: float) -> np.ndarray:
+    """The reflectance factor pi I / mu0 (mu_nodes x phi_nodes) at the top of ``layers`` ((optical depth, albedo,
+    moments) of ``air_layers``, top first) over a Lambertian surface of ``albedo``: one DISORT solve."""
+    from ..plane_parallel.disort import solve
+    tau, ssa, moments = layers
+    mu_nodes, phi_nodes = np.asarray(mu_nodes, np.float64), np.asarray(phi_nodes, np.float64)
+    res = solve(tau, ssa, mu0, mu_nodes, [0.0], phi_nodes, moments=moments, surface_albedo=albedo, n_streams=N_STREAMS)
+    return np.array([[np.pi * res.intensities(m, 0, p) / mu0 for p in range(phi_nodes.size)]
+                     for m in range(mu_nodes.size)])
 
 
 def _layer_edges(ground_m: float, split_m: float | None = None) -> np.ndarray:
