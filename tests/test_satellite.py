@@ -114,19 +114,22 @@ def test_satellite_refuses_before_rendering(tmp_path, capsys, argv, message):
 
 
 def test_satellite_over_dask_is_bit_identical(tmp_path, capsys):
-    """The satellite render's passes as Dask tasks (a LocalCluster of one worker): the same reflectance.
-    And without an atmosphere, a pixel that sees the bare surround far from the domain reads its albedo
-    (a Lambertian surface: R = albedo, whatever the angles), the file's boundary albedo in the band (its
-    broadband ALBEDO shaped by the land use, ``--surface file``)."""
+    """The satellite render's passes as Dask tasks (a LocalCluster of one worker), with the default clear air: the
+    same reflectance. And without an atmosphere (``--atmosphere none``), a pixel that sees the bare surround far
+    from the domain reads its albedo (a Lambertian surface: R = albedo, whatever the angles), the file's boundary
+    albedo in the band (its broadband ALBEDO shaped by the land use, ``--surface file``)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         assert cli.main(_plateau_args(tmp_path)) == 0
         far = tmp_path / "dask"
         assert cli.main(_plateau_args(far) + ["--workers", "1"]) == 0
+        assert cli.main(_plateau_args(tmp_path / "none", "--atmosphere", "none")) == 0
         hyd = wm.open_wrf(shared_file(WRF_THOMPSON), time=1)
-    ds = xr.open_dataset(tmp_path / "sat.nc")
-    a, b = ds.reflectance.values, xr.open_dataset(far / "sat.nc").reflectance.values
+    a, b = (xr.open_dataset(p / "sat.nc").reflectance.values for p in (tmp_path, far))
+    assert xr.open_dataset(tmp_path / "sat.nc").attrs["atmosphere"] == "clear"
     np.testing.assert_array_equal(a, b)
+    ds = xr.open_dataset(tmp_path / "none" / "sat.nc")
+    a = ds.reflectance.values
     edge = wm.terrain.Terrain.of(hyd).in_band(0.64).edge_albedo()
     surround = (ds.in_domain.values == 0) & (ds.cloud.values == 0)
     assert surround.sum() > 5

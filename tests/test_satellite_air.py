@@ -171,7 +171,8 @@ def _args(**kw):
 
 def test_the_options_resolve_and_refuse_before_rendering():
     from weather_mi.cli.satellite_air_option import check_natural_view, satellite_atmosphere
-    assert satellite_atmosphere(_args()) is None  # the default stays none (issue 38: --rgb costs over 1.3x)
+    from weather_mi.optics.air import Atmosphere
+    assert satellite_atmosphere(_args()).aod_550 == Atmosphere().aod_550  # clear by default (issue 38: <= 1.3x)
     assert satellite_atmosphere(_args(rayleigh=True)) is None  # the old option: molecules in the box only
     assert satellite_atmosphere(_args(atmosphere="clear", aod=0.3)).aod_550 == 0.3
     with pytest.raises(ValueError, match="--rayleigh .* exclude"):
@@ -192,6 +193,36 @@ def test_the_options_resolve_and_refuse_before_rendering():
         check_natural_view(_args(view="natural", band="0.64", rgb=True), loop=False)
     with pytest.raises(ValueError, match="several files or times"):
         check_natural_view(_args(view="natural"), loop=True)
+
+
+@pytest.mark.parametrize("rgb", [False, True])
+def test_satellite_has_the_clear_air_by_default(tmp_path, rgb):
+    """``weather-mi satellite`` end to end with its defaults: the clear atmosphere (recorded in the NetCDF), and
+    against ``--atmosphere none`` (same seed) the air changes the pixels: a clear sea brighter (the air's path
+    reflectance), by more at 0.47 um than at 0.64 um with ``--rgb`` (Rayleigh ~ lambda^-4)."""
+    import xarray as xr
+    from weather_mi.cli import commands as cli
+    common = ["satellite", "--demo", "cumulus", "--lat", "25", "--lon", "-75", "--date", "2013-05-20T16:00",
+              "--resolution", "4km", "--spp", "2", *(["--rgb"] if rgb else [])]
+    out = {}
+    for name, extra in (("default", []), ("none", ["--atmosphere", "none"])):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            assert cli.main([*common, *extra, "-o", str(tmp_path / f"{name}.nc")]) == 0
+        with xr.open_dataset(tmp_path / f"{name}.nc") as ds:
+            out[name] = (ds.attrs["atmosphere"], ds.reflectance.load())
+    assert out["default"][0] == "clear" and out["none"][0] == "none"
+    air, none = out["default"][1], out["none"][1]
+    changed = np.isfinite(air) & np.isfinite(none) & (air != none)
+    assert changed.mean() > 0.9
+    clear = (none < 0.1) & np.isfinite(air)  # the sea
+    assert clear.sum() > 10
+    added = (air - none).where(clear)
+    if rgb:
+        by_band = added.mean(("y", "x"))
+        assert float(by_band.isel(band=0)) > float(by_band.isel(band=1)) > 0.0  # 0.47 um > 0.64 um
+    else:
+        assert float(added.mean()) > 0.0
 
 
 def test_a_loop_records_its_atmosphere():

@@ -5,16 +5,17 @@ from __future__ import annotations
 
 from .air_option import add_aod_ozone
 
-# clear costs 1.45x (one band) and 1.7x (--rgb) the time to the same noise; the target is 1.3x (docs/satellite_air.md)
-DEFAULT_ATMOSPHERE = "none"
+# clear costs about 1.1x (one band) and 1.2x (--rgb) the time to the same noise; the target is 1.3x (docs/satellite_air.md)
+DEFAULT_ATMOSPHERE = "clear"
 
 
 def add_satellite_air_options(p) -> None:
     p.add_argument("--atmosphere", default=None, choices=("none", "clear"),
-                   help="clear: a clear 1-D atmosphere (molecules, ozone, aerosol) in the band(s), inside the model's "
-                        "box from its own air density, above its top and around it, and on the sun's path through a "
-                        "spherical shell (about 1.5x the time without it; --rgb 1.7x); none (default; always with "
-                        "--rayleigh or --tile-size): vacuum between the hydrometeors, the sun as it is above the air")
+                   help="clear (default): a clear 1-D atmosphere (molecules, ozone, aerosol) in the band(s), inside the "
+                        "model's box from its own air density, above its top and around it, and on the sun's path "
+                        "through a spherical shell (about 1.1-1.2x the time to the same noise without it); none (the "
+                        "default with --rayleigh or --tile-size): vacuum between the hydrometeors, the sun as it is "
+                        "above the air")
     add_aod_ozone(p)
     p.add_argument("--view", default="reflectance", choices=("reflectance", "natural"),
                    help="reflectance (default): the imager's band(s) as reflectance factors; natural: what an "

@@ -76,8 +76,8 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
                          keep=("beta_ext", "weights") if args.rgb or args.rayleigh or args.view == "natural"
                          else ("weights",))  # the air: beta_s
     atm = satellite_atmosphere(args)
-    air = args.rgb or args.rayleigh or atm is not None or args.view == "natural"  # their air needs rho_air
-    hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air" or not air])  # in vol now
+    # --rayleigh's air needs rho_air; the clear air's box reads its level means (the volume's ``air_density``)
+    hyd = hyd.drop_vars([v for v in hyd.data_vars if v != "rho_air" or not args.rayleigh])  # in vol now
     if args.view == "natural":
         return _satellite_natural(args, hyd, vol, resolution, nc, exr, png, ckpt, atm)
     if args.rgb:

@@ -79,11 +79,12 @@ def air_weights(air) -> np.ndarray:
 
 def integrator_air_albedo(vol: OpticalVolume, air) -> dict:
     """``majorant_volpath``'s ``air_albedo`` (the hydrometeors' albedo grid, (z, y, x, C), the volume's own array,
-    used in place; levels padded where periodic) and ``air_scattering`` (the air's scattering per level and
-    channel, molecules and aerosol summed, 1/m) (``kernel.plugins.air_albedo``)."""
+    used in place: one channel where its three agree, a satellite band's, :func:`grey_or_rgb`, not a copy of the
+    three; levels padded where periodic) and ``air_scattering`` (the air's scattering per level and channel,
+    molecules and aerosol summed, 1/m) (``kernel.plugins.air_albedo``)."""
     import mitsuba as mi
     albedo = np.asarray(vol.albedo)
-    albedo = albedo if albedo.ndim == 4 else albedo[..., None]
+    albedo = grey_or_rgb(albedo) if albedo.ndim == 4 else albedo[..., None]
     sca = air.scattering_levels.sum(axis=0)
     if vol.periodic:
         albedo, sca = pad_levels(albedo), pad_levels(sca)

@@ -30,25 +30,21 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..optics.air.layers import N_STREAMS, air_layers, layer_edges as _layer_edges  # noqa: F401  (moved there)
+from ..optics.air import layers as _layers
+from ..optics.air.layers import N_STREAMS
 
+LAYER_M = 2000.0  # the satellite's DISORT layers up to 30 km (1 km: R_0 within 8e-4 at 0.47 um, the image within 3e-4,
+#                   each solve twice the time)
 ALBEDOS = (0.0, 0.1, 0.5)         # the surface albedos of the three DISORT solves (R_0, then K and s)
 
 
 def plane_parallel_terms(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_nodes, ground_m: float = 0.0,
-                         albedos=ALBEDOS):
+                         albedos=ALBEDOS, split_m: float | None = None):
     """(R_0, K, s) of the module docstring on the grid ``mu_nodes`` (ascending cos of the view zenith) x
     ``phi_nodes`` (deg, 0 forward scattering): three DISORT solves (``ALBEDOS``; ``albedos`` (0,): R_0 alone,
-    K and s None)."""
-    from ..plane_parallel.disort import solve
-    tau, ssa, moments = air_layers(atm, wavelength_nm, ground_m)
-    mu_nodes, phi_nodes = np.asarray(mu_nodes, np.float64), np.asarray(phi_nodes, np.float64)
-    refl = []
-    for a in albedos:
-        res = solve(tau, ssa, mu0, mu_nodes, [0.0], phi_nodes, moments=moments, surface_albedo=a,
-                    n_streams=N_STREAMS)
-        refl.append(np.array([[np.pi * res.intensities(m, 0, p) / mu0 for p in range(phi_nodes.size)]
-                              for m in range(mu_nodes.size)]))
+    K and s None); ``split_m``: ``air_layers``' layers split there."""
+    layers = air_layers(atm, wavelength_nm, ground_m, split_m)
+    refl = [reflectance(layers, mu0, mu_nodes, phi_nodes, a) for a in albedos]
     if len(refl) == 1:
         return refl[0], None, None
     r0, (a1, a2) = refl[0], albedos[1:]
@@ -58,27 +54,45 @@ def plane_parallel_terms(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_no
 
 
 def above_box_coupling(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_nodes, ground_m: float, top_m: float,
-                       albedo: float) -> np.ndarray:
+                       albedo: float, full=None) -> np.ndarray:
     """What the air above the box's top adds to a clear column beyond its single scattering along the line of
     sight and its direct transmittances (mu_nodes x phi_nodes): R_full - T(mu0) T(mu) R_below - R_above (DISORT,
     the surface of ``albedo``; T the direct transmittances of the air above ``top_m``, R_above its reflectance
     alone over a black surface): its diffuse light onto the box and the box's diffuse light scattered back into
     the line of sight. Added to every line of sight through the box (a cloud's own coupling taken as the clear
-    column's)."""
-    from ..plane_parallel.disort import solve
-    mu_nodes, phi_nodes = np.asarray(mu_nodes, np.float64), np.asarray(phi_nodes, np.float64)
-    tau, ssa, moments = air_layers(atm, wavelength_nm, ground_m, split_m=top_m)
+    column's). ``full``: R_full on the grid where known (``ColumnTerms.full``: no solve of the whole column)."""
+    mu_nodes = np.asarray(mu_nodes, np.float64)
+    layers = air_layers(atm, wavelength_nm, ground_m, split_m=top_m)
     n_above = _layers_above(ground_m, top_m)
 
     def refl(sl, a):
-        res = solve(tau[sl], ssa[sl], mu0, mu_nodes, [0.0], phi_nodes, moments=moments[sl], surface_albedo=a,
-                    n_streams=N_STREAMS)
-        return np.array([[np.pi * res.intensities(m, 0, p) / mu0 for p in range(phi_nodes.size)]
-                         for m in range(mu_nodes.size)])
-    tau_above = float(tau[:n_above].sum())
-    full, below, above = refl(slice(None), albedo), refl(slice(n_above, None), albedo), refl(slice(0, n_above), 0.0)
+        return reflectance(tuple(v[sl] for v in layers), mu0, mu_nodes, phi_nodes, a)
+    tau_above = float(layers[0][:n_above].sum())
+    full = refl(slice(None), albedo) if full is None else full
+    below, above = refl(slice(n_above, None), albedo), refl(slice(0, n_above), 0.0)
     t_dir = np.exp(-tau_above / mu0) * np.exp(-tau_above / mu_nodes)[:, None]
     return full - t_dir * below - above
+
+
+def reflectance(layers, mu0: float, mu_nodes, phi_nodes, albedo: float) -> np.ndarray:
+    """The reflectance factor pi I / mu0 (mu_nodes x phi_nodes) at the top of ``layers`` ((optical depth, albedo,
+    moments) of ``air_layers``, top first) over a Lambertian surface of ``albedo``: one DISORT solve."""
+    from ..plane_parallel.disort import solve
+    tau, ssa, moments = layers
+    mu_nodes, phi_nodes = np.asarray(mu_nodes, np.float64), np.asarray(phi_nodes, np.float64)
+    res = solve(tau, ssa, mu0, mu_nodes, [0.0], phi_nodes, moments=moments, surface_albedo=albedo, n_streams=N_STREAMS)
+    return np.array([[np.pi * res.intensities(m, 0, p) / mu0 for p in range(phi_nodes.size)]
+                     for m in range(mu_nodes.size)])
+
+
+def air_layers(atm, wavelength_nm: float, ground_m: float = 0.0, split_m=None):
+    """``optics.air.layers.air_layers`` with the satellite's ``LAYER_M``."""
+    return _layers.air_layers(atm, wavelength_nm, ground_m, split_m, layer_m=LAYER_M)
+
+
+def _layer_edges(ground_m: float, split_m=None) -> np.ndarray:
+    """``optics.air.layers.layer_edges`` with the satellite's ``LAYER_M``."""
+    return _layers.layer_edges(ground_m, split_m, layer_m=LAYER_M)
 
 
 def _layers_above(ground_m: float, top_m: float) -> int:
@@ -116,12 +130,13 @@ def with_air_outside(scene, img):
     rad = np.asarray(img.radiance, np.float64).copy()
     se = None if img.stderr is None else np.asarray(img.stderr, np.float64).copy()
     t_box = None if img.transmittance is None else np.asarray(img.transmittance, np.float64)[hit]
-    t_a, r_a = _through_box(atm, scene, t_box, o[hit], d[hit], mu[hit], phi[hit], t0[hit], t1[hit], band_nm, mu0)
-    rad[hit] = r_a + t_a * rad[hit] + _coupling(atm, scene, mu[hit], phi[hit], band_nm, mu0)
+    col = ColumnTerms(atm, scene, mu, phi, mu0)
+    t_a, r_a = _through_box(atm, scene, col, t_box, o[hit], d[hit], mu[hit], phi[hit], t0[hit], t1[hit], band_nm, mu0)
+    rad[hit] = r_a + t_a * rad[hit] + _coupling(col, mu[hit], phi[hit], band_nm, scene)
     if se is not None:
         se[hit] = t_a * se[hit]
     if (~hit).any():
-        rad[~hit], surface = _past_box(atm, scene, mu[~hit], phi[~hit], rad[~hit], band_nm, mu0)
+        rad[~hit], surface = _past_box(col, mu[~hit], phi[~hit], rad[~hit], band_nm)
         if se is not None:
             se[~hit] = se[~hit] * surface
     meta = {**img.metadata, "air_outside": {"above_box_px": int(hit.sum()), "past_box_px": int((~hit).sum())}}
@@ -144,7 +159,37 @@ def _segments(atm, scene, start, d, s0, s1, table, band_nm):
     return segment_air(atm, scene.spec.sun.to_sun, start, d, s0, s1, table, wavelengths_nm=band_nm)
 
 
-def _through_box(atm, scene, t_box, o, d, mu, phi, t0, t1, band_nm, mu0):
+class ColumnTerms:
+    """The clear plane-parallel column's DISORT terms (R_0, K, s of ``plane_parallel_terms``, its layers split at
+    the box's top) per wavelength, each solved once, on one (mu, phi) grid spanning every line of sight of a view:
+    shared by the lines that miss the box (``_past_box``), the side walls' ratio (``_path_reflectance``) and the
+    coupling above the box, whose whole column over a surface of albedo a is R_0 + a K / (1 - a s) (``full``)."""
+
+    def __init__(self, atm, scene, mu, phi, mu0: float):
+        self.atm, self.mu0 = atm, float(mu0)
+        self.ground, self.top = ground_height_m(scene), float(scene.vol.bbox[1][2])
+        self.mu_nodes, self.phi_nodes, _ = _grid(np.ravel(mu), np.ravel(phi))
+        self._terms = {}
+
+    def terms(self, wl: float):
+        """(R_0, K, s) on the grid at ``wl`` (nm)."""
+        if wl not in self._terms:
+            self._terms[wl] = plane_parallel_terms(self.atm, wl, self.mu0, self.mu_nodes, self.phi_nodes, self.ground,
+                                                   split_m=self.top)
+        return self._terms[wl]
+
+    def full(self, wl: float, albedo: float):
+        """The whole column's reflectance over a Lambertian surface of ``albedo`` on the grid (Chandrasekhar)."""
+        r0, k, s = self.terms(wl)
+        return r0 + albedo * k / (1.0 - albedo * s)
+
+    def at(self, values, mu, phi):
+        """``values`` on the grid interpolated at (mu, phi) (n,)."""
+        from scipy.interpolate import RegularGridInterpolator
+        return RegularGridInterpolator((self.mu_nodes, self.phi_nodes), values)(np.stack([mu, phi], axis=-1))
+
+
+def _through_box(atm, scene, col, t_box, o, d, mu, phi, t0, t1, band_nm, mu0):
     """(T_A (n, 3), the air's reflectance added (n, 3)) of lines of sight through the box: A from the top of the
     air to the box entry ``t0`` (single scattering), and B from a side wall's exit ``t1`` down to the ground
     (single scattering times the column's ratio of all orders to the first, R_0 / (pi S_column / mu0),
@@ -162,24 +207,15 @@ def _through_box(atm, scene, t_box, o, d, mu, phi, t0, t1, band_nm, mu0):
         k = np.flatnonzero(side)
         _, s_b = _segments(atm, scene, start[k], d[k], back[k] + t1[k], back[k] + t_ground[k], table, band_nm)
         _, s_col = _segments(atm, scene, start[k], d[k], np.zeros(k.size), back[k] + t_ground[k], table, band_nm)
-        ratio = _path_reflectance(atm, scene, mu[k], phi[k], band_nm, mu0) / np.maximum(np.pi * s_col / mu0, 1e-12)
+        ratio = _path_reflectance(col, mu[k], phi[k], band_nm) / np.maximum(np.pi * s_col / mu0, 1e-12)
         seen = 1.0 if t_box is None else t_box[k, None]
         added[k] += t_a[k] * seen * ratio * np.pi * s_b / mu0
     return t_a, added
 
 
-def _path_reflectance(atm, scene, mu, phi, band_nm, mu0):
+def _path_reflectance(col, mu, phi, band_nm):
     """R_0 (n, 3): the clear column's reflectance over a black surface (DISORT) at the lines' angles."""
-    from scipy.interpolate import RegularGridInterpolator
-    mu_nodes, phi_nodes, pts = _grid(mu, phi)
-    ground = ground_height_m(scene)
-    out, done = np.zeros((mu.size, 3)), {}
-    for c, wl in enumerate(band_nm):
-        if wl not in done:
-            r0 = plane_parallel_terms(atm, wl, mu0, mu_nodes, phi_nodes, ground, albedos=(0.0,))[0]
-            done[wl] = RegularGridInterpolator((mu_nodes, phi_nodes), r0)(pts)
-        out[:, c] = done[wl]
-    return out
+    return np.stack([col.at(col.terms(wl)[0], mu, phi) for wl in band_nm], axis=-1)
 
 
 def _grid(mu, phi):
@@ -189,33 +225,27 @@ def _grid(mu, phi):
     return mu_nodes, phi_nodes, np.stack([mu, phi], axis=-1)
 
 
-def _coupling(atm, scene, mu, phi, band_nm, mu0):
+def _coupling(col, mu, phi, band_nm, scene):
     """``above_box_coupling`` (n, 3) at the lines of sight's angles, per channel (the ground's albedo there)."""
-    from scipy.interpolate import RegularGridInterpolator
-    mu_nodes, phi_nodes, pts = _grid(mu, phi)
-    ground = ground_height_m(scene)
     albedo = (0.0,) * 3 if scene.spec.ground is None else scene.spec.ground.albedo
     out, done = np.zeros((mu.size, 3)), {}
     for c, (wl, a) in enumerate(zip(band_nm, albedo)):
         if (wl, a) not in done:
-            table = above_box_coupling(atm, wl, mu0, mu_nodes, phi_nodes, ground, float(scene.vol.bbox[1][2]), a)
-            done[(wl, a)] = RegularGridInterpolator((mu_nodes, phi_nodes), table)(pts)
+            table = above_box_coupling(col.atm, wl, col.mu0, col.mu_nodes, col.phi_nodes, col.ground, col.top, a,
+                                       full=col.full(wl, a))
+            done[(wl, a)] = col.at(table, mu, phi)
         out[:, c] = done[(wl, a)]
     return out
 
 
-def _past_box(atm, scene, mu, phi, rendered, band_nm, mu0):
+def _past_box(col, mu, phi, rendered, band_nm):
     """(reflectance (n, 3), the factor on the rendered surface term (n, 3)) of the lines of sight that miss the
     box (module docstring), the plane-parallel terms interpolated in (mu, phi) per distinct wavelength."""
-    from scipy.interpolate import RegularGridInterpolator
     from ..optics.air.sunlight import transmittance
-    ground = ground_height_m(scene)
-    mu_nodes, phi_nodes, pts = _grid(mu, phi)
     out, factor = np.empty_like(rendered), np.empty_like(rendered)
     for wl in sorted(set(band_nm)):
-        r0, k, s = (RegularGridInterpolator((mu_nodes, phi_nodes), v)(pts)
-                    for v in plane_parallel_terms(atm, wl, mu0, mu_nodes, phi_nodes, ground))
-        t_dir = float(transmittance(atm, [wl], ground, mu0)[0])
+        r0, k, s = (col.at(v, mu, phi) for v in col.terms(wl))
+        t_dir = float(transmittance(col.atm, [wl], col.ground, col.mu0)[0])
         for c in (c for c, w in enumerate(band_nm) if w == wl):
             a = np.clip(rendered[:, c] / t_dir, 0.0, 1.0)
             factor[:, c] = k / (t_dir * (1.0 - a * s))

@@ -68,6 +68,7 @@ class AirLevels:
         self.grey = bool(grey)
         air = np.ascontiguousarray(np.asarray(air)[:, :1]) if grey else air
         a = np.asarray(air, np.float64)
+        self.values, self._split = a, None
         n, self.channels = a.shape[0], a.shape[1]  # 3 (R, G, B), or a wavelength grid's K (.spectral_air)
         self.n = dr.opaque(mi.Int32, n)
         self.sigma = aligned_float(mi, np.asarray(air, np.float32))
@@ -83,6 +84,16 @@ class AirLevels:
         c = np.concatenate([[np.zeros(self.channels)], np.cumsum((s_left + 0.5 * slope * width[:, None]) * width[:, None], axis=0)])
         self.knot = mi.Float64(knots)
         self.s_left, self.slope, self.c_left = (mi.Float64(v[:n + 1].ravel()) for v in (s_left, slope, c))
+
+    def split_max(self):
+        """(The air's largest channel per level, grey; each channel's excess over it, <= 0), both ``AirLevels``
+        (float64 differences, kept): a free flight tracked grey against the largest channel, the channels weighted
+        by the excess in closed form (``trackers``: sigma_c = sigma_max + excess_c)."""
+        if self._split is None:
+            top = self.values.max(axis=1, keepdims=True)
+            self._split = (AirLevels(np.repeat(top, self.channels, axis=1).astype(np.float32), grey=True),
+                           AirLevels(self.values - top))
+        return self._split
 
     def cube_bound(self, cz, k, lo: int, active):
         """The majorant of the empty cube of radius ``k`` about texel cell level ``cz`` (cells from ``lo``)."""

@@ -113,9 +113,10 @@ class MajorantVolpath:
          and which is added to a grey (1-channel) one, the albedo then the mixture's of ``air_albedo`` and
          ``air_scattering`` (:mod:`.air_albedo`, ``MediumSetup.add_air``) (:mod:`.air_levels`): its cells are
          crossed as empty space, with the air's majorant. An air whose three channels are equal (a satellite
-         band's) is tracked grey (``air_levels.equal_channels``). Spectral variants, with ``air_spectra``, ``air_nm``
-         and ``air_component_albedo``: (levels, M) the profiles of the air's components, read at the path's
-         wavelengths (:mod:`.spectral_air`; the albedo :mod:`.spectral_air_albedo`).
+          band's) is tracked grey (``air_levels.equal_channels``); a chromatic one's free flights follow its
+          largest channel, grey, the channels weighted in closed form (:mod:`.trackers`). Spectral variants,
+          with ``air_spectra``, ``air_nm`` and ``air_component_albedo``: (levels, M) the profiles of the air's
+          components, read at the path's wavelengths (:mod:`.spectral_air`; the albedo :mod:`.spectral_air_albedo`).
      * - periodic, periodic_tiles
        - |string|, |int|
        - "none" (default), "view" or "transport": x and y periodic over ``periodic_tiles`` periods on each
@@ -212,6 +213,7 @@ class MajorantVolpath:
                     maj = air_levels.with_coarse_air(maj, self.air_levels, self.cell)
                 self.majorant = mi.TensorXf(maj)
                 self._auto_key = key
+        levels = None
         if self.air_levels is not None and vol is not None and int(volume_data(vol).shape[-1]) == 1:
             if self.air_spectral is not None:  # spectral variants: the air at the path's wavelengths
                 levels = self.air_spectral
@@ -222,9 +224,9 @@ class MajorantVolpath:
         coarse = self._grids.coarse(self.majorant, vol, ms.scale, self.cell)
         periodic = self.periodic != "none"
         texel, texel_data = self._grids.texel(vol, ms.scale, self.reach if periodic else None, self.air_levels,
-                                              grey_air=not ms.spectral, levels=self.air_spectral)
+                                              grey_air=not ms.spectral, levels=levels)
         track = texel if (texel is not None and self.track_mode == "texel") else coarse
-        texel_data = None if ms.air is not None else texel_data  # the grid's texels lack the air added per level
+        # (a grey grid's texels lack the air added per level: the trackers add it, ``trackers``)
         self._tk = Tracking(ms, to_local, coarse, texel, track, texel_data, self.periodic, self.reach)
 
     # ------------------------------------------------------------ main entry

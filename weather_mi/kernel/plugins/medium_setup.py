@@ -288,8 +288,9 @@ class GridCache:
         between texels i and i + 1 modulo N). ``air``: the box's air per level (``air_levels``), whose cells
         count as empty (majorant 0 here; the trackers use the air's own); ``grey_air``: the trackers' extinction is
         grey (not spectral), the air's one channel (``air_levels.AirLevels`` grey); ``levels``: the trackers' air
-        object where not ``AirLevels(air)`` (spectral variants: ``spectral_air.ComponentAirLevels``, ``air`` then its
-        (levels, K) table over wavelength, which the majorants bound)."""
+        object where already built (the medium's, ``MediumSetup.add_air``: an ``AirLevels``; spectral variants:
+        ``spectral_air.ComponentAirLevels``, ``air`` then its (levels, K) table over wavelength, which the
+        majorants bound)."""
         if vol is None:
             return None, None
         data = volume_data(vol)

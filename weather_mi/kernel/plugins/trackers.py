@@ -9,6 +9,14 @@ majorants, walked cell by cell with the DDA (:mod:`.dda`), empty cubes of cells 
 * :func:`exact_transmittance`: T = exp(-tau), tau integrated exactly by Simpson's rule per texel cell
   (the trilinear interpolant is a cubic along a ray there), with Russian roulette in a render.
 
+The box's air added per level to a grey grid (:mod:`.air_levels`; render's and ``satellite``'s default) costs the
+loops little: the walks interpolate the grey grid's texels and add the air's level values; exact transmittance
+takes the air's optical depth of the whole segment in closed form once (the air is horizontally homogeneous, the
+ray straight), its loop the hydrometeors' alone; a chromatic air's free flights and ratio tracking follow its
+largest channel, grey (sigma_g = the hydrometeors' + the air's largest), the channels weighted in closed form by
+its excess e_c = sigma_c - sigma_g <= 0 (:func:`_excess_weight`): exp(-integral e_c) over the flight, times
+sigma_c / sigma_g at a real collision: the density and escape probability drawn with sigma_g become sigma_c's.
+
 Every function takes the per-render :class:`.medium_setup.Tracking` ``tk``; distances are along the ray.
 """
 from __future__ import annotations
@@ -33,11 +41,17 @@ class _Walk:
     within [0, t_end] (``cells``, ``nexts``, ``t_near``), ``t_max`` where it leaves, ``active`` where it
     meets the box; ``air`` the grid's air at the ray's wavelengths (``spectral_air.bind_air``)."""
 
-    def __init__(self, tk, grid, texels, ray, t_end, active, tile_only=None):
+    def __init__(self, tk, grid, texels, ray, t_end, active, tile_only=None, split_air: bool = False):
         self.tk, self.grid, self.texels, self.ray = tk, grid, texels, ray
         self.air = bind_air(grid.air, ray.wavelengths)
         self.bound_air = None if self.air is grid.air else self.air  # spectral: for the medium's lookups too
         o_l, d_l, self.t_near, self.t_max, self.active = ray_box(tk.to_local, ray, t_end, active, tk.bounds(tile_only))
+        self.met = mi.Bool(active) & (self.t_near < self.t_max)  # (``active`` is the loops' state, updated in place)
+        # the air the walk tracks: the grid's (at the ray's wavelengths), or (``split_air``, RGB) its largest channel,
+        # grey, the rest its ``excess``
+        self.excess = None
+        if split_air:
+            self.air, self.excess = grid.air.split_max()
         self.q0 = [o_l[k] * grid.scale[k] + grid.shift for k in range(3)]
         self.dq = [d_l[k] * grid.scale[k] for k in range(3)]
         self.cells, self.nexts = locate(grid, self.q0, self.dq, self.t_near)
@@ -60,7 +74,10 @@ class _Walk:
         dt = dr.select(maj > 0.0, -dr.log(1.0 - u) / maj, dr.inf)
         tc = t + dt
         collide = active & (tc < seg_end)
-        if self.air is not None:  # sigma_t in the air's cells from its levels, elsewhere the medium's lookup
+        if self.air is not None and self.texels is not None:  # a grey grid's interpolant plus the air per level (RGB)
+            grey = cell_interpolant(self.texels, grid, q0, dq, cells, (tc,), collide & ~empty)[0]
+            s_t = self.air.sigma_at(q0[2] + dq[2] * tc, collide) + dr.select(empty, 0.0, grey)
+        elif self.air is not None:  # sigma_t in the air's cells from its levels, elsewhere the medium's lookup
             s_t = dr.select(empty, self.air.sigma_at(q0[2] + dq[2] * tc, collide & empty),
                             self.sigma_t(tc, collide & ~empty))
         elif self.texels is None:
@@ -80,10 +97,34 @@ class _Walk:
 
 
 def _tracking_walk(tk, ray, t_end, active, tile_only=None):
-    """The walk of free flights and ratio tracking: over ``tk.track``, texels interpolated in texel cells."""
+    """The walk of free flights and ratio tracking: over ``tk.track``, texels interpolated in texel cells (a grey
+    grid's: with the air added per level, the air's extinction added to them)."""
     grid = tk.track
-    texels = tk.texel_data if (grid is tk.texel and not tk.ms.spectral) else None
-    return _Walk(tk, grid, texels, ray, t_end, active, tile_only)
+    texels = tk.texel_data if (grid is tk.texel and not tk.ms.spectral) else None  # spectral: the medium's lookups
+    return _Walk(tk, grid, texels, ray, t_end, active, tile_only, split_air=_split_air(tk, grid, texels))
+
+
+def _split_air(tk, grid, texels) -> bool:
+    """Whether free flights and ratio tracking follow the air's largest channel, grey, and weight the channels by
+    its excess in closed form (:func:`_excess_weight`): a chromatic RGB air added per level to a grey grid whose
+    texels the walk interpolates (the only spectral part of the extinction is then the air's)."""
+    from .air_levels import AirLevels
+    air = grid.air
+    return (texels is not None and type(air) is AirLevels and not air.grey and air.channels == 3
+            and tk.ms.air is air)
+
+
+def _excess_weight(walk, end, at_collision, s_g, active):
+    """The channels' factor of a walk tracked grey against the air's largest channel (``_split_air``), over
+    [t_near, ``end``]: exp(-tau_excess) (<= 0 excess: >= 1), at a real collision (``at_collision``) times
+    sigma_c / sigma_g = 1 + excess_c / ``s_g`` (s_g the grey extinction the collision was drawn with). The
+    free flight's density and its escape probability are those of sigma_g; these factors make them sigma_c's
+    (Color3f; 1 where not ``active``)."""
+    ex, q0, dq = walk.excess, walk.q0, walk.dq
+    tau = ex.tau(q0[2], dq[2], walk.t_near, end, active)
+    at = ex.sigma_at(q0[2] + dq[2] * end, active & at_collision)
+    ratio = dr.select(at_collision, 1.0 + at * dr.rcp(dr.select(s_g > 0.0, s_g, 1.0)), 1.0)
+    return dr.select(active, ratio * dr.exp(-tau), 1.0)
 
 
 def _spectral_collision(tr, maj, s_t, xi, collide, found):
@@ -147,8 +188,9 @@ def delta_tracking(tk, ray, t_end, sampler, active, weight, tile_only=None):
         collisions (unbiased; the mean of the throughput is preserved).
     """
     walk = _tracking_walk(tk, ray, t_end, active, tile_only)
-    spectral = tk.ms.spectral
-    tr = mi.Spectrum(weight) if spectral else mi.Float(1.0)
+    split = walk.excess is not None  # grey against the air's largest channel (``_split_air``)
+    spectral = tk.ms.spectral and not split
+    tr = mi.Spectrum(weight) if spectral else mi.Float(0.0 if split else 1.0)
 
     def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
         cells, nexts = [cx, cy, cz], [tx, ty, tz]
@@ -159,10 +201,15 @@ def delta_tracking(tk, ray, t_end, sampler, active, weight, tile_only=None):
         else:
             stop = collide & (xi * maj < s_t)
             found |= stop
+            if split:  # tr: the grey extinction of the real collision
+                tr = dr.select(stop, s_t, tr)
         t, (cx, cy, cz), (tx, ty, tz), active = walk.advance(active, collide, tc, seg_end, cells, nexts, k, stop)
         return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
 
     _, _, t, _, _, _, _, _, _, found, tr = _walk_loop(walk, sampler, tr, body, "majorant_volpath: DDA delta tracking")
+    if split:
+        end = dr.select(found, t, walk.t_max)
+        return found, t, mi.Spectrum(weight) * _excess_weight(walk, end, found, tr, walk.met)
     return found, t, (tr if spectral else weight)
 
 
@@ -183,7 +230,8 @@ def ratio_tracking(tk, ray, t_end, sampler, active):
         The transmittance estimate (dimensionless).
     """
     walk = _tracking_walk(tk, ray, t_end, active)
-    spectral = tk.ms.spectral
+    split = walk.excess is not None  # grey against the air's largest channel (``_split_air``)
+    spectral = tk.ms.spectral and not split
     tr = mi.Spectrum(1.0) if spectral else mi.Float(1.0)
 
     def body(sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr):
@@ -199,6 +247,8 @@ def ratio_tracking(tk, ray, t_end, sampler, active):
         return sampler, active, t, cx, cy, cz, tx, ty, tz, found, tr
 
     *_, tr = _walk_loop(walk, sampler, tr, body, "majorant_volpath: DDA ratio tracking")
+    if split:
+        return mi.Spectrum(tr) * _excess_weight(walk, walk.t_max, mi.Bool(False), mi.Float(1.0), walk.met)
     return mi.Spectrum(tr) if not spectral else tr
 
 
@@ -232,11 +282,23 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
         The transmittance (dimensionless), or its roulette estimate.
     """
     spectral = tk.ms.spectral
-    walk = _Walk(tk, tk.texel, None if spectral else tk.texel_data, ray, t_end, active)
+    air = tk.texel.air
+    # a grey grid with the air added per level: the air's optical depth over the whole segment in closed form (one
+    # evaluation: the air is horizontally homogeneous, the ray straight), the loop the hydrometeors' alone (grey,
+    # their interpolant from the texels), as without the air
+    split = air is not None and tk.texel_data is not None and not spectral  # RGB
+    walk = _Walk(tk, tk.texel, tk.texel_data if (split or not spectral) else None, ray, t_end, active)
     grid, texels, q0, dq, t_max = walk.grid, walk.texels, walk.q0, walk.dq, walk.t_max
-    air = walk.air
+    air = walk.air  # at the ray's wavelengths (spectral: ``spectral_air.bind_air``)
     t_near, active, cells, nexts = walk.t_near, walk.active, walk.cells, walk.nexts
-    s0 = walk.sigma_t(t_near, active)
+    tau_air, tau_air_min = None, 0.0
+    if split:
+        tau_air = dr.select(active, air.tau(q0[2], dq[2], t_near, t_max, active), 0.0)  # 0 where it misses the box
+        tau_air_min = tau_air if air.grey else dr.min(tau_air)
+        air, spectral = None, False  # the loop's: grey, without the air
+        s0 = cell_interpolant(texels, grid, q0, dq, cells, (t_near,), active)[0]
+    else:
+        s0 = walk.sigma_t(t_near, active)
     tau = dr.zeros(mi.Spectrum) if spectral else mi.Float(0.0)
 
     rr = sampler is not None and EXACT_RR_SURVIVE < 1.0
@@ -265,7 +327,7 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
             s0 = dr.select(lookup, s_1, air.sigma_at(q0[2] + dq[2] * seg_end, in_air))
         t = dr.select(active, seg_end, t)
         (cx, cy, cz), (tx, ty, tz), outside = dda_step(grid, q0, dq, t, cells, nexts, k, active)
-        tau_min = dr.min(tau) if spectral else tau
+        tau_min = (dr.min(tau) if spectral else tau) + tau_air_min
         if rr:  # Russian roulette each time T falls by another EXACT_RR_STEP (weights w)
             low = active & (tau_min > next_rr)
             survive = sampler.next_1d(low) < EXACT_RR_SURVIVE
@@ -283,6 +345,8 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
                                  nexts[0], nexts[1], nexts[2], s0, tau, mi.Float(1.0), mi.Float(EXACT_RR_TAU)),
                           cond=cond, body=body, label="majorant_volpath: exact transmittance")
     *_, tau, w, _ = state
+    if split:  # the air's part, over the segment the walk crossed
+        tau, spectral = tau + tau_air, tk.ms.spectral
     if rr:
         return mi.Spectrum(w * dr.exp(-tau))
     return mi.Spectrum(dr.select((dr.min(tau) if spectral else tau) > TAU_ZERO, 0.0, dr.exp(-tau)))

@@ -131,7 +131,7 @@ def with_box_air(vol, hyd, atm: Atmosphere, band_nm=None):
     ``BoxAir.band_nm``), else the RGB mode's. A ValueError naming ``rho_air`` where its grid is not the volume's."""
     from dataclasses import replace
     z_m = vol.level_heights_m()
-    if hyd is not None:
+    if hyd is not None and "rho_air" in hyd:
         rho = np.asarray(hyd["rho_air"].values)
         if rho.shape != tuple(vol.shape):
             raise ValueError(f"rho_air's grid {rho.shape} is not the optical volume's {tuple(vol.shape)}: the air in "

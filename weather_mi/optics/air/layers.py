@@ -11,14 +11,15 @@ LAYER_M = 1000.0
 N_STREAMS = 16                    # Rayleigh needs 4; the aerosol's forward peak is left to DISORT's corrections
 
 
-def air_layers(atm, wavelength_nm: float, ground_m: float = 0.0, split_m=None):
+def air_layers(atm, wavelength_nm: float, ground_m: float = 0.0, split_m=None, layer_m: float = LAYER_M):
     """The 1-D atmosphere from ``ground_m`` to its top as DISORT layers (top first): (optical depth, single-
     scattering albedo, Legendre moments (layers, N_STREAMS + 1)) at ``wavelength_nm``: molecules (Rayleigh with
     depolarisation, ``optics.rayleigh``), ozone (absorbing), aerosol (Henyey-Greenstein of ``atm.aerosol_g``,
-    albedo ``atm.aerosol_ssa``); ``split_m``: a layer edge there (a height or a sequence of heights, m)."""
+    albedo ``atm.aerosol_ssa``); ``split_m``: a layer edge there (a height or a sequence of heights, m);
+    ``layer_m``: the layers' thickness up to 30 km."""
     from ..rayleigh import DEPOLARISATION, cross_section_m2 as rayleigh_sigma
     from .ozone import cross_section_m2 as ozone_sigma
-    edges = layer_edges(ground_m, split_m)
+    edges = layer_edges(ground_m, split_m, layer_m)
     wl = float(wavelength_nm)
     z = np.linspace(edges[:-1], edges[1:], 41, axis=-1)          # (layers, 41)
     p = atm.profiles(z)
@@ -36,11 +37,11 @@ def air_layers(atm, wavelength_nm: float, ground_m: float = 0.0, split_m=None):
     return tau, np.clip(sca / np.maximum(tau, 1e-30), 0.0, 1.0 - 1e-7), moments
 
 
-def layer_edges(ground_m: float, split_m=None) -> np.ndarray:
-    """The heights (m, ascending) of ``air_layers``' layer edges: every ``LAYER_M`` to 30 km, every 5 km above,
+def layer_edges(ground_m: float, split_m=None, layer_m: float = LAYER_M) -> np.ndarray:
+    """The heights (m, ascending) of ``air_layers``' layer edges: every ``layer_m`` to 30 km, every 5 km above,
     and ``split_m`` (None, a height or heights)."""
     lo, mid, top = TOP_LAYERS_M
-    edges = np.r_[np.arange(max(ground_m, lo), mid, LAYER_M), np.arange(mid, top + 1.0, 5000.0)]
+    edges = np.r_[np.arange(max(ground_m, lo), mid, layer_m), np.arange(mid, top + 1.0, 5000.0)]
     splits = [] if split_m is None else np.atleast_1d(np.asarray(split_m, np.float64))
     return np.unique(np.r_[edges, np.clip(splits, ground_m, top)])
 

@@ -80,19 +80,42 @@ def _column(profiles, z0, dz, r0, mu, s_a, s_b, radius_m, top_m, t, out, i):  # 
         out[p, i] += abs(acc[p])
 
 
+@njit(cache=True)
+def _columns_of(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, top_m, t, out, i):  # pragma: no cover
+    """Point i's columns into out[:, i]: from the lowest point back to the point (none where the sun is above
+    the horizon: s_star = 0, a segment of length 0 that adds 0), then from it to the top."""
+    if blocked[i]:
+        return
+    if s_star[i] != 0.0:
+        _column(profiles, z0, dz, r0[i], mu[i], s_star[i], 0.0, radius_m, top_m, t, out, i)
+    _column(profiles, z0, dz, r0[i], mu[i], s_star[i], s_top[i], radius_m, top_m, t, out, i)
+
+
 @njit(parallel=True, cache=True)
-def slant_columns(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, top_m, t):  # pragma: no cover
+def _slant_columns_parallel(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, top_m, t):  # pragma: no cover
+    out = np.zeros((profiles.shape[0], r0.shape[0]))
+    for i in prange(r0.shape[0]):
+        _columns_of(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, top_m, t, out, i)
+    return out
+
+
+@njit(cache=True)
+def _slant_columns_serial(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, top_m, t):  # pragma: no cover
+    out = np.zeros((profiles.shape[0], r0.shape[0]))
+    for i in range(r0.shape[0]):
+        _columns_of(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, top_m, t, out, i)
+    return out
+
+
+PARALLEL_MIN_POINTS = 256  # fewer points: one thread (waking numba's pool costs ~0.1 s on a loaded machine)
+
+
+def slant_columns(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, top_m, t):
     """Columns (n_profiles, n) of ``profiles`` (n_profiles, n_z; on heights z0 + dz * arange(n_z)) from the points
     at radius r0 (n,) towards cos(zenith) mu (n,): from the lowest point s_star back to the point and from it to
-    the top s_top, each on s_star +- L t^2; 0 where ``blocked``."""
-    n = r0.shape[0]
-    out = np.zeros((profiles.shape[0], n))
-    for i in prange(n):
-        if blocked[i]:
-            continue
-        _column(profiles, z0, dz, r0[i], mu[i], s_star[i], 0.0, radius_m, top_m, t, out, i)
-        _column(profiles, z0, dz, r0[i], mu[i], s_star[i], s_top[i], radius_m, top_m, t, out, i)
-    return out
+    the top s_top, each on s_star +- L t^2; 0 where ``blocked``. The same floats on one thread or several."""
+    run = _slant_columns_parallel if r0.shape[0] >= PARALLEL_MIN_POINTS else _slant_columns_serial
+    return run(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, top_m, t)
 
 
 @njit(cache=True)
