@@ -8,7 +8,6 @@ module's own constants.
 """
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -187,21 +186,6 @@ def test_bad_arguments():
         synthetic.cumulus(spacing_m=(50.0, -50.0, 50.0))
     with pytest.raises(WeatherDataError, match="shear_azimuth_deg"):
         synthetic.supercell(shear_azimuth_deg="north")
-
-
-@pytest.mark.parametrize("which,build", [("sc", synthetic.supercell), ("cu", synthetic.cumulus)])
-def test_build_time(which, build, request):
-    request.getfixturevalue(which)                   # built once already: FFT planning, allocation warm
-    elapsed = _timed(build)
-    if elapsed >= 2.0:                               # one retry: a busy machine is not a slow builder
-        elapsed = min(elapsed, _timed(build))
-    assert elapsed < 2.0, f"{build.__name__} took {elapsed:.2f} s"
-
-
-def _timed(build):
-    t0 = time.perf_counter()
-    build(seed=12)
-    return time.perf_counter() - t0
 
 
 # ----------------------------------------------------------------------------- supercell anatomy
