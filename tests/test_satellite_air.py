@@ -35,7 +35,7 @@ def _disort_clear_column(lam_nm, mu0, mu, phi_deg, albedo):
     """pi I / mu0 at the top of a molecular atmosphere (US 1976 density to 80 km in 250 m layers, Bodhaine's cross
     section, Chandrasekhar's phase function with depolarisation) over a Lambertian surface; phi 0 forward."""
     from weather_mi.io.standard_atmosphere import standard_density
-    from weather_mi.plane_parallel.disort import solve
+    from weather_mi.optics.disort import solve
     edges = np.arange(0.0, 80e3 + 1.0, 250.0)
     z = np.linspace(edges[:-1], edges[1:], 21)
     n = standard_density(z) * 6.02214076e23 / 28.9645e-3

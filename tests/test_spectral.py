@@ -141,7 +141,7 @@ def test_chromatic_slab_xyz_against_disort(variant_restored):
     variant against DISORT solved at every 5 nm with the phase function the kernel holds there, integrated
     over the ASTM G173 spectrum and the CIE 1931 functions here (luminance 1 for the sun): within 3 standard
     errors and 0.01. Z is 0.4 times, X 1.3 times what a grey slab with the 550 nm phase function gives."""
-    from weather_mi.plane_parallel.disort import solve
+    from weather_mi.optics.disort import solve
     from weather_mi.plane_parallel.slab import GAP, slab_volume, sun_for
     theta = np.unique(np.concatenate([np.linspace(0, np.pi, 2001), np.geomspace(1e-4, 0.2, 400)]))
     table = PhaseTable.from_values(

@@ -131,7 +131,7 @@ def test_sun_seen_through_the_box_is_beer_lambert_over_the_spectrum(variant_rest
 def _disort_nadir(tau):
     """DISORT (disortpp): a conservative Rayleigh slab over a black surface, pi I / mu0 upward at nadir at the top
     (Legendre moments 1, 0, (1 - g) / (10 (1 + 2 g)), g = DEPOL / (2 - DEPOL))."""
-    from weather_mi.plane_parallel.disort import solve
+    from weather_mi.optics.disort import solve
     g = DEPOL / (2 - DEPOL)
     moments = np.zeros(33)
     moments[0], moments[2] = 1.0, (1 - g) / (10 * (1 + 2 * g))

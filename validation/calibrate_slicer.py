@@ -64,9 +64,9 @@ from weather_mi.study.report import side_by_side  # noqa: E402
 from weather_mi.display.aerial import with_eye_air  # noqa: E402
 from weather_mi.optics.air import Atmosphere  # noqa: E402
 from weather_mi.optics.air.inside import with_box_air  # noqa: E402
-from validation.slicer_low_sun import low_sun_view  # noqa: E402
 from weather_mi.io.times import select_times, time_strings  # noqa: E402
-from weather_mi.study.runs import DATA_SCENES, DATA_TIMES, StudyConfig, eye_transmittance, load_scene, view  # noqa: E402
+from weather_mi.study.runs import (DATA_SCENES, DATA_TIMES, StudyConfig, eye_transmittance, load_scene,  # noqa: E402
+                                   low_sun_view, view)
 
 TRAIN_SCENES = ("demo-supercell", "demo-cumulus", "demo-cumulus-thin", "wrf-supercell-0100", "wrf-supercell-0200",
                 "wrf-plateau-0000")
@@ -115,7 +115,7 @@ def check_held_out(train, held_out, data) -> None:
 
 def view_of(vol, lighting: str, cfg):
     """``study.runs.view``'s view of a lighting, or, for a lighting ending in LOW_SUN, that lighting's with the
-    sun at LOW_SUN_DEG and the clear atmosphere (``slicer_low_sun.low_sun_view``)."""
+    sun at LOW_SUN_DEG and the clear atmosphere (``study.runs.low_sun_view``)."""
     if lighting.endswith(LOW_SUN):
         return low_sun_view(vol, lighting[: -len(LOW_SUN)], cfg, LOW_SUN_DEG, Atmosphere())
     return view(vol, lighting, cfg)

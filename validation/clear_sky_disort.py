@@ -114,7 +114,7 @@ def _tau_rayleigh(lam_nm: float) -> float:
 
 def disort(cloud_tau: float, lam_nm: float) -> np.ndarray:
     """pi I / mu0 of ``VIEWS`` from DISORT on the same layers."""
-    from weather_mi.plane_parallel.disort import solve
+    from weather_mi.optics.disort import solve
     n = 64
     gamma = DEPOL / (2 - DEPOL)
     chi_r = np.zeros(n + 1)

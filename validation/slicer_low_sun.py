@@ -45,9 +45,8 @@ from weather_mi.io.image import Image  # noqa: E402
 from weather_mi.optics.air import Atmosphere  # noqa: E402
 from weather_mi.optics.air.inside import with_box_air  # noqa: E402
 from weather_mi.optics.volume import optical_volume  # noqa: E402
-from weather_mi.scene.spec import Sun  # noqa: E402
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
-from weather_mi.study.runs import CAMERA_AZIMUTH, DATA_SCENES, StudyConfig, eye_transmittance, view  # noqa: E402
+from weather_mi.study.runs import DATA_SCENES, StudyConfig, eye_transmittance, low_sun_view  # noqa: E402
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
@@ -56,13 +55,6 @@ def storm(name: str, data: Path, cfg: StudyConfig):
     """(Hydrometeors, OpticalVolume) of a held-out storm, as the calibration loads it (isolated box)."""
     hyd = sources.open_source(Path(data) / DATA_SCENES[name][0])
     return hyd, optical_volume(hyd, species=cfg.species, phase_quality=cfg.phase_quality, periodic=False)
-
-
-def low_sun_view(vol, lighting: str, cfg: StudyConfig, elevation: float, atmosphere):
-    """``study.runs.view``'s front- or side-lit view with the sun at ``elevation`` degrees."""
-    spec = view(vol, lighting, cfg)
-    az = {"front": CAMERA_AZIMUTH, "side": CAMERA_AZIMUTH + 90.0, "back": CAMERA_AZIMUTH + 180.0}[lighting]
-    return replace(spec, sun=Sun(az, elevation), atmosphere=atmosphere)
 
 
 def reference(out: Path, tag: str, spec, vol, hyd, spp: int, target_rse=None, max_seconds=None) -> Image:

@@ -27,13 +27,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np  # noqa: E402
 
 from validation.calibrate_slicer import read_fitted  # noqa: E402
-from validation.slicer_low_sun import DEFAULT_DATA, low_sun_view, reference, storm  # noqa: E402
+from validation.slicer_low_sun import DEFAULT_DATA, reference, storm  # noqa: E402
 from weather_mi.display import metrics  # noqa: E402
 from weather_mi.io.image import auto_exposure  # noqa: E402
 from weather_mi.optics.air import Atmosphere  # noqa: E402
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
 from weather_mi.study.regions import pixel_regions  # noqa: E402
-from weather_mi.study.runs import DATA_SCENES, StudyConfig, eye_transmittance  # noqa: E402
+from weather_mi.study.runs import DATA_SCENES, StudyConfig, eye_transmittance, low_sun_view  # noqa: E402
 
 LUMA = np.array([0.2126, 0.7152, 0.0722])
 

@@ -199,7 +199,7 @@ def slab_radiance(tau: float, albedo: float, phase_table, mu0: float, spp: int =
 def disort_slab(tau: float, albedo: float, g, mu0: float, n_streams: int = 64,
                 n_moments: int = 512) -> dict:
     """DISORT (``disortpp``) solution for one homogeneous HG layer over a black surface, sun flux
-    F0 = 1 at zenith cosine mu0, no diffuse illumination (``weather_mi.plane_parallel.disort.solve``: delta-M, the
+    F0 = 1 at zenith cosine mu0, no diffuse illumination (``weather_mi.optics.disort.solve``: delta-M, the
     Nakajima-Tanaka intensity correction from ``n_moments`` HG moments g^l). ``g`` may instead be a PhaseTable: its own Legendre moments (green
     channel). Then the fluxes are exact to the solver's accuracy, but the corrected intensities only
     where the moments converge (a cloud droplet table at 2048: yes; ice or snow: no, they come out
@@ -208,7 +208,7 @@ def disort_slab(tau: float, albedo: float, g, mu0: float, n_streams: int = 64,
     Returns R, T (direct beam included), T_diffuse, T_direct, and the normalised radiances
     pi I / (mu0 F0): ``L_nadir`` (upward, umu = +1, at the top) and ``L_zenith`` (diffuse
     downward, umu = -1, at the bottom)."""
-    from .disort import solve
+    from ..optics.disort import solve
     table = hasattr(g, "legendre")
     res = solve([tau], [albedo], mu0, [-1.0, 1.0], [0.0, float(tau)], [0.0], n_streams=n_streams,
                 moments=np.asarray(g.legendre(int(n_moments)))[:, 1][None] if table else None,

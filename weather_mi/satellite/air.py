@@ -77,7 +77,7 @@ def above_box_coupling(atm, wavelength_nm: float, mu0: float, mu_nodes, phi_node
 def reflectance(layers, mu0: float, mu_nodes, phi_nodes, albedo: float) -> np.ndarray:
     """The reflectance factor pi I / mu0 (mu_nodes x phi_nodes) at the top of ``layers`` ((optical depth, albedo,
     moments) of ``air_layers``, top first) over a Lambertian surface of ``albedo``: one DISORT solve."""
-    from ..plane_parallel.disort import solve
+    from ..optics.disort import solve
     tau, ssa, moments = layers
     mu_nodes, phi_nodes = np.asarray(mu_nodes, np.float64), np.asarray(phi_nodes, np.float64)
     res = solve(tau, ssa, mu0, mu_nodes, [0.0], phi_nodes, moments=moments, surface_albedo=albedo, n_streams=N_STREAMS)

@@ -32,7 +32,7 @@ def disort_reflectance(tau, ssa, moments, mu0: float, mu: float, phi_rel_deg: fl
     moments : array_like, (layers, n_moments + 1)
         Legendre moments of each layer's phase function (moment 0 = 1).
     """
-    from ..plane_parallel.disort import solve
+    from ..optics.disort import solve
     res = solve(tau, ssa, mu0, [mu], [0.0], [phi_rel_deg], moments=moments, surface_albedo=surface_albedo,
                 n_streams=n_streams)
     return float(np.pi * res.intensities(0, 0, 0) / mu0)

@@ -241,7 +241,7 @@ def rayleigh_reflectance(tau: float, sza, vza, saa, vaa, where=None, n_streams: 
     interpolated linearly in that (SZA, VZA, relative azimuth) table; not one solve per pixel."""
     from scipy.interpolate import RegularGridInterpolator
     from ..optics.rayleigh import DEPOLARISATION
-    from ..plane_parallel.disort import solve
+    from ..optics.disort import solve
     gamma = DEPOLARISATION / (2.0 - DEPOLARISATION)
     moments = np.zeros((1, n_streams + 1))
     moments[0, 0], moments[0, 2] = 1.0, (1.0 - gamma) / (10.0 * (1.0 + 2.0 * gamma))

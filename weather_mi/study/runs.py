@@ -151,6 +151,14 @@ def view(vol, lighting: str, cfg: StudyConfig, camera_azimuth: float = CAMERA_AZ
                      width=cfg.width, height=cfg.height, seed=0)
 
 
+def low_sun_view(vol, lighting: str, cfg: StudyConfig, elevation: float, atmosphere) -> SceneSpec:
+    """:func:`view`'s front-, side- or back-lit view with the sun at ``elevation`` degrees and ``atmosphere``
+    (``optics.air.Atmosphere`` or None): the slicer at a low sun (issue 38 part 3)."""
+    spec = view(vol, lighting, cfg)
+    az = {"front": CAMERA_AZIMUTH, "side": CAMERA_AZIMUTH + 90.0, "back": CAMERA_AZIMUTH + 180.0}[lighting]
+    return replace(spec, sun=Sun(az, elevation), atmosphere=atmosphere)
+
+
 def eye_transmittance(vol, spec: SceneSpec, slices: int) -> np.ndarray:
     """Transmittance of each pixel ray through the volume (H, W), from the slicer's eye pass (it does
     not depend on the lighting): the cloud mask of the metrics."""

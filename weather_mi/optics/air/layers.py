@@ -1,5 +1,5 @@
 """The clear 1-D atmosphere (``Atmosphere``) as DISORT's layers at one wavelength: optical depth, single-scattering
-albedo and Legendre moments of each layer, top first (``plane_parallel.disort.solve``'s input). Used by the
+albedo and Legendre moments of each layer, top first (``optics.disort.solve``'s input). Used by the
 satellite's air outside its box (``satellite.air``) and the skylight the render's box receives from the air around
 it (``air.skylight``)."""
 from __future__ import annotations

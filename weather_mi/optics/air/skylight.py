@@ -1,7 +1,7 @@
 """The diffuse sky of the clear 1-D atmosphere (all orders of scattering), as seen from a height inside it: the
 light that the air around the model's box sends into the box (``kernel.air_sky``: the envmap of ``--sky air``).
 
-DISORT (``plane_parallel.disort.solve``; the layers of ``air.layers``: molecules, ozone, aerosol of an
+DISORT (``optics.disort.solve``; the layers of ``air.layers``: molecules, ozone, aerosol of an
 ``Atmosphere``, a Lambertian ground of one albedo) at ``SKY_WAVELENGTHS_NM`` gives the downward radiance
 I(lambda, h, theta, phi) per unit irradiance of the sun above the air (on a plane normal to it) at heights h, view
 zenith angles theta < 90 deg (looking up) and azimuths phi relative to the sun's (0: towards it), and the diffuse
@@ -119,7 +119,7 @@ def diffuse_source_table(atm: Atmosphere, mu0: float, ground_m: float = 0.0, alb
 
 @functools.lru_cache(maxsize=8)
 def _diffuse_table(atm, mu0, ground_m, albedo, band_nm, table_class):
-    from ...plane_parallel.disort import solve
+    from ..disort import solve
     heights = np.arange(ground_m, DIFFUSE_TOP_M + 1.0, DIFFUSE_STEP_M)
     wls = SKY_WAVELENGTHS_NM if band_nm is None else np.asarray(band_nm, np.float64)
     j = []
@@ -138,7 +138,7 @@ def spectral_sky(atm: Atmosphere, mu0: float, heights_m, zenith_deg, phi_deg, gr
     """DISORT's (radiance (n_wl, n_h, n_z, n_phi), diffuse irradiance on a horizontal plane (n_wl, n_h), direct
     (n_wl, n_h)) per unit irradiance of the sun above the air, at ``heights_m`` (ascending, m above sea level),
     view zenith angles ``zenith_deg`` (< 90: looking up) and azimuths ``phi_deg`` (0: towards the sun)."""
-    from ...plane_parallel.disort import solve  # DISORT's one set-up (a leaf module over disortpp)
+    from ..disort import solve  # DISORT's one set-up (a leaf module over disortpp)
     heights = np.asarray(heights_m, np.float64)
     mu_user = -np.cos(np.radians(np.asarray(zenith_deg, np.float64)))  # downward-travelling light: looking up
     m_order = np.argsort(mu_user)                                       # DISORT wants them ascending

@@ -1,7 +1,8 @@
 """DISORT (``disortpp``) as weather-mi sets it up: one function that builds the configuration (Lambertian
 surface, user polar angles, optical depths and azimuths, sun flux F0 = 1, delta-M, the Nakajima-Tanaka
-intensity correction) and solves it, for the plane-parallel validation (``slab.disort_slab``) and the
-independent-pixel approximation (``ipa.disort_reflectance``).
+intensity correction) and solves it: for the clear air's skylight (``optics.air.skylight``), the satellite's
+air outside its box (``satellite.air``), the plane-parallel validation (``plane_parallel.slab.disort_slab``) and
+the independent-pixel approximation (``satellite.ipa.disort_reflectance``).
 
 The Nakajima-Tanaka (TMS/IMS) correction is only active in DisORT++ when BOTH ``intensity_corr_buras`` (the
 C code's ``corint``) and ``intensity_corr_nakajima`` are set (with only the latter nothing happens); it
