@@ -142,7 +142,7 @@ def main(argv=None):
         print(f"{name}: the lit cloud's light comes from a median height of {height:.0f} m, where "
               f"the direct sun is xy ({ours[0]:.3f}, {ours[1]:.3f}) in our clear air (CIEDE2000 "
               f"{delta_e_equal_lightness(xy, ours):.1f}) and ({theirs[0]:.3f}, {theirs[1]:.3f}) by SPCTRL2 with the "
-              f"aerosol above that height, no water (CIEDE2000 {delta_e_equal_lightness(xy, theirs):.1f})")
+              f"aerosol and water above that height (CIEDE2000 {delta_e_equal_lightness(xy, theirs):.1f})")
         print(f"{name}: lit cloud xy ({xy[0]:.3f}, {xy[1]:.3f}); CIEDE2000 at equal lightness to "
               "SPCTRL2 (1.4 cm water) " + ", ".join(f"{p:.0f} hPa {de[p, 1.4]:.1f}" for p in PRESSURES_HPA)
               + f"; nearest {min(de[p, 1.4] for p in PRESSURES_HPA):.1f} (no water: "
