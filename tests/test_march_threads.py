@@ -1,9 +1,8 @@
-"""The compiled slant columns on the calling thread for small work (``optics.air.march_kernels.threads_for``: the
-slicer's per-frame sun column woke numba's OpenMP pool, 40 ms a call on a loaded machine): the same numbers as on
-the pool, and the pool's thread count restored."""
+"""The compiled slant columns on the calling thread for small work (``optics.air.march_kernels.SERIAL_WORK``: the
+serial kernel below it; the slicer's per-frame sun column woke numba's OpenMP pool, 40 ms a call on a loaded
+machine): the same numbers as the parallel kernel's."""
 from __future__ import annotations
 
-import numba
 import numpy as np
 
 from weather_mi.optics.air import Atmosphere
@@ -11,22 +10,21 @@ from weather_mi.optics.air import march_kernels
 from weather_mi.optics.air.shell import slant_columns
 
 
-def test_small_marches_run_on_one_thread_and_give_the_pools_columns(monkeypatch):
-    """129 heights at two suns (one below the horizon: both segments summed) on one thread against the same on
-    the pool: identical columns (each point is summed alone); inside ``threads_for`` one thread, after it the
-    pool's count again, and large work keeps the pool."""
+def test_small_marches_run_serially_and_give_the_parallel_kernels_columns(monkeypatch):
+    """129 heights at two suns (one below the horizon: both segments summed) through the serial kernel against
+    the parallel one (forced with ``SERIAL_WORK`` 0): identical columns (each point is summed alone), and the
+    choice is the one expected on each side (the kernels counted)."""
     atm = Atmosphere()
     h = np.linspace(0.0, 22e3, 129)
     mu = np.concatenate([np.full(65, 0.3), np.full(64, -0.05)])
-    threads = numba.get_num_threads()
-    with march_kernels.threads_for(h.size * 128):
-        assert numba.get_num_threads() == 1
-    with march_kernels.threads_for(march_kernels.SERIAL_WORK):
-        assert numba.get_num_threads() == threads
-    assert numba.get_num_threads() == threads
+    calls = []
+    for name in ("_slant_columns_serial", "_slant_columns_parallel"):
+        kernel = getattr(march_kernels, name)
+        monkeypatch.setattr(march_kernels, name, lambda *a, _k=kernel, _n=name: calls.append(_n) or _k(*a))
     serial, blocked = slant_columns(atm.profiles, h, mu, 100e3, samples=128)
-    monkeypatch.setattr(march_kernels, "SERIAL_WORK", 0)  # the pool for any work
+    monkeypatch.setattr(march_kernels, "SERIAL_WORK", 0)  # the parallel kernel for any work
     pooled, blocked_pool = slant_columns(atm.profiles, h, mu, 100e3, samples=128)
+    assert calls == ["_slant_columns_serial", "_slant_columns_parallel"]
     assert np.array_equal(blocked, blocked_pool) and not blocked[:65].any()
     for name in serial:
         assert np.array_equal(serial[name], pooled[name]), name

@@ -6,31 +6,13 @@ of its time on (rays x samples x channels) temporaries, about 1 s for a satellit
 sight (``satellite.air``) and the sun's tables of every render with the air."""
 from __future__ import annotations
 
-import contextlib
-
 import numpy as np
 from numba import njit, prange
 
-# points x samples below which a march runs on the calling thread alone: waking the thread pool (OpenMP) for a
-# parallel region cost 40 ms on a loaded 2-core machine against 0.7 ms for the slicer's per-frame sun column
-# (129 heights x 128 samples) on one thread (the same numbers: every point is summed alone)
+# points x samples below which a march runs on the calling thread alone (its serial kernel): waking the thread pool
+# (OpenMP) for a parallel region cost 40-100 ms on a loaded 2-core machine against 0.7 ms for the slicer's per-frame
+# sun column (129 heights x 128 samples) on one thread (the same numbers: every point is summed alone)
 SERIAL_WORK = 1 << 17
-
-
-@contextlib.contextmanager
-def threads_for(work: int):
-    """Run the block's compiled marches on one thread where ``work`` (points x samples) is below
-    ``SERIAL_WORK``; with the pool's threads otherwise."""
-    if work >= SERIAL_WORK:
-        yield
-        return
-    import numba
-    n = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        yield
-    finally:
-        numba.set_num_threads(n)
 
 
 @njit(cache=True)
@@ -107,14 +89,11 @@ def _slant_columns_serial(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radi
     return out
 
 
-PARALLEL_MIN_POINTS = 256  # fewer points: one thread (waking numba's pool costs ~0.1 s on a loaded machine)
-
-
 def slant_columns(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, top_m, t):
     """Columns (n_profiles, n) of ``profiles`` (n_profiles, n_z; on heights z0 + dz * arange(n_z)) from the points
     at radius r0 (n,) towards cos(zenith) mu (n,): from the lowest point s_star back to the point and from it to
     the top s_top, each on s_star +- L t^2; 0 where ``blocked``. The same floats on one thread or several."""
-    run = _slant_columns_parallel if r0.shape[0] >= PARALLEL_MIN_POINTS else _slant_columns_serial
+    run = _slant_columns_parallel if r0.shape[0] * t.shape[0] >= SERIAL_WORK else _slant_columns_serial
     return run(profiles, z0, dz, r0, mu, s_star, s_top, blocked, radius_m, top_m, t)
 
 
@@ -176,4 +155,4 @@ def segment_air(o, d, t0, length, sun, x, z0, dz, profiles, sigma_r, sigma_o, ae
     return trans, inscatter
 
 
-__all__ = ["SERIAL_WORK", "slant_columns", "segment_air", "threads_for"]
+__all__ = ["SERIAL_WORK", "slant_columns", "segment_air"]

@@ -13,7 +13,6 @@ from __future__ import annotations
 import numpy as np
 
 from .march_kernels import slant_columns as slant_columns_kernel
-from .march_kernels import threads_for
 
 EARTH_RADIUS_M = 6371e3  # mean radius
 DZ_TABLE_M = 20.0        # profiles are tabulated on this height step
@@ -46,10 +45,8 @@ def slant_columns(profiles_of_height, h_m, mu, top_m: float, radius_m: float = E
     s_star = np.maximum(-r0 * mf, 0.0)
     s_top = -r0 * mf + np.sqrt(np.maximum((r0 * mf) ** 2 + rt * rt - r0 * r0, 0.0))
     names = list(profiles)
-    with threads_for(hf.size * samples):  # (a few points: on this thread, no pool to wake)
-        cols = slant_columns_kernel(np.stack([profiles[k] for k in names]), float(z_tab[0]), DZ_TABLE_M, r0, mf,
-                                    s_star, s_top, blocked, float(radius_m), float(top_m),
-                                    np.linspace(0.0, 1.0, samples))
+    cols = slant_columns_kernel(np.stack([profiles[k] for k in names]), float(z_tab[0]), DZ_TABLE_M, r0, mf,
+                                s_star, s_top, blocked, float(radius_m), float(top_m), np.linspace(0.0, 1.0, samples))
     out = dict(zip(names, cols))
     return {k: v.reshape(h.shape) for k, v in out.items()}, blocked.reshape(h.shape)
 
