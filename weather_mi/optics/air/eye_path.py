@@ -19,6 +19,8 @@ x uniform (dense near t0, where an eye ray near the ground meets most of its air
 """
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from ..phase.analytic import hg_value
@@ -77,7 +79,6 @@ def segment_air(atm: Atmosphere, to_sun, origins, dirs, t0, t1, table: SunAirTab
         s = t0[:, None] + length[:, None] * x * x
         lit = np.asarray(shadow(o[:, None, :] + s[..., None] * d[:, None, :]), np.float64).reshape(s.shape)
     z_top = float(np.max(np.r_[_heights(o, d, t0), _heights(o, d, t0 + length), 0.0]))
-    z = np.arange(0.0, z_top + 2 * PROFILE_STEP_M, PROFILE_STEP_M)
     cos_t = np.clip(d @ sun, -1.0, 1.0)
     tab = np.asarray(table.rgb, np.float64)
     own, first = _distinct_channels(wl, tab)
@@ -86,12 +87,23 @@ def segment_air(atm: Atmosphere, to_sun, origins, dirs, t0, t1, table: SunAirTab
                    for v in (rayleigh_cross_section_m2(w * 1e-9), ozone_cross_section_m2(w), atm.aerosol_factor(w))]
     t, s = march_kernels.segment_air(
         o, d, np.ascontiguousarray(t0), length, sun, x, 0.0, PROFILE_STEP_M,
-        np.stack([atm.air_number_density_m3(z), atm.ozone_number_density_m3(z), atm.aerosol_extinction_550_per_m(z)]),
+        _profile_grid(atm, z_top if z_top > TOP_M else TOP_M),
         *per_channel, float(atm.aerosol_ssa), *((np.ones_like(cos_t),) * 2 if isotropic else
                                                 (phase_value(cos_t), hg_value(atm.aerosol_g, cos_t))),
         np.asarray(table.heights_m, np.float64), np.asarray(table.mu, np.float64), np.ascontiguousarray(tab[..., own]),
         lit, float(EARTH_RADIUS_M))
     return t[:, first], s[:, first]
+
+
+@functools.lru_cache(maxsize=8)
+def _profile_grid(atm: Atmosphere, z_top: float) -> np.ndarray:
+    """(3, n) the air, ozone (per m^3) and aerosol (1/m at 550 nm) on heights 0, PROFILE_STEP_M, ... past ``z_top``:
+    once per atmosphere (up to ``TOP_M``; a straight segment is highest at an end, so no point lies above it; the
+    grid's nodes are the same at any length, so a longer one gives the same sums)."""
+    z = np.arange(0.0, z_top + 2 * PROFILE_STEP_M, PROFILE_STEP_M)
+    grid = np.stack([atm.air_number_density_m3(z), atm.ozone_number_density_m3(z), atm.aerosol_extinction_550_per_m(z)])
+    grid.flags.writeable = False
+    return grid
 
 
 def _distinct_channels(wl, tab) -> tuple[np.ndarray, np.ndarray]:
