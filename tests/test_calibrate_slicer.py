@@ -1,10 +1,10 @@
 """validation/calibrate_slicer.py's evaluation of an earlier fit (--fitted) and its refusal of a bad file."""
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from conftest import SHARED_DATA
 from validation import calibrate_slicer as cs
 
 
@@ -39,7 +39,7 @@ def test_fitted_column_is_named_after_its_file(tmp_path):
     assert "Parameters of an earlier fit" in text and "Fitted on" not in text
 
 
-DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+DATA = SHARED_DATA
 needs_data = pytest.mark.skipif(not (DATA / "wrf" / "wrfout_quarter_ss_series.nc").is_file(),
                                 reason="needs ../shared/data (the WRF supercell series)")
 

@@ -64,8 +64,7 @@ def test_a_grazing_sun_on_a_wide_layer_takes_mu0_of_the_light_at_its_face():
     (the same solution at x = 0), mu of the normal face's."""
     mu = 0.1
     face = leaking_diffusion(np, 0.0, 1e4, 0.4, 1.5, incidence=mu)
-    assert face == pytest.approx(mu, rel=1e-6)
-    assert slab_fluence(1e-9, 4000.0, mu) == pytest.approx(mu, rel=1e-3)  # the exponential source's, at the face
+    assert face == pytest.approx(slab_fluence(1e-9, 4000.0, mu), rel=1e-3)  # the exponential source's, at the face
 
 
 @pytest.mark.parametrize("mu0", [0.1, 0.5, 0.9])

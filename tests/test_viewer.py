@@ -168,13 +168,11 @@ def test_bad_input_exits_2_before_serving(tmp_path, capsys):
     from weather_mi.cli.commands import main
     bad = tmp_path / "wrfout_broken.nc"
     bad.write_text("not a netcdf file")
-    t0 = time.perf_counter()
     assert main(["view", str(bad), "--no-browser", "--port", "0"]) == 2
     err = capsys.readouterr().err
     assert "wrfout_broken.nc" in err and "NetCDF" in err
     assert main(["view", "--demo", "cumulus", "--time", "3", "--no-browser"]) == 2
     assert "--time" in capsys.readouterr().err
-    assert time.perf_counter() - t0 < 30
 
 
 def test_time_option_selects_an_index_or_a_timestamp():

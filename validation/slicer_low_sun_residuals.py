@@ -13,7 +13,7 @@ holds the error.
 
     python validation/slicer_low_sun_residuals.py [--data ../shared/data] [--elevation 6] [--lightings front,side]
         [--scenes ...] [--out /work/calib-cache/lowsun] [--target-rse 0.03] [--variants "ms_contribution=0;..."]
-        [--params fitted.json]
+        [--fitted fitted.json]
 """
 from __future__ import annotations
 
@@ -78,15 +78,15 @@ def main(argv=None) -> int:
     ap.add_argument("--elevation", type=float, default=6.0)
     ap.add_argument("--scenes", default="wrf-supercell,wrf-plateau,bomex,rico")
     ap.add_argument("--lightings", default="front,side")
-    ap.add_argument("--out", default="/work/calib-cache/lowsun")
-    ap.add_argument("--params", default=None, help="a fitted.json (default: the shipped defaults)")
+    ap.add_argument("--out", default="validation-low-sun", help="the references' cache (slicer_low_sun.py's --out)")
+    ap.add_argument("--fitted", default=None, help="a fitted.json (default: the shipped defaults)")
     ap.add_argument("--variants", default="", help="';'-separated SliceParams overrides, e.g. 'ms_contribution=0'")
     args = ap.parse_args(argv)
     width, height = (int(v) for v in args.size.split("x"))
     cfg = replace(StudyConfig(), width=width, height=height)
     base = SliceParams(slab_jitter=1.0)
-    if args.params:
-        base = base.updated(**read_fitted(Path(args.params)))
+    if args.fitted:
+        base = base.updated(**read_fitted(Path(args.fitted)))
     variants = {"defaults": base}
     for v in filter(None, args.variants.split(";")):
         variants[v] = base.updated(**{k: float(x) for k, x in (kv.split("=") for kv in v.split(","))})

@@ -155,8 +155,7 @@ def low_sun_view(vol, lighting: str, cfg: StudyConfig, elevation: float, atmosph
     """:func:`view`'s front-, side- or back-lit view with the sun at ``elevation`` degrees and ``atmosphere``
     (``optics.air.Atmosphere`` or None): the slicer at a low sun (issue 38 part 3)."""
     spec = view(vol, lighting, cfg)
-    az = {"front": CAMERA_AZIMUTH, "side": CAMERA_AZIMUTH + 90.0, "back": CAMERA_AZIMUTH + 180.0}[lighting]
-    return replace(spec, sun=Sun(az, elevation), atmosphere=atmosphere)
+    return replace(spec, sun=replace(spec.sun, elevation=float(elevation)), atmosphere=atmosphere)
 
 
 def eye_transmittance(vol, spec: SceneSpec, slices: int) -> np.ndarray:

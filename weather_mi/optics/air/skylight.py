@@ -22,6 +22,7 @@ import numpy as np
 from .. import spectrum
 from .atmosphere import Atmosphere
 from .layers import N_STREAMS, air_layers
+from .sunlight import toa_luminance
 
 SKY_WAVELENGTHS_NM = np.arange(400.0, 700.0 + 0.1, 25.0)  # 13 DISORT solves (the sky's spectrum is smooth)
 HORIZON_ELEVATION_DEG = 0.5  # a view at the horizon is asked at this elevation (plane-parallel: mu = 0 is singular)
@@ -97,7 +98,7 @@ def rgb(values) -> np.ndarray:
     lo = np.clip(np.searchsorted(SKY_WAVELENGTHS_NM, wl, side="right") - 1, 0, SKY_WAVELENGTHS_NM.size - 2)
     f = np.clip((wl - SKY_WAVELENGTHS_NM[lo]) / np.diff(SKY_WAVELENGTHS_NM)[lo], 0.0, 1.0)
     fine = np.exp(v[..., lo] * (1.0 - f) + v[..., lo + 1] * f)
-    return spectrum.linear_srgb(spectrum.xyz(fine * toa, wl) / float(spectrum.xyz(toa, wl)[1]))
+    return spectrum.linear_srgb(spectrum.xyz(fine * toa, wl) / toa_luminance(wl))
 
 
 DIFFUSE_TOP_M, DIFFUSE_STEP_M = 30e3, 500.0  # the diffuse light's table (above 30 km the air scatters < 1 %)

@@ -39,7 +39,8 @@ def transmittance(atm: Atmosphere, wavelength_nm, h_m, mu, samples: int | None =
     return np.where(blocked[..., None], 0.0, np.exp(-tau))
 
 
-def _toa_luminance(wl) -> float:
+def toa_luminance(wl) -> float:
+    """The top-of-atmosphere sun's luminance Y (ASTM G173 over the wavelengths ``wl``, nm)."""
     return float(spectrum.xyz(spectrum.solar_toa_w_m2_nm(wl), wl)[1])
 
 
@@ -47,7 +48,7 @@ def sun_xyz(atm: Atmosphere, h_m, mu, wavelength_nm=spectrum.WAVELENGTHS_NM, sam
     """CIE XYZ of the direct sun at (h_m, mu) (...), over the top-of-atmosphere sun's luminance: (..., 3)."""
     wl = np.asarray(wavelength_nm, np.float64)
     t = transmittance(atm, wl, h_m, mu, samples)
-    return spectrum.xyz(spectrum.solar_toa_w_m2_nm(wl) * t, wl) / _toa_luminance(wl)
+    return spectrum.xyz(spectrum.solar_toa_w_m2_nm(wl) * t, wl) / toa_luminance(wl)
 
 
 def sun_rgb(atm: Atmosphere, h_m, mu, wavelength_nm=spectrum.WAVELENGTHS_NM, samples: int | None = None) -> np.ndarray:
