@@ -12,7 +12,7 @@ divided by the luminance ratio: > 1 in R and < 1 in B is too red). Variants (--v
 holds the error.
 
     python validation/slicer_low_sun_residuals.py [--data ../shared/data] [--elevation 6] [--lightings front,side]
-        [--scenes ...] [--out /work/calib-cache/lowsun] [--target-rse 0.03] [--variants "ms_contribution=0;..."]
+        [--scenes ...] [--out validation-low-sun] [--target-rse 0.03] [--variants "ms_contribution=0;..."]
         [--fitted fitted.json]
 """
 from __future__ import annotations
