@@ -54,15 +54,21 @@ def exit_heights(bbox, reference_m: float, zenith_deg, azimuth_deg) -> np.ndarra
     return np.minimum(float(reference_m) + np.nan_to_num(rise, nan=np.inf, posinf=np.inf), float(z1))
 
 
-def sky_bitmap(spec, bbox, reference_m: float | None = None, size=ENV_SIZE) -> np.ndarray:
-    """The envmap's linear RGB radiance (H, W, 3), float32 (module docstring) for ``spec`` (its atmosphere, sun and
-    ground) and a box ``bbox``."""
+def _ground(spec) -> tuple[float, float]:
+    """(The flat ground's height, at least sea level; its mean albedo): the 1-D atmosphere's lower boundary."""
+    if spec.ground is None:
+        return 0.0, 0.0
+    return max(float(spec.ground.height), 0.0), float(np.mean(spec.ground.albedo))
+
+
+def _sky(spec, bbox, reference_m: float | None = None, size=ENV_SIZE):
+    """(The envmap's bitmap, as :func:`sky_bitmap`; the ``skylight.SkyTable`` it was read from, its first level
+    the reference height; None with the sun below the horizon)."""
     from ..optics.air.skylight import sky_table
     atm, sun = spec.atmosphere, spec.sun
     if atm is None:
         raise ValueError("--sky air is the clear atmosphere's own sky: it needs an atmosphere (--atmosphere clear)")
-    ground = 0.0 if spec.ground is None else max(float(spec.ground.height), 0.0)
-    albedo = 0.0 if spec.ground is None else float(np.mean(spec.ground.albedo))
+    ground, albedo = _ground(spec)
     ref = ground if reference_m is None else max(float(reference_m), ground)
     top = max(float(bbox[1][2]), ref)
     levels = np.unique(np.r_[np.arange(ref, top, LEVEL_STEP_M), top])
@@ -70,7 +76,7 @@ def sky_bitmap(spec, bbox, reference_m: float | None = None, size=ENV_SIZE) -> n
     w, h = size
     out = np.zeros((h, w, 3))
     if sun.mu0 <= 0.0:  # the sun below the horizon: no sky from this model (the render's sun is off too)
-        return out.astype(np.float32)
+        return out.astype(np.float32), None
     table = sky_table(atm, float(sun.mu0), levels, ground_m=ground, albedo=albedo)
     up = zen <= 90.0
     h_exit = exit_heights(bbox, ref, zen[up], az)
@@ -78,7 +84,13 @@ def sky_bitmap(spec, bbox, reference_m: float | None = None, size=ENV_SIZE) -> n
     out[up] = table.at(h_exit, np.broadcast_to(zen[up][:, None], h_exit.shape), np.broadcast_to(rel, h_exit.shape))
     horizon = int(np.flatnonzero(up)[-1])
     out[horizon + 1] = out[horizon]
-    return (out * np.asarray(sun.irradiance, np.float64)).astype(np.float32)
+    return (out * np.asarray(sun.irradiance, np.float64)).astype(np.float32), table
+
+
+def sky_bitmap(spec, bbox, reference_m: float | None = None, size=ENV_SIZE) -> np.ndarray:
+    """The envmap's linear RGB radiance (H, W, 3), float32 (module docstring) for ``spec`` (its atmosphere, sun and
+    ground) and a box ``bbox``."""
+    return _sky(spec, bbox, reference_m, size)[0]
 
 
 def air_sky_dict(spec, bbox, reference_m: float | None = None) -> dict:
@@ -91,14 +103,11 @@ def air_sky_dict(spec, bbox, reference_m: float | None = None) -> dict:
 def open_ground_sky(spec, bbox) -> tuple[np.ndarray, np.ndarray]:
     """(The envmap's irradiance on the open ground (a horizontal plane, nothing in the way), the 1-D atmosphere's
     diffuse irradiance there (DISORT's flux)), RGB, times the sun's irradiance: the second less the first is the
-    skylight that the render's vacuum outside the box leaves out of the open ground (``display.aerial``)."""
-    from ..optics.air.skylight import sky_table
-    bitmap = sky_bitmap(spec, bbox)
-    ground = 0.0 if spec.ground is None else max(float(spec.ground.height), 0.0)
-    albedo = 0.0 if spec.ground is None else float(np.mean(spec.ground.albedo))
+    skylight that the render's vacuum outside the box leaves out of the open ground (``display.aerial``). One
+    DISORT table: the envmap's, whose first level is the ground."""
     if spec.sun.mu0 <= 0.0:
         return np.zeros(3), np.zeros(3)
-    table = sky_table(spec.atmosphere, float(spec.sun.mu0), [ground], ground_m=ground, albedo=albedo)
+    bitmap, table = _sky(spec, bbox)
     return horizontal_irradiance(bitmap), table.diffuse_rgb[0] * np.asarray(spec.sun.irradiance, np.float64)
 
 
