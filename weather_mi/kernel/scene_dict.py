@@ -432,11 +432,12 @@ def integrator_dict(vol: OpticalVolume, integrator: str, max_depth: int, rr_dept
         air = air_in_medium(vol)
         levels = None
         if air is not None:  # the air's levels, which the trackers cross as empty space (plugins/air_levels.py)
-            levels = air.extinction_levels
-            levels = np.ascontiguousarray(pad_levels(levels) if vol.periodic else levels)
             if mi.is_spectral:  # over wavelength (kernel/spectral_air.py): the majorant bounds every wavelength's
                 from .spectral_air import extinction_levels
                 levels = extinction_levels(vol, air)
+            else:
+                levels = air.extinction_levels
+                levels = np.ascontiguousarray(pad_levels(levels) if vol.periodic else levels)
             majorant = with_coarse_air(majorant, levels, int(cell))  # a bound of the hydrometeors' and the air's sum
         d = {"type": "majorant_volpath", "max_depth": int(max_depth), "cell": int(cell),
              "majorant": mi.TensorXf(majorant), "to_world": bbox_transform(grid_bbox(vol))}
@@ -487,7 +488,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
             sensor["medium"] = {"type": "ref", "id": "weather_medium"}
     if spec.sky is not None and spec.sky.kind == "air":  # the air's diffuse sky into the box, not seen directly
         import mitsuba as mi
-        if "spectral" not in mi.variant() and spec.sun.mu0 > 0.0:  # (spectral variants: the air colours the sun only)
+        if not mi.is_spectral and spec.sun.mu0 > 0.0:  # (spectral variants: the air colours the sun only)
             from .air_sky import EMITTER_NEE, air_sky_dict
             d["sky"] = air_sky_dict(spec, vol.bbox)
             nee = {"emitter_nee": EMITTER_NEE} if integrator.get("type") == "majorant_volpath" else {}
