@@ -502,7 +502,7 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     if "beta_ext" not in keep:
         beta_ext = ReleasedGrid("beta_ext", beta_ext.shape)
     if "weights" not in keep:
-        weights = ReleasedGrid("weights", beta_ext.shape if weights is None else weights.shape)
+        weights = ReleasedGrid("weights", weights.shape)
     return OpticalVolume(names, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
                          Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic,
