@@ -35,23 +35,23 @@ class MixtureAlbedo:
         corner, frac = grid_lookup.corners(p_local, self.shape, periodic)
         _, ny, nx = self.shape
         n_c = self.channels
-        z0, z1 = corner[0]
+        levels = corner[0]
         # the air's values of the point's two levels, gathered once (not at each of the 4 corners of a level)
-        air = {id(z): [(dr.gather(mi.Float, self.ext, mi.UInt32(z * 3 + c), active),
-                        dr.gather(mi.Float, self.sca, mi.UInt32(z * 3 + c), active)) for c in range(3)] for z in (z0, z1)}
+        air = [[(dr.gather(mi.Float, self.ext, mi.UInt32(z * 3 + c), active),
+                 dr.gather(mi.Float, self.sca, mi.UInt32(z * 3 + c), active)) for c in range(3)] for z in levels]
 
-        def texel(z, y, x):
-            i = mi.UInt32((z * ny + y) * nx + x)
+        def texel(level, y, x):  # level: 0 or 1, the point's lower or upper level (z0, z1)
+            i = mi.UInt32((levels[level] * ny + y) * nx + x)
             b = dr.gather(mi.Float, beta, i, active)
             out = []
-            for c, (ext, sca_air) in enumerate(air[id(z)]):
+            for c, (ext, sca_air) in enumerate(air[level]):
                 a = dr.gather(mi.Float, self.albedo, i * n_c + (c if n_c == 3 else 0), active)
                 sigma_t = b + ext
                 sca = a * b + sca_air
                 out.append(dr.clip(dr.select(sigma_t > 0.0, sca / dr.select(sigma_t > 0.0, sigma_t, 1.0), 1.0), 0.0, 1.0))
             return mi.Color3f(*out)
 
-        return grid_lookup.trilinear(texel, corner, frac)
+        return grid_lookup.trilinear(texel, ((0, 1),) + tuple(corner[1:]), frac)
 
 
 def parse(props, extinction, check):
