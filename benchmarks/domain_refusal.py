@@ -14,25 +14,15 @@ import os
 import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
+from bench_timing import timed  # noqa: E402 (benchmarks/, the script's folder, is on sys.path)
+
 GOAL_S = 5.0
-
-
-def timed(fn, rounds: int) -> list:
-    """Wall seconds of ``rounds`` calls of ``fn`` after one warm-up call."""
-    fn()
-    out = []
-    for _ in range(rounds):
-        t0 = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t0)
-    return out
 
 
 def main(argv=None) -> int:

@@ -10,25 +10,15 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
+from bench_timing import timed  # noqa: E402 (benchmarks/, the script's folder, is on sys.path)
+
 GOAL_S = 3.0
 FILES = ("bomex_50m.txt", "rico_20m.txt")
-
-
-def timed(fn, rounds: int) -> list:
-    """Wall seconds of ``rounds`` calls of ``fn`` after one warm-up call."""
-    fn()
-    out = []
-    for _ in range(rounds):
-        t0 = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t0)
-    return out
 
 
 def main(argv=None) -> int:

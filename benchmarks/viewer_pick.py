@@ -11,13 +11,14 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import time
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from bench_timing import timed  # noqa: E402 (benchmarks/, the script's folder, is on sys.path)
 
 GOAL_S = 0.02
 W, H = 32, 24
@@ -30,17 +31,6 @@ def big_grid():
     bbox = ((0.0, 0.0, 0.0), (150e3, 150e3, 20e3))
     spacing = tuple((bbox[1][a] - bbox[0][a]) / n for a, n in zip((2, 1, 0), beta.shape))  # (dz, dy, dx)
     return SimpleNamespace(species=("cloud",), bbox=bbox, beta_total=beta, beta_ext=beta[None], spacing=spacing)
-
-
-def timed(fn, rounds: int) -> list:
-    """Wall seconds of ``rounds`` calls of ``fn`` after one warm-up call."""
-    fn()
-    out = []
-    for _ in range(rounds):
-        t0 = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t0)
-    return out
 
 
 def main(argv=None) -> int:
