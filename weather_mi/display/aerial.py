@@ -35,6 +35,10 @@ luminance there). The storm shadows the direct sun at the samples of A and B and
 (``optics.air.storm_shadow``: the hydrometeors' chord towards the sun; not for a periodic field; not on the
 diffuse light's source). Not included: the light the storm scatters into the outside air, the storm's blocking of
 the open ground's sky and of the outside air's diffuse light.
+
+A spectral render (``render --spectral``, ``eye_air(spectral=True)``): the same terms at DISORT's 13 wavelengths
+(``SpectralChannels``), the radiances integrated to CIE XYZ and linear sRGB, the transmittances a factor per sRGB
+channel on the render's pixels (exact for light of the sun's spectrum; docs/spectral.md measures the rest).
 """
 from __future__ import annotations
 
