@@ -17,7 +17,8 @@ the figure with ``Image.metadata["noise"]["rse_mean"]`` (the R, G, B channels' m
 spectral mode's R, G, B come from X, Y, Z through sRGB's matrix, whose chroma noise it counts).
 
 ``--atmosphere clear`` (default, as ``render`` runs): both modes have the air inside the box as well as on the
-sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``none``: no air. ``--three-nodes``
+sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``none``: no air. ``--linear`` adds the spectral mode with
+the phase tables bilinear in wavelength (4 corners a lane) instead of one wavelength node a lane; ``--three-nodes``
 adds the spectral mode as it was before the tables every 25 nm; ``--without-box-air`` both modes without the box's
 air (the air on the sun's path only: ``kernel.medium.air_in_medium`` None, a different scene; the spectral mode as it
 was before its box air was wired).
@@ -61,9 +62,10 @@ def phase_cost(lanes: int, rounds: int) -> None:
     weights = np.random.default_rng(0).random((16, 16, 16, 5)).astype(np.float32)
     base = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
             "weights": mi.TensorXf(weights)}
+    tables = {"spectral_values": mi.TensorXf(sv), "spectral_nm": mi.TensorXf(SPECTRAL_NM.astype(np.float32))}
     plugins = {"R, G, B interpolated": mi.load_dict(base),
-               "every 25 nm": mi.load_dict({**base, "spectral_values": mi.TensorXf(sv),
-                                            "spectral_nm": mi.TensorXf(SPECTRAL_NM.astype(np.float32))})}
+               "every 25 nm, bilinear": mi.load_dict({**base, **tables}),
+               "every 25 nm, one node a lane": mi.load_dict({**base, **tables, "spectral_interpolation": "stochastic"})}
     rng = np.random.default_rng(1)
     u = rng.random((8, lanes))
     mei = dr.zeros(mi.MediumInteraction3f, lanes)
@@ -120,6 +122,9 @@ def main(argv=None):
     ap.add_argument("--phase", action="store_true", help="the phase plugin alone (module docstring)")
     ap.add_argument("--three-nodes", action="store_true",
                     help="also the spectral mode with the R, G, B tables interpolated (as before the 25 nm tables)")
+    ap.add_argument("--linear", action="store_true",
+                    help="also the spectral mode with the phase tables bilinear in wavelength (as before the one-node "
+                         "stochastic reads, ``spectral_interpolation`` 'linear')")
     ap.add_argument("--without-box-air", action="store_true",
                     help="also both modes without the box's air (the spectral one as before it was wired)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
@@ -138,11 +143,14 @@ def main(argv=None):
     modes = dict(MODES)
     if args.three_nodes:
         modes["spectral, 3 nodes"] = "llvm_ad_spectral"
+    if args.linear:
+        modes["spectral, linear"] = "llvm_ad_spectral"
     if args.without_box_air:
         modes["rgb, no box air"] = "llvm_ad_rgb"
         modes["spectral, no box air"] = "llvm_ad_spectral"
     for mode, variant in modes.items():  # compile (and build the spectral tables) first, as measured: the kernels
-        with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")):  # of 1 spp differ
+        with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")), \
+                linear(mode.endswith("linear")):  # of 1 spp differ
             render_reference(replace(spec, seed=99), vol, spp=args.spp, passes=args.passes, progress=False,
                              variant=variant)
     print(f"demo supercell, {args.lighting} view, sun {args.elevation:g} deg, {w}x{h}, {args.spp} spp in "
@@ -155,7 +163,8 @@ def main(argv=None):
     for r in range(args.rounds):
         got = {}
         for mode, variant in (list(modes.items()) if r % 2 == 0 else list(modes.items())[::-1]):  # alternate
-            with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")):
+            with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")), \
+                    linear(mode.endswith("linear")):
                 got[mode] = timed_render(replace(spec, seed=r), vol, args.spp, args.passes, variant, cloud)
         b = got["rgb"]
         for mode, g in got.items():
@@ -184,6 +193,26 @@ def three_nodes(on: bool):
     from weather_mi.kernel import medium
     own = medium.spectral_phase_properties
     medium.spectral_phase_properties = lambda vol, nodes=None: own(vol)
+    try:
+        yield
+    finally:
+        medium.spectral_phase_properties = own
+
+
+@contextlib.contextmanager
+def linear(on: bool):
+    """With ``on``: the spectral mode's phase tables read bilinearly in wavelength (4 corners a lane,
+    ``spectral_interpolation`` "linear") instead of one wavelength node a lane at random ("stochastic")."""
+    if not on:
+        yield
+        return
+    from weather_mi.kernel import medium
+    own = medium.spectral_phase_properties
+
+    def bilinear(vol, nodes=None):
+        d = own(vol, nodes)
+        return {**d, "spectral_interpolation": "linear"} if "spectral_values" in d else d
+    medium.spectral_phase_properties = bilinear
     try:
         yield
     finally:
