@@ -22,6 +22,8 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from ..jitarrays import aligned_uint
+
 
 def prepare_spectral(v: np.ndarray, stacks) -> np.ndarray:
     """(S, N, K) float32: per species (``stacks``: S lists of K PhaseTable-likes, each one wavelength's table in
@@ -207,7 +209,7 @@ def picked_value(codes, grid, n_species: int, w, idx, t, wavelengths, u, gather4
     """mi.Spectrum: as :func:`spectral_value`, but each lane reads ONE of its two bracketing wavelength nodes,
     j + 1 with probability equal to its linear weight there (lane l's uniform: frac(``u`` + l / 4)), and the
     value there linear in v: an unbiased estimate of the bilinear value (its expectation over the pick). Read
-    from :func:`pack_half_nodes` (``codes``, as float32 bits, flat; the species other than ``flat``): two
+    from :func:`pack_half_nodes` (``codes``, a flat UInt32; the species other than ``flat``): two
     16-byte packets a lane from a table a fifth the size of :func:`pack_spectral`'s (it stays in the caches).
     The pdf (:func:`spectral_pdf`) is unchanged: sampling stays exact."""
     lo, inv_step, k = grid
@@ -224,7 +226,7 @@ def picked_value(codes, grid, n_species: int, w, idx, t, wavelengths, u, gather4
         ul = u + 0.25 * lane
         ul = dr.select(ul >= 1.0, ul - 1.0, ul)
         j = dr.select(ul < x - mi.Float(j), j + 1, j)  # P(j + 1) = the lane's weight of node j + 1
-        near, far = (dr.reinterpret_array(mi.Vector4u, gather4(codes, j * n + idx + d)) for d in (0, 1))
+        near, far = (dr.gather(mi.Vector4u, codes, j * n + idx + d) for d in (0, 1))
         ws = w if lane_w is None else lane_w[lane]
         acc = mi.Float(0.0)
         for s in range(n_species):
@@ -256,9 +258,8 @@ def mixture_tables(props, n_species: int, n_nodes: int, name: str, storage) -> d
     flat, rest, flat_table = split_flat(values, storage)  # species flat in wavelength (the box's air): read once
     if flat:
         out.update(spectral_flat=flat, spectral_table=rest, spectral_flat_table=flat_table)
-    if out["spectral_interpolation"] == "stochastic":
-        codes = pack_half_nodes(values[[s for s in range(n_species) if s not in flat]])
-        out["spectral_pairs"] = storage(codes.view(np.float32))  # the codes' bits, gathered as floats
+    if out["spectral_interpolation"] == "stochastic" and dr.is_array_v(mi.Float):  # JIT variants (else linear)
+        out["spectral_pairs"] = aligned_uint(mi, pack_half_nodes(values[[s for s in range(n_species) if s not in flat]]))
     return out
 
 
