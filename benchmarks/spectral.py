@@ -17,7 +17,9 @@ the figure with ``Image.metadata["noise"]["rse_mean"]`` (the R, G, B channels' m
 spectral mode's R, G, B come from X, Y, Z through sRGB's matrix, whose chroma noise it counts).
 
 ``--atmosphere clear`` (default, as ``render`` runs): both modes have the air inside the box as well as on the
-sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``none``: no air. ``--linear`` adds the spectral mode with
+sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``none``: no air. ``--phase-twice`` adds the spectral mode with every
+phase value evaluated twice (the tables' reads' share of the render time, the paths unchanged); ``--linear`` adds the
+spectral mode with
 the phase tables bilinear in wavelength (4 corners a lane) instead of one wavelength node a lane; ``--three-nodes``
 adds the spectral mode as it was before the tables every 25 nm; ``--without-box-air`` both modes without the box's
 air (the air on the sun's path only: ``kernel.medium.air_in_medium`` None, a different scene; the spectral mode as it
@@ -125,6 +127,9 @@ def main(argv=None):
     ap.add_argument("--linear", action="store_true",
                     help="also the spectral mode with the phase tables bilinear in wavelength (as before the one-node "
                          "stochastic reads, ``spectral_interpolation`` 'linear')")
+    ap.add_argument("--phase-twice", action="store_true",
+                    help="also the spectral mode with every phase value evaluated twice (the second kept alive, unused): "
+                         "the cost of the tables' reads in the render, with the paths unchanged")
     ap.add_argument("--without-box-air", action="store_true",
                     help="also both modes without the box's air (the spectral one as before it was wired)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
@@ -145,12 +150,14 @@ def main(argv=None):
         modes["spectral, 3 nodes"] = "llvm_ad_spectral"
     if args.linear:
         modes["spectral, linear"] = "llvm_ad_spectral"
+    if args.phase_twice:
+        modes["spectral, phase twice"] = "llvm_ad_spectral"
     if args.without_box_air:
         modes["rgb, no box air"] = "llvm_ad_rgb"
         modes["spectral, no box air"] = "llvm_ad_spectral"
     for mode, variant in modes.items():  # compile (and build the spectral tables) first, as measured: the kernels
         with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")), \
-                linear(mode.endswith("linear")):  # of 1 spp differ
+                linear(mode.endswith("linear")), phase_twice(mode.endswith("twice")):  # of 1 spp differ
             render_reference(replace(spec, seed=99), vol, spp=args.spp, passes=args.passes, progress=False,
                              variant=variant)
     print(f"demo supercell, {args.lighting} view, sun {args.elevation:g} deg, {w}x{h}, {args.spp} spp in "
@@ -164,7 +171,7 @@ def main(argv=None):
         got = {}
         for mode, variant in (list(modes.items()) if r % 2 == 0 else list(modes.items())[::-1]):  # alternate
             with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")), \
-                    linear(mode.endswith("linear")):
+                    linear(mode.endswith("linear")), phase_twice(mode.endswith("twice")):
                 got[mode] = timed_render(replace(spec, seed=r), vol, args.spp, args.passes, variant, cloud)
         b = got["rgb"]
         for mode, g in got.items():
@@ -217,6 +224,31 @@ def linear(on: bool):
         yield
     finally:
         medium.spectral_phase_properties = own
+
+
+@contextlib.contextmanager
+def phase_twice(on: bool):
+    """With ``on``: every phase value by wavelength (``spectral_value``, ``picked_value``) evaluated a second time at
+    the next node segment and rotated lanes, kept alive by a select that never fires: the extra time is one
+    evaluation's, and the paths (directions, weights, lengths) are those of the mode without it."""
+    if not on:
+        yield
+        return
+    import drjit as dr
+    import mitsuba as mi
+    from weather_mi.kernel.plugins import hydrometeor_mixture as hm
+    own = hm.spectral_value, hm.picked_value
+
+    def twice(f):
+        def evaluate(table, grid, n, w, idx, t, wl, *rest):
+            x = f(table, grid, n, w, idx + 1, t, mi.Spectrum(wl[1], wl[2], wl[3], wl[0]), *rest)
+            return mi.Spectrum(f(table, grid, n, w, idx, t, wl, *rest) + dr.select(x < -1.0, 1.0, 0.0))
+        return evaluate
+    hm.spectral_value, hm.picked_value = (twice(f) for f in own)
+    try:
+        yield
+    finally:
+        hm.spectral_value, hm.picked_value = own
 
 
 @contextlib.contextmanager
