@@ -228,9 +228,10 @@ def linear(on: bool):
 
 @contextlib.contextmanager
 def phase_twice(on: bool):
-    """With ``on``: every phase value by wavelength (``spectral_value``, ``picked_value``) evaluated a second time at
-    the next node segment and rotated lanes, kept alive by a select that never fires: the extra time is one
-    evaluation's, and the paths (directions, weights, lengths) are those of the mode without it."""
+    """With ``on``: every phase value by wavelength (``spectral_value``, ``picked_value``) evaluated a second time
+    half the table away (node segment idx +- half of them) with the lanes' wavelengths rotated, kept alive by a
+    select that never fires: the extra time is one evaluation's (reads from lines the first did not load), and
+    the paths (directions, weights, lengths) are those of the mode without it."""
     if not on:
         yield
         return
@@ -239,12 +240,16 @@ def phase_twice(on: bool):
     from weather_mi.kernel.plugins import hydrometeor_mixture as hm
     own = hm.spectral_value, hm.picked_value
 
-    def twice(f):
+    def twice(f, picked):
         def evaluate(table, grid, n, w, idx, t, wl, *rest):
-            x = f(table, grid, n, w, idx + 1, t, mi.Spectrum(wl[1], wl[2], wl[3], wl[0]), *rest)
+            flat = rest[3 if picked else 2] if len(rest) > (3 if picked else 2) else ()
+            k = grid[2]  # node segments: the codes' (picked) or the corner table's width over a segment's record
+            half = (dr.width(table) // (4 * k) - 1 if picked else dr.width(table) // (4 * (k - 1) * (n - len(flat)))) // 2
+            far = dr.select(idx >= half, idx - half, idx + half)  # half the table away: lines the first did not touch
+            x = f(table, grid, n, w, far, t, mi.Spectrum(wl[1], wl[2], wl[3], wl[0]), *rest)
             return mi.Spectrum(f(table, grid, n, w, idx, t, wl, *rest) + dr.select(x < -1.0, 1.0, 0.0))
         return evaluate
-    hm.spectral_value, hm.picked_value = (twice(f) for f in own)
+    hm.spectral_value, hm.picked_value = twice(own[0], False), twice(own[1], True)
     try:
         yield
     finally:
