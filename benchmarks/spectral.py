@@ -17,13 +17,12 @@ the figure with ``Image.metadata["noise"]["rse_mean"]`` (the R, G, B channels' m
 spectral mode's R, G, B come from X, Y, Z through sRGB's matrix, whose chroma noise it counts).
 
 ``--atmosphere clear`` (default, as ``render`` runs): both modes have the air inside the box as well as on the
-sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``none``: no air. ``--phase-twice`` adds the spectral mode with every
-phase value evaluated twice (the tables' reads' share of the render time, the paths unchanged); ``--linear`` adds the
-spectral mode with
-the phase tables bilinear in wavelength (4 corners a lane) instead of one wavelength node a lane; ``--three-nodes``
-adds the spectral mode as it was before the tables every 25 nm; ``--without-box-air`` both modes without the box's
-air (the air on the sun's path only: ``kernel.medium.air_in_medium`` None, a different scene; the spectral mode as it
-was before its box air was wired).
+sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``none``: no air. ``--phase-twice`` adds
+the spectral mode with every phase value evaluated twice (the tables' reads' share of the render time, the paths
+unchanged); ``--linear`` adds the spectral mode with the phase tables bilinear in wavelength (4 corners a lane)
+instead of one wavelength node a lane (what renders read); ``--three-nodes`` adds the spectral mode as it was before
+the tables every 25 nm; ``--without-box-air`` both modes without the box's air (the air on the sun's path only:
+``kernel.medium.air_in_medium`` None, a different scene; the spectral mode as it was before its box air was wired).
 
 ``--phase``: the mixture plugin alone in ``llvm_ad_spectral``, ``eval_pdf`` and ``sample`` on the demo
 supercell's five species (their tables at "test" quality, a random 16^3 weight grid) at random directions and
@@ -128,8 +127,8 @@ def main(argv=None):
                     help="also the spectral mode with the phase tables bilinear in wavelength (as before the one-node "
                          "stochastic reads, ``spectral_interpolation`` 'linear')")
     ap.add_argument("--phase-twice", action="store_true",
-                    help="also the spectral mode with every phase value evaluated twice (the second kept alive, unused): "
-                         "the cost of the tables' reads in the render, with the paths unchanged")
+                    help="also the spectral mode with every phase value evaluated twice (the second kept alive, "
+                         "unused): the cost of the tables' reads in the render, with the paths unchanged")
     ap.add_argument("--without-box-air", action="store_true",
                     help="also both modes without the box's air (the spectral one as before it was wired)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
@@ -244,7 +243,8 @@ def phase_twice(on: bool):
         def evaluate(table, grid, n, w, idx, t, wl, *rest):
             flat = rest[3 if picked else 2] if len(rest) > (3 if picked else 2) else ()
             k = grid[2]  # node segments: the codes' (picked) or the corner table's width over a segment's record
-            half = (dr.width(table) // (4 * k) - 1 if picked else dr.width(table) // (4 * (k - 1) * (n - len(flat)))) // 2
+            segments = dr.width(table) // (4 * k) - 1 if picked else dr.width(table) // (4 * (k - 1) * (n - len(flat)))
+            half = segments // 2
             far = dr.select(idx >= half, idx - half, idx + half)  # half the table away: lines the first did not touch
             x = f(table, grid, n, w, far, t, mi.Spectrum(wl[1], wl[2], wl[3], wl[0]), *rest)
             return mi.Spectrum(f(table, grid, n, w, idx, t, wl, *rest) + dr.select(x < -1.0, 1.0, 0.0))

@@ -40,11 +40,12 @@ Layout for speed (every scattering event costs one ``sample`` and one ``eval_pdf
 Spectral variants (``llvm_ad_spectral``: every path carries 4 wavelengths, ``mei.wavelengths``): with
 ``spectral_values`` (S x N x K, the species' tables at the K uniform wavelengths ``spectral_nm``, nm; what
 ``kernel.medium`` passes, ``optics.phase.spectral_tables``) a lane's value is read from them, bilinear in v and
-wavelength (``spectral_phase``), and the sampler draws from the wavelengths' mean; without them the three
+wavelength (``spectral_phase``; ``spectral_interpolation`` "stochastic": one wavelength node a lane, unbiased,
+``picked_value``), and the sampler draws from the wavelengths' mean; without them the three
 channels of ``values`` are the tables at the wavelengths ``channel_wavelengths`` (nm, descending: 650, 550,
 450 for the R, G, B tables) and a lane's value is their linear interpolation at its wavelength, held
-constant beyond the first and last (:func:`lerp_channels`), drawn from the channel mean. Each lane's
-weight is value(lambda) / pdf. ``coalbedo`` (S x (K + 1): 1 - omega_s on the uniform
+constant beyond the first and last (:func:`lerp_channels`), drawn from the channel mean. Each lane's weight is
+value(lambda) / pdf. ``coalbedo`` (S x (K + 1): 1 - omega_s on the uniform
 grid ``coalbedo_nm`` of K wavelengths, and at the reference wavelength) gives the medium's single-scattering
 albedo at a lane's wavelength (:meth:`HydrometeorMixture.albedo_at`), used by ``majorant_volpath``.
 
@@ -414,8 +415,8 @@ class HydrometeorMixture:
             spectral_air_weights.by_lane(self.air_spectral, w, mei.wavelengths, _gather4)  # the value's, by wavelength
         tables = (self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths)
         flat = (self.spectral_flat, self.spectral_flat_table)
-        value = spectral_value(self.spectral_table, *tables, _gather4, lane_w, *flat) if self.spectral_pairs is None \
-            else picked_value(self.spectral_pairs, *tables, hash_uniform(mei.p, wo), _gather4, lane_w, *flat)
+        value = spectral_value(self.spectral_table, *tables, _gather4, lane_w, *flat) if self.spectral_codes is None \
+            else picked_value(self.spectral_codes, *tables, hash_uniform(mei.p, wo), _gather4, lane_w, *flat)
         return value, spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4)
 
     def _mix(self, w, idx, t):

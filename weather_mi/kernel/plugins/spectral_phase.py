@@ -247,11 +247,11 @@ def mixture_tables(props, n_species: int, n_nodes: int, name: str, storage) -> d
     """``hydrometeor_mixture``'s attributes for the tables by wavelength: ``spectral_values``, ``spectral_table``
     (:func:`pack_spectral`, of the species other than the flat ones where there are flat ones),
     ``spectral_grid`` (:func:`from_properties`), ``spectral_flat`` and ``spectral_flat_table`` (:func:`split_flat`),
-    ``spectral_interpolation`` (:func:`interpolation_from`) and, for "stochastic", ``spectral_pairs``
+    ``spectral_interpolation`` (:func:`interpolation_from`) and, for "stochastic", ``spectral_codes``
     (:func:`pack_half_nodes` of the same species as ``spectral_table``); all None (and no flat species) without them."""
     values, table, grid = from_properties(props, n_species, n_nodes, name, storage)
     out = {"spectral_values": values, "spectral_table": table, "spectral_grid": grid, "spectral_flat": (),
-           "spectral_flat_table": None, "spectral_pairs": None,
+           "spectral_flat_table": None, "spectral_codes": None,
            "spectral_interpolation": interpolation_from(props, name)}
     if values is None:
         return out
@@ -259,7 +259,8 @@ def mixture_tables(props, n_species: int, n_nodes: int, name: str, storage) -> d
     if flat:
         out.update(spectral_flat=flat, spectral_table=rest, spectral_flat_table=flat_table)
     if out["spectral_interpolation"] == "stochastic" and dr.is_array_v(mi.Float):  # JIT variants (else linear)
-        out["spectral_pairs"] = aligned_uint(mi, pack_half_nodes(values[[s for s in range(n_species) if s not in flat]]))
+        rest = [s for s in range(n_species) if s not in flat]
+        out["spectral_codes"] = aligned_uint(mi, pack_half_nodes(values[rest]))
     return out
 
 
@@ -272,6 +273,6 @@ def interpolation_from(props, name: str) -> str:
     return how
 
 
-__all__ = ["flat_species", "split_flat", "prepare_spectral", "pack_spectral", "check_spectral", "spectral_value", "from_properties", "pack_pdf",
-           "spectral_pdf", "pack_half_nodes", "encode16", "decode16", "HALF_BIAS", "hash_uniform", "picked_value", "interpolation_from", "INTERPOLATIONS",
-           "mixture_tables"]
+__all__ = ["flat_species", "split_flat", "prepare_spectral", "pack_spectral", "check_spectral", "spectral_value",
+           "from_properties", "pack_pdf", "spectral_pdf", "pack_half_nodes", "encode16", "decode16", "HALF_BIAS",
+           "hash_uniform", "picked_value", "interpolation_from", "INTERPOLATIONS", "mixture_tables"]
