@@ -17,10 +17,12 @@ the figure with ``Image.metadata["noise"]["rse_mean"]`` (the R, G, B channels' m
 spectral mode's R, G, B come from X, Y, Z through sRGB's matrix, whose chroma noise it counts).
 
 ``--atmosphere clear`` (default, as ``render`` runs): both modes have the air inside the box as well as on the
-sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``none``: no air. ``--three-nodes``
-adds the spectral mode as it was before the tables every 25 nm; ``--without-box-air`` both modes without the box's
-air (the air on the sun's path only: ``kernel.medium.air_in_medium`` None, a different scene; the spectral mode as it
-was before its box air was wired).
+sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``none``: no air. ``--phase-twice`` adds
+the spectral mode with every phase value evaluated twice (the tables' reads' share of the render time, the paths
+unchanged); ``--linear`` adds the spectral mode with the phase tables bilinear in wavelength (4 corners a lane)
+instead of one wavelength node a lane (what renders read); ``--three-nodes`` adds the spectral mode as it was before
+the tables every 25 nm; ``--without-box-air`` both modes without the box's air (the air on the sun's path only:
+``kernel.medium.air_in_medium`` None, a different scene; the spectral mode as it was before its box air was wired).
 
 ``--phase``: the mixture plugin alone in ``llvm_ad_spectral``, ``eval_pdf`` and ``sample`` on the demo
 supercell's five species (their tables at "test" quality, a random 16^3 weight grid) at random directions and
@@ -61,9 +63,10 @@ def phase_cost(lanes: int, rounds: int) -> None:
     weights = np.random.default_rng(0).random((16, 16, 16, 5)).astype(np.float32)
     base = {"type": "hydrometeor_mixture", "nodes": mi.TensorXf(nodes[:, None]), "values": mi.TensorXf(values),
             "weights": mi.TensorXf(weights)}
+    tables = {"spectral_values": mi.TensorXf(sv), "spectral_nm": mi.TensorXf(SPECTRAL_NM.astype(np.float32))}
     plugins = {"R, G, B interpolated": mi.load_dict(base),
-               "every 25 nm": mi.load_dict({**base, "spectral_values": mi.TensorXf(sv),
-                                            "spectral_nm": mi.TensorXf(SPECTRAL_NM.astype(np.float32))})}
+               "every 25 nm, bilinear": mi.load_dict({**base, **tables}),
+               "every 25 nm, one node a lane": mi.load_dict({**base, **tables, "spectral_interpolation": "stochastic"})}
     rng = np.random.default_rng(1)
     u = rng.random((8, lanes))
     mei = dr.zeros(mi.MediumInteraction3f, lanes)
@@ -120,6 +123,12 @@ def main(argv=None):
     ap.add_argument("--phase", action="store_true", help="the phase plugin alone (module docstring)")
     ap.add_argument("--three-nodes", action="store_true",
                     help="also the spectral mode with the R, G, B tables interpolated (as before the 25 nm tables)")
+    ap.add_argument("--linear", action="store_true",
+                    help="also the spectral mode with the phase tables bilinear in wavelength (as before the one-node "
+                         "stochastic reads, ``spectral_interpolation`` 'linear')")
+    ap.add_argument("--phase-twice", action="store_true",
+                    help="also the spectral mode with every phase value evaluated twice (the second kept alive, "
+                         "unused): the cost of the tables' reads in the render, with the paths unchanged")
     ap.add_argument("--without-box-air", action="store_true",
                     help="also both modes without the box's air (the spectral one as before it was wired)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
@@ -138,11 +147,16 @@ def main(argv=None):
     modes = dict(MODES)
     if args.three_nodes:
         modes["spectral, 3 nodes"] = "llvm_ad_spectral"
+    if args.linear:
+        modes["spectral, linear"] = "llvm_ad_spectral"
+    if args.phase_twice:
+        modes["spectral, phase twice"] = "llvm_ad_spectral"
     if args.without_box_air:
         modes["rgb, no box air"] = "llvm_ad_rgb"
         modes["spectral, no box air"] = "llvm_ad_spectral"
     for mode, variant in modes.items():  # compile (and build the spectral tables) first, as measured: the kernels
-        with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")):  # of 1 spp differ
+        with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")), \
+                linear(mode.endswith("linear")), phase_twice(mode.endswith("twice")):  # of 1 spp differ
             render_reference(replace(spec, seed=99), vol, spp=args.spp, passes=args.passes, progress=False,
                              variant=variant)
     print(f"demo supercell, {args.lighting} view, sun {args.elevation:g} deg, {w}x{h}, {args.spp} spp in "
@@ -155,7 +169,8 @@ def main(argv=None):
     for r in range(args.rounds):
         got = {}
         for mode, variant in (list(modes.items()) if r % 2 == 0 else list(modes.items())[::-1]):  # alternate
-            with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")):
+            with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")), \
+                    linear(mode.endswith("linear")), phase_twice(mode.endswith("twice")):
                 got[mode] = timed_render(replace(spec, seed=r), vol, args.spp, args.passes, variant, cloud)
         b = got["rgb"]
         for mode, g in got.items():
@@ -188,6 +203,57 @@ def three_nodes(on: bool):
         yield
     finally:
         medium.spectral_phase_properties = own
+
+
+@contextlib.contextmanager
+def linear(on: bool):
+    """With ``on``: the spectral mode's phase tables read bilinearly in wavelength (4 corners a lane,
+    ``spectral_interpolation`` "linear") instead of one wavelength node a lane at random ("stochastic")."""
+    if not on:
+        yield
+        return
+    from weather_mi.kernel import medium
+    own = medium.spectral_phase_properties
+
+    def bilinear(vol, nodes=None):
+        d = own(vol, nodes)
+        return {**d, "spectral_interpolation": "linear"} if "spectral_values" in d else d
+    medium.spectral_phase_properties = bilinear
+    try:
+        yield
+    finally:
+        medium.spectral_phase_properties = own
+
+
+@contextlib.contextmanager
+def phase_twice(on: bool):
+    """With ``on``: every phase value by wavelength (``spectral_value``, ``picked_value``) evaluated a second time
+    half the table away (node segment idx +- half of them) with the lanes' wavelengths rotated, kept alive by a
+    select that never fires: the extra time is one evaluation's (reads from lines the first did not load), and
+    the paths (directions, weights, lengths) are those of the mode without it."""
+    if not on:
+        yield
+        return
+    import drjit as dr
+    import mitsuba as mi
+    from weather_mi.kernel.plugins import hydrometeor_mixture as hm
+    own = hm.spectral_value, hm.picked_value
+
+    def twice(f, picked):
+        def evaluate(table, grid, n, w, idx, t, wl, *rest):
+            flat = rest[3 if picked else 2] if len(rest) > (3 if picked else 2) else ()
+            k = grid[2]  # node segments: the codes' (picked) or the corner table's width over a segment's record
+            segments = dr.width(table) // (4 * k) - 1 if picked else dr.width(table) // (4 * (k - 1) * (n - len(flat)))
+            half = segments // 2
+            far = dr.select(idx >= half, idx - half, idx + half)  # half the table away: lines the first did not touch
+            x = f(table, grid, n, w, far, t, mi.Spectrum(wl[1], wl[2], wl[3], wl[0]), *rest)
+            return mi.Spectrum(f(table, grid, n, w, idx, t, wl, *rest) + dr.select(x < -1.0, 1.0, 0.0))
+        return evaluate
+    hm.spectral_value, hm.picked_value = twice(own[0], False), twice(own[1], True)
+    try:
+        yield
+    finally:
+        hm.spectral_value, hm.picked_value = own
 
 
 @contextlib.contextmanager

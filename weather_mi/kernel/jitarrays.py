@@ -29,6 +29,15 @@ def aligned_float(mi, a) -> "mi.Float":
     return mi.Float(out)
 
 
+def aligned_uint(mi, a) -> "mi.UInt32":
+    """A Dr.Jit UInt32 from integer data (bit patterns such as packed 16-bit codes, which must not pass
+    through float copies: NaN and denormal patterns) in 64-byte aligned memory, as :func:`aligned_float`."""
+    a = np.asarray(a, np.uint32).ravel()
+    out = aligned_empty(a.size).view(np.uint32)
+    out[:] = a
+    return mi.UInt32(out)
+
+
 def kernel_scalar(mi, value):
     """A per-frame scalar for a kernel: Dr.Jit arrays pass through (they may carry gradients), Python
     numbers become opaque values (a new value recompiles nothing; a literal would)."""

@@ -201,7 +201,9 @@ def grey_or_rgb(albedo: np.ndarray) -> np.ndarray:
 def spectral_phase_properties(vol: OpticalVolume, nodes=None) -> dict:
     """Spectral variants: the species' co-albedo spectra (``optics.spectral``), where the volume knows its
     species (none for raw optics: the albedo is then grey at its 550 nm value), and with the mixture's versine
-    ``nodes`` its phase tables by wavelength (:func:`spectral_phase_values`)."""
+    ``nodes`` its phase tables by wavelength (:func:`spectral_phase_values`), each lane reading one of its two
+    bracketing wavelength nodes at random (``spectral_interpolation`` "stochastic": the bilinear value in
+    expectation, ``kernel.plugins.spectral_phase.picked_value``)."""
     import mitsuba as mi
     from ..optics.spectral import COALBEDO_NM, coalbedo_table
     species = vol.components or ([vol.species_set[n] for n in vol.species] if vol.species_set is not None else None)
@@ -209,7 +211,7 @@ def spectral_phase_properties(vol: OpticalVolume, nodes=None) -> dict:
     if nodes is not None and vol.phase_tables is not None:
         from ..optics.phase.spectral_tables import SPECTRAL_NM
         d = {"spectral_values": mi.TensorXf(spectral_phase_values(vol, nodes, species)),
-             "spectral_nm": mi.TensorXf(SPECTRAL_NM.astype(np.float32))}
+             "spectral_nm": mi.TensorXf(SPECTRAL_NM.astype(np.float32)), "spectral_interpolation": "stochastic"}
     if species is None:
         return d
     c = coalbedo_table(species)

@@ -40,11 +40,12 @@ Layout for speed (every scattering event costs one ``sample`` and one ``eval_pdf
 Spectral variants (``llvm_ad_spectral``: every path carries 4 wavelengths, ``mei.wavelengths``): with
 ``spectral_values`` (S x N x K, the species' tables at the K uniform wavelengths ``spectral_nm``, nm; what
 ``kernel.medium`` passes, ``optics.phase.spectral_tables``) a lane's value is read from them, bilinear in v and
-wavelength (``spectral_phase``), and the sampler draws from the wavelengths' mean; without them the three
+wavelength (``spectral_phase``; ``spectral_interpolation`` "stochastic": one wavelength node a lane, unbiased,
+``picked_value``), and the sampler draws from the wavelengths' mean; without them the three
 channels of ``values`` are the tables at the wavelengths ``channel_wavelengths`` (nm, descending: 650, 550,
 450 for the R, G, B tables) and a lane's value is their linear interpolation at its wavelength, held
-constant beyond the first and last (:func:`lerp_channels`), drawn from the channel mean. Each lane's
-weight is value(lambda) / pdf. ``coalbedo`` (S x (K + 1): 1 - omega_s on the uniform
+constant beyond the first and last (:func:`lerp_channels`), drawn from the channel mean. Each lane's weight is
+value(lambda) / pdf. ``coalbedo`` (S x (K + 1): 1 - omega_s on the uniform
 grid ``coalbedo_nm`` of K wavelengths, and at the reference wavelength) gives the medium's single-scattering
 albedo at a lane's wavelength (:meth:`HydrometeorMixture.albedo_at`), used by ``majorant_volpath``.
 
@@ -70,7 +71,7 @@ from . import air_levels, grid_lookup
 from .mixture_tables import (GUIDE_THETA0, alias_table, angle_warp, channel_mean_pdf, common_nodes,  # noqa: F401
                              guide_table, prepare_tables, segment_masses)
 from . import spectral_air_weights, spectral_albedo
-from .spectral_phase import from_properties, pack_pdf, spectral_pdf, spectral_value, split_flat
+from .spectral_phase import hash_uniform, mixture_tables, pack_pdf, picked_value, spectral_pdf, spectral_value
 from .variant_class import variant_class
 
 PLUGIN_NAME = "hydrometeor_mixture"
@@ -297,14 +298,9 @@ class HydrometeorMixture:
 
     def _set_spectral_tables(self, props, n_nodes: int):
         """Spectral variants with ``spectral_values`` and ``spectral_nm``: the phase tables by wavelength
-        (``spectral_phase.from_properties``); else None (R, G, B interpolated)."""
-        self.spectral_values, self.spectral_table, self.spectral_grid = from_properties(
-            props, self.n_species, n_nodes, PLUGIN_NAME, _storage)
-        self.spectral_flat, self.spectral_flat_table = (), None
-        if self.spectral_values is not None:  # species flat in wavelength (the box's air) apart: read once
-            flat, rest, flat_table = split_flat(self.spectral_values, _storage)
-            if flat:
-                self.spectral_flat, self.spectral_table, self.spectral_flat_table = flat, rest, flat_table
+        (``spectral_phase.mixture_tables``); else None (R, G, B interpolated)."""
+        for key, value in mixture_tables(props, self.n_species, n_nodes, PLUGIN_NAME, _storage).items():
+            setattr(self, key, value)
 
     def _set_spectral(self, props):
         """Spectral variants: the channels' wavelengths (nm) and the species' co-albedo spectra."""
@@ -406,18 +402,22 @@ class HydrometeorMixture:
         t = dr.clip((v - v0) / dr.maximum(v1 - v0, 1e-30), 0.0, 1.0)
         return lo, t
 
-    def _mix_at(self, w, idx, t, mei):
+    def _mix_at(self, w, idx, t, mei, wo):
         """(the variant's Spectrum value, pdf) of the mixture: :meth:`_mix`'s channels (at the lanes'
-        wavelengths in spectral variants), or the tables by wavelength (``spectral_phase``) where given."""
+        wavelengths in spectral variants), or the tables by wavelength (``spectral_phase``) where given: bilinear,
+        or with ``spectral_interpolation`` "stochastic" one wavelength node a lane (its pick hashed from the
+        vertex and ``wo``: ``picked_value``)."""
         if self.spectral_table is None:
             value, pdf = self._mix(w, idx, t)
             return self._at_wavelengths(value, mei), pdf
         w = _channel_mean(w)  # (a spectral variant's air weights are one value: ``Weights`` as they are)
         lane_w = None if self.air_spectral is None else \
             spectral_air_weights.by_lane(self.air_spectral, w, mei.wavelengths, _gather4)  # the value's, by wavelength
-        return (spectral_value(self.spectral_table, self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths,
-                               _gather4, lane_w, self.spectral_flat, self.spectral_flat_table),
-                spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4))
+        tables = (self.spectral_grid, self.n_species, w, idx, t, mei.wavelengths)
+        flat = (self.spectral_flat, self.spectral_flat_table)
+        value = spectral_value(self.spectral_table, *tables, _gather4, lane_w, *flat) if self.spectral_codes is None \
+            else picked_value(self.spectral_codes, *tables, hash_uniform(mei.p, wo), _gather4, lane_w, *flat)
+        return value, spectral_pdf(self.spectral_pdf, self.n_species, w, idx, t, _gather4)
 
     def _mix(self, w, idx, t):
         """(per-channel value, pdf) of the mixture with weights w in node segment idx at fraction t (weights by
@@ -498,7 +498,7 @@ class HydrometeorMixture:
         # value and pdf where v was drawn: same weights, same segment (no search, no second lookup)
         t = dr.clip(x / dr.maximum(dmu, 1e-30), 0.0, 1.0)
         if self.spectral_table is not None:  # the lanes' values from the tables by wavelength
-            value, pdf = self._mix_at(w, idx, t, mei)
+            value, pdf = self._mix_at(w, idx, t, mei, wo)
         else:
             value, pdf = self._mix(w, idx, t)
         return wo, value, pdf
@@ -506,7 +506,7 @@ class HydrometeorMixture:
     def eval_pdf(self, ctx, mei, wo, active=True):
         h = wo + mei.wi  # |wo + wi|^2 = 2 (1 - cos Theta): accurate near forward
         idx, t = self._segment(0.5 * dr.squared_norm(h))
-        return self._mix_at(self._weights_at(mei), idx, t, mei)
+        return self._mix_at(self._weights_at(mei), idx, t, mei, wo)
 
     def traverse(self, cb):
         if self.weights is None:  # the parameter as given (negative values as 0), from the packed copy

@@ -22,6 +22,8 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from ..jitarrays import aligned_uint
+
 
 def prepare_spectral(v: np.ndarray, stacks) -> np.ndarray:
     """(S, N, K) float32: per species (``stacks``: S lists of K PhaseTable-likes, each one wavelength's table in
@@ -145,5 +147,132 @@ def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4,
     return mi.Spectrum(*out)
 
 
-__all__ = ["flat_species", "split_flat", "prepare_spectral", "pack_spectral", "check_spectral", "spectral_value", "from_properties", "pack_pdf",
-           "spectral_pdf"]
+HALF_BIAS = 88  # float32 exponent of the 16-bit code 0: codes span 2^-39 .. 2^25 (6 exponent, 10 mantissa bits)
+HALF_MAX = 2.0 ** 25 * (1.0 - 2.0 ** -12)
+
+
+def encode16(values: np.ndarray) -> np.ndarray:
+    """uint16 codes of non-negative float32 ``values``: the float's bits from exponent ``HALF_BIAS`` up, rounded to
+    10 mantissa bits (relative error <= 2^-11); values below 2^-39 (and 0) as code 0, which decodes to 0."""
+    v = np.asarray(values, np.float32)
+    if not (np.all(np.isfinite(v)) and v.min(initial=0.0) >= 0.0 and v.max(initial=0.0) < HALF_MAX):
+        raise ValueError(f"16-bit phase tables hold values in [0, {HALF_MAX:.4g}) 1/sr; got {v.min()} .. {v.max()}")
+    b = v.view(np.uint32).astype(np.int64) - (HALF_BIAS << 23)
+    return np.where(b > 0, (b + (1 << 12)) >> 13, 0).astype(np.uint16)
+
+
+def decode16(codes: np.ndarray) -> np.ndarray:
+    """float32 values of :func:`encode16`'s codes (numpy; the kernel decodes the same way, :func:`_decoded`)."""
+    c = np.asarray(codes, np.uint32)
+    return np.where(c == 0, 0, (c << 13) + (HALF_BIAS << 23)).astype(np.uint32).view(np.float32)
+
+
+def pack_half_nodes(values: np.ndarray) -> np.ndarray:
+    """(K, N, 4) uint32 from (S <= 8, N, K): per wavelength node j and versine node i the S species' values as
+    16-bit codes (:func:`encode16`), two to a 32-bit word (species 2 m in the low half of word m), zero-padded to
+    8: one 16-byte packet per (j, i), each value once (:func:`picked_value` reads (j, i) and (j, i + 1));
+    16 N K bytes, 0.6 MB for 1828 nodes and 21 wavelengths, where :func:`pack_spectral`'s corners take 2.9 MB."""
+    v = np.asarray(values, np.float32)
+    if v.shape[0] > 8:
+        raise ValueError(f"16-bit packets hold at most 8 species; got {v.shape[0]}")
+    codes = np.zeros((v.shape[2], v.shape[1], 8), np.uint32)
+    codes[..., :v.shape[0]] = np.transpose(encode16(v), (2, 1, 0))
+    return (codes[..., 0::2] | (codes[..., 1::2] << 16)).astype(np.uint32)
+
+
+def _decoded(word, high: bool):
+    """The float of the 16-bit code in the low (or ``high``) half of UInt32 ``word`` (:func:`decode16`)."""
+    m = ((word >> 3) if high else (word << 13)) & 0x1FFFE000
+    return dr.select(m == 0, 0.0, dr.reinterpret_array(mi.Float, m + (HALF_BIAS << 23)))
+
+
+def hash_uniform(p, wo):
+    """A uniform number in [0, 1) per lane from the bits of the point ``p`` and the direction ``wo`` (a
+    multiply-xor combination and murmur3's 32-bit finaliser): a pure function of the vertex and the direction,
+    so the value at one (vertex, direction) is the same wherever it is evaluated (MIS weights by value), and
+    independent of the wavelengths and the angle in all but rounding."""
+    bits = [dr.reinterpret_array(mi.UInt32, c) for c in (p.x, p.y, p.z, wo.x, wo.y, wo.z)]
+    h = mi.UInt32(0x9E3779B9)
+    for b, k in zip(bits, (0x85EBCA6B, 0xC2B2AE35, 0x27D4EB2F, 0x165667B1, 0xD3A2646C, 0xFD7046C5)):
+        h = (h ^ b) * k
+        h ^= h >> 15
+    h ^= h >> 16  # fmix32
+    h *= 0x85EBCA6B
+    h ^= h >> 13
+    h *= 0xC2B2AE35
+    h ^= h >> 16
+    return mi.Float(h >> 8) * (1.0 / (1 << 24))
+
+
+def picked_value(codes, grid, n_species: int, w, idx, t, wavelengths, u, gather4, lane_w=None, flat=(),
+                 flat_table=None):
+    """mi.Spectrum: as :func:`spectral_value`, but each lane reads ONE of its two bracketing wavelength nodes,
+    j + 1 with probability equal to its linear weight there (lane l's uniform: frac(``u`` + l / 4)), and the
+    value there linear in v: an unbiased estimate of the bilinear value (its expectation over the pick). Read
+    from :func:`pack_half_nodes` (``codes``, a flat UInt32; the species other than ``flat``): two
+    16-byte packets a lane from a table a fifth the size of :func:`pack_spectral`'s (it stays in the caches).
+    The pdf (:func:`spectral_pdf`) is unchanged: sampling stays exact."""
+    lo, inv_step, k = grid
+    n = dr.width(codes) // (4 * k)  # versine nodes
+    shared = {}
+    for f, s in enumerate(flat):  # the species the same at every wavelength: read once (split_flat's table)
+        e = gather4(flat_table, idx * len(flat) + f)
+        shared[s] = dr.fma(e[2] - e[0], t, e[0])
+    rest = [s for s in range(n_species) if s not in shared]
+    out = []
+    for lane in range(4):
+        x = dr.clip((wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
+        j = mi.UInt32(x)
+        ul = u + 0.25 * lane
+        ul = dr.select(ul >= 1.0, ul - 1.0, ul)
+        j = dr.select(ul < x - mi.Float(j), j + 1, j)  # P(j + 1) = the lane's weight of node j + 1
+        near, far = (dr.gather(mi.Vector4u, codes, j * n + idx + d) for d in (0, 1))
+        ws = w if lane_w is None else lane_w[lane]
+        acc = mi.Float(0.0)
+        for s in range(n_species):
+            if s in shared:
+                acc += ws[s] * shared[s]
+                continue
+            r = rest.index(s)
+            p0, p1 = _decoded(near[r // 2], r % 2 == 1), _decoded(far[r // 2], r % 2 == 1)
+            acc += ws[s] * dr.fma(p1 - p0, t, p0)
+        out.append(acc)
+    return mi.Spectrum(*out)
+
+
+INTERPOLATIONS = ("linear", "stochastic")
+
+
+def mixture_tables(props, n_species: int, n_nodes: int, name: str, storage) -> dict:
+    """``hydrometeor_mixture``'s attributes for the tables by wavelength: ``spectral_values``, ``spectral_table``
+    (:func:`pack_spectral`, of the species other than the flat ones where there are flat ones),
+    ``spectral_grid`` (:func:`from_properties`), ``spectral_flat`` and ``spectral_flat_table`` (:func:`split_flat`),
+    ``spectral_interpolation`` (:func:`interpolation_from`) and, for "stochastic", ``spectral_codes``
+    (:func:`pack_half_nodes` of the same species as ``spectral_table``); all None (and no flat species) without them."""
+    values, table, grid = from_properties(props, n_species, n_nodes, name, storage)
+    out = {"spectral_values": values, "spectral_table": table, "spectral_grid": grid, "spectral_flat": (),
+           "spectral_flat_table": None, "spectral_codes": None,
+           "spectral_interpolation": interpolation_from(props, name)}
+    if values is None:
+        return out
+    flat, rest, flat_table = split_flat(values, storage)  # species flat in wavelength (the box's air): read once
+    if flat:
+        out.update(spectral_flat=flat, spectral_table=rest, spectral_flat_table=flat_table)
+    if out["spectral_interpolation"] == "stochastic" and dr.is_array_v(mi.Float):  # JIT variants (else linear)
+        rest = [s for s in range(n_species) if s not in flat]
+        out["spectral_codes"] = aligned_uint(mi, pack_half_nodes(values[rest]))
+    return out
+
+
+def interpolation_from(props, name: str) -> str:
+    """The ``spectral_interpolation`` property: "linear" (default: :func:`spectral_value`, the bilinear value)
+    or "stochastic" (:func:`picked_value`, its unbiased one-node estimate; what ``kernel.medium`` renders with)."""
+    how = str(props.get("spectral_interpolation", "linear"))
+    if how not in INTERPOLATIONS:
+        raise ValueError(f"{name}: 'spectral_interpolation' must be one of {INTERPOLATIONS}, got {how!r}")
+    return how
+
+
+__all__ = ["flat_species", "split_flat", "prepare_spectral", "pack_spectral", "check_spectral", "spectral_value",
+           "from_properties", "pack_pdf", "spectral_pdf", "pack_half_nodes", "encode16", "decode16", "HALF_BIAS",
+           "hash_uniform", "picked_value", "interpolation_from", "INTERPOLATIONS", "mixture_tables"]
