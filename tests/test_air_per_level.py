@@ -25,6 +25,8 @@ from weather_mi.optics.air.inside import with_box_air
 from weather_mi.optics.volume import optical_volume
 from weather_mi.scene.framing import scene_spec
 
+from test_majorant_volpath import trilinear_numpy
+
 ATM = Atmosphere(aod_550=0.3)  # aerosol absorbs (ssa < 1) and scatters forward: the air's albedo is not 1
 CONSERVATIVE = Atmosphere(aod_550=0.0, ozone_atm_cm=0.0)
 
@@ -127,24 +129,6 @@ def test_the_phase_weights_are_each_channels_shares_of_its_scattering():
     assert tuple(phase_dict(grey)["air_weights"].shape) == (nz, 2)
 
 
-def _trilinear(grid, p_unit):
-    """numpy: ``grid`` (z, y, x, ...) at unit-cube points (n, 3 as x, y, z), texel centres at (i + 0.5) / n,
-    clamped at the edges (Mitsuba's grid volumes)."""
-    idx, frac = [], []
-    for axis, n in enumerate(grid.shape[:3]):
-        u = p_unit[:, 2 - axis] * n - 0.5
-        i0 = np.floor(u)
-        idx.append((np.clip(i0, 0, n - 1).astype(int), np.clip(i0 + 1, 0, n - 1).astype(int)))
-        frac.append(u - i0)
-    out = 0.0
-    for k in range(8):
-        bits = [(k >> 2) & 1, (k >> 1) & 1, k & 1]
-        w = np.prod([f if b else 1.0 - f for f, b in zip(frac, bits)], axis=0)
-        z, y, x = (idx[a][b] for a, b in zip(range(3), bits))
-        out = out + (w[:, None] if grid.ndim == 4 else w) * grid[z, y, x]
-    return out
-
-
 def test_sigma_t_is_the_grids_and_the_albedo_the_point_wise_mixture(storm):
     """At random points: sigma_t (per channel), the grey grid plus the air per level, equals the RGB grid that holds
     their sum (the medium's own lookups) to float32 rounding; the single-scattering albedo is the point-wise
@@ -168,12 +152,12 @@ def test_sigma_t_is_the_grids_and_the_albedo_the_point_wise_mixture(storm):
     np.testing.assert_allclose(s1, s0, rtol=3e-6, atol=1e-12)
     lo, hi = (np.asarray(q, np.float64) for q in vol.bbox)
     unit = (np.stack([np.array(c, np.float64) for c in (p.x, p.y, p.z)], 1) - lo) / (hi - lo)
-    beta = _trilinear(np.asarray(vol.beta_total, np.float64), unit)
-    omega_h = _trilinear(np.broadcast_to(np.asarray(vol.albedo, np.float64)[..., None] if np.ndim(vol.albedo) == 3
-                                         else np.asarray(vol.albedo, np.float64), vol.shape[:3] + (3,)), unit)
-    air = vol.air
-    ext = _trilinear(np.broadcast_to(air.extinction_levels[:, None, None, :], vol.shape[:3] + (3,)), unit)
-    sca = _trilinear(np.broadcast_to(air.scattering_levels.sum(0)[:, None, None, :], vol.shape[:3] + (3,)), unit)
+    beta = trilinear_numpy(vol.beta_total, unit)
+    omega_h = trilinear_numpy(np.broadcast_to(np.asarray(vol.albedo, np.float64)[..., None] if np.ndim(vol.albedo) == 3
+                                              else np.asarray(vol.albedo, np.float64), vol.shape[:3] + (3,)), unit)
+    centres = (np.arange(vol.shape[0]) + 0.5) / vol.shape[0]  # the air per level: linear between them, clamped
+    ext, sca = (np.stack([np.interp(unit[:, 2], centres, t[:, c]) for c in range(3)], 1)
+                for t in (vol.air.extinction_levels, vol.air.scattering_levels.sum(0)))
     want = np.clip((omega_h * beta[:, None] + sca) / (beta[:, None] + ext), 0.0, 1.0)
     np.testing.assert_allclose(a1.T if a1.shape[0] == 3 else a1, want, rtol=1e-4, atol=1e-6)
     a0 = a0.T if a0.shape[0] == 3 else a0

@@ -118,9 +118,5 @@ def on_eye_rays(img, spec, vol, args, air=None):
     if spec.atmosphere is None:
         return img
     from ..display.aerial import with_eye_air
-    spectral = img.xyz is not None
-    if air is None:
-        from ..display.aerial import eye_air
-        air = eye_air(spec, vol, sky_air=args.sky == "air", spectral=spectral)
     return with_eye_air(img, spec, vol, sky_air=args.sky == "air", air=air)
 

@@ -201,10 +201,12 @@ def with_eye_air(img, spec, vol, sky_air: bool = False, air=None):
     the box's opacity where the ray ends on a sky model's sky), the standard error scaled alike (the added terms
     are exact).
     Needs ``spec.atmosphere`` (a ValueError otherwise). ``air``: ``eye_air(spec, vol, sky_air)`` if already
-    computed (a progressive render's passes share it)."""
+    computed (a progressive render's passes share it; else computed here, per wavelength for a spectral render)."""
     if spec.atmosphere is None:
         raise ValueError("the air along the eye rays needs an atmosphere (--atmosphere clear)")
-    t_a, s_a, s_b, sky_end, hit, t_air, ground = eye_air(spec, vol, sky_air) if air is None else air
+    if air is None:  # a spectral render's (img.xyz) terms per wavelength
+        air = eye_air(spec, vol, sky_air, spectral=img.xyz is not None)
+    t_a, s_a, s_b, sky_end, hit, t_air, ground = air
     t_box = np.ones(hit.shape) if img.transmittance is None else np.asarray(img.transmittance, np.float64)
     rad = np.asarray(img.radiance, np.float64)
     w = np.where(sky_end, np.where(hit, 1.0 - np.clip(t_box, 0.0, 1.0), 0.0), 1.0)[..., None]

@@ -30,17 +30,16 @@ ALBEDO_PROPERTY, SCATTERING_PROPERTY = "air_albedo", "air_scattering"
 class MixtureAlbedo:
     """The albedo grid (held as given: a TensorXf made from numpy shares its memory on LLVM) and the air's tables."""
 
-    def __init__(self, albedo, scattering: np.ndarray, extinction: np.ndarray):
+    def __init__(self, albedo, scattering: np.ndarray):
         self.shape = tuple(int(n) for n in albedo.shape[:3])
         self.channels = int(albedo.shape[3]) if len(albedo.shape) == 4 else 1
         self.albedo = albedo.array
         self.sca = aligned_float(mi, np.asarray(scattering, np.float32))
-        self.ext = aligned_float(mi, np.asarray(extinction, np.float32))
 
-    def at(self, p_local, beta, periodic: bool, active):
-        """The albedo (Color3f) at the unit-cube point ``p_local``; ``beta`` the grey sigma_t grid's data (flat):
-        the point-wise mixture (omega_h beta + s) / (beta + e), omega_h and beta trilinear, e and s linear between
-        the level centres (as ``air_levels.AirLevels.sigma_at``, so sigma_s / sigma_t of the trackers' medium)."""
+    def at(self, p_local, beta, sigma_t, periodic: bool, active):
+        """The albedo (Color3f) at the unit-cube point ``p_local``: the point-wise mixture (omega_h beta + s) /
+        sigma_t, omega_h and beta trilinear (``beta`` the grey sigma_t grid's data, flat), s linear between the level
+        centres, and ``sigma_t`` the trackers' (beta + e: ``medium_setup.sigma_t_at``)."""
         corner, frac = grid_lookup.corners(p_local, self.shape, periodic)
         _, ny, nx = self.shape
         n_c = self.channels
@@ -54,12 +53,10 @@ class MixtureAlbedo:
         (z0, z1), fz = corner[0], frac[0]
         out = []
         for c in range(3):
-            e, s = (grid_lookup.lerp(dr.gather(mi.Float, t, mi.UInt32(z0 * 3 + c), active),
-                                     dr.gather(mi.Float, t, mi.UInt32(z1 * 3 + c), active), fz)
-                    for t in (self.ext, self.sca))
-            sigma_t = v[0] + e
-            sca = v[1 + c] * v[0] + s
-            out.append(dr.clip(dr.select(sigma_t > 0.0, sca / dr.select(sigma_t > 0.0, sigma_t, 1.0), 1.0), 0.0, 1.0))
+            s = grid_lookup.lerp(dr.gather(mi.Float, self.sca, mi.UInt32(z0 * 3 + c), active),
+                                 dr.gather(mi.Float, self.sca, mi.UInt32(z1 * 3 + c), active), fz)
+            out.append(dr.clip(dr.select(sigma_t[c] > 0.0, (v[1 + c] * v[0] + s) / dr.select(sigma_t[c] > 0.0,
+                                                                                             sigma_t[c], 1.0), 1.0), 0.0, 1.0))
         return mi.Color3f(*out)
 
 
@@ -76,4 +73,4 @@ def parse(props, extinction, check):
     check(sca.shape == tuple(extinction.shape) and np.all(np.isfinite(sca)) and sca.min() >= 0.0,
           f"'{SCATTERING_PROPERTY}' must be finite, non-negative and shaped as 'air_extinction' "
           f"{tuple(extinction.shape)}, got {sca.shape}")
-    return MixtureAlbedo(albedo, sca, extinction)
+    return MixtureAlbedo(albedo, sca)

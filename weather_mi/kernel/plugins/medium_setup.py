@@ -185,7 +185,7 @@ def scattering_event(ms, ray, t, active):
         return ms.air_albedo.event(ms, ray, t, active)  # (``spectral_air_albedo``)
     if ms.air is not None:  # sigma_t with the air per level (:func:`sigma_t_at`); the albedo grid the mixture's
         sigma_t = sigma_t_at(ms, mei.p, ray, active)
-        albedo = ms.air_albedo.at(ms.air_to_local @ mei.p, ms.beta, ms.air_periodic, active)
+        albedo = ms.air_albedo.at(ms.air_to_local @ mei.p, ms.beta, mi.Color3f(sigma_t), ms.air_periodic, active)
         albedo = dr.select(sigma_t > 0.0, albedo, 0.0)
         mei.sigma_s, mei.sigma_t = albedo * sigma_t, sigma_t
         return mei, albedo
