@@ -61,8 +61,9 @@ def eq4_grid(rho, q, radius_m, scale: float, density_kg_m3: float, default_radiu
     <= 0 replaced by ``default_radius_m``)."""
     grid = np.ndim(radius_m) != 0
     c3, denom, d2, rdef = eq4_factors(scale, density_kg_m3, default_radius_m if grid else radius_m)
-    rho, q, r = (np.ascontiguousarray(np.broadcast_to(np.asarray(a, np.float32), out.shape)).reshape(-1)
-                 for a in (rho, q, radius_m if grid else 0.0))
+    rho, q = (np.ascontiguousarray(np.broadcast_to(np.asarray(a, np.float32), out.shape)).reshape(-1) for a in (rho, q))
+    r = (np.ascontiguousarray(np.broadcast_to(np.asarray(radius_m, np.float32), out.shape)).reshape(-1) if grid
+         else np.zeros(1, np.float32))  # one radius: ``_eq4`` reads no grid of them
     dest = out.reshape(-1) if out.flags.c_contiguous else np.empty(out.size, np.float32)
     _eq4(rho, q, r, GRID if grid else SCALAR, c3, denom, d2, rdef, 0, dest.size, dest)
     if not out.flags.c_contiguous:

@@ -76,7 +76,8 @@ class Species:
     def beta_ext_per_m(self, rho_air_kg_m3, q_kg_per_kg, radius_m=None, out=None):
         """Eq. 4: beta = 3 rho_air q / (2 rho_particle R), times the species scaling (1/m). With float32 grids,
         ``out`` (a float32 grid of their shape) receives it in one compiled pass (``mixture_kernels.eq4_grid``,
-        the voxel pass's own Eq. 4; a radius grid's values <= 0 are the species' radius)."""
+        the voxel pass's own Eq. 4; there a radius grid's values <= 0 are the species' radius; without ``out`` the
+        formula as written, for scalars and float64)."""
         r = self.radius_m if radius_m is None else radius_m
         if out is None:
             return self.scale * 3.0 * rho_air_kg_m3 * q_kg_per_kg / (2.0 * self.density_kg_m3 * r)

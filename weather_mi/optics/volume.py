@@ -247,15 +247,6 @@ class OpticalVolume:
                    phase_tables=None if phase is None else (phase,))
 
 
-def _radius_field(hyd: xr.Dataset, name: str, default_m: float, use_model: bool):
-    """Per-voxel equivalent radius (m): the model's effective radius where given (> 0), else the species'."""
-    var = f"r_eff_{name}"
-    if use_model and var in hyd:
-        r = hyd[var].values.astype(np.float32, copy=False)
-        return np.where(r > 0, r, np.float32(default_m))
-    return default_m
-
-
 SIZES = ("scheme", "physical", "paper")
 
 
@@ -301,8 +292,9 @@ def extinction(hyd: xr.Dataset, species: SpeciesSet | str = "paper", scale: Mapp
     total, largest = None, {}
     for s in sp:
         q = hyd[f"q_{s.name}"].values.astype(np.float32, copy=False)
-        beta = s.beta_ext_per_m(rho, q, _radius_field(hyd, s.name, s.radius_m, use_model),
-                                out=np.empty(rho.shape, np.float32))
+        r_var = f"r_eff_{s.name}"  # the model's radius per voxel (its values <= 0 the species', in Eq. 4's pass)
+        radius = hyd[r_var].values.astype(np.float32, copy=False) if use_model and r_var in hyd else s.radius_m
+        beta = s.beta_ext_per_m(rho, q, radius, out=np.empty(rho.shape, np.float32))
         largest[s.name] = float(beta.max())
         total = beta if total is None else np.add(total, beta, out=total)
     return total, largest
@@ -325,7 +317,7 @@ def level_density(rho_air_kg_m3) -> np.ndarray:
 def _species_constants(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_albedo: bool) -> dict:
     """``mixture_kernels.voxel_optics``'s per-species constants, each as numpy computes it in the expressions the
     pass replaces: Eq. 4's float32 factors (``Species.beta_ext_per_m``: 3 scale; 2 rho_p R, or 2 rho_p and R
-    where the voxel has its own radius, ``_radius_field``), the mixture's albedos, and where each voxel's albedo
+    where the voxel has its own radius, ``r_eff_<species>`` > 0), the mixture's albedos, and where each voxel's albedo
     comes from its radius (``voxel_albedo``, with the model's radii: the species with ``r_eff_<species>`` whose
     albedo is the physical one of its radius; an overridden, artistic albedo is kept) the weak-absorption
     constants of ``species.albedo_of_radius``."""
