@@ -45,6 +45,7 @@ import numpy as np
 from ..kernel.jitarrays import aligned_float
 from ..optics.air.shell import EARTH_RADIUS_M
 from .eye import OPAQUE_T
+from .eye_air_quadrature import NODES, gauss_segment
 from .packets import lerp_rows, packed, packet
 
 HEIGHT_STEP_M = 250.0   # the height table's step (m): the aerosol's 1.2 km scale height within 0.5%
@@ -184,7 +185,7 @@ def _phases(dr, air: EyeAir, cos_t):
     return phase_value(cos_t), hg_value(air.aerosol_g, cos_t)
 
 
-def _source(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
+def source_at(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
     """point(s) -> (extinction, source) (mi.Color3f, 1/m and 1/m/sr per unit irradiance above the air) at o + s d:
     the integrand of ``segment`` (its arguments)."""
     import drjit as dr
@@ -216,7 +217,7 @@ def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse:
     mi.Float), a factor on the sun's colour C(h, mu) (``eye_path.segment_air``'s ``shadow``)."""
     import drjit as dr
     length = dr.maximum(t1 - t0, 0.0)
-    source = _source(mi, air, o, d, shadow, diffuse)
+    source = source_at(mi, air, o, d, shadow, diffuse)
 
     def point(i):
         x = mi.Float(i) * (1.0 / (samples - 1))
@@ -248,7 +249,7 @@ def profile(mi, air: EyeAir, o, d, t0, t1, samples: int, emit, shadow=None, acti
     (the others evaluate no point past t0: T = 1, S = 0 as their empty segment's; LLVM skips a packet of them)."""
     import drjit as dr
     length = dr.maximum(t1 - t0, 0.0)
-    source = _source(mi, air, o, d, shadow, True)
+    source = source_at(mi, air, o, d, shadow, True)
     if active is not None:
         zero = mi.Color3f(0.0)
         source_all = source
@@ -318,8 +319,8 @@ def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background,
     # without crossing the box (w = 0: not integrated)
     sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
     w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
-    t_a, s_a = segment(mi, air, o, d, mi.Float(0.0) + 0.0 * t_in, dr.select(w > 0, dr.select(hit, t_in, t_end), 0.0),
-                       SAMPLES_OUTSIDE, True, shadow=shadow)
+    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, shadow), mi.Float(0.0) + 0.0 * t_in,
+                             dr.select(w > 0, dr.select(hit, t_in, t_end), 0.0), NODES, True)
     return boxed + w * (e * s_a + (t_a - 1.0) * boxed)
 
 
@@ -353,5 +354,5 @@ def _top_m() -> float:
     return TOP_M
 
 
-__all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "SAMPLES_OUTSIDE", "box_interval", "eye_air_input",
+__all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "SAMPLES_OUTSIDE", "box_interval", "eye_air_input", "source_at",
            "height_table", "light_shadow", "profile", "ray_ends", "seen_through_air", "segment"]
