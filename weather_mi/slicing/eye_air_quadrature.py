@@ -26,7 +26,7 @@ import functools
 
 import numpy as np
 
-NODES = 8   # Gauss-Legendre nodes on the eye rays' segment outside the box (the trapezoids had 33)
+NODES = 12   # Gauss-Legendre nodes on the eye rays' segment outside the box (the trapezoids had 33)
 
 
 @functools.lru_cache(maxsize=8)
