@@ -16,9 +16,10 @@ Earth whose centre lies under the box's centre, as ``display.aerial``'s):
 
 T_x, S_x: the segment's transmittance and single-scattered sunlight per unit irradiance above the air
 (``optics.air.eye_path``'s integrals: molecules with Rayleigh's phase function, aerosol with its albedo and
-Henyey-Greenstein's, ozone absorbing, the direct sun's colour C(h, mu) at each point), here trapezoidal on
-``SAMPLES_OUTSIDE`` points (dense near the camera: s = t0 + L x^2) and ``SAMPLES_BOX`` points (uniform) per
-box segment, from 1-D tables by height. The air in the box is the 1-D atmosphere's (US 1976 molecules; the
+Henyey-Greenstein's, ozone absorbing, the direct sun's colour C(h, mu) at each point), here by Gauss-Legendre
+on ``eye_air_quadrature.NODES`` points outside the box (dense near the camera: s = t0 + L x^2; 33 trapezoids
+before, 5x less accurate) and trapezoidal on ``SAMPLES_BOX`` points (uniform) per box segment, from 1-D tables
+by height. The air in the box is the 1-D atmosphere's (US 1976 molecules; the
 path tracer takes the model's own rho_air, within a few per cent of it for the storms here).
 
 The storm's shadow on the air (``display.aerial``'s is ``optics.air.storm_shadow``'s map): the sunlight at
@@ -49,7 +50,6 @@ from .eye_air_quadrature import NODES, gauss_segment
 from .packets import lerp_rows, packed, packet
 
 HEIGHT_STEP_M = 250.0   # the height table's step (m): the aerosol's 1.2 km scale height within 0.5%
-SAMPLES_OUTSIDE = 33    # points on the segment outside the box (x^2 spacing, as eye_path's 257: S within 1%)
 SAMPLES_BOX = 13        # points on each segment inside the box (uniform)
 # the sun's colour by (cos zenith, height) for every sun, once per atmosphere (``sun_table``): cosines from below
 # the horizon of the air's top to the zenith, heights to the air's top; slant columns on 64 points a segment
@@ -354,5 +354,5 @@ def _top_m() -> float:
     return TOP_M
 
 
-__all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "SAMPLES_OUTSIDE", "box_interval", "eye_air_input", "source_at",
+__all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "box_interval", "eye_air_input", "source_at",
            "height_table", "light_shadow", "profile", "ray_ends", "seen_through_air", "segment"]

@@ -1,14 +1,14 @@
 """The eye rays' air on a coarse grid of the frame's pixels, read per pixel (issue 38 part 3: the air's cost in
 a drag frame).
 
-``eye_air.seen_through_air`` integrates the air on every pixel's ray (33 + 2 x 13 points, each a few table
+``eye_air.seen_through_air`` integrates the air on every pixel's ray (12 + 2 x 13 points, each a few table
 lookups and a lookup of the storm's shadow): half the time of a uniform-mode frame at 300 x 300. The air seen
 along neighbouring rays differs little (it varies with the direction over degrees, as the sky does); only the
 cloud's depth and transmittance, which split the box's chord, change from pixel to pixel. So here the rays of
 every ``STEP``-th pixel in x and in y (the last row and column included) integrate the air once:
 
 * A: the segment outside the box, (S_A, T_A) over [camera, box entry] (or [camera, the ground or the air's
-  top] where the ray misses the box), 33 points as ``eye_air``'s;
+  top] where the ray misses the box), on Gauss-Legendre nodes as ``eye_air``'s (``eye_air_quadrature``);
 * the box's chord [t_in, t_out] as cumulative (S, T) at ``BOX_POINTS`` uniform fractions x_k of it (trapezoids,
   the diffuse light and the storm's shadow as ``eye_air.segment``'s).
 

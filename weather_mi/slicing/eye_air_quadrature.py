@@ -14,9 +14,12 @@ shadow). Both are taken on the n Gauss-Legendre nodes x_i, weights w_i of [0, 1]
 with A_ij = int_0^{x_i} l_j(u) du the integral of the Lagrange polynomial through the nodes that is 1 at x_j
 (Gauss collocation's integration matrix: tau at the nodes exact for a polynomial integrand of degree n - 1,
 the sum for S for degree 2n - 1). The air's profile is smooth along a ray (the aerosol's 1.2 km scale height
-over a few e-folds), so 8 nodes hold it where the trapezoids needed 33; the storm's shadow is a step on the
-source, which any rule resolves only to its spacing. Each node evaluates the source once (unrolled: no loop,
-no storage), the matrix is n^2 multiply-adds per colour; rays whose segment is empty evaluate none. Checked
+over a few e-folds): on the demo supercell's drag (sun 4 and 35 deg) S within 0.23% of the trapezoids on 257
+points for 99% of the coarse rays (T within 1.5e-3) on 12 nodes, 0.83% on 8, where the 33 trapezoids before
+were within 1.3% (T 4e-2). The storm's shadow is a step on the source, which any rule resolves only to its
+spacing: 8 nodes missed the cloud ball's long shadow at a 4 deg sun by 8% in blue (tests/test_slicing_air.py,
+the trapezoids 4% the other way), 12 by 2.3-2.8%. Each node evaluates the source once (unrolled: no loop, no
+storage), the matrix is n^2 multiply-adds per colour; rays whose segment is empty evaluate none. Checked
 against the closed forms of a homogeneous path and of an exponential atmosphere along a vertical ray
 (tests/test_eye_air_quadrature.py).
 """
