@@ -28,8 +28,9 @@ light volume, ``light_shadow``: exp(-tau) of the hydrometeors' chord towards the
 box, the light leaving it on the point's sun ray, 1 where that ray misses the box). The light pass runs
 every frame for the frame's sun, so the shadow follows the sun and the sliders with no pass of its own,
 compiles nothing new when the sun moves, and is the shadow the slicer's cloud and ground get. Against the
-map on the same segments: within 2.4-4.4% (tests/test_slicing_air.py; the light volume's penumbra at a cloud's
-rim is lighter). None for a periodic field (as ``display.aerial``).
+map on the same segments: within 0.5-2.8% (tests/test_slicing_air.py; 2.4-4.4% lighter with the trapezoids
+before the Gauss nodes: the light volume's penumbra at a cloud's rim is lighter, and the step where a ray
+enters the shadow falls between points either way). None for a periodic field (as ``display.aerial``).
 Not included: light scattered more than once by the air, the light the storm scatters into its shadow, and
 the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
 (``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing. Frames of 96 px a side or
