@@ -40,9 +40,9 @@ def _mi():
 def test_a_homogeneous_path_is_the_closed_form(squared):
     """Constant extinction sigma and source c over lengths L with sigma L from 0.02 to 12 (the horizon's
     haze is ~10 in blue): T = exp(-sigma L) within 1e-5 (absolute), S = c / sigma (1 - exp(-sigma L)) within
-    1e-4 (measured 1.4e-7: float32) on the slicer's ``NODES`` (12), on either spacing (uniform, or dense near the camera as the slicer's
-    outside segment). As many trapezoids on the same spacing miss S by over 1% (the test can tell)."""
-    import drjit as dr
+    1e-4 (measured 1.4e-7: float32) on the slicer's ``NODES`` (12), on either spacing (uniform, or dense near
+    the camera as the slicer's outside segment). As many trapezoids on the same spacing miss S by over 1% (the
+    test can tell)."""
     mi = _mi()
     lengths = np.array([2e3, 20e3, 100e3, 300e3, 1200e3])
     sigma = np.array([1e-5, 2e-5, 1e-5])
@@ -69,8 +69,8 @@ def test_a_homogeneous_path_is_the_closed_form(squared):
 def test_scatterers_thinner_than_the_extinction_are_the_closed_form():
     """A vertical path through an exponential atmosphere, extinction sigma0 e^(-h/H) and source
     a e^(-2h/H) (scatterers at half its scale height, as the aerosol's under the molecules'), from h0 over
-    lengths L up to 20 km (17 e-folds): with u = e^(-h/H), k = sigma0 H: tau = k (u0 - u1) and S = a H e^(-k u0) [e^(k u)(u/k - 1/k^2)]
-    from u1 to u0. Within 1e-5 (T) and 1e-4 (S) on ``NODES``, either spacing (measured 6e-6; 8 nodes: 0.36% at
+    lengths L up to 20 km (17 e-folds): with u = e^(-h/H), k = sigma0 H: tau = k (u0 - u1) and
+    S = a H e^(-k u0) [e^(k u)(u/k - 1/k^2)] from u1 to u0. Within 1e-5 (T) and 1e-4 (S) on ``NODES``, either spacing (measured 6e-6; 8 nodes: 0.36% at
     20 km, where the scatterers fall over 33 e-folds)."""
     mi = _mi()
     H, sigma0, a, h0 = 1200.0, np.array([8e-5, 4e-5, 2e-5]), np.array([5e-6, 3e-6, 1e-6]), 300.0
