@@ -44,8 +44,10 @@ def switched_off(setting: str):
 
     def composite_only(*args, **kwargs):
         coarse_air = coarse.coarse_air
-        coarse.coarse_air = lambda mi, air, *_a, **_k: dr.zeros(mi.Float, coarse.coarse_count(air.width) * coarse.coarse_count(
-            air.height) * (coarse.BOX_POINTS + 1) * coarse.ROW)
+        # an evaluated table of zeros (a dr.zeros literal would let Dr.Jit fold the gathers away: no composite)
+        coarse.coarse_air = lambda mi, air, *_a, **_k: dr.opaque(
+            mi.Float, 0.0, coarse.coarse_count(air.width) * coarse.coarse_count(air.height) * (coarse.BOX_POINTS + 1)
+            * coarse.ROW)
         try:
             return seen_through(*args, **kwargs)
         finally:

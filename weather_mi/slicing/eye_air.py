@@ -16,9 +16,10 @@ Earth whose centre lies under the box's centre, as ``display.aerial``'s):
 
 T_x, S_x: the segment's transmittance and single-scattered sunlight per unit irradiance above the air
 (``optics.air.eye_path``'s integrals: molecules with Rayleigh's phase function, aerosol with its albedo and
-Henyey-Greenstein's, ozone absorbing, the direct sun's colour C(h, mu) at each point), here trapezoidal on
-``SAMPLES_OUTSIDE`` points (dense near the camera: s = t0 + L x^2) and ``SAMPLES_BOX`` points (uniform) per
-box segment, from 1-D tables by height. The air in the box is the 1-D atmosphere's (US 1976 molecules; the
+Henyey-Greenstein's, ozone absorbing, the direct sun's colour C(h, mu) at each point), here by Gauss-Legendre
+on ``eye_air_quadrature.NODES`` points outside the box (dense near the camera: s = t0 + L x^2; 33 trapezoids
+before, 5x less accurate) and trapezoidal on ``SAMPLES_BOX`` points (uniform) per box segment, from 1-D tables
+by height. The air in the box is the 1-D atmosphere's (US 1976 molecules; the
 path tracer takes the model's own rho_air, within a few per cent of it for the storms here).
 
 The storm's shadow on the air (``display.aerial``'s is ``optics.air.storm_shadow``'s map): the sunlight at
@@ -27,8 +28,9 @@ light volume, ``light_shadow``: exp(-tau) of the hydrometeors' chord towards the
 box, the light leaving it on the point's sun ray, 1 where that ray misses the box). The light pass runs
 every frame for the frame's sun, so the shadow follows the sun and the sliders with no pass of its own,
 compiles nothing new when the sun moves, and is the shadow the slicer's cloud and ground get. Against the
-map on the same segments: within 2.4-4.4% (tests/test_slicing_air.py; the light volume's penumbra at a cloud's
-rim is lighter). None for a periodic field (as ``display.aerial``).
+map on the same segments: within 0.5-2.8% (tests/test_slicing_air.py; 2.4-4.4% lighter with the trapezoids
+before the Gauss nodes: the light volume's penumbra at a cloud's rim is lighter, and the step where a ray
+enters the shadow falls between points either way). None for a periodic field (as ``display.aerial``).
 Not included: light scattered more than once by the air, the light the storm scatters into its shadow, and
 the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
 (``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing. Frames of 96 px a side or
@@ -45,10 +47,10 @@ import numpy as np
 from ..kernel.jitarrays import aligned_float
 from ..optics.air.shell import EARTH_RADIUS_M
 from .eye import OPAQUE_T
+from .eye_air_quadrature import NODES, gauss_segment
 from .packets import lerp_rows, packed, packet
 
 HEIGHT_STEP_M = 250.0   # the height table's step (m): the aerosol's 1.2 km scale height within 0.5%
-SAMPLES_OUTSIDE = 33    # points on the segment outside the box (x^2 spacing, as eye_path's 257: S within 1%)
 SAMPLES_BOX = 13        # points on each segment inside the box (uniform)
 # the sun's colour by (cos zenith, height) for every sun, once per atmosphere (``sun_table``): cosines from below
 # the horizon of the air's top to the zenith, heights to the air's top; slant columns on 64 points a segment
@@ -184,7 +186,7 @@ def _phases(dr, air: EyeAir, cos_t):
     return phase_value(cos_t), hg_value(air.aerosol_g, cos_t)
 
 
-def _source(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
+def source_at(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
     """point(s) -> (extinction, source) (mi.Color3f, 1/m and 1/m/sr per unit irradiance above the air) at o + s d:
     the integrand of ``segment`` (its arguments)."""
     import drjit as dr
@@ -216,7 +218,7 @@ def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse:
     mi.Float), a factor on the sun's colour C(h, mu) (``eye_path.segment_air``'s ``shadow``)."""
     import drjit as dr
     length = dr.maximum(t1 - t0, 0.0)
-    source = _source(mi, air, o, d, shadow, diffuse)
+    source = source_at(mi, air, o, d, shadow, diffuse)
 
     def point(i):
         x = mi.Float(i) * (1.0 / (samples - 1))
@@ -248,7 +250,7 @@ def profile(mi, air: EyeAir, o, d, t0, t1, samples: int, emit, shadow=None, acti
     (the others evaluate no point past t0: T = 1, S = 0 as their empty segment's; LLVM skips a packet of them)."""
     import drjit as dr
     length = dr.maximum(t1 - t0, 0.0)
-    source = _source(mi, air, o, d, shadow, True)
+    source = source_at(mi, air, o, d, shadow, True)
     if active is not None:
         zero = mi.Color3f(0.0)
         source_all = source
@@ -318,8 +320,8 @@ def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background,
     # without crossing the box (w = 0: not integrated)
     sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
     w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
-    t_a, s_a = segment(mi, air, o, d, mi.Float(0.0) + 0.0 * t_in, dr.select(w > 0, dr.select(hit, t_in, t_end), 0.0),
-                       SAMPLES_OUTSIDE, True, shadow=shadow)
+    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, shadow), mi.Float(0.0) + 0.0 * t_in,
+                             dr.select(w > 0, dr.select(hit, t_in, t_end), 0.0), NODES, True)
     return boxed + w * (e * s_a + (t_a - 1.0) * boxed)
 
 
@@ -353,5 +355,5 @@ def _top_m() -> float:
     return TOP_M
 
 
-__all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "SAMPLES_OUTSIDE", "box_interval", "eye_air_input",
+__all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "box_interval", "eye_air_input", "source_at",
            "height_table", "light_shadow", "profile", "ray_ends", "seen_through_air", "segment"]

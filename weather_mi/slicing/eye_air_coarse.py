@@ -1,14 +1,14 @@
 """The eye rays' air on a coarse grid of the frame's pixels, read per pixel (issue 38 part 3: the air's cost in
 a drag frame).
 
-``eye_air.seen_through_air`` integrates the air on every pixel's ray (33 + 2 x 13 points, each a few table
+``eye_air.seen_through_air`` integrates the air on every pixel's ray (12 + 2 x 13 points, each a few table
 lookups and a lookup of the storm's shadow): half the time of a uniform-mode frame at 300 x 300. The air seen
 along neighbouring rays differs little (it varies with the direction over degrees, as the sky does); only the
 cloud's depth and transmittance, which split the box's chord, change from pixel to pixel. So here the rays of
 every ``STEP``-th pixel in x and in y (the last row and column included) integrate the air once:
 
 * A: the segment outside the box, (S_A, T_A) over [camera, box entry] (or [camera, the ground or the air's
-  top] where the ray misses the box), 33 points as ``eye_air``'s;
+  top] where the ray misses the box), on Gauss-Legendre nodes as ``eye_air``'s (``eye_air_quadrature``);
 * the box's chord [t_in, t_out] as cumulative (S, T) at ``BOX_POINTS`` uniform fractions x_k of it (trapezoids,
   the diffuse light and the storm's shadow as ``eye_air.segment``'s).
 
@@ -43,7 +43,8 @@ part 3), 0.53-0.65 when every pixel integrated its own (and the box's rows were 
 from __future__ import annotations
 
 from .eye import OPAQUE_T
-from .eye_air import SAMPLES_OUTSIDE, EyeAir, profile, ray_ends, segment
+from .eye_air import EyeAir, profile, ray_ends, source_at
+from .eye_air_quadrature import NODES, gauss_segment
 
 STEP = 4            # the coarse grid: every STEP-th pixel in x and y (the last row and column included)
 BOX_POINTS = 17     # points on each coarse ray's box chord (uniform): the cloud's depth read between them
@@ -78,8 +79,8 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
     t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
     kind = _kind(dr, hit, t_ground)
     # A: not where the ray ends on the sky model's sky without crossing the box (no pixel of that kind uses it)
-    t_a, s_a = segment(mi, air, o, d, 0.0 * t_in, dr.select(hit, t_in, dr.select(kind == 2.0, 0.0, t_end)),
-                       SAMPLES_OUTSIDE, True, shadow=shadow)
+    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, shadow), 0.0 * t_in,
+                             dr.select(hit, t_in, dr.select(kind == 2.0, 0.0, t_end)), NODES, True)
     rows = BOX_POINTS + 1
     out = dr.empty(mi.Float, nx * ny * rows * ROW)  # (every float written below)
     base = j * (rows * 2)  # in packets of 4 floats

@@ -16,10 +16,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kernel.jitarrays import aligned_float
-from .packets import lerp_rows, packed
+from .packets import packed, packet
 
 TOP_ABOVE_BOX_M = 2000.0  # the table reaches this far above the box (as the path tracer's, kernel.scene_dict)
 COLUMN_SAMPLES = 128  # the slant columns' points per segment (``shell.slant_columns``: the colour within 1e-3)
+# the table the kernels read: the linear interpolant of ``sun_by_height``'s rows on this many heights (every 2.7 m
+# for a 20 km box), read at the nearest row (one gather a sample, no interpolation: 0.8-1.6 ms less of a drag
+# frame's CPU in the uniform modes); within 0.15% of the interpolant (of the brightest channel) at a 4 deg sun,
+# 0.3% at 2 deg, 0.02% at 35 deg
+FINE_ROWS = 8192
 
 
 @dataclass
@@ -28,7 +33,7 @@ class SunAir:
 
     h0: object      # mi.Float: the table's lowest height (m above sea level)
     inv_dh: object  # mi.Float: 1 / its height step (1/m)
-    rgb: object     # mi.Float (n x 4): the sun's linear sRGB per height, padded (``packets.packed``)
+    rgb: object     # mi.Float (n x 4): the sun's linear sRGB per height (``FINE_ROWS``), padded (``packets.packed``)
     n: int          # the number of heights
 
 
@@ -61,16 +66,18 @@ def sun_air_input(mi, spec, grid_box) -> SunAir | None:
         return None
     import drjit as dr
     heights, rgb = sun_by_height(spec, grid_box[1][2])
-    step = float(heights[1] - heights[0])
-    return SunAir(dr.opaque(mi.Float, float(heights[0])), dr.opaque(mi.Float, 1.0 / step),
-                  aligned_float(mi, packed(rgb)), int(heights.size))
+    fine = np.linspace(heights[0], heights[-1], FINE_ROWS)
+    rgb = np.stack([np.interp(fine, heights, rgb[:, c]) for c in range(3)], axis=1)
+    step = float(fine[1] - fine[0])
+    return SunAir(dr.opaque(mi.Float, float(fine[0])), dr.opaque(mi.Float, 1.0 / step),
+                  aligned_float(mi, packed(rgb)), int(fine.size))
 
 
 def sun_colour_at(mi, air: SunAir, z):
-    """The sun's colour (mi.Color3f) at heights z (mi.Float, m above sea level), linear in height between
-    the table's rows, clamped to its ends (inside a kernel)."""
+    """The sun's colour (mi.Color3f) at heights z (mi.Float, m above sea level): the table's nearest row
+    (``FINE_ROWS``), clamped to its ends (inside a kernel)."""
     import drjit as dr
-    return lerp_rows(mi, dr, air.rgb, (z - air.h0) * air.inv_dh, air.n)
+    return packet(mi, dr, air.rgb, mi.UInt32(dr.clip((z - air.h0) * air.inv_dh + 0.5, 0.0, float(air.n - 1))))
 
 
 __all__ = ["SunAir", "sun_by_height", "sun_at_height", "sun_air_input", "sun_colour_at"]
