@@ -27,12 +27,6 @@ def _disort_sky_xyz(atm, mu0, zenith_deg, phi_deg):
     return (sun * sky) @ cmf / (sun @ cmf[:, 1])
 
 
-def _lab(xyz, white_y):
-    import colour
-    d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
-    return colour.XYZ_to_Lab(np.asarray(xyz) / white_y, d65)
-
-
 def _sky_spec(elevation, pitch):
     """A camera at the ground 50 km south of a small clear box, looking north ``pitch`` deg up (9x7 pixels, 40 deg):
     the centre pixel misses the box; the sun in the east at ``elevation``."""
@@ -57,15 +51,15 @@ def test_spectral_sky_outside_the_box_against_disort_in_xyz(elevation):
     XYZ): luminance within 6 % of DISORT's all orders (the diffuse source's isotropy: 4 % low), chromaticity
     within CIEDE2000 0.5 at equal luminance (measured <= 0.35; the RGB mode's three-wavelength terms reach 0.66,
     so the bound tells them apart)."""
-    import colour
     from weather_mi.display.aerial import eye_air
+    from weather_mi.display.cloud_colour import delta_e_at_white
     from weather_mi.optics.spectrum import xyz_of_linear_srgb
     for pitch in (10.0, 30.0, 60.0):
         spec, vol = _sky_spec(elevation, pitch)
         ref = _disort_sky_xyz(spec.atmosphere, spec.sun.mu0, 90.0 - pitch, 90.0)
         got = xyz_of_linear_srgb(eye_air(spec, vol, True, spectral=True)[1][3, 4])
         assert 0.94 < got[1] / ref[1] < 1.06, (pitch, got, ref)
-        de = float(colour.delta_E(_lab(got * ref[1] / got[1], 2 * ref[1]), _lab(ref, 2 * ref[1]), method="CIE 2000"))
+        de = delta_e_at_white(got * ref[1] / got[1], ref, 2 * ref[1])
         assert de < 0.5, (pitch, de, got, ref)
 
 
@@ -85,8 +79,8 @@ def test_spectral_render_has_the_airs_sky_and_the_rgb_modes(tmp_path, variant_re
     """``render --spectral`` with the atmosphere's defaults (``--sky air``): the sky above the demo cumulus is
     blue sky, not black (main before: 0), and within CIEDE2000 2 of the RGB mode's sky (the same air, per
     wavelength here, at 650/550/450 nm there); the EXR's X, Y, Z follow its R, G, B."""
-    import colour
     from weather_mi.cli import commands as cli
+    from weather_mi.display.cloud_colour import delta_e_at_white
     from weather_mi.io.image import Image
     from weather_mi.optics.spectrum import xyz_of_linear_srgb
     imgs = {}
@@ -104,5 +98,5 @@ def test_spectral_render_has_the_airs_sky_and_the_rgb_modes(tmp_path, variant_re
     assert s[1] > 0.005 and s[2] > 1.5 * s[0], s  # a blue sky (black before)
     np.testing.assert_allclose(sp.xyz, xyz_of_linear_srgb(sp.radiance), rtol=1e-4, atol=1e-7)
     white = 2 * xyz_of_linear_srgb(r)[1]
-    de = float(colour.delta_E(_lab(xyz_of_linear_srgb(s), white), _lab(xyz_of_linear_srgb(r), white), method="CIE 2000"))
+    de = delta_e_at_white(xyz_of_linear_srgb(s), xyz_of_linear_srgb(r), white)
     assert de < 2.0, (de, s, r)

@@ -18,11 +18,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
 def _full_de(a, b, white_y) -> float:
-    import colour
+    from weather_mi.display.cloud_colour import delta_e_at_white
     from weather_mi.optics.spectrum import xyz_of_linear_srgb
-    d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
-    la, lb = (colour.XYZ_to_Lab(xyz_of_linear_srgb(v) / white_y, d65) for v in (a, b))
-    return float(colour.delta_E(la, lb, method="CIE 2000"))
+    return delta_e_at_white(xyz_of_linear_srgb(a), xyz_of_linear_srgb(b), white_y)
 
 
 def regions(rgb_img, spectral_img) -> dict:

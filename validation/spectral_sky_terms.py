@@ -23,14 +23,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
-def _lab(xyz, white_y):
-    import colour
-    return colour.XYZ_to_Lab(np.asarray(xyz) / white_y, colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"])
-
-
 def _de(a, b, white_y) -> float:
-    import colour
-    return float(colour.delta_E(_lab(a, white_y), _lab(b, white_y), method="CIE 2000"))
+    from weather_mi.display.cloud_colour import delta_e_at_white
+    return delta_e_at_white(a, b, white_y)
 
 
 def _upsampled(rgb, wl):

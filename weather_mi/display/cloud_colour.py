@@ -74,4 +74,13 @@ def delta_e_equal_lightness(xy_a, xy_b) -> float:
     return float(colour.delta_E(lab[0], lab[1], method="CIE 2000"))
 
 
-__all__ = ["lit_cloud_pixels", "lit_cloud_rgb", "visible_height_m", "xy_of_linear_srgb", "delta_e_equal_lightness"]
+def delta_e_at_white(xyz_a, xyz_b, white_y: float) -> float:
+    """CIEDE2000 between two CIE XYZ colours in CIELAB whose white (the D65 white point) has luminance ``white_y``."""
+    import colour
+    d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
+    lab = [colour.XYZ_to_Lab(np.asarray(v, np.float64) / white_y, d65) for v in (xyz_a, xyz_b)]
+    return float(colour.delta_E(lab[0], lab[1], method="CIE 2000"))
+
+
+__all__ = ["lit_cloud_pixels", "lit_cloud_rgb", "visible_height_m", "xy_of_linear_srgb", "delta_e_equal_lightness",
+           "delta_e_at_white"]
