@@ -4,16 +4,18 @@ wavelength (``kernel/spectral_air.py``, ``kernel/plugins/spectral_air.py``, ``sp
 that do not come from our code: the kernel's optical depth at fixed wavelengths against the RGB medium's per channel
 and against Bodhaine et al. (1999)'s cross section (Eq. 2, written out in ``test_box_air``) x the number density;
 the direct sun through the box (Beer-Lambert) at one wavelength; the nadir reflectance's CIE X, Y, Z against DISORT
-solved every 5 nm and integrated over the ASTM G173 sun and the CIE 1931 functions here. Every test puts the variant
-back as it found it."""
+solved every 5 nm and integrated over the ASTM G173 sun and the CIE 1931 functions here; a grey cloud layer inside the
+slab (the trackers' texel path with the air at the ray's wavelengths) against the cloud's optical depth plus
+Bodhaine's, per lane. Every test puts the variant back as it found it."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from test_box_air import AVOGADRO, DEPOL, H_M, M_AIR, MU0, RHO, _clear_slab, _nadir_camera, _point_sun, \
+from test_box_air import AVOGADRO, DEPOL, H_M, M_AIR, MU0, RHO, WIDE_M, _clear_slab, _nadir_camera, _point_sun, \
     _sigma_physical_m2, _tau
 from test_spectral import SPECTRAL, _astm_toa, _cmfs
 
@@ -250,13 +252,12 @@ def _cloud_in_air(beta_per_m: float):
     """The clear slab with a grey cloud layer: the (4, 4, 4) grid's level 1 (centre 3.75 km) at ``beta_per_m``, the
     others 0; its trilinear interpolant is a hat in z over 1.25-6.25 km, constant in x and y: a vertical ray through
     the slab crosses 2.5 km x beta of it."""
-    from test_box_air import WIDE_M
     from weather_mi.optics.phase.analytic import isotropic
     from weather_mi.optics.volume import OpticalVolume
-    from dataclasses import replace
     beta = np.zeros((4, 4, 4), np.float32)
     beta[1] = beta_per_m
-    vol = OpticalVolume.from_arrays(beta, 1.0, isotropic(), ((-WIDE_M / 2, -WIDE_M / 2, 0.0), (WIDE_M / 2, WIDE_M / 2, H_M)))
+    box = ((-WIDE_M / 2, -WIDE_M / 2, 0.0), (WIDE_M / 2, WIDE_M / 2, H_M))
+    vol = OpticalVolume.from_arrays(beta, 1.0, isotropic(), box)
     return replace(vol, air=_clear_slab().air)
 
 
