@@ -12,7 +12,8 @@ majorants, walked cell by cell with the DDA (:mod:`.dda`), empty cubes of cells 
 The box's air added per level to a grey grid (:mod:`.air_levels`; render's and ``satellite``'s default) costs the
 loops little: the walks interpolate the grey grid's texels and add the air's level values; exact transmittance
 takes the air's optical depth of the whole segment in closed form once (the air is horizontally homogeneous, the
-ray straight), its loop the hydrometeors' alone; a chromatic air's free flights and ratio tracking follow its
+ray straight), its loop the hydrometeors' alone (a grey air, and the spectral variants' air at the ray's
+wavelengths, ``_spectral_air``); a chromatic air's free flights and ratio tracking follow its
 largest channel, grey (sigma_g = the hydrometeors' + the air's largest), the channels weighted in closed form by
 its excess e_c = sigma_c - sigma_g <= 0 (:func:`_excess_weight`): exp(-integral e_c) over the flight, times
 sigma_c / sigma_g at a real collision: the density and escape probability drawn with sigma_g become sigma_c's.
@@ -26,7 +27,7 @@ import mitsuba as mi
 
 from .dda import cell_end, cell_interpolant, cell_of, dda_step, locate, ray_box
 from .medium_setup import sigma_t_at
-from .spectral_air import bind_air
+from .spectral_air import ComponentAirLevels, bind_air
 
 RR_THRESHOLD = 0.1    # ratio tracking: roulette once max(T) drops below this ...
 RR_SURVIVE = 0.5      # ... surviving with this probability
@@ -74,7 +75,7 @@ class _Walk:
         dt = dr.select(maj > 0.0, -dr.log(1.0 - u) / maj, dr.inf)
         tc = t + dt
         collide = active & (tc < seg_end)
-        if self.air is not None and self.texels is not None:  # a grey grid's interpolant plus the air per level (RGB)
+        if self.air is not None and self.texels is not None:  # a grey grid's interpolant plus the air per level
             grey = cell_interpolant(self.texels, grid, q0, dq, cells, (tc,), collide & ~empty)[0]
             s_t = self.air.sigma_at(q0[2] + dq[2] * tc, collide) + dr.select(empty, 0.0, grey)
         elif self.air is not None:  # sigma_t in the air's cells from its levels, elsewhere the medium's lookup
@@ -100,8 +101,16 @@ def _tracking_walk(tk, ray, t_end, active, tile_only=None):
     """The walk of free flights and ratio tracking: over ``tk.track``, texels interpolated in texel cells (a grey
     grid's: with the air added per level, the air's extinction added to them)."""
     grid = tk.track
-    texels = tk.texel_data if (grid is tk.texel and not tk.ms.spectral) else None  # spectral: the medium's lookups
+    texels = tk.texel_data if (grid is tk.texel and (not tk.ms.spectral or _spectral_air(tk, grid))) else None
     return _Walk(tk, grid, texels, ray, t_end, active, tile_only, split_air=_split_air(tk, grid, texels))
+
+
+def _spectral_air(tk, grid) -> bool:
+    """Whether ``grid`` holds the box's air over wavelength (spectral variants, ``spectral_air.ComponentAirLevels``)
+    added per level to the medium's grey grid: the walks then interpolate the grey grid's texels and add the air at
+    the ray's wavelengths, and exact transmittance takes the air's optical depth in closed form once per segment, as
+    for a grey air (an RGB air with its channels still takes the medium's lookups, as it did: bit-identical)."""
+    return isinstance(grid.air, ComponentAirLevels) and tk.ms.air is grid.air
 
 
 def _split_air(tk, grid, texels) -> bool:
@@ -286,7 +295,7 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
     # a grey grid with the air added per level: the air's optical depth over the whole segment in closed form (one
     # evaluation: the air is horizontally homogeneous, the ray straight), the loop the hydrometeors' alone (grey,
     # their interpolant from the texels), as without the air
-    split = air is not None and tk.texel_data is not None and not spectral  # RGB
+    split = air is not None and tk.texel_data is not None and (not spectral or _spectral_air(tk, tk.texel))
     walk = _Walk(tk, tk.texel, tk.texel_data if (split or not spectral) else None, ray, t_end, active)
     grid, texels, q0, dq, t_max = walk.grid, walk.texels, walk.q0, walk.dq, walk.t_max
     air = walk.air  # at the ray's wavelengths (spectral: ``spectral_air.bind_air``)
