@@ -189,11 +189,9 @@ def test_a_cloud_in_a_grey_air_agrees_with_volpath(transmittance):
 
 @pytest.mark.parametrize("transmittance", ["exact", "ratio"])
 def test_a_cloud_in_a_chromatic_air_per_level_agrees_with_volpath(transmittance):
-    """A chromatic air added per level to the cloud's grey grid (render's and ``satellite --rgb``'s default kernel):
-    free flights and ratio tracking follow the air's largest channel, grey, the channels weighted by the excess in
-    closed form; exact transmittance takes the air's optical depth of a segment in closed form. Against stock volpath
-    on the grid that holds cloud plus air (three channels, spectral extinction), with a ground."""
-    from weather_mi.kernel.plugins import trackers
+    """A chromatic air added per level to the cloud's grey grid (render's and ``satellite --rgb``'s default kernel:
+    the trackers take the medium's lookups per step, sigma_t the grey grid's plus the air's per level). Against
+    stock volpath on the grid that holds cloud plus air (three channels, spectral extinction), with a ground."""
     sigma, cloud, air = cloud_in_air()
     a = passes(mi.load_dict(air_scene(sigma, {"type": "volpath", "max_depth": 4}, ground=True)), 16, 16)
     scene = mi.load_dict(scene_dict(cloud, ours_grey_air(cloud, air, max_depth=4, transmittance=transmittance),
@@ -201,7 +199,7 @@ def test_a_cloud_in_a_chromatic_air_per_level_agrees_with_volpath(transmittance)
     integ = scene.integrator()
     integ._setup(scene, None)
     tk = integ._tk
-    assert tk.ms.spectral and trackers._split_air(tk, tk.track, tk.texel_data)
+    assert tk.ms.spectral and tk.ms.air is tk.track.air  # the air per level, chromatic
     b = passes(scene, 16, 16, seed0=1000)
     assert np.all(np.isfinite(b)) and b.min() >= 0
     assert_agree(a, b)
