@@ -23,8 +23,8 @@ unchanged); ``--linear`` adds the spectral mode with the phase tables bilinear i
 instead of one wavelength node a lane (what renders read); ``--three-nodes`` adds the spectral mode as it was before
 the tables every 25 nm; ``--without-box-air`` both modes without the box's air (the air on the sun's path only:
 ``kernel.medium.air_in_medium`` None, a different scene; the spectral mode as it was before its box air was wired);
-``--medium-lookups`` adds the spectral mode with the trackers' medium lookups per step (as before spectralair38c);
-``--rgb-texel-path`` the RGB mode with the trackers' texel path and split air (not what it runs: not bit-identical).
+``--medium-lookups`` adds both modes with the trackers' medium lookups per step (as between c0780af and
+spectralair38c: no texel interpolant, no split RGB flights, the box's air's optical depth per empty cube).
 
 ``--phase``: the mixture plugin alone in ``llvm_ad_spectral``, ``eval_pdf`` and ``sample`` on the demo
 supercell's five species (their tables at "test" quality, a random 16^3 weight grid) at random directions and
@@ -134,11 +134,8 @@ def main(argv=None):
     ap.add_argument("--without-box-air", action="store_true",
                     help="also both modes without the box's air (the spectral one as before it was wired)")
     ap.add_argument("--medium-lookups", action="store_true",
-                    help="also the spectral mode with the trackers' medium lookups per step (as before spectralair38c: "
-                         "no texel interpolant, the box's air's optical depth per empty cube)")
-    ap.add_argument("--rgb-texel-path", action="store_true",
-                    help="also the RGB mode with the texel interpolant and split air the trackers have for it but "
-                         "do not take (``trackers._spectral_air`` true for its air too; not bit-identical)")
+                    help="also both modes with the trackers' medium lookups per step (no texel interpolant, no split "
+                         "RGB flights, the box's air's optical depth per empty cube)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
     args = ap.parse_args(argv)
     if args.phase:
@@ -160,16 +157,15 @@ def main(argv=None):
     if args.phase_twice:
         modes["spectral, phase twice"] = "llvm_ad_spectral"
     if args.medium_lookups:
+        modes["rgb, medium lookups"] = "llvm_ad_rgb"
         modes["spectral, medium lookups"] = "llvm_ad_spectral"
-    if args.rgb_texel_path:
-        modes["rgb, texel path"] = "llvm_ad_rgb"
     if args.without_box_air:
         modes["rgb, no box air"] = "llvm_ad_rgb"
         modes["spectral, no box air"] = "llvm_ad_spectral"
     for mode, variant in modes.items():  # compile (and build the spectral tables) first, as measured: the kernels
         with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")), \
                 linear(mode.endswith("linear")), phase_twice(mode.endswith("twice")), \
-                medium_lookups(mode.endswith("lookups"), mode.endswith("texel path")):  # of 1 spp differ
+                medium_lookups(mode.endswith("lookups")):  # of 1 spp differ
             render_reference(replace(spec, seed=99), vol, spp=args.spp, passes=args.passes, progress=False,
                              variant=variant)
     print(f"demo supercell, {args.lighting} view, sun {args.elevation:g} deg, {w}x{h}, {args.spp} spp in "
@@ -184,7 +180,7 @@ def main(argv=None):
         for mode, variant in (list(modes.items()) if r % 2 == 0 else list(modes.items())[::-1]):  # alternate
             with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")), \
                     linear(mode.endswith("linear")), phase_twice(mode.endswith("twice")), \
-                    medium_lookups(mode.endswith("lookups"), mode.endswith("texel path")):
+                    medium_lookups(mode.endswith("lookups")):
                 got[mode] = timed_render(replace(spec, seed=r), vol, args.spp, args.passes, variant, cloud)
         b = got["rgb"]
         for mode, g in got.items():
@@ -287,22 +283,19 @@ def no_box_air(on: bool):
 
 
 @contextlib.contextmanager
-def medium_lookups(on: bool, texels: bool = False):
-    """With ``on``: the spectral walks take the medium's lookups per step (``trackers._spectral_air`` False: as
-    before the texel interpolant and the closed-form air per segment were used with the box's air over wavelength).
-    With ``texels``: every air added per level to a grey grid takes the texel path, the RGB mode's too (its split
-    air, ``trackers._split_air``)."""
-    if not (on or texels):
+def medium_lookups(on: bool):
+    """With ``on``: the walks over a grey grid with the box's air take the medium's lookups per step
+    (``trackers._air_on_grey_grid`` False)."""
+    if not on:
         yield
         return
     from weather_mi.kernel.plugins import trackers
-    own = trackers._spectral_air
-    trackers._spectral_air = (lambda tk, grid: grid.air is not None and tk.ms.air is grid.air) if texels else \
-        (lambda tk, grid: False)
+    own = trackers._air_on_grey_grid
+    trackers._air_on_grey_grid = lambda tk, grid: False
     try:
         yield
     finally:
-        trackers._spectral_air = own
+        trackers._air_on_grey_grid = own
 
 
 if __name__ == "__main__":

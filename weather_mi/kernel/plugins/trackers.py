@@ -13,12 +13,10 @@ The box's air added per level to a grey grid (:mod:`.air_levels`; render's and `
 loops little: the walks interpolate the grey grid's texels and add the air's level values; exact transmittance
 takes the air's optical depth of the whole segment in closed form once (the air is horizontally homogeneous, the
 ray straight), its loop the hydrometeors' alone (a grey air, and the spectral variants' air at the ray's
-wavelengths, ``_spectral_air``). The RGB mode's chromatic air (``ms.spectral`` true) takes the medium's lookups
-per step instead: the walks built for it (:func:`_split_air`: free flights and ratio tracking following the air's
-largest channel, grey, the channels weighted in closed form by the excess e_c = sigma_c - sigma_g <= 0,
-:func:`_excess_weight`) are not taken (``_tracking_walk``'s texels are None there). Taken, they agreed with DISORT
-(``tests/test_clear_sky_disort.py``) at 0.77x the RGB render's time to the same luminance noise, but their
-weights exp(-integral e_c) grow along long paths in the air, and their noise per channel is not yet measured.
+wavelengths, :func:`_air_on_grey_grid`); the RGB mode's chromatic air's free flights and ratio tracking follow its
+largest channel, grey (sigma_g = the hydrometeors' + the air's largest), the channels weighted in closed form by
+its excess e_c = sigma_c - sigma_g <= 0 (:func:`_excess_weight`): exp(-integral e_c) over the flight, times
+sigma_c / sigma_g at a real collision: the density and escape probability drawn with sigma_g become sigma_c's.
 
 Every function takes the per-render :class:`.medium_setup.Tracking` ``tk``; distances are along the ray.
 """
@@ -29,7 +27,7 @@ import mitsuba as mi
 
 from .dda import cell_end, cell_interpolant, cell_of, dda_step, locate, ray_box
 from .medium_setup import sigma_t_at
-from .spectral_air import ComponentAirLevels, bind_air
+from .spectral_air import bind_air
 
 RR_THRESHOLD = 0.1    # ratio tracking: roulette once max(T) drops below this ...
 RR_SURVIVE = 0.5      # ... surviving with this probability
@@ -103,16 +101,18 @@ def _tracking_walk(tk, ray, t_end, active, tile_only=None):
     """The walk of free flights and ratio tracking: over ``tk.track``, texels interpolated in texel cells (a grey
     grid's: with the air added per level, the air's extinction added to them)."""
     grid = tk.track
-    texels = tk.texel_data if (grid is tk.texel and (not tk.ms.spectral or _spectral_air(tk, grid))) else None
+    texels = tk.texel_data if (grid is tk.texel and (not tk.ms.spectral or _air_on_grey_grid(tk, grid))) else None
     return _Walk(tk, grid, texels, ray, t_end, active, tile_only, split_air=_split_air(tk, grid, texels))
 
 
-def _spectral_air(tk, grid) -> bool:
-    """Whether ``grid`` holds the box's air over wavelength (spectral variants, ``spectral_air.ComponentAirLevels``)
-    added per level to the medium's grey grid: the walks then interpolate the grey grid's texels and add the air at
-    the ray's wavelengths, and exact transmittance takes the air's optical depth in closed form once per segment, as
-    for a grey air (an RGB air with its channels still takes the medium's lookups, as it did: bit-identical)."""
-    return isinstance(grid.air, ComponentAirLevels) and tk.ms.air is grid.air
+def _air_on_grey_grid(tk, grid) -> bool:
+    """Whether ``grid`` is the medium's grey grid with the box's air added per level (``tk.ms.air``: an RGB
+    ``AirLevels`` or the spectral variants' ``ComponentAirLevels`` over wavelength): the walks then interpolate the
+    grey grid's texels and add the air (a chromatic RGB air's flights follow its largest channel, :func:`_split_air`;
+    a spectral one's are tracked over the ray's 4 wavelengths), and exact transmittance takes the air's optical depth
+    in closed form once per segment, its loop the hydrometeors' alone (the extinction's only spectral part is the
+    air's). (Gated on grey media alone from c0780af to spectralair38c: the RGB mode took the medium's lookups.)"""
+    return tk.ms.air is not None and grid.air is tk.ms.air
 
 
 def _split_air(tk, grid, texels) -> bool:
@@ -297,7 +297,7 @@ def exact_transmittance(tk, ray, t_end, active, sampler=None):
     # a grey grid with the air added per level: the air's optical depth over the whole segment in closed form (one
     # evaluation: the air is horizontally homogeneous, the ray straight), the loop the hydrometeors' alone (grey,
     # their interpolant from the texels), as without the air
-    split = air is not None and tk.texel_data is not None and (not spectral or _spectral_air(tk, tk.texel))
+    split = air is not None and tk.texel_data is not None and (not spectral or _air_on_grey_grid(tk, tk.texel))
     walk = _Walk(tk, tk.texel, tk.texel_data if (split or not spectral) else None, ray, t_end, active)
     grid, texels, q0, dq, t_max = walk.grid, walk.texels, walk.q0, walk.dq, walk.t_max
     air = walk.air  # at the ray's wavelengths (spectral: ``spectral_air.bind_air``)
