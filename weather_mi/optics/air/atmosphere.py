@@ -25,6 +25,7 @@ wavelength (nm).
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -113,12 +114,20 @@ class Atmosphere:
         per m^2, aerosol as its optical depth at 550 nm, water as precipitable cm, by the band model) at wavelengths
         (n,)."""
         wl = np.asarray(wavelength_nm, np.float64)
-        tau = (np.asarray(columns["air"])[..., None] * rayleigh_cross_section_m2(wl * 1e-9)
-               + np.asarray(columns["ozone"])[..., None] * ozone_cross_section_m2(wl)
-               + np.asarray(columns["aerosol"])[..., None] * self.aerosol_factor(wl))
+        sigma_air, sigma_ozone, aerosol = self._per_wavelength(tuple(wl.tolist()))
+        tau = (np.asarray(columns["air"])[..., None] * sigma_air
+               + np.asarray(columns["ozone"])[..., None] * sigma_ozone
+               + np.asarray(columns["aerosol"])[..., None] * aerosol)
         if "water" in columns:
             tau = tau + water_vapour.band_optical_depth(wl, columns["water"])  # Bird & Riordan Eq. 2-8
         return tau
+
+    @functools.lru_cache(maxsize=8)
+    def _per_wavelength(self, wl: tuple) -> tuple:
+        """(Rayleigh's and ozone's cross sections (m^2), the aerosol's Angstrom factor) at the wavelengths ``wl``
+        (nm), once per atmosphere and grid (``optical_depths``: a new sun in the slicer's drag computes none)."""
+        w = np.asarray(wl, np.float64)
+        return rayleigh_cross_section_m2(w * 1e-9), ozone_cross_section_m2(w), self.aerosol_factor(w)
 
     def profiles(self, z_m, water: bool = True) -> dict:
         """The constituents at heights z_m: air and ozone (molecules/m^3), aerosol (1/m at 550 nm), water vapour
