@@ -80,6 +80,18 @@ TRAIN = [(s, l) for s in TRAIN_SCENES for l in ("front", "side", "back")] + \
                                    ("wrf-plateau-0000", "front"), ("wrf-plateau-0000", "side"))]
 HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") for l in ("front", "side", "back")]
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+# in the cache name of every reference rendered with the air (here and validation/slicer_low_sun.py): bumped when
+# the path tracer's air changes, so that a cached reference of an older air is never read (air2: Eq. 8's weights
+# per level and channel, kernel.medium.air_weights)
+AIR_REFERENCES = "air2"
+
+
+def cache_name(tag: str, spec, plan: str) -> str:
+    """The EXR name of a cached reference: ``tag``, the size, the sampling plan, the seed (if not 0) and, for a
+    view with the air, AIR_REFERENCES."""
+    seed = "" if spec.seed == 0 else f"_seed{spec.seed}"
+    air = "" if spec.atmosphere is None else f"_{AIR_REFERENCES}"
+    return f"{tag}_{spec.width}x{spec.height}_{plan}{seed}{air}_reference.exr"
 
 
 def field_of(scene: str, data) -> tuple | None:
@@ -125,9 +137,8 @@ def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_
               max_seconds=None) -> Image:
     """The path-traced reference of a view: ``spp`` samples, or with ``target_rse`` passes added until the
     mean relative standard error over cloud pixels reaches it (or ``max_seconds``); cached as EXR."""
-    seed = "" if spec.seed == 0 else f"_seed{spec.seed}"
     plan = f"{spp}spp" if target_rse is None else f"rse{target_rse:g}"
-    path = out / f"{scene}_{lighting}_{spec.width}x{spec.height}_{plan}{seed}_reference.exr"
+    path = out / cache_name(f"{scene}_{lighting}", spec, plan)
     if path.is_file():
         return Image.load(path)
     t = time.perf_counter()
@@ -142,11 +153,12 @@ def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_
     return ref
 
 
-def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, max_seconds=None, noise=None):
+def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, max_seconds=None, noise=None,
+               low_sun=None):
     """{(scene, lighting): TrainingView}; with ``second_seed`` also {(scene, lighting): a second,
     independent reference (seed 1)} for the reference's own noise. ``target_rse``/``max_seconds``: see
-    ``reference``; ``noise`` (a dict) receives each reference's (spp, mean relative standard error over
-    cloud pixels)."""
+    ``reference``; ``low_sun``: (target_rse, max_seconds) of the LOW_SUN views instead; ``noise`` (a dict)
+    receives each reference's (spp, mean relative standard error over cloud pixels)."""
     views, vols, seconds = {}, {}, {}
     for scene, lighting in names:
         if scene not in vols:
@@ -155,14 +167,15 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
             continue
         vol = vols[scene][0]
         spec = view_of(vol, lighting, cfg)
-        ref = reference(out, scene, lighting, vol, spec, spp, target_rse, max_seconds)
+        plan = low_sun if low_sun is not None and lighting.endswith(LOW_SUN) else (target_rse, max_seconds)
+        ref = reference(out, scene, lighting, vol, spec, spp, *plan)
         if noise is not None:
             noise[(scene, lighting)] = (ref.metadata["spp"], (ref.metadata.get("noise") or {}).get("rse_mean"))
         mask = metrics.cloud_mask(eye_transmittance(vol, spec, 128))
         views[(scene, lighting)] = TrainingView(vol, spec, ref.radiance, mask)
         if second_seed:
-            seconds[(scene, lighting)] = reference(out, scene, lighting, vol, replace(spec, seed=1), spp, target_rse,
-                                                 max_seconds).radiance
+            seconds[(scene, lighting)] = reference(out, scene, lighting, vol, replace(spec, seed=1), spp,
+                                                   *plan).radiance
     return (views, seconds) if second_seed else views
 
 
@@ -234,6 +247,27 @@ def table(rows, names, title, noise):
     return "\n".join(lines)
 
 
+def log_step(path: Path, iteration: int, loss: float, params: dict) -> None:
+    """Append one fit iteration (its loss and the parameters it was measured at) to a JSON-lines file: a fit
+    stopped early keeps its iterates (``--start``/``--fitted`` read a line's "params" saved as a fitted.json)."""
+    with open(path, "a") as f:
+        f.write(json.dumps({"iteration": iteration, "loss": loss,
+                            "params": {n: round(v, 4) for n, v in params.items()}}) + "\n")
+
+
+def fit_start(start: str) -> SliceParams:
+    """--start's parameters: "fit-start", "defaults" (the shipped ones, those they leave at 0 at FIT_START's
+    values) or the path of an earlier fit's fitted.json (read_fitted); SystemExit for anything else."""
+    if start == "fit-start":
+        return FIT_START
+    if start == "defaults":
+        return SliceParams().updated(**{n: getattr(FIT_START, n) for n in MULTIPLE_PARAMS
+                                        if getattr(SliceParams(), n) == 0})
+    if not Path(start).is_file():
+        raise SystemExit(f"--start {start}: expected fit-start, defaults or an existing fitted.json")
+    return SliceParams().updated(**read_fitted(Path(start)))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("-o", "--output", default="out/slicer_calibration")
@@ -248,6 +282,11 @@ def main(argv=None) -> int:
     ap.add_argument("--target-rse", type=float, default=0.02,
                     help="held-out references: mean relative standard error over cloud pixels to reach")
     ap.add_argument("--max-seconds", type=float, default=600.0, help="held-out references: time limit each")
+    ap.add_argument("--low-sun-target-rse", type=float, default=None,
+                    help="the LOW_SUN training references (the air: slower, noisier at --spp) to this mean cloud "
+                         "RSE, at most --low-sun-max-seconds each; the other training views as before")
+    ap.add_argument("--low-sun-max-seconds", type=float, default=180.0,
+                    help="with --low-sun-target-rse: time limit of each LOW_SUN training reference")
     ap.add_argument("--iterations", type=int, default=50)
     ap.add_argument("--learning-rate", type=float, default=0.15)
     ap.add_argument("--slices", type=int, default=128)
@@ -262,9 +301,10 @@ def main(argv=None) -> int:
     ap.add_argument("--fit-supersample", type=int, default=None,
                     help="the fit's points per pixel per side (default --supersample)")
     ap.add_argument("--no-fit", action="store_true", help="evaluate the shipped defaults only")
-    ap.add_argument("--start", default="fit-start", choices=("fit-start", "defaults"),
-                    help="where the fit starts: calibrate.FIT_START (near single scattering), or the shipped "
-                         "defaults with the parameters they leave at 0 (terms that are off) at FIT_START's values")
+    ap.add_argument("--start", default="fit-start",
+                    help="where the fit starts: fit-start (calibrate.FIT_START, near single scattering), defaults "
+                         "(the shipped defaults with the parameters they leave at 0, terms that are off, at "
+                         "FIT_START's values), or a fitted.json of an earlier fit (continue it)")
     ap.add_argument("--fit-only", action="store_true", help="stop after the fit (writes fitted.json)")
     ap.add_argument("--fitted", default=None,
                     help="a fitted.json of an earlier fit: evaluate its parameters as \"fitted here\", no fit")
@@ -279,8 +319,10 @@ def main(argv=None) -> int:
     cfg = StudyConfig(width=width, height=height, phase_quality="test")
     noise = {}
     check_held_out(TRAIN, HELD_OUT, args.data)
+    start = fit_start(args.start)
+    low_sun = None if args.low_sun_target_rse is None else (args.low_sun_target_rse, args.low_sun_max_seconds)
     train = load_views(TRAIN, out, cfg, args.data, args.spp, noise=noise, target_rse=args.train_target_rse,
-                       max_seconds=args.max_seconds if args.train_target_rse else None)
+                       max_seconds=args.max_seconds if args.train_target_rse else None, low_sun=low_sun)
     if args.references_only:
         load_views(HELD_OUT, out, cfg, args.data, args.spp, target_rse=args.target_rse,
                    max_seconds=args.max_seconds)
@@ -292,12 +334,11 @@ def main(argv=None) -> int:
         head = f"Parameters of an earlier fit ({args.fitted}): `{json.dumps(fit)}`."
     elif not args.no_fit:
         t = time.perf_counter()
-        start = FIT_START if args.start == "fit-start" else SliceParams().updated(
-            **{n: getattr(FIT_START, n) for n in MULTIPLE_PARAMS if getattr(SliceParams(), n) == 0})
         fitted, history = calibrate(list(train.values()), start=start.updated(slab_jitter=args.slab_jitter),
                                     iterations=args.iterations, slices=args.fit_slices or args.slices,
                                     light_res=None, learning_rate=args.learning_rate, progress=True,
-                                    supersample=args.fit_supersample or args.supersample)
+                                    supersample=args.fit_supersample or args.supersample,
+                                    on_step=lambda i, loss, p: log_step(out / "fit_steps.jsonl", i, loss, p))
         fit = {n: round(float(getattr(fitted, n)), 4) for n in MULTIPLE_PARAMS}
         head = (f"Fitted on {len(train)} training views in {time.perf_counter() - t:.0f} s: `{json.dumps(fit)}`; "
                 f"loss {history[0]:.4g} -> {history[-1]:.4g} in {len(history)} iterations.")

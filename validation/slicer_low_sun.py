@@ -47,6 +47,7 @@ from weather_mi.optics.air.inside import with_box_air  # noqa: E402
 from weather_mi.optics.volume import optical_volume  # noqa: E402
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
 from weather_mi.study.runs import DATA_SCENES, StudyConfig, eye_transmittance, low_sun_view  # noqa: E402
+from validation.calibrate_slicer import cache_name, read_fitted  # noqa: E402
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
@@ -63,7 +64,7 @@ def reference(out: Path, tag: str, spec, vol, hyd, spp: int, target_rse=None, ma
     ``target_rse`` passes of ``spp`` added until the mean relative standard error over the cloud pixels
     reaches it (or ``max_seconds``)."""
     plan = f"{spp}spp" if target_rse is None else f"rse{target_rse:g}"
-    path = out / f"{tag}_{spec.width}x{spec.height}_{plan}_reference.exr"
+    path = out / cache_name(tag, spec, plan)
     if path.is_file():
         return Image.load(path)
     t = time.perf_counter()
@@ -102,7 +103,6 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     params = SliceParams(slab_jitter=1.0)
     if args.fitted is not None:
-        from validation.calibrate_slicer import read_fitted
         params = params.updated(**read_fitted(Path(args.fitted)))
     rows = []
     for name in args.scenes.split(","):
