@@ -4,14 +4,15 @@ beside the paper's Table IV modes.
     .venv/bin/python validation/calibrate_slicer.py [-o out/slicer_calibration] [--data ../shared/data]
         [--size 64x48] [--spp 128] [--train-target-rse R] [--target-rse 0.02] [--max-seconds 600] [--iterations 50]
         [--learning-rate 0.15] [--slices 128] [--supersample 2] [--slab-jitter 1]
-        [--no-fit] [--noise-floor] [--start defaults|fit-start] [--fit-slices N] [--fit-supersample N]
-        [--fit-only] [--fitted fitted.json] [--held-out-only]
+        [--no-fit] [--noise-floor] [--start defaults|fit-start|fitted.json] [--fit-slices N] [--fit-supersample N]
+        [--fit-only] [--fitted fitted.json] [--held-out-only] [--low-sun-target-rse R [--low-sun-max-seconds S]]
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them);
    training views at --spp, or to --train-target-rse (the loss clips display colours at 1, so that noisy
    references pull the brightest faces down; measured: it did not help the held-out views, and the shipped
-   defaults were fitted to --spp 128), held-out views to
-   --target-rse:
+   defaults were fitted to --spp 128), the LOW_SUN training views (the air: 5-10x slower to the same noise,
+   cloud RSE 0.13-0.17 at 128 spp) to --low-sun-target-rse if given, held-out views to --target-rse; a
+   reference with the air carries AIR_REFERENCES in its name (one of an older path tracer's air is not read):
    training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
    its condensate x 0.15), the real WRF supercell at 01:00 and 02:00 (wrf/wrfout_quarter_ss_series.nc,
    the held-out one's run at other times) and the WRF plateau at 00:00 (held out: its last time, 09:00,
@@ -24,9 +25,11 @@ beside the paper's Table IV modes.
 2. Fit the model's parameters with Dr.Jit reverse-mode AD on the training views
    (weather_mi.slicing.calibrate), starting near single scattering (--start fit-start: calibrate.FIT_START)
    or from the shipped defaults (--start defaults: a refit after a change of the model, the new parameters
-   at FIT_START's values), in the frames it judges (--slices, the automatic light buffer; 810 s on 2 idle
+   at FIT_START's values), or from an earlier fit (--start fitted.json: continue it), in the frames it judges (--slices, the automatic light buffer; 810 s on 2 idle
    cores at the defaults; --fit-slices / --fit-supersample: the fit's frames coarser than the judged ones,
-   for a busy machine).
+   for a busy machine). Each iteration's loss and the parameters it was measured at are appended to
+   fit_steps.jsonl in the output folder (a fit stopped early keeps its iterates; Adam's last step may overshoot
+   the best one).
    The slicer's frames, in the fit and the evaluation, average each pixel over --supersample^2 points
    (SliceRenderer.frame(supersample=)) with slab offsets --slab-jitter: the references' pixels are
    box-filtered footprint averages, and a pixel-centre sample differs from them at every edge (held-out
