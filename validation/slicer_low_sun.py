@@ -18,7 +18,8 @@ The slicer's frames are the refined viewer frames the calibration judges (2 x 2 
 jitter 1, 128 slices), with the shipped defaults or the parameters of --fitted. CIEDE2000 and FLIP over the
 cloud pixels (``display.metrics.compare``), and the reference's own noise (its mean relative standard error over
 them). References are cached as EXR in --out (--spp samples, or passes of --spp to --target-rse, at most
---max-seconds each; --references-only renders them alone). The table of issue 38 part 3: --elevations 6
+--max-seconds each; --references-only renders them alone; those with the air named with
+``calibrate_slicer.AIR_REFERENCES``, so that one of an older path tracer's air is never read). The table of issue 38 part 3: --elevations 6
 --lightings front,side,back --spp 64 --target-rse 0.03 --max-seconds 150 (validation/README.md).
 
     python validation/slicer_low_sun.py [--data ../shared/data] [--size 64x48] [--spp 64] [--elevations 4,8]
