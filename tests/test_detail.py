@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import json
-import time
 
 import numpy as np
 import pytest
@@ -92,11 +91,18 @@ def test_noise_rejects_unrepresentable_scales():
         detail.noise((16, 16, 16), spacing_m=(1.0, -1.0, 1.0))
 
 
-def test_noise_fast_on_128_cubed():
-    detail.noise((128, 128, 128), seed=0)  # builds and caches the spectral filter
-    t0 = time.perf_counter()
-    detail.noise((128, 128, 128), seed=1)
-    assert time.perf_counter() - t0 < 1.0
+def test_noise_on_128_cubed_builds_its_filter_once():
+    """A re-seeded noise on the same grid reuses the cached spectral filter (its speed, 1 s at 128^3, is a goal of
+    benchmarks/detail.py, not a timed test) and is another zero-mean, unit-variance float32 field."""
+    detail._spectral_filter.cache_clear()
+    first = detail.noise((128, 128, 128), seed=0)  # builds and caches the spectral filter
+    second = detail.noise((128, 128, 128), seed=1)
+    info = detail._spectral_filter.cache_info()
+    assert (info.misses, info.hits) == (1, 1)
+    for n in (first, second):
+        assert n.dtype == np.float32 and n.shape == (128, 128, 128)
+        assert abs(n.mean(dtype=np.float64)) < 1e-5 and n.std(dtype=np.float64) == pytest.approx(1.0, abs=1e-5)
+    assert abs(np.corrcoef(first.ravel(), second.ravel())[0, 1]) < 0.05  # another draw, not the same field
 
 
 def test_field_is_a_mean_one_float32_multiplier():

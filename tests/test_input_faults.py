@@ -154,7 +154,7 @@ def test_wrf_bad_map_factors_are_an_error(tmp_path):
         wm.open_wrf(path)
 
 
-def _huge_wrfout(path: Path, nz: int, ny: int, nx: int) -> Path:
+def huge_wrfout(path: Path, nz: int, ny: int, nx: int) -> Path:
     """A wrfout whose fields are declared (nz, ny, nx) but never written: chunked NetCDF-4, a few KB on disk."""
     import netCDF4
     with netCDF4.Dataset(path, "w") as nc:
@@ -170,22 +170,22 @@ def _huge_wrfout(path: Path, nz: int, ny: int, nx: int) -> Path:
     return path
 
 
-def test_a_domain_too_large_for_memory_fails_fast_before_allocating(tmp_path, monkeypatch):
-    import time
+def test_a_domain_too_large_for_memory_fails_before_allocating(tmp_path, monkeypatch):
+    """Refused from the file's dimensions, nothing of the grid read or allocated (its speed, 5 s, is
+    benchmarks/domain_refusal.py's goal, not a timed test)."""
     monkeypatch.delenv("WEATHER_MI_MAX_MEMORY_GB", raising=False)  # the machine's own memory, not an override
     import tracemalloc
-    path = _huge_wrfout(tmp_path / "huge.nc", 100, 200_000, 200_000)  # 4e12 cells: 190 TB at 48 bytes per cell
+    path = huge_wrfout(tmp_path / "huge.nc", 100, 200_000, 200_000)  # 4e12 cells: 190 TB at 48 bytes per cell
     tracemalloc.start()
-    t0 = time.perf_counter()
     with pytest.raises(wm.errors.DomainTooLargeError) as info:
         wm.open_wrf(path)
-    seconds, peak = time.perf_counter() - t0, tracemalloc.get_traced_memory()[1]
+    peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     msg = str(info.value)
     assert "100 x 200000 x 200000" in msg and " TB" not in msg and "GB more at peak" in msg
     assert "sub-box" in msg and "coarser levels" in msg and "tiles on a cluster" in msg
     assert info.value.needed > 1e14 and isinstance(info.value, MemoryError)
-    assert seconds < 5 and peak < 50e6  # nothing of the grid was read or allocated
+    assert peak < 50e6  # nothing of the grid was read or allocated
 
 
 def test_optical_volume_checks_the_memory_before_allocating(monkeypatch):

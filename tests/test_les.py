@@ -7,7 +7,6 @@ the documented facts in ../shared/data/README.md, never from the reader under te
 from __future__ import annotations
 
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -55,10 +54,7 @@ REAL = [("bomex_50m.txt", (52, 146, 115), 50.0, 40.0, 1.69, True),
 def test_real_files_grid_counts_and_max(name, shape, dxy, dz, max_lwc, has_veff):
     path = les_file(name)
     levels, rows = plain_read(path)
-    t0 = time.perf_counter()
-    ds = open_les(path)
-    elapsed = time.perf_counter() - t0
-    assert elapsed < 3.0, f"reading {name} took {elapsed:.2f} s"
+    ds = open_les(path)  # its speed (3 s a file) is benchmarks/les_read.py's goal
     assert tuple(ds.sizes[d] for d in ("z", "y", "x")) == shape
     assert len(levels) == shape[0]
     for d, step in (("x", dxy), ("y", dxy), ("z", dz)):

@@ -35,6 +35,36 @@ def test_eq1_to_eq3_consistent_with_eq4():
     assert vol.beta_total[1, 2, 3] == pytest.approx(beta_eq3, rel=1e-6)
 
 
+@pytest.mark.parametrize("model_radii", [False, True])
+def test_extinction_is_optical_volumes_eq4_and_eq6(model_radii):
+    """``volume.extinction`` (the summary's) and ``optical_volume`` give Eq. 4 summed over the species (Eq. 6),
+    written out here in float64: 3 scale rho_air q / (2 rho_p R), R the voxel's r_eff where > 0 (with the
+    model's radii), else the species' radius; the largest extinction per species as well."""
+    hyd = wm.synthetic.cumulus()
+    rng = np.random.default_rng(4)
+    for name in ("cloud", "rain"):
+        r = rng.uniform(5e-6, 2e-3, hyd["rho_air"].shape)
+        r[rng.random(r.shape) < 0.3] = 0.0  # no radius there: the species'
+        hyd[f"r_eff_{name}"] = (("z", "y", "x"), r)
+    sp = preset("physical", scale={"ice": 1.7})
+    rho = hyd["rho_air"].values.astype(np.float64)
+    expected, largest = 0.0, {}
+    for s in sp:
+        r = s.radius_m
+        if model_radii and f"r_eff_{s.name}" in hyd:
+            r = np.where(hyd[f"r_eff_{s.name}"].values > 0, hyd[f"r_eff_{s.name}"].values, s.radius_m)
+        beta = 3.0 * s.scale * rho * hyd[f"q_{s.name}"].values / (2.0 * s.density_kg_m3 * r)
+        expected, largest[s.name] = expected + beta, beta.max()
+    assert expected.max() > 1e-3  # a storm, not zeros
+    total, by_species = wm.optics.volume.extinction(hyd, sp, model_radii=model_radii)
+    vol = wm.optical_volume(hyd, sp, model_radii=model_radii)
+    np.testing.assert_allclose(total, expected, rtol=2e-6, atol=1e-12)
+    np.testing.assert_allclose(vol.beta_total, expected, rtol=2e-6, atol=1e-12)
+    for i, s in enumerate(sp):
+        assert by_species[s.name] == pytest.approx(largest[s.name], rel=2e-6)
+        assert float(vol.beta_ext[i].max()) == pytest.approx(largest[s.name], rel=2e-6)
+
+
 def test_eq6_sum_and_eq8_weights_mixture():
     a = np.zeros((2, 2, 2))
     a[0, 0, 0] = 1e-3
@@ -191,8 +221,8 @@ def numpy_voxel_albedo(hyd, sp, beta_ext, albedo_sum):
 
 def numpy_optics(hyd, sp, use_model, voxel_albedo):
     """``optics.volume``'s four grids (beta_ext, beta_total, albedo, weights) as the numpy expressions of
-    weather-mi before the compiled voxel pass: Eq. 4 by ``Species.beta_ext_per_m`` (the radius grid's zeros the
-    species' radius), Eq. 6, 5, 8 summed species after species in float32, each voxel's albedo from its radius
+    weather-mi before the compiled voxel pass: Eq. 4 as numpy's float32 operations in the expression's order (the
+    radius grid's zeros the species' radius), Eq. 6, 5, 8 summed species after species in float32, each voxel's albedo from its radius
     (``numpy_voxel_albedo``), the clear voxels filled with the volume's mean albedo, clipped to [0, 1]."""
     rho = hyd["rho_air"].values.astype(np.float32)
     beta = np.empty((len(sp),) + rho.shape, np.float32)
@@ -201,7 +231,9 @@ def numpy_optics(hyd, sp, use_model, voxel_albedo):
         if use_model and f"r_eff_{s.name}" in hyd:
             r = hyd[f"r_eff_{s.name}"].values.astype(np.float32)
             r = np.where(r > 0, r, np.float32(s.radius_m))
-        s.beta_ext_per_m(rho, hyd[f"q_{s.name}"].values.astype(np.float32), r, out=beta[i])
+        q = hyd[f"q_{s.name}"].values.astype(np.float32)
+        beta[i] = rho * np.float32(s.scale * 3.0) * q / (np.float32(2.0 * s.density_kg_m3 * r) if np.ndim(r) == 0
+                                                         else r * np.float32(2.0 * s.density_kg_m3))
     rgb = np.asarray([s.albedo_rgb for s in sp], np.float32)
     mean_albedo = np.asarray([np.float32(np.mean(s.albedo_rgb)) for s in sp], np.float32)
     total, albedo_sum = beta[0].copy(), np.stack([beta[0] * rgb[0, c] for c in range(3)], axis=-1)

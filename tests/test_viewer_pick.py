@@ -4,8 +4,6 @@ distances worked out by hand from the grid's geometry, the camera rays checked a
 sensors."""
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 
@@ -183,18 +181,14 @@ class _BigGrid:
         return ((z1 - z0) / nz, (y1 - y0) / ny, (x1 - x0) / nx)
 
 
-def test_a_long_ray_through_a_big_grid_is_fast():
+def test_a_long_ray_through_a_big_grid_finds_the_blocks_face():
+    """A diagonal through ~600 cells before the block (the pick's speed, 20 ms, is benchmarks/viewer_pick.py's
+    goal, not a timed test)."""
     big = _BigGrid()
     spec = spec_of(wm.Camera(origin=(-1000.0, -3000.0, 500.0), target=(150e3, 150e3, 18e3), fov=40.0))
-    hit = first_dense_voxel(None, big, spec, W / 2, H / 2)  # a diagonal: ~600 cells before the block
+    hit = first_dense_voxel(None, big, spec, W / 2, H / 2)
     # it enters the block through its west face (x 125 km, i 250) at y 124.7 km, z 15 km
     assert hit is not None and hit["index"][2] == 250 and hit["index"][1] == 249 and hit["index"][0] >= 60
-    times = []
-    for _ in range(20):
-        t0 = time.perf_counter()
-        first_dense_voxel(None, big, spec, W / 2, H / 2)
-        times.append(time.perf_counter() - t0)
-    assert np.median(times) < 0.02, f"median {np.median(times) * 1e3:.1f} ms per pick"
 
 
 def test_the_dense_cells_mixing_ratios_read_out_as_the_dataset_and_hold_only_the_block(storm):

@@ -56,10 +56,10 @@ def view_down(sky="air", ground=0.3, elevation=30.0, sun_azimuth=200.0):
                      atmosphere=Atmosphere(), seed=5)
 
 
-def ground_radiance(sky, spp=256, width_m=10e3, height_m=2e3):
+def ground_radiance(sky, spp=256, width_m=10e3, height_m=2e3, variant="llvm_ad_rgb"):
     """The path tracer's radiance of the ground under a cloud-free box ``width_m`` wide and ``height_m`` high
     (its own air: ``optics.air.inside``), the sun at 30 deg, against DISORT's rho / pi (direct + diffuse) at the
-    ground."""
+    ground (linear sRGB; ``variant``: a spectral one's linear sRGB of its CIE XYZ)."""
     from weather_mi.optics.air import Atmosphere
     from weather_mi.optics.air.skylight import sky_table
     from weather_mi.optics.phase.analytic import isotropic
@@ -67,7 +67,7 @@ def ground_radiance(sky, spp=256, width_m=10e3, height_m=2e3):
     from weather_mi.reference.render import render_reference
     vol = OpticalVolume.from_arrays(np.zeros((16, 4, 4), np.float32), 1.0, isotropic(),
                                     ((-width_m / 2, -width_m / 2, 0.0), (width_m / 2, width_m / 2, height_m)))
-    img = render_reference(view_down(sky), vol, spp=spp, progress=False, variant="llvm_ad_rgb")
+    img = render_reference(view_down(sky), vol, spp=spp, progress=False, variant=variant)
     r = img.radiance.reshape(-1, 3).astype(np.float64).mean(axis=0)
     se = np.sqrt((img.stderr.reshape(-1, 3).astype(np.float64) ** 2).sum(axis=0)) / 16
     table = sky_table(Atmosphere(), 0.5, [0.0], ground_m=0.0, albedo=0.3)

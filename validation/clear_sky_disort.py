@@ -57,20 +57,20 @@ def bodhaine_cross_section_m2(lam_nm):
     return 24 * math.pi ** 3 * (n * n - 1) ** 2 / (lam_cm ** 4 * ns ** 2 * (n * n + 2) ** 2) * king * 1e-4
 
 
-def slab(cloud_tau: float):
-    """The OpticalVolume: the air slab with a cloud layer of optical depth ``cloud_tau`` (0: none)."""
+def slab(cloud_tau: float, nz: int = NZ, cloud_albedo: float = 1.0):
+    """The OpticalVolume: the air slab on ``nz`` levels with a cloud layer of optical depth ``cloud_tau`` (0: none)
+    and single-scattering albedo ``cloud_albedo``."""
     from weather_mi.optics.air import Atmosphere
     from weather_mi.optics.air.inside import box_air
     from weather_mi.optics.phase.analytic import henyey_greenstein
     from weather_mi.optics.volume import OpticalVolume
-    z = (np.arange(NZ) + 0.5) * (H_M / NZ)
-    in_cloud = (z > CLOUD_M[0]) & (z < CLOUD_M[1])
-    beta = np.zeros((NZ, 4, 4), np.float32)
-    beta[in_cloud] = cloud_tau / (CLOUD_M[1] - CLOUD_M[0])
-    vol = OpticalVolume.from_arrays(beta, 1.0, henyey_greenstein(CLOUD_G),
+    z = (np.arange(nz) + 0.5) * (H_M / nz)
+    beta = np.zeros((nz, 4, 4), np.float32)
+    beta[(z > CLOUD_M[0]) & (z < CLOUD_M[1])] = cloud_tau / (CLOUD_M[1] - CLOUD_M[0])
+    vol = OpticalVolume.from_arrays(beta, cloud_albedo, henyey_greenstein(CLOUD_G),
                                     ((-WIDE_M / 2, -WIDE_M / 2, 0.0), (WIDE_M / 2, WIDE_M / 2, H_M)))
-    return replace(vol, air=box_air(Atmosphere(aod_550=0.0, ozone_atm_cm=0.0), np.full(NZ, RHO), z,
-                                    shape=(NZ, 4, 4)))
+    return replace(vol, air=box_air(Atmosphere(aod_550=0.0, ozone_atm_cm=0.0), np.full(nz, RHO), z,
+                                    shape=(nz, 4, 4)))
 
 
 def view_rays():
@@ -91,7 +91,7 @@ def view_rays():
     return RayTable(np.stack([o, o]), np.stack([d, d]))
 
 
-def path_tracer(cloud_tau: float, spp: int, passes: int, **render_kw):
+def path_tracer(cloud_tau: float, spp: int, passes: int, nz: int = NZ, cloud_albedo: float = 1.0, **render_kw):
     """(pi I / mu0, its standard error), each (views, 3 channels), from one render (``render_kw``: more options of
     ``render_reference``)."""
     from weather_mi.reference.render import render_reference
@@ -101,8 +101,8 @@ def path_tracer(cloud_tau: float, spp: int, passes: int, **render_kw):
     sun = Sun(azimuth=0.0, elevation=math.degrees(math.asin(MU0)), irradiance=1.0, angular_diameter_deg=0.0)
     spec = SceneSpec(camera=Camera(origin=(0.0, 0.0, -10.0), target=(0.0, 1.0, 0.0)), sun=sun, sky=None,
                      ground=None, width=w, height=h, seed=5, rays=rays)
-    img = render_reference(spec, slab(cloud_tau), spp=spp, passes=passes, progress=False, variant="llvm_ad_rgb",
-                           normalize="reflectance", **render_kw)
+    img = render_reference(spec, slab(cloud_tau, nz, cloud_albedo), spp=spp, passes=passes, progress=False,
+                           variant="llvm_ad_rgb", normalize="reflectance", **render_kw)
     r = img.radiance.reshape(w, 3)[0::2].astype(np.float64)
     se = img.stderr.reshape(w, 3)[0::2].astype(np.float64)
     return r, se
@@ -112,8 +112,25 @@ def _tau_rayleigh(lam_nm: float) -> float:
     return bodhaine_cross_section_m2(lam_nm) * RHO * AVOGADRO / M_AIR * H_M
 
 
-def disort(cloud_tau: float, lam_nm: float) -> np.ndarray:
-    """pi I / mu0 of ``VIEWS`` from DISORT on the same layers."""
+def cloud_layers(cloud_tau: float, nz: int = NZ, sub: int = 8):
+    """(Layer edges, top first (m); the cloud's extinction in each layer (1/m)): the path tracer's cloud, linear
+    between the grid's level centres (clamped beyond the first and last), each ramp cut into ``sub`` layers whose
+    extinction is its mean (exact for a linear piece)."""
+    zc = (np.arange(nz) + 0.5) * (H_M / nz)
+    b = np.where((zc > CLOUD_M[0]) & (zc < CLOUD_M[1]), cloud_tau / (CLOUD_M[1] - CLOUD_M[0]), 0.0)
+    knots, values = [0.0, *zc, H_M], [b[0], *b, b[-1]]
+    edges, beta = [0.0], []
+    for z0, z1, v0, v1 in zip(knots[:-1], knots[1:], values[:-1], values[1:]):
+        m = sub if v0 != v1 else 1
+        for k in range(m):
+            edges.append(z0 + (z1 - z0) * (k + 1) / m)
+            beta.append(v0 + (v1 - v0) * (k + 0.5) / m)
+    return edges[::-1], beta[::-1]
+
+
+def disort(cloud_tau: float, lam_nm: float, nz: int = NZ, cloud_albedo: float = 1.0) -> np.ndarray:
+    """pi I / mu0 of ``VIEWS`` from DISORT on the same layers (the cloud's ramps resolved, :func:`cloud_layers`;
+    each layer's single-scattering albedo and moments those of its molecules and cloud by their optical depths)."""
     from weather_mi.optics.disort import solve
     n = 64
     gamma = DEPOL / (2 - DEPOL)
@@ -121,16 +138,17 @@ def disort(cloud_tau: float, lam_nm: float) -> np.ndarray:
     chi_r[0], chi_r[2] = 1.0, (1 - gamma) / (10 * (1 + 2 * gamma))
     chi_c = CLOUD_G ** np.arange(n + 1)
     per_m = _tau_rayleigh(lam_nm) / H_M
-    edges = [H_M, CLOUD_M[1], CLOUD_M[0], 0.0]            # top first
-    tau_r = [per_m * (a - b) for a, b in zip(edges[:-1], edges[1:])]
-    tau_c = [0.0, cloud_tau, 0.0]
-    tau = [r + c for r, c in zip(tau_r, tau_c)]
-    moments = np.array([(r * chi_r + c * chi_c) / (r + c) for r, c in zip(tau_r, tau_c)])
-    total = float(sum(tau))
+    edges, beta_c = cloud_layers(cloud_tau, nz)
+    dz = -np.diff(edges)
+    tau_r, tau_c = per_m * dz, np.asarray(beta_c) * dz
+    tau_sca = tau_r + cloud_albedo * tau_c
+    moments = (tau_r[:, None] * chi_r + cloud_albedo * tau_c[:, None] * chi_c) / tau_sca[:, None]
+    tau = tau_r + tau_c
     mus = [(-math.cos(math.radians(z)) if way == "up" else math.cos(math.radians(z))) for _, z, _, way in VIEWS]
     mu_user = sorted(set(mus))
     phis = sorted({a for _, _, a, _ in VIEWS})
-    res = solve(tau, [1.0] * 3, MU0, mu_user, [0.0, total], phis, moments=moments, n_streams=n)
+    res = solve(list(tau), list(tau_sca / tau), MU0, mu_user, [0.0, float(tau.sum())], phis, moments=moments,
+                n_streams=n)
     out = []
     for (_, z, a, way), mu in zip(VIEWS, mus):
         it = 1 if way == "up" else 0  # the bottom for the sky, the top for the reflectance
@@ -138,12 +156,12 @@ def disort(cloud_tau: float, lam_nm: float) -> np.ndarray:
     return np.array(out)
 
 
-def compare(cloud_tau: float, spp: int, passes: int):
+def compare(cloud_tau: float, spp: int, passes: int, nz: int = NZ, cloud_albedo: float = 1.0):
     """Rows (view, wavelength, ours, se, DISORT, relative difference, within: 1 % or 3 se)."""
-    ours, se = path_tracer(cloud_tau, spp, passes)
+    ours, se = path_tracer(cloud_tau, spp, passes, nz, cloud_albedo)
     rows = []
     for c, lam in CHANNELS:
-        ref = disort(cloud_tau, lam)
+        ref = disort(cloud_tau, lam, nz, cloud_albedo)
         for j, (name, *_rest) in enumerate(VIEWS):
             diff = ours[j, c] - ref[j]
             rows.append((name, lam, ours[j, c], se[j, c], ref[j], diff / ref[j],
@@ -156,12 +174,14 @@ def main(argv=None) -> int:
     ap.add_argument("--spp", type=int, default=16384)
     ap.add_argument("--passes", type=int, default=8)
     ap.add_argument("--cloud-tau", type=float, nargs="+", default=[0.0, 2.0])
+    ap.add_argument("--levels", type=int, default=NZ, help="the grid's levels over the 10 km (80: 125 m)")
+    ap.add_argument("--cloud-albedo", type=float, default=1.0)
     args = ap.parse_args(argv)
     for tau in args.cloud_tau:
-        print(f"\n{'pure molecular' if tau == 0 else f'cloud layer tau {tau:g} at 4-6 km'} (10 km, mu0 {MU0}), "
-              f"{args.spp} spp: pi I / mu0")
+        print(f"\n{'pure molecular' if tau == 0 else f'cloud layer tau {tau:g}, albedo {args.cloud_albedo:g} at 4-6 km'}"
+              f" (10 km on {args.levels} levels, mu0 {MU0}), {args.spp} spp: pi I / mu0")
         print("| view | nm | path tracer | se | DISORT | difference | within 1% or 3 se |\n|---|---|---|---|---|---|---|")
-        for name, lam, o, s, r, rel, ok in compare(tau, args.spp, args.passes):
+        for name, lam, o, s, r, rel, ok in compare(tau, args.spp, args.passes, args.levels, args.cloud_albedo):
             print(f"| {name} | {lam:.0f} | {o:.5f} | {s:.5f} | {r:.5f} | {100 * rel:+.2f}% | {'yes' if ok else 'NO'} |")
     return 0
 

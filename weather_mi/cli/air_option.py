@@ -102,20 +102,25 @@ def view_air(args) -> dict:
 def eye_rays_air(spec, vol, args):
     """The air along the eye rays outside the box (``display.aerial.eye_air``, the storm's shadow on it read from
     ``vol``'s extinction), computed before the render releases ``vol``'s grids (``render_reference(
-    release_volume=True)``), for :func:`on_eye_rays`; None without an atmosphere and in the spectral mode."""
-    if spec.atmosphere is None or getattr(args, "spectral", False):
+    release_volume=True)``), for :func:`on_eye_rays`; None without an atmosphere. ``--spectral``: its terms per
+    wavelength, projected to the spectral output's linear sRGB (``display.aerial.SpectralChannels``)."""
+    if spec.atmosphere is None:
         return None
     from ..display.aerial import eye_air
-    return eye_air(spec, vol, sky_air=args.sky == "air")
+    return eye_air(spec, vol, sky_air=args.sky == "air", spectral=bool(getattr(args, "spectral", False)))
 
 
 def on_eye_rays(img, spec, vol, args, air=None):
     """``img`` seen through the air outside the box (``display.aerial.with_eye_air``; ``air``: its
     :func:`eye_rays_air`, computed before ``vol``'s grids were released), with the air's sky for ``--sky air``;
-    ``img`` itself without an atmosphere, and in the spectral mode (``--spectral``: the air inside the box and on
-    the sun's path are in its render, ``kernel/spectral_air.py``; along the eye rays outside the box not yet)."""
-    if spec.atmosphere is None or img.xyz is not None:
+    ``img`` itself without an atmosphere. A spectral render (``img.xyz``) takes the terms per wavelength
+    (:func:`eye_rays_air` with ``--spectral``) and its X, Y, Z follow its R, G, B."""
+    if spec.atmosphere is None:
         return img
     from ..display.aerial import with_eye_air
+    spectral = img.xyz is not None
+    if air is None:
+        from ..display.aerial import eye_air
+        air = eye_air(spec, vol, sky_air=args.sky == "air", spectral=spectral)
     return with_eye_air(img, spec, vol, sky_air=args.sky == "air", air=air)
 

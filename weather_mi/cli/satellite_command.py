@@ -7,6 +7,7 @@ from pathlib import Path
 from ..io.sources import DEMOS, check_time
 from ..optics.volume import default_sizes
 from ..reference.options import add_flags, flag_values
+from ..satellite.bands import DEFAULT_GROUND_ALBEDO, SEA_ALBEDO
 from .options import add_dask_options, add_place_options, add_sizes_option, add_surface_options, check_unfinished, \
     open_placed, surface_kw
 from .periodic_option import add_periodic_option, periodic_value
@@ -83,7 +84,7 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     if args.rgb:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt, atm)
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
-                               ground_albedo=0.06 if args.ground_albedo is None else args.ground_albedo,
+                               ground_albedo=DEFAULT_GROUND_ALBEDO if args.ground_albedo is None else args.ground_albedo,
                                seed=args.seed, atmosphere=atm, **surface_kw(args))
     del vol, hyd  # the scene holds the band's volume (its own albedo) and air: the RGB albedo and rho_air go
     w, h = scene.view.size
@@ -210,8 +211,8 @@ def add_satellite_parser(sub) -> None:
     sat.add_argument("--phase", default="per_species", choices=("per_species", "paper"))
     add_periodic_option(sat)
     sat.add_argument("--ground-albedo", type=float, default=None,
-                     help="surface albedo where the file has none (default 0.06, the sea; with --rgb the sea "
-                          "per band, 0.06 at 0.47 um to 0.02 at 0.86 um)")
+                     help=f"surface albedo where the file has none (default {DEFAULT_GROUND_ALBEDO:g}, the sea; with --rgb "
+                          f"the sea per band, {SEA_ALBEDO['0.47']:g} at 0.47 um to {SEA_ALBEDO['0.86']:g} at 0.86 um)")
     add_surface_options(sat, "file")
     add_flags(sat, SATELLITE_ESTIMATOR)
     sat.add_argument("--seed", type=int, default=0)

@@ -61,6 +61,7 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
     from ..optics.volume import default_sizes, optical_volume
     from ..reference.cluster import session
     from ..satellite import imagery as si
+    from ..satellite.bands import DEFAULT_GROUND_ALBEDO
     from .periodic_option import periodic_value
     from ..satellite import truecolor as tc
     from .options import surface_kw
@@ -69,7 +70,7 @@ def satellite_loop_command(args, resolution: float, nc: Path, reference_kw: dict
     atm = satellite_atmosphere(args)
     surface = surface_kw(args)
     hyds = open_placed_times(args)
-    albedo = 0.06 if args.ground_albedo is None else args.ground_albedo
+    albedo = DEFAULT_GROUND_ALBEDO if args.ground_albedo is None else args.ground_albedo
     what = "true colour" if args.rgb else f"band {args.band or '0.64'} um"
     print(f"{args.satellite}, {what}, {resolution:g} km: a loop of {len(hyds)} times "
           f"({hyds[0].attrs.get('valid_time')} to {hyds[-1].attrs.get('valid_time')})")

@@ -35,6 +35,10 @@ luminance there). The storm shadows the direct sun at the samples of A and B and
 (``optics.air.storm_shadow``: the hydrometeors' chord towards the sun; not for a periodic field; not on the
 diffuse light's source). Not included: the light the storm scatters into the outside air, the storm's blocking of
 the open ground's sky and of the outside air's diffuse light.
+
+A spectral render (``render --spectral``, ``eye_air(spectral=True)``): the same terms at DISORT's 13 wavelengths
+(``SpectralChannels``), the radiances integrated to CIE XYZ and linear sRGB, the transmittances a factor per sRGB
+channel on the render's pixels (exact for light of the sun's spectrum; docs/spectral.md measures the rest).
 """
 from __future__ import annotations
 
@@ -46,18 +50,20 @@ CHUNK = 2048  # rays per call of ``segment_air`` (memory: CHUNK x 257 samples x 
 SMOOTH_SAMPLES = 65  # points per segment for the multiple scattering and the box's air (no storm shadow in them)
 
 
-def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
+def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None, spectral: bool = False):
     """Per pixel: (T_A, E S_A, E S_B (H, W, 3) of the module docstring, whether the ray ends on the sky
     model's sky, whether it meets the box (H, W), T_air (H, W, 3), the ground's terms (H, W, 3): T_B L_g - L_g'
     where the ray meets the box, G where it meets the ground outside it; 0 without ``sky_air``). ``table``: the
     sun's (``eye_path.wide_sun_table``);
     ``samples``: points per segment (default ``eye_path.SAMPLES``; 33 keep S within about 1%, at an eighth of
-    the cost: a viewer's reference)."""
-    from ..optics.air.eye_path import SAMPLES, segment_air, top_distance, wide_sun_table
+    the cost: a viewer's reference). ``spectral``: the terms per wavelength (``SpectralChannels``: a spectral
+    render's), projected to the same linear sRGB after the march."""
+    from ..optics.air.eye_path import SAMPLES, segment_air, top_distance
     samples = SAMPLES if samples is None else int(samples)
     from ..slicing.geometry import camera_rays, ray_box
     atm, sun = spec.atmosphere, spec.sun
-    table = wide_sun_table(atm, sun.mu0) if table is None else table
+    ch = SpectralChannels(spec, sky_air) if spectral else RgbChannels(spec, sky_air, table)
+    table, ms = ch.sun_table, ch.diffuse  # ms: the outside air's multiple scattering (--sky air)
     o, d = (a.reshape(-1, 3).astype(np.float64) for a in camera_rays(spec))
     (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in vol.bbox)
     centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, 0.0])
@@ -73,36 +79,37 @@ def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
     hit &= t_in < t_end
     a_end = np.where(hit, t_in, t_end)
     e = np.asarray(sun.irradiance, np.float64)
-    n = o.shape[0]
+    n, c = o.shape[0], len(ch.wavelengths_nm)
     shadow = None
     if not vol.periodic:  # the storm's shadow on the air's single scattering (a periodic field: none)
         from ..optics.air.storm_shadow import storm_shadow
         sh = storm_shadow(vol.beta_total, vol.bbox, sun.to_sun)
         shadow = lambda p: sh.transmittance(p + centre)  # noqa: E731  (the frame's points in the volume's)
-    ms = _diffuse_table(spec) if sky_air else None  # the outside air's multiple scattering (--sky air)
-    t_a, s_a, s_b = np.ones((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
-    t_air, t_b = np.ones((n, 3)), np.ones((n, 3))
+    t_a, s_a, s_b = np.ones((n, c)), np.zeros((n, c)), np.zeros((n, c))
+    t_air, t_b = np.ones((n, c)), np.ones((n, c))
     for i in range(0, n, CHUNK):
         sl = slice(i, i + CHUNK)
 
         def seg(t0, t1, tab=table, n=samples, **kw):
-            return segment_air(atm, sun.to_sun, o[sl], d[sl], t0, t1, tab, samples=n, **kw)
+            return segment_air(atm, sun.to_sun, o[sl], d[sl], t0, t1, tab, ch.wavelengths_nm, samples=n, **kw)
         coarse = min(samples, SMOOTH_SAMPLES)  # the diffuse source and the box's air: smooth along the ray
         t_a[sl], s = seg(np.zeros(a_end[sl].shape), a_end[sl], shadow=shadow)
         if ms is not None:
             s = s + seg(np.zeros(a_end[sl].shape), a_end[sl], ms, coarse, isotropic=True)[1]
-        s_a[sl] = s * e
+        s_a[sl] = s
         if sky_air:
             b0, b1 = np.where(hit[sl], t_out[sl], 0.0), np.where(hit[sl], t_end[sl], 0.0)  # B: none where no box
             t_b[sl], s = seg(b0, b1, shadow=shadow)
-            s_b[sl] = (s + seg(b0, b1, ms, coarse, isotropic=True)[1]) * e
+            s_b[sl] = s + seg(b0, b1, ms, coarse, isotropic=True)[1]
             t_air[sl], _ = seg(np.where(hit[sl], t_in[sl], 0.0), b0, n=coarse)
+    s_a, s_b = ch.radiance(s_a) * e, ch.radiance(s_b) * e
+    t_a, t_air, t_b = ch.transmittance(t_a), ch.transmittance(t_air), ch.transmittance(t_b)
     ground = np.zeros((n, 3))
     if sky_air and floor is not None and getattr(vol, "terrain", None) is None:
         on_ground = np.isfinite(t_ground) & (t_ground <= t_end)
         q = o + np.where(on_ground, t_ground, 0.0)[:, None] * d       # the ground point (the frame's)
         on_ground &= ~np.all((q[:, :2] >= lo[:2]) & (q[:, :2] <= hi[:2]), axis=-1)  # under the box: the render's
-        lit_g, lit_full, open_sky = _ground_radiance(spec, vol, table, q, shadow)
+        lit_g, lit_full, open_sky = _ground_radiance(spec, vol, ch, q, shadow)
         ground = np.where((hit & on_ground)[:, None], t_b * lit_full - lit_g,
                           np.where(on_ground[:, None], open_sky, 0.0))
     shape = (spec.height, spec.width)
@@ -111,28 +118,76 @@ def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None):
             sky_end.reshape(shape), hit.reshape(shape), t_air.reshape(shape + (3,)), ground.reshape(shape + (3,)))
 
 
-def _diffuse_table(spec):
+class RgbChannels:
+    """The RGB mode's channels: the air at 650/550/450 nm (``optics.air.inside.CHANNEL_NM``), the sun's and the
+    diffuse light's tables in linear sRGB (their spectra projected), the march's results used as they are."""
+
+    def __init__(self, spec, sky_air: bool, table=None):
+        from ..optics.air.eye_path import wide_sun_table
+        from ..optics.air.inside import CHANNEL_NM
+        self.wavelengths_nm = CHANNEL_NM
+        self.sun_table = wide_sun_table(spec.atmosphere, spec.sun.mu0) if table is None else table
+        self.diffuse = _diffuse_table(spec) if sky_air else None
+
+    def radiance(self, values):
+        return values
+
+    def transmittance(self, values):
+        return values
+
+    def sun(self, values):
+        """The direct sun's colour (n, 3) from the sun's table's values (n, c)."""
+        return values
+
+
+class SpectralChannels:
+    """A spectral render's channels: the air, the sun's transmittance and the diffuse light's mean intensity at
+    DISORT's 13 wavelengths (``skylight.SKY_WAVELENGTHS_NM``, 400-700 nm); radiances (per unit irradiance of the
+    sun above the air, per wavelength) projected to CIE XYZ and linear sRGB with the top-of-atmosphere sun's
+    spectrum (``skylight.rgb``: log-linear between the wavelengths); a transmittance T(lambda) as the factor per
+    sRGB channel it puts on that sun's light (``skylight.transmittance_rgb``, applied to the render's pixels)."""
+
+    def __init__(self, spec, sky_air: bool):
+        from ..optics.air.eye_path import wide_sun_table
+        from ..optics.air.skylight import SKY_WAVELENGTHS_NM
+        self.wavelengths_nm = SKY_WAVELENGTHS_NM
+        self.sun_table = wide_sun_table(spec.atmosphere, spec.sun.mu0, band_nm=SKY_WAVELENGTHS_NM)
+        self.diffuse = _diffuse_table(spec, SKY_WAVELENGTHS_NM) if sky_air else None
+
+    def radiance(self, values):
+        from ..optics.air.skylight import rgb
+        return rgb(np.asarray(values, np.float64).T)
+
+    def transmittance(self, values):
+        from ..optics.air.skylight import transmittance_rgb
+        return transmittance_rgb(np.asarray(values, np.float64).T)
+
+    sun = radiance
+
+
+def _diffuse_table(spec, band_nm=None):
     """The diffuse light's mean intensity by height (``optics.air.skylight.diffuse_source_table``) for ``spec``'s
-    atmosphere, sun and ground (albedo: its channel mean); None with the sun below the horizon."""
+    atmosphere, sun and ground (albedo: its channel mean); None with the sun below the horizon. ``band_nm``: at
+    those wavelengths (None: linear sRGB)."""
     from ..optics.air.skylight import diffuse_source_table
     if spec.sun.mu0 <= 0.0:
         return None
     ground = 0.0 if spec.ground is None else max(float(spec.ground.height), 0.0)
     albedo = 0.0 if spec.ground is None else float(np.mean(spec.ground.albedo))
-    return diffuse_source_table(spec.atmosphere, float(spec.sun.mu0), ground, albedo)
+    return diffuse_source_table(spec.atmosphere, float(spec.sun.mu0), ground, albedo, band_nm)
 
 
-def _ground_radiance(spec, vol, table, points, shadow):
+def _ground_radiance(spec, vol, ch, points, shadow):
     """(The flat ground's radiance at ``points`` (n, 3) (the frame's: the box's centre at x = y = 0) as the render
     lit it, as the open ground is lit, the open ground's sky that the render leaves out (n, 3) each): module
-    docstring."""
+    docstring. ``ch``: the channels (``RgbChannels``, ``SpectralChannels``)."""
     from ..kernel.air_sky import open_ground_sky
     from ..optics.air.shell import EARTH_RADIUS_M
     sun, e = spec.sun, np.asarray(spec.sun.irradiance, np.float64)
     rel = points + [0.0, 0.0, EARTH_RADIUS_M]                                 # from the Earth's centre
     mu = rel @ np.asarray(sun.to_sun, np.float64) / np.linalg.norm(rel, axis=-1)
     h = np.full(points.shape[0], max(float(spec.ground.height), 0.0))
-    direct = e * sun.mu0 * table.at(h, mu)
+    direct = e * sun.mu0 * ch.sun(ch.sun_table.at(h, mu))
     if shadow is not None:
         direct = direct * np.asarray(shadow(points), np.float64).reshape(-1)[:, None]
     e_env, e_sky = open_ground_sky(spec, vol.bbox)
@@ -157,7 +212,11 @@ def with_eye_air(img, spec, vol, sky_air: bool = False, air=None):
     out = rad + w * (s_a + t_a * (rad + behind) - rad)
     se = None if img.stderr is None else (img.stderr * (1.0 + w * (t_a - 1.0))).astype(np.float32)
     meta = {**img.metadata, "eye_air": {"sky": "air" if sky_air else "model", "pixels_changed": int((w > 0).sum())}}
-    return replace(img, radiance=out.astype(np.float32), stderr=se, metadata=meta)
+    xyz = None
+    if img.xyz is not None:  # a spectral render's CIE XYZ: its linear sRGB's, as the render gave them
+        from ..optics.spectrum import xyz_of_linear_srgb
+        xyz = xyz_of_linear_srgb(out).astype(np.float32)
+    return replace(img, radiance=out.astype(np.float32), stderr=se, metadata=meta, xyz=xyz)
 
 
 __all__ = ["eye_air", "with_eye_air"]

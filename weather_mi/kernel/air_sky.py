@@ -17,7 +17,11 @@ lookup does not darken the horizon). The ground's albedo (channel mean) is DISOR
 Radiance: the table's per unit luminance irradiance of the sun above the air, times ``spec.sun.irradiance``
 (the RGB mode's sun above the air, as ``optics.air.sunlight``). The envmap is not seen directly by the camera
 (``scene_dict`` hides the scene's emitters from camera rays where it is in the scene: the air's sky along the eye
-rays is ``display.aerial``'s). The spectral variants take no envmap (their air colours the sun only).
+rays is ``display.aerial``'s). The spectral variants take the same envmap: Mitsuba's ``envmap`` turns each
+pixel's linear sRGB into a smooth spectrum (Jakob & Hanika 2019's sRGB model times D65), whose CIE XYZ is the
+pixel's (within 0.3 %); its shape differs from DISORT's sky spectrum, which matters only where the light is
+filtered by wavelength on its way to the eye: ``docs/spectral.md`` measures it (CIEDE2000 under 0.3 through the
+box's air and a cloud), so no spectral emitter is built.
 """
 from __future__ import annotations
 

@@ -253,10 +253,11 @@ def medium_dict(vol: OpticalVolume, air_in_grid: bool = True) -> dict:
     With the air in the box (``air_in_medium``) the phase takes the air's Eq. 8 weights per level and colour
     channel (``air_weights``; :func:`phase_dict`). With ``air_in_grid`` (for stock ``volpath``) the sigma_t grid
     (RGB) and the albedo grid are the mixture's of the hydrometeors and the air
-    (``optics.air.inside.medium_grids``); otherwise the air is one value per level that ``majorant_volpath``
+    (``optics.air.inside.medium_grids``; the grid volume blends its texels' mixture albedos, stock volpath's only
+    way, which at a cloud's edge in absorbing air gives the cloud the air's albedo); otherwise the air is one value per level that ``majorant_volpath``
     adds (``air_extinction``; :func:`air_by_integrator`): the sigma_t grid stays the hydrometeors' grey one, used
     in place, the weights their 20 bytes per cell, and the medium holds no albedo grid (a constant 1, unread): the
-    integrator reads the hydrometeors' in place and mixes in the air's (:func:`integrator_air_albedo`)."""
+    integrator reads the hydrometeors' in place and mixes in the air's point-wise (:func:`integrator_air_albedo`)."""
     import mitsuba as mi
     from .plugins.hydrometeor_mixture import bbox_transform
     to_world = bbox_transform(grid_bbox(vol))

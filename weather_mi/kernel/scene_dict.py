@@ -487,8 +487,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
         if _inside(spec.camera.origin, medium_box(vol, floor)):
             sensor["medium"] = {"type": "ref", "id": "weather_medium"}
     if spec.sky is not None and spec.sky.kind == "air":  # the air's diffuse sky into the box, not seen directly
-        import mitsuba as mi
-        if not mi.is_spectral and spec.sun.mu0 > 0.0:  # (spectral variants: the air colours the sun only)
+        if spec.sun.mu0 > 0.0:  # spectral variants: the envmap's RGB upsampled by Mitsuba (kernel.air_sky)
             from .air_sky import EMITTER_NEE, air_sky_dict
             d["sky"] = air_sky_dict(spec, vol.bbox)
             nee = {"emitter_nee": EMITTER_NEE} if integrator.get("type") == "majorant_volpath" else {}

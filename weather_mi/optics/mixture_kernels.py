@@ -35,8 +35,8 @@ def _not_plus_zero(x):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _eq4(rho, q, r, mode, c3, denom, d2, rdef, lo, m, out):  # pragma: no cover - compiled
-    """out[:m] = Eq. 4 of one species on voxels lo..lo+m, as ``Species.beta_ext_per_m(rho, q, r, out=...)``
-    computes it in float32: (rho (3 scale)) q, divided by 2 rho_p R (R the voxel's radius where > 0, else the
+    """out[:m] = Eq. 4 of one species on voxels lo..lo+m, as numpy's float32 expression of it (``eq4_factors``;
+    ``eq4_grid`` on a whole grid): (rho (3 scale)) q, divided by 2 rho_p R (R the voxel's radius where > 0, else the
     species' ``rdef``, times ``d2`` = 2 rho_p; with ``mode`` SCALAR, by ``denom``: the species' 2 rho_p R)."""
     if mode == GRID:
         for j in range(m):
@@ -45,6 +45,29 @@ def _eq4(rho, q, r, mode, c3, denom, d2, rdef, lo, m, out):  # pragma: no cover 
     else:
         for j in range(m):
             out[j] = ((rho[lo + j] * c3) * q[lo + j]) / denom
+
+
+def eq4_factors(scale: float, density_kg_m3: float, radius_m: float) -> tuple:
+    """Eq. 4's float32 factors of a species, as numpy rounds them in ``3 scale rho q / (2 rho_p R)``: (3 scale,
+    2 rho_p R, 2 rho_p, R), the last two for a radius per voxel (``_eq4``'s ``d2`` and ``rdef``)."""
+    return (np.float32(scale * 3.0), np.float32(2.0 * density_kg_m3 * radius_m), np.float32(2.0 * density_kg_m3),
+            np.float32(radius_m))
+
+
+def eq4_grid(rho, q, radius_m, scale: float, density_kg_m3: float, default_radius_m: float,
+             out: np.ndarray) -> np.ndarray:
+    """``out`` (a float32 grid of the inputs' shape) = Eq. 4 of one species (1/m), ``_eq4`` over the whole grid:
+    rho (kg/m^3) and q (kg/kg) float32 grids, ``radius_m`` one radius (m) or a grid of them (a voxel's radius
+    <= 0 replaced by ``default_radius_m``)."""
+    grid = np.ndim(radius_m) != 0
+    c3, denom, d2, rdef = eq4_factors(scale, density_kg_m3, default_radius_m if grid else radius_m)
+    rho, q, r = (np.ascontiguousarray(np.broadcast_to(np.asarray(a, np.float32), out.shape)).reshape(-1)
+                 for a in (rho, q, radius_m if grid else 0.0))
+    dest = out.reshape(-1) if out.flags.c_contiguous else np.empty(out.size, np.float32)
+    _eq4(rho, q, r, GRID if grid else SCALAR, c3, denom, d2, rdef, 0, dest.size, dest)
+    if not out.flags.c_contiguous:
+        out[...] = dest.reshape(out.shape)
+    return out
 
 
 @njit(cache=True)

@@ -75,16 +75,13 @@ class Species:
 
     def beta_ext_per_m(self, rho_air_kg_m3, q_kg_per_kg, radius_m=None, out=None):
         """Eq. 4: beta = 3 rho_air q / (2 rho_particle R), times the species scaling (1/m). With float32 grids,
-        ``out`` (a float32 grid of their shape) receives it in place, in three passes without temporaries
-        (a radius grid is used as the denominator's scratch: give a copy)."""
+        ``out`` (a float32 grid of their shape) receives it in one compiled pass (``mixture_kernels.eq4_grid``,
+        the voxel pass's own Eq. 4; a radius grid's values <= 0 are the species' radius)."""
         r = self.radius_m if radius_m is None else radius_m
         if out is None:
             return self.scale * 3.0 * rho_air_kg_m3 * q_kg_per_kg / (2.0 * self.density_kg_m3 * r)
-        np.multiply(rho_air_kg_m3, self.scale * 3.0, out=out)  # the expression's float32 operations, in order
-        np.multiply(out, q_kg_per_kg, out=out)
-        if np.ndim(r) == 0:
-            return np.divide(out, 2.0 * self.density_kg_m3 * r, out=out)
-        return np.divide(out, np.multiply(r, 2.0 * self.density_kg_m3, out=r), out=out)
+        from .mixture_kernels import eq4_grid
+        return eq4_grid(rho_air_kg_m3, q_kg_per_kg, r, self.scale, self.density_kg_m3, self.radius_m, out)
 
 
 @dataclass(frozen=True)

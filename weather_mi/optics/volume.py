@@ -329,7 +329,7 @@ def _species_constants(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_a
     comes from its radius (``voxel_albedo``, with the model's radii: the species with ``r_eff_<species>`` whose
     albedo is the physical one of its radius; an overridden, artistic albedo is kept) the weak-absorption
     constants of ``species.albedo_of_radius``."""
-    from .mixture_kernels import GRID, SCALAR
+    from .mixture_kernels import GRID, SCALAR, eq4_factors
     n_s = len(sp)
     k = {"mode": np.zeros(n_s, np.int8), "by_radius": np.zeros(n_s, np.bool_), "radius_scale": np.ones(n_s),
          "k_abs": np.zeros((n_s, 3)), "n_term": np.zeros((n_s, 3))}
@@ -342,10 +342,8 @@ def _species_constants(hyd: xr.Dataset, sp: SpeciesSet, use_model: bool, voxel_a
             k["by_radius"][i], k["radius_scale"][i] = True, 1.0 if scale is None else scale
             k["k_abs"][i] = k_rgb
             k["n_term"][i] = [n ** 3 - (n * n - 1.0) ** 1.5 for n in n_rgb]  # species.albedo_of_radius's
-    k["c3"] = np.array([np.float32(s.scale * 3.0) for s in sp], np.float32)
-    k["denom"] = np.array([np.float32(2.0 * s.density_kg_m3 * s.radius_m) for s in sp], np.float32)
-    k["d2"] = np.array([np.float32(2.0 * s.density_kg_m3) for s in sp], np.float32)
-    k["rdef"] = np.array([np.float32(s.radius_m) for s in sp], np.float32)
+    factors = np.array([eq4_factors(s.scale, s.density_kg_m3, s.radius_m) for s in sp], np.float32)
+    k["c3"], k["denom"], k["d2"], k["rdef"] = (np.ascontiguousarray(col) for col in factors.T)
     k["rgb"] = np.asarray([s.albedo_rgb for s in sp], np.float32)
     k["mean_albedo"] = np.asarray([np.float32(np.mean(s.albedo_rgb)) for s in sp], np.float32)
     k["albedo64"] = np.asarray([s.albedo_rgb for s in sp], np.float64)
@@ -502,7 +500,7 @@ def optical_volume(hyd: xr.Dataset, species: SpeciesSet | str = "paper",
     if "beta_ext" not in keep:
         beta_ext = ReleasedGrid("beta_ext", beta_ext.shape)
     if "weights" not in keep:
-        weights = ReleasedGrid("weights", beta_ext.shape if weights is None else weights.shape)
+        weights = ReleasedGrid("weights", weights.shape)
     return OpticalVolume(names, beta_ext, beta_total, albedo, weights, bbox_of(hyd), sp, phase,
                          phase_quality, attrs, None if phase_tables is None else tuple(phase_tables),
                          Terrain.of(hyd), periodic_of_attrs(hyd.attrs) if periodic is None else periodic,

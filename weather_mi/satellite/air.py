@@ -131,7 +131,7 @@ def with_air_outside(scene, img):
     se = None if img.stderr is None else np.asarray(img.stderr, np.float64).copy()
     t_box = None if img.transmittance is None else np.asarray(img.transmittance, np.float64)[hit]
     col = ColumnTerms(atm, scene, mu, phi, mu0)
-    t_a, r_a = _through_box(atm, scene, col, t_box, o[hit], d[hit], mu[hit], phi[hit], t0[hit], t1[hit], band_nm, mu0)
+    t_a, r_a = _through_box(scene, col, t_box, o[hit], d[hit], mu[hit], phi[hit], t0[hit], t1[hit], band_nm)
     rad[hit] = r_a + t_a * rad[hit] + _coupling(col, mu[hit], phi[hit], band_nm, scene)
     if se is not None:
         se[hit] = t_a * se[hit]
@@ -152,13 +152,6 @@ def _sun_table(atm, start, band_nm, mu0):
     return wide_sun_table(atm, mu0, reach_m=reach, n_mu=17, n_h=61, band_nm=band_nm)
 
 
-def _segments(atm, scene, start, d, s0, s1, table, band_nm):
-    """(T, S) (n, 3) of ``eye_path.segment_air`` over [s0, s1] along the lines from ``start`` (one compiled march:
-    no temporaries per sample)."""
-    from ..optics.air.eye_path import segment_air
-    return segment_air(atm, scene.spec.sun.to_sun, start, d, s0, s1, table, wavelengths_nm=band_nm)
-
-
 class ColumnTerms:
     """The clear plane-parallel column's DISORT terms (R_0, K, s of ``plane_parallel_terms``, its layers split at
     the box's top) per wavelength, each solved once, on one (mu, phi) grid spanning every line of sight of a view:
@@ -168,7 +161,7 @@ class ColumnTerms:
     def __init__(self, atm, scene, mu, phi, mu0: float):
         self.atm, self.mu0 = atm, float(mu0)
         self.ground, self.top = ground_height_m(scene), float(scene.vol.bbox[1][2])
-        self.mu_nodes, self.phi_nodes, _ = _grid(np.ravel(mu), np.ravel(phi))
+        self.mu_nodes, self.phi_nodes = _grid(np.ravel(mu), np.ravel(phi))
         self._terms = {}
 
     def terms(self, wl: float):
@@ -189,24 +182,29 @@ class ColumnTerms:
         return RegularGridInterpolator((self.mu_nodes, self.phi_nodes), values)(np.stack([mu, phi], axis=-1))
 
 
-def _through_box(atm, scene, col, t_box, o, d, mu, phi, t0, t1, band_nm, mu0):
+def _through_box(scene, col, t_box, o, d, mu, phi, t0, t1, band_nm):
     """(T_A (n, 3), the air's reflectance added (n, 3)) of lines of sight through the box: A from the top of the
     air to the box entry ``t0`` (single scattering), and B from a side wall's exit ``t1`` down to the ground
     (single scattering times the column's ratio of all orders to the first, R_0 / (pi S_column / mu0),
-    seen through A and the box: ``t_box`` (n,), the render's eye-ray transmittance, or None)."""
-    from ..optics.air.eye_path import top_distance
+    seen through A and the box: ``t_box`` (n,), the render's eye-ray transmittance, or None); the air and mu0
+    are ``col``'s. Each segment's air is ``eye_path.segment_air`` (one compiled march)."""
+    from ..optics.air.eye_path import segment_air, top_distance
     back = top_distance(o, -d)                      # from the start back up to the top of the air
     start = o - back[:, None] * d
-    table = _sun_table(atm, start, band_nm, mu0)
-    t_a, s_a = _segments(atm, scene, start, d, np.zeros(back.shape), back + np.maximum(t0, 0.0), table, band_nm)
+    mu0 = col.mu0
+    table = _sun_table(col.atm, start, band_nm, mu0)
+
+    def segments(k, s0, s1):  # (T, S) (n, 3) over [s0, s1] along the lines k from ``start``
+        return segment_air(col.atm, scene.spec.sun.to_sun, start[k], d[k], s0, s1, table, wavelengths_nm=band_nm)
+    t_a, s_a = segments(slice(None), np.zeros(back.shape), back + np.maximum(t0, 0.0))
     floor = 0.0 if scene.spec.ground is None else float(scene.spec.ground.height)
     t_ground = (floor - o[:, 2]) / np.minimum(d[:, 2], -1e-9)
     side = (t1 < t_ground - 1.0) & ~(scene.vol.periodic and scene.vol.periodic != "transport")
     added = np.pi * s_a / mu0
     if side.any():
         k = np.flatnonzero(side)
-        _, s_b = _segments(atm, scene, start[k], d[k], back[k] + t1[k], back[k] + t_ground[k], table, band_nm)
-        _, s_col = _segments(atm, scene, start[k], d[k], np.zeros(k.size), back[k] + t_ground[k], table, band_nm)
+        _, s_b = segments(k, back[k] + t1[k], back[k] + t_ground[k])
+        _, s_col = segments(k, np.zeros(k.size), back[k] + t_ground[k])
         ratio = _path_reflectance(col, mu[k], phi[k], band_nm) / np.maximum(np.pi * s_col / mu0, 1e-12)
         seen = 1.0 if t_box is None else t_box[k, None]
         added[k] += t_a[k] * seen * ratio * np.pi * s_b / mu0
@@ -219,10 +217,10 @@ def _path_reflectance(col, mu, phi, band_nm):
 
 
 def _grid(mu, phi):
-    """(mu nodes, phi nodes, points) spanning the lines of sight's angles, for interpolating DISORT's terms."""
+    """(mu nodes, phi nodes) spanning the lines of sight's angles, for interpolating DISORT's terms."""
     mu_nodes = np.linspace(mu.min(), max(mu.max(), mu.min() + 1e-4), 5)
     phi_nodes = np.linspace(phi.min(), max(phi.max(), phi.min() + 1e-3), 7)
-    return mu_nodes, phi_nodes, np.stack([mu, phi], axis=-1)
+    return mu_nodes, phi_nodes
 
 
 def _coupling(col, mu, phi, band_nm, scene):

@@ -75,8 +75,9 @@ def band(name) -> Band:
 # The sea under a true-colour render where neither the file nor --ground-albedo gives the ground: a Lambertian
 # stand-in, grey 0.02 of surface reflection plus the light from the water, which pure water's absorption
 # (Pope & Fry 1997: 0.01/m at 0.47 um, 0.3/m at 0.64 um, several per metre at 0.86 um) leaves only in the blue;
-# values chosen, not fitted (the single-band default, 0.06, is kept at 0.47 um)
-SEA_ALBEDO = {"0.47": 0.06, "0.51": 0.05, "0.64": 0.03, "0.86": 0.02}
+# values chosen, not fitted (the single-band default, DEFAULT_GROUND_ALBEDO, is kept at 0.47 um)
+DEFAULT_GROUND_ALBEDO = 0.06  # a satellite view's ground where neither the file nor --ground-albedo gives it: the sea
+SEA_ALBEDO = {"0.47": DEFAULT_GROUND_ALBEDO, "0.51": 0.05, "0.64": 0.03, "0.86": 0.02}
 IMAGERS = {"abi": "GOES-R ABI", "ahi": "Himawari AHI", "seviri": "MSG SEVIRI"}
 TRUE_COLOR = {"abi": ("0.64", "0.86", "0.47"), "ahi": ("0.64", "0.51", "0.47")}
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .bands import Band, band, band_volume, check_band_on, rgb_volume, true_color_bands
+from .bands import DEFAULT_GROUND_ALBEDO, Band, band, band_volume, check_band_on, rgb_volume, true_color_bands
 from .geostationary import Satellite, satellite
 from ..optics.volume import OpticalVolume
 from .rays import SatelliteView, satellite_view
@@ -40,7 +40,7 @@ class SatelliteScene:
 
 
 def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east", band_name: str = "0.64",
-                    resolution_km: float = 1.0, *, rayleigh: bool = False, ground_albedo=0.06,
+                    resolution_km: float = 1.0, *, rayleigh: bool = False, ground_albedo=DEFAULT_GROUND_ALBEDO,
                     seed: int = 0, max_vza_deg: float = 80.0, sun_time=None, rgb: bool = False,
                     surface: str = "file", wind_m_s: float | None = None, atmosphere=None,
                     channel_bands=None) -> SatelliteScene:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .bands import DEFAULT_GROUND_ALBEDO
 from .tile_plan import DEFAULT_HALO_KM, DEFAULT_TILE_PX, Outline, Tile, domain_outline, plan_tiles
 
 
@@ -35,7 +36,7 @@ class TileJob:
     sun: tuple             # (azimuth, elevation) in degrees
     band: str
     rayleigh: bool = False
-    ground_albedo: float = 0.06
+    ground_albedo: float = DEFAULT_GROUND_ALBEDO
     seed: int = 0
     read_sizes: bool = True
     optics: dict = field(default_factory=dict)
@@ -147,7 +148,7 @@ class TiledSatellite:
 
 def tiled_satellite(path, time=None, sat="goes-east", band_name: str = "0.64", resolution_km: float = 1.0, *,
                     tile_px: int = DEFAULT_TILE_PX, halo_km: float = DEFAULT_HALO_KM, rayleigh: bool = False,
-                    ground_albedo=0.06, seed: int = 0, max_vza_deg: float = 80.0, lat=None, lon=None,
+                    ground_albedo=DEFAULT_GROUND_ALBEDO, seed: int = 0, max_vza_deg: float = 80.0, lat=None, lon=None,
                     date=None, surface: str = "file", wind_m_s: float | None = None,
                     rgb: bool = False) -> TiledSatellite:
     """The plan of a tiled satellite image of one time of the wrfout ``path`` (``imagery.satellite_scene``'s
@@ -178,7 +179,7 @@ def tiled_satellite(path, time=None, sat="goes-east", band_name: str = "0.64", r
     if rgb:
         ground_albedo = tuple(SEA_ALBEDO[x.name] if ground_albedo is None else float(ground_albedo) for x in bands)
     elif ground_albedo is None:
-        ground_albedo = 0.06
+        ground_albedo = DEFAULT_GROUND_ALBEDO
     top = outline.top_m + RAY_START_ABOVE_M
     view = satellite_view(place, sat, resolution_km, top, max_vza_deg, str(path))
     azimuth, elevation, sun_meta = sun_from_time(ds)

@@ -3,10 +3,17 @@ air per level to a grey sigma_t grid (``air_levels``): the medium then holds no 
 integrator reads the hydrometeors' albedo grid in place (``air_albedo``, (z, y, x, C), C = 1 or 3) with the air's
 scattering per level and channel (``air_scattering``, (levels, 3), 1/m, molecules and aerosol summed).
 
-In each of the 8 corners of a point the mixture's albedo is what ``optics.air.inside.medium_grids`` put into that
-voxel of the albedo grid before (float32, the same operations), clip((omega_h beta + beta_sca,air) / (beta +
-beta_ext,air), 0, 1) (1 where nothing attenuates), blended trilinearly as the grid volume blended its texels:
-the same albedo to float rounding, without a 3-channel grid of it (nor Mitsuba's copy of one)."""
+At a point p, with beta(p) the grid's extinction and omega_h(p) the hydrometeors' albedo (both trilinear, as
+Mitsuba's grid volumes blend them) and the air's extinction e(z) and scattering s(z) (linear between the level
+centres, as the trackers read the air):
+
+    sigma_t = beta + e,   omega = (omega_h beta + s) / sigma_t  (1 where nothing attenuates),
+
+the point-wise mixture, as ``spectral_air_albedo`` has it at the lanes' wavelengths. (It blended the 8 corners'
+mixture albedos before: near a cloud's edge the empty corners' albedo is the air's, far under 1 in the upper air
+where ozone's absorption is a large share of its thin extinction, and it was applied to the cloud's collisions
+there, which darkened the cloud in red and green.) Without air (e = s = 0) it is omega_h, the medium's own albedo.
+"""
 from __future__ import annotations
 
 import numpy as np
@@ -31,27 +38,29 @@ class MixtureAlbedo:
         self.ext = aligned_float(mi, np.asarray(extinction, np.float32))
 
     def at(self, p_local, beta, periodic: bool, active):
-        """The albedo (Color3f) at the unit-cube point ``p_local``; ``beta`` the grey sigma_t grid's data (flat)."""
+        """The albedo (Color3f) at the unit-cube point ``p_local``; ``beta`` the grey sigma_t grid's data (flat):
+        the point-wise mixture (omega_h beta + s) / (beta + e), omega_h and beta trilinear, e and s linear between
+        the level centres (as ``air_levels.AirLevels.sigma_at``, so sigma_s / sigma_t of the trackers' medium)."""
         corner, frac = grid_lookup.corners(p_local, self.shape, periodic)
         _, ny, nx = self.shape
         n_c = self.channels
-        z0, z1 = corner[0]
-        # the air's values of the point's two levels, gathered once (not at each of the 4 corners of a level)
-        air = {id(z): [(dr.gather(mi.Float, self.ext, mi.UInt32(z * 3 + c), active),
-                        dr.gather(mi.Float, self.sca, mi.UInt32(z * 3 + c), active)) for c in range(3)] for z in (z0, z1)}
 
-        def texel(z, y, x):
+        def texel(z, y, x):  # (beta, omega_h R, G, B) of a corner, blended as one packet
             i = mi.UInt32((z * ny + y) * nx + x)
-            b = dr.gather(mi.Float, beta, i, active)
-            out = []
-            for c, (ext, sca_air) in enumerate(air[id(z)]):
-                a = dr.gather(mi.Float, self.albedo, i * n_c + (c if n_c == 3 else 0), active)
-                sigma_t = b + ext
-                sca = a * b + sca_air
-                out.append(dr.clip(dr.select(sigma_t > 0.0, sca / dr.select(sigma_t > 0.0, sigma_t, 1.0), 1.0), 0.0, 1.0))
-            return mi.Color3f(*out)
+            a = [dr.gather(mi.Float, self.albedo, i * n_c + c, active) for c in range(n_c)]
+            return mi.Vector4f(dr.gather(mi.Float, beta, i, active), *(a if n_c == 3 else a * 3))
 
-        return grid_lookup.trilinear(texel, corner, frac)
+        v = grid_lookup.trilinear(texel, corner, frac)
+        (z0, z1), fz = corner[0], frac[0]
+        out = []
+        for c in range(3):
+            e, s = (grid_lookup.lerp(dr.gather(mi.Float, t, mi.UInt32(z0 * 3 + c), active),
+                                     dr.gather(mi.Float, t, mi.UInt32(z1 * 3 + c), active), fz)
+                    for t in (self.ext, self.sca))
+            sigma_t = v[0] + e
+            sca = v[1 + c] * v[0] + s
+            out.append(dr.clip(dr.select(sigma_t > 0.0, sca / dr.select(sigma_t > 0.0, sigma_t, 1.0), 1.0), 0.0, 1.0))
+        return mi.Color3f(*out)
 
 
 def parse(props, extinction, check):

@@ -68,9 +68,7 @@ def by_lane(spectral, w, wavelengths, gather4):
     z0, z1, fz, inv_total, scattering = w.air
     q = -(-2 * n_a // 4)
     hydro = list(w[:len(w) - n_a])
-    hydro_sum = mi.Float(0.0)
-    for wi in hydro:
-        hydro_sum = hydro_sum + wi
+    hydro_sum = dr.sum(hydro)
     out = []
     for lane in range(4):
         u = dr.clip((wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
@@ -85,9 +83,7 @@ def by_lane(spectral, w, wavelengths, gather4):
             rec.append(e)
         air = [dr.lerp(dr.fma(rec[0][2 * a + 1] - rec[0][2 * a], t, rec[0][2 * a]),
                        dr.fma(rec[1][2 * a + 1] - rec[1][2 * a], t, rec[1][2 * a]), fz) * inv_total for a in range(n_a)]
-        total = hydro_sum
-        for a in air:
-            total = total + a
+        total = dr.sum([hydro_sum] + air)  # in this order: hydro_sum + air_0 + air_1 ...
         use = scattering & (total > 0.0)
         inv = dr.rcp(dr.select(use, total, 1.0))
         out.append([dr.select(use, wi * inv, wi) for wi in hydro] +

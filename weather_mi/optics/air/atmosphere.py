@@ -120,12 +120,12 @@ class Atmosphere:
             tau = tau + water_vapour.band_optical_depth(wl, columns["water"])  # Bird & Riordan Eq. 2-8
         return tau
 
-    def profiles(self, z_m) -> dict:
+    def profiles(self, z_m, water: bool = True) -> dict:
         """The constituents at heights z_m: air and ozone (molecules/m^3), aerosol (1/m at 550 nm), water vapour
-        (precipitable cm per m; only where ``water_vapour_cm`` > 0)."""
+        (precipitable cm per m; only where ``water`` is asked for and ``water_vapour_cm`` > 0)."""
         out = {"air": self.air_number_density_m3(z_m), "ozone": self.ozone_number_density_m3(z_m),
                "aerosol": self.aerosol_extinction_550_per_m(z_m)}
-        if self.water_vapour_cm > 0.0:
+        if water and self.water_vapour_cm > 0.0:
             out["water"] = water_vapour.column_density_cm_per_m(self.water_vapour_cm, z_m)
         return out
 

@@ -13,7 +13,9 @@ The extinction differs by channel (Rayleigh ~ lambda^-4): spectral extinction, t
 tracking (Kutz et al. 2017, ``kernel.plugins.trackers``). ``majorant_volpath`` adds the air per level itself (the
 medium's sigma_t grid stays the hydrometeors' grey one, the air's Eq. 8 coefficients a table per level,
 ``kernel.plugins.air_levels``, the mixture's albedo at a point ``kernel.plugins.air_albedo``); for stock
-``volpath`` :func:`medium_grids` puts it into RGB grids (``kernel.medium.medium_dict(air_in_grid=True)``).
+``volpath`` :func:`medium_grids` puts it into RGB grids (``kernel.medium.medium_dict(air_in_grid=True)``; their
+albedo the texels' mixtures, blended: at a cloud's edge in absorbing air not the point-wise mixture the integrator
+has).
 The phase functions enter the Eq. 8 mixture as two more components, weighted by their scattering
 coefficients per colour channel (``kernel.medium.air_weights``: each channel's mixture its own, as Eq. 8 holds
 per wavelength; the hydrometeors' coefficients are one for all channels). With channel means a cloud inside a

@@ -22,7 +22,7 @@ def air_layers(atm, wavelength_nm: float, ground_m: float = 0.0, split_m=None, l
     edges = layer_edges(ground_m, split_m, layer_m)
     wl = float(wavelength_nm)
     z = np.linspace(edges[:-1], edges[1:], 41, axis=-1)          # (layers, 41)
-    p = atm.profiles(z)
+    p = atm.profiles(z, water=False)  # the layers hold no water vapour's bands
     t_r, t_o, t_a = (np.trapezoid(p[k], z, axis=-1)[::-1] * f   # top first
                      for k, f in (("air", float(rayleigh_sigma(wl * 1e-9))), ("ozone", float(ozone_sigma(wl))),
                                   ("aerosol", float(atm.aerosol_factor(wl)))))

@@ -101,6 +101,14 @@ def rgb(values) -> np.ndarray:
     return spectrum.linear_srgb(spectrum.xyz(fine * toa, wl) / toa_luminance(wl))
 
 
+def transmittance_rgb(values) -> np.ndarray:
+    """The factor per linear sRGB channel (..., 3) that transmittances T (n_wl, ...) at ``SKY_WAVELENGTHS_NM`` put
+    on the light of the top-of-atmosphere sun: rgb(T) / rgb(1) (:func:`rgb`), exact for light of that spectrum
+    (a cloud lit by the sun, the daylight-white sky), a von Kries-like diagonal for other light (``docs/spectral.md``
+    measures the difference)."""
+    return rgb(values) / rgb(np.ones(SKY_WAVELENGTHS_NM.size))
+
+
 DIFFUSE_TOP_M, DIFFUSE_STEP_M = 30e3, 500.0  # the diffuse light's table (above 30 km the air scatters < 1 %)
 
 
@@ -167,4 +175,5 @@ def _tau_at(tau, ground_m: float, heights) -> list:
     return [float(cum_from_top[int(np.argmin(np.abs(top_down - h)))]) for h in heights[::-1]]
 
 
-__all__ = ["SkyTable", "sky_table", "spectral_sky", "diffuse_source_table", "rgb", "SKY_WAVELENGTHS_NM"]
+__all__ = ["SkyTable", "sky_table", "spectral_sky", "diffuse_source_table", "rgb", "transmittance_rgb",
+           "SKY_WAVELENGTHS_NM"]
