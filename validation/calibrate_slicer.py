@@ -85,8 +85,8 @@ HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") fo
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 # in the cache name of every reference rendered with the air (here and validation/slicer_low_sun.py): bumped when
 # the path tracer's air changes, so that a cached reference of an older air is never read (air2: Eq. 8's weights
-# per level and channel, kernel.medium.air_weights)
-AIR_REFERENCES = "air2"
+# per level and channel, kernel.medium.air_weights; air3: the air's albedo point-wise, kernel/plugins/air_albedo.py)
+AIR_REFERENCES = "air3"
 
 
 def cache_name(tag: str, spec, plan: str) -> str:
