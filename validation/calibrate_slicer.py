@@ -324,8 +324,11 @@ def main(argv=None) -> int:
     check_held_out(TRAIN, HELD_OUT, args.data)
     start = fit_start(args.start)
     low_sun = None if args.low_sun_target_rse is None else (args.low_sun_target_rse, args.low_sun_max_seconds)
+    fits = args.fitted is None and not args.no_fit
+    # the training views: to fit, for their table, or to render; --held-out-only of an earlier fit needs none
     train = load_views(TRAIN, out, cfg, args.data, args.spp, noise=noise, target_rse=args.train_target_rse,
-                       max_seconds=args.max_seconds if args.train_target_rse else None, low_sun=low_sun)
+                       max_seconds=args.max_seconds if args.train_target_rse else None, low_sun=low_sun) \
+        if args.references_only or fits or not args.held_out_only else {}
     if args.references_only:
         load_views(HELD_OUT, out, cfg, args.data, args.spp, target_rse=args.target_rse,
                    max_seconds=args.max_seconds)
