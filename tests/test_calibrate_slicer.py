@@ -91,3 +91,44 @@ def test_no_held_out_field_is_trained_on(monkeypatch):
         cs.check_held_out(cs.TRAIN + [("wrf-supercell-0130", "front")], cs.HELD_OUT, DATA)
     with pytest.raises(SystemExit, match=r"training scene bomex .* held-out field of bomex"):
         cs.check_held_out(cs.TRAIN + [("bomex", "back")], cs.HELD_OUT, DATA)
+
+
+def test_a_reference_with_the_air_is_named_after_the_air_it_was_rendered_with():
+    """Cached references with the air carry AIR_REFERENCES in their name: one rendered before the path tracer's
+    per-channel Eq. 8 (the name without it) is never read as a current one; those without the air keep their
+    names (still valid: the air's change does not touch them)."""
+    import weather_mi as wm
+    from weather_mi.study.runs import StudyConfig
+    vol = wm.OpticalVolume.from_arrays(np.full((4, 4, 4), 1e-3, np.float32), 1.0, wm.phase.henyey_greenstein(0.85),
+                                       ((0.0, 0.0, 1000.0), (4e3, 4e3, 5e3)))
+    cfg = StudyConfig(width=64, height=48)
+    low = cs.view_of(vol, "front" + cs.LOW_SUN, cfg)
+    plain = cs.view_of(vol, "front", cfg)
+    assert cs.cache_name("s_front", plain, "128spp") == "s_front_64x48_128spp_reference.exr"
+    assert cs.cache_name("s_front", low, "rse0.06") == f"s_front_64x48_rse0.06_{cs.AIR_REFERENCES}_reference.exr"
+    assert cs.AIR_REFERENCES != "" and "s_front_64x48_rse0.06_reference.exr" != cs.cache_name("s_front", low, "rse0.06")
+    from dataclasses import replace
+    assert cs.cache_name("s_front", replace(low, seed=1), "128spp").endswith(f"_seed1_{cs.AIR_REFERENCES}_reference.exr")
+
+
+def test_a_fit_starts_where_asked(tmp_path):
+    """--start: FIT_START, the shipped defaults (their terms that are off at FIT_START's values), or an earlier
+    fit's parameters (fitted.json, or a line's "params" of fit_steps.jsonl); anything else refused by name."""
+    from weather_mi.slicing import SliceParams
+    from weather_mi.slicing.calibrate import FIT_START, MULTIPLE_PARAMS
+    assert cs.fit_start("fit-start") == FIT_START
+    shipped = cs.fit_start("defaults")
+    for n in MULTIPLE_PARAMS:
+        assert getattr(shipped, n) == (getattr(SliceParams(), n) or getattr(FIT_START, n))
+    steps = tmp_path / "fit_steps.jsonl"
+    cs.log_step(steps, 0, 0.0125, {"ms_extinction": 0.25151, "diffusion_incidence": 0.7})
+    cs.log_step(steps, 1, 0.0121, {"ms_extinction": 0.3, "diffusion_incidence": 0.65})
+    lines = [json.loads(line) for line in steps.read_text().splitlines()]
+    assert [line["iteration"] for line in lines] == [0, 1] and lines[1]["loss"] == 0.0121
+    earlier = tmp_path / "earlier.json"
+    earlier.write_text(json.dumps(lines[0]["params"]))
+    start = cs.fit_start(str(earlier))
+    assert start.ms_extinction == 0.2515 and start.diffusion_incidence == 0.7
+    assert start.leak_gain == SliceParams().leak_gain  # the parameters it does not name: the shipped ones
+    with pytest.raises(SystemExit, match=r"--start no-such\.json: expected fit-start, defaults or an existing"):
+        cs.fit_start("no-such.json")

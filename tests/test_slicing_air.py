@@ -73,9 +73,11 @@ def test_the_air_adds_no_error_to_the_slicers_cloud_and_the_box_air_is_there_at_
     out with the storm's shadow from its light volume (``slicing.eye_air``).
     The cloud's colour at equal lightness: the slicer's error with the air is its error on the same view without
     any atmosphere in either renderer (the "multiple" model lets the low sun through the back-lit tau ~ 180 ball),
-    within 1.5. With the defaults refitted with real storms (issue 41: trained without air, at high suns) the air
-    adds 1.0-1.2 here (with air / without: 7.31 / 6.28 at 32 spp, 7.75 / 6.60 at 256 spp); with the previous
-    defaults it added none at this size (6.53 / 7.20 at 256 spp). At 48 px both add more (10.4 / 5.3 and
+    or less: with the defaults refitted with the lit face's incidence and low-sun training views with the air
+    (issue 38) the air adds none here: 3.47 with it against 6.72 without at 32 spp. With issue 41's defaults
+    (trained without air, at high suns, before the path tracer's air fixes) it added 1.0-1.2 (with air /
+    without: 7.31 / 6.28 at 32 spp, 7.75 / 6.60 at 256 spp), and the bound was 1.5; with the ones before
+    them it added none at this size (6.53 / 7.20 at 256 spp). At 48 px both add more (10.4 / 5.3 and
     9.2 / 5.6): the slicer's low-sun light with the air needs its own calibration (issue 38). A white sun and sky
     (the slicer before the atmosphere) measured 14.9-15.6 from the truth: the test can tell.
     The clear pixels that cross the box, in the ball's shadow (sky behind: its air's light and the sky dimmed):
@@ -87,7 +89,7 @@ def test_the_air_adds_no_error_to_the_slicers_cloud_and_the_box_air_is_there_at_
     from validation.slicer_air import measure
     m = measure(32, 32)
     assert m["cloud_pixels"] > 50 and m["clear_box_pixels"] > 30
-    assert m["de_slicer"] < m["de_slicer_no_air"] + 1.5, m
+    assert m["de_slicer"] < m["de_slicer_no_air"], m
     assert m["de_white"] > m["de_slicer"] + 6.0, m
     ratio = m["clear_slicer"] / m["clear_ref"]
     assert np.all(np.abs(ratio - [1.0, 1.0, 0.95]) < [0.08, 0.08, 0.16]), ratio

@@ -4,14 +4,15 @@ beside the paper's Table IV modes.
     .venv/bin/python validation/calibrate_slicer.py [-o out/slicer_calibration] [--data ../shared/data]
         [--size 64x48] [--spp 128] [--train-target-rse R] [--target-rse 0.02] [--max-seconds 600] [--iterations 50]
         [--learning-rate 0.15] [--slices 128] [--supersample 2] [--slab-jitter 1]
-        [--no-fit] [--noise-floor] [--start defaults|fit-start] [--fit-slices N] [--fit-supersample N]
-        [--fit-only] [--fitted fitted.json] [--held-out-only]
+        [--no-fit] [--noise-floor] [--start defaults|fit-start|fitted.json] [--fit-slices N] [--fit-supersample N]
+        [--fit-only] [--fitted fitted.json] [--held-out-only] [--low-sun-target-rse R [--low-sun-max-seconds S]]
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them);
    training views at --spp, or to --train-target-rse (the loss clips display colours at 1, so that noisy
    references pull the brightest faces down; measured: it did not help the held-out views, and the shipped
-   defaults were fitted to --spp 128), held-out views to
-   --target-rse:
+   defaults were fitted to --spp 128), the LOW_SUN training views (the air: 5-10x slower to the same noise,
+   cloud RSE 0.13-0.17 at 128 spp) to --low-sun-target-rse if given, held-out views to --target-rse; a
+   reference with the air carries AIR_REFERENCES in its name (one of an older path tracer's air is not read):
    training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
    its condensate x 0.15), the real WRF supercell at 01:00 and 02:00 (wrf/wrfout_quarter_ss_series.nc,
    the held-out one's run at other times) and the WRF plateau at 00:00 (held out: its last time, 09:00,
@@ -24,9 +25,11 @@ beside the paper's Table IV modes.
 2. Fit the model's parameters with Dr.Jit reverse-mode AD on the training views
    (weather_mi.slicing.calibrate), starting near single scattering (--start fit-start: calibrate.FIT_START)
    or from the shipped defaults (--start defaults: a refit after a change of the model, the new parameters
-   at FIT_START's values), in the frames it judges (--slices, the automatic light buffer; 810 s on 2 idle
+   at FIT_START's values), or from an earlier fit (--start fitted.json: continue it), in the frames it judges (--slices, the automatic light buffer; 810 s on 2 idle
    cores at the defaults; --fit-slices / --fit-supersample: the fit's frames coarser than the judged ones,
-   for a busy machine).
+   for a busy machine). Each iteration's loss and the parameters it was measured at are appended to
+   fit_steps.jsonl in the output folder (a fit stopped early keeps its iterates; Adam's last step may overshoot
+   the best one).
    The slicer's frames, in the fit and the evaluation, average each pixel over --supersample^2 points
    (SliceRenderer.frame(supersample=)) with slab offsets --slab-jitter: the references' pixels are
    box-filtered footprint averages, and a pixel-centre sample differs from them at every edge (held-out
@@ -80,6 +83,18 @@ TRAIN = [(s, l) for s in TRAIN_SCENES for l in ("front", "side", "back")] + \
                                    ("wrf-plateau-0000", "front"), ("wrf-plateau-0000", "side"))]
 HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") for l in ("front", "side", "back")]
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+# in the cache name of every reference rendered with the air (here and validation/slicer_low_sun.py): bumped when
+# the path tracer's air changes, so that a cached reference of an older air is never read (air2: Eq. 8's weights
+# per level and channel, kernel.medium.air_weights; air3: the air's albedo point-wise, kernel/plugins/air_albedo.py)
+AIR_REFERENCES = "air3"
+
+
+def cache_name(tag: str, spec, plan: str) -> str:
+    """The EXR name of a cached reference: ``tag``, the size, the sampling plan, the seed (if not 0) and, for a
+    view with the air, AIR_REFERENCES."""
+    seed = "" if spec.seed == 0 else f"_seed{spec.seed}"
+    air = "" if spec.atmosphere is None else f"_{AIR_REFERENCES}"
+    return f"{tag}_{spec.width}x{spec.height}_{plan}{seed}{air}_reference.exr"
 
 
 def field_of(scene: str, data) -> tuple | None:
@@ -125,9 +140,8 @@ def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_
               max_seconds=None) -> Image:
     """The path-traced reference of a view: ``spp`` samples, or with ``target_rse`` passes added until the
     mean relative standard error over cloud pixels reaches it (or ``max_seconds``); cached as EXR."""
-    seed = "" if spec.seed == 0 else f"_seed{spec.seed}"
     plan = f"{spp}spp" if target_rse is None else f"rse{target_rse:g}"
-    path = out / f"{scene}_{lighting}_{spec.width}x{spec.height}_{plan}{seed}_reference.exr"
+    path = out / cache_name(f"{scene}_{lighting}", spec, plan)
     if path.is_file():
         return Image.load(path)
     t = time.perf_counter()
@@ -142,11 +156,12 @@ def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_
     return ref
 
 
-def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, max_seconds=None, noise=None):
+def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, max_seconds=None, noise=None,
+               low_sun=None):
     """{(scene, lighting): TrainingView}; with ``second_seed`` also {(scene, lighting): a second,
     independent reference (seed 1)} for the reference's own noise. ``target_rse``/``max_seconds``: see
-    ``reference``; ``noise`` (a dict) receives each reference's (spp, mean relative standard error over
-    cloud pixels)."""
+    ``reference``; ``low_sun``: (target_rse, max_seconds) of the LOW_SUN views instead; ``noise`` (a dict)
+    receives each reference's (spp, mean relative standard error over cloud pixels)."""
     views, vols, seconds = {}, {}, {}
     for scene, lighting in names:
         if scene not in vols:
@@ -155,14 +170,15 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
             continue
         vol = vols[scene][0]
         spec = view_of(vol, lighting, cfg)
-        ref = reference(out, scene, lighting, vol, spec, spp, target_rse, max_seconds)
+        plan = low_sun if low_sun is not None and lighting.endswith(LOW_SUN) else (target_rse, max_seconds)
+        ref = reference(out, scene, lighting, vol, spec, spp, *plan)
         if noise is not None:
             noise[(scene, lighting)] = (ref.metadata["spp"], (ref.metadata.get("noise") or {}).get("rse_mean"))
         mask = metrics.cloud_mask(eye_transmittance(vol, spec, 128))
         views[(scene, lighting)] = TrainingView(vol, spec, ref.radiance, mask)
         if second_seed:
-            seconds[(scene, lighting)] = reference(out, scene, lighting, vol, replace(spec, seed=1), spp, target_rse,
-                                                 max_seconds).radiance
+            seconds[(scene, lighting)] = reference(out, scene, lighting, vol, replace(spec, seed=1), spp,
+                                                   *plan).radiance
     return (views, seconds) if second_seed else views
 
 
@@ -234,6 +250,27 @@ def table(rows, names, title, noise):
     return "\n".join(lines)
 
 
+def log_step(path: Path, iteration: int, loss: float, params: dict) -> None:
+    """Append one fit iteration (its loss and the parameters it was measured at) to a JSON-lines file: a fit
+    stopped early keeps its iterates (``--start``/``--fitted`` read a line's "params" saved as a fitted.json)."""
+    with open(path, "a") as f:
+        f.write(json.dumps({"iteration": iteration, "loss": loss,
+                            "params": {n: round(v, 4) for n, v in params.items()}}) + "\n")
+
+
+def fit_start(start: str) -> SliceParams:
+    """--start's parameters: "fit-start", "defaults" (the shipped ones, those they leave at 0 at FIT_START's
+    values) or the path of an earlier fit's fitted.json (read_fitted); SystemExit for anything else."""
+    if start == "fit-start":
+        return FIT_START
+    if start == "defaults":
+        return SliceParams().updated(**{n: getattr(FIT_START, n) for n in MULTIPLE_PARAMS
+                                        if getattr(SliceParams(), n) == 0})
+    if not Path(start).is_file():
+        raise SystemExit(f"--start {start}: expected fit-start, defaults or an existing fitted.json")
+    return SliceParams().updated(**read_fitted(Path(start)))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("-o", "--output", default="out/slicer_calibration")
@@ -248,6 +285,11 @@ def main(argv=None) -> int:
     ap.add_argument("--target-rse", type=float, default=0.02,
                     help="held-out references: mean relative standard error over cloud pixels to reach")
     ap.add_argument("--max-seconds", type=float, default=600.0, help="held-out references: time limit each")
+    ap.add_argument("--low-sun-target-rse", type=float, default=None,
+                    help="the LOW_SUN training references (the air: slower, noisier at --spp) to this mean cloud "
+                         "RSE, at most --low-sun-max-seconds each; the other training views as before")
+    ap.add_argument("--low-sun-max-seconds", type=float, default=180.0,
+                    help="with --low-sun-target-rse: time limit of each LOW_SUN training reference")
     ap.add_argument("--iterations", type=int, default=50)
     ap.add_argument("--learning-rate", type=float, default=0.15)
     ap.add_argument("--slices", type=int, default=128)
@@ -262,9 +304,10 @@ def main(argv=None) -> int:
     ap.add_argument("--fit-supersample", type=int, default=None,
                     help="the fit's points per pixel per side (default --supersample)")
     ap.add_argument("--no-fit", action="store_true", help="evaluate the shipped defaults only")
-    ap.add_argument("--start", default="fit-start", choices=("fit-start", "defaults"),
-                    help="where the fit starts: calibrate.FIT_START (near single scattering), or the shipped "
-                         "defaults with the parameters they leave at 0 (terms that are off) at FIT_START's values")
+    ap.add_argument("--start", default="fit-start",
+                    help="where the fit starts: fit-start (calibrate.FIT_START, near single scattering), defaults "
+                         "(the shipped defaults with the parameters they leave at 0, terms that are off, at "
+                         "FIT_START's values), or a fitted.json of an earlier fit (continue it)")
     ap.add_argument("--fit-only", action="store_true", help="stop after the fit (writes fitted.json)")
     ap.add_argument("--fitted", default=None,
                     help="a fitted.json of an earlier fit: evaluate its parameters as \"fitted here\", no fit")
@@ -279,8 +322,13 @@ def main(argv=None) -> int:
     cfg = StudyConfig(width=width, height=height, phase_quality="test")
     noise = {}
     check_held_out(TRAIN, HELD_OUT, args.data)
+    start = fit_start(args.start)
+    low_sun = None if args.low_sun_target_rse is None else (args.low_sun_target_rse, args.low_sun_max_seconds)
+    fits = args.fitted is None and not args.no_fit
+    # the training views: to fit, for their table, or to render; --held-out-only of an earlier fit needs none
     train = load_views(TRAIN, out, cfg, args.data, args.spp, noise=noise, target_rse=args.train_target_rse,
-                       max_seconds=args.max_seconds if args.train_target_rse else None)
+                       max_seconds=args.max_seconds if args.train_target_rse else None, low_sun=low_sun) \
+        if args.references_only or fits or not args.held_out_only else {}
     if args.references_only:
         load_views(HELD_OUT, out, cfg, args.data, args.spp, target_rse=args.target_rse,
                    max_seconds=args.max_seconds)
@@ -292,12 +340,11 @@ def main(argv=None) -> int:
         head = f"Parameters of an earlier fit ({args.fitted}): `{json.dumps(fit)}`."
     elif not args.no_fit:
         t = time.perf_counter()
-        start = FIT_START if args.start == "fit-start" else SliceParams().updated(
-            **{n: getattr(FIT_START, n) for n in MULTIPLE_PARAMS if getattr(SliceParams(), n) == 0})
         fitted, history = calibrate(list(train.values()), start=start.updated(slab_jitter=args.slab_jitter),
                                     iterations=args.iterations, slices=args.fit_slices or args.slices,
                                     light_res=None, learning_rate=args.learning_rate, progress=True,
-                                    supersample=args.fit_supersample or args.supersample)
+                                    supersample=args.fit_supersample or args.supersample,
+                                    on_step=lambda i, loss, p: log_step(out / "fit_steps.jsonl", i, loss, p))
         fit = {n: round(float(getattr(fitted, n)), 4) for n in MULTIPLE_PARAMS}
         head = (f"Fitted on {len(train)} training views in {time.perf_counter() - t:.0f} s: `{json.dumps(fit)}`; "
                 f"loss {history[0]:.4g} -> {history[-1]:.4g} in {len(history)} iterations.")

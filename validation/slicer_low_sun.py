@@ -18,7 +18,8 @@ The slicer's frames are the refined viewer frames the calibration judges (2 x 2 
 jitter 1, 128 slices), with the shipped defaults or the parameters of --fitted. CIEDE2000 and FLIP over the
 cloud pixels (``display.metrics.compare``), and the reference's own noise (its mean relative standard error over
 them). References are cached as EXR in --out (--spp samples, or passes of --spp to --target-rse, at most
---max-seconds each; --references-only renders them alone). The table of issue 38 part 3: --elevations 6
+--max-seconds each; --references-only renders them alone; those with the air named with
+``calibrate_slicer.AIR_REFERENCES``, so that one of an older path tracer's air is never read). The table of issue 38 part 3: --elevations 6
 --lightings front,side,back --spp 64 --target-rse 0.03 --max-seconds 150 (validation/README.md).
 
     python validation/slicer_low_sun.py [--data ../shared/data] [--size 64x48] [--spp 64] [--elevations 4,8]
@@ -47,6 +48,7 @@ from weather_mi.optics.air.inside import with_box_air  # noqa: E402
 from weather_mi.optics.volume import optical_volume  # noqa: E402
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
 from weather_mi.study.runs import DATA_SCENES, StudyConfig, eye_transmittance, low_sun_view  # noqa: E402
+from validation.calibrate_slicer import cache_name, read_fitted  # noqa: E402
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
@@ -63,7 +65,7 @@ def reference(out: Path, tag: str, spec, vol, hyd, spp: int, target_rse=None, ma
     ``target_rse`` passes of ``spp`` added until the mean relative standard error over the cloud pixels
     reaches it (or ``max_seconds``)."""
     plan = f"{spp}spp" if target_rse is None else f"rse{target_rse:g}"
-    path = out / f"{tag}_{spec.width}x{spec.height}_{plan}_reference.exr"
+    path = out / cache_name(tag, spec, plan)
     if path.is_file():
         return Image.load(path)
     t = time.perf_counter()
@@ -102,7 +104,6 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     params = SliceParams(slab_jitter=1.0)
     if args.fitted is not None:
-        from validation.calibrate_slicer import read_fitted
         params = params.updated(**read_fitted(Path(args.fitted)))
     rows = []
     for name in args.scenes.split(","):

@@ -46,6 +46,11 @@ def _to_free(v: float, kind: str) -> float:
     return math.log(max(v, 1e-6))
 
 
+def _plain(t: float, kind: str) -> float:
+    """The parameter of a free coordinate (the inverse of ``_to_free``)."""
+    return 1 / (1 + math.exp(-t)) if kind == "unit" else math.exp(t)
+
+
 def _from_free(dr, x, kind: str):
     return dr.rcp(1 + dr.exp(-x)) if kind == "unit" else dr.exp(x)
 
@@ -53,9 +58,11 @@ def _from_free(dr, x, kind: str):
 def calibrate(views: list[TrainingView], mode: SliceMode = MODES["per-species/multiple"],
               start: SliceParams = FIT_START, names: dict = MULTIPLE_PARAMS, iterations: int = 40,
               learning_rate: float = 0.1, slices: int = 64, light_res: int = 64, progress: bool = False,
-              supersample: int = 1):
+              supersample: int = 1, on_step=None):
     """Fit the parameters ``names`` (name -> "unit" | "positive") of ``mode`` to the views, their frames
-    with ``supersample`` x ``supersample`` points per pixel (``SliceRenderer.frame``). Returns (fitted
+    with ``supersample`` x ``supersample`` points per pixel (``SliceRenderer.frame``). ``on_step(iteration,
+    loss, {name: value})``, if given, receives each iteration's loss with the parameters it was measured at
+    (before that iteration's step: a long fit can be stopped and its best iterate kept). Returns (fitted
     SliceParams, loss per iteration)."""
     import drjit as dr
     import mitsuba as mi
@@ -90,11 +97,12 @@ def calibrate(views: list[TrainingView], mode: SliceMode = MODES["per-species/mu
             total += float(loss[0])
             grads += np.array([float(dr.grad(xi)[0]) for xi in x])
         history.append(total / len(views))
+        if on_step is not None:
+            on_step(it, history[-1], {n: _plain(float(t), k) for t, (n, k) in zip(theta, names.items())})
         g = grads / len(views)
         m1 = 0.9 * m1 + 0.1 * g
         m2 = 0.999 * m2 + 0.001 * g * g
         theta -= learning_rate * (m1 / (1 - 0.9 ** (it + 1))) / (np.sqrt(m2 / (1 - 0.999 ** (it + 1))) + 1e-8)
         theta = np.clip(theta, -8.0, 3.0)
-    plain = lambda t, k: 1 / (1 + math.exp(-t)) if k == "unit" else math.exp(t)  # noqa: E731
-    fitted = start.updated(**{n: plain(float(t), k) for t, (n, k) in zip(theta, names.items())})
+    fitted = start.updated(**{n: _plain(float(t), k) for t, (n, k) in zip(theta, names.items())})
     return fitted, history
