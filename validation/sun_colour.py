@@ -2,6 +2,7 @@
 direct sunlight of Bird & Riordan's SPCTRL2 (pvlib) at that sun; and at midday against SPCTRL2's sun and sky.
 
     .venv/bin/python validation/sun_colour.py [--size 160x120] [--spp 64] [--elevation 4] [--midday 60]
+        [--spectral] [--cases none:sunsky,clear:air,clear:sunsky] [--camera-distance-km KM]
 
 The scene of ``weather-mi render --demo supercell --sun-elevation 4 --sun-azimuth 260 --camera-azimuth 290``
 (its defaults otherwise) rendered with ``--atmosphere none`` (the sky model), and ``--atmosphere clear`` (the
@@ -14,6 +15,13 @@ height the lit cloud's light comes from (median over its pixels of where the eye
 our air's direct sun there, and SPCTRL2's with the standard pressure and the aerosol column above that height.
 At ``--midday`` (sun elevation, deg) the reference is SPCTRL2's global horizontal irradiance (direct plus
 diffuse: sun and sky) at sea level and 850 hPa.
+
+With the air, for the same lit pixels: their colour without the eye rays' air outside the box (the render
+before ``display.aerial.with_eye_air``), and an independent model of the eye path: the Rayleigh transmittance
+(Beer-Lambert, Bodhaine et al. 1999 Eq. 29 and the U.S. Standard Atmosphere 1976 written out here) from the
+camera to where each lit pixel's ray reaches optical depth 1, applied to the SPCTRL2 reference (molecules only:
+no ozone, aerosol or light scattered into the path, so a bound on the yellowing, not a prediction).
+``--spectral``: Mitsuba's spectral variant and the eye rays' air per wavelength (as ``render --spectral``).
 """
 from __future__ import annotations
 
