@@ -100,3 +100,28 @@ def test_lit_cloud_pixels_and_their_height():
     np.testing.assert_allclose(visible_height_m(spec, vol, mask, step_m=10.0), 2900.0, atol=15.0)
     with pytest.raises(ValueError, match="opaque"):
         lit_cloud_pixels(rad, np.ones((4, 5)))
+
+
+def test_eye_path_rayleigh_model_of_the_headline():
+    """``validation/sun_colour.py``'s independent eye-path model: its standard atmosphere's molecules hold the
+    hydrostatic column (p(0) - p(20 km)) / (m g) with p(20 km) = 5474.9 Pa (U.S. Standard Atmosphere 1976's
+    table), its written-out Eq. 29 is Bodhaine's definition (Eq. 2) within 0.1 %, and a level path at 1.5 km
+    of 30 km has exp(-sigma n L) (the flat-ground trapezoid of the headline against the closed form)."""
+    from validation.sun_colour import (WAVELENGTHS_NM, eye_path_rayleigh_transmittance, rayleigh_cross_section_cm2,
+                                       us_standard_number_density_m3)
+    from weather_mi.optics.rayleigh import cross_section_physical_m2
+    z = np.linspace(0.0, 20000.0, 200001)
+    column = np.trapezoid(us_standard_number_density_m3(z), z)
+    m_air = 28.9644e-3 / 6.02214076e23  # kg per molecule, the 1976 standard's molar mass
+    assert column == pytest.approx((101325.0 - 5474.9) / (m_air * 9.80665), rel=2e-3)
+    lam = np.array([400.0, 450.0, 550.0, 650.0, 750.0])
+    np.testing.assert_allclose(rayleigh_cross_section_cm2(lam), 1e4 * cross_section_physical_m2(lam * 1e-9), rtol=1e-3)
+    vol = wm.OpticalVolume.from_arrays(beta_ext=np.full((4, 4, 4), 0.01, np.float32), albedo=1.0,
+                                       phase=wm.phase.henyey_greenstein(0.5),
+                                       bbox=((28000.0, -2000.0, 1000.0), (32000.0, 2000.0, 2000.0)))
+    camera = wm.Camera(origin=(0.0, 0.0, 1500.0), target=(30000.0, 0.0, 1500.0), fov=1.0)
+    spec = wm.SceneSpec(camera=camera, sky=None, ground=None, width=1, height=1)
+    t = eye_path_rayleigh_transmittance(spec, vol, np.ones((1, 1), bool))
+    length = 28000.0 + 75.0  # optical depth 1 (0.01 /m): 100 m into the box, at the second 50 m step's middle
+    expected = np.exp(-rayleigh_cross_section_cm2(WAVELENGTHS_NM) * 1e-4 * us_standard_number_density_m3(1500.0) * length)
+    np.testing.assert_allclose(t, expected, rtol=1e-4)

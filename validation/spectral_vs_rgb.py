@@ -18,6 +18,8 @@ display exposure for all (A's):
 * the same two over 4 x 4 pixel blocks (radiance averaged; cloud blocks: A's mean transmittance < 1/2), and
   between the cloud's mean colours (all cloud pixels averaged: what is left there is the modes' systematic
   difference in the cloud's overall colour);
+* the cloud's mean colour of the RGB mode against A and against B alone (a firefly in one spectral render
+  moves the A+B mean and the noise figure, not both of these);
 * lit dE: CIEDE2000 at equal lightness between the two modes' lit-cloud chromaticities (the brightest 10%
   of the opaque cloud pixels, ``display.cloud_colour``, chosen on B), and its noise part (A against B);
 * ms/spp (each mode's seconds per sample per pixel, kernels compiled beforehand) and the spectral mode's
@@ -113,6 +115,7 @@ def figures(rgb: dict, a: dict, b: dict) -> dict:
                                        blocks(a["transmittance"]) < CLOUD_T),
             "dE_mean_colour": mean_colour_de(ref, rgb["radiance"], exposure, cloud),
             "dE_mean_colour_noise": mean_colour_de(a["radiance"], b["radiance"], exposure, cloud),
+            "dE_mean_colour_ab": tuple(mean_colour_de(x["radiance"], rgb["radiance"], exposure, cloud) for x in (a, b)),
             "lit_dE": delta_e_equal_lightness(xy_r, lit_xy(ref, lit)), "lit_dE_noise": delta_e_equal_lightness(xy_b, xy_a),
             "lit_xy_spectral": lit_xy(ref, lit), "lit_xy_rgb": xy_r,
             "rse_rgb": rgb["rse"], "rse_spectral": a["rse"],
@@ -162,9 +165,9 @@ def main(argv=None):
           "percentile, RGB against the spectral A+B mean (and against A); noise floor = spectral A against B; lit "
           "dE = lit cloud's chromaticity at equal lightness; cost = spectral/RGB time to the same luminance RSE")
     print("| scene | lighting | sun elev | pixels | dE RGB vs A+B | dE RGB vs A | dE noise A vs B | 4x4 blocks: dE RGB vs "
-          "A+B | 4x4 blocks: dE noise | lit dE | lit dE noise "
+          "A+B | 4x4 blocks: dE noise | mean colour: dE RGB vs A+B | its noise | RGB vs A / vs B | lit dE | lit dE noise "
           "| lit xy spectral | lit xy RGB | RSE RGB | RSE spectral | ms/spp RGB | ms/spp spectral | cost |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---" * 21 + "|")
     for name in args.scenes.split(","):
         vol, _ = load_scene(name, cfg)
         for lighting in args.lightings.split(","):
@@ -178,6 +181,7 @@ def main(argv=None):
                       f"| {r['dE_rgb_blocks'][0]:.2f} / {r['dE_rgb_blocks'][1]:.2f} "
                       f"| {r['dE_noise_blocks'][0]:.2f} / {r['dE_noise_blocks'][1]:.2f} "
                       f"| {r['dE_mean_colour']:.2f} | {r['dE_mean_colour_noise']:.2f} "
+                      f"| {r['dE_mean_colour_ab'][0]:.2f} / {r['dE_mean_colour_ab'][1]:.2f} "
                       f"| {r['lit_dE']:.2f} | {r['lit_dE_noise']:.2f} "
                       f"| ({r['lit_xy_spectral'][0]:.3f}, {r['lit_xy_spectral'][1]:.3f}) "
                       f"| ({r['lit_xy_rgb'][0]:.3f}, {r['lit_xy_rgb'][1]:.3f}) | {r['rse_rgb']:.4f} | {r['rse_spectral']:.4f} "

@@ -34,6 +34,12 @@ def visible_height_m(spec, vol, mask: np.ndarray, tau: float = 1.0, step_m: floa
     """Height (m) at which each eye ray of the pixels in ``mask`` (H, W) reaches optical depth ``tau`` in
     ``vol``'s extinction (nearest voxel, steps of ``step_m``): where the light those pixels show comes
     from, about. NaN for a ray that does not reach it."""
+    return visible_points_m(spec, vol, mask, tau, step_m)[:, 2]
+
+
+def visible_points_m(spec, vol, mask: np.ndarray, tau: float = 1.0, step_m: float = 50.0) -> np.ndarray:
+    """The points (N, 3), m, scene coordinates, where the eye rays of the pixels in ``mask`` (H, W; row-major
+    order) reach optical depth ``tau`` (as :func:`visible_height_m`); NaN rows where a ray does not."""
     from ..slicing.geometry import film_rays
     if np.shape(mask) != (spec.height, spec.width):
         raise ValueError(f"the mask is {np.shape(mask)}, the scene's image (height, width) {(spec.height, spec.width)}")
@@ -42,7 +48,7 @@ def visible_height_m(spec, vol, mask: np.ndarray, tau: float = 1.0, step_m: floa
     lo, hi = (np.asarray(b, np.float64) for b in vol.bbox)
     beta = np.asarray(vol.beta_total, np.float32)
     n = np.array(beta.shape[::-1])  # x, y, z
-    out = np.full(iy.size, np.nan)
+    out = np.full((iy.size, 3), np.nan)
     for k in range(iy.size):
         o, d = origins[k], dirs[k]
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -56,7 +62,7 @@ def visible_height_m(spec, vol, mask: np.ndarray, tau: float = 1.0, step_m: floa
         depth = np.cumsum(beta[i[:, 2], i[:, 1], i[:, 0]]) * step_m
         j = np.searchsorted(depth, tau)
         if j < t.size:
-            out[k] = p[j, 2]
+            out[k] = p[j]
     return out
 
 
@@ -82,5 +88,5 @@ def delta_e_at_white(xyz_a, xyz_b, white_y: float) -> float:
     return float(colour.delta_E(lab[0], lab[1], method="CIE 2000"))
 
 
-__all__ = ["lit_cloud_pixels", "lit_cloud_rgb", "visible_height_m", "xy_of_linear_srgb", "delta_e_equal_lightness",
-           "delta_e_at_white"]
+__all__ = ["lit_cloud_pixels", "lit_cloud_rgb", "visible_height_m", "visible_points_m", "xy_of_linear_srgb",
+           "delta_e_equal_lightness", "delta_e_at_white"]
