@@ -75,11 +75,16 @@ def test_the_spectral_envmap_lights_a_cloud_free_ground_as_disort(variant_restor
     assert r0[2] < 0.85 * ref[2], r0 / ref
 
 
-def test_spectral_render_has_the_airs_sky_and_the_rgb_modes(tmp_path, variant_restored):
+def test_spectral_render_has_the_airs_sky_and_the_rgb_modes(tmp_path, variant_restored, monkeypatch):
     """``render --spectral`` with the atmosphere's defaults (``--sky air``): the sky above the demo cumulus is
     blue sky, not black (main before: 0), and within CIEDE2000 2 of the RGB mode's sky (the same air, per
-    wavelength here, at 650/550/450 nm there); the EXR's X, Y, Z follow its R, G, B."""
+    wavelength here, at 650/550/450 nm there); the EXR's X, Y, Z follow its R, G, B. The cloud's phase tables by
+    wavelength at "test" quality (the sky is checked; "default" takes 2.5 minutes to build on a cold cache)."""
     from weather_mi.cli import commands as cli
+    from weather_mi.optics.phase import spectral_tables
+    own = spectral_tables.species_stack
+    monkeypatch.setattr(spectral_tables, "species_stack",
+                        lambda sp, mode="per_species", quality="default", *a, **k: own(sp, mode, "test", *a, **k))
     from weather_mi.display.cloud_colour import delta_e_at_white
     from weather_mi.io.image import Image
     from weather_mi.optics.spectrum import xyz_of_linear_srgb
