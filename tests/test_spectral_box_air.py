@@ -60,11 +60,7 @@ def _tau_kernel(variant: str, wavelengths_nm=None, slant: float = 0.0, tracker: 
         tr = np.array(exact_transmittance(integ._tk, ray, t_end, mi.Bool(True)))
     else:
         n = 1 << 14
-        big = mi.Ray3f(mi.Point3f(*(dr_repeat(c, n) for c in (ray.o.x, ray.o.y, ray.o.z))),
-                       mi.Vector3f(*(dr_repeat(c, n) for c in (ray.d.x, ray.d.y, ray.d.z))))
-        big.wavelengths = mi.Spectrum(*(mi.Float(np.full(4 * n, w, np.float32)) for w in wavelengths_nm))
-        sampler = mi.load_dict({"type": "independent"})
-        sampler.seed(7, 4 * n)
+        big, sampler = _repeated_rays(ray, wavelengths_nm, n, seed=7)
         tr = np.array(ratio_tracking(integ._tk, big, dr_repeat(t_end, n), sampler, mi.Bool(True)))
         return -np.log(tr.reshape(tr.shape[0], -1).mean(axis=1)), tr.reshape(tr.shape[0], -1).std(axis=1) / math.sqrt(4 * n)
     return -np.log(tr.reshape(tr.shape[0], -1).mean(axis=1))
@@ -73,6 +69,17 @@ def _tau_kernel(variant: str, wavelengths_nm=None, slant: float = 0.0, tracker: 
 def dr_repeat(a, n):
     import mitsuba as mi
     return mi.Float(np.tile(np.asarray(a, np.float32), n))
+
+
+def _repeated_rays(ray, wavelengths_nm, n: int, seed: int):
+    """(``ray``'s 4 lanes each repeated ``n`` times with ``wavelengths_nm``, an independent sampler for them)."""
+    import mitsuba as mi
+    big = mi.Ray3f(mi.Point3f(*(dr_repeat(c, n) for c in (ray.o.x, ray.o.y, ray.o.z))),
+                   mi.Vector3f(*(dr_repeat(c, n) for c in (ray.d.x, ray.d.y, ray.d.z))))
+    big.wavelengths = mi.Spectrum(*(mi.Float(np.full(4 * n, w, np.float32)) for w in wavelengths_nm))
+    sampler = mi.load_dict({"type": "independent"})
+    sampler.seed(seed, 4 * n)
+    return big, sampler
 
 
 def test_optical_depth_at_the_rgb_wavelengths_is_the_rgb_mediums(variant_restored):
@@ -292,11 +299,7 @@ def test_free_flights_through_a_cloud_in_the_air_escape_per_lane(variant_restore
     integ = _integrator(SPECTRAL, _cloud_in_air(CLOUD_BETA))
     ray, t_end = _vertical_rays(SPECTRAL, LANES_NM, 0.4)
     n = 1 << 14
-    big = mi.Ray3f(mi.Point3f(*(dr_repeat(c, n) for c in (ray.o.x, ray.o.y, ray.o.z))),
-                   mi.Vector3f(*(dr_repeat(c, n) for c in (ray.d.x, ray.d.y, ray.d.z))))
-    big.wavelengths = mi.Spectrum(*(mi.Float(np.full(4 * n, w, np.float32)) for w in LANES_NM))
-    sampler = mi.load_dict({"type": "independent"})
-    sampler.seed(11, 4 * n)
+    big, sampler = _repeated_rays(ray, LANES_NM, n, seed=11)
     found, _, w = delta_tracking(integ._tk, big, dr_repeat(t_end, n), sampler, mi.Bool(True), mi.Spectrum(1.0))
     escaped = np.array(w) * ~np.array(found, bool)[None, :]
     mean, se = escaped.mean(axis=1), escaped.std(axis=1) / math.sqrt(escaped.shape[1])

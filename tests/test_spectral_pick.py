@@ -20,6 +20,17 @@ def _hg(g, mu):
     return (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * mu) ** 1.5)
 
 
+
+def _interactions(mi, rng, n: int, lanes_nm):
+    """``n`` medium interactions at random points of the unit cube, looking down, with the 4 lanes' wavelengths."""
+    import drjit as dr
+    mei = dr.zeros(mi.MediumInteraction3f, n)
+    mei.p = mi.Point3f(*(mi.Float(rng.random(n).astype(np.float32)) for _ in range(3)))
+    mei.wi = mi.Vector3f(0, 0, -1)
+    mei.sh_frame = mi.Frame3f(mei.wi)
+    mei.wavelengths = mi.Spectrum(*(mi.Float(np.full(n, v, np.float32)) for v in lanes_nm))
+    return mei
+
 def test_16bit_codes_round_to_a_10_bit_mantissa():
     """decode16(encode16(x)) within 2^-11 relative of x from 2^-38 to 3e7 1/sr (a raindrop's forward peak is 1.4e7),
     0 and values below 2^-39 as 0; negative, infinite or too large values a ValueError."""
@@ -56,7 +67,6 @@ def test_each_lane_reads_one_node_with_its_linear_weight(variant_restored):
     value is the mixture at its lower or its upper wavelength node (numpy, linear in v; within the codes'
     2^-11), the upper one as often as its linear weight (4 binomial sigma), and the mean is the bilinear
     value of the "linear" plugin (4 se); the pdf is the "linear" plugin's, float for float."""
-    import drjit as dr
     import mitsuba as mi
     wm.set_variant(SPECTRAL)
     w = np.array([3.0, 1.0, 0.5], np.float32)
@@ -64,11 +74,7 @@ def test_each_lane_reads_one_node_with_its_linear_weight(variant_restored):
     lanes = np.array([361.0, 437.5, 512.0, 829.0])
     n = 40000
     rng = np.random.default_rng(5)
-    mei = dr.zeros(mi.MediumInteraction3f, n)
-    mei.p = mi.Point3f(*(mi.Float(rng.random(n).astype(np.float32)) for _ in range(3)))
-    mei.wi = mi.Vector3f(0, 0, -1)
-    mei.sh_frame = mi.Frame3f(mei.wi)
-    mei.wavelengths = mi.Spectrum(*(mi.Float(np.full(n, v, np.float32)) for v in lanes))
+    mei = _interactions(mi, rng, n, lanes)
     cos = -0.6
     wo = mi.Vector3f(float(np.sqrt(1 - cos ** 2)), 0.0, cos)
     ctx = mi.PhaseFunctionContext(None)
@@ -97,17 +103,12 @@ def test_each_lane_reads_one_node_with_its_linear_weight(variant_restored):
 def test_picked_sampling_weights_have_mean_one_at_every_wavelength(variant_restored):
     """Directions drawn from the wavelengths' mean density with the values picked per lane: the weights
     value / pdf average to 1 at each wavelength (every wavelength's table is normalised, the pick is unbiased)."""
-    import drjit as dr
     import mitsuba as mi
     wm.set_variant(SPECTRAL)
     _, _, _, picked = _plugins(mi, np.array([3.0, 1.0, 0.5], np.float32))
     n = 200_000
     rng = np.random.default_rng(1)
-    mei = dr.zeros(mi.MediumInteraction3f, n)
-    mei.p = mi.Point3f(*(mi.Float(rng.random(n).astype(np.float32)) for _ in range(3)))
-    mei.wi = mi.Vector3f(0, 0, -1)
-    mei.sh_frame = mi.Frame3f(mei.wi)
-    mei.wavelengths = mi.Spectrum(*(mi.Float(np.full(n, v)) for v in (380.0, 487.5, 580.0, 780.0)))
+    mei = _interactions(mi, rng, n, (380.0, 487.5, 580.0, 780.0))
     u = rng.random((3, n))
     _, weight, _ = picked.sample(mi.PhaseFunctionContext(None), mei, mi.Float(u[0]), mi.Point2f(u[1], u[2]))
     np.testing.assert_allclose(np.array(weight).mean(axis=1), 1.0, atol=0.01)
