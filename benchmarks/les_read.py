@@ -8,14 +8,13 @@ wall-clock assert in tests/test_les.py; speed goals live here).
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-from bench_timing import timed  # noqa: E402 (benchmarks/, the script's folder, is on sys.path)
+from bench_timing import goal_row, timed  # noqa: E402 (benchmarks/, the script's folder, is on sys.path)
 
 GOAL_S = 3.0
 FILES = ("bomex_50m.txt", "rico_20m.txt")
@@ -34,11 +33,8 @@ def main(argv=None) -> int:
         if not path.is_file():
             print(f"| {name} | absent ({path}) | | | | | |")
             continue
-        base = statistics.median(timed(lambda: path.read_text().split(), args.rounds))
-        read = timed(lambda: open_les(path), args.rounds)
-        med = statistics.median(read)
-        print(f"| {name} | {base:.3f} | {med:.3f} | {min(read):.3f} | {med / base:.1f}x | {GOAL_S:g} | "
-              f"{'yes' if med < GOAL_S else 'NO'} |")
+        print(goal_row(name, timed(lambda: path.read_text().split(), args.rounds),
+                       timed(lambda: open_les(path), args.rounds), GOAL_S))
     return 0
 
 
