@@ -84,7 +84,7 @@ def _satellite(args, resolution, nc, exr, png, ckpt) -> Path:
     if args.rgb:
         return _satellite_rgb(args, hyd, vol, resolution, nc, exr, png, ckpt, atm)
     scene = si.satellite_scene(hyd, vol, args.satellite, args.band or "0.64", resolution, rayleigh=args.rayleigh,
-                               ground_albedo=DEFAULT_GROUND_ALBEDO if args.ground_albedo is None else args.ground_albedo,
+                               ground_albedo=args.ground_albedo,
                                seed=args.seed, atmosphere=atm, **surface_kw(args))
     del vol, hyd  # the scene holds the band's volume (its own albedo) and air: the RGB albedo and rho_air go
     w, h = scene.view.size

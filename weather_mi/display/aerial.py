@@ -62,6 +62,8 @@ def eye_air(spec, vol, sky_air: bool, table=None, samples: int | None = None, sp
     samples = SAMPLES if samples is None else int(samples)
     from ..slicing.geometry import camera_rays, ray_box
     atm, sun = spec.atmosphere, spec.sun
+    if spectral and table is not None:
+        raise ValueError("eye_air: a sun table is the RGB mode's (650/550/450 nm); the spectral terms make their own")
     ch = SpectralChannels(spec, sky_air) if spectral else RgbChannels(spec, sky_air, table)
     table, ms = ch.sun_table, ch.diffuse  # ms: the outside air's multiple scattering (--sky air)
     o, d = (a.reshape(-1, 3).astype(np.float64) for a in camera_rays(spec))

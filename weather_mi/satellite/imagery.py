@@ -40,14 +40,14 @@ class SatelliteScene:
 
 
 def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east", band_name: str = "0.64",
-                    resolution_km: float = 1.0, *, rayleigh: bool = False, ground_albedo=DEFAULT_GROUND_ALBEDO,
+                    resolution_km: float = 1.0, *, rayleigh: bool = False, ground_albedo=None,
                     seed: int = 0, max_vza_deg: float = 80.0, sun_time=None, rgb: bool = False,
                     surface: str = "file", wind_m_s: float | None = None, atmosphere=None,
                     channel_bands=None) -> SatelliteScene:
     """The satellite's view of ``hyd`` (its place and valid time) with ``vol``'s optics in the band;
     ``sun_time`` (UTC): the sun of another time over the same clouds (a study of the sun's elevation);
     ``rgb``: the satellite's true-colour bands in one render (``bands.rgb_volume``; ``band_name`` unused;
-    ``ground_albedo`` one value or one per channel), without molecules (their extinction is not grey);
+    ``ground_albedo`` one value or one per channel; None: ``bands.DEFAULT_GROUND_ALBEDO``), without molecules (their extinction is not grey);
     ``surface``, ``wind_m_s``: the ground under a domain with its own (``scene.surface``: "file", each
     column's surface in the band with the sea's glint; "albedo"; "flat": ``ground_albedo`` everywhere);
     ``atmosphere`` (``optics.air.Atmosphere``): the clear 1-D atmosphere in the band(s) inside the box (from
@@ -105,7 +105,8 @@ def satellite_scene(hyd, vol: OpticalVolume, sat: str | Satellite = "goes-east",
     cam = Camera.orthographic(center=((x0 + x1) / 2, (y0 + y1) / 2, top + 1000.0), direction=(0.0, 0.0, -1.0),
                               width=extent, height=extent)  # nominal: the rays come from the table
     w, h = view.size
-    spec = SceneSpec(camera=cam, sun=sun, sky=None, ground=Ground(albedo=ground_albedo), width=w, height=h,
+    albedo = DEFAULT_GROUND_ALBEDO if ground_albedo is None else ground_albedo  # the sea's, where not given
+    spec = SceneSpec(camera=cam, sun=sun, sky=None, ground=Ground(albedo=albedo), width=w, height=h,
                      seed=seed, rays=view.rays, atmosphere=atmosphere)
     return SatelliteScene(spec, bvol, view, sat, b, sun_meta, bands, place.source)
 
