@@ -81,8 +81,8 @@ def luminance_rse(means, cloud: np.ndarray) -> float:
     n = len(means)
     if n < 2:
         raise ValueError(f"luminance_rse needs at least 2 passes, got {n}")
-    y = np.stack([(i + 1) * np.asarray(m, np.float64) @ Y_OF_LINEAR_SRGB for i, m in enumerate(means)])
-    y[1:] -= y[:-1].copy()  # pass i = (i + 1) mean_i - i mean_(i-1), in Y (linear)
+    from .colour_noise import pass_images
+    y = pass_images(means)[..., :3] @ Y_OF_LINEAR_SRGB  # pass i = (i + 1) mean_i - i mean_(i-1), in Y (linear)
     ym, se = y.mean(axis=0), y.std(axis=0, ddof=1) / np.sqrt(n)
     ok = np.asarray(cloud, bool) & (ym > 0)
     return float(np.mean(se[ok] / ym[ok])) if np.any(ok) else float("nan")
