@@ -96,16 +96,32 @@ def phase_cost(lanes: int, rounds: int) -> None:
         print(f"{name}: eval_pdf + sample {np.median(ts):.0f} ns per lane (rounds: {', '.join(f'{t:.0f}' for t in ts)})")
 
 
-def timed_render(spec, vol, spp: int, passes: int, variant: str, cloud) -> dict:
-    """One render: wall and CPU seconds, the luminance RSE and the channel-mean RSE."""
+def timed_render(spec, vol, spp: int, passes: int, variant: str, cloud, firefly_k: float) -> dict:
+    """One render: wall and CPU seconds, the luminance RSE, the channel-mean RSE and the colour noise
+    (``reference.colour_noise``: per-channel RSE, chroma se, fireflies); the render's arrays freed after."""
+    from weather_mi.reference.colour_noise import colour_noise
     from weather_mi.reference.estimates import luminance_rse
     from weather_mi.reference.render import render_reference
     means = []
     wall, cpu = time.perf_counter(), time.process_time()
     img = render_reference(spec, vol, spp=spp, passes=passes, progress=False, variant=variant,
                            on_pass=lambda im: means.append(np.asarray(im.radiance, np.float64).copy()))
-    return {"wall": time.perf_counter() - wall, "cpu": time.process_time() - cpu, "rse": luminance_rse(means, cloud),
-            "rse_ch": float(img.metadata["noise"]["rse_mean"])}
+    out = {"wall": time.perf_counter() - wall, "cpu": time.process_time() - cpu, "rse": luminance_rse(means, cloud),
+           "rse_ch": float(img.metadata["noise"]["rse_mean"]), **colour_noise(means, cloud, firefly_k)}
+    del img, means
+    release_kernel_memory()
+    return out
+
+
+def release_kernel_memory() -> None:
+    """Frees what a render left behind: Python's garbage (the scene, its grids) and Dr.Jit's cached allocations,
+    so that the next mode's render starts from the same memory."""
+    import gc
+
+    import drjit as dr
+    gc.collect()
+    dr.sync_thread()
+    dr.flush_malloc_cache()
 
 
 def main(argv=None):
@@ -136,7 +152,11 @@ def main(argv=None):
     ap.add_argument("--medium-lookups", action="store_true",
                     help="also both modes with the trackers' medium lookups per step (no texel interpolant, no split "
                          "RGB flights, the box's air's optical depth per empty cube)")
+    ap.add_argument("--mean-density", action="store_true",
+                    help="also the spectral mode with directions from the phase's channel-mean density (before chroma38)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
+    ap.add_argument("--firefly-k", type=float, default=10.0,
+                    help="a firefly: a cloud pixel with one pass > k x the median of its passes in a channel")
     args = ap.parse_args(argv)
     if args.phase:
         return phase_cost(args.lanes, args.rounds)
@@ -159,44 +179,86 @@ def main(argv=None):
     if args.medium_lookups:
         modes["rgb, medium lookups"] = "llvm_ad_rgb"
         modes["spectral, medium lookups"] = "llvm_ad_spectral"
+    if args.mean_density:
+        modes["spectral, mean density"] = "llvm_ad_spectral"
     if args.without_box_air:
         modes["rgb, no box air"] = "llvm_ad_rgb"
         modes["spectral, no box air"] = "llvm_ad_spectral"
     for mode, variant in modes.items():  # compile (and build the spectral tables) first, as measured: the kernels
-        with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")), \
-                linear(mode.endswith("linear")), phase_twice(mode.endswith("twice")), \
-                medium_lookups(mode.endswith("lookups")):  # of 1 spp differ
+        with patched(mode):                # of 1 spp differ
             render_reference(replace(spec, seed=99), vol, spp=args.spp, passes=args.passes, progress=False,
                              variant=variant)
+        release_kernel_memory()
     print(f"demo supercell, {args.lighting} view, sun {args.elevation:g} deg, {w}x{h}, {args.spp} spp in "
-          f"{args.passes} passes, --atmosphere {args.atmosphere}, {int(cloud.sum())} cloud pixels")
-    print("| round | mode | wall s | CPU s | luminance RSE | CPU time ratio to RGB | time to the same RSE over RGB's "
-          "(wall, CPU) |")
-    print("|---|---|---|---|---|---|---|")
-    keys = ("wall", "cpu") + (("ch",) if args.channel_rse else ())
+          f"{args.passes} passes, --atmosphere {args.atmosphere}, {int(cloud.sum())} cloud pixels; fireflies: cloud "
+          f"pixels with one pass > {args.firefly_k:g} x the median of its passes in a channel")
+    print("| round | mode | wall s | CPU s | luminance RSE | RSE R / G / B | chroma se (u'v') | fireflies | CPU time ratio "
+          "to RGB | time to the same luminance RSE over RGB's (wall, CPU) | to the same chroma se (CPU) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    keys = ("wall", "cpu", "chroma", "R", "G", "B") + (("ch",) if args.channel_rse else ())
     ratios = {m: {k: [] for k in keys} for m in modes if m != "rgb"}
+    fireflies = {m: [] for m in modes}
     for r in range(args.rounds):
         got = {}
         for mode, variant in (list(modes.items()) if r % 2 == 0 else list(modes.items())[::-1]):  # alternate
-            with three_nodes(mode.endswith("3 nodes")), no_box_air(mode.endswith("no box air")), \
-                    linear(mode.endswith("linear")), phase_twice(mode.endswith("twice")), \
-                    medium_lookups(mode.endswith("lookups")):
-                got[mode] = timed_render(replace(spec, seed=r), vol, args.spp, args.passes, variant, cloud)
+            with patched(mode):
+                got[mode] = timed_render(replace(spec, seed=r), vol, args.spp, args.passes, variant, cloud,
+                                         args.firefly_k)
         b = got["rgb"]
         for mode, g in got.items():
+            fireflies[mode].append(g["fireflies"])
             if mode != "rgb":
                 for k in ("wall", "cpu"):
                     ratios[mode][k].append(g[k] * g["rse"] ** 2 / (b[k] * b["rse"] ** 2))
+                ratios[mode]["chroma"].append(g["cpu"] * g["chroma_se"] ** 2 / (b["cpu"] * b["chroma_se"] ** 2))
+                for c, name in enumerate("RGB"):
+                    ratios[mode][name].append(g["cpu"] * g["rse_rgb"][c] ** 2 / (b["cpu"] * b["rse_rgb"][c] ** 2))
                 if args.channel_rse:
                     ratios[mode]["ch"].append(g["cpu"] * g["rse_ch"] ** 2 / (b["cpu"] * b["rse_ch"] ** 2))
-            eff = "1, 1" if mode == "rgb" else f"{ratios[mode]['wall'][-1]:.2f}, {ratios[mode]['cpu'][-1]:.2f}"
-            print(f"| {r} | {mode} | {g['wall']:.1f} | {g['cpu']:.1f} | {g['rse']:.4f} | {g['cpu'] / b['cpu']:.2f} | "
-                  f"{eff} |", flush=True)
+            eff = "1, 1 | 1" if mode == "rgb" else (f"{ratios[mode]['wall'][-1]:.2f}, {ratios[mode]['cpu'][-1]:.2f} | "
+                                                   f"{ratios[mode]['chroma'][-1]:.2f}")
+            rgb_rse = " / ".join(f"{v:.4f}" for v in g["rse_rgb"])
+            print(f"| {r} | {mode} | {g['wall']:.1f} | {g['cpu']:.1f} | {g['rse']:.4f} | {rgb_rse} | {g['chroma_se']:.5f} "
+                  f"| {g['fireflies']} | {g['cpu'] / b['cpu']:.2f} | {eff} |", flush=True)
     for mode, rs in ratios.items():
         print(f"median time to the same luminance RSE, {mode} / RGB: wall {np.median(rs['wall']):.2f}, "
-              f"CPU {np.median(rs['cpu']):.2f} (target <= 1.5)")
+              f"CPU {np.median(rs['cpu']):.2f} (target <= 1.5); to the same chroma se (CPU) "
+              f"{np.median(rs['chroma']):.2f}; to the same R / G / B RSE (CPU) "
+              f"{' / '.join(f'{np.median(rs[c]):.2f}' for c in 'RGB')}")
         if args.channel_rse:
             print(f"  with the channel-mean RSE (CPU): {np.median(rs['ch']):.2f}")
+    print("fireflies per render: " + "; ".join(f"{m} {', '.join(str(n) for n in f)}" for m, f in fireflies.items()))
+
+
+@contextlib.contextmanager
+def patched(mode: str):
+    """The patches of ``mode`` (its name's ending: :func:`three_nodes`, :func:`no_box_air`, :func:`linear`,
+    :func:`phase_twice`, :func:`medium_lookups`) for the duration of the block, undone after it."""
+    with contextlib.ExitStack() as stack:
+        for suffix, patch in (("3 nodes", three_nodes), ("no box air", no_box_air), ("linear", linear),
+                              ("twice", phase_twice), ("lookups", medium_lookups), ("mean density", mean_density)):
+            stack.enter_context(patch(mode.endswith(suffix)))
+        yield
+
+
+@contextlib.contextmanager
+def mean_density(on: bool):
+    """With ``on``: the spectral mode's directions drawn from the phase function's channel-mean density (as before
+    chroma38), not from its R, G, B densities in the throughput's shares (``lane_channels``)."""
+    if not on:
+        yield
+        return
+    from weather_mi.kernel.plugins import path_loop
+    own = path_loop.PathLoop.__init__
+
+    def init(self, *args):
+        own(self, *args)
+        self.by_lane = False
+    path_loop.PathLoop.__init__ = init
+    try:
+        yield
+    finally:
+        path_loop.PathLoop.__init__ = own
 
 
 @contextlib.contextmanager

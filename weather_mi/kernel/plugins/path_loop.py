@@ -8,7 +8,7 @@ import functools
 import drjit as dr
 import mitsuba as mi
 
-from . import mvnee, sun
+from . import lane_channels, mvnee, sun
 from .medium_setup import phase_ctx, scattering_event
 from .path_state import Vertex, path_state_class
 from .trackers import delta_tracking, shadow_transmittance
@@ -53,6 +53,10 @@ class PathLoop:
         self.mvnee = has_medium and sun_mode != "none" and integ.mvnee > 0.0
         # spectral variants sample the channel mean: the path's wavelengths are not the tables' channels
         self.by_channel = has_medium and integ.channels == "history" and hasattr(phase, "sample_channel") and mi.is_rgb
+        # ... there, the R, G, B densities in the throughput's shares by wavelength (.lane_channels; not with sun
+        # guiding, the aureole or multiple-vertex NEE, whose pdfs take the channel mean)
+        self.by_lane = (has_medium and integ.channels == "history" and hasattr(phase, "sample_channel")
+                        and mi.is_spectral and not (self.guiding or self.aureole or self.mvnee))
         self.rr_cap = 0.95 if integ.rr_mode == "volpath" else 1.0
         self.c_em = c_em = integ.emitter_nee
         self.c_sky = c_em if sun_mode != "none" else 1.0          # share of shadow rays towards the scene's emitters
@@ -182,6 +186,8 @@ class PathLoop:
         if self.by_channel:
             t_sum = dr.sum(p.throughput)
             v.alpha = p.throughput * dr.select(t_sum > 0.0, dr.rcp(t_sum), 0.0)
+        elif self.by_lane:  # the R, G, B densities' shares (.lane_channels)
+            v.alpha = lane_channels.channel_shares(p.throughput, p.ray.wavelengths, self.phase.channel_nm)
 
     def f_eval(self, sampler, p, v, d):
         """Phase function or BSDF value toward d, and the pdf with which this vertex continues the path in
@@ -190,6 +196,9 @@ class PathLoop:
         if not self.has_medium:
             return bsdf_val, bsdf_pdf
         ph_val, ph_pdf = self.phase.eval_pdf(phase_ctx(sampler), v.mei, d, v.act_scatter)
+        if self.by_lane:  # (no guiding: the continuation's density is the channels')
+            return (dr.select(v.act_e_surf, bsdf_val, ph_val),
+                    dr.select(v.act_e_surf, bsdf_pdf, lane_channels.continuation_pdf(self.phase, v.mei, d, v.alpha)))
         ph_pdf = sun.continuation_pdf(self.integ, self.phase, sampler, v.mei, d, ph_val, ph_pdf, v.alpha, v.eps,
                                       v.act_scatter)
         return dr.select(v.act_e_surf, bsdf_val, ph_val), dr.select(v.act_e_surf, bsdf_pdf, ph_pdf)
@@ -273,7 +282,7 @@ class PathLoop:
             return
         act_scatter = v.act_scatter
         ph_ctx = phase_ctx(sampler)
-        if self.guiding or self.by_channel:
+        if self.guiding or self.by_channel or self.by_lane:
             wo, ph_val, ph_pdf = self.guided_phase(sampler, v, ph_ctx)
             ph_w = ph_val * dr.select(ph_pdf > 0.0, dr.rcp(ph_pdf), 0.0)
         else:
@@ -305,7 +314,7 @@ class PathLoop:
             in_disk = toward_sun & (u_g < 0.5 * v.eps) if self.sun_mode == "disk" else mi.Bool(False)
             mei_s = sun.about_sun(integ, v.mei, toward_sun)
         ph_pdf = None  # with channels, the channel mixture's pdf follows from the values
-        if self.by_channel:
+        if self.by_channel or self.by_lane:
             u = sampler.next_1d(act_scatter)
             alpha = v.alpha
             channel = mi.UInt32(dr.select(u >= alpha[0], 1, 0) + dr.select(u >= alpha[0] + alpha[1], 1, 0))
@@ -317,6 +326,8 @@ class PathLoop:
         if self.guiding:  # the values are needed about the path's own direction
             wo = dr.select(in_disk, sun.sample_disk(integ, sampler.next_2d(act_scatter)), wo)
             ph_val, ph_pdf = phase.eval_pdf(ph_ctx, v.mei, wo, act_scatter)
+        if self.by_lane:  # (no guiding)
+            return wo, ph_val, lane_channels.continuation_pdf(phase, v.mei, wo, v.alpha)
         ph_pdf = sun.continuation_pdf(integ, phase, sampler, v.mei, wo, ph_val, ph_pdf, v.alpha, v.eps, act_scatter)
         return wo, ph_val, ph_pdf
 
