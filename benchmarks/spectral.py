@@ -152,8 +152,9 @@ def main(argv=None):
     ap.add_argument("--medium-lookups", action="store_true",
                     help="also both modes with the trackers' medium lookups per step (no texel interpolant, no split "
                          "RGB flights, the box's air's optical depth per empty cube)")
-    ap.add_argument("--mean-density", action="store_true",
-                    help="also the spectral mode with directions from the phase's channel-mean density (before chroma38)")
+    ap.add_argument("--before-chroma", action="store_true",
+                    help="also the spectral mode with directions from the phase's channel-mean density ('mean density'), "
+                         "with Mitsuba's wavelengths ('mitsuba wavelengths') and with both ('before chroma38')")
     ap.add_argument("--lanes", type=int, default=1 << 20)
     ap.add_argument("--firefly-k", type=float, default=10.0,
                     help="a firefly: a cloud pixel with one pass > k x the median of its passes in a channel")
@@ -179,8 +180,9 @@ def main(argv=None):
     if args.medium_lookups:
         modes["rgb, medium lookups"] = "llvm_ad_rgb"
         modes["spectral, medium lookups"] = "llvm_ad_spectral"
-    if args.mean_density:
-        modes["spectral, mean density"] = "llvm_ad_spectral"
+    if args.before_chroma:
+        for name in ("mean density", "mitsuba wavelengths", "before chroma38"):
+            modes[f"spectral, {name}"] = "llvm_ad_spectral"
     if args.without_box_air:
         modes["rgb, no box air"] = "llvm_ad_rgb"
         modes["spectral, no box air"] = "llvm_ad_spectral"
@@ -235,9 +237,11 @@ def patched(mode: str):
     """The patches of ``mode`` (its name's ending: :func:`three_nodes`, :func:`no_box_air`, :func:`linear`,
     :func:`phase_twice`, :func:`medium_lookups`) for the duration of the block, undone after it."""
     with contextlib.ExitStack() as stack:
-        for suffix, patch in (("3 nodes", three_nodes), ("no box air", no_box_air), ("linear", linear),
-                              ("twice", phase_twice), ("lookups", medium_lookups), ("mean density", mean_density)):
-            stack.enter_context(patch(mode.endswith(suffix)))
+        for suffixes, patch in ((("3 nodes",), three_nodes), (("no box air",), no_box_air), (("linear",), linear),
+                                (("twice",), phase_twice), (("lookups",), medium_lookups),
+                                (("mean density", "before chroma38"), mean_density),
+                                (("mitsuba wavelengths", "before chroma38"), mitsuba_wavelengths)):
+            stack.enter_context(patch(mode.endswith(suffixes)))
         yield
 
 
@@ -259,6 +263,22 @@ def mean_density(on: bool):
         yield
     finally:
         path_loop.PathLoop.__init__ = own
+
+
+@contextlib.contextmanager
+def mitsuba_wavelengths(on: bool):
+    """With ``on``: the spectral paths' wavelengths as Mitsuba's sensor draws them (``sample_rgb_spectrum``), not
+    redrawn for colour (``kernel.plugins.wavelengths``)."""
+    if not on:
+        yield
+        return
+    from weather_mi.kernel.plugins import wavelengths
+    own = wavelengths.redrawn
+    wavelengths.redrawn = lambda ray, weight, sample, active: (ray, weight)
+    try:
+        yield
+    finally:
+        wavelengths.redrawn = own
 
 
 @contextlib.contextmanager

@@ -15,6 +15,8 @@ import numpy as np
 import drjit as dr
 import mitsuba as mi
 
+from . import wavelengths
+
 MAX_JOBS_PER_LAUNCH = 1 << 22  # persistent lanes: samples per kernel launch (12 bytes of radiance each)
 CUDA_LANES = 1 << 20           # lanes of a launch off LLVM: a GPU wants ~10^5-10^6 threads in flight
 
@@ -140,8 +142,11 @@ class _Launch:
             key = dr.gather(mi.UInt64, self.layer_key, layer, start)
             _seed_pcg(sampler.rng, key, ((key >> 32) << 32) | mi.UInt64(number), start)
             pos = mi.Point2f(mi.Float(pixel % self.size[0]), mi.Float(pixel // self.size[0])) + sampler.next_2d(start)
-            ray, ray_weight = sensor.sample_ray(sensor.shutter_open(), sampler.next_1d(start), pos * self.inv_size,
+            u_wavelength = sampler.next_1d(start)
+            ray, ray_weight = sensor.sample_ray(sensor.shutter_open(), u_wavelength, pos * self.inv_size,
                                                 mi.Point2f(0.5, 0.5), start)
+            if mi.is_spectral:  # the path's wavelengths drawn for colour (.wavelengths)
+                ray, ray_weight = wavelengths.redrawn(ray, ray_weight, u_wavelength, start)
             new = loop.initial(ray, medium, start)
             for name in type(path).DRJIT_STRUCT:  # the new samples' paths in the lanes that start one
                 setattr(path, name, dr.select(start, getattr(new, name), getattr(path, name)))

@@ -1,0 +1,59 @@
+"""The spectral paths' wavelengths drawn for colour (``kernel.plugins.wavelengths``, issue 38 chroma38): the
+density integrates to 1 and has Mitsuba's own as its part (written out against Mitsuba's ``pdf_rgb_spectrum``); a
+sensor's rays redrawn from it estimate the CIE 1931 functions' integrals (colour-science, numpy here) without bias,
+and with less spread in Z than Mitsuba's draw (the point of it)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import weather_mi as wm
+
+SPECTRAL = "llvm_ad_spectral"
+
+
+def test_density_is_normalised_and_mitsubas_part_is_mitsubas(variant_restored):
+    import mitsuba as mi
+    from weather_mi.kernel.plugins import wavelengths as wl
+    wm.set_variant(SPECTRAL)
+    lam = np.linspace(360.0, 830.0, 4701)
+    assert np.trapezoid(wl.colour_pdf(lam), lam) == pytest.approx(1.0, abs=1e-4)
+    assert np.trapezoid(wl.mitsuba_pdf(lam), lam) == pytest.approx(1.0, abs=1e-4)
+    got = np.array(mi.pdf_rgb_spectrum(mi.Float(lam[::50]))).ravel()
+    np.testing.assert_allclose(wl.mitsuba_pdf(lam[::50]), got, rtol=1e-5)
+
+
+def _redrawn_xyz(n: int, redraw: bool, seed: int = 0):
+    """(n, 3): X, Y, Z of a flat unit spectrum estimated by n rays of a perspective sensor, 4 lanes each."""
+    import colour
+    import mitsuba as mi
+    from weather_mi.kernel.plugins import wavelengths as wl
+    wm.set_variant(SPECTRAL)
+    sensor = mi.load_dict({"type": "perspective", "film": {"type": "hdrfilm", "width": 4, "height": 4,
+                                                           "pixel_format": "xyz"}})
+    u = mi.Float(np.random.default_rng(seed).random(n))
+    ray, weight = sensor.sample_ray(0.0, u, mi.Point2f(0.5, 0.5), mi.Point2f(0.5, 0.5))
+    if redraw:
+        ray, weight = wl.redrawn(ray, weight, u, mi.Bool(True))
+    lam, w = np.array(ray.wavelengths).T, np.array(weight).T  # (n, 4)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    grid = np.arange(360.0, 831.0, 1.0)
+    table = cmfs.copy().align(colour.SpectralShape(360, 830, 1)).values
+    c = np.stack([np.interp(lam, grid, table[:, k]) for k in range(3)], -1)  # (n, 4, 3)
+    return (w[..., None] * c).mean(axis=1) / np.trapezoid(table[:, 1], grid)
+
+
+def test_redrawn_wavelengths_estimate_the_colour_matching_integrals(variant_restored):
+    """A flat spectrum of 1: E[X, Y, Z] = int xbar, ybar, zbar / int ybar (1.000, 1.000, 1.000 to 0.3 %) within
+    3 se; the per-ray spread of Z at most half Mitsuba's own draw's (which the check would fail)."""
+    import colour
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    grid = np.arange(360.0, 831.0, 1.0)
+    table = cmfs.copy().align(colour.SpectralShape(360, 830, 1)).values
+    want = np.trapezoid(table, grid, axis=0) / np.trapezoid(table[:, 1], grid)
+    n = 1 << 18
+    new, old = _redrawn_xyz(n, True), _redrawn_xyz(n, False)
+    for xyz in (new, old):
+        se = xyz.std(axis=0) / np.sqrt(n)
+        assert np.all(np.abs(xyz.mean(axis=0) - want) < 3 * se + 1e-4), (xyz.mean(axis=0), want, se)
+    assert new.std(axis=0)[2] < 0.5 * old.std(axis=0)[2]

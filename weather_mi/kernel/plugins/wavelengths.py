@@ -1,0 +1,73 @@
+"""The wavelengths of a spectral path (issue 38, chroma38): drawn for colour, not for luminance alone.
+
+Mitsuba's sensors draw a path's 4 wavelengths from ``sample_rgb_spectrum`` (density 1 / cosh^2(0.0072 (lambda -
+538 nm)), stratified: one uniform shifted by 1/4 per lane). That density follows the CIE Y curve and is low where
+zbar peaks (445 nm), so a path's CIE Z is noisy: for a solar spectrum the relative spread of one path's X, Y, Z is
+0.11, 0.04, 0.49 (its linear sRGB B 0.57), and the spectral mode's chroma noise is mostly this, the luminance
+noise of the paths being the same in both modes. Drawing them from the mixture
+
+    p(lambda) = 0.5 p_M(lambda) + 0.3 xbar / int xbar + 0.1 ybar / int ybar + 0.1 zbar / int zbar
+
+(p_M Mitsuba's density; CIE 1931 functions) takes the per-path chromaticity spread (u', v') of a solar, a reddened
+and a blue spectrum from 0.039 / 0.022 / 0.066 to 0.010-0.016 (numpy, 2 x 10^4 stratified paths; docs/spectral.md),
+at a per-path luminance spread of 0.12 instead of 0.04 (against the paths' own ~1.3 in a storm: +1 % variance).
+Same stratification (the sensor's uniform shifted by 1/4 per lane, inverted through this density's CDF), the
+weight 1 / p(lambda): unbiased. Used by the persistent lanes (:mod:`.lanes`, the LLVM renders); ``mi.render``
+(CUDA) keeps Mitsuba's."""
+from __future__ import annotations
+
+import numpy as np
+
+import drjit as dr
+import mitsuba as mi
+
+LAMBDA_NM = (360.0, 830.0)    # Mitsuba's CIE range (MI_CIE_MIN, MI_CIE_MAX)
+MIX = (0.5, 0.3, 0.1, 0.1)    # Mitsuba's density, xbar, ybar, zbar (each normalised)
+GRID_NM = 1.0                 # the tabulated density's spacing (piecewise linear)
+
+_CACHE: dict = {}
+
+
+def mitsuba_pdf(lam_nm) -> np.ndarray:
+    """Mitsuba's ``pdf_rgb_spectrum`` (1/nm over 360-830 nm), written out: 0.003939804229 / cosh^2(0.0072
+    (lambda - 538))."""
+    return 0.003939804229326285 / np.cosh(0.0072 * (np.asarray(lam_nm, np.float64) - 538.0)) ** 2
+
+
+def colour_pdf(lam_nm) -> np.ndarray:
+    """The density :data:`MIX` (1/nm over 360-830 nm) at ``lam_nm``."""
+    from ...optics.spectrum import cmfs_1931
+    grid = np.arange(LAMBDA_NM[0], LAMBDA_NM[1] + 0.5 * GRID_NM, GRID_NM)
+    cmf = cmfs_1931(np.arange(LAMBDA_NM[0], LAMBDA_NM[1] + 2.5, 5.0))
+    cmf = np.stack([np.interp(grid, np.arange(LAMBDA_NM[0], LAMBDA_NM[1] + 2.5, 5.0), cmf[:, k]) for k in range(3)], -1)
+    m = mitsuba_pdf(grid)
+    parts = [m / np.trapezoid(m, grid)] + [cmf[:, k] / np.trapezoid(cmf[:, k], grid) for k in range(3)]
+    pdf = sum(w * p for w, p in zip(MIX, parts))
+    return np.interp(np.asarray(lam_nm, np.float64), grid, pdf / np.trapezoid(pdf, grid))
+
+
+def _distribution():
+    """The density as Mitsuba's ``ContinuousDistribution`` (piecewise linear on the 1 nm grid), per variant."""
+    key = mi.variant()
+    if key not in _CACHE:
+        grid = np.arange(LAMBDA_NM[0], LAMBDA_NM[1] + 0.5 * GRID_NM, GRID_NM)
+        _CACHE[key] = mi.ContinuousDistribution(mi.ScalarVector2f(*LAMBDA_NM), mi.Float(colour_pdf(grid)))
+    return _CACHE[key]
+
+
+def redrawn(ray, weight, sample, active):
+    """``ray`` and its sensor weight with the 4 wavelengths the sensor drew from ``sample`` (its wavelength
+    sample, Mitsuba's density) replaced by the 4 drawn from :func:`colour_pdf` with the same stratified
+    uniforms: weight x p_M(old) / p(new)."""
+    dist = _distribution()
+    shifted = [sample + 0.25 * i for i in range(4)]
+    shifted = [dr.select(s >= 1.0, s - 1.0, s) for s in shifted]  # Mitsuba's sample_shifted
+    _, w_m = mi.sample_rgb_spectrum(mi.Spectrum(*shifted))  # 1 / p_M of the sensor's wavelengths
+    lam, pdf = [], []
+    for s in shifted:
+        x, p = dist.sample_pdf(s, active)
+        lam.append(x)
+        pdf.append(p)
+    ray.wavelengths = mi.Spectrum(*lam)
+    ratio = mi.Spectrum(*(dr.select(p > 0.0, dr.rcp(p), 0.0) for p in pdf)) * dr.rcp(w_m)
+    return ray, weight * ratio
