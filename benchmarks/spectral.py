@@ -4,7 +4,7 @@ front view, ``study.runs.view``), paired: the two modes alternate in one process
 each round's ratio is taken between renders run next to each other.
 
     .venv/bin/python benchmarks/spectral.py [--size 64x48] [--spp 64] [--passes 8] [--rounds 3] [--elevation 20]
-                                            [--atmosphere clear|none]
+                                            [--atmosphere clear|none] [--before-chroma] [--firefly-k 10]
     .venv/bin/python benchmarks/spectral.py --phase [--lanes 1048576] [--rounds 5]
 
 Per round: each mode's seconds (wall, and the process's CPU seconds over all threads: on a loaded machine
@@ -12,7 +12,14 @@ the wall time measures the other processes too) and its luminance RSE over the c
 (``estimates.cloud_mask``): the standard error of Y over the passes over Y, averaged over the cloud pixels
 (``estimates.luminance_rse``). The spectral mode's
 time to the same RSE over the RGB mode's is (t RSE^2)_spectral / (t RSE^2)_RGB (RSE falls as
-1 / sqrt(samples)); target: at most 1.5. Medians over rounds are printed last. ``--channel-rse`` also prints
+1 / sqrt(samples)); target: at most 1.5. Medians over rounds are printed last. The colour noise
+(``reference.colour_noise``, what the luminance RSE does not count): the RSE of each linear sRGB channel, the
+chroma se (the standard error of each cloud pixel's CIE 1976 (u', v'), mean over the cloud pixels), and the
+fireflies (cloud pixels in which one pass of one channel exceeds ``--firefly-k`` x the median of the pixel's
+passes); the time to the same chroma se and to the same R, G, B RSE, as above. ``--before-chroma`` adds the spectral
+mode as before chroma38: directions from the phase's channel-mean density ("mean density"), Mitsuba's wavelengths
+("mitsuba wavelengths"), both ("before chroma38"). Each mode's patches are applied by one context manager
+(``patched``) and undone after its render; each render's arrays and Dr.Jit's cached memory are released after it. ``--channel-rse`` also prints
 the figure with ``Image.metadata["noise"]["rse_mean"]`` (the R, G, B channels' mean se over their mean: the
 spectral mode's R, G, B come from X, Y, Z through sRGB's matrix, whose chroma noise it counts).
 

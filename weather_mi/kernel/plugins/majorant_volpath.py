@@ -84,7 +84,9 @@ class MajorantVolpath:
        - Whether ``reference.render_pass`` renders with persistent lanes (default: DEFAULT_PERSISTENT_LANES).
      * - phase_channels
        - |string|
-       - "history" (default: channels drawn in proportion to the throughput) or "mean".
+       - "history" (default: channels drawn in proportion to the throughput; in spectral variants the R, G, B
+         densities in the throughput's shares by wavelength, :mod:`.lane_channels`, without sun guiding, the
+         aureole or multiple-vertex NEE) or "mean".
      * - emitter_nee
        - |float|
        - Probability of a shadow ray towards the scene's emitters (the sky), else the sun; in (0, 1].

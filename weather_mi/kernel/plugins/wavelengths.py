@@ -11,8 +11,8 @@ noise of the paths being the same in both modes. Drawing them from the mixture
 (p_M Mitsuba's density; CIE 1931 functions) takes the per-path chromaticity spread (u', v') of a solar, a reddened
 and a blue spectrum from 0.039 / 0.022 / 0.066 to 0.010-0.016 (numpy, 2 x 10^4 stratified paths; docs/spectral.md),
 at a per-path luminance spread of 0.12 instead of 0.04 (against the paths' own ~1.3 in a storm: +1 % variance).
-Same stratification (the sensor's uniform shifted by 1/4 per lane, inverted through this density's CDF), the
-weight 1 / p(lambda): unbiased. Used by the persistent lanes (:mod:`.lanes`, the LLVM renders); ``mi.render``
+Same stratification (the sensor's uniform shifted by 1/4 per lane, inverted through this density's CDF; the
+density piecewise constant on 1 nm bins, each its mean), the weight 1 / p(lambda): unbiased. Used by the persistent lanes (:mod:`.lanes`, the LLVM renders); ``mi.render``
 (CUDA) keeps Mitsuba's."""
 from __future__ import annotations
 
@@ -47,25 +47,42 @@ def colour_pdf(lam_nm) -> np.ndarray:
 
 
 def _distribution():
-    """The density as Mitsuba's ``ContinuousDistribution`` (piecewise linear on the 1 nm grid), per variant."""
+    """(pdf of each 1 nm bin (1/nm), cumulative at the bins' upper edges) of :func:`colour_pdf` made piecewise
+    constant on the bins (their mean), as Dr.Jit arrays, per variant."""
     key = mi.variant()
     if key not in _CACHE:
-        grid = np.arange(LAMBDA_NM[0], LAMBDA_NM[1] + 0.5 * GRID_NM, GRID_NM)
-        _CACHE[key] = mi.ContinuousDistribution(mi.ScalarVector2f(*LAMBDA_NM), mi.Float(colour_pdf(grid)))
+        edges = np.arange(LAMBDA_NM[0], LAMBDA_NM[1] + 0.5 * GRID_NM, GRID_NM)
+        fine = np.linspace(LAMBDA_NM[0], LAMBDA_NM[1], 16 * (edges.size - 1) + 1)
+        f = colour_pdf(fine)
+        bins = 0.5 * (f[:-1] + f[1:]).reshape(edges.size - 1, 16).mean(axis=1)  # trapezoid mean of each bin
+        bins /= bins.sum() * GRID_NM
+        cdf = np.cumsum(bins) * GRID_NM
+        cdf[-1] = 1.0
+        _CACHE[key] = (mi.Float(bins), mi.Float(cdf), int(bins.size))
     return _CACHE[key]
+
+
+def sample_colour(u, active=True):
+    """(wavelength nm, pdf 1/nm) for uniforms ``u`` (Float): the bin whose cumulative first exceeds u (binary
+    search), the wavelength uniform within it (the density piecewise constant on 1 nm bins)."""
+    bins, cdf, n = _distribution()
+    i = dr.binary_search(0, n - 1, lambda k: dr.gather(mi.Float, cdf, k, active) <= u)
+    lo = dr.select(i > 0, dr.gather(mi.Float, cdf, dr.maximum(i, 1) - 1, active), 0.0)
+    p = dr.gather(mi.Float, bins, i, active)
+    x = dr.clip((u - lo) / dr.maximum(p * GRID_NM, 1e-30), 0.0, 1.0)
+    return LAMBDA_NM[0] + (mi.Float(i) + x) * GRID_NM, p
 
 
 def redrawn(ray, weight, sample, active):
     """``ray`` and its sensor weight with the 4 wavelengths the sensor drew from ``sample`` (its wavelength
     sample, Mitsuba's density) replaced by the 4 drawn from :func:`colour_pdf` with the same stratified
     uniforms: weight x p_M(old) / p(new)."""
-    dist = _distribution()
     shifted = [sample + 0.25 * i for i in range(4)]
     shifted = [dr.select(s >= 1.0, s - 1.0, s) for s in shifted]  # Mitsuba's sample_shifted
     _, w_m = mi.sample_rgb_spectrum(mi.Spectrum(*shifted))  # 1 / p_M of the sensor's wavelengths
     lam, pdf = [], []
     for s in shifted:
-        x, p = dist.sample_pdf(s, active)
+        x, p = sample_colour(s, active)
         lam.append(x)
         pdf.append(p)
     ray.wavelengths = mi.Spectrum(*lam)
