@@ -51,6 +51,18 @@ def channel_pdfs(phase, mei, wo):
     return value
 
 
+def eval_pdf(phase, mei, wo, beta):
+    """(the lanes' phase values, sum_c beta_c p_c(wo)) at ``wo`` from one lookup of the vertex's weights and of
+    the direction's node segment (``phase.eval_pdf``'s values; its channel-mean pdf is not needed)."""
+    from .hydrometeor_mixture import _channel_mean
+    w = phase._weights_at(mei)
+    h = wo + mei.wi
+    idx, t = phase._segment(0.5 * dr.squared_norm(h))
+    value, _ = phase._mix_at(w, idx, t, mei, wo)
+    channels, _ = phase._mix(_channel_mean(w), idx, t)
+    return value, dr.sum(beta * channels)
+
+
 def continuation_pdf(phase, mei, wo, beta):
     """The density with which a vertex continues in ``wo``: sum_c beta_c p_c(wo)."""
     return dr.sum(beta * channel_pdfs(phase, mei, wo))

@@ -195,10 +195,10 @@ class PathLoop:
         bsdf_val, bsdf_pdf = v.bsdf.eval_pdf(self.bsdf_ctx, p.si, p.si.to_local(d), v.act_e_surf)
         if not self.has_medium:
             return bsdf_val, bsdf_pdf
-        ph_val, ph_pdf = self.phase.eval_pdf(phase_ctx(sampler), v.mei, d, v.act_scatter)
         if self.by_lane:  # (no guiding: the continuation's density is the channels')
-            return (dr.select(v.act_e_surf, bsdf_val, ph_val),
-                    dr.select(v.act_e_surf, bsdf_pdf, lane_channels.continuation_pdf(self.phase, v.mei, d, v.alpha)))
+            ph_val, ph_pdf = lane_channels.eval_pdf(self.phase, v.mei, d, v.alpha)
+            return dr.select(v.act_e_surf, bsdf_val, ph_val), dr.select(v.act_e_surf, bsdf_pdf, ph_pdf)
+        ph_val, ph_pdf = self.phase.eval_pdf(phase_ctx(sampler), v.mei, d, v.act_scatter)
         ph_pdf = sun.continuation_pdf(self.integ, self.phase, sampler, v.mei, d, ph_val, ph_pdf, v.alpha, v.eps,
                                       v.act_scatter)
         return dr.select(v.act_e_surf, bsdf_val, ph_val), dr.select(v.act_e_surf, bsdf_pdf, ph_pdf)
