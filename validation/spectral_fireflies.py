@@ -139,7 +139,8 @@ def main(argv=None):
     med = np.median(size)
     print(f"{xyz.shape[0] * xyz.shape[1]} samples; the median sample's largest |R|, |G|, |B|: {med:.4f}; samples above "
           + ", ".join(f"{k} x: {int(np.sum(size > k * med))}" for k in (100, 1000, 10000))
-          + f"; the largest {size.max() / med:.0f} x")
+          + f"; the largest {size.max() / med:.0f} x; samples with a channel above "
+          + ", ".join(f"{v:g}: {int(np.sum(size > v))}" for v in (10.0, 30.0, 100.0)))
     print("| pixel (row, col; flat) | pass | sample in the pass | XYZ | linear sRGB | x the median |")
     print("|---|---|---|---|---|---|")
     for i in np.argsort(-size.ravel())[: args.top]:
