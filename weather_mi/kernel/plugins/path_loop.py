@@ -51,10 +51,10 @@ class PathLoop:
         self.guiding = has_medium and sun_mode != "none" and integ.guiding > 0.0
         self.aureole = has_medium and sun_mode != "none" and integ.aureole > 0.0
         self.mvnee = has_medium and sun_mode != "none" and integ.mvnee > 0.0
-        # spectral variants sample the channel mean: the path's wavelengths are not the tables' channels
+        # history-aware channel sampling: in RGB variants the throughput's channels are the tables' ...
         self.by_channel = has_medium and integ.channels == "history" and hasattr(phase, "sample_channel") and mi.is_rgb
-        # ... there, the R, G, B densities in the throughput's shares by wavelength (.lane_channels; not with sun
-        # guiding, the aureole or multiple-vertex NEE, whose pdfs take the channel mean)
+        # ... in spectral variants the R, G, B densities in the throughput's shares by wavelength (.lane_channels;
+        # not with sun guiding, the aureole or multiple-vertex NEE, whose pdfs take the channel mean)
         self.by_lane = (has_medium and integ.channels == "history" and hasattr(phase, "sample_channel")
                         and mi.is_spectral and not (self.guiding or self.aureole or self.mvnee))
         self.rr_cap = 0.95 if integ.rr_mode == "volpath" else 1.0
