@@ -122,9 +122,11 @@ def main(argv=None):
     ap.add_argument("--every", type=int, default=250, help="with --trace: print every this many scatterings")
     ap.add_argument("--top", type=int, default=8)
     ap.add_argument("--before", action="store_true", help="the code as before chroma38")
+    ap.add_argument("--mode", default="spectral",
+                    help="a mode of benchmarks/spectral.py whose patches apply (e.g. 'spectral, linear')")
     args = ap.parse_args(argv)
     spec, vol = scene(args)
-    with patched("spectral, before chroma38" if args.before else "spectral"):
+    with patched("spectral, before chroma38" if args.before else args.mode):
         if args.trace:
             return trace(args, spec, vol, *(int(v) for v in args.trace.split(",")))
         pixels = None
