@@ -28,7 +28,7 @@ sun's path (the spectral mode over wavelength: ``kernel/spectral_air.py``); ``no
 the spectral mode with every phase value evaluated twice (the tables' reads' share of the render time, the paths
 unchanged); ``--linear`` adds the spectral mode with the phase tables bilinear in wavelength (4 corners a lane)
 instead of one wavelength node a lane (what renders read); ``--three-nodes`` adds the spectral mode as it was before
-the tables every 25 nm; ``--without-box-air`` both modes without the box's air (the air on the sun's path only:
+the tables every 25 nm (with ``--atmosphere none`` only: the box's air by wavelength needs the tables); ``--without-box-air`` both modes without the box's air (the air on the sun's path only:
 ``kernel.medium.air_in_medium`` None, a different scene; the spectral mode as it was before its box air was wired);
 ``--medium-lookups`` adds both modes with the trackers' medium lookups per step (as between c0780af and
 spectralair38c: no texel interpolant, no split RGB flights, the box's air's optical depth per empty cube).
