@@ -43,7 +43,7 @@ part 3), 0.53-0.65 when every pixel integrated its own (and the box's rows were 
 from __future__ import annotations
 
 from .eye import OPAQUE_T
-from .eye_air import EyeAir, profile, ray_ends, source_at
+from .eye_air import EyeAir, outside_box, profile, ray_ends, source_at
 from .eye_air_quadrature import NODES, gauss_segment
 
 STEP = 4            # the coarse grid: every STEP-th pixel in x and y (the last row and column included)
@@ -79,7 +79,7 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
     t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
     kind = _kind(dr, hit, t_ground)
     # A: not where the ray ends on the sky model's sky without crossing the box (no pixel of that kind uses it)
-    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, shadow), 0.0 * t_in,
+    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, outside_box(shadow)), 0.0 * t_in,
                              dr.select(hit, t_in, dr.select(kind == 2.0, 0.0, t_end)), NODES, True)
     rows = BOX_POINTS + 1
     out = dr.empty(mi.Float, nx * ny * rows * ROW)  # (every float written below)
