@@ -153,11 +153,12 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
         t = dr.gather(mi.Vector4f, table, c * (rows * 2) + 2 * k + 1, active)
         return mi.Color3f(s.x, s.y, s.z), mi.Color3f(t.x, t.y, t.z), s.w
     zero = dr.zeros(mi.Color3f, dr.width(t_in))
-    s_a, t_a, s_f, t_f, s_1, t_1 = zero, zero, zero, zero, zero, zero
+    s_a, t_a = zero, zero
     total, plain = mi.Float(0.0), []
     # what each pixel reads: A where it counts (w > 0), the box at the cloud's depth where there is cloud, the
     # whole box where the cloud lets light through (elsewhere: S = 0, T = 1 in front of the cloud, nothing seen
-    # behind it)
+    # behind it); the box's rows each behind a branch that LLVM takes per packet of lanes (packets of pixels
+    # that need none of them read none)
     need_a, need_f, need_1 = w > 0, hit & (transmittance < 1.0), hit & (transmittance > OPAQUE_T)
     for c, wgt in corners:
         sa, ta, flag = read(c, BOX_POINTS, need_a | hit)
@@ -166,17 +167,29 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
         total += wgt_same
     use_all = total < 1e-3  # no neighbour on the pixel's side: all four
     norm = dr.select(use_all, 1.0, dr.rcp(dr.maximum(total, 1e-3)))
+    cs, ks = [], []
     for c, wgt, wgt_same, sa, ta in plain:
         k = dr.select(use_all, wgt, wgt_same) * norm
-        sl, tl, _ = read(c, i0, need_f)
-        su, tu, _ = read(c, i0 + 1, need_f)
-        se, te, _ = read(c, BOX_POINTS - 1, need_1)
         s_a, t_a = s_a + k * sa, t_a + k * ta
-        s_f, t_f = s_f + k * (sl + (su - sl) * f), t_f + k * (tl + (tu - tl) * f)
-        s_1, t_1 = s_1 + k * se, t_1 + k * te
-    one = mi.Color3f(1.0)
-    s_f, t_f = dr.select(need_f, s_f, zero), dr.select(need_f, t_f, one)
-    s_1, t_1 = dr.select(need_1, s_1, s_f), dr.select(need_1, t_1, t_f)
+        cs.append(c)
+        ks.append(k)
+
+    def at_depth(i0, f, *ck):  # the box's cumulative air at the cloud's depth (rows i0 and i0 + 1)
+        s_f, t_f = mi.Color3f(0.0), mi.Color3f(0.0)
+        for c, k in zip(ck[:4], ck[4:]):
+            sl, tl, _ = read(c, i0, True)
+            su, tu, _ = read(c, i0 + 1, True)
+            s_f, t_f = s_f + k * (sl + (su - sl) * f), t_f + k * (tl + (tu - tl) * f)
+        return s_f, t_f
+
+    def whole(s_f, t_f, *ck):  # ... and through the whole box (its last row)
+        s_1, t_1 = mi.Color3f(0.0), mi.Color3f(0.0)
+        for c, k in zip(ck[:4], ck[4:]):
+            se, te, _ = read(c, BOX_POINTS - 1, True)
+            s_1, t_1 = s_1 + k * se, t_1 + k * te
+        return s_1, t_1
+    s_f, t_f = dr.if_stmt((i0, f, *cs, *ks), need_f, at_depth, lambda *_: (mi.Color3f(0.0), mi.Color3f(1.0)))
+    s_1, t_1 = dr.if_stmt((s_f, t_f, *cs, *ks), need_1, whole, lambda s, t, *_: (mi.Color3f(s), mi.Color3f(t)))
     e = air.irradiance
     boxed = e * s_f + t_f * radiance + transmittance * (e * (s_1 - s_f) + (t_1 - t_f) * background)
     return boxed + w * (e * s_a + (t_a - 1.0) * boxed)
