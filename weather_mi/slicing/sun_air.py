@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kernel.jitarrays import aligned_float
-from .packets import packed, packet
+from .packets import packet
 
 TOP_ABOVE_BOX_M = 2000.0  # the table reaches this far above the box (as the path tracer's, kernel.scene_dict)
 COLUMN_SAMPLES = 128  # the slant columns' points per segment (``shell.slant_columns``: the colour within 1e-3)
@@ -86,13 +86,9 @@ def sun_rows(spec, z_top_m: float):
 
 
 @functools.lru_cache(maxsize=4)
-def _fine_rows(h0: float, h1: float, n: int):
-    """(fine heights (FINE_ROWS,), the row below each (int), its weight on the row above): the linear
-    interpolant of ``n`` uniform rows from h0 to h1 on ``FINE_ROWS`` heights (``np.interp``'s)."""
-    fine = np.linspace(h0, h1, FINE_ROWS)
-    f = np.clip((fine - h0) / (h1 - h0) * (n - 1), 0.0, n - 1.0)
-    i = np.minimum(f.astype(np.int64), n - 2)
-    return fine, i, (f - i)[:, None]
+def _fine_heights(h0: float, h1: float) -> np.ndarray:
+    """The ``FINE_ROWS`` heights from h0 to h1 (m) that the kernels' table holds."""
+    return np.linspace(h0, h1, FINE_ROWS)
 
 
 def sun_at_height(spec, z_m: float) -> np.ndarray:
@@ -112,11 +108,13 @@ def sun_air_input(mi, spec, grid_box) -> SunAir | None:
         return None
     import drjit as dr
     heights, rgb = sun_rows(spec, grid_box[1][2])
-    fine, i, w = _fine_rows(float(heights[0]), float(heights[-1]), heights.size)
-    rgb = rgb[i] * (1.0 - w) + rgb[i + 1] * w
+    fine = _fine_heights(float(heights[0]), float(heights[-1]))
+    table = np.zeros((FINE_ROWS, 4), np.float32)  # packed rows (``packets.packed``)
+    for c in range(3):
+        table[:, c] = np.interp(fine, heights, rgb[:, c])
     step = float(fine[1] - fine[0])
-    return SunAir(dr.opaque(mi.Float, float(fine[0])), dr.opaque(mi.Float, 1.0 / step),
-                  aligned_float(mi, packed(rgb)), int(fine.size))
+    return SunAir(dr.opaque(mi.Float, float(fine[0])), dr.opaque(mi.Float, 1.0 / step), aligned_float(mi, table),
+                  int(fine.size))
 
 
 def sun_colour_at(mi, air: SunAir, z):
