@@ -35,7 +35,9 @@ Not included: light scattered more than once by the air, the light the storm sca
 the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
 (``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing. Frames of 96 px a side or
 more integrate all this on every 4th pixel's ray and read it per pixel (``eye_air_coarse``); the tables' rows
-are packets of 4 floats (one gather each, ``packets.packed``).
+are packets of 4 floats (one gather each, ``packets.packed``): the air's by height holds its three profiles
+(molecules, ozone, aerosol), which per-channel cross sections turn into its coefficients (``cross_sections``), and
+the segments outside the box read the storm's shadow from the light volume's last plane (``light_shadow``).
 """
 from __future__ import annotations
 
