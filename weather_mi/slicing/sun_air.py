@@ -27,11 +27,12 @@ COLUMN_SAMPLES = 128  # the slant columns' points per segment (``shell.slant_col
 # 0.3% at 2 deg, 0.02% at 35 deg
 FINE_ROWS = 8192
 # a new sun (a drag of the sun) reads its rows off a table over sun elevations built once per atmosphere and box
-# (``elevation_table``: cubic in t = sqrt(elevation) on ``ELEVATION_NODES`` columns from ``ELEVATION_MIN_DEG`` to
-# 90 deg, one more beyond each end; 0.07 s once) instead of computing its slant columns: ``sun_air_input`` 0.32 ms
-# of the calling thread's CPU a new sun instead of 1.0; within 4.7e-5 of ``sun_by_height``'s rows (of the
-# brightest channel) at 2-90 deg; below ``ELEVATION_MIN_DEG`` (the terminator's heights, where a cubic on this grid
-# is 1-4% off) computed for the sun itself
+# (``elevation_table``: log XYZ, cubic in t = sqrt(elevation) on ``ELEVATION_NODES`` columns from
+# ``ELEVATION_MIN_DEG`` to 90 deg, one more beyond each end; 0.1 s once) instead of computing its slant columns:
+# ``sun_air_input`` 0.21 ms of the calling thread's CPU a new sun instead of 1.0; within 4.6e-5 of
+# ``sun_by_height``'s rows (of each row's brightest channel) at 2-90 deg, 1.8e-4 with AOD 0.4, 4.1e-4 with AOD 1
+# (at the dimmest heights of a low sun); below ``ELEVATION_MIN_DEG`` (the terminator's heights) computed for the
+# sun itself
 ELEVATION_MIN_DEG, ELEVATION_NODES = 2.0, 92
 
 
@@ -59,30 +60,35 @@ def sun_by_height(spec, z_top_m: float):
 
 @functools.lru_cache(maxsize=4)
 def elevation_table(atm, z_top_m: float):
-    """(t nodes (n,), heights (h,), rgb (n, h, 3)): ``sun_by_height``'s rows for suns at elevations t^2 deg on a
+    """(t nodes (n,), heights (h,), log XYZ (n, h, 3)): the logarithm of the direct sun's CIE XYZ (``sunlight.sun_xyz``,
+    positive: its linear sRGB may not be) on ``sun_by_height``'s heights for suns at elevations t^2 deg, on a
     uniform grid of t = sqrt(elevation) from ``ELEVATION_MIN_DEG`` to 90 deg and one node beyond each end (dense
-    near the horizon, where the colour changes fastest), for the atmosphere ``atm`` and a box whose top is ``z_top_m`` (m)."""
-    from ..optics.air import sun_rgb
-    from ..optics.air.sunlight import HEIGHT_SAMPLES
+    near the horizon, where the colour changes fastest), for the atmosphere ``atm`` and a box whose top is
+    ``z_top_m`` (m). The logarithm is nearly linear in the air mass, so a cubic holds to the dimmest sun."""
+    from ..optics.air.sunlight import HEIGHT_SAMPLES, sun_xyz
     dt = (np.sqrt(90.0) - np.sqrt(ELEVATION_MIN_DEG)) / (ELEVATION_NODES - 1)
     t = np.sqrt(ELEVATION_MIN_DEG) + dt * (np.arange(ELEVATION_NODES + 2) - 1.0)  # a node beyond each end
     heights = np.linspace(0.0, max(float(z_top_m), 0.0) + TOP_ABOVE_BOX_M, HEIGHT_SAMPLES)
     mu = np.sin(np.radians(t * t))
-    return t, heights, sun_rgb(atm, heights[None, :], mu[:, None], samples=COLUMN_SAMPLES)
+    xyz = sun_xyz(atm, heights[None, :], mu[:, None], samples=COLUMN_SAMPLES)
+    return t, heights, np.log(np.maximum(xyz, 1e-300))
 
 
 def sun_rows(spec, z_top_m: float):
-    """``sun_by_height(spec, z_top_m)``, read off ``elevation_table`` by cubic (Catmull-Rom) interpolation in
-    t = sqrt(elevation) for a sun at least ``ELEVATION_MIN_DEG`` high, computed for the sun itself below."""
+    """``sun_by_height(spec, z_top_m)``, read off ``elevation_table`` by cubic (Catmull-Rom) interpolation of log XYZ
+    in t = sqrt(elevation), then linear sRGB (``spectrum.linear_srgb``), for a sun at least ``ELEVATION_MIN_DEG``
+    high; computed for the sun itself below."""
+    from ..optics.spectrum import linear_srgb
     elevation = float(np.degrees(np.arcsin(np.clip(float(spec.sun.mu0), -1.0, 1.0))))
     if elevation < ELEVATION_MIN_DEG:
         return sun_by_height(spec, z_top_m)
-    t, heights, rgb = elevation_table(spec.atmosphere, float(z_top_m))
+    t, heights, log_xyz = elevation_table(spec.atmosphere, float(z_top_m))
     f = (np.sqrt(min(elevation, 90.0)) - t[0]) / (t[1] - t[0])
     i = min(max(int(f), 1), t.size - 3)
     u = f - i
-    p0, p1, p2, p3 = (rgb[k] for k in (i - 1, i, i + 1, i + 2))
-    return heights, p1 + 0.5 * u * (p2 - p0 + u * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3 + u * (3.0 * (p1 - p2) + p3 - p0)))
+    p0, p1, p2, p3 = (log_xyz[k] for k in (i - 1, i, i + 1, i + 2))
+    log = p1 + 0.5 * u * (p2 - p0 + u * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3 + u * (3.0 * (p1 - p2) + p3 - p0)))
+    return heights, linear_srgb(np.exp(log))
 
 
 @functools.lru_cache(maxsize=4)
