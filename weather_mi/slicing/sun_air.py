@@ -5,7 +5,8 @@ atmosphere the sun reaching a point at height h (m above sea level, the slicer's
 tracer's) is E_sun C(h, mu0), C the direct sun's linear sRGB after the air above h along the sun
 (``optics.air.sunlight.SunAirTable.by_height``: 1 in luminance above the air). The eye pass multiplies the
 sunlight it scatters (and the ground's) by C at the sample's height: a 1-D table over heights, an input of
-the frame (``SunAir``: a new sun uploads new values, nothing recompiles). Without an atmosphere it is None
+the frame (``SunAir``: a new sun's, ``sun_air_table.sun_air_input``, computed in a small kernel from a table kept
+per atmosphere; nothing recompiles). Without an atmosphere it is None
 and the eye pass is unchanged. C is the transmittance through all the air above the point (the box's
 included); the air along the eye rays, inside the box and out, is ``eye_air.py``'s.
 """
