@@ -37,8 +37,9 @@ def test_a_sun_below_the_tables_lowest_elevation_is_computed_for_itself():
 
 @pytest.mark.parametrize("elevation", [2.1, 4.0, 35.0, 88.0])
 def test_the_kernels_fine_rows_are_the_hosts(elevation):
-    """``sun_air_table.fine_rows`` (a kernel from the uploaded elevation table) against ``sun_rows`` interpolated on
-    the same fine heights by ``np.interp`` on the host: within 2e-5 of each height's brightest channel (float32)."""
+    """``sun_air_table.as_sun_air`` of a ``sun_source`` (a kernel from the uploaded elevation table) against
+    ``sun_rows`` interpolated on the same fine heights by ``np.interp`` on the host: within 2e-5 of each height's
+    brightest channel (float32)."""
     from weather_mi.kernel.variant import ensure_registered
     ensure_registered()
     import mitsuba as mi
@@ -47,12 +48,15 @@ def test_the_kernels_fine_rows_are_the_hosts(elevation):
     def reuse(name, key, make):
         return kept.setdefault((name, key), make())
     spec = types.SimpleNamespace(atmosphere=Atmosphere(), sun=wm.Sun(240.0, elevation))
-    h0, h1, rgb = sun_air_table.fine_rows(mi, spec, 18000.0, 4096, reuse)
+    source = sun_air_table.sun_source(mi, spec, 18000.0, 4096, reuse)
+    sun = sun_air_table.as_sun_air(mi, source)
+    h0, h1, rgb = float(source.h0[0]), float(source.h0[0]) + 4095 / float(source.inv_dh[0]), sun.rgb
     heights, rows = sun_air_table.sun_rows(spec, 18000.0)
     fine = np.linspace(h0, h1, 4096)
     host = np.stack([np.interp(fine, heights, rows[:, c]) for c in range(3)], axis=1)
     dev = np.asarray(rgb).reshape(-1, 4)
-    assert (h0, h1) == (heights[0], heights[-1]) and np.all(dev[:, 3] == 0)
+    np.testing.assert_allclose((h0, h1), (heights[0], heights[-1]), rtol=1e-6)
+    assert np.all(dev[:, 3] == 0)
     assert np.max(np.abs(dev[:, :3] - host) / np.abs(host).max(axis=1, keepdims=True)) < 2e-5
 
 

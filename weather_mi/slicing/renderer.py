@@ -46,7 +46,7 @@ from .periodic import PeriodicSlicing
 from .rays import Scalars, f32, phase_index, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
 from .sun_air import sun_at_height
-from .sun_air_table import sun_air_input
+from .sun_air_table import as_sun_air, sun_air_input
 from .texture_storage import ChannelTextures, replace_storage
 from .view import ViewCache
 
@@ -497,7 +497,7 @@ class SliceRenderer:
         out = composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
                         e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
                         e.sca_ratio, e.below, self.tile_box, None if self.differentiable else inputs.tex_light,
-                        e.sun_air, depth=e.eye_air is not None)
+                        as_sun_air(mi, e.sun_air), depth=e.eye_air is not None)
         if e.eye_air is None:
             return out
         shadow = light_shadow(mi, self.light, e.eye_air.to_sun)  # the storm's shadow on the air

@@ -4,12 +4,14 @@ the calling thread's CPU, and the table the frame reads (``sun_air.SunAir``) was
 place: freeing last frame's one queued a host function that waited for the interpreter's lock behind the frame's
 kernels (1.9-9 ms of a worker thread, kernel history, the drag at 300 x 300 on 2 loaded cores). Here the
 per-atmosphere table holds log CIE XYZ (positive, nearly linear in the air mass) on ``sun_by_height``'s heights
-for suns on a grid in sqrt(elevation), uploaded once; a new sun's rows are its cubic (Catmull-Rom) interpolation,
-exp, linear sRGB and the linear interpolant on the ``sun_air.FINE_ROWS`` heights, all in one small kernel whose
-inputs are opaque scalars (``fine_rows``: a new sun recompiles nothing)."""
+for suns on a grid in sqrt(elevation), uploaded once; a new sun gives four weights and a node (``SunAirSource``, opaque
+values: 0.10 ms of the calling thread's CPU), and the frame's kernels compute its rows (``as_sun_air``: Catmull-Rom,
+exp, linear sRGB and the linear interpolant on the ``sun_air.FINE_ROWS`` heights, one small kernel recorded with the
+frame's: a new sun traces and recompiles nothing).""""""
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -62,17 +64,16 @@ def _fine_heights(h0: float, h1: float) -> np.ndarray:
     return np.linspace(h0, h1, FINE_ROWS)
 
 
-def sun_air_input(mi, spec, grid_box, reuse=None) -> SunAir | None:
+def sun_air_input(mi, spec, grid_box, reuse=None) -> SunAir | SunAirSource | None:
     """The frame's ``SunAir`` for ``spec`` in the box ``grid_box`` ((lo, hi) corners, m); None without an
     atmosphere. ``reuse``: None, or the renderer's ``SliceRenderer._reuse``: a sun at least
-    ``ELEVATION_MIN_DEG`` high then reads its table off the atmosphere's elevation table in a kernel
-    (``fine_rows``: no host array per new sun)."""
+    ``ELEVATION_MIN_DEG`` high then gives its ``SunAirSource``, whose table the frame's kernels compute from the
+    atmosphere's elevation table (``as_sun_air``: no host array per new sun)."""
     if getattr(spec, "atmosphere", None) is None:
         return None
     import drjit as dr
     if reuse is not None and spec.sun.mu0 >= np.sin(np.radians(ELEVATION_MIN_DEG)):
-        h0, h1, rgb = fine_rows(mi, spec, float(grid_box[1][2]), FINE_ROWS, reuse)
-        return SunAir(dr.opaque(mi.Float, h0), dr.opaque(mi.Float, (FINE_ROWS - 1) / (h1 - h0)), rgb, FINE_ROWS)
+        return sun_source(mi, spec, float(grid_box[1][2]), FINE_ROWS, reuse)
     heights, rgb = sun_rows(spec, grid_box[1][2])
     fine = _fine_heights(float(heights[0]), float(heights[-1]))
     table = np.zeros((FINE_ROWS, 4), np.float32)  # packed rows (``packets.packed``)
@@ -97,38 +98,61 @@ def _node(spec, t) -> tuple[int, float]:
     return i, f - i
 
 
-def fine_rows(mi, spec, z_top_m: float, rows: int, reuse):
-    """(lowest height, highest height (m), mi.Float (rows x 4)): ``sun_rows`` on ``rows`` uniform heights (linear
-    between its own, as ``np.interp``), packed (``packets.packed``), computed in a kernel from the atmosphere's
-    ``elevation_table`` (uploaded once through ``reuse``, the renderer's ``SliceRenderer._reuse``); the sun at least
-    ``ELEVATION_MIN_DEG`` high."""
+@dataclass
+class SunAirSource:
+    """A new sun's ``sun_air.SunAir`` before its table: what ``as_sun_air`` computes the table from inside the
+    frame's kernels (recorded with them: a new sun traces nothing; opaque values, the ints part of the structure)."""
+
+    h0: object        # mi.Float: the table's lowest height (m above sea level)
+    inv_dh: object    # mi.Float: 1 / its height step (1/m)
+    table: object     # mi.Float: ``elevation_table``'s log XYZ, packed (nodes x n_h x 4)
+    weights: tuple    # 4 mi.Float: the Catmull-Rom weights of the sun's four nodes
+    base: object      # mi.UInt32: the first of those nodes' rows
+    n_h: int          # heights of ``elevation_table``
+    rows: int         # heights of the frame's table (``sun_air.FINE_ROWS``)
+
+
+def sun_source(mi, spec, z_top_m: float, rows: int, reuse) -> SunAirSource:
+    """The ``SunAirSource`` of ``spec``'s sun (at least ``ELEVATION_MIN_DEG`` high) for a box whose top is
+    ``z_top_m``: ``sun_rows`` on ``rows`` uniform heights (linear between its own, as ``np.interp``) once
+    ``as_sun_air`` computes it; the atmosphere's ``elevation_table`` uploaded once through ``reuse`` (the renderer's
+    ``SliceRenderer._reuse``)."""
     import drjit as dr
-    from ..optics.spectrum import linear_srgb
     key = (spec.atmosphere, float(z_top_m))
     t, heights, log_xyz = elevation_table(*key)
-    n_h = heights.size
     table = reuse("sun air table", key, lambda: aligned_float(mi, packed(log_xyz)))
     i, u = _node(spec, t)
-    weights = [dr.opaque(mi.Float, w) for w in _catmull_rom(u)]
-    base = dr.opaque(mi.UInt32, (i - 1) * n_h)
+    h0, h1 = float(heights[0]), float(heights[-1])
+    return SunAirSource(dr.opaque(mi.Float, h0), dr.opaque(mi.Float, (rows - 1) / (h1 - h0)), table,
+                        tuple(dr.opaque(mi.Float, w) for w in _catmull_rom(u)),
+                        dr.opaque(mi.UInt32, (i - 1) * heights.size), int(heights.size), int(rows))
+
+
+def as_sun_air(mi, sun_air):
+    """``sun_air`` (None, a ``sun_air.SunAir``) as it is, or the ``SunAir`` of a ``SunAirSource``: its table computed
+    (inside a kernel: Catmull-Rom in log XYZ, exp, linear sRGB, linear in height, packed)."""
+    if not isinstance(sun_air, SunAirSource):
+        return sun_air
+    import drjit as dr
+    from ..optics.spectrum import linear_srgb
+    s, n_h = sun_air, sun_air.n_h
     cols = linear_srgb(np.eye(3))  # XYZ's unit vectors in linear sRGB (its matrix's columns)
-    f = mi.Float(dr.arange(mi.UInt32, rows)) * ((n_h - 1) / (rows - 1))
+    f = mi.Float(dr.arange(mi.UInt32, s.rows)) * ((n_h - 1) / (s.rows - 1))
     j = dr.minimum(mi.UInt32(f), n_h - 2)
     a = f - mi.Float(j)
 
-    def srgb(row):  # the sun's linear sRGB at height row ``row`` of the table
+    def srgb(row):  # the sun's linear sRGB at height row ``row`` of the elevation table
         log = mi.Color3f(0.0)
-        for k, w in enumerate(weights):
-            v = dr.gather(mi.Vector4f, table, base + k * n_h + row)
+        for k, w in enumerate(s.weights):
+            v = dr.gather(mi.Vector4f, s.table, s.base + k * n_h + row)
             log += w * mi.Color3f(v.x, v.y, v.z)
         xyz = dr.exp(log)
         return sum((xyz[c] * mi.Color3f(*(float(x) for x in cols[c])) for c in range(1, 3)),
                    xyz[0] * mi.Color3f(*(float(x) for x in cols[0])))
     lo, hi = srgb(j), srgb(j + 1)
     rgb = lo * (1.0 - a) + hi * a
-    out = dr.ravel(mi.Vector4f(rgb.x, rgb.y, rgb.z, 0.0))
-    dr.make_opaque(out)
-    return float(heights[0]), float(heights[-1]), out
+    return SunAir(s.h0, s.inv_dh, dr.ravel(mi.Vector4f(rgb.x, rgb.y, rgb.z, 0.0)), s.rows)
 
 
-__all__ = ["ELEVATION_MIN_DEG", "elevation_table", "fine_rows", "sun_air_input", "sun_rows"]
+__all__ = ["ELEVATION_MIN_DEG", "SunAirSource", "as_sun_air", "elevation_table", "sun_air_input", "sun_rows",
+           "sun_source"]
