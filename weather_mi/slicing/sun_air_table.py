@@ -7,7 +7,7 @@ per-atmosphere table holds log CIE XYZ (positive, nearly linear in the air mass)
 for suns on a grid in sqrt(elevation), uploaded once; a new sun gives four weights and a node (``SunAirSource``, opaque
 values: 0.10 ms of the calling thread's CPU), and the frame's kernels compute its rows (``as_sun_air``: Catmull-Rom,
 exp, linear sRGB and the linear interpolant on the ``sun_air.FINE_ROWS`` heights, one small kernel recorded with the
-frame's: a new sun traces and recompiles nothing).""""""
+frame's: a new sun traces and recompiles nothing)."""
 from __future__ import annotations
 
 import functools
