@@ -105,11 +105,13 @@ def test_the_slicers_source_on_a_vertical_ray_is_omega_p_one_minus_t():
     H, omega, step = 8000.0, 0.9, 10.0
     sigma0 = np.array([1.2e-5, 2.5e-5, 5.5e-5])
     h = np.arange(0.0, 60e3 + step, step)
-    ext = sigma0 * np.exp(-h / H)[:, None]
-    table = np.concatenate([ext, omega * ext, np.zeros_like(ext)], axis=1)
+    # the profiles (molecules, ozone, aerosol) and their cross sections (eye_air.cross_sections): molecules scatter
+    # omega of the extinction, the "ozone" absorbs the rest
+    prof = np.exp(-h / H)[:, None] * np.array([omega, 1.0 - omega, 0.0])
+    cross = tuple(mi.Color3f(*c.tolist()) for c in (sigma0, sigma0, np.zeros(3), np.zeros(3)))
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
     to_sun = np.array([0.0, -math.cos(math.radians(25.0)), math.sin(math.radians(25.0))])
-    air = EyeAir(air=mi.Float(packed(table)), h_step=op(1.0 / step), n_h=h.size,
+    air = EyeAir(air=mi.Float(packed(prof)), cross=cross, h_step=op(1.0 / step), n_h=h.size,
                  sun_rgb=mi.Float(packed(np.ones((2, 2, 3)))), sun_mu=(op(-1.0), op(0.5), op(1.0 / 100e3)), n_mu=2,
                  n_s=2, to_sun=mi.Vector3f(*to_sun.tolist()), irradiance=mi.Color3f(1.0), aerosol_g=op(0.7),
                  centre=mi.Point3f(0.0, 0.0, 0.0), box=(mi.Point3f(-1.0), mi.Point3f(1.0)), floor=op(0.0),

@@ -35,7 +35,9 @@ Not included: light scattered more than once by the air, the light the storm sca
 the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
 (``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing. Frames of 96 px a side or
 more integrate all this on every 4th pixel's ray and read it per pixel (``eye_air_coarse``); the tables' rows
-are packets of 4 floats (one gather each, ``packets.packed``).
+are packets of 4 floats (one gather each, ``packets.packed``): the air's by height holds its three profiles
+(molecules, ozone, aerosol), which per-channel cross sections turn into its coefficients (``cross_sections``), and
+the segments outside the box read the storm's shadow from the light volume's last plane (``light_shadow``).
 """
 from __future__ import annotations
 
@@ -62,8 +64,10 @@ class EyeAir:
     """The air's tables and the scene's values, as the frame's kernels read them (opaque Dr.Jit values; the
     ints and bools are part of a recording's structure)."""
 
-    air: object         # mi.Float (n_h x 12): per height, extinction, molecules' and aerosol's scattering (R, G, B,
-                        # each padded to a packet of 4), 1/m (``packets.packed``)
+    air: object         # mi.Float (n_h x 4): per height, the profiles (molecules, ozone, aerosol; ``height_table``),
+                        # padded to a packet of 4 (``packets.packed``): one packet a row
+    cross: tuple        # mi.Color3f each: (molecules' extinction, ozone's, aerosol's, aerosol's scattering) per unit of
+                        # the profiles (``cross_sections``): the table's columns times these are the coefficients, 1/m
     h_step: object      # mi.Float: 1 / the height table's step (1/m); its heights start at sea level
     n_h: int            # rows of the height table
     sun_rgb: object     # mi.Float (n_mu x n_s x 4): the direct sun's linear sRGB by (mu, height), padded (``sun_table``)
@@ -97,17 +101,30 @@ def sun_table(atm):
     return SunAirTable(heights_m=heights, mu=mu, rgb=rgb.astype(np.float32))
 
 
-def height_table(atm, wavelengths_nm=None) -> np.ndarray:
-    """(n_h, 9): extinction, molecules' scattering, aerosol's scattering (1/m) at R, G, B, heights 0 to
-    ``eye_path.TOP_M`` every ``HEIGHT_STEP_M``."""
+PROFILE_SCALE = 1e-25  # the table's number densities (1/m^3) times this (the cross sections over it: float32 both)
+
+
+def height_table(atm) -> np.ndarray:
+    """(n_h, 3): the air's profiles at heights 0 to ``eye_path.TOP_M`` every ``HEIGHT_STEP_M``: molecules and ozone
+    (number densities, 1/m^3, times ``PROFILE_SCALE``) and the aerosol's extinction at 550 nm (1/m). The air's
+    extinction is linear in them (``Atmosphere.extinction_per_m``), so one packet a row, interpolated, gives all of
+    its coefficients at every channel (``cross_sections``): 2 gathers a point instead of 6."""
     from ..optics.air.eye_path import TOP_M
+    h = np.arange(0.0, TOP_M + HEIGHT_STEP_M / 2, HEIGHT_STEP_M)
+    return np.stack([atm.air_number_density_m3(h) * PROFILE_SCALE, atm.ozone_number_density_m3(h) * PROFILE_SCALE,
+                     atm.aerosol_extinction_550_per_m(h)], axis=1)
+
+
+def cross_sections(atm, wavelengths_nm=None) -> np.ndarray:
+    """(4, 3): per unit of ``height_table``'s columns, the molecules' extinction (= their scattering), ozone's
+    (absorption), the aerosol's extinction and its scattering at R, G, B (``Atmosphere.extinction_per_m``'s terms)."""
     from ..optics.air.inside import CHANNEL_NM
+    from ..optics.air.ozone import cross_section_m2 as ozone_m2
     from ..optics.rayleigh import cross_section_m2
     wl = np.asarray(CHANNEL_NM if wavelengths_nm is None else wavelengths_nm, np.float64)
-    h = np.arange(0.0, TOP_M + HEIGHT_STEP_M / 2, HEIGHT_STEP_M)
-    molecules = atm.air_number_density_m3(h)[:, None] * cross_section_m2(wl * 1e-9)
-    aerosol = atm.aerosol_extinction_550_per_m(h)[:, None] * atm.aerosol_factor(wl)
-    return np.concatenate([atm.extinction_per_m(wl, h), molecules, aerosol * atm.aerosol_ssa], axis=1)
+    aerosol = atm.aerosol_factor(wl)
+    return np.stack([cross_section_m2(wl * 1e-9) / PROFILE_SCALE, ozone_m2(wl) / PROFILE_SCALE, aerosol,
+                     aerosol * atm.aerosol_ssa])
 
 
 def diffuse_light(spec, e_sky) -> np.ndarray:
@@ -150,9 +167,10 @@ def _fixed_inputs(mi, atm, bbox, floor) -> dict:
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
     table = sun_table(atm)
     air, rgb = aligned_float(mi, packed(height_table(atm))), aligned_float(mi, packed(table.rgb))
+    cross = tuple(mi.Color3f(*(op(v) for v in row)) for row in cross_sections(atm))
     (x0, y0, z0), (x1, y1, z1) = (np.asarray(p, np.float64) for p in bbox)
     lo = (x0, y0, max(z0, floor) if floor is not None else z0)
-    return dict(air=air, h_step=op(1.0 / HEIGHT_STEP_M), n_h=dr.width(air) // 12, sun_rgb=rgb,
+    return dict(air=air, cross=cross, h_step=op(1.0 / HEIGHT_STEP_M), n_h=dr.width(air) // 4, sun_rgb=rgb,
                 sun_mu=(op(table.mu[0]), op((table.mu.size - 1) / (table.mu[-1] - table.mu[0])),
                         op((table.heights_m.size - 1) / (table.heights_m[-1] - table.heights_m[0]))),
                 n_mu=int(table.mu.size), n_s=int(table.heights_m.size), aerosol_g=op(atm.aerosol_g),
@@ -199,8 +217,10 @@ def source_at(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
         r = dr.norm(q)
         h = dr.maximum(r - EARTH_RADIUS_M, 0.0)
         fh = h * air.h_step
-        ext = lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 0)
-        sca_r, sca_a = lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 1), lerp_rows(mi, dr, air.air, fh, air.n_h, 3, 2)
+        prof = lerp_rows(mi, dr, air.air, fh, air.n_h)  # (molecules, ozone, aerosol): one packet a row
+        mol, ozone, aer, aer_sca = air.cross
+        sca_r, sca_a = prof.x * mol, prof.z * aer_sca
+        ext = sca_r + prof.y * ozone + prof.z * aer
         src = (sca_r * p_r + sca_a * p_a) * _sun_colour(mi, dr, air, h, dr.dot(q, air.to_sun) / r)
         if shadow is not None:  # the storm's shadow on the direct sun
             src *= shadow(o + s * d)
@@ -320,7 +340,7 @@ def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background,
     # without crossing the box (w = 0: not integrated)
     sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
     w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
-    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, shadow), mi.Float(0.0) + 0.0 * t_in,
+    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, outside_box(shadow)), mi.Float(0.0) + 0.0 * t_in,
                              dr.select(w > 0, dr.select(hit, t_in, t_end), 0.0), NODES, True)
     return boxed + w * (e * s_a + (t_a - 1.0) * boxed)
 
@@ -329,17 +349,24 @@ def light_shadow(mi, light, to_sun):
     """The storm's shadow at world points (mi.Point3f -> mi.Float) from the sun's bound light volume
     ``light`` (``LightVolume``, its direct light D): a point outside the slicing box reads D where its sun ray
     enters the box (where the sunlight leaves it towards the point, nudged 0.1% of the chord inside), 1 where
-    the sun ray misses the box or leaves it behind the point; a point inside reads D there."""
+    the sun ray misses the box or leaves it behind the point; a point inside reads D there. Its ``outside``
+    attribute: the same for points known to lie outside the slicing box (the eye rays' segments before the
+    model's box), read from the light leaving the box on the point's light ray (the light volume's last plane:
+    one bilinear read of a plane instead of two; the same light, as the planes beyond a light ray's last
+    occupied slab hold it unchanged)."""
     import drjit as dr
     lo, hi = (mi.Point3f(*(float(v) for v in c)) for c in (light.lo, light.hi))
 
     inv = dr.rcp(dr.select(dr.abs(to_sun) < 1e-12, 1e-12, to_sun))  # once per frame, not per sample
 
-    def shadow(p):
+    def towards_sun(p):
+        """(t_in, t_out) of the sun rays from p against the slicing box (t_in >= 0)."""
         t0, t1 = (lo - p) * inv, (hi - p) * inv
         a, b = dr.minimum(t0, t1), dr.maximum(t0, t1)
-        t_in = dr.maximum(dr.maximum(dr.maximum(a.x, a.y), a.z), 0.0)
-        t_out = dr.minimum(dr.minimum(b.x, b.y), b.z)
+        return dr.maximum(dr.maximum(dr.maximum(a.x, a.y), a.z), 0.0), dr.minimum(dr.minimum(b.x, b.y), b.z)
+
+    def shadow(p):
+        t_in, t_out = towards_sun(p)
         ahead = t_out > t_in
         t = t_in + 1e-3 * dr.maximum(t_out - t_in, 0.0)
         # D as the store holds it (its logarithm where it holds logarithms): no log or exp per texel; a packet
@@ -347,7 +374,20 @@ def light_shadow(mi, light, to_sun):
         return dr.if_stmt((p + t * to_sun, ahead), ahead,
                           lambda q, a: light.lookup(q, log_direct=light.log_store, active=a)[0],
                           lambda q, a: mi.Float(1.0))
+
+    def outside(p):
+        t_in, t_out = towards_sun(p)
+        ahead = t_out > t_in
+        return dr.if_stmt((p, ahead), ahead,
+                          lambda q, a: light.lookup(q, exit_plane=True, log_direct=light.log_store, active=a)[0],
+                          lambda q, a: mi.Float(1.0))
+    shadow.outside = outside
     return shadow
+
+
+def outside_box(shadow):
+    """``light_shadow``'s function for points outside the slicing box (None stays None)."""
+    return getattr(shadow, "outside", shadow)
 
 
 def _top_m() -> float:
@@ -356,4 +396,4 @@ def _top_m() -> float:
 
 
 __all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "box_interval", "eye_air_input", "source_at",
-           "height_table", "light_shadow", "profile", "ray_ends", "seen_through_air", "segment"]
+           "cross_sections", "height_table", "light_shadow", "outside_box", "profile", "ray_ends", "seen_through_air", "segment"]

@@ -34,7 +34,10 @@ pixel (``eye_air.seen_through_air``).
 
 Coarse rays that miss the box evaluate no point of its profile (their rows: T = 1, S = 0), those that end on
 the sky model's sky without crossing the box integrate no air outside it (no pixel of their kind reads it), and
-pixels of that kind keep the eye pass's radiance: each a branch LLVM takes per packet of lanes (the same floats).
+pixels of that kind keep the eye pass's radiance: each a branch LLVM takes per packet of lanes (the same floats);
+a pixel reads the box's rows at its cloud's depth and at the box's end behind branches of the same kind (packets of
+pixels on the ground or in a clear part of the box read none of them; Dr.Jit on one thread, the drag: the per-pixel
+composite ~3 -> ~1.3 ms of CPU a frame).
 
 The cost (benchmarks/slicing_air.py, the drag at 300 x 300, 128 slices, frame by frame against no air): the
 rate with the air at 0.89-0.94 of the rate without it in the uniform modes (benchmarks/README.md, issue 38
@@ -43,7 +46,7 @@ part 3), 0.53-0.65 when every pixel integrated its own (and the box's rows were 
 from __future__ import annotations
 
 from .eye import OPAQUE_T
-from .eye_air import EyeAir, profile, ray_ends, source_at
+from .eye_air import EyeAir, outside_box, profile, ray_ends, source_at
 from .eye_air_quadrature import NODES, gauss_segment
 
 STEP = 4            # the coarse grid: every STEP-th pixel in x and y (the last row and column included)
@@ -79,7 +82,7 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
     t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
     kind = _kind(dr, hit, t_ground)
     # A: not where the ray ends on the sky model's sky without crossing the box (no pixel of that kind uses it)
-    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, shadow), 0.0 * t_in,
+    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, outside_box(shadow)), 0.0 * t_in,
                              dr.select(hit, t_in, dr.select(kind == 2.0, 0.0, t_end)), NODES, True)
     rows = BOX_POINTS + 1
     out = dr.empty(mi.Float, nx * ny * rows * ROW)  # (every float written below)
@@ -153,11 +156,12 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
         t = dr.gather(mi.Vector4f, table, c * (rows * 2) + 2 * k + 1, active)
         return mi.Color3f(s.x, s.y, s.z), mi.Color3f(t.x, t.y, t.z), s.w
     zero = dr.zeros(mi.Color3f, dr.width(t_in))
-    s_a, t_a, s_f, t_f, s_1, t_1 = zero, zero, zero, zero, zero, zero
+    s_a, t_a = zero, zero
     total, plain = mi.Float(0.0), []
     # what each pixel reads: A where it counts (w > 0), the box at the cloud's depth where there is cloud, the
     # whole box where the cloud lets light through (elsewhere: S = 0, T = 1 in front of the cloud, nothing seen
-    # behind it)
+    # behind it); the box's rows each behind a branch that LLVM takes per packet of lanes (packets of pixels
+    # that need none of them read none)
     need_a, need_f, need_1 = w > 0, hit & (transmittance < 1.0), hit & (transmittance > OPAQUE_T)
     for c, wgt in corners:
         sa, ta, flag = read(c, BOX_POINTS, need_a | hit)
@@ -166,17 +170,29 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
         total += wgt_same
     use_all = total < 1e-3  # no neighbour on the pixel's side: all four
     norm = dr.select(use_all, 1.0, dr.rcp(dr.maximum(total, 1e-3)))
+    cs, ks = [], []
     for c, wgt, wgt_same, sa, ta in plain:
         k = dr.select(use_all, wgt, wgt_same) * norm
-        sl, tl, _ = read(c, i0, need_f)
-        su, tu, _ = read(c, i0 + 1, need_f)
-        se, te, _ = read(c, BOX_POINTS - 1, need_1)
         s_a, t_a = s_a + k * sa, t_a + k * ta
-        s_f, t_f = s_f + k * (sl + (su - sl) * f), t_f + k * (tl + (tu - tl) * f)
-        s_1, t_1 = s_1 + k * se, t_1 + k * te
-    one = mi.Color3f(1.0)
-    s_f, t_f = dr.select(need_f, s_f, zero), dr.select(need_f, t_f, one)
-    s_1, t_1 = dr.select(need_1, s_1, s_f), dr.select(need_1, t_1, t_f)
+        cs.append(c)
+        ks.append(k)
+
+    def at_depth(i0, f, *ck):  # the box's cumulative air at the cloud's depth (rows i0 and i0 + 1)
+        s_f, t_f = mi.Color3f(0.0), mi.Color3f(0.0)
+        for c, k in zip(ck[:4], ck[4:]):
+            sl, tl, _ = read(c, i0, True)
+            su, tu, _ = read(c, i0 + 1, True)
+            s_f, t_f = s_f + k * (sl + (su - sl) * f), t_f + k * (tl + (tu - tl) * f)
+        return s_f, t_f
+
+    def whole(s_f, t_f, *ck):  # ... and through the whole box (its last row)
+        s_1, t_1 = mi.Color3f(0.0), mi.Color3f(0.0)
+        for c, k in zip(ck[:4], ck[4:]):
+            se, te, _ = read(c, BOX_POINTS - 1, True)
+            s_1, t_1 = s_1 + k * se, t_1 + k * te
+        return s_1, t_1
+    s_f, t_f = dr.if_stmt((i0, f, *cs, *ks), need_f, at_depth, lambda *_: (mi.Color3f(0.0), mi.Color3f(1.0)))
+    s_1, t_1 = dr.if_stmt((s_f, t_f, *cs, *ks), need_1, whole, lambda s, t, *_: (mi.Color3f(s), mi.Color3f(t)))
     e = air.irradiance
     boxed = e * s_f + t_f * radiance + transmittance * (e * (s_1 - s_f) + (t_1 - t_f) * background)
     return boxed + w * (e * s_a + (t_a - 1.0) * boxed)

@@ -96,7 +96,8 @@ class EyeInputs:
     jitter_rotation: object  # slab-offset rotation of the frame index (jitter.py), opaque Float
     sca_ratio: object      # None, or beta_sca / beta where the eye's texture holds beta alone (opaque Float)
     below: object          # None, or the lit ground's radiance x sky_gain lighting the medium from below, mi.Color3f
-    sun_air: SunAir | None = None  # None, or the sun's colour per height after the air (spec.atmosphere, sun_air.py)
+    sun_air: SunAir | None = None  # None, or the sun's colour per height after the air (spec.atmosphere, sun_air.py; or
+    # a new sun's sun_air_table.SunAirSource, its table computed in the frame's kernels)
     eye_air: EyeAir | None = None  # None, or the air along the eye rays, in and outside the box (eye_air.py)
 
 

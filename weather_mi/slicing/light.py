@@ -376,8 +376,9 @@ class LightVolume:
         if f.jitter is not None:
             return self._lookup_offset(kf, x0, y0, fx, fy, outside, texel, light, with_previous, exit_plane,
                                        unlit_value)
-        here, after = plane(k0), plane(k0 + 1)
-        val = light((1.0 - fk) * here + fk * after)
+        last = exit_plane and not with_previous  # the last plane alone (the same floats as at weights 0 and 1)
+        here, after = (None, plane(n_slices)) if last else (plane(k0), plane(k0 + 1))
+        val = light(after if last else (1.0 - fk) * here + fk * after)
         u0, u1 = unlit_value
         unlit = (kf < -0.5) | outside
         out = (dr.select(unlit, u0, val[0]), dr.select(unlit, u1, val[1]))

@@ -45,7 +45,8 @@ from .occupancy import OccupancyMap
 from .periodic import PeriodicSlicing
 from .rays import Scalars, f32, phase_index, phase_table, phase_values
 from .supersample import block_mean, block_mean_jit, fine_spec
-from .sun_air import sun_air_input, sun_at_height
+from .sun_air import sun_at_height
+from .sun_air_table import as_sun_air, sun_air_input
 from .texture_storage import ChannelTextures, replace_storage
 from .view import ViewCache
 
@@ -477,7 +478,7 @@ class SliceRenderer:
                          diffuse_colour, model, _colour(mi, e_sky / np.pi) * kernel_scalar(mi, gain), ground,
                          kernel_scalar(mi, params.slab_jitter), kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
                          sca_ratio, below, self._reuse("sun air", (spec.atmosphere, float(spec.sun.mu0)),
-                                                       lambda: sun_air_input(mi, spec, self.grid_box)),
+                                                       lambda: sun_air_input(mi, spec, self.grid_box, self._reuse)),
                          None if not self._eye_air else eye_air_input(mi, spec, self.vol.bbox, self._reuse, e_sky,
                                                                       not self.vol.periodic))
 
@@ -496,7 +497,7 @@ class SliceRenderer:
         out = composite(mi, self.light.frame, self.light.n_slices, e.rays, inputs.tex_eye, self.grid_box,
                         e.phase_colour, e.diffuse_colour, model, e.ambient, e.ground, self.differentiable, offset,
                         e.sca_ratio, e.below, self.tile_box, None if self.differentiable else inputs.tex_light,
-                        e.sun_air, depth=e.eye_air is not None)
+                        as_sun_air(mi, e.sun_air), depth=e.eye_air is not None)
         if e.eye_air is None:
             return out
         shadow = light_shadow(mi, self.light, e.eye_air.to_sun)  # the storm's shadow on the air

@@ -5,7 +5,8 @@ atmosphere the sun reaching a point at height h (m above sea level, the slicer's
 tracer's) is E_sun C(h, mu0), C the direct sun's linear sRGB after the air above h along the sun
 (``optics.air.sunlight.SunAirTable.by_height``: 1 in luminance above the air). The eye pass multiplies the
 sunlight it scatters (and the ground's) by C at the sample's height: a 1-D table over heights, an input of
-the frame (``SunAir``: a new sun uploads new values, nothing recompiles). Without an atmosphere it is None
+the frame (``SunAir``: a new sun's, ``sun_air_table.sun_air_input``, computed in a small kernel from a table kept
+per atmosphere; nothing recompiles). Without an atmosphere it is None
 and the eye pass is unchanged. C is the transmittance through all the air above the point (the box's
 included); the air along the eye rays, inside the box and out, is ``eye_air.py``'s.
 """
@@ -15,8 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kernel.jitarrays import aligned_float
-from .packets import packed, packet
+from .packets import packet
 
 TOP_ABOVE_BOX_M = 2000.0  # the table reaches this far above the box (as the path tracer's, kernel.scene_dict)
 COLUMN_SAMPLES = 128  # the slant columns' points per segment (``shell.slant_columns``: the colour within 1e-3)
@@ -59,20 +59,6 @@ def sun_at_height(spec, z_m: float) -> np.ndarray:
                               samples=COLUMN_SAMPLES), dtype=np.float64).reshape(3)
 
 
-def sun_air_input(mi, spec, grid_box) -> SunAir | None:
-    """The frame's ``SunAir`` for ``spec`` in the box ``grid_box`` ((lo, hi) corners, m); None without an
-    atmosphere."""
-    if getattr(spec, "atmosphere", None) is None:
-        return None
-    import drjit as dr
-    heights, rgb = sun_by_height(spec, grid_box[1][2])
-    fine = np.linspace(heights[0], heights[-1], FINE_ROWS)
-    rgb = np.stack([np.interp(fine, heights, rgb[:, c]) for c in range(3)], axis=1)
-    step = float(fine[1] - fine[0])
-    return SunAir(dr.opaque(mi.Float, float(fine[0])), dr.opaque(mi.Float, 1.0 / step),
-                  aligned_float(mi, packed(rgb)), int(fine.size))
-
-
 def sun_colour_at(mi, air: SunAir, z):
     """The sun's colour (mi.Color3f) at heights z (mi.Float, m above sea level): the table's nearest row
     (``FINE_ROWS``), clamped to its ends (inside a kernel)."""
@@ -80,4 +66,4 @@ def sun_colour_at(mi, air: SunAir, z):
     return packet(mi, dr, air.rgb, mi.UInt32(dr.clip((z - air.h0) * air.inv_dh + 0.5, 0.0, float(air.n - 1))))
 
 
-__all__ = ["SunAir", "sun_by_height", "sun_at_height", "sun_air_input", "sun_colour_at"]
+__all__ = ["SunAir", "sun_by_height", "sun_at_height", "sun_colour_at"]
