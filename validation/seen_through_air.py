@@ -186,15 +186,15 @@ def effective_mu0(mu0: float) -> float:
     return float(mu0 + 0.50572 * (96.07995 - theta) ** -1.6364)
 
 
-def path_radiance(origins, ends, to_sun, wavelength_nm, albedo: float = 0.15) -> tuple:
+def path_radiance(origins, ends, to_sun, wavelength_nm, albedo: float = 0.15, disort_nm=DISORT_NM) -> tuple:
     """Eq. 2 per path: (L_path (N, n) per unit irradiance of the sun above the air, T (N, n)) on ``wavelength_nm``
-    (the DISORT radiances log-linear between DISORT_NM, constant beyond)."""
+    (the DISORT radiances at ``disort_nm``, log-linear between them, constant beyond)."""
     o, e = np.asarray(origins, np.float64), np.asarray(ends, np.float64)
     mu, phi = view_geometry(o, e, to_sun)
     mu0 = effective_mu0(float(np.asarray(to_sun, np.float64)[2] / np.linalg.norm(to_sun)))
-    i = disort_radiance(mu0, np.r_[o[:, 2], e[:, 2]], np.r_[mu, mu], np.r_[phi, phi], albedo)
+    i = disort_radiance(mu0, np.r_[o[:, 2], e[:, 2]], np.r_[mu, mu], np.r_[phi, phi], albedo, disort_nm)
     wl = np.asarray(wavelength_nm, np.float64)
-    fine = np.exp(np.stack([np.interp(wl, DISORT_NM, np.log(np.maximum(v, 1e-30))) for v in i.T]))  # (2N, n)
+    fine = np.exp(np.stack([np.interp(wl, disort_nm, np.log(np.maximum(v, 1e-30))) for v in i.T]))  # (2N, n)
     t = path_transmittance(o, e, wl)
     n = o.shape[0]
     return fine[:n] - t * fine[n:], t
