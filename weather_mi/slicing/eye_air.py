@@ -105,9 +105,11 @@ def height_table(atm, wavelengths_nm=None) -> np.ndarray:
     from ..optics.rayleigh import cross_section_m2
     wl = np.asarray(CHANNEL_NM if wavelengths_nm is None else wavelengths_nm, np.float64)
     h = np.arange(0.0, TOP_M + HEIGHT_STEP_M / 2, HEIGHT_STEP_M)
+    from ..optics.air.ozone import channel_cross_section_m2
     molecules = atm.air_number_density_m3(h)[:, None] * cross_section_m2(wl * 1e-9)
+    ozone = atm.ozone_number_density_m3(h)[:, None] * channel_cross_section_m2(wl)  # RGB: the band averages
     aerosol = atm.aerosol_extinction_550_per_m(h)[:, None] * atm.aerosol_factor(wl)
-    return np.concatenate([atm.extinction_per_m(wl, h), molecules, aerosol * atm.aerosol_ssa], axis=1)
+    return np.concatenate([molecules + ozone + aerosol, molecules, aerosol * atm.aerosol_ssa], axis=1)
 
 
 def diffuse_light(spec, e_sky) -> np.ndarray:
