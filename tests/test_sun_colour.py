@@ -167,7 +167,8 @@ def test_path_radiance_of_a_thin_air_is_single_scattering(monkeypatch):
     I_end) in an optically thin aerosol (AOD 1e-4, no molecules, no ozone, black ground): the single-scattering
     closed form omega tau_path p_HG(Theta) / (4 pi) (tau_path the path's optical depth, exp(-z / H) integrated,
     Theta between the sunlight and the light going to the camera) within 3 %, at a scattering angle where the
-    Henyey-Greenstein phase function is 5x smaller than the other way round (the azimuth convention can fail)."""
+    Henyey-Greenstein phase function is 5x smaller than the other way round (the azimuth convention can fail), and on
+    a path looking down (light going up) in the same call."""
     from validation import seen_through_air as air
     aod, h, g = 1e-4, air.AEROSOL_SCALE_M, air.AEROSOL_G
 
@@ -175,18 +176,18 @@ def test_path_radiance_of_a_thin_air_is_single_scattering(monkeypatch):
         z = np.clip(np.asarray(z_m, np.float64), 0.0, None)[..., None] + 0.0 * np.asarray(wavelength_nm)
         return {"air": 0.0 * z, "ozone": 0.0 * z, "aerosol": aod / h * np.exp(-z / h)}
     monkeypatch.setattr(air, "extinction_parts_per_m", thin)
-    origins = np.array([[0.0, 0.0, 500.0], [0.0, 0.0, 500.0]])
-    ends = np.array([[20000.0, 0.0, 3000.0], [-20000.0, 0.0, 3000.0]])   # away from the sun, towards it
+    origins = np.array([[0.0, 0.0, 500.0], [0.0, 0.0, 500.0], [0.0, 0.0, 3000.0]])
+    ends = np.array([[20000.0, 0.0, 3000.0], [-20000.0, 0.0, 3000.0], [15000.0, 5000.0, 800.0]])  # the last: down
     to_sun = np.array([-np.cos(np.radians(40.0)), 0.0, np.sin(np.radians(40.0))])
     wl = np.array([500.0, 600.0])
     l_path, t = air.path_radiance(origins, ends, to_sun, wl, albedo=0.0, disort_nm=wl)
     rise = ends[:, 2] - origins[:, 2]
     length = np.linalg.norm(ends - origins, axis=1)
-    tau = aod * (np.exp(-origins[:, 2] / h) - np.exp(-ends[:, 2] / h)) * length / rise
+    tau = aod * np.abs(np.exp(-origins[:, 2] / h) - np.exp(-ends[:, 2] / h)) * length / np.abs(rise)
     cos_theta = (-to_sun) @ ((origins - ends) / length[:, None]).T
     p_hg = (1 - g * g) / (1 + g * g - 2 * g * cos_theta) ** 1.5
     expected = air.AEROSOL_SSA * tau * p_hg / (4 * np.pi)
-    np.testing.assert_allclose(l_path, np.repeat(expected[:, None], 2, axis=1), rtol=0.03)
+    np.testing.assert_allclose(l_path, np.repeat(expected[:, None], 2, axis=1), rtol=0.03)  # up and down at once
     assert p_hg[1] > 5 * p_hg[0]
     np.testing.assert_allclose(t, np.exp(-np.repeat(tau[:, None], 2, axis=1)), rtol=1e-6)
 

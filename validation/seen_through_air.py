@@ -149,13 +149,21 @@ def disort_radiance(mu0: float, heights_m, mu, phi, albedo: float = 0.15, wavele
     travelling in directions (mu, phi) (N,) (:func:`view_geometry`), the sun at cos(zenith) ``mu0``, a Lambertian
     ground of ``albedo``: a grid of 12 mu (geometric in |mu|: near-level rays) x 7 phi x the layer edges,
     interpolated (linear in each)."""
+    mu, phi, heights = (np.asarray(v, np.float64) for v in (mu, phi, heights_m))
+    if np.min(np.abs(mu)) < 1e-5:
+        raise ValueError(f"a path is level (plane-parallel: mu != 0), got |mu| {np.min(np.abs(mu)):.3g}")
+    out = np.empty((len(wavelengths_nm), mu.size))
+    for group in (mu < 0.0, mu > 0.0):  # light going down (rays looking up) and up: one DISORT grid each
+        if group.any():
+            out[:, group] = _radiance_one_way(mu0, heights[group], mu[group], phi[group], albedo, wavelengths_nm)
+    return out
+
+
+def _radiance_one_way(mu0: float, heights_m, mu, phi, albedo: float, wavelengths_nm) -> np.ndarray:
+    """:func:`disort_radiance` for directions all downward or all upward."""
     from scipy.interpolate import RegularGridInterpolator
     from weather_mi.optics.disort import solve
     edges = layer_edges_m()
-    mu = np.asarray(mu, np.float64)
-    if not (np.all(mu < 0.0) or np.all(mu > 0.0)) or np.min(np.abs(mu)) < 1e-5:
-        raise ValueError("the paths must all look up or all down and none be level (plane-parallel: mu != 0), got "
-                         f"mu {np.min(mu):.3g}..{np.max(mu):.3g}")
     a = np.abs(mu)  # near-level rays: a grid geometric in |mu|, ascending in mu as DISORT wants it
     mu_grid = np.sign(mu[0]) * np.geomspace(a.min(), a.max(), 12) if np.ptp(a) > 1e-6 else mu[:1]
     mu_grid = np.sort(mu_grid)
@@ -168,7 +176,7 @@ def disort_radiance(mu0: float, heights_m, mu, phi, albedo: float = 0.15, wavele
                     n_streams=STREAMS)
         i = np.asarray(res.intensity, np.float64)[::-1]  # (heights ascending, mu, phi)
         grids, vals, pts = [edges], i, [np.asarray(heights_m, np.float64)]
-        for g, v, axis in ((mu_grid, mu, 1), (phi_grid, phi, 2)):
+        for g, v in ((mu_grid, mu), (phi_grid, phi)):
             if g.size > 1:
                 grids.append(g)
                 pts.append(np.clip(v, g[0], g[-1]))
