@@ -2,7 +2,8 @@
 direct sunlight of Bird & Riordan's SPCTRL2 (pvlib) at that sun; and at midday against SPCTRL2's sun and sky.
 
     .venv/bin/python validation/sun_colour.py [--size 160x120] [--spp 64] [--elevation 4] [--midday 60]
-        [--spectral] [--cases none:sunsky,clear:air,clear:sunsky] [--camera-distance-km KM]
+        [--spectral] [--cases none:sunsky,clear:air,clear:sunsky] [--camera-distance-km KM] [--seed N]
+        [--renders DIR] [--no-through-air]
 
 The scene of ``weather-mi render --demo supercell --sun-elevation 4 --sun-azimuth 260 --camera-azimuth 290``
 (its defaults otherwise) rendered with ``--atmosphere none`` (the sky model), and ``--atmosphere clear`` (the
@@ -22,6 +23,12 @@ before ``display.aerial.with_eye_air``), and an independent model of the eye pat
 camera to where each lit pixel's ray reaches optical depth 1, applied to the SPCTRL2 reference (molecules only:
 no ozone, aerosol or light scattered into the path, so a bound on the yellowing, not a prediction).
 ``--spectral``: Mitsuba's spectral variant and the eye rays' air per wavelength (as ``render --spectral``).
+
+And (unless ``--no-through-air``) the reference for a distant cloud, sun and sky (and the direct sun) at the lit
+cloud's height *seen through the same air*: the eye path's transmittance of the whole air and the air's own light
+along it from DISORT, on an atmosphere written out in ``validation/seen_through_air.py``, at the render's luminance
+(that module's docstring; docs/spectral.md, "The headline against sun and sky seen through the same air").
+``--renders DIR`` keeps each render as .npz there and reads it back on a later run.
 """
 from __future__ import annotations
 
@@ -192,17 +199,18 @@ def spectrl2_global_xy(elevation_deg: float, pressure_hpa: float, water_cm: floa
 CASES = (("none", "sunsky"), ("clear", "air"), ("clear", "sunsky"))  # (--atmosphere, --sky)
 
 
-def _scene(vol, size, elevation, atmosphere, sky, camera_distance_km=None):
+def _scene(vol, size, elevation, atmosphere, sky, camera_distance_km=None, seed: int = 0):
     from weather_mi.scene.framing import scene_spec
     return scene_spec(vol, size, sun_elevation=elevation, sun_azimuth=260.0, camera_azimuth=290.0,
-                      atmosphere=atmosphere, sky=sky, camera_distance_km=camera_distance_km)
+                      atmosphere=atmosphere, sky=sky, camera_distance_km=camera_distance_km, seed=seed)
 
 
 def _render(args, vol, size, elevation, atmosphere, sky):
-    spec = _scene(vol, size, elevation, atmosphere, sky, args.camera_distance_km)
+    spec = _scene(vol, size, elevation, atmosphere, sky, args.camera_distance_km, args.seed)
     cache = None
     if args.renders:
-        cam = "" if args.camera_distance_km is None else f"_cam{args.camera_distance_km:g}km"
+        cam = ("" if args.camera_distance_km is None else f"_cam{args.camera_distance_km:g}km") + \
+            (f"_seed{args.seed}" if args.seed else "")
         cache = Path(args.renders) / (f"{args.mode}_sun{elevation:g}_{atmosphere}_{sky}_{size[0]}x{size[1]}_"
                                       f"{args.spp}spp{cam}.npz")
     out = lit_cloud(spec, vol, args.spp, atmosphere == "clear", sky == "air", args.spectral, cache)
@@ -323,6 +331,7 @@ def main(argv=None):
     ap.add_argument("--cases", default=",".join(f"{a}:{s}" for a, s in CASES),
                     help="--atmosphere:--sky pairs, comma-separated (default: all three)")
     ap.add_argument("--camera-distance-km", type=float, default=None, help="render's --camera-distance-km")
+    ap.add_argument("--seed", type=int, default=0, help="the path tracer's seed (render's --seed)")
     ap.add_argument("--renders", default=None, help="a folder: each case's render saved there as .npz (and read "
                     "from there when it exists: the table recomputed without rendering again)")
     ap.add_argument("--no-through-air", dest="through_air", action="store_false",
