@@ -170,3 +170,31 @@ def test_top_of_atmosphere_sun_luminance_is_one():
     x, y = spectrum.chromaticity_xy(xyz)
     assert abs(x - 0.3127) < 0.015 and abs(y - 0.3290) < 0.01
     np.testing.assert_allclose(sun_xyz(Atmosphere(aod_550=0.0, ozone_atm_cm=0.0), TOP_M, 1.0), xyz, rtol=1e-6)
+
+
+def test_the_rgb_channels_take_ozones_band_average():
+    """The RGB mode's ozone per channel (``air.ozone.channel_cross_section_m2``): the top-of-atmosphere sun (ASTM
+    G173 from pvlib) through a thin ozone column (optical depth 0.01 near 600 nm), its linear sRGB computed here from
+    the spectrum with colour-science (CIE 1931 2 deg, sRGB's matrix), is the unabsorbed sun's times exp(-N sigma_c)
+    per channel within 5e-4 (first order in the optical depth; blue's band average is negative and clipped to 0);
+    the line at 650 nm would be 4.5e-3 off in red. Other wavelengths keep their lines."""
+    import colour
+    import pvlib
+    from weather_mi.optics.air.ozone import channel_cross_section_m2, cross_section_m2
+    ref = pvlib.spectrum.get_reference_spectra(standard="ASTM G173-03")
+    wl = np.arange(360.0, 831.0)
+    e = np.interp(wl, np.asarray(ref.index, float), np.asarray(ref["extraterrestrial"], float))
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    xbar = np.stack([np.interp(wl, cmfs.wavelengths, cmfs.values[:, i]) for i in range(3)], axis=1)
+    sigma = cross_section_m2(wl)
+    column = 0.01 / float(cross_section_m2(600.0))
+
+    def srgb(spectrum_values):
+        return colour.XYZ_to_RGB(spectrum_values @ xbar, "sRGB", illuminant=None, chromatic_adaptation_transform=None,
+                                 apply_cctf_encoding=False)
+    seen = srgb(e * np.exp(-column * sigma)) / srgb(e)
+    rgb_nm = np.array([650.0, 550.0, 450.0])
+    np.testing.assert_allclose(seen, np.exp(-column * channel_cross_section_m2(rgb_nm)), atol=5e-4)
+    assert abs(seen[0] - np.exp(-column * cross_section_m2(650.0))) > 4e-3       # the lines: the check can fail
+    np.testing.assert_array_equal(channel_cross_section_m2([640.0, 550.0, 450.0]),
+                                  cross_section_m2([640.0, 550.0, 450.0]))

@@ -31,13 +31,14 @@ def _p_hg(g, mu):
 
 
 def _coefficients(atm, h):
-    """(molecular scattering, aerosol extinction, total extinction) at height h, per channel (650/550/450)."""
+    """(molecular scattering, aerosol extinction, total extinction) at height h, per channel (650/550/450; ozone
+    each channel's band average, checked in ``test_air.py``)."""
+    from weather_mi.optics.air.ozone import rgb_channel_cross_sections_m2
     wl = np.array([650.0, 550.0, 450.0])
-    total = atm.extinction_per_m(wl, h)
     aer = atm.aerosol_extinction_550_per_m(h) * (wl / 550.0) ** -atm.angstrom
     from weather_mi.optics.rayleigh import cross_section_m2
     mol = atm.air_number_density_m3(h) * cross_section_m2(wl * 1e-9)
-    return mol, aer, total
+    return mol, aer, mol + atm.ozone_number_density_m3(h) * rgb_channel_cross_sections_m2() + aer
 
 
 def test_a_short_horizontal_path_is_the_homogeneous_closed_form():
@@ -159,7 +160,7 @@ def _trapezoid_march(atm, to_sun, o, d, t0, t1, table, wl, samples, shadow=None)
     """The single-scattering sums written out with numpy on (rays x samples x channels): the trapezoidal rule on
     s = t0 + (t1 - t0) x^2, the profiles at each sample's height above the sphere (the module docstring)."""
     from weather_mi.optics.rayleigh import cross_section_m2
-    from weather_mi.optics.air.ozone import cross_section_m2 as ozone_m2
+    from weather_mi.optics.air.ozone import channel_cross_section_m2 as ozone_m2  # RGB: the band averages
     sun = np.asarray(to_sun) / np.linalg.norm(to_sun)
     x = np.linspace(0.0, 1.0, samples)
     s = t0[:, None] + np.maximum(t1 - t0, 0.0)[:, None] * x * x

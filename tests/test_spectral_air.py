@@ -26,8 +26,19 @@ def rgb_air(atm=None):
 
 def test_tables_equal_the_rgb_air_at_its_three_wavelengths():
     """At 650 / 550 / 450 nm (nodes of the grid) the tables hold the RGB medium's per-level extinction and scattering
-    (so its optical depth per level, extinction x level thickness) to the bit; in between they are not constant."""
-    air = rgb_air()
+    (so its optical depth per level, extinction x level thickness) to the bit, ozone aside; in between they are not
+    constant. With ozone the RGB channels differ from the nodes by ozone's number density times its band average
+    less its line (``air.ozone.channel_cross_section_m2``: the RGB mode's channels are bands, midday38)."""
+    from weather_mi.optics.air.ozone import cross_section_m2, rgb_channel_cross_sections_m2
+    atm = Atmosphere(aod_550=0.2, ozone_atm_cm=0.35)
+    with_ozone, lines = rgb_air(atm), spectral_air_levels(rgb_air(atm))
+    for c, nm in enumerate(CHANNEL_NM):
+        j = int(np.flatnonzero(lines.wavelengths_nm == nm)[0])
+        band_less_line = atm.ozone_number_density_m3(Z_M) * (rgb_channel_cross_sections_m2()[c] - cross_section_m2(nm))
+        np.testing.assert_allclose(with_ozone.extinction_levels[:, c] - lines.extinction[:, j], band_less_line,
+                                   rtol=1e-3, atol=2e-7 * with_ozone.extinction_levels[:, c].max())
+        np.testing.assert_array_equal(lines.scattering[:, :, j], with_ozone.scattering_levels[:, :, c])
+    air = rgb_air(Atmosphere(aod_550=0.2, ozone_atm_cm=0.0))
     tables = spectral_air_levels(air)
     dz = np.diff(Z_M).mean()
     for c, nm in enumerate(CHANNEL_NM):
@@ -89,14 +100,14 @@ def _tau_numpy(table_k, q0, dq, t0, t1, steps=20_000):
 
 def test_kernel_optical_depth_at_lane_wavelengths(variant_restored):
     """In ``llvm_ad_spectral``: lanes at 650 / 550 / 450 nm give the RGB ``AirLevels``' optical depth and extinction
-    per channel to the bit; a lane at 503.7 nm gives the midpoint rule's optical depth of the table interpolated in
-    wavelength (1e-5 relative)."""
+    per channel to the bit (no ozone: the RGB channels' ozone is its band average, not the line's); a lane at
+    503.7 nm gives the midpoint rule's optical depth of the table interpolated in wavelength (1e-5 relative)."""
     wm.set_variant(SPECTRAL)
     import drjit as dr
     import mitsuba as mi
     from weather_mi.kernel.plugins.air_levels import AirLevels
     from weather_mi.kernel.plugins.spectral_air import SpectralAirLevels
-    air = rgb_air()
+    air = rgb_air(Atmosphere(aod_550=0.2, ozone_atm_cm=0.0))
     tables = spectral_air_levels(air)
     rgb = AirLevels(air.extinction_levels)
     spec = SpectralAirLevels(tables.extinction, tables.wavelengths_nm)

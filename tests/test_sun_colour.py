@@ -125,3 +125,86 @@ def test_eye_path_rayleigh_model_of_the_headline():
     length = 28000.0 + 75.0  # optical depth 1 (0.01 /m): 100 m into the box, at the second 50 m step's middle
     expected = np.exp(-rayleigh_cross_section_cm2(WAVELENGTHS_NM) * 1e-4 * us_standard_number_density_m3(1500.0) * length)
     np.testing.assert_allclose(t, expected, rtol=1e-4)
+
+
+def test_the_air_of_the_reference_seen_through_the_same_air():
+    """``validation/seen_through_air.py``'s atmosphere, written out there, against closed forms: each U.S. Standard
+    1976 layer's formula reaches the next layer's tabulated base pressure (the number density continuous at 11,
+    20, 32, 47, 51, 71 km), the column is hydrostatic p0 / (m g) within 0.5 %; the ozone layer holds 0.3 atm-cm
+    and the aerosol AOD 0.1 at 550 nm; DISORT's layers sum to the same columns times the cross sections; a level
+    path's transmittance is exp(-beta(z) L); a pure Rayleigh layer's second Legendre moment is (1 - gamma) /
+    (10 (1 + 2 gamma))."""
+    from validation import seen_through_air as air
+    bases = np.array([11e3, 20e3, 32e3, 47e3, 51e3, 71e3])
+    np.testing.assert_allclose(air.us_standard_number_density_m3(bases - 1e-3), air.us_standard_number_density_m3(bases),
+                               rtol=2e-5)
+    z = np.linspace(0.0, 84000.0, 840001)
+    m_air = 28.9644e-3 / 6.02214076e23
+    assert np.trapezoid(air.us_standard_number_density_m3(z), z) == pytest.approx(101325.0 / (m_air * 9.80665),
+                                                                                  rel=5e-3)
+    z = np.linspace(0.0, air.TOP_M, 80001)
+    assert np.trapezoid(air.ozone_number_density_m3(z), z) == pytest.approx(0.3 * 2.6867811e23, rel=1e-6)
+    parts = air.extinction_parts_per_m(np.array([450.0, 550.0, 650.0]), z)
+    assert np.trapezoid(parts["aerosol"][:, 1], z) == pytest.approx(0.1, rel=1e-5)
+    edges = air.layer_edges_m()
+    tau, ssa, moments = air.layers(450.0, edges)
+    column = np.trapezoid(air.us_standard_number_density_m3(z), z)
+    expected = (air.rayleigh_cross_section_cm2(450.0) * 1e-4 * column + 0.1 * (450.0 / 550.0) ** -1.14
+                + np.trapezoid(parts["ozone"][:, 0], z))
+    assert tau.sum() == pytest.approx(expected, rel=1e-3)
+    gamma = 0.0279 / (2.0 - 0.0279)
+    assert moments[0, 2] == pytest.approx((1.0 - gamma) / (10.0 * (1.0 + 2.0 * gamma)), rel=1e-3)  # 60 km: no aerosol
+    assert ssa[0] == pytest.approx(1.0, abs=1e-3) and 0.9 < ssa[-1] < 1.0    # the top's ozone absorbs little
+    level = air.path_transmittance(np.array([[0.0, 0.0, 2000.0]]), np.array([[30000.0, 0.0, 2000.0]]),
+                                   np.array([450.0, 600.0]))
+    np.testing.assert_allclose(level[0], np.exp(-air.extinction_per_m(np.array([450.0, 600.0]), 2000.0) * 30000.0),
+                               rtol=1e-9)
+    assert level[0, 0] < 0.6  # aerosol and molecules: the check can fail
+
+
+def test_path_radiance_of_a_thin_air_is_single_scattering(monkeypatch):
+    """Eq. 2 of ``validation/seen_through_air.py`` (DISORT at the camera's and the far end's heights, I_cam - T
+    I_end) in an optically thin aerosol (AOD 1e-4, no molecules, no ozone, black ground): the single-scattering
+    closed form omega tau_path p_HG(Theta) / (4 pi) (tau_path the path's optical depth, exp(-z / H) integrated,
+    Theta between the sunlight and the light going to the camera) within 3 %, at a scattering angle where the
+    Henyey-Greenstein phase function is 5x smaller than the other way round (the azimuth convention can fail), and on
+    a path looking down (light going up) in the same call."""
+    from validation import seen_through_air as air
+    aod, h, g = 1e-4, air.AEROSOL_SCALE_M, air.AEROSOL_G
+
+    def thin(wavelength_nm, z_m):
+        z = np.clip(np.asarray(z_m, np.float64), 0.0, None)[..., None] + 0.0 * np.asarray(wavelength_nm)
+        return {"air": 0.0 * z, "ozone": 0.0 * z, "aerosol": aod / h * np.exp(-z / h)}
+    monkeypatch.setattr(air, "extinction_parts_per_m", thin)
+    origins = np.array([[0.0, 0.0, 500.0], [0.0, 0.0, 500.0], [0.0, 0.0, 3000.0]])
+    ends = np.array([[20000.0, 0.0, 3000.0], [-20000.0, 0.0, 3000.0], [15000.0, 5000.0, 800.0]])  # the last: down
+    to_sun = np.array([-np.cos(np.radians(40.0)), 0.0, np.sin(np.radians(40.0))])
+    wl = np.array([500.0, 600.0])
+    l_path, t = air.path_radiance(origins, ends, to_sun, wl, albedo=0.0, disort_nm=wl)
+    rise = ends[:, 2] - origins[:, 2]
+    length = np.linalg.norm(ends - origins, axis=1)
+    tau = aod * np.abs(np.exp(-origins[:, 2] / h) - np.exp(-ends[:, 2] / h)) * length / np.abs(rise)
+    cos_theta = (-to_sun) @ ((origins - ends) / length[:, None]).T
+    p_hg = (1 - g * g) / (1 + g * g - 2 * g * cos_theta) ** 1.5
+    expected = air.AEROSOL_SSA * tau * p_hg / (4 * np.pi)
+    np.testing.assert_allclose(l_path, np.repeat(expected[:, None], 2, axis=1), rtol=0.03)  # up and down at once
+    assert p_hg[1] > 5 * p_hg[0]
+    np.testing.assert_allclose(t, np.exp(-np.repeat(tau[:, None], 2, axis=1)), rtol=1e-6)
+
+
+def test_the_reference_keeps_the_renders_luminance():
+    """Eq. 1's k: the reference's Y is the rendered cloud's; without the air's light its chromaticity is that of
+    T E; a path radiance of the top-of-atmosphere sun's spectrum c per unit irradiance adds Y = c (the render's
+    unit: the sun above the air has luminance 1)."""
+    from validation.seen_through_air import reference_xyz
+    from validation.sun_colour import WAVELENGTHS_NM, xy_of_spectrum
+    from weather_mi.optics import spectrum
+    e = np.exp(-((WAVELENGTHS_NM - 600.0) / 80.0) ** 2)
+    t = np.linspace(0.4, 0.8, WAVELENGTHS_NM.size)
+    ref = reference_xyz(0.2, e, t, np.zeros(WAVELENGTHS_NM.size), WAVELENGTHS_NM)
+    assert ref["xyz"][1] == pytest.approx(0.2)
+    np.testing.assert_allclose(spectrum.chromaticity_xy(ref["xyz"]), xy_of_spectrum(e, t), atol=2e-4)
+    ref = reference_xyz(0.2, e, t, np.full(WAVELENGTHS_NM.size, 0.05), WAVELENGTHS_NM)
+    assert ref["path_xyz"][1] == pytest.approx(0.05, rel=2e-3) and ref["xyz"][1] == pytest.approx(0.2)
+    with pytest.raises(ValueError, match="brighter"):
+        reference_xyz(0.01, e, t, np.full(WAVELENGTHS_NM.size, 0.05), WAVELENGTHS_NM)

@@ -2,7 +2,8 @@
 direct sunlight of Bird & Riordan's SPCTRL2 (pvlib) at that sun; and at midday against SPCTRL2's sun and sky.
 
     .venv/bin/python validation/sun_colour.py [--size 160x120] [--spp 64] [--elevation 4] [--midday 60]
-        [--spectral] [--cases none:sunsky,clear:air,clear:sunsky] [--camera-distance-km KM]
+        [--spectral] [--cases none:sunsky,clear:air,clear:sunsky] [--camera-distance-km KM] [--seed N]
+        [--renders DIR] [--no-through-air]
 
 The scene of ``weather-mi render --demo supercell --sun-elevation 4 --sun-azimuth 260 --camera-azimuth 290``
 (its defaults otherwise) rendered with ``--atmosphere none`` (the sky model), and ``--atmosphere clear`` (the
@@ -22,6 +23,12 @@ before ``display.aerial.with_eye_air``), and an independent model of the eye pat
 camera to where each lit pixel's ray reaches optical depth 1, applied to the SPCTRL2 reference (molecules only:
 no ozone, aerosol or light scattered into the path, so a bound on the yellowing, not a prediction).
 ``--spectral``: Mitsuba's spectral variant and the eye rays' air per wavelength (as ``render --spectral``).
+
+And (unless ``--no-through-air``) the reference for a distant cloud, sun and sky (and the direct sun) at the lit
+cloud's height *seen through the same air*: the eye path's transmittance of the whole air and the air's own light
+along it from DISORT, on an atmosphere written out in ``validation/seen_through_air.py``, at the render's luminance
+(that module's docstring; docs/spectral.md, "The headline against sun and sky seen through the same air").
+``--renders DIR`` keeps each render as .npz there and reads it back on a later run.
 """
 from __future__ import annotations
 
@@ -32,6 +39,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from validation.seen_through_air import (path_transmittance, rayleigh_cross_section_cm2,  # noqa: E402,F401
+                                         us_standard_number_density_m3)
 
 PRESSURES_HPA = (1013.25, 850.0, 700.0, 500.0)
 
@@ -70,18 +80,24 @@ def spectrl2_direct_xy(elevation_deg: float, pressure_hpa: float, water_cm: floa
     return xy_of_spectrum(spectrl2_spectrum(elevation_deg, pressure_hpa, water_cm, ozone_atm_cm, turbidity_500))
 
 
-def spectrl2_at_height(elevation_deg: float, height_m: float, water_cm: float = 1.4,
-                       transmittance=1.0) -> np.ndarray:
-    """SPCTRL2's direct sun at a height: the standard atmosphere's pressure there, the turbidity of the aerosol
-    above it (0.1 at sea level, scale height 1.2 km) and the precipitable water above it (``water_cm`` at sea
-    level, scale height 2 km): SPCTRL2 itself has no profiles; these are our atmosphere's defaults. Its xy, seen
-    through ``transmittance`` (on ``WAVELENGTHS_NM``)."""
+def spectrl2_spectrum_at_height(elevation_deg: float, height_m: float, water_cm: float = 1.4,
+                                sky: bool = False) -> np.ndarray:
+    """SPCTRL2's direct sun (``sky``: sun and sky, global horizontal) at a height on ``WAVELENGTHS_NM``: the
+    standard atmosphere's pressure there, the turbidity of the aerosol above it (0.1 at sea level, scale height
+    1.2 km) and the precipitable water above it (``water_cm`` at sea level, scale height 2 km): SPCTRL2 itself has
+    no profiles; these are our atmosphere's defaults."""
     from weather_mi.io.standard_atmosphere import standard_temperature_pressure
     from weather_mi.optics.air.water_vapour import SCALE_HEIGHT_M
     pressure_hpa = float(standard_temperature_pressure(height_m)[1]) / 100.0
-    e = spectrl2_spectrum(elevation_deg, pressure_hpa, water_cm * np.exp(-height_m / SCALE_HEIGHT_M),
-                          turbidity_500=0.1 * np.exp(-height_m / 1200.0))
-    return xy_of_spectrum(e, transmittance)
+    return spectrl2_spectrum(elevation_deg, pressure_hpa, water_cm * np.exp(-height_m / SCALE_HEIGHT_M),
+                             turbidity_500=0.1 * np.exp(-height_m / 1200.0), sky=sky)
+
+
+def spectrl2_at_height(elevation_deg: float, height_m: float, water_cm: float = 1.4,
+                       transmittance=1.0) -> np.ndarray:
+    """The xy of SPCTRL2's direct sun at a height (``spectrl2_spectrum_at_height``) seen through
+    ``transmittance`` (on ``WAVELENGTHS_NM``)."""
+    return xy_of_spectrum(spectrl2_spectrum_at_height(elevation_deg, height_m, water_cm), transmittance)
 
 
 def own_direct_xy(elevation_deg: float, height_m: float) -> np.ndarray:
@@ -105,26 +121,42 @@ def demo_volume():
     return optical_volume(open_source(demo="supercell"), species="physical")
 
 
-def lit_cloud(spec, vol, spp: int, eye_air: bool = False, sky_air: bool = False, spectral: bool = False) -> dict:
+def lit_cloud(spec, vol, spp: int, eye_air: bool = False, sky_air: bool = False, spectral: bool = False,
+              cache=None) -> dict:
     """The lit cloud of one render: ``xy`` (the lit pixels' mean), ``height`` (median height (m) where their eye
     rays reach optical depth 1), ``mask``, ``img``; ``eye_air``: seen through the air outside the box
     (``display.aerial``; ``sky_air``: with the air's own sky), and then ``xy_box``: the same pixels' colour
     without it (as the box's edge sends it to the camera: the eye path outside the box removed); ``spectral``:
-    Mitsuba's spectral variant and the eye rays' air per wavelength (as ``render --spectral``)."""
+    Mitsuba's spectral variant and the eye rays' air per wavelength (as ``render --spectral``); ``cache``: an
+    .npz path that holds the render (read when it exists, written when not)."""
     from weather_mi.display.cloud_colour import lit_cloud_pixels, visible_height_m, xy_of_linear_srgb
     from weather_mi.reference.render import render_reference
     variant = None
     if spectral:
         from weather_mi.kernel.variant import spectral_variant
         variant = spectral_variant()
-    raw = render_reference(spec, vol, spp=spp, progress=False, variant=variant)
-    img = raw
-    if eye_air:
-        from weather_mi.display.aerial import eye_air as eye_air_terms, with_eye_air
-        img = with_eye_air(raw, spec, vol, sky_air=sky_air, air=eye_air_terms(spec, vol, sky_air, spectral=spectral))
+    saved = Path(cache) if cache else None
+    if saved is not None and saved.exists():  # --renders: a render of the same case made before
+        import types
+        with np.load(saved) as f:
+            raw = types.SimpleNamespace(radiance=f["raw"])
+            img = types.SimpleNamespace(radiance=f["radiance"], transmittance=f["transmittance"],
+                                        metadata={"seconds": float(f["seconds"])})
+    else:
+        raw = render_reference(spec, vol, spp=spp, progress=False, variant=variant)
+        img = raw
+        if eye_air:
+            from weather_mi.display.aerial import eye_air as eye_air_terms, with_eye_air
+            img = with_eye_air(raw, spec, vol, sky_air=sky_air,
+                               air=eye_air_terms(spec, vol, sky_air, spectral=spectral))
+        if saved is not None:
+            saved.parent.mkdir(parents=True, exist_ok=True)
+            np.savez_compressed(saved, raw=raw.radiance, radiance=img.radiance, transmittance=img.transmittance,
+                                seconds=img.metadata["seconds"])
     mask = lit_cloud_pixels(img.radiance, img.transmittance)
     height = float(np.nanmedian(visible_height_m(spec, vol, mask)))
-    return {"xy": xy_of_linear_srgb(img.radiance[mask].mean(axis=0)), "height": height, "mask": mask, "img": img,
+    rgb = np.asarray(img.radiance, np.float64)[mask].mean(axis=0)
+    return {"xy": xy_of_linear_srgb(rgb), "rgb": rgb, "height": height, "mask": mask, "img": img,
             "xy_box": xy_of_linear_srgb(np.asarray(raw.radiance, np.float64)[mask].mean(axis=0))}
 
 
@@ -135,40 +167,26 @@ def lit_cloud_xy(spec, vol, spp: int, eye_air: bool = False, sky_air: bool = Fal
     return out["xy"], out["height"], out["img"]
 
 
-def rayleigh_cross_section_cm2(wavelength_nm) -> np.ndarray:
-    """Bodhaine et al. (1999) Eq. 29: the Rayleigh cross section of dry air (360 ppm CO2), cm^2 per molecule,
-    their fit to their Eqs. 1-18 (lambda in um), written out here, not ``optics.air.rayleigh``'s."""
-    lam2 = (np.asarray(wavelength_nm, np.float64) / 1000.0) ** 2
-    return 1e-28 * (1.0455996 - 341.29061 / lam2 - 0.90230850 * lam2) / (1.0 + 0.0027059889 / lam2 - 85.968563 * lam2)
-
-
-def us_standard_number_density_m3(z_m) -> np.ndarray:
-    """Air molecules per m^3 of the U.S. Standard Atmosphere 1976 below 20 km, written out: T = 288.15 - 6.5 K/km
-    z, p = 101325 Pa (T / 288.15)^5.25588 to 11 km, then 216.65 K and p = 22632 Pa exp(-(z - 11 km) / 6341.6 m);
-    n = p / (k T)."""
-    z = np.asarray(z_m, np.float64)
-    t = np.where(z < 11000.0, 288.15 - 0.0065 * z, 216.65)
-    p = np.where(z < 11000.0, 101325.0 * (t / 288.15) ** 5.25588, 22632.06 * np.exp(-(z - 11000.0) / 6341.62))
-    return p / (1.380649e-23 * t)
-
-
 def eye_path_rayleigh_transmittance(spec, vol, mask, points: int = 401) -> np.ndarray:
     """The eye rays' Rayleigh transmittance (Beer-Lambert) from the camera to where the ``mask`` pixels' rays
     reach optical depth 1 in the cloud (``display.cloud_colour.visible_points_m``), averaged over the pixels,
     on ``WAVELENGTHS_NM``: exp(-sigma(lambda) int n(z) ds), sigma Bodhaine's Eq. 29, n the standard
     atmosphere's, the heights above a flat ground (trapezoid over ``points`` points). Molecules only: no ozone,
     aerosol or in-scattered light (an independent model of what the eye path does to a far white cloud)."""
+    origins, ends = eye_paths(spec, vol, mask)
+    return path_transmittance(origins, ends, WAVELENGTHS_NM, points, molecules_only=True).mean(axis=0)
+
+
+def eye_paths(spec, vol, mask) -> tuple:
+    """(origins, ends) (N, 3), m: the camera and where the ``mask`` pixels' eye rays reach optical depth 1 in the
+    cloud (``display.cloud_colour.visible_points_m``; the rays that do not left out)."""
     from weather_mi.display.cloud_colour import visible_points_m
     from weather_mi.slicing.geometry import film_rays
     iy, ix = np.nonzero(mask)
     origins, _ = film_rays(spec, ix + 0.5, iy + 0.5)
     ends = visible_points_m(spec, vol, mask)
     ok = np.isfinite(ends[:, 0])
-    s = np.linspace(0.0, 1.0, points)
-    pts = origins[ok, None, :] + s[None, :, None] * (ends[ok] - origins[ok])[:, None, :]
-    length = np.linalg.norm(ends[ok] - origins[ok], axis=1)
-    column = np.trapezoid(us_standard_number_density_m3(pts[..., 2]), s, axis=1) * length * 1e-4  # per cm^2
-    return np.exp(-column[:, None] * rayleigh_cross_section_cm2(WAVELENGTHS_NM)[None, :]).mean(axis=0)
+    return origins[ok], ends[ok]
 
 
 def spectrl2_global_xy(elevation_deg: float, pressure_hpa: float, water_cm: float = 1.4,
@@ -181,19 +199,57 @@ def spectrl2_global_xy(elevation_deg: float, pressure_hpa: float, water_cm: floa
 CASES = (("none", "sunsky"), ("clear", "air"), ("clear", "sunsky"))  # (--atmosphere, --sky)
 
 
-def _scene(vol, size, elevation, atmosphere, sky, camera_distance_km=None):
+def _scene(vol, size, elevation, atmosphere, sky, camera_distance_km=None, seed: int = 0):
     from weather_mi.scene.framing import scene_spec
     return scene_spec(vol, size, sun_elevation=elevation, sun_azimuth=260.0, camera_azimuth=290.0,
-                      atmosphere=atmosphere, sky=sky, camera_distance_km=camera_distance_km)
+                      atmosphere=atmosphere, sky=sky, camera_distance_km=camera_distance_km, seed=seed)
 
 
 def _render(args, vol, size, elevation, atmosphere, sky):
-    spec = _scene(vol, size, elevation, atmosphere, sky, args.camera_distance_km)
-    out = lit_cloud(spec, vol, args.spp, atmosphere == "clear", sky == "air", args.spectral)
+    spec = _scene(vol, size, elevation, atmosphere, sky, args.camera_distance_km, args.seed)
+    cache = None
+    if args.renders:
+        cam = ("" if args.camera_distance_km is None else f"_cam{args.camera_distance_km:g}km") + \
+            (f"_seed{args.seed}" if args.seed else "")
+        cache = Path(args.renders) / (f"{args.mode}_sun{elevation:g}_{atmosphere}_{sky}_{size[0]}x{size[1]}_"
+                                      f"{args.spp}spp{cam}.npz")
+    out = lit_cloud(spec, vol, args.spp, atmosphere == "clear", sky == "air", args.spectral, cache)
     out["spec"] = spec
     if atmosphere == "clear":  # the eye path modelled independently: Rayleigh's Beer-Lambert to the tau = 1 points
         out["t_eye"] = eye_path_rayleigh_transmittance(spec, vol, out["mask"])
+        if args.through_air:  # and the whole air's: transmittance and path radiance (validation.seen_through_air)
+            from validation.seen_through_air import path_radiance
+            origins, ends = eye_paths(spec, vol, out["mask"])
+            albedo = 0.0 if spec.ground is None else float(np.mean(spec.ground.albedo))
+            l_path, t_air = path_radiance(origins, ends, spec.sun.to_sun, WAVELENGTHS_NM, albedo)
+            out["l_path"], out["t_air"] = l_path.mean(axis=0), t_air.mean(axis=0)
     return out
+
+
+def _through_air_words(r, elevation: float, name: str) -> str:
+    """The lit cloud against sun and sky (and the direct sun) at its height seen through the same air
+    (``validation.seen_through_air``, Eq. 1), as words; "" without it."""
+    if "l_path" not in r:
+        return ""
+    from validation.seen_through_air import reference_xyz
+    from weather_mi.display.cloud_colour import delta_e_equal_lightness as dee
+    from weather_mi.optics import spectrum
+    y_render = float(spectrum.xyz_of_linear_srgb(r["rgb"])[1])
+    i450, i550, i650 = (int(np.argmin(abs(WAVELENGTHS_NM - w))) for w in (450, 550, 650))
+    t = r["t_air"]
+    words = [f"{name}: the eye path's whole air (molecules, ozone, aerosol) T {t[i450]:.3f} / {t[i550]:.3f} / "
+             f"{t[i650]:.3f} at 450/550/650 nm"]
+    for label, sky in (("sun and sky", True), ("direct sun", False)):
+        e = spectrl2_spectrum_at_height(elevation, r["height"], sky=sky)
+        ref = reference_xyz(y_render, e, t, r["l_path"], WAVELENGTHS_NM)
+        xy_ref = spectrum.chromaticity_xy(ref["xyz"])
+        xy_lit = xy_of_spectrum(e, t)
+        words.append(f"SPCTRL2's {label} at {r['height']:.0f} m seen through the same air: xy ({xy_ref[0]:.3f}, "
+                     f"{xy_ref[1]:.3f}), the air's own light {ref['path_xyz'][1] / y_render:.0%} of its Y; the lit "
+                     f"cloud CIEDE2000 {dee(r['xy'], xy_ref):.1f} from it ({dee(r['xy'], xy_lit):.1f} from the "
+                     f"same without the air's light, {dee(r['xy_box'], xy_of_spectrum(e)):.1f} at the box's edge "
+                     "from the light itself)")
+    return "; ".join(words)
 
 
 def _eye_path_words(r, de_to) -> str:
@@ -236,6 +292,8 @@ def low_sun(args, vol, size) -> None:
             print(f"{name}: SPCTRL2's direct sun at {height:.0f} m seen through the eye path's Rayleigh "
                   f"transmittance: xy ({seen[0]:.3f}, {seen[1]:.3f}); the lit cloud is CIEDE2000 {dee(xy, seen):.1f} "
                   "from it", flush=True)
+        if "l_path" in r:
+            print(_through_air_words(r, args.elevation, name), flush=True)
 
 
 def midday(args, vol, size) -> None:
@@ -259,6 +317,8 @@ def midday(args, vol, size) -> None:
                   + ", ".join(f"{p:.0f} hPa ({v[0]:.3f}, {v[1]:.3f})" for p, v in seen.items())
                   + "; the lit cloud is CIEDE2000 " + " / ".join(f"{dee(xy, v):.1f}" for v in seen.values())
                   + " from them", flush=True)
+        if "l_path" in r:
+            print(_through_air_words(r, args.midday, name), flush=True)
 
 
 def main(argv=None):
@@ -271,6 +331,12 @@ def main(argv=None):
     ap.add_argument("--cases", default=",".join(f"{a}:{s}" for a, s in CASES),
                     help="--atmosphere:--sky pairs, comma-separated (default: all three)")
     ap.add_argument("--camera-distance-km", type=float, default=None, help="render's --camera-distance-km")
+    ap.add_argument("--seed", type=int, default=0, help="the path tracer's seed (render's --seed)")
+    ap.add_argument("--renders", default=None, help="a folder: each case's render saved there as .npz (and read "
+                    "from there when it exists: the table recomputed without rendering again)")
+    ap.add_argument("--no-through-air", dest="through_air", action="store_false",
+                    help="leave out the reference seen through the same air (validation/seen_through_air.py: "
+                    "DISORT's path radiance, 17 solves per case)")
     args = ap.parse_args(argv)
     args.cases = [tuple(c.split(":")) for c in args.cases.split(",")]
     args.mode = "spectral" if args.spectral else "RGB"

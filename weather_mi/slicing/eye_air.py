@@ -119,7 +119,7 @@ def cross_sections(atm, wavelengths_nm=None) -> np.ndarray:
     """(4, 3): per unit of ``height_table``'s columns, the molecules' extinction (= their scattering), ozone's
     (absorption), the aerosol's extinction and its scattering at R, G, B (``Atmosphere.extinction_per_m``'s terms)."""
     from ..optics.air.inside import CHANNEL_NM
-    from ..optics.air.ozone import cross_section_m2 as ozone_m2
+    from ..optics.air.ozone import channel_cross_section_m2 as ozone_m2  # RGB: the channels' band averages
     from ..optics.rayleigh import cross_section_m2
     wl = np.asarray(CHANNEL_NM if wavelengths_nm is None else wavelengths_nm, np.float64)
     aerosol = atm.aerosol_factor(wl)

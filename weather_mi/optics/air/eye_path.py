@@ -28,7 +28,7 @@ from ..rayleigh import cross_section_m2 as rayleigh_cross_section_m2, phase_valu
 from . import march_kernels
 from .atmosphere import Atmosphere
 from .inside import CHANNEL_NM
-from .ozone import cross_section_m2 as ozone_cross_section_m2
+from .ozone import channel_cross_section_m2 as ozone_cross_section_m2
 from .shell import EARTH_RADIUS_M
 from .sunlight import SunAirTable, channel_values
 
@@ -83,8 +83,9 @@ def segment_air(atm: Atmosphere, to_sun, origins, dirs, t0, t1, table: SunAirTab
     tab = np.asarray(table.rgb, np.float64)
     own, first = _distinct_channels(wl, tab)
     w = wl[own]
+    ozone = ozone_cross_section_m2(wl)[own]  # the RGB mode's channels: the band averages (air.ozone)
     per_channel = [np.broadcast_to(v, own.shape).astype(np.float64)
-                   for v in (rayleigh_cross_section_m2(w * 1e-9), ozone_cross_section_m2(w), atm.aerosol_factor(w))]
+                   for v in (rayleigh_cross_section_m2(w * 1e-9), ozone, atm.aerosol_factor(w))]
     t, s = march_kernels.segment_air(
         o, d, np.ascontiguousarray(t0), length, sun, x, 0.0, PROFILE_STEP_M,
         _profile_grid(atm, z_top if z_top > TOP_M else TOP_M),

@@ -32,7 +32,7 @@ from ..rayleigh import AVOGADRO, M_AIR_KG_MOL, cross_section_m2 as rayleigh_cros
 from ..scattering_coefficients import scattering_coefficients
 from ..volume import level_density
 from .atmosphere import Atmosphere
-from .ozone import cross_section_m2 as ozone_cross_section_m2
+from .ozone import channel_cross_section_m2 as ozone_cross_section_m2
 
 CHANNEL_NM = tuple(float(w * 1e9) for w in RGB_WAVELENGTHS_M)  # R, G, B: 650, 550, 450 nm
 NAMES = ("air_molecules", "air_aerosol")
@@ -100,7 +100,8 @@ def components(atm: Atmosphere, n_air_m3, z_m, wavelengths_nm):
     """(profiles (z, 3), spectra (n, 3)), float64: the air's three components, molecules, ozone and aerosol, as a
     density per level times a cross section per wavelength, whose products are their extinctions (1/m): molecules
     ``n_air_m3`` (z,) per m^3 x Bodhaine's cross section (m^2), ozone ``atm``'s number density at ``z_m`` (z,) (m) x
-    the Chappuis band's cross section (m^2), aerosol its extinction at 550 nm (1/m) x Angstrom's factor."""
+    the Chappuis band's cross section (m^2; for the RGB mode's channels each one's band average,
+    ``ozone.channel_cross_section_m2``), aerosol its extinction at 550 nm (1/m) x Angstrom's factor."""
     wl = np.asarray(wavelengths_nm, np.float64)
     z = np.asarray(z_m, np.float64)
     profiles = np.stack([np.asarray(n_air_m3, np.float64), atm.ozone_number_density_m3(z),
