@@ -13,6 +13,7 @@ import weather_mi as wm
 from weather_mi.optics.air import Atmosphere
 from weather_mi.optics.air.inside import CHANNEL_NM
 from weather_mi.slicing import sun_air, sun_air_table
+from weather_mi.optics.air.ozone import channel_cross_section_m2, cross_section_m2
 from weather_mi.slicing.eye_air import HEIGHT_STEP_M, cross_sections, height_table
 
 
@@ -68,10 +69,13 @@ def test_the_air_profiles_times_cross_sections_are_its_coefficients():
     prof, cross = height_table(atm), cross_sections(atm)
     h = np.arange(prof.shape[0]) * HEIGHT_STEP_M
     ext = prof[:, 0:1] * cross[0] + prof[:, 1:2] * cross[1] + prof[:, 2:3] * cross[2]
-    np.testing.assert_allclose(ext, atm.extinction_per_m(CHANNEL_NM, h), rtol=1e-12)
+    # the RGB channels' ozone is the band average (air.ozone), not the line's that extinction_per_m reads
+    band_minus_line = channel_cross_section_m2(CHANNEL_NM) - cross_section_m2(np.asarray(CHANNEL_NM))
+    expected = atm.extinction_per_m(CHANNEL_NM, h) + atm.ozone_number_density_m3(h)[:, None] * band_minus_line
+    np.testing.assert_allclose(ext, expected, rtol=1e-9)
     aerosol = atm.aerosol_extinction_550_per_m(h)[:, None] * atm.aerosol_factor(np.asarray(CHANNEL_NM))
     np.testing.assert_allclose(prof[:, 2:3] * cross[3], aerosol * atm.aerosol_ssa, rtol=1e-12)
-    assert np.all(cross[3] < cross[2]) and np.all(cross[1] > 0)  # absorbing aerosol, ozone's Chappuis band
+    assert np.all(cross[3] < cross[2]) and np.all(cross[1][:2] > 0)  # absorbing aerosol, ozone's Chappuis band
 
 
 def test_the_shadow_outside_the_box_is_the_light_leaving_it():
