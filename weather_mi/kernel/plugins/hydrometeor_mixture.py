@@ -251,7 +251,7 @@ class HydrometeorMixture:
         self._set_tables(nodes, values)
         self._set_weights(weights, tail)
         self._set_spectral(props)
-        if self.air_spectral is not None and self.spectral_table is None:
+        if self.air_spectral is not None and self.spectral_grid is None:
             raise ValueError(f"{PLUGIN_NAME}: '{spectral_air_weights.TABLE_PROPERTY}' needs the tables by wavelength "
                              "('spectral_values', 'spectral_nm')")
         self.m_flags = mi.PhaseFunctionFlags.Anisotropic
@@ -407,7 +407,7 @@ class HydrometeorMixture:
         wavelengths in spectral variants), or the tables by wavelength (``spectral_phase``) where given: bilinear,
         or with ``spectral_interpolation`` "stochastic" one wavelength node a lane (its pick hashed from the
         vertex and ``wo``: ``picked_value``)."""
-        if self.spectral_table is None:
+        if self.spectral_grid is None:
             value, pdf = self._mix(w, idx, t)
             return self._at_wavelengths(value, mei), pdf
         w = _channel_mean(w)  # (a spectral variant's air weights are one value: ``Weights`` as they are)
@@ -440,7 +440,7 @@ class HydrometeorMixture:
     # ------------------------------------------------------------ PhaseFunction interface
     def sample(self, ctx, mei, sample1, sample2, active=True):
         wo, value, pdf = self._sample(mei, mi.UInt32(3), sample1, sample2)
-        if self.spectral_table is None:
+        if self.spectral_grid is None:
             weight = dr.select(pdf > 0.0, value / pdf, 0.0)
             return wo, self._at_wavelengths(weight, mei), pdf
         return wo, dr.select(pdf > 0.0, value / pdf, 0.0), pdf  # the lanes' values already
@@ -450,7 +450,7 @@ class HydrometeorMixture:
         mixture sum_s w_s p_s,c) instead of the channel mean, and the per-channel value there (1/sr).
         For history-aware channel sampling in ``majorant_volpath``, which computes the pdf itself."""
         wo, value, _ = self._sample(mei, mi.UInt32(channel), sample1, sample2)
-        return wo, value if self.spectral_table is not None else self._at_wavelengths(value, mei)
+        return wo, value if self.spectral_grid is not None else self._at_wavelengths(value, mei)
 
     def _sample(self, mei, row, sample1, sample2):
         """(wo, per-channel value, channel-mean pdf) of a direction drawn from the density in ``row``
@@ -497,7 +497,7 @@ class HydrometeorMixture:
         wo = mei.to_world(mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, -cos_theta))
         # value and pdf where v was drawn: same weights, same segment (no search, no second lookup)
         t = dr.clip(x / dr.maximum(dmu, 1e-30), 0.0, 1.0)
-        if self.spectral_table is not None:  # the lanes' values from the tables by wavelength
+        if self.spectral_grid is not None:  # the lanes' values from the tables by wavelength
             value, pdf = self._mix_at(w, idx, t, mei, wo)
         else:
             value, pdf = self._mix(w, idx, t)

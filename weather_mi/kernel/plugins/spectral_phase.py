@@ -44,15 +44,15 @@ def prepare_spectral(v: np.ndarray, stacks) -> np.ndarray:
     return out.astype(np.float32)
 
 
-def from_properties(props, n_species: int, n_nodes: int, name: str, storage):
-    """(values S x N x K, the packed table (``storage`` of :func:`pack_spectral`), (first nm, 1 / step, K)) from
-    ``spectral_values`` and ``spectral_nm`` in ``props`` (spectral variants), checked; (None, None, None) else."""
+def from_properties(props, n_species: int, n_nodes: int, name: str):
+    """(values S x N x K, (first nm, 1 / step, K)) from ``spectral_values`` and ``spectral_nm`` in ``props``
+    (spectral variants), checked; (None, None) else."""
     if not (mi.is_spectral and "spectral_values" in props):
-        return None, None, None
+        return None, None
     values = np.asarray(props["spectral_values"], np.float32)
     grid = np.asarray(props["spectral_nm"], np.float64).ravel()
     check_spectral(values, grid, n_species, n_nodes, name)
-    return values, storage(pack_spectral(values)), (float(grid[0]), float(1.0 / (grid[1] - grid[0])), int(grid.size))
+    return values, (float(grid[0]), float(1.0 / (grid[1] - grid[0])), int(grid.size))
 
 
 def pack_pdf(pbar: np.ndarray) -> np.ndarray:
@@ -102,15 +102,20 @@ def flat_species(values: np.ndarray) -> tuple:
     return tuple(s for s in range(v.shape[0]) if np.array_equal(v[s], np.broadcast_to(v[s][:, :1], v[s].shape)))
 
 
+def flat_table(values: np.ndarray, flat: tuple, storage):
+    """``storage`` of :func:`pack_spectral` of the flat species' tables (their first two wavelengths:
+    (N - 1, 1, F, 4)), :func:`spectral_value`'s ``flat_table``."""
+    return storage(pack_spectral(np.asarray(values, np.float32)[list(flat)][:, :, :2]))
+
+
 def split_flat(values: np.ndarray, storage):
-    """(flat species (:func:`flat_species`), ``storage`` of :func:`pack_spectral` of the others' tables, ``storage`` of
-    the flat ones' (their first two wavelengths: (N - 1, 1, F, 4))), for :func:`spectral_value`'s ``flat_table``:
-    the per-lane records then hold the species that change with wavelength alone (80 bytes for the five
-    hydrometeors, where the box's air's two flat tables made them 112)."""
+    """(flat species (:func:`flat_species`), ``storage`` of :func:`pack_spectral` of the others' tables,
+    :func:`flat_table`): the per-lane records then hold the species that change with wavelength alone (80 bytes
+    for the five hydrometeors, where the box's air's two flat tables made them 112)."""
     v = np.asarray(values, np.float32)
     flat = flat_species(v)
     rest = [s for s in range(v.shape[0]) if s not in flat]
-    return flat, storage(pack_spectral(v[rest])), storage(pack_spectral(v[list(flat)][:, :, :2]))
+    return flat, storage(pack_spectral(v[rest])), flat_table(v, flat, storage)
 
 
 def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4, lane_w=None, flat=(),
@@ -244,23 +249,28 @@ INTERPOLATIONS = ("linear", "stochastic")
 
 
 def mixture_tables(props, n_species: int, n_nodes: int, name: str, storage) -> dict:
-    """``hydrometeor_mixture``'s attributes for the tables by wavelength: ``spectral_values``, ``spectral_table``
-    (:func:`pack_spectral`, of the species other than the flat ones where there are flat ones),
-    ``spectral_grid`` (:func:`from_properties`), ``spectral_flat`` and ``spectral_flat_table`` (:func:`split_flat`),
-    ``spectral_interpolation`` (:func:`interpolation_from`) and, for "stochastic", ``spectral_codes``
-    (:func:`pack_half_nodes` of the same species as ``spectral_table``); all None (and no flat species) without them."""
-    values, table, grid = from_properties(props, n_species, n_nodes, name, storage)
-    out = {"spectral_values": values, "spectral_table": table, "spectral_grid": grid, "spectral_flat": (),
-           "spectral_flat_table": None, "spectral_codes": None,
-           "spectral_interpolation": interpolation_from(props, name)}
+    """``hydrometeor_mixture``'s attributes for the tables by wavelength: ``spectral_values``, ``spectral_grid``
+    (:func:`from_properties`; None without the tables: R, G, B interpolated), ``spectral_interpolation``
+    (:func:`interpolation_from`), ``spectral_flat`` and ``spectral_flat_table`` (:func:`split_flat`), and the
+    table the lanes read of the species other than the flat ones: for "linear" ``spectral_table``
+    (:func:`pack_spectral`'s corners), for "stochastic" ``spectral_codes`` (:func:`pack_half_nodes`, a fifth of
+    the corners' size; the JIT variants, else "linear"); the other None."""
+    values, grid = from_properties(props, n_species, n_nodes, name)
+    how = interpolation_from(props, name)
+    if how == "stochastic" and not dr.is_array_v(mi.Float):
+        how = "linear"  # scalar variants: the bilinear value
+    out = {"spectral_values": values, "spectral_table": None, "spectral_grid": grid, "spectral_flat": (),
+           "spectral_flat_table": None, "spectral_codes": None, "spectral_interpolation": how}
     if values is None:
         return out
-    flat, rest, flat_table = split_flat(values, storage)  # species flat in wavelength (the box's air): read once
+    flat = flat_species(values)  # species flat in wavelength (the box's air): read once
+    rest = [s for s in range(n_species) if s not in flat]
     if flat:
-        out.update(spectral_flat=flat, spectral_table=rest, spectral_flat_table=flat_table)
-    if out["spectral_interpolation"] == "stochastic" and dr.is_array_v(mi.Float):  # JIT variants (else linear)
-        rest = [s for s in range(n_species) if s not in flat]
+        out.update(spectral_flat=flat, spectral_flat_table=flat_table(values, flat, storage))
+    if how == "stochastic":
         out["spectral_codes"] = aligned_uint(mi, pack_half_nodes(values[rest]))
+    else:
+        out["spectral_table"] = storage(pack_spectral(values[rest]))
     return out
 
 
@@ -273,6 +283,6 @@ def interpolation_from(props, name: str) -> str:
     return how
 
 
-__all__ = ["flat_species", "split_flat", "prepare_spectral", "pack_spectral", "check_spectral", "spectral_value",
+__all__ = ["flat_species", "flat_table", "split_flat", "prepare_spectral", "pack_spectral", "check_spectral", "spectral_value",
            "from_properties", "pack_pdf", "spectral_pdf", "pack_half_nodes", "encode16", "decode16", "HALF_BIAS",
            "hash_uniform", "picked_value", "interpolation_from", "INTERPOLATIONS", "mixture_tables"]
