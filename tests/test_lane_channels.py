@@ -19,10 +19,11 @@ def _hg(g, mu):
     return (1 - g * g) / (4 * np.pi * (1 + g * g - 2 * g * mu) ** 1.5)
 
 
-def _draws(n: int, seed: int = 0):
+def _draws(n: int, seed: int = 0, densities: bool = False):
     """The plugin, n vertices with throughputs and wavelengths in 450-650 nm, and their directions drawn by
     channel with the shares beta: (throughput (n, 4), f (n, 4) at the drawn directions, q there, f / q from
-    the channel mean's sample())."""
+    the channel mean's sample()); q from ``lane_channels.continuation_pdf``, or with ``densities`` from the
+    channels' densities ``sample_channel`` returns with the draw (what the path loop uses)."""
     import drjit as dr
     import mitsuba as mi
     from weather_mi.kernel.plugins import lane_channels as lc
@@ -47,8 +48,13 @@ def _draws(n: int, seed: int = 0):
     uc = mi.Float(u[0])
     channel = mi.UInt32(dr.select(uc >= beta[0], 1, 0) + dr.select(uc >= beta[0] + beta[1], 1, 0))
     ctx = mi.PhaseFunctionContext(None)
-    wo, f = phase.sample_channel(ctx, mei, channel, mi.Float(u[1]), mi.Point2f(u[2], u[3]))
-    q = lc.continuation_pdf(phase, mei, wo, beta)
+    if densities:
+        wo, f, dens = phase.sample_channel(ctx, mei, channel, mi.Float(u[1]), mi.Point2f(u[2], u[3]),
+                                           densities=True)
+        q = dr.sum(beta * dens)
+    else:
+        wo, f = phase.sample_channel(ctx, mei, channel, mi.Float(u[1]), mi.Point2f(u[2], u[3]))
+        q = lc.continuation_pdf(phase, mei, wo, beta)
     _, w_mean, _ = phase.sample(ctx, mei, mi.Float(u[1]), mi.Point2f(u[2], u[3]))
     return tp, np.array(f).T, np.array(q), np.array(w_mean).T, b.T, lam
 
@@ -67,7 +73,7 @@ def test_channel_shares_split_each_lane_between_its_bracketing_channels(variant_
 def test_each_lanes_weight_has_expectation_one(variant_restored):
     """E[f_i(wo) / q(wo)] = integral of f_i = 1 for every lane (the draws' density is q): within 3 se."""
     n = 1 << 18
-    _, f, q, _, _, _ = _draws(n)
+    _, f, q, _, _, _ = _draws(n, densities=True)
     w = f / q[:, None]
     se = w.std(axis=0) / np.sqrt(n)
     assert np.all(np.abs(w.mean(axis=0) - 1.0) < 3 * se + 1e-3), (w.mean(axis=0), se)
@@ -81,3 +87,11 @@ def test_a_draw_preserves_the_paths_total_throughput(variant_restored):
     assert after == pytest.approx(tp.sum(axis=1), rel=2e-3)
     before = np.sum(tp * w_mean, axis=1) / tp.sum(axis=1)
     assert np.std(np.log(before)) > 0.1
+
+
+def test_the_draws_own_densities_are_the_continuation_pdf(variant_restored):
+    """The channels' densities ``sample_channel`` returns with a draw (from the draw's weights and node segment)
+    give the pdf ``continuation_pdf`` finds again from the direction (a new search), to float rounding."""
+    _, _, q_search, _, _, _ = _draws(4096)
+    _, _, q_draw, _, _, _ = _draws(4096, densities=True)
+    np.testing.assert_allclose(q_draw, q_search, rtol=2e-3)

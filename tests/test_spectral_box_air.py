@@ -177,12 +177,12 @@ def test_air_in_the_grid_is_refused_in_a_spectral_variant(variant_restored):
 def test_a_flat_species_read_once_gives_the_same_values(variant_restored):
     """``spectral_phase.spectral_value`` reads a species whose tables are the same at every wavelength (the air's
     Rayleigh and Henyey-Greenstein) once for the 4 lanes, from the whole table or from one of its own
-    (``split_flat``): the same floats as reading it per lane."""
+    (``mixture_tables``' split, as the plugin loads it): the same floats as reading it per lane."""
     from weather_mi.kernel.variant import set_variant
     set_variant(SPECTRAL)
     import drjit as dr
     import mitsuba as mi
-    from weather_mi.kernel.plugins.spectral_phase import flat_species, pack_spectral, spectral_value, split_flat
+    from weather_mi.kernel.plugins.spectral_phase import flat_species, mixture_tables, pack_spectral, spectral_value
     rng = np.random.default_rng(3)
     values = rng.random((3, 50, 21)).astype(np.float32)
     values[1] = values[1][:, :1]  # species 1 flat in wavelength
@@ -196,9 +196,11 @@ def test_a_flat_species_read_once_gives_the_same_values(variant_restored):
     a = spectral_value(table, grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i))
     b = spectral_value(table, grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i), flat=(1,))
     np.testing.assert_array_equal(np.array(a), np.array(b))
-    flat, rest, flat_table = split_flat(values, lambda x: mi.Float(x.ravel()))  # the flat one in a table of its own
-    c = spectral_value(rest, grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i), flat=flat,
-                       flat_table=flat_table)
+    props = {"spectral_values": values, "spectral_nm": 350.0 + 25.0 * np.arange(21)}
+    out = mixture_tables(props, 3, 50, "test", lambda x: mi.Float(np.asarray(x).ravel()))  # the flat one apart
+    assert out["spectral_flat"] == (1,) and out["spectral_codes"] is None
+    c = spectral_value(out["spectral_table"], grid, 3, w, idx, t, wl, lambda src, i: dr.gather(mi.Vector4f, src, i),
+                       flat=out["spectral_flat"], flat_table=out["spectral_flat_table"])
     np.testing.assert_array_equal(np.array(a), np.array(c))
 
 

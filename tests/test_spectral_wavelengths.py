@@ -1,5 +1,5 @@
 """The spectral paths' wavelengths drawn for colour (``kernel.plugins.wavelengths``, issue 38 chroma38): the
-density integrates to 1 and has Mitsuba's own as its part (written out against Mitsuba's ``pdf_rgb_spectrum``); a
+kernel's draws follow the density and their pdf is its value, Mitsuba's density is its part (written out against Mitsuba's ``pdf_rgb_spectrum``); a
 sensor's rays redrawn from it estimate the CIE 1931 functions' integrals (colour-science, numpy here) without bias,
 and with less spread in Z than Mitsuba's draw (the point of it)."""
 from __future__ import annotations
@@ -17,7 +17,20 @@ def test_density_is_normalised_and_mitsubas_part_is_mitsubas(variant_restored):
     from weather_mi.kernel.plugins import wavelengths as wl
     wm.set_variant(SPECTRAL)
     lam = np.linspace(360.0, 830.0, 4701)
-    assert np.trapezoid(wl.colour_pdf(lam), lam) == pytest.approx(1.0, abs=1e-4)
+    # the density the kernel draws from: a draw's pdf is the mean of colour_pdf over its 1 nm bin, and a
+    # histogram of the draws follows it (the binning and the inversion both checked)
+    u = np.random.default_rng(3).random(1 << 20)
+    x, p = (np.array(a).ravel() for a in wl.sample_colour(mi.Float(u)))
+    fine = np.linspace(360.0, 830.0, 470 * 64 + 1)
+    bin_mean = np.trapezoid(wl.colour_pdf(fine).reshape(-1)[:-1].reshape(470, 64), dx=1 / 64, axis=1)
+    bin_mean /= bin_mean.sum()
+    inside = np.abs(x - np.round(x)) > 1e-3  # float32 wavelengths at a bin's edge may round into the next
+    np.testing.assert_allclose(p[inside], bin_mean[np.minimum((x[inside] - 360.0).astype(int), 469)], rtol=2e-3)
+    hist, edges = np.histogram(x, bins=47, range=(360.0, 830.0), density=True)
+    mean_pdf = [np.trapezoid(wl.colour_pdf(np.linspace(a, b, 41)), np.linspace(a, b, 41)) / (b - a)
+                for a, b in zip(edges[:-1], edges[1:])]
+    se = np.sqrt(np.asarray(mean_pdf) / (x.size * (edges[1] - edges[0])))  # a bin's Poisson se (1/nm)
+    assert np.all(np.abs(hist - mean_pdf) < 4 * se), np.max(np.abs(hist - mean_pdf) / se)
     assert np.trapezoid(wl.mitsuba_pdf(lam), lam) == pytest.approx(1.0, abs=1e-4)
     got = np.array(mi.pdf_rgb_spectrum(mi.Float(lam[::50]))).ravel()
     np.testing.assert_allclose(wl.mitsuba_pdf(lam[::50]), got, rtol=1e-5)

@@ -16,6 +16,7 @@ from ..kernel.scene_dict import recentred, sensor_dict
 from ..optics.volume import OpticalVolume
 from .passes import current_or_default_variant
 from ..scene.spec import SceneSpec
+from .colour_noise import pass_images
 
 CLOUD_TAU = np.log(2.0)  # cloud pixels: eye-ray transmittance below 1/2
 
@@ -81,7 +82,6 @@ def luminance_rse(means, cloud: np.ndarray) -> float:
     n = len(means)
     if n < 2:
         raise ValueError(f"luminance_rse needs at least 2 passes, got {n}")
-    from .colour_noise import pass_images
     y = pass_images(means)[..., :3] @ Y_OF_LINEAR_SRGB  # pass i = (i + 1) mean_i - i mean_(i-1), in Y (linear)
     ym, se = y.mean(axis=0), y.std(axis=0, ddof=1) / np.sqrt(n)
     ok = np.asarray(cloud, bool) & (ym > 0)

@@ -156,15 +156,20 @@ def _gather4(src, index):
     return dr.gather(mi.Vector4f, src, index)
 
 
+def channel_bracket(lam, channel_nm):
+    """(above the middle channel, t_hi, t_lo) of wavelength ``lam`` (nm) between the channels ``channel_nm``
+    (descending): its fraction from channel 1 to 0 (550 -> 650 nm) and from 2 to 1 (450 -> 550 nm), clipped."""
+    (l0, l1, l2) = channel_nm
+    return lam >= l1, dr.clip((lam - l1) / (l0 - l1), 0.0, 1.0), dr.clip((lam - l2) / (l1 - l2), 0.0, 1.0)
+
+
 def lerp_channels(value, wavelengths, channel_nm):
     """Per lane of ``wavelengths`` (nm; a 4-lane Spectrum), the three channel values ``value`` (at
     ``channel_nm``, descending) interpolated linearly in wavelength, constant beyond the ends."""
-    (l0, l1, l2), out = channel_nm, []
+    out = []
     for lane in range(4):
-        lam = wavelengths[lane]
-        t_hi = dr.clip((lam - l1) / (l0 - l1), 0.0, 1.0)   # 550 -> 650: channel 1 -> 0
-        t_lo = dr.clip((lam - l2) / (l1 - l2), 0.0, 1.0)   # 450 -> 550: channel 2 -> 1
-        out.append(dr.select(lam >= l1, dr.lerp(value[1], value[0], t_hi), dr.lerp(value[2], value[1], t_lo)))
+        red, t_hi, t_lo = channel_bracket(wavelengths[lane], channel_nm)
+        out.append(dr.select(red, dr.lerp(value[1], value[0], t_hi), dr.lerp(value[2], value[1], t_lo)))
     return mi.Spectrum(*out)
 
 
@@ -439,22 +444,25 @@ class HydrometeorMixture:
 
     # ------------------------------------------------------------ PhaseFunction interface
     def sample(self, ctx, mei, sample1, sample2, active=True):
-        wo, value, pdf = self._sample(mei, mi.UInt32(3), sample1, sample2)
+        wo, value, pdf, _ = self._sample(mei, mi.UInt32(3), sample1, sample2)
         if self.spectral_grid is None:
             weight = dr.select(pdf > 0.0, value / pdf, 0.0)
             return wo, self._at_wavelengths(weight, mei), pdf
         return wo, dr.select(pdf > 0.0, value / pdf, 0.0), pdf  # the lanes' values already
 
-    def sample_channel(self, ctx, mei, channel, sample1, sample2, active=True):
+    def sample_channel(self, ctx, mei, channel, sample1, sample2, active=True, densities=False):
         """A direction drawn from colour channel ``channel``'s density (UInt32 per lane, 0..2: the
         mixture sum_s w_s p_s,c) instead of the channel mean, and the per-channel value there (1/sr).
-        For history-aware channel sampling in ``majorant_volpath``, which computes the pdf itself."""
-        wo, value, _ = self._sample(mei, mi.UInt32(channel), sample1, sample2)
-        return wo, value if self.spectral_grid is not None else self._at_wavelengths(value, mei)
+        For history-aware channel sampling in ``majorant_volpath``, which computes the pdf itself; with
+        ``densities`` also the three channels' densities at the direction (Color3f, 1/sr; the pdf's terms,
+        from the draw's own weights and node segment: ``lane_channels.continuation_pdf``)."""
+        wo, value, _, (w, idx, t) = self._sample(mei, mi.UInt32(channel), sample1, sample2)
+        value = value if self.spectral_grid is not None else self._at_wavelengths(value, mei)
+        return (wo, value, mi.Color3f(self._mix(w, idx, t)[0])) if densities else (wo, value)
 
     def _sample(self, mei, row, sample1, sample2):
-        """(wo, per-channel value, channel-mean pdf) of a direction drawn from the density in ``row``
-        of table4 (0..2: a colour channel; 3: the channel mean)."""
+        """(wo, per-channel value, channel-mean pdf, (weights, node segment, fraction)) of a direction drawn
+        from the density in ``row`` of table4 (0..2: a colour channel; 3: the channel mean)."""
         w = self._weights_at(mei)
         # the weights of the row's density: by channel, that channel's (row 0..2) or their mean (row 3)
         w_row = w.of_row(row) if isinstance(w, ByChannel) else w
@@ -501,7 +509,7 @@ class HydrometeorMixture:
             value, pdf = self._mix_at(w, idx, t, mei, wo)
         else:
             value, pdf = self._mix(w, idx, t)
-        return wo, value, pdf
+        return wo, value, pdf, (w, idx, t)
 
     def eval_pdf(self, ctx, mei, wo, active=True):
         h = wo + mei.wi  # |wo + wi|^2 = 2 (1 - cos Theta): accurate near forward

@@ -24,16 +24,13 @@ def channel_shares(throughput, wavelengths, channel_nm):
     ``wavelengths``, nm), each lane's share split between the two channels (``channel_nm``, descending) that
     bracket its wavelength, linearly, and given to the end channel beyond them; 1/3 each where the throughput
     is 0."""
-    (l0, l1, l2) = channel_nm
+    from .hydrometeor_mixture import channel_bracket  # the lanes' values read the channels as lerp_channels
     total = dr.sum(throughput)
     inv = dr.select(total > 0.0, dr.rcp(total), 0.0)
     beta = [mi.Float(0.0), mi.Float(0.0), mi.Float(0.0)]
     for lane in range(4):
         a = throughput[lane] * inv
-        lam = wavelengths[lane]
-        t_hi = dr.clip((lam - l1) / (l0 - l1), 0.0, 1.0)   # 550 -> 650: channel 1 -> 0
-        t_lo = dr.clip((lam - l2) / (l1 - l2), 0.0, 1.0)   # 450 -> 550: channel 2 -> 1
-        red = lam >= l1
+        red, t_hi, t_lo = channel_bracket(wavelengths[lane], channel_nm)
         beta[0] += dr.select(red, a * t_hi, 0.0)
         beta[1] += dr.select(red, a * (1.0 - t_hi), a * t_lo)
         beta[2] += dr.select(red, 0.0, a * (1.0 - t_lo))
@@ -44,22 +41,20 @@ def channel_shares(throughput, wavelengths, channel_nm):
 def channel_pdfs(phase, mei, wo):
     """(Color3f, 1/sr) the densities p_R, p_G, p_B at ``wo`` that ``phase.sample_channel`` draws from (the
     mixture's R, G, B table rows with the channel-mean species weights, as ``_sample`` uses them)."""
-    from .hydrometeor_mixture import _channel_mean
     h = wo + mei.wi  # |wo + wi|^2 = 2 (1 - cos Theta), as eval_pdf
     idx, t = phase._segment(0.5 * dr.squared_norm(h))
-    value, _ = phase._mix(_channel_mean(phase._weights_at(mei)), idx, t)
+    value, _ = phase._mix(phase._weights_at(mei), idx, t)  # each channel's own weights (a ByChannel's row)
     return value
 
 
 def eval_pdf(phase, mei, wo, beta):
     """(the lanes' phase values, sum_c beta_c p_c(wo)) at ``wo`` from one lookup of the vertex's weights and of
     the direction's node segment (``phase.eval_pdf``'s values; its channel-mean pdf is not needed)."""
-    from .hydrometeor_mixture import _channel_mean
     w = phase._weights_at(mei)
     h = wo + mei.wi
     idx, t = phase._segment(0.5 * dr.squared_norm(h))
     value, _ = phase._mix_at(w, idx, t, mei, wo)
-    channels, _ = phase._mix(_channel_mean(w), idx, t)
+    channels, _ = phase._mix(w, idx, t)  # each channel's own weights, as the draws (a ByChannel's row)
     return value, dr.sum(beta * channels)
 
 

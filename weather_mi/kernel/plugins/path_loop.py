@@ -318,16 +318,17 @@ class PathLoop:
             u = sampler.next_1d(act_scatter)
             alpha = v.alpha
             channel = mi.UInt32(dr.select(u >= alpha[0], 1, 0) + dr.select(u >= alpha[0] + alpha[1], 1, 0))
-            wo, ph_val = phase.sample_channel(ph_ctx, mei_s, channel, sampler.next_1d(act_scatter),
-                                              sampler.next_2d(act_scatter), act_scatter)
+            drawn = phase.sample_channel(ph_ctx, mei_s, channel, sampler.next_1d(act_scatter),
+                                         sampler.next_2d(act_scatter), act_scatter, densities=self.by_lane)
+            wo, ph_val = drawn[0], drawn[1]
         else:
             wo, _, _ = phase.sample(ph_ctx, mei_s, sampler.next_1d(act_scatter), sampler.next_2d(act_scatter),
                                     act_scatter)
         if self.guiding:  # the values are needed about the path's own direction
             wo = dr.select(in_disk, sun.sample_disk(integ, sampler.next_2d(act_scatter)), wo)
             ph_val, ph_pdf = phase.eval_pdf(ph_ctx, v.mei, wo, act_scatter)
-        if self.by_lane:  # (no guiding)
-            return wo, ph_val, lane_channels.continuation_pdf(phase, v.mei, wo, v.alpha)
+        if self.by_lane:  # (no guiding): sum_c alpha_c p_c(wo), the densities from the draw's own lookup
+            return wo, ph_val, dr.sum(v.alpha * drawn[2])
         ph_pdf = sun.continuation_pdf(integ, phase, sampler, v.mei, wo, ph_val, ph_pdf, v.alpha, v.eps, act_scatter)
         return wo, ph_val, ph_pdf
 

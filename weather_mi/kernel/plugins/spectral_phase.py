@@ -104,18 +104,10 @@ def flat_species(values: np.ndarray) -> tuple:
 
 def flat_table(values: np.ndarray, flat: tuple, storage):
     """``storage`` of :func:`pack_spectral` of the flat species' tables (their first two wavelengths:
-    (N - 1, 1, F, 4)), :func:`spectral_value`'s ``flat_table``."""
+    (N - 1, 1, F, 4)), :func:`spectral_value`'s ``flat_table``: the per-lane records then hold the species that
+    change with wavelength alone (80 bytes for the five hydrometeors, where the box's air's two flat tables made
+    them 112)."""
     return storage(pack_spectral(np.asarray(values, np.float32)[list(flat)][:, :, :2]))
-
-
-def split_flat(values: np.ndarray, storage):
-    """(flat species (:func:`flat_species`), ``storage`` of :func:`pack_spectral` of the others' tables,
-    :func:`flat_table`): the per-lane records then hold the species that change with wavelength alone (80 bytes
-    for the five hydrometeors, where the box's air's two flat tables made them 112)."""
-    v = np.asarray(values, np.float32)
-    flat = flat_species(v)
-    rest = [s for s in range(v.shape[0]) if s not in flat]
-    return flat, storage(pack_spectral(v[rest])), flat_table(v, flat, storage)
 
 
 def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4, lane_w=None, flat=(),
@@ -124,7 +116,7 @@ def spectral_value(table, grid, n_species: int, w, idx, t, wavelengths, gather4,
     segment ``idx``; ``table`` from :func:`pack_spectral` (flat), ``grid`` = (first nm, 1 / step, K). ``lane_w``:
     each lane's own weights (4 lists of S Floats: the air's by wavelength, ``spectral_air_weights``) in place of w.
     ``flat``: species the same at every wavelength (:func:`flat_species`), one packet load for the 4 lanes; with
-    ``flat_table`` (:func:`split_flat`) they are read from it, and ``table`` holds the other species only."""
+    ``flat_table`` (:func:`flat_table`) they are read from it, and ``table`` holds the other species only."""
     lo, inv_step, k = grid
     out, shared = [], {}
     for f, s in enumerate(flat):  # wavelength cell 0: the same values as any other
@@ -220,7 +212,7 @@ def picked_value(codes, grid, n_species: int, w, idx, t, wavelengths, u, gather4
     lo, inv_step, k = grid
     n = dr.width(codes) // (4 * k)  # versine nodes
     shared = {}
-    for f, s in enumerate(flat):  # the species the same at every wavelength: read once (split_flat's table)
+    for f, s in enumerate(flat):  # the species the same at every wavelength: read once (flat_table)
         e = gather4(flat_table, idx * len(flat) + f)
         shared[s] = dr.fma(e[2] - e[0], t, e[0])
     rest = [s for s in range(n_species) if s not in shared]
@@ -251,7 +243,7 @@ INTERPOLATIONS = ("linear", "stochastic")
 def mixture_tables(props, n_species: int, n_nodes: int, name: str, storage) -> dict:
     """``hydrometeor_mixture``'s attributes for the tables by wavelength: ``spectral_values``, ``spectral_grid``
     (:func:`from_properties`; None without the tables: R, G, B interpolated), ``spectral_interpolation``
-    (:func:`interpolation_from`), ``spectral_flat`` and ``spectral_flat_table`` (:func:`split_flat`), and the
+    (:func:`interpolation_from`), ``spectral_flat`` and ``spectral_flat_table`` (:func:`flat_table`), and the
     table the lanes read of the species other than the flat ones: for "linear" ``spectral_table``
     (:func:`pack_spectral`'s corners), for "stochastic" ``spectral_codes`` (:func:`pack_half_nodes`, a fifth of
     the corners' size; the JIT variants, else "linear"); the other None."""
@@ -283,6 +275,6 @@ def interpolation_from(props, name: str) -> str:
     return how
 
 
-__all__ = ["flat_species", "flat_table", "split_flat", "prepare_spectral", "pack_spectral", "check_spectral", "spectral_value",
+__all__ = ["flat_species", "flat_table", "prepare_spectral", "pack_spectral", "check_spectral", "spectral_value",
            "from_properties", "pack_pdf", "spectral_pdf", "pack_half_nodes", "encode16", "decode16", "HALF_BIAS",
            "hash_uniform", "picked_value", "interpolation_from", "INTERPOLATIONS", "mixture_tables"]

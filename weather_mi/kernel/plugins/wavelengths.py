@@ -23,7 +23,7 @@ import mitsuba as mi
 
 LAMBDA_NM = (360.0, 830.0)    # Mitsuba's CIE range (MI_CIE_MIN, MI_CIE_MAX)
 MIX = (0.5, 0.3, 0.1, 0.1)    # Mitsuba's density, xbar, ybar, zbar (each normalised)
-GRID_NM = 1.0                 # the tabulated density's spacing (piecewise linear)
+GRID_NM = 1.0                 # the sampled density's bins (piecewise constant on them)
 
 _CACHE: dict = {}
 
@@ -38,8 +38,7 @@ def colour_pdf(lam_nm) -> np.ndarray:
     """The density :data:`MIX` (1/nm over 360-830 nm) at ``lam_nm``."""
     from ...optics.spectrum import cmfs_1931
     grid = np.arange(LAMBDA_NM[0], LAMBDA_NM[1] + 0.5 * GRID_NM, GRID_NM)
-    cmf = cmfs_1931(np.arange(LAMBDA_NM[0], LAMBDA_NM[1] + 2.5, 5.0))
-    cmf = np.stack([np.interp(grid, np.arange(LAMBDA_NM[0], LAMBDA_NM[1] + 2.5, 5.0), cmf[:, k]) for k in range(3)], -1)
+    cmf = cmfs_1931(grid)  # colour-science's 1 nm table
     m = mitsuba_pdf(grid)
     parts = [m / np.trapezoid(m, grid)] + [cmf[:, k] / np.trapezoid(cmf[:, k], grid) for k in range(3)]
     pdf = sum(w * p for w, p in zip(MIX, parts))
