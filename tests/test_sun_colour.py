@@ -107,8 +107,8 @@ def test_eye_path_rayleigh_model_of_the_headline():
     hydrostatic column (p(0) - p(20 km)) / (m g) with p(20 km) = 5474.9 Pa (U.S. Standard Atmosphere 1976's
     table), its written-out Eq. 29 is Bodhaine's definition (Eq. 2) within 0.1 %, and a level path at 1.5 km
     of 30 km has exp(-sigma n L) (the flat-ground trapezoid of the headline against the closed form)."""
-    from validation.sun_colour import (WAVELENGTHS_NM, eye_path_rayleigh_transmittance, rayleigh_cross_section_cm2,
-                                       us_standard_number_density_m3)
+    from validation.seen_through_air import rayleigh_cross_section_cm2, us_standard_number_density_m3
+    from validation.sun_colour import WAVELENGTHS_NM, eye_path_rayleigh_transmittance
     from weather_mi.optics.rayleigh import cross_section_physical_m2
     z = np.linspace(0.0, 20000.0, 200001)
     column = np.trapezoid(us_standard_number_density_m3(z), z)

@@ -105,10 +105,14 @@ def path_transmittance(origins, ends, wavelength_nm, points: int = 401, molecule
     alone."""
     o, e = np.asarray(origins, np.float64), np.asarray(ends, np.float64)
     s = np.linspace(0.0, 1.0, points)
-    z = o[:, None, 2] + s[None, :] * (e[:, 2] - o[:, 2])[:, None]
-    beta = (extinction_parts_per_m(wavelength_nm, z)["air"] if molecules_only else extinction_per_m(wavelength_nm, z))
-    length = np.linalg.norm(e - o, axis=1)
-    return np.exp(-np.trapezoid(beta, s, axis=1) * length[:, None])
+    out = []
+    for k in range(0, max(len(o), 1), 16):  # 16 paths at a time: (16, points, n) per part, not (N, points, n)
+        ok, ek = o[k:k + 16], e[k:k + 16]
+        z = ok[:, None, 2] + s[None, :] * (ek[:, 2] - ok[:, 2])[:, None]
+        beta = (extinction_parts_per_m(wavelength_nm, z)["air"] if molecules_only
+                else extinction_per_m(wavelength_nm, z))
+        out.append(np.exp(-np.trapezoid(beta, s, axis=1) * np.linalg.norm(ek - ok, axis=1)[:, None]))
+    return np.concatenate(out)
 
 
 def layer_edges_m() -> np.ndarray:

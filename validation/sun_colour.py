@@ -40,8 +40,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from validation.seen_through_air import (path_transmittance, rayleigh_cross_section_cm2,  # noqa: E402,F401
-                                         us_standard_number_density_m3)
+from validation.seen_through_air import path_transmittance  # noqa: E402
 
 PRESSURES_HPA = (1013.25, 850.0, 700.0, 500.0)
 
@@ -167,13 +166,14 @@ def lit_cloud_xy(spec, vol, spp: int, eye_air: bool = False, sky_air: bool = Fal
     return out["xy"], out["height"], out["img"]
 
 
-def eye_path_rayleigh_transmittance(spec, vol, mask, points: int = 401) -> np.ndarray:
+def eye_path_rayleigh_transmittance(spec, vol, mask, points: int = 401, paths=None) -> np.ndarray:
     """The eye rays' Rayleigh transmittance (Beer-Lambert) from the camera to where the ``mask`` pixels' rays
     reach optical depth 1 in the cloud (``display.cloud_colour.visible_points_m``), averaged over the pixels,
     on ``WAVELENGTHS_NM``: exp(-sigma(lambda) int n(z) ds), sigma Bodhaine's Eq. 29, n the standard
     atmosphere's, the heights above a flat ground (trapezoid over ``points`` points). Molecules only: no ozone,
-    aerosol or in-scattered light (an independent model of what the eye path does to a far white cloud)."""
-    origins, ends = eye_paths(spec, vol, mask)
+    aerosol or in-scattered light (an independent model of what the eye path does to a far white cloud).
+    ``paths``: :func:`eye_paths`' (origins, ends) where the caller has them."""
+    origins, ends = eye_paths(spec, vol, mask) if paths is None else paths
     return path_transmittance(origins, ends, WAVELENGTHS_NM, points, molecules_only=True).mean(axis=0)
 
 
@@ -216,10 +216,10 @@ def _render(args, vol, size, elevation, atmosphere, sky):
     out = lit_cloud(spec, vol, args.spp, atmosphere == "clear", sky == "air", args.spectral, cache)
     out["spec"] = spec
     if atmosphere == "clear":  # the eye path modelled independently: Rayleigh's Beer-Lambert to the tau = 1 points
-        out["t_eye"] = eye_path_rayleigh_transmittance(spec, vol, out["mask"])
+        origins, ends = eye_paths(spec, vol, out["mask"])  # once: a ray march per lit pixel
+        out["t_eye"] = eye_path_rayleigh_transmittance(spec, vol, out["mask"], paths=(origins, ends))
         if args.through_air:  # and the whole air's: transmittance and path radiance (validation.seen_through_air)
             from validation.seen_through_air import path_radiance
-            origins, ends = eye_paths(spec, vol, out["mask"])
             albedo = 0.0 if spec.ground is None else float(np.mean(spec.ground.albedo))
             l_path, t_air = path_radiance(origins, ends, spec.sun.to_sun, WAVELENGTHS_NM, albedo)
             out["l_path"], out["t_air"] = l_path.mean(axis=0), t_air.mean(axis=0)
