@@ -38,7 +38,8 @@ def test_translucent_frames_are_the_same_with_the_light_in_words():
     from weather_mi.optics.air import Atmosphere
     from weather_mi.slicing import MODES, SliceRenderer
     from weather_mi.slicing import light as light_module
-    vol = wm.optical_volume(wm.synthetic.supercell(shape=(20, 48, 48), spacing_m=(1000.0, 2000.0, 2000.0)), species="physical")
+    storm = wm.synthetic.supercell(shape=(20, 48, 48), spacing_m=(1000.0, 2000.0, 2000.0))
+    vol = wm.optical_volume(storm, species="physical")
     init = light_module.LightVolume.__init__
     frames = {}
     try:

@@ -76,7 +76,8 @@ def _hold_step(mi, dr, store, lane, plane, translucent: bool, words: bool = Fals
     (the optical depths are 0): (k, D, I) -> (D, I), the state stored as that step stores it, unchanged."""
     def hold(k, D, I):
         if translucent:
-            store_light(mi, dr, store, lane + k * plane, dr.maximum(D, LOG_FLOOR), dr.maximum(I, LOG_FLOOR), True, words)
+            store_light(mi, dr, store, lane + k * plane, dr.maximum(D, LOG_FLOOR), dr.maximum(I, LOG_FLOOR), True,
+                        words)
         else:
             dr.scatter(store, D, lane + k * plane)
         return D, I

@@ -33,7 +33,7 @@ class SunAir:
 
     h0: object      # mi.Float: the table's lowest height (m above sea level)
     inv_dh: object  # mi.Float: 1 / its height step (1/m)
-    words: object   # mi.UInt64 (n): the sun's linear sRGB per height (``FINE_ROWS``), one word a row (``packets.rgb_words``)
+    words: object   # mi.UInt64 (n): the sun's linear sRGB per height (``FINE_ROWS``), a word a row (``rgb_words``)
     n: int          # the number of heights
 
 

@@ -156,5 +156,5 @@ def source_rows(mi, sun_air: SunAirSource):
     return lo * (1.0 - a) + hi * a
 
 
-__all__ = ["ELEVATION_MIN_DEG", "SunAirSource", "as_sun_air", "source_rows", "elevation_table", "sun_air_input", "sun_rows",
-           "sun_source"]
+__all__ = ["ELEVATION_MIN_DEG", "SunAirSource", "as_sun_air", "elevation_table", "source_rows", "sun_air_input",
+           "sun_rows", "sun_source"]
