@@ -50,14 +50,13 @@ def test_the_kernels_fine_rows_are_the_hosts(elevation):
         return kept.setdefault((name, key), make())
     spec = types.SimpleNamespace(atmosphere=Atmosphere(), sun=wm.Sun(240.0, elevation))
     source = sun_air_table.sun_source(mi, spec, 18000.0, 4096, reuse)
-    sun = sun_air_table.as_sun_air(mi, source)
-    h0, h1, rgb = float(source.h0[0]), float(source.h0[0]) + 4095 / float(source.inv_dh[0]), sun.rgb
+    h0, h1 = float(source.h0[0]), float(source.h0[0]) + 4095 / float(source.inv_dh[0])
+    rgb = np.asarray(sun_air_table.source_rows(mi, source)).T  # (rows, 3)
     heights, rows = sun_air_table.sun_rows(spec, 18000.0)
     fine = np.linspace(h0, h1, 4096)
     host = np.stack([np.interp(fine, heights, rows[:, c]) for c in range(3)], axis=1)
-    dev = np.asarray(rgb).reshape(-1, 4)
+    dev = np.asarray(rgb).reshape(-1, 3)
     np.testing.assert_allclose((h0, h1), (heights[0], heights[-1]), rtol=1e-6)
-    assert np.all(dev[:, 3] == 0)
     assert np.max(np.abs(dev[:, :3] - host) / np.abs(host).max(axis=1, keepdims=True)) < 2e-5
 
 
@@ -106,3 +105,23 @@ def test_the_shadow_outside_the_box_is_the_light_leaving_it():
     diff = np.abs(last_plane - general)
     assert np.percentile(diff, 99) < 1e-5, np.percentile(diff, [50, 99, 100])
     assert diff.max() < 0.15  # (the few whose sun ray leaves the box through the storm: see the docstring)
+
+
+def test_the_sun_colour_read_from_one_word_a_row_is_the_row_within_2_to_the_minus_14():
+    """``sun_air.sun_colour_at`` reads each row as one 64-bit word (``packets.rgb_words``: per channel the float32
+    rounded to 13 mantissa bits): against the rows themselves (numpy float32), every channel within 2^-14 of its
+    own value (not of the brightest), zero stays zero, the channels in order, and the nearest row at each height."""
+    from weather_mi.kernel.variant import ensure_registered
+    ensure_registered()
+    import drjit as dr
+    import mitsuba as mi
+    rng = np.random.default_rng(38)
+    rows = np.exp(rng.uniform(-14.0, 1.0, (1000, 3))).astype(np.float32)  # sun colours of 1e-6 .. 2.7
+    rows[:3] = [[0.0, 0.5, 1.0], [1.0, 0.0, 0.25], [np.float32(0.1), np.float32(0.2), 0.0]]
+    sun = sun_air.sun_air_of_rows(mi, dr.opaque(mi.Float, 100.0), dr.opaque(mi.Float, 0.5),
+                                  mi.Color3f(*(mi.Float(rows[:, c]) for c in range(3))))
+    z = 100.0 + 2.0 * np.arange(1000) + rng.uniform(-0.9, 0.9, 1000)  # within the nearest row's half step
+    got = np.asarray(sun_air.sun_colour_at(mi, sun, mi.Float(z.astype(np.float32)))).T
+    assert np.all(got[rows == 0] == 0)
+    rel = np.abs(got - rows)[rows > 0] / rows[rows > 0]
+    assert rel.max() <= 2.0 ** -14 and np.median(rel) > 1e-6  # rounded (not the float32 itself)

@@ -32,6 +32,8 @@ from ..kernel.jitarrays import aligned_float, kernel_scalar
 from .blur import _blur, blur_weights
 from .geometry import SliceGeometry
 from .jitter import texel_offsets
+from .light_slabs import (LIGHT_SUBSAMPLES, LOG_FLOOR, _hold_step, _slab_range, _slab_step,  # noqa: F401 (re-exported)
+                          source_extinction, store_light, word_pair)
 from .rays import f32, light_rays
 
 # variance (texels^2) that forward-scattered light accumulates between two blur steps at the reference
@@ -41,11 +43,6 @@ from .rays import f32, light_rays
 # 4 slabs with a 13-tap kernel (0.5 with the 5-tap kernel, whose exact range ends at 4/3, blurred every slab:
 # 127 launches instead of 31, ~17% more frame time in uniform/translucent; slice convergence unchanged)
 BLUR_STEP_VARIANCE = 1.5
-# extinction samples per half slab of the light pass (the midpoint rule over each half). One sample per
-# slab puts a cloud top that lies inside the slab at the slab's middle, and the dense stratocumulus deck
-# kept changing with the slice count (validation/slice_convergence.py: 128 vs 256 up to 2.9 with the eye
-# pass's other measures, 1.9 with one sample per half; two per half: 1.8 at 1.7x the light pass's cost)
-LIGHT_SUBSAMPLES = 1
 
 
 def auto_light_res(box, spacing, low: int = 128, high: int = 256) -> int:
@@ -124,13 +121,14 @@ class LightVolume:
     numpy. Storage: (planes, R, R) floats of direct light D where no light is scattered forward; for
     translucent light (``log_store``) (planes, R, R, 2): log D and log(D + I) (I: forward-scattered), which
     its lookups interpolate (as logarithms: ``lookup(log_forward=True)``) without taking a logarithm per
-    texel read."""
+    texel read; the pair as one 64-bit word a texel (planes, R, R) unless differentiated (``light_slabs``)."""
 
     def __init__(self, mi, box, res: int, differentiable: bool = False, occupancy=None):
         self.mi = mi
         self.lo, self.hi = (np.asarray(p, dtype=np.float64) for p in box)  # slicing box (world)
         self.res = int(res)
         self.differentiable = differentiable
+        self.words = not differentiable  # translucent light's pair as one 64-bit word a texel (light_slabs.py)
         self.store = None
         self.log_store = False  # the store holds log D, log(D + I) (translucent light)
         self.frame: LookupFrame | None = None   # the geometry of the store, as kernel values
@@ -191,22 +189,24 @@ class LightVolume:
                          g.n_slices, int(chunk), bool(translucent), *span, keep=keep)
 
     def run(self, plan: "SweepPlan", source):
-        """The light pass's kernels: the store of (planes, R, R, 2) floats (see the module docstring)."""
+        """The light pass's kernels: the store (see the class docstring)."""
         mi = self.mi
         import drjit as dr
         R, N = self.res, plan.n_slices
         C = 2 if plan.translucent else 1  # stored channels: (log D, log(D + I)), or D alone (I = 0)
         # every plane of every lane is written (the exit plane too); only a differentiated pass starts from zeros
-        store = (dr.zeros if self.differentiable else dr.empty)(mi.Float, (N + 1) * R * R * C)
+        words = plan.translucent and self.words
+        store = dr.empty(mi.UInt64, (N + 1) * R * R) if words else \
+            (dr.zeros if self.differentiable else dr.empty)(mi.Float, (N + 1) * R * R * C)
         lane = dr.arange(mi.UInt32, R * R)
         offset = None
         if plan.frame.jitter is not None:
             offset = texel_offsets(dr, mi, lane % R, lane // R, plan.frame.jitter, plan.frame.rotation)
         plane = dr.opaque(mi.UInt32, R * R)
         through_slab = _slab_step(mi, source, (plan.q0, plan.qs, plan.kin, plan.kout), plan.dl, store, lane,
-                                  plane, plan.translucent, offset, N, (plan.ka, plan.kb), plan.keep)
+                                  plane, plan.translucent, offset, N, (plan.ka, plan.kb), plan.keep, words)
         # the slabs that may read the medium per light ray, and the store of those that do not
-        hold = _hold_step(dr, store, lane, plane, plan.translucent)
+        hold = _hold_step(mi, dr, store, lane, plane, plan.translucent, words)
         span = None if plan.ka is None else _slab_range(mi, dr, plan.ka, plan.kb, N)
         if plan.translucent:  # (log D, log F), F = D + I: a slab subtracts optical depths, nothing more
             state = (dr.zeros(mi.Float, R * R), dr.zeros(mi.Float, R * R))
@@ -226,14 +226,12 @@ class LightVolume:
                 state = (state[0], dr.log(dr.maximum(D + blurred, 1e-30)))
             state = self._through_slabs(through_slab, state, k0, k1, lane, store,
                                         plan.translucent and k1 < N, hold, span)  # (I for the next blur step)
-        at = (lane + dr.opaque(mi.UInt32, N * R * R)) * C
+        at = lane + dr.opaque(mi.UInt32, N * R * R)
         if plan.translucent:
             D, I = (dr.maximum(v, LOG_FLOOR) for v in state[:2])
         else:
             D, I = state
-        dr.scatter(store, D, at)
-        if plan.translucent:
-            dr.scatter(store, I, at + 1)
+        store_light(mi, dr, store, at, D, I, plan.translucent, words)
         dr.eval(store)
         return store
 
@@ -395,6 +393,8 @@ class LightVolume:
         translucent) only D is read."""
         mi = self.mi
         import drjit as dr
+        if isinstance(self.store, mi.UInt64):  # one word a texel: (log D, log(D + I)) (light_slabs.pair_word)
+            return word_pair(mi, dr, dr.gather(mi.UInt64, self.store, at, active))
         if self.log_store:
             return dr.gather(mi.Array2f, self.store, at, active)
         return mi.Array2f(dr.gather(mi.Float, self.store, at, active), 0.0)
@@ -497,97 +497,3 @@ class LightVolume:
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         direct, indirect = self.lookup(mi.Point3f(*(aligned_float(mi, p[:, i]) for i in range(3))))
         return np.asarray(direct, dtype=np.float64), np.asarray(indirect, dtype=np.float64)
-
-
-def _slab_step(mi, source, rays, dl, store, lane, plane, translucent: bool, offset=None, n_slices: int = 0,
-               span=(None, None), keep=None):
-    """The step of the light pass through one slab k: (k, D, I) -> (D, I) after the slab (translucent
-    light: (k, log D, log(D + I)) -> the same after the slab: optical depths subtracted, no exp or log),
-    storing the light at plane k (``store[lane + k plane]``, or its 2 channels for translucent light). ``rays``:
-    (q0, qs, kin, kout) of ``LightVolume._light_rays``; ``dl``: the light path (m) across one slab; ``offset``: None or each
-    lane's plane offset j (slice units): its slabs are [k + j - 1/2, k + j + 1/2], the first and the last
-    reaching to where the ray enters and leaves the box; ``keep``: see ``SweepPlan``."""
-    import drjit as dr
-    q0, qs, kin, kout = rays
-
-    def through_slab(k, D, I):
-        """Carry (D, I) (translucent light: (log D, log(D + I))) through slab k in two halves, [k - 1/2, k]
-        and [k, k + 1/2] (+ j) clipped to the box (slice units); store the light at plane k (+ j)."""
-        kf = mi.Float(k)
-        if offset is None:
-            a, m, b = (dr.clip(kf + h, kin, kout) for h in (-0.5, 0.0, 0.5))
-        else:
-            kj = kf + offset
-            a = dr.select(k == 0, kin, dr.clip(kj - 0.5, kin, kout))
-            m = dr.clip(kj, kin, kout)
-            b = dr.select(k == n_slices - 1, kout, dr.clip(kj + 0.5, kin, kout))
-        ka, kb = span  # (nothing to sample outside the box, nor outside the occupied span)
-        (e1, keep1), (e2, keep2) = (_mean_extinction(dr, source, q0, qs, x0, x1, LIGHT_SUBSAMPLES,
-                                                     (x1 > x0) if ka is None else (x1 > x0) & (x1 >= ka) & (x0 <= kb),
-                                                     keep)
-                                    for x0, x1 in ((a, m), (m, b)))
-        if translucent:  # in logarithms: D' = D exp(-tau), F' = F exp(-tau_keep), F = D + I
-            log_d, log_f = D, I
-            tau1, kap1 = e1 * dl * (m - a), keep1 * dl * (m - a)
-            at = (lane + k * plane) * 2  # stored at the plane: log D, log(D + I), floored at log(1e-30)
-            dr.scatter(store, dr.maximum(log_d - tau1, LOG_FLOOR), at)
-            dr.scatter(store, dr.maximum(log_f - kap1, LOG_FLOOR), at + 1)
-            return log_d - (tau1 + e2 * dl * (b - m)), log_f - (kap1 + keep2 * dl * (b - m))
-        t1, t2 = dr.exp(-e1 * dl * (m - a)), dr.exp(-e2 * dl * (b - m))
-        D_mid = D * t1
-        dr.scatter(store, D_mid, lane + k * plane)  # no forward light: D alone
-        return D_mid * t2, I
-
-    return through_slab
-
-
-def _hold_step(dr, store, lane, plane, translucent: bool):
-    """The store of ``_slab_step``'s ``through_slab`` at plane k of a slab where the light ray reads no medium
-    (the optical depths are 0): (k, D, I) -> (D, I), the state stored as that step stores it, unchanged."""
-    def hold(k, D, I):
-        if translucent:
-            at = (lane + k * plane) * 2
-            dr.scatter(store, dr.maximum(D, LOG_FLOOR), at)
-            dr.scatter(store, dr.maximum(I, LOG_FLOOR), at + 1)
-        else:
-            dr.scatter(store, D, lane + k * plane)
-        return D, I
-    return hold
-
-
-def _slab_range(mi, dr, ka, kb, n_slices: int):
-    """(first, end) per light ray: the slabs k in [first, end) that may sample the medium within the ray's
-    occupied span [ka, kb] (slice units). A slab's halves reach half a slab beyond k, a plane offset half
-    a slab more and the first and last slabs to the box's faces: a slab more than 1.5 slice units outside
-    the span reads nothing (``_slab_step``'s activity mask), here with a margin of one more; none where
-    ka > kb (an empty span)."""
-    n = float(n_slices)
-    first = mi.UInt32(dr.clip(dr.floor(ka) - 2.0, 0.0, n))
-    end = mi.UInt32(dr.clip(dr.ceil(kb) + 3.0, 0.0, n))
-    return first, dr.select(kb >= ka, dr.maximum(end, first), first)
-
-
-LOG_FLOOR = math.log(1e-30)  # stored logarithms of light are at least this (the light at least 1e-30)
-
-
-def source_extinction(dr, source, t, active=True, keep=None):
-    """(extinction, extinction of all forward light beta - beta_f) in 1/m of the light pass's ``source``
-    texture at texture coordinates t: channels (beta, beta_f), or beta alone, where no light is scattered
-    forward (the low-albedo and "multiple" light: then both are beta) or where beta - beta_f is ``keep``
-    x beta."""
-    v = source.eval(t, active)
-    e = dr.maximum(v[0], 0.0)
-    if len(v) == 1:
-        return e, (e if keep is None else e * keep)
-    return e, dr.maximum(e - dr.maximum(v[1], 0.0), 0.0)
-
-
-def _mean_extinction(dr, source, q0, qs, x0, x1, n: int, active=True, keep=None):
-    """Mean extinction and mean extinction of all forward light (beta - beta_f, 1/m) along the light ray
-    q0 + k qs between slice units x0 and x1, from ``n`` evenly spaced samples (the midpoint rule)."""
-    ext, kept = 0.0, 0.0
-    for i in range(n):
-        e, k = source_extinction(dr, source, q0 + (x0 + ((i + 0.5) / n) * (x1 - x0)) * qs, active, keep)
-        ext += e
-        kept += k
-    return ext * (1.0 / n), kept * (1.0 / n)

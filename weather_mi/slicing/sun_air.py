@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .packets import packet
+from .packets import rgb_words, word_rgb
 
 TOP_ABOVE_BOX_M = 2000.0  # the table reaches this far above the box (as the path tracer's, kernel.scene_dict)
 COLUMN_SAMPLES = 128  # the slant columns' points per segment (``shell.slant_columns``: the colour within 1e-3)
@@ -33,7 +33,7 @@ class SunAir:
 
     h0: object      # mi.Float: the table's lowest height (m above sea level)
     inv_dh: object  # mi.Float: 1 / its height step (1/m)
-    rgb: object     # mi.Float (n x 4): the sun's linear sRGB per height (``FINE_ROWS``), padded (``packets.packed``)
+    words: object   # mi.UInt64 (n): the sun's linear sRGB per height (``FINE_ROWS``), a word a row (``rgb_words``)
     n: int          # the number of heights
 
 
@@ -61,9 +61,15 @@ def sun_at_height(spec, z_m: float) -> np.ndarray:
 
 def sun_colour_at(mi, air: SunAir, z):
     """The sun's colour (mi.Color3f) at heights z (mi.Float, m above sea level): the table's nearest row
-    (``FINE_ROWS``), clamped to its ends (inside a kernel)."""
+    (``FINE_ROWS``), clamped to its ends (inside a kernel; within 6.1e-5 of the row's colour, ``rgb_words``)."""
     import drjit as dr
-    return packet(mi, dr, air.rgb, mi.UInt32(dr.clip((z - air.h0) * air.inv_dh + 0.5, 0.0, float(air.n - 1))))
+    return word_rgb(mi, dr, air.words, mi.UInt32(dr.clip((z - air.h0) * air.inv_dh + 0.5, 0.0, float(air.n - 1))))
 
 
-__all__ = ["SunAir", "sun_by_height", "sun_at_height", "sun_colour_at"]
+def sun_air_of_rows(mi, h0, inv_dh, rgb) -> SunAir:
+    """The ``SunAir`` of the rows ``rgb`` (mi.Color3f, one per height from h0 every 1 / inv_dh m)."""
+    import drjit as dr
+    return SunAir(h0, inv_dh, rgb_words(mi, dr, rgb), dr.width(rgb))
+
+
+__all__ = ["SunAir", "sun_air_of_rows", "sun_by_height", "sun_at_height", "sun_colour_at"]

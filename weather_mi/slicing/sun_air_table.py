@@ -17,7 +17,7 @@ import numpy as np
 
 from ..kernel.jitarrays import aligned_float
 from .packets import packed
-from .sun_air import COLUMN_SAMPLES, FINE_ROWS, TOP_ABOVE_BOX_M, SunAir, sun_by_height
+from .sun_air import COLUMN_SAMPLES, FINE_ROWS, TOP_ABOVE_BOX_M, SunAir, sun_air_of_rows, sun_by_height
 
 # a new sun (a drag of the sun) reads its rows off a table over sun elevations built once per atmosphere and box
 # (``elevation_table``: log XYZ, cubic in t = sqrt(elevation) on ``ELEVATION_NODES`` columns from
@@ -76,12 +76,9 @@ def sun_air_input(mi, spec, grid_box, reuse=None) -> SunAir | SunAirSource | Non
         return sun_source(mi, spec, float(grid_box[1][2]), FINE_ROWS, reuse)
     heights, rgb = sun_rows(spec, grid_box[1][2])
     fine = _fine_heights(float(heights[0]), float(heights[-1]))
-    table = np.zeros((FINE_ROWS, 4), np.float32)  # packed rows (``packets.packed``)
-    for c in range(3):
-        table[:, c] = np.interp(fine, heights, rgb[:, c])
     step = float(fine[1] - fine[0])
-    return SunAir(dr.opaque(mi.Float, float(fine[0])), dr.opaque(mi.Float, 1.0 / step), aligned_float(mi, table),
-                  int(fine.size))
+    rows = mi.Color3f(*(aligned_float(mi, np.interp(fine, heights, rgb[:, c]).astype(np.float32)) for c in range(3)))
+    return sun_air_of_rows(mi, dr.opaque(mi.Float, float(fine[0])), dr.opaque(mi.Float, 1.0 / step), rows)
 
 
 def _catmull_rom(u: float) -> tuple[float, float, float, float]:
@@ -130,9 +127,15 @@ def sun_source(mi, spec, z_top_m: float, rows: int, reuse) -> SunAirSource:
 
 def as_sun_air(mi, sun_air):
     """``sun_air`` (None, a ``sun_air.SunAir``) as it is, or the ``SunAir`` of a ``SunAirSource``: its table computed
-    (inside a kernel: Catmull-Rom in log XYZ, exp, linear sRGB, linear in height, packed)."""
+    (inside a kernel: ``source_rows``, one word a row)."""
     if not isinstance(sun_air, SunAirSource):
         return sun_air
+    return sun_air_of_rows(mi, sun_air.h0, sun_air.inv_dh, source_rows(mi, sun_air))
+
+
+def source_rows(mi, sun_air: SunAirSource):
+    """The rows (mi.Color3f) of a ``SunAirSource``'s table (inside a kernel: Catmull-Rom in log XYZ, exp, linear
+    sRGB, linear in height)."""
     import drjit as dr
     from ..optics.spectrum import linear_srgb
     s, n_h = sun_air, sun_air.n_h
@@ -150,9 +153,8 @@ def as_sun_air(mi, sun_air):
         return sum((xyz[c] * mi.Color3f(*(float(x) for x in cols[c])) for c in range(1, 3)),
                    xyz[0] * mi.Color3f(*(float(x) for x in cols[0])))
     lo, hi = srgb(j), srgb(j + 1)
-    rgb = lo * (1.0 - a) + hi * a
-    return SunAir(s.h0, s.inv_dh, dr.ravel(mi.Vector4f(rgb.x, rgb.y, rgb.z, 0.0)), s.rows)
+    return lo * (1.0 - a) + hi * a
 
 
-__all__ = ["ELEVATION_MIN_DEG", "SunAirSource", "as_sun_air", "elevation_table", "sun_air_input", "sun_rows",
-           "sun_source"]
+__all__ = ["ELEVATION_MIN_DEG", "SunAirSource", "as_sun_air", "elevation_table", "source_rows", "sun_air_input",
+           "sun_rows", "sun_source"]
