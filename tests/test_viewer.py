@@ -358,4 +358,4 @@ def test_view_air_options_are_checked_before_serving(capsys):
     from weather_mi.cli.commands import main, build_parser
     assert main(["view", "--demo", "cumulus", "--atmosphere", "clear", "--aod", "5", "--no-browser"]) == 2
     assert "--aod" in capsys.readouterr().err
-    assert build_parser().parse_args(["view", "--demo", "cumulus"]).atmosphere == "none"  # until issue 38's rates
+    assert build_parser().parse_args(["view", "--demo", "cumulus"]).atmosphere == "clear"  # as render's (issue 38)

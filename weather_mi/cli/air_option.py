@@ -70,8 +70,8 @@ def in_box(vol, spec):
     return scene_air(vol, spec.atmosphere)
 
 
-VIEW_DEFAULT = "none"  # ``view --atmosphere``'s default: "clear" once every drag target holds with the air
-# (benchmarks/slicing_air.py: the uniform modes do not yet, benchmarks/README.md; benchmarks/viewer.py)
+VIEW_DEFAULT = "clear"  # ``view --atmosphere``'s default, as ``render``'s: every drag target holds with the air
+# (benchmarks/slicing_air.py, benchmarks/README.md "the air's cost per drag frame"; benchmarks/viewer.py)
 
 
 def add_view_options(p) -> None:
