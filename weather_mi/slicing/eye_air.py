@@ -106,25 +106,25 @@ PROFILE_SCALE = 1e-25  # the table's number densities (1/m^3) times this (the cr
 
 def height_table(atm) -> np.ndarray:
     """(n_h, 3): the air's profiles at heights 0 to ``eye_path.TOP_M`` every ``HEIGHT_STEP_M``: molecules and ozone
-    (number densities, 1/m^3, times ``PROFILE_SCALE``) and the aerosol's extinction at 550 nm (1/m). The air's
-    extinction is linear in them (``Atmosphere.extinction_per_m``), so one packet a row, interpolated, gives all of
-    its coefficients at every channel (``cross_sections``): 2 gathers a point instead of 6."""
+    (number densities, 1/m^3, times ``PROFILE_SCALE``) and the aerosol's extinction at 550 nm (1/m)
+    (``optics.air.inside.components``' profiles). The air's extinction is linear in them, so one packet a row,
+    interpolated, gives all of its coefficients at every channel (``cross_sections``): 2 gathers a point instead
+    of 6."""
     from ..optics.air.eye_path import TOP_M
+    from ..optics.air.inside import CHANNEL_NM, components
     h = np.arange(0.0, TOP_M + HEIGHT_STEP_M / 2, HEIGHT_STEP_M)
-    return np.stack([atm.air_number_density_m3(h) * PROFILE_SCALE, atm.ozone_number_density_m3(h) * PROFILE_SCALE,
-                     atm.aerosol_extinction_550_per_m(h)], axis=1)
+    profiles, _ = components(atm, atm.air_number_density_m3(h), h, CHANNEL_NM)
+    return profiles * np.array([PROFILE_SCALE, PROFILE_SCALE, 1.0])
 
 
-def cross_sections(atm, wavelengths_nm=None) -> np.ndarray:
+def cross_sections(atm) -> np.ndarray:
     """(4, 3): per unit of ``height_table``'s columns, the molecules' extinction (= their scattering), ozone's
-    (absorption), the aerosol's extinction and its scattering at R, G, B (``Atmosphere.extinction_per_m``'s terms)."""
-    from ..optics.air.inside import CHANNEL_NM
-    from ..optics.air.ozone import channel_cross_section_m2 as ozone_m2  # RGB: the channels' band averages
-    from ..optics.rayleigh import cross_section_m2
-    wl = np.asarray(CHANNEL_NM if wavelengths_nm is None else wavelengths_nm, np.float64)
-    aerosol = atm.aerosol_factor(wl)
-    return np.stack([cross_section_m2(wl * 1e-9) / PROFILE_SCALE, ozone_m2(wl) / PROFILE_SCALE, aerosol,
-                     aerosol * atm.aerosol_ssa])
+    (absorption; the RGB channels' band averages), the aerosol's extinction and its scattering at R, G, B
+    (``optics.air.inside.components``' spectra)."""
+    from ..optics.air.inside import CHANNEL_NM, components
+    _, spectra = components(atm, np.zeros(1), np.zeros(1), CHANNEL_NM)
+    return np.stack([spectra[:, 0] / PROFILE_SCALE, spectra[:, 1] / PROFILE_SCALE, spectra[:, 2],
+                     spectra[:, 2] * atm.aerosol_ssa])
 
 
 def diffuse_light(spec, e_sky) -> np.ndarray:
