@@ -179,7 +179,7 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
 
     def at_depth(i0, f, *ck):  # the box's cumulative air at the cloud's depth (rows i0 and i0 + 1)
         s_f, t_f = mi.Color3f(0.0), mi.Color3f(0.0)
-        for c, k in zip(ck[:4], ck[4:]):
+        for c, k in zip(ck[:len(ck) // 2], ck[len(ck) // 2:]):
             sl, tl, _ = read(c, i0, True)
             su, tu, _ = read(c, i0 + 1, True)
             s_f, t_f = s_f + k * (sl + (su - sl) * f), t_f + k * (tl + (tu - tl) * f)
@@ -187,7 +187,7 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
 
     def whole(s_f, t_f, *ck):  # ... and through the whole box (its last row)
         s_1, t_1 = mi.Color3f(0.0), mi.Color3f(0.0)
-        for c, k in zip(ck[:4], ck[4:]):
+        for c, k in zip(ck[:len(ck) // 2], ck[len(ck) // 2:]):
             se, te, _ = read(c, BOX_POINTS - 1, True)
             s_1, t_1 = s_1 + k * se, t_1 + k * te
         return s_1, t_1

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kernel.jitarrays import aligned_float
-from .packets import packed
+from .packets import packed, packet
 from .sun_air import COLUMN_SAMPLES, FINE_ROWS, TOP_ABOVE_BOX_M, SunAir, sun_air_of_rows, sun_by_height
 
 # a new sun (a drag of the sun) reads its rows off a table over sun elevations built once per atmosphere and box
@@ -148,8 +148,7 @@ def source_rows(mi, sun_air: SunAirSource):
     def srgb(row):  # the sun's linear sRGB at height row ``row`` of the elevation table
         log = mi.Color3f(0.0)
         for k, w in enumerate(s.weights):
-            v = dr.gather(mi.Vector4f, s.table, s.base + k * n_h + row)
-            log += w * mi.Color3f(v.x, v.y, v.z)
+            log += w * packet(mi, dr, s.table, s.base + k * n_h + row)
         xyz = dr.exp(log)
         return sum((xyz[c] * mi.Color3f(*(float(x) for x in cols[c])) for c in range(1, 3)),
                    xyz[0] * mi.Color3f(*(float(x) for x in cols[0])))
