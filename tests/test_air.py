@@ -9,6 +9,7 @@ from weather_mi.optics import spectrum
 from weather_mi.optics.air import Atmosphere, sun_air_table, sun_xyz, transmittance
 from weather_mi.optics.air.atmosphere import TOP_M
 from weather_mi.optics.air.shell import EARTH_RADIUS_M, horizon_mu, slant_columns
+from validation.direct_beam_spctrl2 import matched_atmosphere, spectrl2_direct
 
 
 def test_chapman_at_90_degrees_is_the_closed_form():
@@ -66,56 +67,37 @@ def test_sun_below_the_horizon_of_a_high_point():
     assert np.all(t_blocked == 0.0)
 
 
-def _spectrl2(sza, pressure_pa, water_cm):
-    import pvlib
-    am = float(pvlib.atmosphere.get_relative_airmass(sza, "kastenyoung1989"))
-    out = pvlib.spectrum.spectrl2(apparent_zenith=np.array([sza]), aoi=np.array([sza]), surface_tilt=0.0,
-                                  ground_albedo=0.2, surface_pressure=pressure_pa, relative_airmass=np.array([am]),
-                                  precipitable_water=water_cm, ozone=0.3, aerosol_turbidity_500nm=0.1, dayofyear=1)
-    return out["wavelength"], out["dni"][:, 0], out["dni_extra"][:, 0]
-
-
-def _matched(h_m, water_cm=1.4):
-    """Our atmosphere with SPCTRL2's aerosol (turbidity 0.1 at 500 nm, alpha 1.14, the whole column above
-    the point, as SPCTRL2 has no height), ozone and water (``water_cm`` above the point; 2 km scale height)."""
-    from weather_mi.optics.air.atmosphere import REFERENCE_NM
-    from weather_mi.optics.air.water_vapour import SCALE_HEIGHT_M
-    aod = 0.1 * (REFERENCE_NM / 500.0) ** -1.14 * np.exp(h_m / 1200.0)
-    return Atmosphere(aod_550=aod, ozone_atm_cm=0.3, angstrom=1.14, aerosol_scale_height_m=1200.0,
-                      water_vapour_cm=water_cm * np.exp(h_m / SCALE_HEIGHT_M))
-
-
 @pytest.mark.parametrize("h_m", [0.0, 3000.0])
-def test_direct_beam_against_spectrl2(h_m):
+def test_direct_beam_againstspectrl2_direct(h_m):
     """Band transmittance of the direct beam at 450/550/650 nm against SPCTRL2 (Bird & Riordan 1986, pvlib;
     1.4 cm of water, 0.3 atm-cm ozone, Kasten-Young air mass) at sea level and 3 km: within 3 % for
     zenith angles 0, 60, 80 deg."""
     from weather_mi.io.standard_atmosphere import standard_temperature_pressure
     pressure = float(standard_temperature_pressure(h_m)[1])
-    atm = _matched(h_m)
+    atm = matched_atmosphere(h_m)
     for sza in (0.0, 60.0, 80.0):
-        lam, dni, etr = _spectrl2(sza, pressure, 1.4 * np.exp(-h_m / 2000.0))
+        lam, dni, etr = spectrl2_direct(sza, pressure, 1.4 * np.exp(-h_m / 2000.0))
         ref = np.interp([450.0, 550.0, 650.0], lam, dni / etr)
         ours = transmittance(atm, [450.0, 550.0, 650.0], h_m, np.cos(np.radians(sza)))
         np.testing.assert_allclose(ours, ref, rtol=0.03, err_msg=f"SZA {sza}, {h_m} m")
 
 
 @pytest.mark.parametrize("wl", [593.0, 718.0, 724.4, 940.0])
-def test_water_vapour_bands_against_spectrl2(wl):
+def test_water_vapour_bands_againstspectrl2_direct(wl):
     """Water vapour's share of the direct beam, T(1.4 cm) / T(0), in its bands (593 nm, 718-724 nm in the
     visible; 940 nm) against SPCTRL2's (pvlib's spectrl2 run twice) at sea level, SZA 0, 60, 80: within 3 %
     (the paths differ: our slant column through a 2 km scale-height layer on a sphere, SPCTRL2's Kasten-Young
     air mass); and nothing at 450/550/650 nm, the RGB mode's wavelengths."""
     for sza in (0.0, 60.0, 80.0):
         mu = np.cos(np.radians(sza))
-        lam, wet, _ = _spectrl2(sza, 101325.0, 1.4)
-        _, dry, _ = _spectrl2(sza, 101325.0, 0.0)
+        lam, wet, _ = spectrl2_direct(sza, 101325.0, 1.4)
+        _, dry, _ = spectrl2_direct(sza, 101325.0, 0.0)
         ref = np.interp(wl, lam, wet) / np.interp(wl, lam, dry)
-        ours = transmittance(_matched(0.0, 1.4), [wl], 0.0, mu)[0] / transmittance(_matched(0.0, 0.0), [wl], 0.0, mu)[0]
+        ours = transmittance(matched_atmosphere(0.0, 1.4), [wl], 0.0, mu)[0] / transmittance(matched_atmosphere(0.0, 0.0), [wl], 0.0, mu)[0]
         assert ref < 0.99 and ours == pytest.approx(ref, rel=0.03), (sza, ours, ref)  # the band absorbs
         rgb = [450.0, 550.0, 650.0]
-        np.testing.assert_array_equal(transmittance(_matched(0.0, 1.4), rgb, 0.0, mu),
-                                      transmittance(_matched(0.0, 0.0), rgb, 0.0, mu))
+        np.testing.assert_array_equal(transmittance(matched_atmosphere(0.0, 1.4), rgb, 0.0, mu),
+                                      transmittance(matched_atmosphere(0.0, 0.0), rgb, 0.0, mu))
 
 
 def test_water_vapour_out_of_range_is_named():
@@ -126,12 +108,12 @@ def test_water_vapour_out_of_range_is_named():
 
 
 @pytest.mark.parametrize("water_cm", [0.0, 1.4, 4.0])
-def test_direct_beam_chromaticity_against_spectrl2(water_cm):
+def test_direct_beam_chromaticity_againstspectrl2_direct(water_cm):
     """The direct sun's chromaticity at sea level against SPCTRL2's (colour-science's integration of its
     spectrum) with the same water: CIEDE2000 at equal lightness below 2 at zenith angles 0, 60, 80 and 86 deg."""
     from validation.sun_colour import spectrl2_direct_xy
     from weather_mi.display.cloud_colour import delta_e_equal_lightness
-    atm = _matched(0.0, water_cm)
+    atm = matched_atmosphere(0.0, water_cm)
     for sza in (0.0, 60.0, 80.0, 86.0):
         ref = spectrl2_direct_xy(90.0 - sza, 1013.25, water_cm=water_cm)
         ours = spectrum.chromaticity_xy(sun_xyz(atm, 0.0, np.cos(np.radians(sza))))
