@@ -126,7 +126,7 @@ def print_spectral(rows: list, width: int, height: int, plan: str) -> None:
                   f"median FLIP {np.median([r[label][1] for r in rows]):.3f}")
 
 
-def main(argv=None) -> int:
+def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", default=str(DEFAULT_DATA))
     ap.add_argument("--size", default="64x48")
@@ -147,7 +147,11 @@ def main(argv=None) -> int:
     ap.add_argument("--rgb-target-rse", type=float, default=None,
                     help="with --spectral: the RGB references' --target-rse (default --target-rse), to read cached ones")
     ap.add_argument("--out", default="validation-low-sun")
-    args = ap.parse_args(argv)
+    return ap.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
     width, height = (int(v) for v in args.size.split("x"))
     cfg = replace(StudyConfig(), width=width, height=height)
     out = Path(args.out)
