@@ -73,7 +73,7 @@ def reference(out: Path, tag: str, spec, vol, hyd, spp: int, target_rse=None, ma
     ``target_rse`` passes of ``spp`` added until the mean relative standard error over the cloud pixels
     reaches it (or ``max_seconds``). ``spectral``: in the spectral variant, as ``render --spectral`` (the eye
     rays' air per wavelength: ``with_eye_air`` on an image with X, Y, Z), "spectral" in the cached name."""
-    from weather_mi.kernel.variant import default_variant, spectral_variant
+    from weather_mi.kernel.variant import default_variant, set_variant, spectral_variant
     plan = f"{spp}spp" if target_rse is None else f"rse{target_rse:g}"
     path = out / cache_name(f"{tag}_spectral" if spectral else tag, spec, plan)
     if path.is_file():
@@ -83,6 +83,7 @@ def reference(out: Path, tag: str, spec, vol, hyd, spp: int, target_rse=None, ma
     variant = spectral_variant() if spectral else default_variant()  # not the one a spectral render left
     img = wm.render_reference(spec, medium, spp=spp, progress=False, target_rse=target_rse, max_seconds=max_seconds,
                               variant=variant)
+    set_variant(default_variant())  # the slicer's sky (kernel.sky) evaluates Mitsuba's emitter in RGB
     if spec.atmosphere is not None:
         img = with_eye_air(img, spec, vol)
     img.save(path)
@@ -94,7 +95,9 @@ def reference(out: Path, tag: str, spec, vol, hyd, spp: int, target_rse=None, ma
 
 def spectral_row(row: dict, out: Path, name: str, spec, vol, hyd, slicer, params, args) -> None:
     """``row["spectral"]`` and ``row["rgb"]``: (CIEDE2000, FLIP, reference RSE) of the slicer's frame against the
-    spectral reference and against the RGB one of the same view with the atmosphere (--spectral)."""
+    spectral reference and against the RGB one of the same view with the atmosphere (--spectral);
+    ``row["refs"]``: (CIEDE2000, FLIP) of the RGB reference against the spectral one (both noisy) and the ratio
+    of their cloud pixels' mean linear R, G, B (spectral / RGB)."""
     tag = f"{name}_{row['lighting']}_{row['elevation']:g}deg_clear"
     rgb_rse = args.target_rse if args.rgb_target_rse is None else args.rgb_target_rse
     refs = {"spectral": reference(out, tag, spec, vol, hyd, args.spp, args.target_rse, args.max_seconds, True),
@@ -106,6 +109,10 @@ def spectral_row(row: dict, out: Path, name: str, spec, vol, hyd, slicer, params
     for label, ref in refs.items():
         m = metrics.compare(ref.radiance, img.radiance, mask=mask if mask.any() else "all")
         row[label] = (m["ciede2000"], m["flip"], (ref.metadata.get("noise") or {}).get("rse_mean", float("nan")))
+    m = metrics.compare(refs["spectral"].radiance, refs["rgb"].radiance, mask=mask if mask.any() else "all")
+    cloud = mask if mask.any() else np.ones(mask.shape, bool)
+    spectral, rgb = (np.asarray(refs[k].radiance, np.float64)[cloud].mean(axis=0) for k in ("spectral", "rgb"))
+    row["refs"] = (m["ciede2000"], m["flip"], spectral / rgb)
 
 
 def print_spectral(rows: list, width: int, height: int, plan: str) -> None:
@@ -113,15 +120,18 @@ def print_spectral(rows: list, width: int, height: int, plan: str) -> None:
     print(f"\n### The slicer against the spectral and the RGB path tracer at a low sun, with the atmosphere ({width} x "
           f"{height}, references {plan}; CIEDE2000 / FLIP over cloud pixels; reference noise: mean RSE)\n")
     print("| storm | lighting | sun elevation | against the spectral reference | against the RGB reference | "
+          "RGB reference against the spectral | cloud's mean R, G, B: spectral / RGB reference | "
           "reference RSE (spectral / RGB) |")
-    print("|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|")
     for r in rows:
-        (ds, fs, rs), (dr, fr, rr) = r["spectral"], r["rgb"]
+        (ds, fs, rs), (dr, fr, rr), (dd, fd, ratio) = r["spectral"], r["rgb"], r["refs"]
         print(f"| {r['scene']} | {r['lighting']} | {r['elevation']:g} | {ds:.2f} / {fs:.3f} | {dr:.2f} / {fr:.3f} | "
-              f"{rs:.3f} / {rr:.3f} |")
-    for label in ("spectral", "rgb"):
+              f"{dd:.2f} / {fd:.3f} | {', '.join(f'{v:.3f}' for v in ratio)} | {rs:.3f} / {rr:.3f} |")
+    texts = {"spectral": "the slicer against the spectral reference", "rgb": "the slicer against the RGB reference",
+             "refs": "the RGB reference against the spectral"}
+    for label, text in texts.items():
         if rows:
-            print(f"\nagainst the {label} reference: median CIEDE2000 {np.median([r[label][0] for r in rows]):.2f}, "
+            print(f"\n{text}: median CIEDE2000 {np.median([r[label][0] for r in rows]):.2f}, "
                   f"mean {np.mean([r[label][0] for r in rows]):.2f}, "
                   f"median FLIP {np.median([r[label][1] for r in rows]):.3f}")
 
