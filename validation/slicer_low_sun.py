@@ -22,9 +22,16 @@ them). References are cached as EXR in --out (--spp samples, or passes of --spp 
 ``calibrate_slicer.AIR_REFERENCES``, so that one of an older path tracer's air is never read). The table of issue 38 part 3: --elevations 6
 --lightings front,side,back --spp 64 --target-rse 0.03 --max-seconds 150 (validation/README.md).
 
+``--spectral``: against the spectral ground truth instead. Each view with the atmosphere twice, the slicer
+unchanged: the reference rendered in Mitsuba's spectral variant (``kernel.variant.spectral_variant``, as ``render
+--spectral``: the film's CIE XYZ as linear sRGB, the eye rays' air outside the box per wavelength) and the RGB one
+(with --rgb-target-rse's plan, default --target-rse: the RGB references already cached); the spectral ones cached
+with "spectral" in their name, so neither is read for the other.
+
     python validation/slicer_low_sun.py [--data ../shared/data] [--size 64x48] [--spp 64] [--elevations 4,8]
         [--scenes wrf-supercell,wrf-plateau,bomex,rico] [--lightings front,side,back] [--out DIR]
         [--target-rse R --max-seconds S] [--references-only] [--fitted fitted.json]
+        [--spectral [--rgb-target-rse R]]
 """
 from __future__ import annotations
 
@@ -59,28 +66,77 @@ def storm(name: str, data: Path, cfg: StudyConfig):
     return hyd, optical_volume(hyd, species=cfg.species, phase_quality=cfg.phase_quality, periodic=False)
 
 
-def reference(out: Path, tag: str, spec, vol, hyd, spp: int, target_rse=None, max_seconds=None) -> Image:
+def reference(out: Path, tag: str, spec, vol, hyd, spp: int, target_rse=None, max_seconds=None,
+              spectral: bool = False) -> Image:
     """The path-traced reference (cached as EXR): with ``spec.atmosphere``, the box's air in the medium and
     the eye rays' air outside it, as ``weather-mi render --atmosphere clear``. ``spp`` samples, or with
     ``target_rse`` passes of ``spp`` added until the mean relative standard error over the cloud pixels
-    reaches it (or ``max_seconds``)."""
+    reaches it (or ``max_seconds``). ``spectral``: in the spectral variant, as ``render --spectral`` (the eye
+    rays' air per wavelength: ``with_eye_air`` on an image with X, Y, Z), "spectral" in the cached name."""
+    from weather_mi.kernel.variant import default_variant, set_variant, spectral_variant
     plan = f"{spp}spp" if target_rse is None else f"rse{target_rse:g}"
-    path = out / cache_name(tag, spec, plan)
+    path = out / cache_name(f"{tag}_spectral" if spectral else tag, spec, plan)
     if path.is_file():
         return Image.load(path)
     t = time.perf_counter()
     medium = vol if spec.atmosphere is None else with_box_air(vol, hyd, spec.atmosphere)
-    img = wm.render_reference(spec, medium, spp=spp, progress=False, target_rse=target_rse, max_seconds=max_seconds)
+    variant = spectral_variant() if spectral else default_variant()  # not the one a spectral render left
+    img = wm.render_reference(spec, medium, spp=spp, progress=False, target_rse=target_rse, max_seconds=max_seconds,
+                              variant=variant)
+    set_variant(default_variant())  # the slicer's sky (kernel.sky) evaluates Mitsuba's emitter in RGB
     if spec.atmosphere is not None:
         img = with_eye_air(img, spec, vol)
     img.save(path)
     noise = img.metadata.get("noise") or {}
-    print(f"  reference {tag}: {time.perf_counter() - t:.0f} s, {img.metadata.get('spp')} spp, "
+    print(f"  reference {tag}{' (spectral)' if spectral else ''}: {time.perf_counter() - t:.0f} s, {img.metadata.get('spp')} spp, "
           f"cloud RSE {noise.get('rse_mean', float('nan')):.3f}", flush=True)
     return img
 
 
-def main(argv=None) -> int:
+def spectral_row(row: dict, out: Path, name: str, spec, vol, hyd, slicer, params, args) -> None:
+    """``row["spectral"]`` and ``row["rgb"]``: (CIEDE2000, FLIP, reference RSE) of the slicer's frame against the
+    spectral reference and against the RGB one of the same view with the atmosphere (--spectral);
+    ``row["refs"]``: (CIEDE2000, FLIP) of the RGB reference against the spectral one (both noisy) and the ratio
+    of their cloud pixels' mean linear R, G, B (spectral / RGB)."""
+    tag = f"{name}_{row['lighting']}_{row['elevation']:g}deg_clear"
+    rgb_rse = args.target_rse if args.rgb_target_rse is None else args.rgb_target_rse
+    refs = {"spectral": reference(out, tag, spec, vol, hyd, args.spp, args.target_rse, args.max_seconds, True),
+            "rgb": reference(out, tag, spec, vol, hyd, args.spp, rgb_rse, args.max_seconds)}
+    if args.references_only:
+        return
+    mask = metrics.cloud_mask(eye_transmittance(vol, spec, 128))
+    img = slicer.frame(spec, params, supersample=2)
+    for label, ref in refs.items():
+        m = metrics.compare(ref.radiance, img.radiance, mask=mask if mask.any() else "all")
+        row[label] = (m["ciede2000"], m["flip"], (ref.metadata.get("noise") or {}).get("rse_mean", float("nan")))
+    m = metrics.compare(refs["spectral"].radiance, refs["rgb"].radiance, mask=mask if mask.any() else "all")
+    cloud = mask if mask.any() else np.ones(mask.shape, bool)
+    spectral, rgb = (np.asarray(refs[k].radiance, np.float64)[cloud].mean(axis=0) for k in ("spectral", "rgb"))
+    row["refs"] = (m["ciede2000"], m["flip"], spectral / rgb)
+
+
+def print_spectral(rows: list, width: int, height: int, plan: str) -> None:
+    """The --spectral table: per view the slicer against the spectral and the RGB reference with the air."""
+    print(f"\n### The slicer against the spectral and the RGB path tracer at a low sun, with the atmosphere ({width} x "
+          f"{height}, references {plan}; CIEDE2000 / FLIP over cloud pixels; reference noise: mean RSE)\n")
+    print("| storm | lighting | sun elevation | against the spectral reference | against the RGB reference | "
+          "RGB reference against the spectral | cloud's mean R, G, B: spectral / RGB reference | "
+          "reference RSE (spectral / RGB) |")
+    print("|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        (ds, fs, rs), (dr, fr, rr), (dd, fd, ratio) = r["spectral"], r["rgb"], r["refs"]
+        print(f"| {r['scene']} | {r['lighting']} | {r['elevation']:g} | {ds:.2f} / {fs:.3f} | {dr:.2f} / {fr:.3f} | "
+              f"{dd:.2f} / {fd:.3f} | {', '.join(f'{v:.3f}' for v in ratio)} | {rs:.3f} / {rr:.3f} |")
+    texts = {"spectral": "the slicer against the spectral reference", "rgb": "the slicer against the RGB reference",
+             "refs": "the RGB reference against the spectral"}
+    for label, text in texts.items():
+        if rows:
+            print(f"\n{text}: median CIEDE2000 {np.median([r[label][0] for r in rows]):.2f}, "
+                  f"mean {np.mean([r[label][0] for r in rows]):.2f}, "
+                  f"median FLIP {np.median([r[label][1] for r in rows]):.3f}")
+
+
+def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", default=str(DEFAULT_DATA))
     ap.add_argument("--size", default="64x48")
@@ -96,8 +152,16 @@ def main(argv=None) -> int:
     ap.add_argument("--fitted", default=None,
                     help="a fitted.json (validation/calibrate_slicer.py): the \"multiple\" model's parameters instead "
                          "of the shipped defaults")
+    ap.add_argument("--spectral", action="store_true",
+                    help="the slicer against the spectral references with the atmosphere and the RGB ones (docstring)")
+    ap.add_argument("--rgb-target-rse", type=float, default=None,
+                    help="with --spectral: the RGB references' --target-rse (default --target-rse), to read cached ones")
     ap.add_argument("--out", default="validation-low-sun")
-    args = ap.parse_args(argv)
+    return ap.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
     width, height = (int(v) for v in args.size.split("x"))
     cfg = replace(StudyConfig(), width=width, height=height)
     out = Path(args.out)
@@ -116,7 +180,10 @@ def main(argv=None) -> int:
         for lighting in args.lightings.split(","):
             for elevation in (float(e) for e in args.elevations.split(",")):
                 row = {"scene": name, "lighting": lighting, "elevation": elevation}
-                for label, atm in (("clear", Atmosphere()), ("none", None)):
+                if args.spectral:
+                    spec = low_sun_view(vol, lighting, cfg, elevation, Atmosphere())
+                    spectral_row(row, out, name, spec, vol, hyd, slicer, params, args)
+                for label, atm in () if args.spectral else (("clear", Atmosphere()), ("none", None)):
                     spec = low_sun_view(vol, lighting, cfg, elevation, atm)
                     tag = f"{name}_{lighting}_{elevation:g}deg_{label}"
                     ref = reference(out, tag, spec, vol, hyd, args.spp, args.target_rse, args.max_seconds)
@@ -137,6 +204,10 @@ def main(argv=None) -> int:
                     print(row, flush=True)
     plan = f"{args.spp} spp" if args.target_rse is None else \
         f"to a cloud RSE of {args.target_rse:g} (at most {args.max_seconds} s), passes of {args.spp} spp"
+    if args.spectral:
+        print_spectral(rows, width, height, plan if args.rgb_target_rse is None else
+                       f"{plan} (RGB: to {args.rgb_target_rse:g})")
+        return 0
     print(f"\n### The slicer against the path tracer at a low sun ({width} x {height}, references {plan}; "
           "CIEDE2000 / FLIP over cloud pixels; reference noise: mean RSE)\n")
     print("| storm | lighting | sun elevation | with the atmosphere | the same, slicer without the box's air | "
