@@ -85,8 +85,9 @@ HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") fo
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 # in the cache name of every reference rendered with the air (here and validation/slicer_low_sun.py): bumped when
 # the path tracer's air changes, so that a cached reference of an older air is never read (air2: Eq. 8's weights
-# per level and channel, kernel.medium.air_weights; air3: the air's albedo point-wise, kernel/plugins/air_albedo.py)
-AIR_REFERENCES = "air3"
+# per level and channel, kernel.medium.air_weights; air3: the air's albedo point-wise, kernel/plugins/air_albedo.py;
+# air4: ozone's band average in the RGB channels, optics/air/ozone.channel_cross_section_m2)
+AIR_REFERENCES = "air4"
 
 
 def cache_name(tag: str, spec, plan: str) -> str:
