@@ -17,6 +17,12 @@ def timed(fn, rounds: int) -> list:
     return out
 
 
+def goal_header(baseline: str, measured: str, unit: str = "s") -> str:
+    """The header of :func:`goal_row`'s table: ``baseline`` and ``measured`` name the two timed calls."""
+    return (f"| case | baseline: {baseline} ({unit}) | {measured} median ({unit}) | {measured} best ({unit}) | ratio | "
+            f"goal ({unit}) | met |\n|---|---|---|---|---|---|---|")
+
+
 def goal_row(case: str, baseline: list, measured: list, goal_s: float, unit: str = "s") -> str:
     """The table row ``| case | baseline median | median | best | ratio | goal | met |`` of wall-clock rounds
     (seconds), printed in ``unit`` ("s" or "ms"); met when the median is under ``goal_s``."""

@@ -134,8 +134,7 @@ class Camera:
             raise ValueError(f"Camera.orbit elevation must be in [-90, 90] degrees, got {elevation!r}")
         if distance is not None and not _finite(distance, "Camera.orbit distance") > 0:
             raise ValueError(f"Camera.orbit distance must be positive (m), got {distance!r}")
-        box = vol_or_bbox.occupied_bbox() if hasattr(vol_or_bbox, "occupied_bbox") else vol_or_bbox
-        (x0, y0, z0), (x1, y1, z1) = _bbox(box)
+        (x0, y0, z0), (x1, y1, z1) = _occupied_bbox(vol_or_bbox)
         centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2]) if target is None else np.asarray(target, float)
         if distance is None:
             radius = 0.5 * math.dist((x0, y0, z0), (x1, y1, z1))
@@ -184,10 +183,10 @@ class Camera:
         """
         if not distance_km > 0 or not height_m > 0:
             raise ValueError(f"ground_view needs a positive distance and height, got {distance_km} km, {height_m} m")
-        if not 0 < fov < 180 or not aspect > 0:
-            raise ValueError(f"ground_view needs 0 < fov < 180 degrees and a positive aspect, got {fov}, {aspect}")
-        box = vol.occupied_bbox() if hasattr(vol, "occupied_bbox") else vol
-        (x0, y0, z0), (x1, y1, z1) = _bbox(box)
+        fov = check_fov_deg(fov)
+        if not aspect > 0:
+            raise ValueError(f"ground_view needs a positive aspect (width / height), got {aspect}")
+        (x0, y0, z0), (x1, y1, z1) = _occupied_bbox(vol)
         core = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
         if hasattr(vol, "beta_total"):
             (bx0, by0, _), _ = _bbox(vol)
@@ -245,6 +244,11 @@ def _bbox(vol_or_bbox):
     bbox = getattr(vol_or_bbox, "bbox", vol_or_bbox)
     lo, hi = (tuple(float(v) for v in p) for p in bbox)
     return lo, hi
+
+
+def _occupied_bbox(vol_or_bbox):
+    """((x0, y0, z0), (x1, y1, z1)) m: a volume's occupied box (where its cloud is), or a box as given."""
+    return _bbox(vol_or_bbox.occupied_bbox() if hasattr(vol_or_bbox, "occupied_bbox") else vol_or_bbox)
 
 
 @dataclass(frozen=True, eq=False)
