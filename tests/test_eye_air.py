@@ -38,6 +38,7 @@ def _coefficients(atm, h):
     aer = atm.aerosol_extinction_550_per_m(h) * (wl / 550.0) ** -atm.angstrom
     from weather_mi.optics.rayleigh import cross_section_m2
     mol = atm.air_number_density_m3(h) * cross_section_m2(wl * 1e-9)
+    # the RGB channels' ozone, pinned by test_air.py::test_the_rgb_channels_take_ozones_band_average
     return mol, aer, mol + atm.ozone_number_density_m3(h) * rgb_channel_cross_sections_m2() + aer
 
 

@@ -56,7 +56,8 @@ def test_the_kernels_fine_rows_are_the_hosts(elevation):
     fine = np.linspace(h0, h1, 4096)
     host = np.stack([np.interp(fine, heights, rows[:, c]) for c in range(3)], axis=1)
     dev = np.asarray(rgb).reshape(-1, 3)
-    np.testing.assert_allclose((h0, h1), (heights[0], heights[-1]), rtol=1e-6)
+    exact = sun_air.sun_by_height(spec, 18000.0)[0]  # the slant columns' own heights, not the table's
+    np.testing.assert_allclose((h0, h1), (exact[0], exact[-1]), rtol=1e-6)  # the step: (rows - 1) / (h1 - h0)
     assert np.max(np.abs(dev[:, :3] - host) / np.abs(host).max(axis=1, keepdims=True)) < 2e-5
 
 
@@ -69,6 +70,7 @@ def test_the_air_profiles_times_cross_sections_are_its_coefficients():
     h = np.arange(prof.shape[0]) * HEIGHT_STEP_M
     ext = prof[:, 0:1] * cross[0] + prof[:, 1:2] * cross[1] + prof[:, 2:3] * cross[2]
     # the RGB channels' ozone is the band average (air.ozone), not the line's that extinction_per_m reads
+    # (the band averages are pinned by test_air.py against colour-science's projection of sunlight)
     band_minus_line = channel_cross_section_m2(CHANNEL_NM) - cross_section_m2(np.asarray(CHANNEL_NM))
     expected = atm.extinction_per_m(CHANNEL_NM, h) + atm.ozone_number_density_m3(h)[:, None] * band_minus_line
     np.testing.assert_allclose(ext, expected, rtol=1e-9)

@@ -34,6 +34,7 @@ def test_tables_equal_the_rgb_air_at_its_three_wavelengths():
     with_ozone, lines = rgb_air(atm), spectral_air_levels(rgb_air(atm))
     for c, nm in enumerate(CHANNEL_NM):
         j = int(np.flatnonzero(lines.wavelengths_nm == nm)[0])
+        # the band averages are pinned by test_air.py (colour-science's projection of sunlight)
         band_less_line = atm.ozone_number_density_m3(Z_M) * (rgb_channel_cross_sections_m2()[c] - cross_section_m2(nm))
         np.testing.assert_allclose(with_ozone.extinction_levels[:, c] - lines.extinction[:, j], band_less_line,
                                    rtol=1e-3, atol=2e-7 * with_ozone.extinction_levels[:, c].max())
