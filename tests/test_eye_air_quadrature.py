@@ -115,7 +115,7 @@ def test_the_slicers_source_on_a_vertical_ray_is_omega_p_one_minus_t():
                  sun_rgb=mi.Float(packed(np.ones((2, 2, 3)))), sun_mu=(op(-1.0), op(0.5), op(1.0 / 100e3)), n_mu=2,
                  n_s=2, to_sun=mi.Vector3f(*to_sun.tolist()), irradiance=mi.Color3f(1.0), aerosol_g=op(0.7),
                  centre=mi.Point3f(0.0, 0.0, 0.0), box=(mi.Point3f(-1.0), mi.Point3f(1.0)), floor=op(0.0),
-                 ground=False, ambient=mi.Color3f(0.0))
+                 ground=False, diffuse=mi.Float(packed(np.zeros((2, 3)))))
     h0 = np.array([0.0, 500.0, 2000.0])
     lengths = np.array([40e3, 8e3, 20e3])
     o = mi.Point3f(0.0, 0.0, mi.Float(h0))

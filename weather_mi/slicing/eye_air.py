@@ -31,7 +31,9 @@ compiles nothing new when the sun moves, and is the shadow the slicer's cloud an
 map on the same segments: within 0.5-2.8% (tests/test_slicing_air.py; 2.4-4.4% lighter with the trapezoids
 before the Gauss nodes: the light volume's penumbra at a cloud's rim is lighter, and the step where a ray
 enters the shadow falls between points either way). None for a periodic field (as ``display.aerial``).
-Not included: light scattered more than once by the air, the light the storm scatters into its shadow, and
+The air in the box also scatters the diffuse light (sun and ground, all orders: its multiple scattering,
+``air_multiple``'s DISORT mean intensity J(h) for the frame's sun, isotropic), not the air outside it (as
+``display.aerial`` with the sky model's sky). Not included: the light the storm scatters into its shadow, and
 the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
 (``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing. Frames of 96 px a side or
 more integrate all this on every 4th pixel's ray and read it per pixel (``eye_air_coarse``); the tables' rows
@@ -48,6 +50,7 @@ import numpy as np
 
 from ..kernel.jitarrays import aligned_float
 from ..optics.air.shell import EARTH_RADIUS_M
+from .air_multiple import diffuse_input
 from .eye import OPAQUE_T
 from .eye_air_quadrature import NODES, gauss_segment
 from .packets import lerp_rows, packed, packet
@@ -81,7 +84,8 @@ class EyeAir:
     box: tuple          # (mi.Point3f lo, mi.Point3f hi): the model's box, its floor at the ground (m)
     floor: object       # mi.Float: the ground's height (m)
     ground: bool        # whether there is a ground
-    ambient: object     # mi.Color3f: the diffuse light on the air in the box, W/m^2/sr per unit phase (``diffuse_light``)
+    diffuse: object     # mi.Float (n_h x 4): the diffuse light's mean intensity J(h) per unit irradiance of the sun,
+                        # on the height table's rows, padded (``air_multiple``): the air's multiple scattering
     shadow: bool = True  # whether the storm shadows the air (False for a periodic field, as ``display.aerial``)
     width: int = 0      # the frame's pixels (row-major rays): the coarse grid of ``eye_air_coarse``; 0: none
     height: int = 0
@@ -104,15 +108,20 @@ def sun_table(atm):
 PROFILE_SCALE = 1e-25  # the table's number densities (1/m^3) times this (the cross sections over it: float32 both)
 
 
+def height_grid() -> np.ndarray:
+    """The height tables' heights (m): 0 to ``eye_path.TOP_M`` every ``HEIGHT_STEP_M``."""
+    from ..optics.air.eye_path import TOP_M
+    return np.arange(0.0, TOP_M + HEIGHT_STEP_M / 2, HEIGHT_STEP_M)
+
+
 def height_table(atm) -> np.ndarray:
     """(n_h, 3): the air's profiles at heights 0 to ``eye_path.TOP_M`` every ``HEIGHT_STEP_M``: molecules and ozone
     (number densities, 1/m^3, times ``PROFILE_SCALE``) and the aerosol's extinction at 550 nm (1/m)
     (``optics.air.inside.components``' profiles). The air's extinction is linear in them, so one packet a row,
     interpolated, gives all of its coefficients at every channel (``cross_sections``): 2 gathers a point instead
     of 6."""
-    from ..optics.air.eye_path import TOP_M
     from ..optics.air.inside import CHANNEL_NM, components
-    h = np.arange(0.0, TOP_M + HEIGHT_STEP_M / 2, HEIGHT_STEP_M)
+    h = height_grid()
     profiles, _ = components(atm, atm.air_number_density_m3(h), h, CHANNEL_NM)
     return profiles * np.array([PROFILE_SCALE, PROFILE_SCALE, 1.0])
 
@@ -127,27 +136,11 @@ def cross_sections(atm) -> np.ndarray:
                      spectra[:, 2] * atm.aerosol_ssa])
 
 
-def diffuse_light(spec, e_sky) -> np.ndarray:
-    """The sky's and the lit ground's light on the air in the box, as isotropic radiance over each hemisphere
-    scattered by an isotropic phase function (W/m^2/sr x 4 pi of the in-scattering, RGB): 1/2 E_sky / pi from
-    the sky above (``e_sky``: its irradiance on a horizontal plane, the sky scaled to the sun at the ground),
-    1/2 rho / pi (E_sun mu0 C(ground) + E_sky) from the ground below (the slicer's lit ground without clouds'
-    shadows): the light the path tracer's air in the box scatters besides the sun's."""
-    sky = np.asarray(e_sky, np.float64)
-    below = np.zeros(3)
-    if spec.ground is not None:
-        from ..kernel.scene_dict import sun_below_air
-        sun = np.asarray(sun_below_air(spec).irradiance, np.float64) * max(float(spec.sun.to_sun[2]), 0.0)
-        below = np.asarray(spec.ground.albedo, np.float64) / np.pi * (sun + sky)
-    return 0.5 * (sky / np.pi + below)
-
-
-def eye_air_input(mi, spec, bbox, reuse, e_sky=(0.0, 0.0, 0.0), shadow: bool = True) -> EyeAir | None:
+def eye_air_input(mi, spec, bbox, reuse, shadow: bool = True) -> EyeAir | None:
     """The frame's ``EyeAir`` for ``spec`` (None without ``spec.atmosphere``) and the model's box ``bbox``
     ((lo, hi) corners, m); ``reuse``: the renderer's ``SliceRenderer._reuse`` (the tables and values of the last
-    atmosphere and ground kept; a frame uploads the sun's and the diffuse light's alone); ``e_sky``: the sky's
-    irradiance on a horizontal plane (W/m^2, RGB; ``diffuse_light``); ``shadow``: whether the storm shadows the
-    air (``EyeAir.shadow``)."""
+    atmosphere and ground kept; a frame uploads the sun's values and, for a new sun, the diffuse light's table
+    (``air_multiple.diffuse_input``) alone); ``shadow``: whether the storm shadows the air (``EyeAir.shadow``)."""
     atm = getattr(spec, "atmosphere", None)
     if atm is None:
         return None
@@ -157,7 +150,8 @@ def eye_air_input(mi, spec, bbox, reuse, e_sky=(0.0, 0.0, 0.0), shadow: bool = T
     fixed = reuse("eye air", (atm, floor), lambda: _fixed_inputs(mi, atm, bbox, floor))
     return EyeAir(**fixed, to_sun=mi.Vector3f(*(op(v) for v in spec.sun.to_sun)),
                   irradiance=mi.Color3f(*(op(v) for v in spec.sun.irradiance)),
-                  ambient=mi.Color3f(*(op(v) for v in diffuse_light(spec, e_sky))), shadow=bool(shadow),
+                  diffuse=diffuse_input(mi, spec, reuse, height_grid(), sun_table(atm).rgb[-1, -1]),
+                  shadow=bool(shadow),
                   width=int(spec.width), height=int(spec.height))
 
 
@@ -210,7 +204,6 @@ def source_at(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
     import drjit as dr
     p_r, p_a = _phases(dr, air, dr.dot(d, air.to_sun))
     q0 = o - air.centre + mi.Vector3f(0.0, 0.0, EARTH_RADIUS_M)  # from the Earth's centre
-    ambient = air.ambient * (1.0 / (4.0 * np.pi)) / dr.maximum(air.irradiance, 1e-30) if diffuse else None
 
     def at(s):
         q = q0 + s * d
@@ -224,8 +217,8 @@ def source_at(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
         src = (sca_r * p_r + sca_a * p_a) * _sun_colour(mi, dr, air, h, dr.dot(q, air.to_sun) / r)
         if shadow is not None:  # the storm's shadow on the direct sun
             src *= shadow(o + s * d)
-        if diffuse:
-            src += (sca_r + sca_a) * ambient
+        if diffuse:  # the air's multiple scattering: beta_s J(h), isotropic (``air_multiple``)
+            src += (sca_r + sca_a) * lerp_rows(mi, dr, air.diffuse, fh, air.n_h)
         return ext, src
     return at
 
@@ -233,7 +226,7 @@ def source_at(mi, air: EyeAir, o, d, shadow=None, diffuse: bool = False):
 def segment(mi, air: EyeAir, o, d, t0, t1, samples: int, squared: bool, diffuse: bool = False, shadow=None):
     """(T, S) (mi.Color3f) of the rays o + s d over [t0, t1] (module docstring; S per unit irradiance above
     the air, 1/sr; T = 1, S = 0 where t1 <= t0); o in the scene's frame. ``diffuse``: S also holds the
-    diffuse light on the air (``EyeAir.ambient`` / (4 pi) x its scattering, over the sun's irradiance).
+    air's multiple scattering (its scattering coefficient times ``EyeAir.diffuse``'s J(h), ``air_multiple``).
     ``shadow``: None, or the direct sun's transmittance through the storm at world points (mi.Point3f ->
     mi.Float), a factor on the sun's colour C(h, mu) (``eye_path.segment_air``'s ``shadow``)."""
     import drjit as dr
@@ -396,4 +389,4 @@ def _top_m() -> float:
 
 
 __all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "box_interval", "eye_air_input", "source_at",
-           "cross_sections", "height_table", "light_shadow", "outside_box", "profile", "ray_ends", "seen_through_air", "segment"]
+           "cross_sections", "height_grid", "height_table", "light_shadow", "outside_box", "profile", "ray_ends", "seen_through_air", "segment"]

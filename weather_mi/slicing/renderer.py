@@ -479,7 +479,7 @@ class SliceRenderer:
                          kernel_scalar(mi, params.slab_jitter), kernel_scalar(mi, jitter_rotation(params.jitter_frame)),
                          sca_ratio, below, self._reuse("sun air", (spec.atmosphere, float(spec.sun.mu0)),
                                                        lambda: sun_air_input(mi, spec, self.grid_box, self._reuse)),
-                         None if not self._eye_air else eye_air_input(mi, spec, self.vol.bbox, self._reuse, e_sky,
+                         None if not self._eye_air else eye_air_input(mi, spec, self.vol.bbox, self._reuse,
                                                                       not self.vol.periodic))
 
     def _eye_pass(self, inputs: FrameInputs):
