@@ -10,8 +10,8 @@ on the anisotropic part). J is DISORT's (``optics.air.skylight.diffuse_source_ta
 a Lambertian ground of the scene's albedo, per unit irradiance of the sun) at the slicer's channels' wavelengths
 (``optics.air.inside.CHANNEL_NM``) times the top-of-atmosphere sun's colour (the channels' unit, as ``sun_table``'s
 C(h, mu)): Hillaire (2020)'s multiple-scattering term, with the mean intensity solved by DISORT instead of his
-isotropic geometric series (plane-parallel, the sun at the frame's cosine; a spherical Earth's twilight is not in
-it: below the horizon J is 0).
+isotropic geometric series (plane-parallel, the sun at the cosine whose air mass is the spherical Earth's,
+``effective_mu0``; a spherical Earth's twilight is not in it: below the horizon J is 0).
 
 The table: nodes over cos(zenith) ``MU_NODES``, each a DISORT solve per channel (0.05 s) cached per atmosphere,
 ground height and albedo (computed when a frame first needs them: an atmosphere costs a frame the two nodes
@@ -61,6 +61,16 @@ def mean_intensity(atm, mu0: float, heights_m, ground_m: float = 0.0, albedo: fl
     return (1.0 - u) * at(MU_NODES[k]) + u * at(MU_NODES[k + 1])
 
 
+def effective_mu0(mu0: float) -> float:
+    """The plane-parallel sun's cosine whose slant column through the air is the spherical Earth's: 1 / m, m
+    Kasten & Young (1989)'s relative air mass, m = 1 / (mu0 + 0.50572 (96.07995 - theta)^-1.6364), theta the zenith
+    angle in degrees (0.113 at a 6 deg sun for mu0 0.105; the same within 0.1% above 30 deg); 0 below the horizon."""
+    if mu0 <= 0.0:
+        return 0.0
+    theta = float(np.degrees(np.arccos(min(float(mu0), 1.0))))
+    return float(mu0 + 0.50572 * (96.07995 - theta) ** -1.6364)
+
+
 def diffuse_input(mi, spec, reuse, heights_m, sun_top):
     """The frame's J table (mi.Float, n x 4: one packet a row, ``packets.packed``; 64-byte aligned, a frame
     input) on ``heights_m`` for ``spec``'s atmosphere, sun and ground (none: albedo 0 at sea level), times
@@ -71,8 +81,9 @@ def diffuse_input(mi, spec, reuse, heights_m, sun_top):
     ground = spec.ground
     ground_m, albedo = (0.0, 0.0) if ground is None else (float(ground.height), float(np.mean(ground.albedo)))
     key = (spec.atmosphere, float(spec.sun.mu0), ground_m, albedo)
-    j = lambda: mean_intensity(spec.atmosphere, key[1], heights_m, ground_m, albedo) * sun_top  # noqa: E731
+    mu = effective_mu0(key[1])
+    j = lambda: mean_intensity(spec.atmosphere, mu, heights_m, ground_m, albedo) * sun_top  # noqa: E731
     return reuse("air multiple", key, lambda: aligned_float(mi, packed(j().astype(np.float32))))
 
 
-__all__ = ["MU_NODES", "diffuse_input", "mean_intensity"]
+__all__ = ["MU_NODES", "diffuse_input", "effective_mu0", "mean_intensity"]
