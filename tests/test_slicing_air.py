@@ -179,7 +179,7 @@ def test_the_storms_shadow_darkens_the_slicers_air_as_the_numpy_segments(mode, m
     shadowed = renderer_module.eye_air_input
 
     def unshadowed(*args, **kwargs):  # the same frame without the storm's shadow on the air
-        return shadowed(*args[:5], shadow=False)
+        return shadowed(*args[:4], shadow=False)
     monkeypatch.setattr(renderer_module, "eye_air_input", unshadowed)
     bright = SliceRenderer(vol, MODES[mode], slices=128).frame(spec).radiance.reshape(-1, 3)[ground].mean(axis=0)
     print(mode, "unshadowed slicer / numpy:", bright / numpy_air)

@@ -73,15 +73,17 @@ def effective_mu0(mu0: float) -> float:
 
 def diffuse_input(mi, spec, reuse, heights_m, sun_top):
     """The frame's J table (mi.Float, n x 4: one packet a row, ``packets.packed``; 64-byte aligned, a frame
-    input) on ``heights_m`` for ``spec``'s atmosphere, sun and ground (none: albedo 0 at sea level), times
+    input) on ``heights_m`` for ``spec``'s atmosphere, sun and ground (none: albedo 0 at sea level; no sky: J = 0,
+    as the path tracer's scene without a sky has no diffuse light from the air around the box), times
     ``sun_top`` (the sun's colour above the air: the unit of ``eye_air.sun_table``'s C(h, mu)); ``reuse``: the
     renderer's (kept while the atmosphere, the sun's cosine and the ground are the same)."""
     from ..kernel.jitarrays import aligned_float
     from .packets import packed
     ground = spec.ground
     ground_m, albedo = (0.0, 0.0) if ground is None else (float(ground.height), float(np.mean(ground.albedo)))
-    key = (spec.atmosphere, float(spec.sun.mu0), ground_m, albedo)
-    mu = effective_mu0(key[1])
+    lit = spec.sky is not None  # no sky: the scene has no diffuse light from the air around the box (J = 0)
+    key = (spec.atmosphere, float(spec.sun.mu0), ground_m, albedo, lit)
+    mu = effective_mu0(key[1]) if lit else 0.0
     j = lambda: mean_intensity(spec.atmosphere, mu, heights_m, ground_m, albedo) * sun_top  # noqa: E731
     return reuse("air multiple", key, lambda: aligned_float(mi, packed(j().astype(np.float32))))
 
