@@ -21,7 +21,10 @@ T_c the cloud's transmittance):
     L = L_box + w (E S_A + (T_A - 1) L_box)
 
 (``eye_air.seen_through_air``'s with S_f = S(f_c), T_f = T(f_c), S_b = (S(1) - S(f_c)) / T(f_c),
-T_b = T(1) / T(f_c)). Neighbours whose ray meets the box where the pixel's does not (or the reverse) are left
+T_b = T(1) / T(f_c)). The whole box's S(1), T(1) are the neighbours' scaled to the pixel's own chord length L
+from their mean chord L' (each coarse ray stores its own): T(1)^(L / L'), S(1) (1 - T(1)^(L / L')) / (1 - T(1)),
+a uniform slab's (near the box's side walls neighbouring chords differ by their whole length: with the air's
+multiple scattering the worst pixel there was 21% off, 10% after). Neighbours whose ray meets the box where the pixel's does not (or the reverse) are left
 out of its weights, and so are those that end on the sky where the pixel's ray ends on the ground (or the
 reverse): the box's silhouette and the horizon stay sharp. Against every pixel's own integration
 (``seen_through_air``) on the demo supercell's drag at 300 x 300: the mean within 0.03% per channel, 99% of
@@ -88,9 +91,11 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
     out = dr.empty(mi.Float, nx * ny * rows * ROW)  # (every float written below)
     base = j * (rows * 2)  # in packets of 4 floats
 
-    def emit(k, t, s):  # row k of the box's cumulative air; with the first, row 0 (T = 1, S = 0) and A's
-        dr.scatter(out, mi.Vector4f(s.x, s.y, s.z, 0.0), base + 2 * k)
-        dr.scatter(out, mi.Vector4f(t.x, t.y, t.z, 0.0), base + 2 * k + 1)
+    chord = dr.select(hit, t_out - t_in, 0.0)
+
+    def emit(k, t, s):  # row k of the box's cumulative air (with the chord's length, m); with the first, row 0
+        dr.scatter(out, mi.Vector4f(s.x, s.y, s.z, 0.0), base + 2 * k)  # (T = 1, S = 0) and A's
+        dr.scatter(out, mi.Vector4f(t.x, t.y, t.z, chord), base + 2 * k + 1)
         first = k == 1
         dr.scatter(out, mi.Vector4f(0.0, 0.0, 0.0, 0.0), base, first)
         dr.scatter(out, mi.Vector4f(1.0, 1.0, 1.0, 0.0), base + 1, first)
@@ -150,11 +155,12 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
     corners = _corners(mi, dr, air.width, air.height)
     kind = _kind(dr, hit, t_ground)
 
-    def read(c, k, active):
-        """(S, T, kind) of row k of coarse ray c (zeros where not ``active``: not read)."""
+    def read(c, k, active, chord=False):
+        """(S, T, kind) of row k of coarse ray c (zeros where not ``active``: not read); ``chord``: and the
+        ray's box chord (m)."""
         s = dr.gather(mi.Vector4f, table, c * (rows * 2) + 2 * k, active)
         t = dr.gather(mi.Vector4f, table, c * (rows * 2) + 2 * k + 1, active)
-        return mi.Color3f(s.x, s.y, s.z), mi.Color3f(t.x, t.y, t.z), s.w
+        return (mi.Color3f(s.x, s.y, s.z), mi.Color3f(t.x, t.y, t.z), s.w) + ((t.w,) if chord else ())
     zero = dr.zeros(mi.Color3f, dr.width(t_in))
     s_a, t_a = zero, zero
     total, plain = mi.Float(0.0), []
@@ -185,12 +191,22 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
             s_f, t_f = s_f + k * (sl + (su - sl) * f), t_f + k * (tl + (tu - tl) * f)
         return s_f, t_f
 
-    def whole(s_f, t_f, *ck):  # ... and through the whole box (its last row)
-        s_1, t_1 = mi.Color3f(0.0), mi.Color3f(0.0)
-        for c, k in zip(ck[:len(ck) // 2], ck[len(ck) // 2:]):
-            se, te, _ = read(c, BOX_POINTS - 1, True)
-            s_1, t_1 = s_1 + k * se, t_1 + k * te
-        return s_1, t_1
+    def whole(s_f, t_f, *ck):  # ... and through the whole box (its last row), for the pixel's own chord: the
+        s_1, t_1, chord = mi.Color3f(0.0), mi.Color3f(0.0), mi.Float(0.0)  # neighbours' as a uniform slab's of
+        for c, k in zip(ck[:len(ck) // 2], ck[len(ck) // 2:]):           # their mean chord, scaled to it
+            se, te, _, length = read(c, BOX_POINTS - 1, True, chord=True)
+            s_1, t_1, chord = s_1 + k * se, t_1 + k * te, chord + k * length
+        return own_chord(s_1, t_1, chord)
+
+    def own_chord(s_1, t_1, chord):
+        """(S, T) of a chord of the pixel's length t_out - t_in from those of the neighbours' mean ``chord``:
+        tau in proportion to the length, S = J (1 - T) with the same J (exact for a uniform slab: the box's
+        side walls, where neighbouring rays' chords differ by their whole length, and the coarse grid's worst
+        pixels were; the same values where the chords are equal)."""
+        r = (t_out - t_in) / dr.maximum(chord, 1e-3)
+        t_own = dr.exp(r * dr.log(dr.maximum(t_1, 1e-30)))
+        thin = 1.0 - t_1 < 1e-4
+        return dr.select(thin, s_1 * r, s_1 * (1.0 - t_own) / dr.maximum(1.0 - t_1, 1e-4)), t_own
     s_f, t_f = dr.if_stmt((i0, f, *cs, *ks), need_f, at_depth, lambda *_: (mi.Color3f(0.0), mi.Color3f(1.0)))
     s_1, t_1 = dr.if_stmt((s_f, t_f, *cs, *ks), need_1, whole, lambda s, t, *_: (mi.Color3f(s), mi.Color3f(t)))
     e = air.irradiance
