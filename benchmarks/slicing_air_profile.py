@@ -53,7 +53,7 @@ def switched_off(setting: str):
         finally:
             coarse.coarse_air = coarse_air
     if setting == "air no shadow":
-        renderer.eye_air_input = lambda *a: eye_air_input(*a[:5], shadow=False)
+        renderer.eye_air_input = lambda *a: eye_air_input(*a[:4], shadow=False)
     elif setting == "air no sun colour":
         renderer.sun_air_input = lambda *a, **k: None
     elif setting == "coarse only":
