@@ -46,7 +46,7 @@ def _slicer_path_radiance(elevation_deg: float, multiple: bool):
     mi = _mi()
     o, e, to_sun = _rays(elevation_deg)
     spec = wm.SceneSpec(camera=wm.Camera(origin=(0.0, -200e3, 5e3), target=(0.0, 0.0, 5e3), fov=10.0),
-                        sun=wm.Sun(azimuth=90.0, elevation=elevation_deg), sky=None,
+                        sun=wm.Sun(azimuth=90.0, elevation=elevation_deg), sky=wm.Sky("sunsky"),
                         ground=wm.Ground(0.15, height=0.0), width=4, height=4, atmosphere=Atmosphere())
     assert np.allclose(spec.sun.to_sun, to_sun, atol=1e-6), spec.sun.to_sun  # the same sun as the reference's
     air = ea.eye_air_input(mi, spec, BOX, lambda name, key, make: make(), shadow=False)
