@@ -389,4 +389,5 @@ def _top_m() -> float:
 
 
 __all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "box_interval", "eye_air_input", "source_at",
-           "cross_sections", "height_grid", "height_table", "light_shadow", "outside_box", "profile", "ray_ends", "seen_through_air", "segment"]
+           "cross_sections", "height_grid", "height_table", "light_shadow", "outside_box", "profile", "ray_ends",
+           "seen_through_air", "segment"]
