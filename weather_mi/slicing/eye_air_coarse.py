@@ -20,20 +20,19 @@ T_c the cloud's transmittance):
     L_box = E S(f_c) + T(f_c) R + T_c (E (S(1) - S(f_c)) + (T(1) - T(f_c)) L_bg)
     L = L_box + w (E S_A + (T_A - 1) L_box)
 
-(``eye_air.seen_through_air``'s with S_f = S(f_c), T_f = T(f_c), S_b = (S(1) - S(f_c)) / T(f_c),
-T_b = T(1) / T(f_c)). The whole box's S(1), T(1) are the neighbours' scaled to the pixel's own chord length L
-from their mean chord L' (each coarse ray stores its own): T(1)^(L / L'), S(1) (1 - T(1)^(L / L')) / (1 - T(1)),
-a uniform slab's (near the box's side walls neighbouring chords differ by their whole length: with the air's
-multiple scattering the worst pixel there was 21% off, 10% after). Neighbours whose ray meets the box where the
-pixel's does not (or the reverse) are left out of its weights, and so are those that end on the sky where the
-pixel's ray ends on the ground (or the reverse): the box's silhouette and the horizon stay sharp. Against every pixel's own integration
-(``seen_through_air``) on the demo supercell's drag at 300 x 300: the mean within 0.03% per channel, 99% of
-pixels within 1.7%, the worst 6% (the rows just below the horizon, where the ground's distance grows faster
-than linearly; tests/test_slicing_air_coarse.py: 99% within 4.5% at 160 px, 8% at 120). Pixels whose
-neighbours differ integrating their own air (tried: 99% within 0.6% at 300 px) cost twice what the grid
-saves, even branched per packet. The grid's size is part of the frame's structure (it changes with the
-frame's size only): a new view compiles nothing. Frames smaller than ``MIN_PIXELS`` a side integrate every
-pixel (``eye_air.seen_through_air``).
+(``eye_air.seen_through_air``'s with S_f = S(f_c), T_f = T(f_c), S_b = (S(1) - S(f_c)) / T(f_c), T_b = T(1) /
+T(f_c)). The whole box's S(1), T(1) are the neighbours' scaled to the pixel's own chord length L from their mean
+chord L' (each coarse ray stores its own): T(1)^(L / L'), S(1) (1 - T(1)^(L / L')) / (1 - T(1)), a uniform slab's
+(near the box's side walls neighbouring chords differ by their whole length: with the air's multiple scattering the
+worst pixel there was 21% off, 10% after). Neighbours whose ray meets the box where the pixel's does not (or the
+reverse) are left out of its weights, and so are those that end on the sky where the pixel's ray ends on the ground
+(or the reverse): the box's silhouette and the horizon stay sharp. Against every pixel's own integration
+(``seen_through_air``) on the demo supercell's drag at 300 x 300: the mean within 0.03% per channel, 99% of pixels
+within 1.7%, the worst 6% (the rows just below the horizon, where the ground's distance grows faster than linearly;
+tests/test_slicing_air_coarse.py: 99% within 4.8% at 160 px, 8% at 120). Pixels whose neighbours differ integrating
+their own air (tried: 99% within 0.6% at 300 px) cost twice what the grid saves, even branched per packet. The
+grid's size is part of the frame's structure (it changes with the frame's size only): a new view compiles nothing.
+Frames smaller than ``MIN_PIXELS`` a side integrate every pixel (``eye_air.seen_through_air``).
 
 Coarse rays that miss the box evaluate no point of its profile (their rows: T = 1, S = 0), those that end on
 the sky model's sky without crossing the box integrate no air outside it (no pixel of their kind reads it), and
