@@ -22,8 +22,16 @@ pixel's linear sRGB into a smooth spectrum (Jakob & Hanika 2019's sRGB model tim
 pixel's (within 0.3 %); its shape differs from DISORT's sky spectrum, which matters only where the light is
 filtered by wavelength on its way to the eye: ``docs/spectral.md`` measures it (CIEDE2000 under 0.3 through the
 box's air and a cloud), so no spectral emitter is built.
+
+What renders outside Mitsuba's path loop (the slicer's skylight on its cloud and ground, ``kernel.sky``) takes
+this sky's irradiance on a horizontal plane at the envmap's reference point (:func:`sky_irradiance`): the 1-D
+atmosphere's diffuse downward flux (DISORT's) at the ground, the skylight the reference's open ground gets
+(the envmap's and ``display.aerial``'s, ``open_ground_sky``), nodes over the sun's cosine cached per atmosphere
+and ground (a sun drag costs a node when it crosses into a new interval: 13 DISORT solves, ~0.1 s).
 """
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 
@@ -115,6 +123,40 @@ def open_ground_sky(spec, bbox) -> tuple[np.ndarray, np.ndarray]:
     return horizontal_irradiance(bitmap), table.diffuse_rgb[0] * np.asarray(spec.sun.irradiance, np.float64)
 
 
+# the sun's cosines of :func:`sky_irradiance`'s nodes (denser low: the skylight changes fastest near the horizon)
+SKYLIGHT_MU_NODES = np.array([0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.85, 1.0])
+
+
+@functools.lru_cache(maxsize=64)
+def _skylight_node(atm, mu0: float, ground_m: float, albedo: float) -> np.ndarray:
+    """DISORT's diffuse downward flux at the ground (RGB, per unit luminance irradiance of the sun above the air)
+    with the sun at cos(zenith) ``mu0``: ``skylight.sky_table``'s ``diffuse_rgb`` there."""
+    from ..optics.air.skylight import rgb, spectral_sky
+    _, down, _ = spectral_sky(atm, mu0, np.array([ground_m]), [0.0], [0.0], ground_m, albedo)
+    return rgb(down)[0]
+
+
+def sky_irradiance(spec) -> np.ndarray:
+    """The air's sky's irradiance (RGB, W/m^2: times ``spec.sun.irradiance``) on a horizontal plane at the envmap's
+    reference point (the ground, at least sea level; module docstring): linear in the sun's cos(zenith) between
+    ``SKYLIGHT_MU_NODES`` (under the lowest node its value times mu0 / the node's; 0 with the sun below the
+    horizon, as the envmap's)."""
+    if spec.atmosphere is None:
+        raise ValueError("--sky air is the clear atmosphere's own sky: it needs an atmosphere (--atmosphere clear)")
+    mu0, nodes = float(spec.sun.mu0), SKYLIGHT_MU_NODES
+    if mu0 <= 0.0:
+        return np.zeros(3)
+    ground, albedo = _ground(spec)
+    at = lambda k: _skylight_node(spec.atmosphere, float(nodes[k]), round(ground, 3), round(albedo, 6))  # noqa: E731
+    if mu0 <= nodes[0]:
+        e = at(0) * mu0 / nodes[0]
+    else:
+        k = int(np.clip(np.searchsorted(nodes, mu0) - 1, 0, nodes.size - 2))
+        u = (mu0 - nodes[k]) / (nodes[k + 1] - nodes[k])
+        e = (1.0 - u) * at(k) + u * at(k + 1)
+    return e * np.asarray(spec.sun.irradiance, np.float64)
+
+
 def horizontal_irradiance(bitmap: np.ndarray) -> np.ndarray:
     """Irradiance (RGB) of an envmap's bitmap (H, W, 3) (``pixel_directions``' layout) on an upward-facing
     horizontal plane: the integral of L cos(theta) over the upper hemisphere (trapezoidal in theta, the
@@ -127,5 +169,5 @@ def horizontal_irradiance(bitmap: np.ndarray) -> np.ndarray:
     return 2.0 * np.pi * np.trapezoid(ring, zen[up], axis=0)
 
 
-__all__ = ["EMITTER_NEE", "air_sky_dict", "sky_bitmap", "open_ground_sky", "exit_heights", "pixel_directions",
+__all__ = ["EMITTER_NEE", "SKYLIGHT_MU_NODES", "sky_irradiance", "air_sky_dict", "sky_bitmap", "open_ground_sky", "exit_heights", "pixel_directions",
            "horizontal_irradiance", "ENV_SIZE"]

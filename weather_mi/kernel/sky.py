@@ -1,8 +1,9 @@
 """The sky as Mitsuba's emitter gives it, for what renders outside Mitsuba's path loop (the slicer's
 background and ground light, the denoiser's features): radiance along rays and irradiance on a horizontal
-surface, the same as the reference's sky. ``Sky("air")`` (the clear atmosphere's own sky) is none here: the
-slicer puts the air's sky on its frames itself (``slicing.eye_air``), and its light into the box is the path
-tracer's alone (``kernel.air_sky``)."""
+surface, the same as the reference's sky. ``Sky("air")`` (the clear atmosphere's own sky) has no radiance
+along rays here: the slicer puts the air's sky on its frames itself (``slicing.eye_air``, as the reference's
+``display.aerial``); its irradiance on a horizontal surface is the 1-D atmosphere's diffuse flux at the envmap's
+reference point (``kernel.air_sky.sky_irradiance``), the light the slicer's cloud and ground take from it."""
 from __future__ import annotations
 
 import numpy as np
@@ -105,7 +106,11 @@ def sky_radiance_arrays(spec: SceneSpec, dirs, cache: dict | None = None, active
 
 def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | None = None) -> np.ndarray:
     """Irradiance (W/m^2, RGB) of the sky on a horizontal surface: pi L for a constant sky; for the
-    Hosek-Wilkie sky, pi x the mean radiance over cosine-distributed directions (stratified)."""
+    Hosek-Wilkie sky, pi x the mean radiance over cosine-distributed directions (stratified); for the air's,
+    ``air_sky.sky_irradiance`` (module docstring)."""
+    if spec.sky is not None and spec.sky.kind == "air":
+        from .air_sky import sky_irradiance
+        return sky_irradiance(spec)
     if _no_model(spec):
         return np.zeros(3)
     if spec.sky.kind == "constant":
