@@ -87,6 +87,7 @@ class EyeAir:
     diffuse: object     # mi.Float (n_h x 4): the diffuse light's mean intensity J(h) per unit irradiance of the sun,
                         # on the height table's rows, padded (``air_multiple``): the air's multiple scattering
     shadow: bool = True  # whether the storm shadows the air (False for a periodic field, as ``display.aerial``)
+    sky_air: bool = False  # the air's own sky (``Sky("air")``): the air to the top is the sky (``seen_through_air``)
     width: int = 0      # the frame's pixels (row-major rays): the coarse grid of ``eye_air_coarse``; 0: none
     height: int = 0
 
@@ -151,7 +152,7 @@ def eye_air_input(mi, spec, bbox, reuse, shadow: bool = True) -> EyeAir | None:
     return EyeAir(**fixed, to_sun=mi.Vector3f(*(op(v) for v in spec.sun.to_sun)),
                   irradiance=mi.Color3f(*(op(v) for v in spec.sun.irradiance)),
                   diffuse=diffuse_input(mi, spec, reuse, height_grid(), sun_table(atm).rgb[-1, -1]),
-                  shadow=bool(shadow),
+                  shadow=bool(shadow), sky_air=spec.sky is not None and spec.sky.kind == "air",
                   width=int(spec.width), height=int(spec.height))
 
 
@@ -328,14 +329,35 @@ def seen_through_air(mi, air: EyeAir, rays, radiance, transmittance, background,
     t_b, s_b = segment(mi, air, o, d, dr.select(behind, t_c, 0.0), dr.select(behind, t_out, 0.0), SAMPLES_BOX,
                        False, True, shadow)
     e = air.irradiance
+    if air.sky_air:  # the air behind the box, B = [box exit, ground or top], seen through the box and the cloud
+        t_far, s_far = gauss_segment(mi, source_at(mi, air, o, d, outside_box(shadow), True), dr.select(behind, t_out, 0.0),
+                                     dr.select(behind, t_end, 0.0), NODES, True)
+        radiance, background = behind_box(e, s_far, t_far, radiance, transmittance, background)
     boxed = e * s_f + t_f * (radiance + transmittance * (e * s_b + (t_b - 1.0) * background))
     # outside: camera to the box (or to the ground or the top); none where the ray ends on the sky model's sky
-    # without crossing the box (w = 0: not integrated)
-    sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
-    w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
-    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, outside_box(shadow)), mi.Float(0.0) + 0.0 * t_in,
-                             dr.select(w > 0, dr.select(hit, t_in, t_end), 0.0), NODES, True)
+    # without crossing the box (w = 0: not integrated); with the air's own sky, everywhere
+    w = outside_weight(mi, air, transmittance, hit, t_ground)
+    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, outside_box(shadow), air.sky_air),
+                             mi.Float(0.0) + 0.0 * t_in, dr.select(w > 0, dr.select(hit, t_in, t_end), 0.0), NODES, True)
     return boxed + w * (e * s_a + (t_a - 1.0) * boxed)
+
+
+def outside_weight(mi, air: EyeAir, transmittance, hit, t_ground):
+    """The weight w of the air outside the box in front of it (A, module docstring): 1, but where the ray ends on
+    the sky model's sky (which holds its air) the box's cloud opacity 1 - T (0 where it misses the box); with the
+    air's own sky (``EyeAir.sky_air``, whose sky is the air to the top) 1 everywhere."""
+    import drjit as dr
+    if air.sky_air:
+        return mi.Float(1.0) + 0.0 * transmittance
+    sky_end = ~dr.isfinite(t_ground)
+    return dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
+
+
+def behind_box(e, s_far, t_far, radiance, transmittance, background):
+    """(Radiance, background) of the eye pass with the air behind the box (S_B, T_B) in the background's place:
+    L_bg' = E S_B + T_B L_bg, seen through the cloud (C + T L_bg'), as ``display.aerial``'s with ``sky_air``."""
+    far = e * s_far + (t_far - 1.0) * background
+    return radiance + transmittance * far, background + far
 
 
 def light_shadow(mi, light, to_sun):
@@ -389,5 +411,5 @@ def _top_m() -> float:
 
 
 __all__ = ["EyeAir", "HEIGHT_STEP_M", "SAMPLES_BOX", "box_interval", "eye_air_input", "source_at",
-           "cross_sections", "height_grid", "height_table", "light_shadow", "outside_box", "profile", "ray_ends",
+           "behind_box", "cross_sections", "height_grid", "outside_weight", "height_table", "light_shadow", "outside_box", "profile", "ray_ends",
            "seen_through_air", "segment"]

@@ -49,7 +49,7 @@ part 3), 0.53-0.65 when every pixel integrated its own (and the box's rows were 
 from __future__ import annotations
 
 from .eye import OPAQUE_T
-from .eye_air import EyeAir, outside_box, profile, ray_ends, source_at
+from .eye_air import EyeAir, behind_box, outside_box, outside_weight, profile, ray_ends, source_at
 from .eye_air_quadrature import NODES, gauss_segment
 
 STEP = 4            # the coarse grid: every STEP-th pixel in x and y (the last row and column included)
@@ -84,10 +84,12 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
     o, d = dr.gather(mi.Point3f, o, pixel), dr.gather(mi.Vector3f, d, pixel)
     t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
     kind = _kind(dr, hit, t_ground)
-    # A: not where the ray ends on the sky model's sky without crossing the box (no pixel of that kind uses it)
-    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, outside_box(shadow)), 0.0 * t_in,
-                             dr.select(hit, t_in, dr.select(kind == 2.0, 0.0, t_end)), NODES, True)
-    rows = BOX_POINTS + 1
+    # A: not where the ray ends on the sky model's sky without crossing the box (no pixel of that kind uses it);
+    # with the air's own sky everywhere, and B behind the box (``eye_air.seen_through_air``)
+    a_end = t_end if air.sky_air else dr.select(kind == 2.0, 0.0, t_end)
+    t_a, s_a = gauss_segment(mi, source_at(mi, air, o, d, outside_box(shadow), air.sky_air), 0.0 * t_in,
+                             dr.select(hit, t_in, a_end), NODES, True)
+    rows = _rows(air)
     out = dr.empty(mi.Float, nx * ny * rows * ROW)  # (every float written below)
     base = j * (rows * 2)  # in packets of 4 floats
 
@@ -102,7 +104,17 @@ def coarse_air(mi, air: EyeAir, o, d, shadow=None):
         dr.scatter(out, mi.Vector4f(s_a.x, s_a.y, s_a.z, kind), base + 2 * BOX_POINTS, first)
         dr.scatter(out, mi.Vector4f(t_a.x, t_a.y, t_a.z, 0.0), base + 2 * BOX_POINTS + 1, first)
     profile(mi, air, o, d, dr.select(hit, t_in, 0.0), dr.select(hit, t_out, 0.0), BOX_POINTS, emit, shadow, hit)
+    if air.sky_air:  # B: its own row after A's
+        t_b, s_b = gauss_segment(mi, source_at(mi, air, o, d, outside_box(shadow), True), dr.select(hit, t_out, 0.0),
+                                 dr.select(hit, t_end, 0.0), NODES, True)
+        dr.scatter(out, mi.Vector4f(s_b.x, s_b.y, s_b.z, 0.0), base + 2 * (BOX_POINTS + 1))
+        dr.scatter(out, mi.Vector4f(t_b.x, t_b.y, t_b.z, 0.0), base + 2 * (BOX_POINTS + 1) + 1)
     return out
+
+
+def _rows(air: EyeAir) -> int:
+    """Rows per coarse ray: the box's ``BOX_POINTS``, A's, and with the air's own sky B's."""
+    return BOX_POINTS + (2 if air.sky_air else 1)
 
 
 def _kind(dr, hit, t_ground):
@@ -136,8 +148,7 @@ def seen_through_coarse_air(mi, air: EyeAir, rays, radiance, transmittance, back
     o, d = rays.origin, rays.direction
     table = coarse_air(mi, air, o, d, shadow if air.shadow else None)
     t_in, t_out, t_end, hit, t_ground = ray_ends(mi, air, o, d)
-    sky_end = ~dr.isfinite(t_ground)  # the ray ends on the sky model's sky (which holds its air)
-    w = dr.select(sky_end, dr.select(hit, 1.0 - dr.clip(transmittance, 0.0, 1.0), 0.0), 1.0)
+    w = outside_weight(mi, air, transmittance, hit, t_ground)
     return dr.if_stmt((radiance, transmittance, background, depth), (w > 0) | hit,
                       lambda *a: _blend(mi, dr, air, table, *a, (t_in, t_out, hit, t_ground, w)),
                       lambda r, *_: mi.Color3f(r))
@@ -151,7 +162,7 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
     f = dr.clip((t_c - t_in) / dr.maximum(t_out - t_in, 1e-6), 0.0, 1.0) * (BOX_POINTS - 1)
     i0 = dr.minimum(mi.UInt32(f), BOX_POINTS - 2)
     f = f - mi.Float(i0)
-    rows = BOX_POINTS + 1
+    rows = _rows(air)
     corners = _corners(mi, dr, air.width, air.height)
     kind = _kind(dr, hit, t_ground)
 
@@ -162,7 +173,7 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
         t = dr.gather(mi.Vector4f, table, c * (rows * 2) + 2 * k + 1, active)
         return (mi.Color3f(s.x, s.y, s.z), mi.Color3f(t.x, t.y, t.z), s.w) + ((t.w,) if chord else ())
     zero = dr.zeros(mi.Color3f, dr.width(t_in))
-    s_a, t_a = zero, zero
+    s_a, t_a, s_far, t_far = zero, zero, zero, zero
     total, plain = mi.Float(0.0), []
     # what each pixel reads: A where it counts (w > 0), the box at the cloud's depth where there is cloud, the
     # whole box where the cloud lets light through (elsewhere: S = 0, T = 1 in front of the cloud, nothing seen
@@ -180,6 +191,9 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
     for c, wgt, wgt_same, sa, ta in plain:
         k = dr.select(use_all, wgt, wgt_same) * norm
         s_a, t_a = s_a + k * sa, t_a + k * ta
+        if air.sky_air:  # B, where the pixel's ray crosses the box
+            sb, tb, _ = read(c, BOX_POINTS + 1, hit)
+            s_far, t_far = s_far + k * sb, t_far + k * tb
         cs.append(c)
         ks.append(k)
 
@@ -210,6 +224,8 @@ def _blend(mi, dr, air: EyeAir, table, radiance, transmittance, background, dept
     s_f, t_f = dr.if_stmt((i0, f, *cs, *ks), need_f, at_depth, lambda *_: (mi.Color3f(0.0), mi.Color3f(1.0)))
     s_1, t_1 = dr.if_stmt((s_f, t_f, *cs, *ks), need_1, whole, lambda s, t, *_: (mi.Color3f(s), mi.Color3f(t)))
     e = air.irradiance
+    if air.sky_air:
+        radiance, background = behind_box(e, s_far, dr.select(hit, t_far, 1.0), radiance, transmittance, background)
     boxed = e * s_f + t_f * radiance + transmittance * (e * (s_1 - s_f) + (t_1 - t_f) * background)
     return boxed + w * (e * s_a + (t_a - 1.0) * boxed)
 

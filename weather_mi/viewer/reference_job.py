@@ -120,7 +120,7 @@ def with_air(recipe: VolumeRecipe, scale, spec: SceneSpec):
     ``spec.atmosphere``, as ``weather-mi render --atmosphere clear`` does, the air inside the box in the medium
     (``optics.air.inside.scene_air``, molecules from the storm's ``rho_air`` as the volume keeps it per level:
     the storm is read once) and the air along the eye rays outside it put on every estimate
-    (``display.aerial.with_eye_air``, computed once)."""
+    (``display.aerial.with_eye_air``, computed once; with ``Sky("air")`` the air's sky's, all orders)."""
     vol = recipe.volume(scale)
     if spec.atmosphere is None:
         return vol, lambda img: img
@@ -129,8 +129,9 @@ def with_air(recipe: VolumeRecipe, scale, spec: SceneSpec):
     from ..optics.air.inside import scene_air
     # a coarser sun table and 33 points a ray (the slicer's, slicing/eye_air.py): S within ~1% at an eighth of
     # the time, so that the first estimate comes soon
-    air = eye_air(spec, vol, False, wide_sun_table(spec.atmosphere, spec.sun.mu0, n_mu=EYE_AIR_MU), EYE_AIR_SAMPLES)
-    return scene_air(vol, spec.atmosphere), lambda img: with_eye_air(img, spec, vol, air=air)
+    sky_air = spec.sky is not None and spec.sky.kind == "air"  # the air's own sky (its envmap: kernel.air_sky)
+    air = eye_air(spec, vol, sky_air, wide_sun_table(spec.atmosphere, spec.sun.mu0, n_mu=EYE_AIR_MU), EYE_AIR_SAMPLES)
+    return scene_air(vol, spec.atmosphere), lambda img: with_eye_air(img, spec, vol, sky_air, air=air)
 
 
 def _child_main(conn, parent_pid: int, recipe: VolumeRecipe, spec: SceneSpec, scale, spp: int,

@@ -107,7 +107,7 @@ class ViewState:
     ambient: float = 0.0
     exposure_ev: float = 0.0
     time: int = 0
-    sky: str = "sunsky"
+    sky: str = "auto"             # "auto": the air's own sky with the clear atmosphere, sunsky without (as render's)
     ground_albedo: float = 0.15
     atmosphere: str = "none"      # "clear": the 1-D atmosphere (optics.air) on the sun's and the eye's paths
     aod: float = 0.1              # its aerosol optical depth at 550 nm
@@ -149,12 +149,20 @@ class ViewState:
             return None
         return Atmosphere(aod_550=self.aod, ozone_atm_cm=self.ozone, water_vapour_cm=self.water_vapour)
 
+    def sky_kind(self) -> str:
+        """The sky's kind: ``sky``, its "auto" resolved as ``render``'s default (``cli.air_option.resolve``): the
+        air's own sky with the clear atmosphere (Hosek-Wilkie's sea-level sky would count the box's air twice),
+        sunsky without it."""
+        if self.sky != "auto":
+            return self.sky
+        return "air" if self.atmosphere == "clear" else "sunsky"
+
     def spec(self, frame, ground_m: float, width: int | None = None, height: int | None = None) -> SceneSpec:
         """The SceneSpec of this view (``width``/``height``: another resolution of the same view)."""
         w, h = width or self.width, height or self.height
         return SceneSpec(camera=self.camera.camera(frame, w, h, ground_m),
                          sun=Sun(self.sun_azimuth, self.sun_elevation, angular_diameter_deg=self.sun_diameter_deg),
-                         sky=None if self.sky == "none" else Sky(self.sky),
+                         sky=None if self.sky == "none" else Sky(self.sky_kind()),
                          ground=None if self.ground_albedo < 0 else Ground(albedo=self.ground_albedo, height=ground_m),
                          width=w, height=h, atmosphere=self.air())
 
@@ -178,7 +186,8 @@ def _reference_lines(state: ViewState) -> str:
         return f"    return {call}\n"
     return ("    from weather_mi.display.aerial import with_eye_air\n"
             f"    image = {call}  # with spec.atmosphere's air in the box\n"
-            "    return with_eye_air(image, spec, ref_vol)  # and along the eye rays outside it\n")
+            "    sky_air = spec.sky is not None and spec.sky.kind == 'air'  # the air's own sky (--sky air)\n"
+            "    return with_eye_air(image, spec, ref_vol, sky_air=sky_air)  # and along the eye rays outside it\n")
 
 
 def python_snippet(state: ViewState, recipe, spec: SceneSpec, times: list[str] | None = None,
