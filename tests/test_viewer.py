@@ -308,7 +308,8 @@ def test_the_atmosphere_is_a_view_setting_checked_before_rendering():
 
 def test_the_air_control_switches_the_slicer_frame(cumulus_storm):
     """The page's Air control (``ViewControls``) reaches the slicer: at a 6 deg sun the clear atmosphere's
-    frame is redder (the sun after its long path through the air) than the frame without it."""
+    frame's cloud is redder (the sun after its long path through the air) than the frame's without it (its sky, the
+    air's own, is bluer: the cloud's pixels, where the frame's transmittance is under 0.5)."""
     from weather_mi.viewer.frames import FrameLoop
     from weather_mi.viewer.widgets import ViewControls
     state = small_state(cumulus_storm, sun_elevation=6.0)
@@ -317,7 +318,8 @@ def test_the_air_control_switches_the_slicer_frame(cumulus_storm):
     assert clear.atmosphere == "clear" and clear.spec(cumulus_storm.frame, cumulus_storm.ground_m).atmosphere is not None
     loop = FrameLoop(cumulus_storm, publish=lambda f: None)
     try:
-        plain, aired = (loop.render(s, draft=True).radiance.reshape(-1, 3).mean(axis=0) for s in (state, clear))
+        plain, aired = ((lambda img: img.radiance[img.transmittance < 0.5].mean(axis=0))(loop.render(s, draft=True))
+                        for s in (state, clear))
     finally:
         loop.stop()
     assert aired[0] / aired[2] > 1.3 * plain[0] / plain[2], (plain, aired)
