@@ -77,10 +77,14 @@ TRAIN_SCENES = ("demo-supercell", "demo-cumulus", "demo-cumulus-thin", "wrf-supe
 # scaled and its eye rays' air, against the path tracer with the air in its box and along its eye rays
 LOW_SUN_DEG = 6.0
 LOW_SUN = f"-{LOW_SUN_DEG:g}deg-clear"
+# today's sun (study.runs.view: front/side 35 deg, back 20 deg) with the clear atmosphere, as `view` shows it by
+# default (issue 38 part 3, refit38); a lighting ending in LOW_SUN also ends in TODAY_AIR: test LOW_SUN first
+TODAY_AIR = "-clear"
 TRAIN = [(s, l) for s in TRAIN_SCENES for l in ("front", "side", "back")] + \
     [(s, l + LOW_SUN) for s, l in (("demo-supercell", "front"), ("demo-supercell", "side"), ("demo-cumulus", "front"),
                                    ("wrf-supercell-0100", "front"), ("wrf-supercell-0100", "side"),
-                                   ("wrf-plateau-0000", "front"), ("wrf-plateau-0000", "side"))]
+                                   ("wrf-plateau-0000", "front"), ("wrf-plateau-0000", "side"))] + \
+    [(s, l + TODAY_AIR) for s in TRAIN_SCENES for l in ("front", "side", "back")]
 HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") for l in ("front", "side", "back")]
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 # in the cache name of every reference rendered with the air (here and validation/slicer_low_sun.py): bumped when
@@ -130,10 +134,14 @@ def check_held_out(train, held_out, data) -> None:
 
 
 def view_of(vol, lighting: str, cfg):
-    """``study.runs.view``'s view of a lighting, or, for a lighting ending in LOW_SUN, that lighting's with the
-    sun at LOW_SUN_DEG and the clear atmosphere (``study.runs.low_sun_view``)."""
+    """``study.runs.view``'s view of a lighting; for a lighting ending in LOW_SUN, that lighting's with the sun at
+    LOW_SUN_DEG and the clear atmosphere (``study.runs.low_sun_view``); ending in TODAY_AIR, with the clear
+    atmosphere at the view's own sun."""
     if lighting.endswith(LOW_SUN):
         return low_sun_view(vol, lighting[: -len(LOW_SUN)], cfg, LOW_SUN_DEG, Atmosphere())
+    if lighting.endswith(TODAY_AIR):
+        base = lighting[: -len(TODAY_AIR)]
+        return low_sun_view(vol, base, cfg, view(vol, base, cfg).sun.elevation, Atmosphere())
     return view(vol, lighting, cfg)
 
 
@@ -161,7 +169,7 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
                low_sun=None):
     """{(scene, lighting): TrainingView}; with ``second_seed`` also {(scene, lighting): a second,
     independent reference (seed 1)} for the reference's own noise. ``target_rse``/``max_seconds``: see
-    ``reference``; ``low_sun``: (target_rse, max_seconds) of the LOW_SUN views instead; ``noise`` (a dict)
+    ``reference``; ``low_sun``: (target_rse, max_seconds) of the views with the air (LOW_SUN, TODAY_AIR) instead; ``noise`` (a dict)
     receives each reference's (spp, mean relative standard error over cloud pixels)."""
     views, vols, seconds = {}, {}, {}
     for scene, lighting in names:
@@ -171,7 +179,7 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
             continue
         vol = vols[scene][0]
         spec = view_of(vol, lighting, cfg)
-        plan = low_sun if low_sun is not None and lighting.endswith(LOW_SUN) else (target_rse, max_seconds)
+        plan = low_sun if low_sun is not None and spec.atmosphere is not None else (target_rse, max_seconds)
         ref = reference(out, scene, lighting, vol, spec, spp, *plan)
         if noise is not None:
             noise[(scene, lighting)] = (ref.metadata["spp"], (ref.metadata.get("noise") or {}).get("rse_mean"))
@@ -286,11 +294,12 @@ def main(argv=None) -> int:
     ap.add_argument("--target-rse", type=float, default=0.02,
                     help="held-out references: mean relative standard error over cloud pixels to reach")
     ap.add_argument("--max-seconds", type=float, default=600.0, help="held-out references: time limit each")
-    ap.add_argument("--low-sun-target-rse", type=float, default=None,
-                    help="the LOW_SUN training references (the air: slower, noisier at --spp) to this mean cloud "
-                         "RSE, at most --low-sun-max-seconds each; the other training views as before")
-    ap.add_argument("--low-sun-max-seconds", type=float, default=180.0,
-                    help="with --low-sun-target-rse: time limit of each LOW_SUN training reference")
+    ap.add_argument("--air-target-rse", "--low-sun-target-rse", dest="low_sun_target_rse", type=float,
+                    default=None,
+                    help="the training references with the air (LOW_SUN, TODAY_AIR: slower, noisier at --spp) to "
+                         "this mean cloud RSE, at most --air-max-seconds each; the other training views as before")
+    ap.add_argument("--air-max-seconds", "--low-sun-max-seconds", dest="low_sun_max_seconds", type=float,
+                    default=180.0, help="with --air-target-rse: time limit of each training reference with the air")
     ap.add_argument("--iterations", type=int, default=50)
     ap.add_argument("--learning-rate", type=float, default=0.15)
     ap.add_argument("--slices", type=int, default=128)
