@@ -5,20 +5,22 @@ beside the paper's Table IV modes.
         [--size 64x48] [--spp 128] [--train-target-rse R] [--target-rse 0.02] [--max-seconds 600] [--iterations 50]
         [--learning-rate 0.15] [--slices 128] [--supersample 2] [--slab-jitter 1]
         [--no-fit] [--noise-floor] [--start defaults|fit-start|fitted.json] [--fit-slices N] [--fit-supersample N]
-        [--fit-only] [--fitted fitted.json] [--held-out-only] [--low-sun-target-rse R [--low-sun-max-seconds S]]
+        [--fit-only] [--fitted fitted.json] [--held-out-only] [--air-target-rse R [--air-max-seconds S]]
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them);
    training views at --spp, or to --train-target-rse (the loss clips display colours at 1, so that noisy
    references pull the brightest faces down; measured: it did not help the held-out views, and the shipped
-   defaults were fitted to --spp 128), the LOW_SUN training views (the air: 5-10x slower to the same noise,
-   cloud RSE 0.13-0.17 at 128 spp) to --low-sun-target-rse if given, held-out views to --target-rse; a
+   defaults were fitted to --spp 128), the training views with the air (LOW_SUN and TODAY_AIR; the air: 5-10x
+   slower to the same noise, cloud RSE 0.13-0.17 at 128 spp) to --air-target-rse (alias --low-sun-target-rse)
+   if given, held-out views to --target-rse; a
    reference with the air carries AIR_REFERENCES in its name (one of an older path tracer's air is not read):
    training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
    its condensate x 0.15), the real WRF supercell at 01:00 and 02:00 (wrf/wrfout_quarter_ss_series.nc,
    the held-out one's run at other times) and the WRF plateau at 00:00 (held out: its last time, 09:00,
    with a fifth of the cloud cover), front-, side- and back-lit, and seven views with the sun at 6 deg and the
    clear atmosphere (LOW_SUN: the demo supercell and the WRF supercell at 01:00 and the plateau at 00:00 front-
-   and side-lit, the demo cumulus front-lit; issue 38); a training field that is a held-out
+   and side-lit, the demo cumulus front-lit; issue 38), and every training storm front-, side- and back-lit at
+   its own sun with the clear atmosphere (TODAY_AIR, as `view` shows it by default); a training field that is a held-out
    one (the same file and time, or the same mixing ratios in another file) is refused (check_held_out);
    held-out: the real WRF supercell, the WRF Tibetan Plateau file, BOMEX and RICO (from --data),
    front-, side- and back-lit (the sun behind the storm: silver linings, dark cores).
