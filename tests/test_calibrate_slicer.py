@@ -69,6 +69,7 @@ def test_the_low_sun_training_views_have_the_air_and_a_low_sun():
     for lighting in ("front", "side"):
         spec = cs.view_of(vol, lighting + cs.LOW_SUN, cfg)
         assert spec.atmosphere is not None and spec.sun.elevation == pytest.approx(cs.LOW_SUN_DEG)
+        assert spec.sky.kind == "air"  # the air's own sky (render's default with the air), not sunsky's
         plain = cs.view_of(vol, lighting, cfg)
         assert plain == view(vol, lighting, cfg) and plain.atmosphere is None
         assert spec.sun.azimuth == pytest.approx(plain.sun.azimuth)
@@ -89,7 +90,9 @@ def test_every_training_storm_is_also_seen_with_the_air_at_todays_sun():
     for lighting, elevation in (("front", 35.0), ("side", 35.0), ("back", 20.0)):
         spec = cs.view_of(vol, lighting + cs.TODAY_AIR, cfg)
         assert spec.atmosphere is not None and spec.sun.elevation == pytest.approx(elevation)
-        assert replace(spec, atmosphere=None) == view(vol, lighting, cfg)
+        plain = view(vol, lighting, cfg)
+        assert spec.sky.kind == "air" and plain.sky.kind == "sunsky"  # the air's own sky: not counted twice
+        assert replace(spec, atmosphere=None, sky=plain.sky) == plain
 
 
 @needs_data

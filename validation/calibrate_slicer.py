@@ -92,8 +92,10 @@ DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 # in the cache name of every reference rendered with the air (here and validation/slicer_low_sun.py): bumped when
 # the path tracer's air changes, so that a cached reference of an older air is never read (air2: Eq. 8's weights
 # per level and channel, kernel.medium.air_weights; air3: the air's albedo point-wise, kernel/plugins/air_albedo.py;
-# air4: ozone's band average in the RGB channels, optics/air/ozone.channel_cross_section_m2)
-AIR_REFERENCES = "air4"
+# air4: ozone's band average in the RGB channels, optics/air/ozone.channel_cross_section_m2; air5: the views with the
+# air lit by the air's own sky, Sky("air"), as render's default with the air, not Hosek-Wilkie's sea-level sky, which
+# already holds the whole column's scattering and with the box's air counted it twice: study.runs.low_sun_view)
+AIR_REFERENCES = "air5"
 
 
 def cache_name(tag: str, spec, plan: str) -> str:
@@ -159,7 +161,7 @@ def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_
     medium = vol if spec.atmosphere is None else with_box_air(vol, None, spec.atmosphere)
     ref = wm.render_reference(spec, medium, spp=spp, progress=False, target_rse=target_rse, max_seconds=max_seconds)
     if spec.atmosphere is not None:  # the air along the eye rays outside the box (as slicer_low_sun.py)
-        ref = with_eye_air(ref, spec, vol)
+        ref = with_eye_air(ref, spec, vol, sky_air=spec.sky is not None and spec.sky.kind == "air")
     ref.save(path)
     noise = ref.metadata.get("noise") or {}
     print(f"  reference {scene} {lighting}: {time.perf_counter() - t:.0f} s, {ref.metadata['spp']} spp, "

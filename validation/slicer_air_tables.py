@@ -1,13 +1,12 @@
 """The slicer's held-out tables with the air, from cached references only: today's views (front/side at 35 deg,
-back at 20 deg, as ``study.runs.view``) with the clear atmosphere against the spectral and the RGB references,
-and the 6 deg sun with the air against the spectral references and without the air against the RGB ones
-(issue 38 part 3, refit38). Issue 41's table (today's views without the air) is ``calibrate_slicer.py
---held-out-only``.
+back at 20 deg, as ``study.runs.view``) with the clear atmosphere and the air's own sky (``study.runs.low_sun_view``),
+and the 6 deg sun with the air and without it (issue 38 part 3, refit38). Issue 41's table (today's views
+without the air) is ``calibrate_slicer.py --held-out-only``.
 
     python validation/slicer_air_tables.py --refs DIR [--data ../shared/data] [--size 64x48]
         [--fitted a.json,b.json] [--scenes wrf-supercell,wrf-plateau,bomex,rico] [--lightings front,side,back]
 
-References are the EXRs that ``validation/slicer_low_sun.py`` caches (``--spectral`` for the spectral ones), read
+References are the RGB EXRs that ``validation/slicer_low_sun.py`` caches, read
 from --refs by their names (``calibrate_slicer.cache_name``; of several plans the one of the lowest RSE);
 nothing is rendered here: a missing reference is an error naming the file it looked for. The slicer's frames
 are those of both scripts (128 slices, 2 x 2 points per pixel, slab jitter 1), with the shipped defaults and
@@ -34,9 +33,8 @@ from validation.calibrate_slicer import AIR_REFERENCES, LOW_SUN_DEG, read_fitted
 from validation.slicer_low_sun import storm  # noqa: E402
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-# (table, sun elevation or None for the view's own, atmosphere, spectral reference)
-TABLES = (("today, air, spectral", None, True, True), ("today, air, RGB", None, True, False),
-          ("6 deg, air, spectral", LOW_SUN_DEG, True, True), ("6 deg, no air", LOW_SUN_DEG, False, False))
+# (table, sun elevation or None for the view's own, atmosphere)
+TABLES = (("today, air", None, True), ("6 deg, air", LOW_SUN_DEG, True), ("6 deg, no air", LOW_SUN_DEG, False))
 
 
 def cached(refs: Path, tag: str, size: str, air: bool) -> Image:
@@ -62,10 +60,10 @@ def rows_of(args, columns: dict) -> list:
         hyd, vol = storm(name, Path(args.data), cfg)
         slicer = SliceRenderer(vol, MODES["per-species/multiple"], slices=128)
         for lighting in args.lightings.split(","):
-            for table, elevation, air, spectral in TABLES:
+            for table, elevation, air in TABLES:
                 el = view(vol, lighting, cfg).sun.elevation if elevation is None else elevation
                 spec = low_sun_view(vol, lighting, cfg, el, Atmosphere() if air else None)
-                tag = f"{name}_{lighting}_{el:g}deg_{'clear' if air else 'none'}" + ("_spectral" if spectral else "")
+                tag = f"{name}_{lighting}_{el:g}deg_{'clear' if air else 'none'}"
                 ref = cached(Path(args.refs), tag, args.size, air)
                 mask = metrics.cloud_mask(eye_transmittance(vol, spec, 128))
                 row = {"table": table, "view": f"{name} {lighting} {el:g}",
