@@ -52,7 +52,8 @@ def test_training_set_has_real_storms_at_other_times():
     assert real == ["wrf-supercell-0100", "wrf-supercell-0200", "wrf-plateau-0000"]
     assert {DATA_TIMES[s] for s in real} == {"0001-01-01_01:00:00", "0001-01-01_02:00:00", "2005-09-21_00:00:00"}
     assert not {s for s, _ in cs.TRAIN} & {s for s, _ in cs.HELD_OUT}
-    assert {l for s, l in cs.TRAIN if s in real} == {"front", "side", "back", "front" + cs.LOW_SUN, "side" + cs.LOW_SUN}
+    assert {l for s, l in cs.TRAIN if s in real} == {"front", "side", "back", "front" + cs.LOW_SUN, "side" + cs.LOW_SUN,
+                                                     "front" + cs.TODAY_AIR, "side" + cs.TODAY_AIR, "back" + cs.TODAY_AIR}
 
 
 def test_the_low_sun_training_views_have_the_air_and_a_low_sun():
@@ -68,9 +69,30 @@ def test_the_low_sun_training_views_have_the_air_and_a_low_sun():
     for lighting in ("front", "side"):
         spec = cs.view_of(vol, lighting + cs.LOW_SUN, cfg)
         assert spec.atmosphere is not None and spec.sun.elevation == pytest.approx(cs.LOW_SUN_DEG)
+        assert spec.sky.kind == "air"  # the air's own sky (render's default with the air), not sunsky's
         plain = cs.view_of(vol, lighting, cfg)
         assert plain == view(vol, lighting, cfg) and plain.atmosphere is None
         assert spec.sun.azimuth == pytest.approx(plain.sun.azimuth)
+
+
+def test_every_training_storm_is_also_seen_with_the_air_at_todays_sun():
+    """refit38: each training storm front-, side- and back-lit at study.runs.view's own sun (35 deg, back 20 deg)
+    with the clear atmosphere, as `view` shows it by default: the same view as without the air, the air added."""
+    from dataclasses import replace
+
+    import weather_mi as wm
+    from weather_mi.study.runs import StudyConfig, view
+    vol = wm.OpticalVolume.from_arrays(np.full((4, 4, 4), 1e-3, np.float32), 1.0, wm.phase.henyey_greenstein(0.85),
+                                       ((0.0, 0.0, 1000.0), (4e3, 4e3, 5e3)))
+    cfg = StudyConfig(width=16, height=12)
+    today = [(s, l) for s, l in cs.TRAIN if l.endswith(cs.TODAY_AIR) and not l.endswith(cs.LOW_SUN)]
+    assert sorted(today) == sorted((s, l + cs.TODAY_AIR) for s in cs.TRAIN_SCENES for l in ("front", "side", "back"))
+    for lighting, elevation in (("front", 35.0), ("side", 35.0), ("back", 20.0)):
+        spec = cs.view_of(vol, lighting + cs.TODAY_AIR, cfg)
+        assert spec.atmosphere is not None and spec.sun.elevation == pytest.approx(elevation)
+        plain = view(vol, lighting, cfg)
+        assert spec.sky.kind == "air" and plain.sky.kind == "sunsky"  # the air's own sky: not counted twice
+        assert replace(spec, atmosphere=None, sky=plain.sky) == plain
 
 
 @needs_data

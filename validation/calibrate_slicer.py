@@ -5,20 +5,22 @@ beside the paper's Table IV modes.
         [--size 64x48] [--spp 128] [--train-target-rse R] [--target-rse 0.02] [--max-seconds 600] [--iterations 50]
         [--learning-rate 0.15] [--slices 128] [--supersample 2] [--slab-jitter 1]
         [--no-fit] [--noise-floor] [--start defaults|fit-start|fitted.json] [--fit-slices N] [--fit-supersample N]
-        [--fit-only] [--fitted fitted.json] [--held-out-only] [--low-sun-target-rse R [--low-sun-max-seconds S]]
+        [--fit-only] [--fitted fitted.json] [--held-out-only] [--air-target-rse R [--air-max-seconds S]]
 
 1. References (path tracer) for every view, cached as EXR in the output folder (a rerun reuses them);
    training views at --spp, or to --train-target-rse (the loss clips display colours at 1, so that noisy
    references pull the brightest faces down; measured: it did not help the held-out views, and the shipped
-   defaults were fitted to --spp 128), the LOW_SUN training views (the air: 5-10x slower to the same noise,
-   cloud RSE 0.13-0.17 at 128 spp) to --low-sun-target-rse if given, held-out views to --target-rse; a
+   defaults were fitted to --spp 128), the training views with the air (LOW_SUN and TODAY_AIR; the air: 5-10x
+   slower to the same noise, cloud RSE 0.13-0.17 at 128 spp) to --air-target-rse (alias --low-sun-target-rse)
+   if given, held-out views to --target-rse; a
    reference with the air carries AIR_REFERENCES in its name (one of an older path tracer's air is not read):
    training: the demo supercell, the demo cumulus and the thin demo cumulus (wm.synthetic; the cumulus with
    its condensate x 0.15), the real WRF supercell at 01:00 and 02:00 (wrf/wrfout_quarter_ss_series.nc,
    the held-out one's run at other times) and the WRF plateau at 00:00 (held out: its last time, 09:00,
    with a fifth of the cloud cover), front-, side- and back-lit, and seven views with the sun at 6 deg and the
    clear atmosphere (LOW_SUN: the demo supercell and the WRF supercell at 01:00 and the plateau at 00:00 front-
-   and side-lit, the demo cumulus front-lit; issue 38); a training field that is a held-out
+   and side-lit, the demo cumulus front-lit; issue 38), and every training storm front-, side- and back-lit at
+   its own sun with the clear atmosphere (TODAY_AIR, as `view` shows it by default); a training field that is a held-out
    one (the same file and time, or the same mixing ratios in another file) is refused (check_held_out);
    held-out: the real WRF supercell, the WRF Tibetan Plateau file, BOMEX and RICO (from --data),
    front-, side- and back-lit (the sun behind the storm: silver linings, dark cores).
@@ -77,17 +79,23 @@ TRAIN_SCENES = ("demo-supercell", "demo-cumulus", "demo-cumulus-thin", "wrf-supe
 # scaled and its eye rays' air, against the path tracer with the air in its box and along its eye rays
 LOW_SUN_DEG = 6.0
 LOW_SUN = f"-{LOW_SUN_DEG:g}deg-clear"
+# today's sun (study.runs.view: front/side 35 deg, back 20 deg) with the clear atmosphere, as `view` shows it by
+# default (issue 38 part 3, refit38); a lighting ending in LOW_SUN also ends in TODAY_AIR: test LOW_SUN first
+TODAY_AIR = "-clear"
 TRAIN = [(s, l) for s in TRAIN_SCENES for l in ("front", "side", "back")] + \
     [(s, l + LOW_SUN) for s, l in (("demo-supercell", "front"), ("demo-supercell", "side"), ("demo-cumulus", "front"),
                                    ("wrf-supercell-0100", "front"), ("wrf-supercell-0100", "side"),
-                                   ("wrf-plateau-0000", "front"), ("wrf-plateau-0000", "side"))]
+                                   ("wrf-plateau-0000", "front"), ("wrf-plateau-0000", "side"))] + \
+    [(s, l + TODAY_AIR) for s in TRAIN_SCENES for l in ("front", "side", "back")]
 HELD_OUT = [(s, l) for s in ("wrf-supercell", "wrf-plateau", "bomex", "rico") for l in ("front", "side", "back")]
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 # in the cache name of every reference rendered with the air (here and validation/slicer_low_sun.py): bumped when
 # the path tracer's air changes, so that a cached reference of an older air is never read (air2: Eq. 8's weights
 # per level and channel, kernel.medium.air_weights; air3: the air's albedo point-wise, kernel/plugins/air_albedo.py;
-# air4: ozone's band average in the RGB channels, optics/air/ozone.channel_cross_section_m2)
-AIR_REFERENCES = "air4"
+# air4: ozone's band average in the RGB channels, optics/air/ozone.channel_cross_section_m2; air5: the views with the
+# air lit by the air's own sky, Sky("air"), as render's default with the air, not Hosek-Wilkie's sea-level sky, which
+# already holds the whole column's scattering and with the box's air counted it twice: study.runs.low_sun_view)
+AIR_REFERENCES = "air5"
 
 
 def cache_name(tag: str, spec, plan: str) -> str:
@@ -130,10 +138,14 @@ def check_held_out(train, held_out, data) -> None:
 
 
 def view_of(vol, lighting: str, cfg):
-    """``study.runs.view``'s view of a lighting, or, for a lighting ending in LOW_SUN, that lighting's with the
-    sun at LOW_SUN_DEG and the clear atmosphere (``study.runs.low_sun_view``)."""
+    """``study.runs.view``'s view of a lighting; for a lighting ending in LOW_SUN, that lighting's with the sun at
+    LOW_SUN_DEG and the clear atmosphere (``study.runs.low_sun_view``); ending in TODAY_AIR, with the clear
+    atmosphere at the view's own sun."""
     if lighting.endswith(LOW_SUN):
         return low_sun_view(vol, lighting[: -len(LOW_SUN)], cfg, LOW_SUN_DEG, Atmosphere())
+    if lighting.endswith(TODAY_AIR):
+        base = lighting[: -len(TODAY_AIR)]
+        return low_sun_view(vol, base, cfg, view(vol, base, cfg).sun.elevation, Atmosphere())
     return view(vol, lighting, cfg)
 
 
@@ -149,7 +161,7 @@ def reference(out: Path, scene: str, lighting: str, vol, spec, spp: int, target_
     medium = vol if spec.atmosphere is None else with_box_air(vol, None, spec.atmosphere)
     ref = wm.render_reference(spec, medium, spp=spp, progress=False, target_rse=target_rse, max_seconds=max_seconds)
     if spec.atmosphere is not None:  # the air along the eye rays outside the box (as slicer_low_sun.py)
-        ref = with_eye_air(ref, spec, vol)
+        ref = with_eye_air(ref, spec, vol, sky_air=spec.sky is not None and spec.sky.kind == "air")
     ref.save(path)
     noise = ref.metadata.get("noise") or {}
     print(f"  reference {scene} {lighting}: {time.perf_counter() - t:.0f} s, {ref.metadata['spp']} spp, "
@@ -161,7 +173,7 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
                low_sun=None):
     """{(scene, lighting): TrainingView}; with ``second_seed`` also {(scene, lighting): a second,
     independent reference (seed 1)} for the reference's own noise. ``target_rse``/``max_seconds``: see
-    ``reference``; ``low_sun``: (target_rse, max_seconds) of the LOW_SUN views instead; ``noise`` (a dict)
+    ``reference``; ``low_sun``: (target_rse, max_seconds) of the views with the air (LOW_SUN, TODAY_AIR) instead; ``noise`` (a dict)
     receives each reference's (spp, mean relative standard error over cloud pixels)."""
     views, vols, seconds = {}, {}, {}
     for scene, lighting in names:
@@ -171,7 +183,7 @@ def load_views(names, out, cfg, data, spp, second_seed=False, target_rse=None, m
             continue
         vol = vols[scene][0]
         spec = view_of(vol, lighting, cfg)
-        plan = low_sun if low_sun is not None and lighting.endswith(LOW_SUN) else (target_rse, max_seconds)
+        plan = low_sun if low_sun is not None and spec.atmosphere is not None else (target_rse, max_seconds)
         ref = reference(out, scene, lighting, vol, spec, spp, *plan)
         if noise is not None:
             noise[(scene, lighting)] = (ref.metadata["spp"], (ref.metadata.get("noise") or {}).get("rse_mean"))
@@ -286,11 +298,12 @@ def main(argv=None) -> int:
     ap.add_argument("--target-rse", type=float, default=0.02,
                     help="held-out references: mean relative standard error over cloud pixels to reach")
     ap.add_argument("--max-seconds", type=float, default=600.0, help="held-out references: time limit each")
-    ap.add_argument("--low-sun-target-rse", type=float, default=None,
-                    help="the LOW_SUN training references (the air: slower, noisier at --spp) to this mean cloud "
-                         "RSE, at most --low-sun-max-seconds each; the other training views as before")
-    ap.add_argument("--low-sun-max-seconds", type=float, default=180.0,
-                    help="with --low-sun-target-rse: time limit of each LOW_SUN training reference")
+    ap.add_argument("--air-target-rse", "--low-sun-target-rse", dest="low_sun_target_rse", type=float,
+                    default=None,
+                    help="the training references with the air (LOW_SUN, TODAY_AIR: slower, noisier at --spp) to "
+                         "this mean cloud RSE, at most --air-max-seconds each; the other training views as before")
+    ap.add_argument("--air-max-seconds", "--low-sun-max-seconds", dest="low_sun_max_seconds", type=float,
+                    default=180.0, help="with --air-target-rse: time limit of each training reference with the air")
     ap.add_argument("--iterations", type=int, default=50)
     ap.add_argument("--learning-rate", type=float, default=0.15)
     ap.add_argument("--slices", type=int, default=128)

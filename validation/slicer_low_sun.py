@@ -31,7 +31,7 @@ with "spectral" in their name, so neither is read for the other.
     python validation/slicer_low_sun.py [--data ../shared/data] [--size 64x48] [--spp 64] [--elevations 4,8]
         [--scenes wrf-supercell,wrf-plateau,bomex,rico] [--lightings front,side,back] [--out DIR]
         [--target-rse R --max-seconds S] [--references-only] [--fitted fitted.json]
-        [--spectral [--rgb-target-rse R]]
+        [--spectral [--rgb-target-rse R]] [--atmospheres clear,none (with --references-only)]
 """
 from __future__ import annotations
 
@@ -84,8 +84,8 @@ def reference(out: Path, tag: str, spec, vol, hyd, spp: int, target_rse=None, ma
     img = wm.render_reference(spec, medium, spp=spp, progress=False, target_rse=target_rse, max_seconds=max_seconds,
                               variant=variant)
     set_variant(default_variant())  # the slicer's sky (kernel.sky) evaluates Mitsuba's emitter in RGB
-    if spec.atmosphere is not None:
-        img = with_eye_air(img, spec, vol)
+    if spec.atmosphere is not None:  # with the air's own sky (study.runs.low_sun_view) its light along the eye rays
+        img = with_eye_air(img, spec, vol, sky_air=spec.sky is not None and spec.sky.kind == "air")
     img.save(path)
     noise = img.metadata.get("noise") or {}
     print(f"  reference {tag}{' (spectral)' if spectral else ''}: {time.perf_counter() - t:.0f} s, {img.metadata.get('spp')} spp, "
@@ -157,11 +157,18 @@ def parse_args(argv=None):
     ap.add_argument("--rgb-target-rse", type=float, default=None,
                     help="with --spectral: the RGB references' --target-rse (default --target-rse), to read cached ones")
     ap.add_argument("--out", default="validation-low-sun")
+    ap.add_argument("--atmospheres", default="clear,none",
+                    help="with --references-only: render the references of these only (clear, none; the table "
+                         "needs both)")
     return ap.parse_args(argv)
 
 
 def main(argv=None) -> int:
     args = parse_args(argv)
+    args.atmospheres = args.atmospheres.split(",")
+    if not args.references_only and not args.spectral and set(args.atmospheres) != {"clear", "none"}:
+        raise SystemExit("slicer_low_sun: --atmospheres other than clear,none needs --references-only (the table "
+                         "compares both)")
     width, height = (int(v) for v in args.size.split("x"))
     cfg = replace(StudyConfig(), width=width, height=height)
     out = Path(args.out)
@@ -183,7 +190,8 @@ def main(argv=None) -> int:
                 if args.spectral:
                     spec = low_sun_view(vol, lighting, cfg, elevation, Atmosphere())
                     spectral_row(row, out, name, spec, vol, hyd, slicer, params, args)
-                for label, atm in () if args.spectral else (("clear", Atmosphere()), ("none", None)):
+                atms = [(lb, a) for lb, a in (("clear", Atmosphere()), ("none", None)) if lb in args.atmospheres]
+                for label, atm in () if args.spectral else atms:
                     spec = low_sun_view(vol, lighting, cfg, elevation, atm)
                     tag = f"{name}_{lighting}_{elevation:g}deg_{label}"
                     ref = reference(out, tag, spec, vol, hyd, args.spp, args.target_rse, args.max_seconds)
@@ -196,7 +204,8 @@ def main(argv=None) -> int:
                     row[label] = (m["ciede2000"], m["flip"], rse)
                     if atm is not None:  # the slicer before the box's air, against the same reference
                         old = before.frame(spec, params, supersample=2)
-                        old = with_eye_air(replace(old, transmittance=before.transmittance), spec, vol)
+                        old = with_eye_air(replace(old, transmittance=before.transmittance), spec, vol,
+                                           sky_air=spec.sky is not None and spec.sky.kind == "air")
                         m = metrics.compare(ref.radiance, old.radiance, mask=mask if mask.any() else "all")
                         row["before"] = (m["ciede2000"], m["flip"])
                 if not args.references_only:

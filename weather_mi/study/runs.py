@@ -153,9 +153,12 @@ def view(vol, lighting: str, cfg: StudyConfig, camera_azimuth: float = CAMERA_AZ
 
 def low_sun_view(vol, lighting: str, cfg: StudyConfig, elevation: float, atmosphere) -> SceneSpec:
     """:func:`view`'s front-, side- or back-lit view with the sun at ``elevation`` degrees and ``atmosphere``
-    (``optics.air.Atmosphere`` or None): the slicer at a low sun (issue 38 part 3)."""
+    (``optics.air.Atmosphere`` or None): the slicer at a low sun (issue 38 part 3). With an atmosphere the sky is
+    the air's own (``Sky("air")``, as ``render``'s default with the air): the sea-level Hosek-Wilkie sky already
+    holds the whole column's scattering, so with the box's air it would count the air twice."""
     spec = view(vol, lighting, cfg)
-    return replace(spec, sun=replace(spec.sun, elevation=float(elevation)), atmosphere=atmosphere)
+    sky = spec.sky if atmosphere is None else Sky("air")
+    return replace(spec, sun=replace(spec.sun, elevation=float(elevation)), atmosphere=atmosphere, sky=sky)
 
 
 def eye_transmittance(vol, spec: SceneSpec, slices: int) -> np.ndarray:
