@@ -49,6 +49,7 @@ def default_spec(vol, width: int, height: int, **kw):
 
 
 ATMOSPHERE = None  # --atmosphere clear: an optics.air.Atmosphere on every frame's scene
+SKY_WITH_AIR = None  # a Sky for the frames with ATMOSPHERE (slicing_air.py --sky air: the air's own); None: the view's
 
 
 def moving_view(vol, width: int, height: int, case: str, i: int, start: int = 0):
@@ -65,7 +66,8 @@ def moving_view(vol, width: int, height: int, case: str, i: int, start: int = 0)
     spec = default_spec(vol, width, height, camera_azimuth=200.0 + (8.0 * swing(0.31, 0.0) if cam else 0.0),
                         camera_elevation=8.0 + (3.0 * swing(0.23, 1.0) if cam else 0.0))
     sun_dir = wm.Sun(240.0 + 8.0 * swing(0.27, 2.0), 35.0 + 3.0 * swing(0.19, 3.0)) if sun else wm.Sun(240.0, 35.0)
-    spec = wm.SceneSpec(camera=spec.camera, sun=sun_dir, sky=spec.sky, ground=spec.ground, width=width,
+    sky = spec.sky if ATMOSPHERE is None or SKY_WITH_AIR is None else SKY_WITH_AIR
+    spec = wm.SceneSpec(camera=spec.camera, sun=sun_dir, sky=sky, ground=spec.ground, width=width,
                         height=height, **({} if ATMOSPHERE is None else {"atmosphere": ATMOSPHERE}))
     params = SliceParams(scale={"ice": 1.0 + 0.1 * (k % 97 + 1)}) if case == "scaling" else SliceParams()
     return spec, params

@@ -1,7 +1,7 @@
 """The slicer's drag with the clear atmosphere against without it, frame by frame (issue 38 part 3: whether
 ``view``'s default can be ``--atmosphere clear``).
 
-    .venv/bin/python benchmarks/slicing_air.py [--frames 12] [--rounds 2] [--modes MODE,...]
+    .venv/bin/python benchmarks/slicing_air.py [--frames 12] [--rounds 2] [--modes MODE,...] [--sky view|air]
 
 Per mode, three renderers on the demo supercell at 300 x 300, 128 slices: without an atmosphere, with the
 clear one (the sun's colour by height and the eye rays' air, ``slicing/eye_air.py``), and with the clear one on
@@ -61,9 +61,13 @@ def main():
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--modes", default=",".join(IDLE_FPS))
     ap.add_argument("--variant", default=None)
+    ap.add_argument("--sky", default="view", choices=("view", "air"),
+                    help="the sky of the frames with the air: the drag's view's (sunsky), or the air's own (Sky(\"air\"), "
+                         "view's default with the air)")
     args = ap.parse_args()
     import weather_mi as wm
     variant = wm.set_variant(args.variant)
+    drag.SKY_WITH_AIR = wm.Sky("air") if args.sky == "air" else None
     vol = wm.optical_volume(wm.synthetic.supercell(), species="physical")
     print(f"variant {variant}; demo supercell {vol.shape}; 300 x 300, 128 slices, drag; medians of "
           f"{args.rounds} x {args.frames} frames, the three settings in turn")

@@ -33,8 +33,11 @@ before the Gauss nodes: the light volume's penumbra at a cloud's rim is lighter,
 enters the shadow falls between points either way). None for a periodic field (as ``display.aerial``).
 The air in the box also scatters the diffuse light (sun and ground, all orders: its multiple scattering,
 ``air_multiple``'s DISORT mean intensity J(h) for the frame's sun, isotropic), not the air outside it (as
-``display.aerial`` with the sky model's sky). Not included: the light the storm scatters into its shadow, and
-the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
+``display.aerial`` with the sky model's sky). With the air's own sky (``Sky("air")``, ``EyeAir.sky_air``: no sky
+model, ``kernel.sky``) the air to the top is the sky, as ``display.aerial``'s with ``sky_air``: A on every ray (w = 1)
+with its multiple scattering, and behind the box B = [box exit, ground or top] (Gauss nodes, the same source) in
+the background's place, L_bg' = E S_B + T_B L_bg. Not included: the light the storm scatters into its shadow, and
+(with a sky model) the air behind the box (as ``display.aerial`` without ``--sky air``). Everything is an input of the frame
 (``EyeAir``): a new sun, camera or atmosphere uploads values and recompiles nothing. Frames of 96 px a side or
 more integrate all this on every 4th pixel's ray and read it per pixel (``eye_air_coarse``); the tables' rows
 are packets of 4 floats (one gather each, ``packets.packed``): the air's by height holds its three profiles
