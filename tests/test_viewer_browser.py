@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from weather_mi.viewer.browser import (ViewerProcess, chromium_path, drag, frame_src, last_status, wait_frames,
-                                       wait_idle)
+from weather_mi.viewer.browser import (ViewerProcess, chromium_path, drag, frame_src, last_status, overlay_text,
+                                       wait_frames, wait_idle)
 
 pytestmark = pytest.mark.skipif(chromium_path() is None, reason="no chromium (./setup.sh installs it)")
 SERIES = Path(__file__).resolve().parents[2] / "shared" / "data" / "wrf" / "wrfout_quarter_ss_series.nc"
@@ -81,6 +81,24 @@ def test_the_first_frame_arrives_and_is_not_blank(page, viewer, tmp_path):
     assert screen.std() > 10
     assert "(draft)" not in status(page)               # the first frame is refined
     assert viewer.seconds_to_serve < 120
+
+
+def test_the_overlay_reads_the_frame_on_screen(browser, viewer):
+    """The line over the view is the status of the frame it shows, not the page's "starting the slicer..." once a
+    frame is drawn (issue 38: the refined frame's parameters reached the page field by field, ``frame`` before
+    ``status``, and the overlay kept the status it read with the frame). Fresh tabs, so that the first frame's
+    message and its parameters race as they do when a page opens."""
+    for _ in range(3):
+        tab = open_page(browser, viewer.url)
+        try:
+            shown = last_status(tab)
+            assert shown and "starting the slicer" not in shown
+            t_end = time.time() + 5
+            while overlay_text(tab) != shown and time.time() < t_end:
+                time.sleep(0.1)
+            assert overlay_text(tab) == shown
+        finally:
+            tab.close()
 
 
 def test_a_slider_changes_the_frame(page):
