@@ -44,9 +44,20 @@ export function render({ model, el }) {
     for (const kind of ["pointerdown", "wheel", "keydown", "change"]) {
       document.addEventListener(kind, markInput, {capture: true, passive: true});
     }
+    // the button held on the view or a slider: the server holds the refine back while a drag may go on
+    const onControl = (e) => e.composedPath().some((n) => n.classList && (n.classList.contains("wm-frame") || n.classList.contains("wm-live")));
+    let held = false;
+    document.addEventListener("pointerdown", (e) => {
+      if (onControl(e)) { held = true; model.send_msg({type: "hold", held: true}); }
+    }, {capture: true, passive: true});
+    for (const kind of ["pointerup", "pointercancel"]) {
+      document.addEventListener(kind, () => {
+        if (held) { held = false; model.send_msg({type: "hold", held: false}); }
+      }, {capture: true, passive: true});
+    }
     document.addEventListener("pointermove", (e) => {
       if (!e.buttons) return;
-      if (e.composedPath().some((n) => n.classList && (n.classList.contains("wm-frame") || n.classList.contains("wm-live")))) {
+      if (onControl(e)) {
         S.seq += 1; S.inputs[S.seq] = performance.now();  // the drag or live message carries it
       } else { markInput(); }
     }, {capture: true, passive: true});

@@ -38,6 +38,7 @@ class ReferencePanel:
         self.metrics = None
         self._overlay = None         # (key, data URL) of the last B or difference picture
         self._denoised = None        # (reference Image, its denoised radiance)
+        self._waiting = None         # (reference Image, its cloud RSE): metrics that wait for the refined frame
         self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="weather-mi metrics")
         w = pn.widgets
         self.show = w.RadioButtonGroup(label="Show", options=SHOW_CHOICES, value="A: slicer", color="default")
@@ -76,8 +77,9 @@ class ReferencePanel:
     def cancel(self, why: str | None):
         job, self.job = self.job, None
         if job is not None:
-            job.cancel()
+            job.cancel(wait=False)  # reaped on a thread: the event loop goes on
         self.cancel_button.disabled = True
+        self._waiting = None
         if why is not None:
             self.image, self.state, self.metrics = None, None, None
             self.ref_text.object = f"Reference: {why}"
@@ -103,18 +105,26 @@ class ReferencePanel:
         if upd.done:
             self.job = None
             self.cancel_button.disabled = True
-        self._executor.submit(self._update_metrics, upd.image, self.session.state, upd.rse_mean)
+        self._waiting = (upd.image, upd.rse_mean)
+        self.refined(self.session.loop.last_frame)
 
-    def _update_metrics(self, ref_img, state, rse=None):
-        """Metrics of the slicer's full-quality frame of this view against the reference (metrics thread); while
-        the reference is noisy (its cloud RSE ``rse`` above NOISY_RSE, or not known yet), also against B denoised,
-        said as such: the raw reference's noise is part of the first figures."""
+    def refined(self, frame) -> None:
+        """A frame was published (any thread): where it is the refined frame of the current view, the metrics of
+        the newest reference estimate that waits for one are computed against it (metrics thread). Never a
+        render of their own: a full-quality frame holds the slicer's render lock for 1-3 s, and each reference
+        pass during a drag of a slicer knob (which keeps the reference) stalled the drag that long."""
+        waiting = self._waiting
+        if waiting is None or frame is None or frame.draft or frame.state != self.session.state:
+            return
+        self._waiting = None
+        self._executor.submit(self._update_metrics, waiting[0], frame, waiting[1])
+
+    def _update_metrics(self, ref_img, f, rse=None):
+        """Metrics of the slicer's full-quality frame ``f`` of this view against the reference (metrics thread);
+        while the reference is noisy (its cloud RSE ``rse`` above NOISY_RSE, or not known yet), also against B
+        denoised, said as such: the raw reference's noise is part of the first figures."""
         from ..display.metrics import compare
-        loop = self.session.loop
         try:
-            f = loop.last_frame
-            if f is None or f.draft or f.state != state:
-                f = loop.render(state)  # this thread: the session's render thread stays free
             kw = dict(mask="cloud", transmittance=f.transmittance, exposure=f.exposure)
             m = compare(ref_img, f.radiance, **kw)
             self.metrics = (m, f)
