@@ -114,6 +114,24 @@ def test_a_slider_changes_the_frame(page):
     assert lat and all(0 < x < 30000 for x in lat)
 
 
+def test_a_slider_held_still_is_not_refined_until_released(page):
+    """Issue 38's slider stall: pressing a slider moves the sun; held still there, the view stays a draft (a refine
+    cannot be interrupted, and the drag may go on), and is refined once the button is released."""
+    from weather_mi.viewer.frames import HOLD_IDLE_S
+    box = page.locator(".wm-sun-azimuth input").first.bounding_box()
+    n0 = page.evaluate("window.wmStats.frames")
+    page.mouse.move(box["x"] + box["width"] * 0.3, box["y"] + box["height"] / 2)
+    page.mouse.down()
+    try:
+        wait_frames(page, n0 + 1, 60)
+        time.sleep(0.5 * HOLD_IDLE_S)   # twice IDLE_S and more: the refine would have come
+        assert "(draft)" in status(page)
+    finally:
+        page.mouse.up()
+    wait_idle(page, 1.0)
+    assert "(draft)" not in status(page)
+
+
 def test_dragging_the_view_turns_the_camera_and_the_wheel_zooms(page):
     code0 = snippet(page)
     before = frame_src(page)
