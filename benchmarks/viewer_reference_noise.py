@@ -9,8 +9,10 @@ The viewer's first view (``serve.prepare``) and its reference as ``ReferenceJob`
 in the box in the medium, the eye rays' air outside it; 2 spp first, then passes to cloud RSE 0.02 or
 ``--seconds``), rendered here in this process, the two settings alternating within each round (paired: the same
 machine state). Per render: passes and spp of the cloud pixels and of the others, the mean relative standard error
-over the cloud pixels (eye-ray transmittance < 1/2, the page's "cloud RSE") and over the other pixels (sky and
-ground, "sky RSE"), and the page's A-vs-B line (``display.metrics.compare`` of the slicer's refined frame against
+over the cloud pixels (eye-ray transmittance < 1/2, the page's "cloud RSE"), the top quarter's pixel-to-pixel
+noise ("top sky noise", from the picture alone) and over the other pixels (sky and
+ground, "sky RSE"; and their RMS standard error over their mean radiance, which counts the rare bright samples
+that a mean of per-pixel ratios estimated from two passes misses), and the page's A-vs-B line (``display.metrics.compare`` of the slicer's refined frame against
 the reference over the cloud pixels, transmittance < 0.99) against the raw reference and its denoised radiance.
 """
 from __future__ import annotations
@@ -39,16 +41,29 @@ def reference(recipe, spec, seconds: float, target_pixels: str):
     return seen(img), time.perf_counter() - t0
 
 
+def neighbour_noise(radiance, clear) -> float:
+    """The noise of the top quarter of the picture (a smooth sky) without any standard error: the standard deviation
+    of the luminance difference between horizontal neighbours that are both clear (not cloud) over sqrt(2), over
+    their mean luminance (the sky's own gradient across one pixel is far below its noise)."""
+    y = np.asarray(radiance, np.float64).mean(axis=2)
+    top = slice(0, y.shape[0] // 4)
+    both = clear[top, 1:] & clear[top, :-1]
+    d = (y[top, 1:] - y[top, :-1])[both]
+    return float(d.std() / np.sqrt(2) / y[top][clear[top]].mean()) if d.size else float("nan")
+
+
 def figures(img, frame) -> dict:
     from weather_mi.display.denoise import denoise_radiance
     from weather_mi.display.metrics import compare
     from weather_mi.reference.estimates import noise_stats
     cloud = img.transmittance < 0.5
     m = img.metadata
+    sky = noise_stats(img.radiance, img.stderr, ~cloud)
     out = {"passes": m["passes"], "spp cloud": m["spp"], "spp other": m["spp_background"],
            "cloud RSE": noise_stats(img.radiance, img.stderr, cloud)["rse_mean"],
-           "sky RSE": noise_stats(img.radiance, img.stderr, ~cloud)["rse_mean"]}
-    for name, ref in (("raw", img.radiance), ("denoised", denoise_radiance(np.nan_to_num(img.radiance)))):
+           "sky RSE": sky["rse_mean"], "sky RMS se / mean": sky["rms_se_over_mean"],
+           "top sky noise": neighbour_noise(img.radiance, ~cloud)}
+    for name, ref in (("raw", img), ("denoised", denoise_radiance(np.nan_to_num(img.radiance)))):
         c = compare(ref, frame.radiance, mask="cloud", transmittance=frame.transmittance, exposure=frame.exposure)
         out[f"CIEDE2000 {name}"], out[f"FLIP {name}"] = c["ciede2000"], c["flip"]
     out["noise floor"] = c["noise_floor"]
