@@ -133,7 +133,7 @@ class ReferencePanel:
             if rse is None or rse > NOISY_RSE:
                 d = compare(self.denoised(ref_img), f.radiance, **kw)
                 why = "not known yet" if rse is None else f"{rse:.3f}"
-                text += (f"; **A vs B denoised** (the reference is noisy, cloud RSE {why}): "
+                text += (f"\n\n**A vs B denoised** (the reference is noisy, cloud RSE {why}): "
                          f"CIEDE2000 {d['ciede2000']:.2f}, FLIP {d['flip']:.3f}")
         except Exception as exc:
             text = f"metrics failed: {exc}"
