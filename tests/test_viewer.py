@@ -199,6 +199,11 @@ def test_reference_metrics_wait_for_the_refined_frame_and_never_render():
             assert text.startswith("**A vs B** over 3072 cloud pixels: CIEDE2000 ")
             assert ("**A vs B denoised** (the reference is noisy, cloud RSE 0.200)" in text) == noisy
             assert (rse > NOISY_RSE) == noisy
+        # metrics that finish after the reference was cancelled (the user moved the sun meanwhile) are not shown
+        generation = panel._generation
+        panel.cancel("the view changed: path-trace it again")
+        panel._update_metrics(upd.image, frame(False, state), 0.2, generation)
+        assert panel.metric_text.object == ""
     finally:
         panel.job = None
         panel.close()

@@ -39,6 +39,7 @@ class ReferencePanel:
         self._overlay = None         # (key, data URL) of the last B or difference picture
         self._denoised = None        # (reference Image, its denoised radiance)
         self._waiting = None         # (reference Image, its cloud RSE): metrics that wait for the refined frame
+        self._generation = 0         # counts the cancels: metrics of a cancelled reference are not shown
         self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="weather-mi metrics")
         w = pn.widgets
         self.show = w.RadioButtonGroup(label="Show", options=SHOW_CHOICES, value="A: slicer", color="default")
@@ -80,6 +81,7 @@ class ReferencePanel:
             job.cancel(wait=False)  # reaped on a thread: the event loop goes on
         self.cancel_button.disabled = True
         self._waiting = None
+        self._generation += 1
         if why is not None:
             self.image, self.state, self.metrics = None, None, None
             self.ref_text.object = f"Reference: {why}"
@@ -117,9 +119,9 @@ class ReferencePanel:
         if waiting is None or frame is None or frame.draft or frame.state != self.session.state:
             return
         self._waiting = None
-        self._executor.submit(self._update_metrics, waiting[0], frame, waiting[1])
+        self._executor.submit(self._update_metrics, waiting[0], frame, waiting[1], self._generation)
 
-    def _update_metrics(self, ref_img, f, rse=None):
+    def _update_metrics(self, ref_img, f, rse=None, generation=None):
         """Metrics of the slicer's full-quality frame ``f`` of this view against the reference (metrics thread);
         while the reference is noisy (its cloud RSE ``rse`` above NOISY_RSE, or not known yet), also against B
         denoised, said as such: the raw reference's noise is part of the first figures."""
@@ -137,9 +139,11 @@ class ReferencePanel:
                          f"CIEDE2000 {d['ciede2000']:.2f}, FLIP {d['flip']:.3f}")
         except Exception as exc:
             text = f"metrics failed: {exc}"
-        self.session.on_loop(lambda: self._show_metrics(text))
+        self.session.on_loop(lambda: self._show_metrics(text, generation))
 
-    def _show_metrics(self, text):
+    def _show_metrics(self, text, generation=None):
+        if generation is not None and generation != self._generation:  # the reference was cancelled meanwhile
+            return
         self.metric_text.object = text
         if self.show.value != "A: slicer":
             self.session.refresh_canvas()
