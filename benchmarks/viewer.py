@@ -21,6 +21,7 @@ every frame; the ratio columns compare the page's rate with it. Targets: >= 10 f
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import statistics
 import sys
@@ -79,9 +80,27 @@ def measure_drag(page, target, seconds: float, dx: float) -> dict:
     elapsed = time.perf_counter() - t0
     n1 = page.evaluate("window.wmStats.frames")
     lat = page.evaluate(f"window.wmStats.latencies.slice({l0})")
+    statuses = page.evaluate(f"window.wmStats.statuses.slice({n0}, {n1})")
     page.mouse.up()
     return {"fps": (n1 - n0) / elapsed, "latency_ms": statistics.median(lat) if lat else float("nan"),
-            "p90_ms": sorted(lat)[int(0.9 * (len(lat) - 1))] if lat else float("nan"), "n": len(lat)}
+            "p90_ms": sorted(lat)[int(0.9 * (len(lat) - 1))] if lat else float("nan"), "n": len(lat),
+            **frame_times(statuses)}
+
+
+STATUS = re.compile(r"(?P<render>\d+) ms \(\+(?P<queued>\d+) queued\), (?P<w>\d+)x(?P<h>\d+)")
+
+
+def frame_times(statuses: list[str]) -> dict:
+    """Where a drag's frames spent their time, from the status lines that came with them (``session.refresh_canvas``:
+    the render's ms, the ms its request waited for the render thread, its size): the medians, and the longest
+    render. A frame rate far below 1000 / (render + queued) is time lost outside the render thread (the server's
+    event loop, the websocket, the page)."""
+    parsed = [m.groupdict() for m in map(STATUS.search, statuses) if m]
+    if not parsed:
+        return {"render_ms": float("nan"), "queued_ms": float("nan"), "max_render_ms": float("nan"), "width": 0}
+    render = [int(p["render"]) for p in parsed]
+    return {"render_ms": statistics.median(render), "queued_ms": statistics.median(int(p["queued"]) for p in parsed),
+            "max_render_ms": max(render), "width": statistics.median(int(p["w"]) for p in parsed)}
 
 
 def main():
@@ -120,19 +139,21 @@ def main():
             b = measure_drag(page, slider, args.seconds, 120)
             rows.append((r + 1, atm or VIEW_DEFAULT, base, first, viewer.seconds_to_serve, s, v, b))
             print(f"round {r + 1}, --atmosphere {atm or VIEW_DEFAULT}: slider {s['fps']:.1f} fps, view {v['fps']:.1f} fps, "
-                  f"slider with the reference running {b['fps']:.1f} fps", flush=True)
+                  f"slider with the reference running {b['fps']:.1f} fps; load average {os.getloadavg()[0]:.1f}",
+                  flush=True)
 
     print(f"\nviewer: {recipe.label}, view 320x240, default mode; the slicer alone in this process:")
     for atm, base in bases.items():
         print(f"  --atmosphere {atm or VIEW_DEFAULT}: full {1000 * base['full']:.0f} ms ({1 / base['full']:.1f} fps), "
               f"draft {1000 * base['draft']:.0f} ms ({1 / base['draft']:.1f} fps)")
     print("\n| round | atmosphere | first frame s (serve s) | drag | fps received | ratio to draft alone | "
-          "median latency ms | p90 ms |")
-    print("|---|---|---|---|---|---|---|---|")
+          "median latency ms | p90 ms | render ms (max) | queued ms | draft width |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for r, atm, base, first, serve, *drags in rows:
         for name, d in zip(("slider", "view", "slider, reference running"), drags):
             print(f"| {r} | {atm} | {first:.1f} ({serve:.1f}) | {name} | {d['fps']:.1f} | {d['fps'] * base['draft']:.2f} | "
-                  f"{d['latency_ms']:.0f} | {d['p90_ms']:.0f} |")
+                  f"{d['latency_ms']:.0f} | {d['p90_ms']:.0f} | {d['render_ms']:.0f} ({d['max_render_ms']:.0f}) | "
+                  f"{d['queued_ms']:.0f} | {d['width']:.0f} |")
 
 
 if __name__ == "__main__":

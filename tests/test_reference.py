@@ -241,6 +241,29 @@ def test_render_to_a_target_adds_passes_over_the_cloud_pixels_only(vol, monkeypa
         real(scenes[0], 2, 1234, pixels=[W * H])
 
 
+def test_render_to_a_target_over_every_pixel_averages_every_pass_everywhere(vol, monkeypatch):
+    """``target_pixels="all"`` (the viewer's reference, issue 38: the sky seen through the air converges with the
+    cloud): the passes past the planned ones render every pixel, so every pixel's estimate is the mean of all the
+    passes and its standard error their spread; the stopping test still counts the cloud pixels only."""
+    sp = spec(seed=2, camera=WIDE_VIEW)
+    cloud = wm.reference.estimates.cloud_mask(sp, vol)
+    monkeypatch.setattr(wm.reference.render, "MAX_TARGET_PASSES", 7)
+    _, passes = _recording(monkeypatch)
+    img = render(sp, vol, spp=8, passes=4, target_rse=1e-6, target_pixels="all")
+    _, pixels, imgs = zip(*passes)
+    assert len(passes) == 7 and pixels == (None,) * 7
+    imgs = np.stack(imgs)
+    assert np.all(imgs[4:][:, ~cloud].max(axis=0) > 0.0)  # the sky pixels were rendered in the added passes too
+    np.testing.assert_allclose(img.radiance, imgs.mean(axis=0), rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(img.stderr, imgs.std(axis=0, ddof=1) / np.sqrt(7), rtol=1e-4, atol=1e-12)
+    m = img.metadata
+    assert (m["passes"], m["spp"], m["spp_background"], m["target_pixels"]) == (7, 14, 14, "all")
+    st = wm.reference.estimates.noise_stats(img.radiance, img.stderr, cloud)
+    assert m["noise"]["rse_mean"] == pytest.approx(st["rse_mean"])  # over the cloud pixels, as before
+    with pytest.raises(ValueError, match="target_pixels must be one of"):
+        render(sp, vol, spp=8, passes=4, target_rse=0.1, target_pixels="sky")
+
+
 def test_render_to_a_target_resumes_bit_for_bit(vol, tmp_path, monkeypatch):
     """Interrupted among the passes over the cloud pixels, a render to a target resumes to the same image."""
     sp = spec(seed=8, camera=WIDE_VIEW)

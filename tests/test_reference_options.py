@@ -31,6 +31,7 @@ RENDER_FLAGS = {"--spp": ("spp", int, 64, None, None),
                 "--integrator": ("integrator", None, "majorant", ("majorant", "volpath"), None),
                 "--target-rse": ("target_rse", float, None, None, None),
                 "--max-seconds": ("max_seconds", float, None, None, None),
+                "--target-pixels": ("target_pixels", None, "cloud", ("cloud", "all"), None),
                 "--sun-guiding": ("sun_guiding", float, None, None, None),
                 "--forward-peak": ("forward_peak_deg", float, None, None, "DEG"),
                 "--aureole-nee": ("aureole_nee", float, None, None, "P")}
@@ -41,7 +42,7 @@ ANIMATE_FLAGS = {**SATELLITE_FLAGS, "--spp": ("spp", int, 16)}
 # render_reference's estimator parameters: {name: default}; spp and max_depth also by position
 RENDER_REFERENCE_OPTIONS = {"spp": 256, "max_depth": -1, "integrator": "majorant", "legacy": False, "passes": None,
                             "normalize": None, "rr_depth": None, "cell": None, "target_rse": None,
-                            "max_seconds": None, "sun_guiding": None, "forward_peak_deg": None,
+                            "max_seconds": None, "target_pixels": "cloud", "sun_guiding": None, "forward_peak_deg": None,
                             "aureole_nee": None, "mvnee": None}
 
 

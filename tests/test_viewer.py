@@ -135,6 +135,80 @@ def test_the_newest_request_wins_drafts_then_a_refine(cumulus_storm):
     assert last.url.startswith("data:image/jpeg;base64,")
 
 
+def test_a_button_held_on_the_view_holds_the_refine_back_until_released(cumulus_storm):
+    """Issue 38's slider stall: a refine cannot be interrupted, so while the mouse button is held (a drag that may go
+    on) the loop waits HOLD_IDLE_S of idle input before refining, not IDLE_S; released, the refine follows."""
+    from weather_mi.viewer.frames import HOLD_IDLE_S, IDLE_S, FrameLoop
+    assert HOLD_IDLE_S >= 4 * IDLE_S
+    frames = []
+    loop = FrameLoop(cumulus_storm, lambda f: frames.append((time.perf_counter(), f)))
+    try:
+        base = small_state(cumulus_storm)
+        loop.render(base)  # compile first
+        loop.render(base, draft=True)
+        loop.hold(True)
+        t_input = time.perf_counter()
+        loop.submit(base.updated(sun_azimuth=300.0), seq=1, interactive=True)
+        time.sleep(4 * IDLE_S)
+        assert frames and all(f.draft for _, f in frames)          # the draft, and no refine while held
+        loop.hold(False)
+        t_end = time.perf_counter() + 60
+        while not any(not f.draft for _, f in frames) and time.perf_counter() < t_end:
+            time.sleep(0.05)
+    finally:
+        loop.stop()
+    refined = [(t, f) for t, f in frames if not f.draft]
+    assert refined and refined[0][1].state.sun_azimuth == 300.0 and refined[0][1].seq == 1
+    assert refined[0][0] - t_input >= 4 * IDLE_S                 # not before the release
+
+
+def test_reference_metrics_wait_for_the_refined_frame_and_never_render():
+    """Issue 38: the metrics of a reference update arriving during a drag (a slicer knob keeps the reference) wait
+    for the view's refined frame instead of rendering one on the metrics thread (a full frame holds the slicer's
+    render lock for seconds); while the reference is noisy the line adds A against B denoised, said as such."""
+    from types import SimpleNamespace
+
+    from weather_mi.io.image import Image
+    from weather_mi.viewer.comparison import NOISY_RSE, ReferencePanel
+    from weather_mi.viewer.reference_job import ReferenceUpdate
+    pytest.importorskip("pyoidn")
+    rng = np.random.default_rng(1)
+    state = ViewState()
+    ref = (0.5 + 0.05 * rng.standard_normal((48, 64, 3))).astype(np.float32)
+    trans = np.full((48, 64), 0.3, np.float32)
+    frame = lambda draft, st: SimpleNamespace(draft=draft, state=st, radiance=np.full((48, 64, 3), 0.45, np.float32),  # noqa: E731
+                                              transmittance=trans, exposure=1.0)
+    loop = SimpleNamespace(last_frame=frame(True, state), render=lambda *a, **k: pytest.fail("the metrics rendered"))
+    session = SimpleNamespace(loop=loop, state=state, on_loop=lambda fn: fn(), refresh_canvas=lambda: None)
+    panel = ReferencePanel(session, {})
+    try:
+        for rse, noisy in ((0.2, True), (0.01, False)):
+            panel.metric_text.object = ""
+            upd = ReferenceUpdate(Image(ref, np.full_like(ref, 0.01)), 4, 4, 1.0, rse)
+            panel.job = SimpleNamespace(poll=lambda: upd, cancel=lambda wait=True: None)
+            loop.last_frame = frame(True, state)   # a draft on screen: the user drags
+            panel.poll()
+            panel._executor.submit(lambda: None).result()
+            assert panel.metric_text.object == ""
+            panel.refined(frame(False, state.updated(sun_azimuth=1.0)))  # another view's: not this one
+            panel._executor.submit(lambda: None).result()
+            assert panel.metric_text.object == ""
+            panel.refined(frame(False, state))
+            panel._executor.submit(lambda: None).result()
+            text = panel.metric_text.object
+            assert text.startswith("**A vs B** over 3072 cloud pixels: CIEDE2000 ")
+            assert ("**A vs B denoised** (the reference is noisy, cloud RSE 0.200)" in text) == noisy
+            assert (rse > NOISY_RSE) == noisy
+        # metrics that finish after the reference was cancelled (the user moved the sun meanwhile) are not shown
+        generation = panel._generation
+        panel.cancel("the view changed: path-trace it again")
+        panel._update_metrics(upd.image, frame(False, state), 0.2, generation)
+        assert panel.metric_text.object == ""
+    finally:
+        panel.job = None
+        panel.close()
+
+
 def test_the_exported_snippet_reproduces_the_view(cumulus_storm, tmp_path, monkeypatch):
     from weather_mi.viewer.frames import FrameLoop
     from weather_mi.viewer.recipe import VolumeRecipe

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from weather_mi.viewer.browser import (ViewerProcess, chromium_path, drag, frame_src, last_status, wait_frames,
-                                       wait_idle)
+from weather_mi.viewer.browser import (ViewerProcess, chromium_path, drag, frame_src, last_status, overlay_text,
+                                       wait_frames, wait_idle)
 
 pytestmark = pytest.mark.skipif(chromium_path() is None, reason="no chromium (./setup.sh installs it)")
 SERIES = Path(__file__).resolve().parents[2] / "shared" / "data" / "wrf" / "wrfout_quarter_ss_series.nc"
@@ -83,6 +83,24 @@ def test_the_first_frame_arrives_and_is_not_blank(page, viewer, tmp_path):
     assert viewer.seconds_to_serve < 120
 
 
+def test_the_overlay_reads_the_frame_on_screen(browser, viewer):
+    """The line over the view is the status of the frame it shows, not the page's "starting the slicer..." once a
+    frame is drawn (issue 38: the refined frame's parameters reached the page field by field, ``frame`` before
+    ``status``, and the overlay kept the status it read with the frame). Fresh tabs, so that the first frame's
+    message and its parameters race as they do when a page opens."""
+    for _ in range(3):
+        tab = open_page(browser, viewer.url)
+        try:
+            shown = last_status(tab)
+            assert shown and "starting the slicer" not in shown
+            t_end = time.time() + 5
+            while overlay_text(tab) != shown and time.time() < t_end:
+                time.sleep(0.1)
+            assert overlay_text(tab) == shown
+        finally:
+            tab.close()
+
+
 def test_a_slider_changes_the_frame(page):
     before = frame_src(page)
     n0 = page.evaluate("window.wmStats.frames")
@@ -94,6 +112,24 @@ def test_a_slider_changes_the_frame(page):
     assert "(draft)" not in status(page)
     lat = page.evaluate("window.wmStats.latencies")
     assert lat and all(0 < x < 30000 for x in lat)
+
+
+def test_a_slider_held_still_is_not_refined_until_released(page):
+    """Issue 38's slider stall: pressing a slider moves the sun; held still there, the view stays a draft (a refine
+    cannot be interrupted, and the drag may go on), and is refined once the button is released."""
+    from weather_mi.viewer.frames import HOLD_IDLE_S
+    box = page.locator(".wm-sun-azimuth input").first.bounding_box()
+    n0 = page.evaluate("window.wmStats.frames")
+    page.mouse.move(box["x"] + box["width"] * 0.3, box["y"] + box["height"] / 2)
+    page.mouse.down()
+    try:
+        wait_frames(page, n0 + 1, 60)
+        time.sleep(0.5 * HOLD_IDLE_S)   # twice IDLE_S and more: the refine would have come
+        assert "(draft)" in status(page)
+    finally:
+        page.mouse.up()
+    wait_idle(page, 1.0)
+    assert "(draft)" not in status(page)
 
 
 def test_dragging_the_view_turns_the_camera_and_the_wheel_zooms(page):

@@ -34,6 +34,7 @@ from .passes import DEFAULT_AUREOLE_NEE, DEFAULT_MVNEE, DEFAULT_SUN_GUIDING, pla
 
 INTEGRATORS = ("majorant", "volpath")
 NORMALIZE = (None, "reflectance")
+TARGET_PIXELS = ("cloud", "all")  # the pixels a render to a target adds passes over
 VALUE = "value"  # ``key``: the resolved value enters the checkpoint fingerprint
 
 
@@ -131,6 +132,12 @@ def _target_rse(v, o, spec):
     return v
 
 
+def _target_pixels(v, o, spec):
+    if v not in TARGET_PIXELS:
+        raise ValueError(f"target_pixels must be one of {TARGET_PIXELS}, got {v!r}")
+    return v
+
+
 def _max_seconds(v, o, spec):
     if v is not None and not (isinstance(v, (int, float)) and v > 0):
         raise ValueError(f"max_seconds must be a positive number of seconds, got {v!r}")
@@ -216,6 +223,14 @@ class ReferenceOptions:
         key_reason="the time limit says when a render stops, not what its passes are: a render resumes with "
                    "another limit",
         flag=Flag("--max-seconds", "with --target-rse: time limit"))
+    target_pixels: str = option("cloud", """
+        With ``target_rse``: the pixels the passes past the planned ones render: "cloud" (the cloud pixels,
+        as above) or "all" (every pixel: the sky and the ground seen through the air in the box, which with
+        an atmosphere scatters, converge with the cloud instead of keeping the planned passes' noise; the
+        stopping test stays over the cloud pixels).""",
+        choices=TARGET_PIXELS, check=_target_pixels, applies=lambda o: o.target_rse is not None,
+        flag=Flag("--target-pixels", "with --target-rse: the pixels the added passes render (all: the sky and "
+                                     "ground too, where the air makes them noisy)"))
     sun_guiding: float | None = option(None, """
         Probability of drawing a scattering direction from the phase function centred on the sun
         ("majorant" only; None: ``passes.DEFAULT_SUN_GUIDING``).""",

@@ -101,8 +101,8 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, *args, options: Refere
     with path_tracing_width():  # the scene is built and its passes rendered at the path tracer's SIMD width
         spp_list = plan_passes(spec, o.spp, o.passes)
         cloud, transmittance = _cloud_pixels(spec, vol)
-        # render to a target: the passes past the planned ones cover the cloud pixels only
-        target = cloud if o.target_rse is not None else None
+        # render to a target: the passes past the planned ones cover the cloud pixels only, or every pixel (None)
+        target = _target(o, cloud) if o.target_pixels == "cloud" else None
         pass_options = PassOptions(o, planned=len(spp_list),
                                    target_pixels=None if target is None else np.flatnonzero(target.ravel()))
         key = _render_key(spec, vol, spp_list, o, worker_variant if client is not None else None)
@@ -159,8 +159,9 @@ class _Run:
 
     @property
     def target(self) -> np.ndarray | None:
-        """The pixels the passes past the planned ones render (a render to a target), or None."""
-        return self.cloud if self.target_rse is not None else None
+        """The pixels the passes past the planned ones render (a render to a target: the cloud pixels, or every
+        pixel with ``target_pixels="all"``), or None."""
+        return _target(self.job.options.estimator, self.cloud)
 
     def per_pass(self, i: int) -> int:
         return self.spp_list[i] if i < len(self.spp_list) else self.spp_list[0]
@@ -219,7 +220,8 @@ class _Run:
     def metadata(self, n: int, noise: dict | None) -> dict:
         import mitsuba as mi
         o, spec, vol = self.job.options.estimator, self.job.spec, self.job.vol
-        background = sum(self.spp_list[:min(n, self.planned)]) if self.target is not None else self.spp_done
+        target = self.target
+        background = sum(self.spp_list[:min(n, self.planned)]) if target is not None and not target.all() else self.spp_done
         # the estimator options (None where unused), then this render's figures: spp and passes done
         return {"renderer": "reference", "variant": mi.variant(), **o.metadata(),
                 "spp": int(self.spp_done), "spp_background": int(background),
@@ -229,6 +231,14 @@ class _Run:
                 "phase_mode": vol.phase_mode, "sun": ("scene emitter" if not o.own_sun else
                                                       ("disk" if spec.sun.angular_diameter_deg > 0 else "point")),
                 "noise": noise}
+
+
+def _target(o: ReferenceOptions, cloud: np.ndarray) -> np.ndarray | None:
+    """The pixels (H, W) the passes of a render to a target add render (``o.target_pixels``: the ``cloud`` pixels, or
+    every pixel), or None without a target."""
+    if o.target_rse is None:
+        return None
+    return cloud if o.target_pixels == "cloud" else np.ones_like(cloud)
 
 
 def _cloud_pixels(spec: SceneSpec, vol: OpticalVolume):

@@ -150,6 +150,14 @@ def frame_src(page) -> str:
                          "return walk(document); })()")
 
 
+def overlay_text(page) -> str | None:
+    """The text over the view (``.wm-overlay``: the shown frame's status line), or None before the view exists."""
+    return page.evaluate("(() => { const walk = (root) => { const o = root.querySelector('.wm-overlay'); "
+                         "if (o) return o.textContent; for (const el of root.querySelectorAll('*')) { "
+                         "if (el.shadowRoot) { const s = walk(el.shadowRoot); if (s !== null) return s; } } "
+                         "return null; }; return walk(document); })()")
+
+
 def drag(page, locator, dx: float, dy: float = 0.0, steps: int = 60, seconds: float = 1.0):
     """Press on ``locator``'s centre, move by (dx, dy) in ``steps`` moves over ``seconds``, release."""
     box = locator.bounding_box()

@@ -44,22 +44,33 @@ export function render({ model, el }) {
     for (const kind of ["pointerdown", "wheel", "keydown", "change"]) {
       document.addEventListener(kind, markInput, {capture: true, passive: true});
     }
+    // the button held on the view or a slider: the server holds the refine back while a drag may go on
+    const onControl = (e) => e.composedPath().some((n) => n.classList && (n.classList.contains("wm-frame") || n.classList.contains("wm-live")));
+    let held = false;
+    document.addEventListener("pointerdown", (e) => {
+      if (onControl(e)) { held = true; model.send_msg({type: "hold", held: true}); }
+    }, {capture: true, passive: true});
+    for (const kind of ["pointerup", "pointercancel"]) {
+      document.addEventListener(kind, () => {
+        if (held) { held = false; model.send_msg({type: "hold", held: false}); }
+      }, {capture: true, passive: true});
+    }
     document.addEventListener("pointermove", (e) => {
       if (!e.buttons) return;
-      if (e.composedPath().some((n) => n.classList && (n.classList.contains("wm-frame") || n.classList.contains("wm-live")))) {
+      if (onControl(e)) {
         S.seq += 1; S.inputs[S.seq] = performance.now();  // the drag or live message carries it
       } else { markInput(); }
     }, {capture: true, passive: true});
   }
 
   // the frame on screen: its input stamp and status travel with it (a pushed message, or the parameters)
-  let shown = {seq: model.frame_seq, status: model.status};
+  let shown = {url: model.frame, seq: model.frame_seq, status: model.status};
   const size = () => {
     img.style.width = model.display_width + "px";
     img.style.height = model.display_height + "px";
   };
   const display = (url, seq, status) => {
-    shown = {seq: seq, status: status};
+    shown = {url: url, seq: seq, status: status};
     if (url && img.src !== url) { img.src = url; } else { overlay.textContent = status; }
   };
   img.addEventListener("load", () => {
@@ -80,7 +91,12 @@ export function render({ model, el }) {
     display(msg.frame, msg.seq, msg.status);
   });
   model.on("frame", () => display(model.frame, model.frame_seq, model.status));
-  model.on("status", () => { if (!model.frame) overlay.textContent = model.status; });
+  // a patch of the parameters arrives field by field: "frame" may come before its "status", and the frame then
+  // shown reads the status it had (the page's "starting the slicer..."): the status that follows is the frame's
+  model.on("status", () => {
+    if (!model.frame) { overlay.textContent = model.status; return; }
+    if (shown.url === model.frame) { shown.status = model.status; overlay.textContent = model.status; }
+  });
   model.on("display_width", size);
 
   // drag: orbit; wheel: zoom; plain move: hover read-out (pixel coordinates of the rendered view)

@@ -19,6 +19,10 @@ PHYSICAL_FIELDS = ("camera", "sun_azimuth", "sun_elevation", "sun_diameter_deg",
                    "sky", "ground_albedo", "atmosphere", "aod", "ozone", "water_vapour")  # what the path tracer sees
 DIFF_MAX_DE = 20.0  # the difference map's colour scale: CIEDE2000 0 .. 20
 SHOW_CHOICES = ["A: slicer", "B: reference", "B: denoised", "difference"]  # B denoised: OIDN, display only
+# above this cloud RSE the metrics line also gives A against B denoised: the raw reference's noise adds to the
+# colour difference (issue 38: the demo supercell with the air after 45 s, RSE 0.26: CIEDE2000 15.0 raw, 13.2
+# against B denoised; benchmarks/viewer_reference_noise.py)
+NOISY_RSE = 0.05
 
 
 class ReferencePanel:
@@ -34,6 +38,8 @@ class ReferencePanel:
         self.metrics = None
         self._overlay = None         # (key, data URL) of the last B or difference picture
         self._denoised = None        # (reference Image, its denoised radiance)
+        self._waiting = None         # (reference Image, its cloud RSE): metrics that wait for the refined frame
+        self._generation = 0         # counts the cancels: metrics of a cancelled reference are not shown
         self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="weather-mi metrics")
         w = pn.widgets
         self.show = w.RadioButtonGroup(label="Show", options=SHOW_CHOICES, value="A: slicer", color="default")
@@ -72,8 +78,10 @@ class ReferencePanel:
     def cancel(self, why: str | None):
         job, self.job = self.job, None
         if job is not None:
-            job.cancel()
+            job.cancel(wait=False)  # reaped on a thread: the event loop goes on
         self.cancel_button.disabled = True
+        self._waiting = None
+        self._generation += 1
         if why is not None:
             self.image, self.state, self.metrics = None, None, None
             self.ref_text.object = f"Reference: {why}"
@@ -99,25 +107,43 @@ class ReferencePanel:
         if upd.done:
             self.job = None
             self.cancel_button.disabled = True
-        self._executor.submit(self._update_metrics, upd.image, self.session.state)
+        self._waiting = (upd.image, upd.rse_mean)
+        self.refined(self.session.loop.last_frame)
 
-    def _update_metrics(self, ref_img, state):
-        """Metrics of the slicer's full-quality frame of this view against the reference (metrics thread)."""
+    def refined(self, frame) -> None:
+        """A frame was published (any thread): where it is the refined frame of the current view, the metrics of
+        the newest reference estimate that waits for one are computed against it (metrics thread). Never a
+        render of their own: a full-quality frame holds the slicer's render lock for 1-3 s, and each reference
+        pass during a drag of a slicer knob (which keeps the reference) stalled the drag that long."""
+        waiting = self._waiting
+        if waiting is None or frame is None or frame.draft or frame.state != self.session.state:
+            return
+        self._waiting = None
+        self._executor.submit(self._update_metrics, waiting[0], frame, waiting[1], self._generation)
+
+    def _update_metrics(self, ref_img, f, rse=None, generation=None):
+        """Metrics of the slicer's full-quality frame ``f`` of this view against the reference (metrics thread);
+        while the reference is noisy (its cloud RSE ``rse`` above NOISY_RSE, or not known yet), also against B
+        denoised, said as such: the raw reference's noise is part of the first figures."""
         from ..display.metrics import compare
-        loop = self.session.loop
         try:
-            f = loop.last_frame
-            if f is None or f.draft or f.state != state:
-                f = loop.render(state)  # this thread: the session's render thread stays free
-            m = compare(ref_img, f.radiance, mask="cloud", transmittance=f.transmittance, exposure=f.exposure)
+            kw = dict(mask="cloud", transmittance=f.transmittance, exposure=f.exposure)
+            m = compare(ref_img, f.radiance, **kw)
             self.metrics = (m, f)
             text = (f"**A vs B** over {m['n_pixels']} cloud pixels: CIEDE2000 {m['ciede2000']:.2f}, "
                     f"FLIP {m['flip']:.3f}, reference noise floor {m['noise_floor']:.3g}")
+            if rse is None or rse > NOISY_RSE:
+                d = compare(self.denoised(ref_img), f.radiance, **kw)
+                why = "not known yet" if rse is None else f"{rse:.3f}"
+                text += (f"\n\n**A vs B denoised** (the reference is noisy, cloud RSE {why}): "
+                         f"CIEDE2000 {d['ciede2000']:.2f}, FLIP {d['flip']:.3f}")
         except Exception as exc:
             text = f"metrics failed: {exc}"
-        self.session.on_loop(lambda: self._show_metrics(text))
+        self.session.on_loop(lambda: self._show_metrics(text, generation))
 
-    def _show_metrics(self, text):
+    def _show_metrics(self, text, generation=None):
+        if generation is not None and generation != self._generation:  # the reference was cancelled meanwhile
+            return
         self.metric_text.object = text
         if self.show.value != "A: slicer":
             self.session.refresh_canvas()
@@ -147,13 +173,16 @@ class ReferencePanel:
         rad = self.denoised()
         return jpeg_url(to_srgb8(rad, f.exposure if f else auto_exposure(rad)))
 
-    def denoised(self) -> np.ndarray:
-        """The reference's denoised radiance, computed once per reference update (not per exposure or
-        export)."""
+    def denoised(self, image=None) -> np.ndarray:
+        """The denoised radiance of the reference estimate ``image`` (default: the newest), computed once per
+        reference update (not per exposure, export or metrics line) on whichever thread asks first."""
         from ..display.denoise import denoise_radiance
-        if self._denoised is None or self._denoised[0] is not self.image:
-            self._denoised = (self.image, denoise_radiance(np.nan_to_num(self.image.radiance)))
-        return self._denoised[1]
+        image = self.image if image is None else image
+        done = self._denoised
+        if done is None or done[0] is not image:
+            done = (image, denoise_radiance(np.nan_to_num(image.radiance)))
+            self._denoised = done
+        return done[1]
 
     def _difference_url(self) -> str:
         from matplotlib import colormaps

@@ -2,7 +2,8 @@
 
 Requests are views (``ViewState`` plus the client input number they answer); the newest request wins,
 older ones are dropped unrendered. While the user drags (requests closer together than ``IDLE_S``), a
-request is rendered as a draft; once the input has been idle for ``IDLE_S``, the same view is refined at
+request is rendered as a draft; once the input has been idle for ``IDLE_S`` (``HOLD_IDLE_S`` while the mouse
+button is still held on the view or a slider, ``hold``: the drag may go on), the same view is refined at
 full quality (all slices, each pixel the mean of REFINE_SUPERSAMPLE^2 points with slab jitter, state.py).
 Drafts adapt to the machine: the loop keeps the finest of ``DRAFT_LEVELS`` (pixels per side divided by,
 slices) whose frames take at most ``DRAFT_BUDGET_S``, so that dragging stays above 10 frames a second where
@@ -29,6 +30,11 @@ from .state import REFINE_JITTER, REFINE_SUPERSAMPLE, ViewState
 DRAFT_LEVELS = ((2, 32), (3, 24), (4, 16))  # (divisor of the width and height, slices), finest first
 DRAFT_BUDGET_S = 0.07
 IDLE_S = 0.25
+# while the mouse button is held on the view or a slider (``hold``), the refine waits this long instead of IDLE_S:
+# a refine (1-3 s on a loaded 2-core machine) cannot be interrupted, and a drag paused for a moment and then
+# resumed waited for it (issue 38: the sun slider pressed, held 0.3 s, then dragged: one 1.3-3.0 s frame, 4-10
+# frames/s against the view's 15-17; benchmarks/viewer.py)
+HOLD_IDLE_S = 2.0
 JPEG_QUALITY = 88
 
 
@@ -173,6 +179,7 @@ class FrameLoop:
         self._last_input = 0.0
         self._stopped = False
         self._refine: tuple | None = None
+        self._held = False  # the mouse button is held on the view or a slider (``hold``)
         self.exposure: float | None = None  # the session's automatic exposure, fixed by its first full frame
         self.last_frame: Frame | None = None
         self.draft_level = 0  # index into DRAFT_LEVELS, adapted to the measured draft time
@@ -190,6 +197,14 @@ class FrameLoop:
             draft = interactive or (now - self._last_input) < IDLE_S
             self._last_input = now
             self._pending = (state, seq, draft, now)
+            self._cond.notify()
+
+    def hold(self, held: bool) -> None:
+        """The mouse button is pressed (True) or released (False) on the view or a slider: while it is held, the
+        refine waits ``HOLD_IDLE_S`` of idle input, not ``IDLE_S`` (a refine cannot be interrupted); on release it
+        comes ``IDLE_S`` after the last input, as before."""
+        with self._cond:
+            self._held = bool(held)
             self._cond.notify()
 
     def stop(self) -> None:
@@ -215,7 +230,8 @@ class FrameLoop:
                         self._refine = None
                     return req
                 if self._refine is not None:
-                    wait = IDLE_S - (time.perf_counter() - self._last_input)
+                    idle = HOLD_IDLE_S if self._held else IDLE_S
+                    wait = idle - (time.perf_counter() - self._last_input)
                     if wait <= 0:
                         req, self._refine = self._refine, None
                         return req

@@ -197,6 +197,10 @@ class ReferenceJob:
                  (None: render ``spp`` and stop).
     max_seconds: or when this many seconds of rendering have passed (the child's clock; the volume's
                  construction and the first kernel compilation come on top).
+    target_pixels: the pixels the passes past the first estimate render (``render_reference``'s): "all" (the
+                 default: the page shows every pixel, and the sky and ground seen through the air in the box
+                 scatter: with "cloud" they kept the first estimate's 2 spp, a white speckle over the blue sky;
+                 issue 38, ``benchmarks/viewer_reference_noise.py``) or "cloud".
     threads    : Dr.Jit worker threads of the child (None: Dr.Jit's default, every core).
     nice       : the child's priority increment (``os.nice``; 0: unchanged).
     variant    : the child's Mitsuba variant (None: ``default_variant()``, cuda_ad_rgb where there is a GPU).
@@ -208,7 +212,8 @@ class ReferenceJob:
 
     def __init__(self, recipe: VolumeRecipe, spec: SceneSpec, scale: Mapping[str, float] | None = None, *,
                  target_rse: float | None = 0.02, max_seconds: float | None = 600.0, spp: int = 2,
-                 threads: int | None = 1, nice: int = 10, variant: str | None = None, **render_kw):
+                 threads: int | None = 1, nice: int = 10, variant: str | None = None, target_pixels: str = "all",
+                 **render_kw):
         if not isinstance(recipe, VolumeRecipe):
             raise TypeError(f"recipe must be a VolumeRecipe, got {type(recipe).__name__}")
         if not isinstance(spec, SceneSpec):
@@ -219,7 +224,8 @@ class ReferenceJob:
         self.recipe, self.spec = recipe, spec
         self.scale = dict(scale or {})
         self.spp, self.target_rse, self.max_seconds = spp, target_rse, max_seconds
-        self.threads, self.nice, self.variant, self.render_kw = threads, nice, variant, dict(render_kw)
+        self.threads, self.nice, self.variant = threads, nice, variant
+        self.render_kw = {"target_pixels": target_pixels, **render_kw}
         self._proc = None
         self._conn = None
         self._last: ReferenceUpdate | None = None
@@ -282,13 +288,18 @@ class ReferenceJob:
                 self._stop_process()
         self._close_conn()
 
-    def cancel(self) -> None:
+    def cancel(self, wait: bool = True) -> None:
         """Terminate the child (SIGTERM, SIGKILL after JOIN_TIMEOUT_S) and reap it; no update follows.
-        Idempotent."""
+        Idempotent. ``wait=False``: the SIGTERM now, the reaping on a thread of its own (the viewer's event loop
+        does not wait for a child at the lowest priority to end on a loaded machine: 0.3 s measured)."""
         self._cancelled = True
         self._finished = True
         if self._proc is not None:
-            self._stop_process()
+            if wait:
+                self._stop_process()
+            elif self._proc.is_alive():
+                self._proc.terminate()
+                threading.Thread(target=self._stop_process, name="reference-reaper", daemon=True).start()
         self._close_conn()
 
     def _stop_process(self) -> None:

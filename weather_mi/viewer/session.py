@@ -105,6 +105,9 @@ class ViewerSession:
         if kind == "mark":
             self.last_mark = max(self.last_mark, int(msg.get("seq", 0)))
             return
+        if kind == "hold":  # the mouse button pressed or released on the view or a slider (canvas.py)
+            self.loop.hold(bool(msg.get("held")))
+            return
         self.last_mark = max(self.last_mark, int(msg.get("seq", 0)))
         if kind == "drag":
             self.set_state(self.state.updated(camera=self.state.camera.dragged(msg["dx"], msg["dy"])))
@@ -139,6 +142,7 @@ class ViewerSession:
 
     # ------------------------------------------------------------------ frames
     def _publish_from_thread(self, frame):
+        self.reference.refined(frame)  # the metrics that wait for the view's refined frame
         self.on_loop(self.refresh_canvas)
 
     def _error_from_thread(self, exc):
