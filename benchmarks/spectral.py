@@ -162,6 +162,9 @@ def main(argv=None):
     ap.add_argument("--before-chroma", action="store_true",
                     help="also the spectral mode with directions from the phase's channel-mean density ('mean density'), "
                          "with Mitsuba's wavelengths ('mitsuba wavelengths') and with both ('before chroma38')")
+    ap.add_argument("--lane-directions", action="store_true",
+                    help="also the spectral mode with directions from the R, G, B tables in the throughput's shares "
+                         "('lane channels', as chroma38) and from one lane's table picked uniformly ('uniform lanes')")
     ap.add_argument("--lanes", type=int, default=1 << 20)
     ap.add_argument("--firefly-k", type=float, default=10.0,
                     help="a firefly: a cloud pixel with one pass > k x the median of its passes in a channel")
@@ -190,6 +193,8 @@ def main(argv=None):
     if args.before_chroma:
         for name in ("mean density", "mitsuba wavelengths", "before chroma38"):
             modes[f"spectral, {name}"] = "llvm_ad_spectral"
+    if args.lane_directions:
+        modes["spectral, lane channels"] = modes["spectral, uniform lanes"] = "llvm_ad_spectral"
     if args.without_box_air:
         modes["rgb, no box air"] = "llvm_ad_rgb"
         modes["spectral, no box air"] = "llvm_ad_spectral"
@@ -247,7 +252,8 @@ def patched(mode: str):
         for suffixes, patch in ((("3 nodes",), three_nodes), (("no box air",), no_box_air), (("linear",), linear),
                                 (("twice",), phase_twice), (("lookups",), medium_lookups),
                                 (("mean density", "before chroma38"), mean_density),
-                                (("mitsuba wavelengths", "before chroma38"), mitsuba_wavelengths)):
+                                (("mitsuba wavelengths", "before chroma38"), mitsuba_wavelengths),
+                                (("lane channels",), lane_channels), (("uniform lanes",), uniform_lanes)):
             stack.enter_context(patch(mode.endswith(suffixes)))
         yield
 
@@ -256,6 +262,29 @@ def patched(mode: str):
 def mean_density(on: bool):
     """With ``on``: the spectral mode's directions drawn from the phase function's channel-mean density (as before
     chroma38), not from its R, G, B densities in the throughput's shares (``lane_channels``)."""
+    with _path_loop_set(on, by_lane=False, own_lanes=False):
+        yield
+
+
+@contextlib.contextmanager
+def lane_channels(on: bool):
+    """With ``on``: the spectral mode's directions drawn from the phase's R, G, B densities in the throughput's
+    shares by wavelength (``lane_channels``, chroma38), not from one lane's own table (``lane_directions``)."""
+    with _path_loop_set(on, own_lanes=False):
+        yield
+
+
+@contextlib.contextmanager
+def uniform_lanes(on: bool):
+    """With ``on``: the lane whose table draws the direction picked with probability 1/4 each (hero wavelength
+    sampling's uniform choice), not in proportion to its throughput (``lane_directions.shares``)."""
+    with _path_loop_set(on, lane_shares="uniform"):
+        yield
+
+
+@contextlib.contextmanager
+def _path_loop_set(on: bool, **attributes):
+    """With ``on``: ``attributes`` set on every ``PathLoop`` after its own set-up."""
     if not on:
         yield
         return
@@ -264,7 +293,8 @@ def mean_density(on: bool):
 
     def init(self, *args):
         own(self, *args)
-        self.by_lane = False
+        for k, v in attributes.items():
+            setattr(self, k, v)
     path_loop.PathLoop.__init__ = init
     try:
         yield

@@ -1,0 +1,185 @@
+"""Each scattering's direction from the phase table of one of the path's own wavelengths (spectral variants with
+``hydrometeor_mixture``'s tables every 25 nm; issue 38, spectralmis38): the one-sample MIS of hero wavelength
+spectral sampling (Wilkie et al. 2014, "Hero wavelength spectral sampling", Eq. 6-7), the lane picked in
+proportion to its throughput.
+
+At a scattering vertex with lane throughputs T_i at wavelengths lambda_i, lane l is picked with probability
+c_l = T_l / sum_j T_j (1/4 each where the throughput is 0) and the direction drawn from that lane's own phase
+function g_l(wo) = sum_s w_s(lambda_l) p_s(wo, lambda_l) (its species with the lane's weights, its wavelength's two
+bracketing table nodes with their linear weights: exactly the bilinear value the lane reads). The direction's
+density is the mixture
+
+    q(wo) = sum_j c_j g_j(wo)                                            (one-sample MIS, balance heuristic)
+
+and every lane's weight is g_i(wo) / q(wo): unbiased for any c (E[g_i / q] = integral g_i = 1), and with c
+proportional to the throughput sum_i T_i g_i / q = sum_i T_i exactly: a draw keeps the path's total throughput,
+and no lane can exceed it (T_i g_i / q <= sum_j T_j), whatever the tables do between their nodes. This replaces
+``lane_channels`` (directions from the R, G, B tables, whose interpolant the 25 nm tables are only approximately:
+its lanes drifted, R = 11 from one 20 deg sample) where the phase has its tables by wavelength. The next-event
+estimate's MIS uses the same q (:func:`eval_pdf`).
+
+Tables (:func:`prepare`, once a phase object, cached on it): the species' values at every wavelength node exactly
+as the lanes read them (the 16-bit codes of ``spectral_phase.pack_half_nodes`` decoded for the species that change
+with wavelength, float32 for the flat ones), and per (node, species) a Walker alias table of the segment masses of
+that piecewise-linear density: (K S (N - 1)) x 2 floats, 2.1 MB for 7 species, 21 wavelengths, 1828 nodes. Values
+and pdf come from the codes (4 packet loads a lane: two wavelength nodes, two versine nodes), so the pdf is the
+density the draw has to float rounding; the codes' tables integrate to 1 within 2^-11 (``tests``)."""
+from __future__ import annotations
+
+import numpy as np
+
+import drjit as dr
+import mitsuba as mi
+
+from . import linear_segment, spectral_air_weights
+from .mixture_tables import alias_table, segment_masses
+from .spectral_phase import _decoded, decode16, encode16, pack_half_nodes
+from ..jitarrays import aligned_uint
+
+SHARES = ("throughput", "uniform")  # c_l: in proportion to the lanes' throughput (default), or 1/4 each
+
+
+def applies(phase) -> bool:
+    """Whether ``phase`` has tables by wavelength this module can draw from (JIT variants)."""
+    return getattr(phase, "spectral_grid", None) is not None and dr.is_array_v(mi.Float)
+
+
+def node_values(values: np.ndarray, flat: tuple) -> np.ndarray:
+    """(S, N, K) float32: ``values`` as the lanes read them: the 16-bit codes' values (:func:`decode16`) for the
+    species not in ``flat``, float32 for the flat ones (read from ``spectral_flat_table``)."""
+    v = np.asarray(values, np.float32).copy()
+    rest = [s for s in range(v.shape[0]) if s not in flat]
+    v[rest] = decode16(encode16(v[rest]))
+    return v
+
+
+def alias_tables(nodes: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """(K, S, N - 1, 2) float32: per wavelength node and species the alias table (probability, alias index as a
+    float, exact below 2^24) of the node segments' masses under ``values`` (S, N, K) piecewise linear in v."""
+    n_s, n, k = values.shape
+    out = np.empty((k, n_s, n - 1, 2), np.float32)
+    for j in range(k):
+        for s, m in enumerate(segment_masses(nodes, np.asarray(values[:, :, j], np.float64))):
+            prob, alias = alias_table(m)
+            out[j, s, :, 0], out[j, s, :, 1] = prob, alias
+    return out
+
+
+def prepare(phase):
+    """The phase's tables for this module (module docstring), built on first use and kept on ``phase``:
+    (node values (K S N,), alias tables (K S (N - 1) x 2,), codes of the non-flat species (``pack_half_nodes``))."""
+    if getattr(phase, "lane_tables", None) is None:
+        values, flat = np.asarray(phase.spectral_values, np.float32), tuple(phase.spectral_flat)
+        exact = node_values(values, flat)
+        nodes = np.asarray(phase.nodes, np.float64)
+        rest = [s for s in range(values.shape[0]) if s not in flat]
+        codes = phase.spectral_codes if phase.spectral_codes is not None else \
+            aligned_uint(mi, pack_half_nodes(values[rest]))
+        phase.lane_tables = (mi.Float(np.ascontiguousarray(np.transpose(exact, (2, 0, 1))).ravel()),
+                             mi.Float(alias_tables(nodes, exact).ravel()), codes)
+    return phase.lane_tables
+
+
+def shares(throughput, how: str = "throughput"):
+    """c (Spectrum, summing to 1): each lane's probability of lending its table to the direction."""
+    if how == "uniform":
+        return mi.Spectrum(0.25)
+    total = dr.sum(throughput)
+    return dr.select(total > 0.0, throughput * dr.rcp(dr.select(total > 0.0, total, 1.0)), 0.25)
+
+
+def _lane_weights(phase, mei):
+    """(the vertex's weights, each lane's weights (4 lists of S Floats))."""
+    from .hydrometeor_mixture import _channel_mean, _gather4
+    w = _channel_mean(phase._weights_at(mei))
+    if phase.air_spectral is None:
+        return w, [list(w)] * 4
+    return w, spectral_air_weights.by_lane(phase.air_spectral, w, mei.wavelengths, _gather4)
+
+
+def _values(phase, lane_w, idx, t, wavelengths):
+    """mi.Spectrum: every lane's bilinear value g_i (its two wavelength nodes, linear in v at fraction ``t`` of
+    segment ``idx``) from the codes and the flat species' table: what the draws' densities are."""
+    _, _, codes = prepare(phase)
+    lo, inv_step, k = phase.spectral_grid
+    n = phase.n_nodes
+    flat = phase.spectral_flat
+    shared = {}
+    for f, s in enumerate(flat):
+        e = dr.gather(mi.Vector4f, phase.spectral_flat_table, idx * len(flat) + f)
+        shared[s] = dr.fma(e[2] - e[0], t, e[0])
+    rest = [s for s in range(phase.n_species) if s not in shared]
+    out = []
+    for lane in range(4):
+        x = dr.clip((wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
+        j = mi.UInt32(x)
+        tl = x - mi.Float(j)
+        node = []
+        for jj in (j, j + 1):
+            near, far = (dr.gather(mi.Vector4u, codes, jj * n + idx + d) for d in (0, 1))
+            node.append((near, far))
+        acc = mi.Float(0.0)
+        for s in range(phase.n_species):
+            if s in shared:
+                acc += lane_w[lane][s] * shared[s]
+                continue
+            r = rest.index(s)
+            p = [dr.fma(_decoded(far[r // 2], r % 2 == 1) - _decoded(near[r // 2], r % 2 == 1), t,
+                        _decoded(near[r // 2], r % 2 == 1)) for near, far in node]
+            acc += lane_w[lane][s] * dr.fma(p[1] - p[0], tl, p[0])
+        out.append(acc)
+    return mi.Spectrum(*out)
+
+
+def eval_pdf(phase, mei, wo, c):
+    """(every lane's phase value g_i(wo), the continuation pdf q(wo) = sum_j c_j g_j(wo))."""
+    _, lane_w = _lane_weights(phase, mei)
+    idx, t = phase._segment(0.5 * dr.squared_norm(wo + mei.wi))
+    g = _values(phase, lane_w, idx, t, mei.wavelengths)
+    return g, dr.sum(c * g)
+
+
+def _pick(weights, u):
+    """(index, the remainder of ``u`` rescaled to [0, 1)) of the entry of ``weights`` (a list of Floats summing to 1)
+    that the uniform ``u`` falls in."""
+    pick = mi.UInt32(0)
+    acc, lower, sel = mi.Float(0.0), mi.Float(0.0), weights[0]
+    for i in range(len(weights) - 1):
+        acc += weights[i]
+        above = u >= acc
+        pick += mi.UInt32(dr.select(above, 1, 0))
+        lower = dr.select(above, acc, lower)
+        sel = dr.select(above, weights[i + 1], sel)
+    return pick, dr.clip((u - lower) / dr.maximum(sel, 1e-30), 0.0, 1.0)
+
+
+def _of_lane(values, lane):
+    """values[lane] for a UInt32 ``lane`` (values: 4 per-lane Floats)."""
+    return dr.select(lane == 0, values[0], dr.select(lane == 1, values[1], dr.select(lane == 2, values[2], values[3])))
+
+
+def sample(phase, mei, c, u_lane, sample1, sample2):
+    """(wo, every lane's value g_i(wo), q(wo)): lane l drawn with probability c_l (``u_lane``; its remainder picks
+    one of the lane's two wavelength nodes by its linear weight), a species by the lane's weights (``sample1``; its
+    remainder the alias coin), a node segment (``sample2.x``) and v within it, the azimuth (``sample2.y``)."""
+    node_vals, alias, _ = prepare(phase)
+    lo, inv_step, k = phase.spectral_grid
+    n_s, n = phase.n_species, phase.n_nodes
+    _, lane_w = _lane_weights(phase, mei)
+    lane, u_node = _pick([c[i] for i in range(4)], u_lane)
+    x = dr.clip((_of_lane([mei.wavelengths[i] for i in range(4)], lane) - lo) * inv_step, 0.0, k - 1.0001)
+    j = mi.UInt32(x)
+    j = dr.select(u_node < x - mi.Float(j), j + 1, j)  # node j + 1 with its linear weight
+    species, coin = _pick([_of_lane([lane_w[i][s] for i in range(4)], lane) for s in range(n_s)], sample1)
+    u = sample2.x * (n - 1)
+    b = mi.UInt32(dr.clip(u, 0.0, n - 2.0))
+    r = dr.clip(u - mi.Float(b), 0.0, 1.0)
+    table = j * n_s + species
+    entry = dr.gather(mi.Vector2f, alias, table * (n - 1) + b)
+    idx = dr.select(coin < entry[0], b, mi.UInt32(entry[1]))
+    f0, f1 = (dr.gather(mi.Float, node_vals, table * n + idx + d) for d in (0, 1))
+    v0, v1 = (dr.gather(mi.Float, phase.nodes, idx + d) for d in (0, 1))
+    v, t = linear_segment.invert(v0, v1, f0, f1, r)
+    wo = linear_segment.direction(mei, v, sample2.y)
+    g = _values(phase, lane_w, idx, t, mei.wavelengths)
+    return wo, g, dr.sum(c * g)
