@@ -165,6 +165,9 @@ def main(argv=None):
     ap.add_argument("--lane-directions", action="store_true",
                     help="also the spectral mode with directions from the R, G, B tables in the throughput's shares "
                          "('lane channels', as chroma38) and from one lane's table picked uniformly ('uniform lanes')")
+    ap.add_argument("--mix", action="append", default=[],
+                    help="also the spectral mode with the wavelengths drawn from this mixture of Mitsuba's density, "
+                         "xbar, ybar, zbar (4 weights, e.g. 0.8,0.1,0.05,0.05; repeatable; ``wavelengths.MIX``)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
     ap.add_argument("--firefly-k", type=float, default=10.0,
                     help="a firefly: a cloud pixel with one pass > k x the median of its passes in a channel")
@@ -195,6 +198,8 @@ def main(argv=None):
             modes[f"spectral, {name}"] = "llvm_ad_spectral"
     if args.lane_directions:
         modes["spectral, lane channels"] = modes["spectral, uniform lanes"] = "llvm_ad_spectral"
+    for m in args.mix:
+        modes[f"spectral, mix {m}"] = "llvm_ad_spectral"
     if args.without_box_air:
         modes["rgb, no box air"] = "llvm_ad_rgb"
         modes["spectral, no box air"] = "llvm_ad_spectral"
@@ -255,7 +260,23 @@ def patched(mode: str):
                                 (("mitsuba wavelengths", "before chroma38"), mitsuba_wavelengths),
                                 (("lane channels",), lane_channels), (("uniform lanes",), uniform_lanes)):
             stack.enter_context(patch(mode.endswith(suffixes)))
+        if " mix " in mode:
+            stack.enter_context(wavelength_mix(tuple(float(x) for x in mode.split(" mix ")[1].split(","))))
         yield
+
+
+@contextlib.contextmanager
+def wavelength_mix(mix):
+    """The spectral paths' wavelengths drawn from the mixture ``mix`` (``wavelengths.MIX``) for the block."""
+    from weather_mi.kernel.plugins import wavelengths
+    own = wavelengths.MIX
+    wavelengths.MIX = mix
+    wavelengths._CACHE.clear()
+    try:
+        yield
+    finally:
+        wavelengths.MIX = own
+        wavelengths._CACHE.clear()
 
 
 @contextlib.contextmanager
