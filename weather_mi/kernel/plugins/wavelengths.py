@@ -72,13 +72,21 @@ def sample_colour(u, active=True):
     return LAMBDA_NM[0] + (mi.Float(i) + x) * GRID_NM, p
 
 
+def mitsuba_weight(lam_nm):
+    """1 / p_M of wavelengths ``lam_nm`` (a Spectrum, nm) as Mitsuba's ``sample_rgb_spectrum`` returns it with
+    them, in closed form (Mitsuba 3.9.1, include/mitsuba/core/spectrum.h): 253.82 cosh^2(0.0072 (lambda - 538)),
+    the same float32 operations on the same wavelengths."""
+    c = dr.cosh(0.0072 * (lam_nm - 538.0))
+    return 253.82 * c * c
+
+
 def redrawn(ray, weight, sample, active):
     """``ray`` and its sensor weight with the 4 wavelengths the sensor drew from ``sample`` (its wavelength
     sample, Mitsuba's density) replaced by the 4 drawn from :func:`colour_pdf` with the same stratified
-    uniforms: weight x p_M(old) / p(new)."""
+    uniforms: weight x p_M(old) / p(new), p_M(old) from the sensor's wavelengths (:func:`mitsuba_weight`)."""
     shifted = [sample + 0.25 * i for i in range(4)]
     shifted = [dr.select(s >= 1.0, s - 1.0, s) for s in shifted]  # Mitsuba's sample_shifted
-    _, w_m = mi.sample_rgb_spectrum(mi.Spectrum(*shifted))  # 1 / p_M of the sensor's wavelengths
+    w_m = mitsuba_weight(ray.wavelengths)  # 1 / p_M of the sensor's wavelengths
     lam, pdf = [], []
     for s in shifted:
         x, p = sample_colour(s, active)
