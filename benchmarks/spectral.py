@@ -164,7 +164,8 @@ def main(argv=None):
                          "with Mitsuba's wavelengths ('mitsuba wavelengths') and with both ('before chroma38')")
     ap.add_argument("--lane-directions", action="store_true",
                     help="also the spectral mode with directions from the R, G, B tables in the throughput's shares "
-                         "('lane channels', as chroma38) and from one lane's table picked uniformly ('uniform lanes')")
+                         "('lane channels', as chroma38), from one lane's table picked uniformly ('uniform lanes') and from "
+                         "the lanes' tables bilinear in wavelength ('bilinear lanes')")
     ap.add_argument("--mix", action="append", default=[],
                     help="also the spectral mode with the wavelengths drawn from this mixture of Mitsuba's density, "
                          "xbar, ybar, zbar (4 weights, e.g. 0.8,0.1,0.05,0.05; repeatable; ``wavelengths.MIX``)")
@@ -197,7 +198,8 @@ def main(argv=None):
         for name in ("mean density", "mitsuba wavelengths", "before chroma38"):
             modes[f"spectral, {name}"] = "llvm_ad_spectral"
     if args.lane_directions:
-        modes["spectral, lane channels"] = modes["spectral, uniform lanes"] = "llvm_ad_spectral"
+        for name in ("lane channels", "uniform lanes", "bilinear lanes"):
+            modes[f"spectral, {name}"] = "llvm_ad_spectral"
     for m in args.mix:
         modes[f"spectral, mix {m}"] = "llvm_ad_spectral"
     if args.without_box_air:
@@ -258,7 +260,8 @@ def patched(mode: str):
                                 (("twice",), phase_twice), (("lookups",), medium_lookups),
                                 (("mean density", "before chroma38"), mean_density),
                                 (("mitsuba wavelengths", "before chroma38"), mitsuba_wavelengths),
-                                (("lane channels",), lane_channels), (("uniform lanes",), uniform_lanes)):
+                                (("lane channels",), lane_channels), (("uniform lanes",), uniform_lanes),
+                                (("bilinear lanes",), bilinear_lanes)):
             stack.enter_context(patch(mode.endswith(suffixes)))
         if " mix " in mode:
             stack.enter_context(wavelength_mix(tuple(float(x) for x in mode.split(" mix ")[1].split(","))))
@@ -300,6 +303,14 @@ def uniform_lanes(on: bool):
     """With ``on``: the lane whose table draws the direction picked with probability 1/4 each (hero wavelength
     sampling's uniform choice), not in proportion to its throughput (``lane_directions.shares``)."""
     with _path_loop_set(on, lane_shares="uniform"):
+        yield
+
+
+@contextlib.contextmanager
+def bilinear_lanes(on: bool):
+    """With ``on``: each lane's table bilinear in wavelength (its two nodes; 4 packet loads a lane) instead of one
+    node a lane picked at each vertex (``lane_directions.pick_nodes``)."""
+    with _path_loop_set(on, lane_nodes="bilinear"):
         yield
 
 

@@ -97,9 +97,27 @@ def _lane_weights(phase, mei):
     return w, spectral_air_weights.by_lane(phase.air_spectral, w, mei.wavelengths, _gather4)
 
 
-def _values(phase, lane_w, idx, t, wavelengths):
-    """mi.Spectrum: every lane's bilinear value g_i (its two wavelength nodes, linear in v at fraction ``t`` of
-    segment ``idx``) from the codes and the flat species' table: what the draws' densities are."""
+def pick_nodes(phase, wavelengths, u):
+    """Each lane's wavelength node for one vertex (4 UInt32): of the two that bracket its wavelength, the upper
+    with probability equal to its linear weight (lane l's uniform frac(``u`` + l / 4), stratified as
+    ``spectral_phase.picked_value``). Independent of the direction: the lane's table at that node is an unbiased
+    estimate of its bilinear one, and the vertex's draw and its next-event estimate use the same (module
+    docstring)."""
+    lo, inv_step, k = phase.spectral_grid
+    out = []
+    for lane in range(4):
+        x = dr.clip((wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
+        j = mi.UInt32(x)
+        ul = u + 0.25 * lane
+        ul = dr.select(ul >= 1.0, ul - 1.0, ul)
+        out.append(dr.select(ul < x - mi.Float(j), j + 1, j))
+    return out
+
+
+def _values(phase, lane_w, idx, t, wavelengths, nodes=None):
+    """mi.Spectrum: every lane's value g_i, linear in v at fraction ``t`` of segment ``idx``, from the codes and the
+    flat species' table: at its node of ``nodes`` (:func:`pick_nodes`), or without them bilinear (its two wavelength
+    nodes): what the draws' densities are."""
     _, _, codes = prepare(phase)
     lo, inv_step, k = phase.spectral_grid
     n = phase.n_nodes
@@ -111,11 +129,14 @@ def _values(phase, lane_w, idx, t, wavelengths):
     rest = [s for s in range(phase.n_species) if s not in shared]
     out = []
     for lane in range(4):
-        x = dr.clip((wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
-        j = mi.UInt32(x)
-        tl = x - mi.Float(j)
+        if nodes is None:
+            x = dr.clip((wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
+            j = mi.UInt32(x)
+            tl, at = x - mi.Float(j), (j, j + 1)
+        else:
+            tl, at = None, (nodes[lane],)
         node = []
-        for jj in (j, j + 1):
+        for jj in at:
             near, far = (dr.gather(mi.Vector4u, codes, jj * n + idx + d) for d in (0, 1))
             node.append((near, far))
         acc = mi.Float(0.0)
@@ -126,16 +147,17 @@ def _values(phase, lane_w, idx, t, wavelengths):
             r = rest.index(s)
             p = [dr.fma(_decoded(far[r // 2], r % 2 == 1) - _decoded(near[r // 2], r % 2 == 1), t,
                         _decoded(near[r // 2], r % 2 == 1)) for near, far in node]
-            acc += lane_w[lane][s] * dr.fma(p[1] - p[0], tl, p[0])
+            acc += lane_w[lane][s] * (p[0] if tl is None else dr.fma(p[1] - p[0], tl, p[0]))
         out.append(acc)
     return mi.Spectrum(*out)
 
 
-def eval_pdf(phase, mei, wo, c):
-    """(every lane's phase value g_i(wo), the continuation pdf q(wo) = sum_j c_j g_j(wo))."""
+def eval_pdf(phase, mei, wo, c, nodes=None):
+    """(every lane's phase value g_i(wo), the continuation pdf q(wo) = sum_j c_j g_j(wo)); ``nodes``: the vertex's
+    (:func:`pick_nodes`), else bilinear."""
     _, lane_w = _lane_weights(phase, mei)
     idx, t = phase._segment(0.5 * dr.squared_norm(wo + mei.wi))
-    g = _values(phase, lane_w, idx, t, mei.wavelengths)
+    g = _values(phase, lane_w, idx, t, mei.wavelengths, nodes)
     return g, dr.sum(c * g)
 
 
@@ -158,18 +180,22 @@ def _of_lane(values, lane):
     return dr.select(lane == 0, values[0], dr.select(lane == 1, values[1], dr.select(lane == 2, values[2], values[3])))
 
 
-def sample(phase, mei, c, u_lane, sample1, sample2):
-    """(wo, every lane's value g_i(wo), q(wo)): lane l drawn with probability c_l (``u_lane``; its remainder picks
-    one of the lane's two wavelength nodes by its linear weight), a species by the lane's weights (``sample1``; its
+def sample(phase, mei, c, u_lane, sample1, sample2, nodes=None):
+    """(wo, every lane's value g_i(wo), q(wo)): lane l drawn with probability c_l (``u_lane``), its node of
+    ``nodes`` (:func:`pick_nodes`; without them, one of its two wavelength nodes by its linear weight, from what
+    is left of ``u_lane``: its bilinear table), a species by the lane's weights (``sample1``; its
     remainder the alias coin), a node segment (``sample2.x``) and v within it, the azimuth (``sample2.y``)."""
     node_vals, alias, _ = prepare(phase)
     lo, inv_step, k = phase.spectral_grid
     n_s, n = phase.n_species, phase.n_nodes
     _, lane_w = _lane_weights(phase, mei)
     lane, u_node = _pick([c[i] for i in range(4)], u_lane)
-    x = dr.clip((_of_lane([mei.wavelengths[i] for i in range(4)], lane) - lo) * inv_step, 0.0, k - 1.0001)
-    j = mi.UInt32(x)
-    j = dr.select(u_node < x - mi.Float(j), j + 1, j)  # node j + 1 with its linear weight
+    if nodes is None:
+        x = dr.clip((_of_lane([mei.wavelengths[i] for i in range(4)], lane) - lo) * inv_step, 0.0, k - 1.0001)
+        j = mi.UInt32(x)
+        j = dr.select(u_node < x - mi.Float(j), j + 1, j)  # node j + 1 with its linear weight
+    else:
+        j = _of_lane(nodes, lane)
     species, coin = _pick([_of_lane([lane_w[i][s] for i in range(4)], lane) for s in range(n_s)], sample1)
     u = sample2.x * (n - 1)
     b = mi.UInt32(dr.clip(u, 0.0, n - 2.0))
@@ -181,5 +207,5 @@ def sample(phase, mei, c, u_lane, sample1, sample2):
     v0, v1 = (dr.gather(mi.Float, phase.nodes, idx + d) for d in (0, 1))
     v, t = linear_segment.invert(v0, v1, f0, f1, r)
     wo = linear_segment.direction(mei, v, sample2.y)
-    g = _values(phase, lane_w, idx, t, mei.wavelengths)
+    g = _values(phase, lane_w, idx, t, mei.wavelengths, nodes)
     return wo, g, dr.sum(c * g)
