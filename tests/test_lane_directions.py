@@ -74,9 +74,9 @@ def _draws(phase, n: int, shares="throughput", picked=False, q_shares=None, seed
     mei.wavelengths = mi.Spectrum(*(mi.Float(lam[:, i]) for i in range(4)))
     throughput = mi.Spectrum(*(mi.Float(tp[:, i]) for i in range(4)))
     c = ld.shares(throughput, shares)
-    nodes = ld.pick_nodes(phase, mei.wavelengths, mi.Float(u[4])) if picked else None
-    wo, g, q = ld.sample(phase, mei, c, mi.Float(u[0]), mi.Float(u[1]), mi.Point2f(u[2], u[3]), nodes)
-    _, q_eval = ld.eval_pdf(phase, mei, wo, c, nodes)
+    at = ld.at_vertex(phase, mei, mi.Float(u[4]) if picked else None)
+    wo, g, q = ld.sample(phase, mei, c, mi.Float(u[0]), mi.Float(u[1]), mi.Point2f(u[2], u[3]), at)
+    _, q_eval = ld.eval_pdf(phase, mei, wo, c, at)
     if q_shares is not None:
         q = dr.sum(ld.shares(throughput, q_shares) * g)
     return tp, lam, np.array(wo.z), np.array(g).T, np.array(q), np.array(q_eval)

@@ -97,6 +97,21 @@ def _lane_weights(phase, mei):
     return w, spectral_air_weights.by_lane(phase.air_spectral, w, mei.wavelengths, _gather4)
 
 
+class LaneVertex:
+    """What a vertex's draw and its next-event estimate share: each lane's Eq. 8 weights (``lane_w``, 4 lists of S
+    Floats; one lookup of the weight grid for both) and its wavelength node (``nodes``, :func:`pick_nodes`; None:
+    bilinear)."""
+
+    def __init__(self, lane_w, nodes=None):
+        self.lane_w, self.nodes = lane_w, nodes
+
+
+def at_vertex(phase, mei, u=None):
+    """The :class:`LaneVertex` of ``mei``: its weights, and with a uniform ``u`` one node a lane."""
+    _, lane_w = _lane_weights(phase, mei)
+    return LaneVertex(lane_w, None if u is None else pick_nodes(phase, mei.wavelengths, u))
+
+
 def pick_nodes(phase, wavelengths, u):
     """Each lane's wavelength node for one vertex (4 UInt32): of the two that bracket its wavelength, the upper
     with probability equal to its linear weight (lane l's uniform frac(``u`` + l / 4), stratified as
@@ -152,12 +167,12 @@ def _values(phase, lane_w, idx, t, wavelengths, nodes=None):
     return mi.Spectrum(*out)
 
 
-def eval_pdf(phase, mei, wo, c, nodes=None):
-    """(every lane's phase value g_i(wo), the continuation pdf q(wo) = sum_j c_j g_j(wo)); ``nodes``: the vertex's
-    (:func:`pick_nodes`), else bilinear."""
-    _, lane_w = _lane_weights(phase, mei)
+def eval_pdf(phase, mei, wo, c, at=None):
+    """(every lane's phase value g_i(wo), the continuation pdf q(wo) = sum_j c_j g_j(wo)); ``at``: the vertex's
+    :class:`LaneVertex` (else looked up, bilinear)."""
+    at = at_vertex(phase, mei) if at is None else at
     idx, t = phase._segment(0.5 * dr.squared_norm(wo + mei.wi))
-    g = _values(phase, lane_w, idx, t, mei.wavelengths, nodes)
+    g = _values(phase, at.lane_w, idx, t, mei.wavelengths, at.nodes)
     return g, dr.sum(c * g)
 
 
@@ -180,15 +195,16 @@ def _of_lane(values, lane):
     return dr.select(lane == 0, values[0], dr.select(lane == 1, values[1], dr.select(lane == 2, values[2], values[3])))
 
 
-def sample(phase, mei, c, u_lane, sample1, sample2, nodes=None):
-    """(wo, every lane's value g_i(wo), q(wo)): lane l drawn with probability c_l (``u_lane``), its node of
-    ``nodes`` (:func:`pick_nodes`; without them, one of its two wavelength nodes by its linear weight, from what
+def sample(phase, mei, c, u_lane, sample1, sample2, at=None):
+    """(wo, every lane's value g_i(wo), q(wo)) with the vertex's :class:`LaneVertex` ``at`` (else looked up, bilinear):
+    lane l drawn with probability c_l (``u_lane``), its node (without nodes, one of its two wavelength nodes by its linear weight, from what
     is left of ``u_lane``: its bilinear table), a species by the lane's weights (``sample1``; its
     remainder the alias coin), a node segment (``sample2.x``) and v within it, the azimuth (``sample2.y``)."""
     node_vals, alias, _ = prepare(phase)
     lo, inv_step, k = phase.spectral_grid
     n_s, n = phase.n_species, phase.n_nodes
-    _, lane_w = _lane_weights(phase, mei)
+    at = at_vertex(phase, mei) if at is None else at
+    lane_w, nodes = at.lane_w, at.nodes
     lane, u_node = _pick([c[i] for i in range(4)], u_lane)
     if nodes is None:
         x = dr.clip((_of_lane([mei.wavelengths[i] for i in range(4)], lane) - lo) * inv_step, 0.0, k - 1.0001)

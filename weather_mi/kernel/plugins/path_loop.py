@@ -188,15 +188,15 @@ class PathLoop:
         ref = dr.select(v.act_scatter, _as_interaction(v.mei), ref)
         v.ref = dr.select(v.act_e_surf, _as_interaction(p.si), ref)
         v.eps = mi.Float(0.0)  # probability of a sun-guided continuation at this vertex
-        v.alpha, v.lane_nodes = None, None
+        v.alpha, v.lane_vertex = None, None
         if self.by_channel:
             t_sum = dr.sum(p.throughput)
             v.alpha = p.throughput * dr.select(t_sum > 0.0, dr.rcp(t_sum), 0.0)
         elif self.own_lanes:  # the lanes' shares (.lane_directions)
             v.alpha = lane_directions.shares(p.throughput, self.lane_shares)
-            if self.lane_nodes == "picked":  # one node a lane for the vertex's draw and its NEE
-                u = sampler.next_1d(v.act_scatter)
-                v.lane_nodes = lane_directions.pick_nodes(self.phase, p.ray.wavelengths, u)
+            # the lanes' weights (and one node a lane) for the vertex's draw and its NEE
+            u = sampler.next_1d(v.act_scatter) if self.lane_nodes == "picked" else None
+            v.lane_vertex = lane_directions.at_vertex(self.phase, v.mei, u)
         elif self.by_lane:  # the R, G, B densities' shares (.lane_channels)
             v.alpha = lane_channels.channel_shares(p.throughput, p.ray.wavelengths, self.phase.channel_nm)
 
@@ -207,7 +207,7 @@ class PathLoop:
         if not self.has_medium:
             return bsdf_val, bsdf_pdf
         if self.by_lane:  # (no guiding: the continuation's density is the lanes' or the channels')
-            ph_val, ph_pdf = lane_directions.eval_pdf(self.phase, v.mei, d, v.alpha, v.lane_nodes) \
+            ph_val, ph_pdf = lane_directions.eval_pdf(self.phase, v.mei, d, v.alpha, v.lane_vertex) \
                 if self.own_lanes else lane_channels.eval_pdf(self.phase, v.mei, d, v.alpha)
             return dr.select(v.act_e_surf, bsdf_val, ph_val), dr.select(v.act_e_surf, bsdf_pdf, ph_pdf)
         ph_val, ph_pdf = self.phase.eval_pdf(phase_ctx(sampler), v.mei, d, v.act_scatter)
@@ -328,7 +328,7 @@ class PathLoop:
         ph_pdf = None  # with channels, the channel mixture's pdf follows from the values
         if self.own_lanes:  # (no guiding): one lane's own table, q = sum_j c_j g_j(wo)
             return lane_directions.sample(phase, mei_s, v.alpha, sampler.next_1d(act_scatter),
-                                          sampler.next_1d(act_scatter), sampler.next_2d(act_scatter), v.lane_nodes)
+                                          sampler.next_1d(act_scatter), sampler.next_2d(act_scatter), v.lane_vertex)
         if self.by_channel or self.by_lane:
             u = sampler.next_1d(act_scatter)
             alpha = v.alpha
