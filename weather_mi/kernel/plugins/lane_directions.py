@@ -1,29 +1,31 @@
 """Each scattering's direction from the phase table of one of the path's own wavelengths (spectral variants with
 ``hydrometeor_mixture``'s tables every 25 nm; issue 38, spectralmis38): the one-sample MIS of hero wavelength
-spectral sampling (Wilkie et al. 2014, "Hero wavelength spectral sampling", Eq. 6-7), the lane picked in
-proportion to its throughput.
+spectral sampling (Wilkie et al. 2014, "Hero wavelength spectral sampling", EGSR), the lane picked in proportion
+to its throughput.
 
-At a scattering vertex with lane throughputs T_i at wavelengths lambda_i, lane l is picked with probability
-c_l = T_l / sum_j T_j (1/4 each where the throughput is 0) and the direction drawn from that lane's own phase
-function g_l(wo) = sum_s w_s(lambda_l) p_s(wo, lambda_l) (its species with the lane's weights, its wavelength's two
-bracketing table nodes with their linear weights: exactly the bilinear value the lane reads). The direction's
-density is the mixture
+At a scattering vertex each lane i (wavelength lambda_i, throughput T_i) reads ONE of the two 25 nm table nodes
+that bracket lambda_i, the upper with probability equal to its linear weight, picked once for the vertex
+(:func:`pick_nodes`, independent of any direction): g_i(wo) = sum_s w_s(lambda_i) p_s(wo, node_i), an unbiased
+estimate of the lane's bilinear phase function. Lane l is picked with probability c_l = T_l / sum_j T_j (1/4 each
+where the throughput is 0) and the direction drawn from its g_l (a species by the lane's weights, a node segment by
+that (node, species)'s alias table, v within it). The direction's density is the mixture
 
     q(wo) = sum_j c_j g_j(wo)                                            (one-sample MIS, balance heuristic)
 
-and every lane's weight is g_i(wo) / q(wo): unbiased for any c (E[g_i / q] = integral g_i = 1), and with c
-proportional to the throughput sum_i T_i g_i / q = sum_i T_i exactly: a draw keeps the path's total throughput,
-and no lane can exceed it (T_i g_i / q <= sum_j T_j), whatever the tables do between their nodes. This replaces
-``lane_channels`` (directions from the R, G, B tables, whose interpolant the 25 nm tables are only approximately:
-its lanes drifted, R = 11 from one 20 deg sample) where the phase has its tables by wavelength. The next-event
-estimate's MIS uses the same q (:func:`eval_pdf`).
+and every lane's weight is g_i(wo) / q(wo): unbiased for any c (given the picks, E[g_i / q] = integral g_i = 1;
+over them, the bilinear value), and with c proportional to the throughput sum_i T_i g_i / q = sum_i T_i exactly: a
+draw keeps the path's total throughput, and no lane can exceed it (T_i g_i / q <= sum_j T_j). The vertex's next-event
+estimate reads the same nodes and weights (:class:`LaneVertex`) and weights its MIS with the same q
+(:func:`eval_pdf`). This replaces ``lane_channels`` (directions from the R, G, B tables, whose interpolant the 25 nm
+tables are only approximately: its lanes drifted, R = 11 from one 20 deg sample) where the phase has its tables by
+wavelength. Without picked nodes (``at`` None) the lanes' tables are bilinear (two nodes a lane), the same otherwise.
 
 Tables (:func:`prepare`, once a phase object, cached on it): the species' values at every wavelength node exactly
 as the lanes read them (the 16-bit codes of ``spectral_phase.pack_half_nodes`` decoded for the species that change
 with wavelength, float32 for the flat ones), and per (node, species) a Walker alias table of the segment masses of
-that piecewise-linear density: (K S (N - 1)) x 2 floats, 2.1 MB for 7 species, 21 wavelengths, 1828 nodes. Values
-and pdf come from the codes (4 packet loads a lane: two wavelength nodes, two versine nodes), so the pdf is the
-density the draw has to float rounding; the codes' tables integrate to 1 within 2^-11 (``tests``)."""
+that piecewise-linear density: K S (N - 1) x 2 floats, 2.1 MB for 7 species, 21 wavelengths, 1828 nodes. Values
+and pdf come from the codes (2 packet loads a lane, its node at two versine nodes; 4 bilinear), so the pdf is the
+density the draw has to float rounding; the codes' tables integrate to 1 within 2^-11 (tests/test_lane_directions)."""
 from __future__ import annotations
 
 import numpy as np
@@ -196,10 +198,11 @@ def _of_lane(values, lane):
 
 
 def sample(phase, mei, c, u_lane, sample1, sample2, at=None):
-    """(wo, every lane's value g_i(wo), q(wo)) with the vertex's :class:`LaneVertex` ``at`` (else looked up, bilinear):
-    lane l drawn with probability c_l (``u_lane``), its node (without nodes, one of its two wavelength nodes by its linear weight, from what
-    is left of ``u_lane``: its bilinear table), a species by the lane's weights (``sample1``; its
-    remainder the alias coin), a node segment (``sample2.x``) and v within it, the azimuth (``sample2.y``)."""
+    """(wo, every lane's value g_i(wo), q(wo)) with the vertex's :class:`LaneVertex` ``at`` (else looked up,
+    bilinear): lane l drawn with probability c_l (``u_lane``), its node (without nodes, one of its two wavelength
+    nodes by its linear weight, from what is left of ``u_lane``: its bilinear table), a species by the lane's
+    weights (``sample1``; its remainder the alias coin), a node segment (``sample2.x``) and v within it, the
+    azimuth (``sample2.y``)."""
     node_vals, alias, _ = prepare(phase)
     lo, inv_step, k = phase.spectral_grid
     n_s, n = phase.n_species, phase.n_nodes
