@@ -166,6 +166,9 @@ def main(argv=None):
                     help="also the spectral mode with directions from the R, G, B tables in the throughput's shares "
                          "('lane channels', as chroma38), from one lane's table picked uniformly ('uniform lanes') and from "
                          "the lanes' tables bilinear in wavelength ('bilinear lanes')")
+    ap.add_argument("--independent-wavelengths", action="store_true",
+                    help="also the spectral mode with each sample's wavelengths independent of the pixel's others "
+                         "('independent wavelengths'; ``lanes.STRATIFIED_WAVELENGTHS`` False)")
     ap.add_argument("--mix", action="append", default=[],
                     help="also the spectral mode with the wavelengths drawn from this mixture of Mitsuba's density, "
                          "xbar, ybar, zbar (4 weights, e.g. 0.8,0.1,0.05,0.05; repeatable; ``wavelengths.MIX``)")
@@ -200,6 +203,8 @@ def main(argv=None):
     if args.lane_directions:
         for name in ("lane channels", "uniform lanes", "bilinear lanes"):
             modes[f"spectral, {name}"] = "llvm_ad_spectral"
+    if args.independent_wavelengths:
+        modes["spectral, independent wavelengths"] = "llvm_ad_spectral"
     for m in args.mix:
         modes[f"spectral, mix {m}"] = "llvm_ad_spectral"
     if args.without_box_air:
@@ -261,11 +266,27 @@ def patched(mode: str):
                                 (("mean density", "before chroma38"), mean_density),
                                 (("mitsuba wavelengths", "before chroma38"), mitsuba_wavelengths),
                                 (("lane channels",), lane_channels), (("uniform lanes",), uniform_lanes),
-                                (("bilinear lanes",), bilinear_lanes)):
+                                (("bilinear lanes",), bilinear_lanes),
+                                (("independent wavelengths",), independent_wavelengths)):
             stack.enter_context(patch(mode.endswith(suffixes)))
         if " mix " in mode:
             stack.enter_context(wavelength_mix(tuple(float(x) for x in mode.split(" mix ")[1].split(","))))
         yield
+
+
+@contextlib.contextmanager
+def independent_wavelengths(on: bool):
+    """With ``on``: each sample's wavelength uniform its own (as before spectralmis38), not stratified over the
+    pixel's samples in the pass (``wavelengths.stratified``)."""
+    if not on:
+        yield
+        return
+    from weather_mi.kernel.plugins import lanes
+    lanes.STRATIFIED_WAVELENGTHS = False
+    try:
+        yield
+    finally:
+        lanes.STRATIFIED_WAVELENGTHS = True
 
 
 @contextlib.contextmanager
