@@ -5,7 +5,8 @@ mixture written out here: a Henyey-Greenstein species whose g falls linearly fro
 g_i / q has expectation 1 (a phase function integrates to 1), with the lanes' tables bilinear in wavelength and
 with one node a lane picked per vertex; a wrong pdf (the shares of q not those of the draw) fails the same check;
 the lanes' values are the tables' written-out interpolant; a draw keeps the path's total throughput exactly with
-the lanes picked by throughput, not with a uniform pick; the draw's pdf is the next-event estimate's."""
+the lanes picked by throughput, not with the uniform pick (the renders', whose weights are at most 4); the draw's
+pdf is the next-event estimate's."""
 from __future__ import annotations
 
 import numpy as np
@@ -82,14 +83,17 @@ def _draws(phase, n: int, shares="throughput", picked=False, q_shares=None, seed
     return tp, lam, np.array(wo.z), np.array(g).T, np.array(q), np.array(q_eval)
 
 
-@pytest.mark.parametrize("picked", [False, True])
-def test_each_lanes_weight_has_expectation_one(phase, picked):
-    """E[g_i(wo) / q(wo)] = integral of g_i = 1 for every lane, within 3 se (2^18 draws)."""
+@pytest.mark.parametrize("picked, shares", [(False, "throughput"), (True, "throughput"), (True, "uniform")])
+def test_each_lanes_weight_has_expectation_one(phase, picked, shares):
+    """E[g_i(wo) / q(wo)] = integral of g_i = 1 for every lane, within 3 se (2^18 draws); with the uniform pick
+    every weight is at most 4."""
     n = 1 << 18
-    _, _, _, g, q, _ = _draws(phase, n, picked=picked)
+    _, _, _, g, q, _ = _draws(phase, n, shares=shares, picked=picked)
     w = g / q[:, None]
     se = w.std(axis=0) / np.sqrt(n)
     assert np.all(np.abs(w.mean(axis=0) - 1.0) < 3 * se + 2e-4), (w.mean(axis=0), se)
+    if shares == "uniform":
+        assert w.max() <= 4.0 * (1 + 1e-5)
 
 
 def test_a_wrong_pdf_fails_the_expectation(phase):
