@@ -172,6 +172,8 @@ def main(argv=None):
     ap.add_argument("--as-main", action="store_true",
                     help="also the spectral mode as before spectralmis38: directions from the R, G, B tables "
                          "('lane channels') and each sample's wavelengths its own ('independent wavelengths')")
+    ap.add_argument("--throughput-lanes", action="store_true",
+                    help="also the spectral mode with the lane that draws a direction picked by throughput")
     ap.add_argument("--mix", action="append", default=[],
                     help="also the spectral mode with the wavelengths drawn from this mixture of Mitsuba's density, "
                          "xbar, ybar, zbar (4 weights, e.g. 0.8,0.1,0.05,0.05; repeatable; ``wavelengths.MIX``)")
@@ -210,6 +212,8 @@ def main(argv=None):
         modes["spectral, independent wavelengths"] = "llvm_ad_spectral"
     if args.as_main:
         modes["spectral, as main"] = "llvm_ad_spectral"
+    if args.throughput_lanes and not args.lane_directions:
+        modes["spectral, throughput lanes"] = "llvm_ad_spectral"
     for m in args.mix:
         modes[f"spectral, mix {m}"] = "llvm_ad_spectral"
     if args.without_box_air:
