@@ -164,16 +164,16 @@ def main(argv=None):
                          "with Mitsuba's wavelengths ('mitsuba wavelengths') and with both ('before chroma38')")
     ap.add_argument("--lane-directions", action="store_true",
                     help="also the spectral mode with directions from the R, G, B tables in the throughput's shares "
-                         "('lane channels', as chroma38), from one lane's table picked by throughput ('throughput lanes') "
-                         "and from the lanes' tables bilinear in wavelength ('bilinear lanes')")
+                         "('lane channels', as chroma38), from one lane's table picked uniformly ('uniform lanes') and "
+                         "from the lanes' tables bilinear in wavelength ('bilinear lanes')")
     ap.add_argument("--independent-wavelengths", action="store_true",
                     help="also the spectral mode with each sample's wavelengths independent of the pixel's others "
                          "('independent wavelengths'; ``lanes.STRATIFIED_WAVELENGTHS`` False)")
     ap.add_argument("--as-main", action="store_true",
                     help="also the spectral mode as before spectralmis38: directions from the R, G, B tables "
                          "('lane channels') and each sample's wavelengths its own ('independent wavelengths')")
-    ap.add_argument("--throughput-lanes", action="store_true",
-                    help="also the spectral mode with the lane that draws a direction picked by throughput")
+    ap.add_argument("--uniform-lanes", action="store_true",
+                    help="also the spectral mode with the lane that draws a direction picked uniformly")
     ap.add_argument("--mix", action="append", default=[],
                     help="also the spectral mode with the wavelengths drawn from this mixture of Mitsuba's density, "
                          "xbar, ybar, zbar (4 weights, e.g. 0.8,0.1,0.05,0.05; repeatable; ``wavelengths.MIX``)")
@@ -206,14 +206,14 @@ def main(argv=None):
         for name in ("mean density", "mitsuba wavelengths", "before chroma38"):
             modes[f"spectral, {name}"] = "llvm_ad_spectral"
     if args.lane_directions:
-        for name in ("lane channels", "throughput lanes", "bilinear lanes"):
+        for name in ("lane channels", "uniform lanes", "bilinear lanes"):
             modes[f"spectral, {name}"] = "llvm_ad_spectral"
     if args.independent_wavelengths:
         modes["spectral, independent wavelengths"] = "llvm_ad_spectral"
     if args.as_main:
         modes["spectral, as main"] = "llvm_ad_spectral"
-    if args.throughput_lanes and not args.lane_directions:
-        modes["spectral, throughput lanes"] = "llvm_ad_spectral"
+    if args.uniform_lanes and not args.lane_directions:
+        modes["spectral, uniform lanes"] = "llvm_ad_spectral"
     for m in args.mix:
         modes[f"spectral, mix {m}"] = "llvm_ad_spectral"
     if args.without_box_air:
@@ -274,7 +274,7 @@ def patched(mode: str):
                                 (("twice",), phase_twice), (("lookups",), medium_lookups),
                                 (("mean density", "before chroma38"), mean_density),
                                 (("mitsuba wavelengths", "before chroma38"), mitsuba_wavelengths),
-                                (("lane channels", "as main"), lane_channels), (("throughput lanes",), throughput_lanes),
+                                (("lane channels", "as main"), lane_channels), (("uniform lanes",), uniform_lanes),
                                 (("bilinear lanes",), bilinear_lanes),
                                 (("independent wavelengths", "as main"), independent_wavelengths)):
             stack.enter_context(patch(mode.endswith(suffixes)))
@@ -329,10 +329,10 @@ def lane_channels(on: bool):
 
 
 @contextlib.contextmanager
-def throughput_lanes(on: bool):
-    """With ``on``: the lane whose table draws the direction picked in proportion to its throughput, not with
-    probability 1/4 each (hero wavelength sampling's uniform choice; ``lane_directions.shares``)."""
-    with _path_loop_set(on, lane_shares="throughput"):
+def uniform_lanes(on: bool):
+    """With ``on``: the lane whose table draws the direction picked with probability 1/4 each (hero wavelength
+    sampling's uniform choice), not in proportion to its throughput (``lane_directions.shares``)."""
+    with _path_loop_set(on, lane_shares="uniform"):
         yield
 
 

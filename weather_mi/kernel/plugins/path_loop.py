@@ -59,7 +59,7 @@ class PathLoop:
                         and mi.is_spectral and not (self.guiding or self.aureole or self.mvnee))
         # ... and where the phase has its tables by wavelength, from one lane's own table (.lane_directions)
         self.own_lanes = self.by_lane and lane_directions.applies(phase)
-        self.lane_shares = "uniform"  # each lane's probability of lending its table (lane_directions.SHARES)
+        self.lane_shares = "throughput"  # each lane's probability of lending its table (lane_directions.SHARES)
         self.lane_nodes = "picked"  # each lane's table at one wavelength node a vertex, or "bilinear"
         if self.own_lanes:
             lane_directions.prepare(phase)  # its tables, before the loop is traced
