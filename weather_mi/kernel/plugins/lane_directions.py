@@ -3,26 +3,27 @@
 spectral sampling (Wilkie et al. 2014, "Hero wavelength spectral sampling", EGSR), the lane picked in proportion to
 its throughput (or uniformly, as there).
 
-At a scattering vertex each lane i (wavelength lambda_i, throughput T_i) reads ONE of the two 25 nm table nodes
-that bracket lambda_i, the upper with probability equal to its linear weight, picked once for the vertex
+At a scattering vertex each lane i (wavelength lambda_i, throughput T_i) reads ONE of the two 25 nm table nodes that
+bracket lambda_i, the upper with probability equal to its linear weight, picked once for the vertex
 (:func:`pick_nodes`, independent of any direction): g_i(wo) = sum_s w_s(lambda_i) p_s(wo, node_i), an unbiased
 estimate of the lane's bilinear phase function. Lane l is picked with probability c_l = T_l / sum_j T_j (``shares``
 "throughput", the renders' choice; 1/4 each where the throughput is 0) or c_l = 1/4 ("uniform") and the direction
-drawn from its g_l (a species by the lane's weights, a node segment by
-that (node, species)'s alias table, v within it). The direction's density is the mixture
+drawn from its g_l (a species by the lane's weights, a node segment by that (node, species)'s alias table, v within
+it). The direction's density is the mixture
 
     q(wo) = sum_j c_j g_j(wo)                                            (one-sample MIS, balance heuristic)
 
-and every lane's weight is g_i(wo) / q(wo): unbiased for any c (given the picks, E[g_i / q] = integral g_i = 1;
-over them, the bilinear value). With c proportional to the throughput sum_i T_i g_i / q = sum_i T_i exactly: a draw
-keeps the path's total throughput, and no lane can exceed it (T_i g_i / q <= sum_j T_j). The uniform pick bounds a
+and every lane's weight is g_i(wo) / q(wo): unbiased for any c (given the picks, E[g_i / q] = integral g_i = 1; over
+them, the bilinear value). With c proportional to the throughput sum_i T_i g_i / q = sum_i T_i exactly: a draw keeps
+the path's total throughput, and no lane can exceed it (T_i g_i / q <= sum_j T_j). The uniform pick bounds a
 vertex's weights by 4, but their product over thousands of scatterings is a random walk in log space (as the
 channel-mean draw's was before chroma38): at 1024 spp its blue and red fireflies gave 1.3x main's chroma se, where
-the pick by throughput gave main's or less (docs/spectral.md, "Each lane's direction from its own table"). The vertex's next-event
-estimate reads the same nodes and weights (:class:`LaneVertex`) and weights its MIS with the same q
-(:func:`eval_pdf`). This replaces ``lane_channels`` (directions from the R, G, B tables, whose interpolant the 25 nm
-tables are only approximately: its lanes drifted, R = 11 from one 20 deg sample) where the phase has its tables by
-wavelength. Without picked nodes (``at`` None) the lanes' tables are bilinear (two nodes a lane), the same otherwise.
+the pick by throughput gave main's or less (docs/spectral.md, "Each lane's direction from its own table"). The
+vertex's next-event estimate reads the same nodes and weights (:class:`LaneVertex`) and weights its MIS with the
+same q (:func:`eval_pdf`). This replaces ``lane_channels`` (directions from the R, G, B tables, whose interpolant
+the 25 nm tables are only approximately: its lanes drifted, R = 11 from one 20 deg sample) where the phase has its
+tables by wavelength. Without picked nodes (``at`` None) the lanes' tables are bilinear (two nodes a lane), the same
+otherwise.
 
 Tables (:func:`prepare`, once a phase object, cached on it): the species' values at every wavelength node exactly
 as the lanes read them (the 16-bit codes of ``spectral_phase.pack_half_nodes`` decoded for the species that change

@@ -19,7 +19,7 @@ from . import wavelengths
 
 MAX_JOBS_PER_LAUNCH = 1 << 22  # persistent lanes: samples per kernel launch (12 bytes of radiance each)
 CUDA_LANES = 1 << 20           # lanes of a launch off LLVM: a GPU wants ~10^5-10^6 threads in flight
-STRATIFIED_WAVELENGTHS = True  # spectral: a pixel's samples in a pass stratified in wavelength (.wavelengths.stratified)
+STRATIFIED_WAVELENGTHS = True  # spectral: a pixel's samples in a pass stratified in wavelength (.wavelengths)
 
 _JOB_SAMPLERS: dict = {}
 _PCG_MULT = 0x5851F42D4C957F2D
