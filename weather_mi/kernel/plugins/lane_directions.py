@@ -17,8 +17,8 @@ and every lane's weight is g_i(wo) / q(wo): unbiased for any c (given the picks,
 them, the bilinear value). With c proportional to the throughput sum_i T_i g_i / q = sum_i T_i exactly: a draw keeps
 the path's total throughput, and no lane can exceed it (T_i g_i / q <= sum_j T_j). The uniform pick bounds a
 vertex's weights by 4, but their product over thousands of scatterings is a random walk in log space (as the
-channel-mean draw's was before chroma38): at 1024 spp its blue and red fireflies gave 1.3x main's chroma se, where
-the pick by throughput gave main's or less (docs/spectral.md, "Each lane's direction from its own table"). The
+channel-mean draw's was before chroma38): at 1024 spp its blue and red fireflies gave up to 1.27x main's chroma se,
+where the pick by throughput gave main's or less (docs/spectral.md, "Each lane's direction from its own table"). The
 vertex's next-event estimate reads the same nodes and weights (:class:`LaneVertex`) and weights its MIS with the
 same q (:func:`eval_pdf`). This replaces ``lane_channels`` (directions from the R, G, B tables, whose interpolant
 the 25 nm tables are only approximately: its lanes drifted, R = 11 from one 20 deg sample) where the phase has its
