@@ -33,6 +33,13 @@ the tables every 25 nm (with ``--atmosphere none`` only: the box's air by wavele
 ``--medium-lookups`` adds both modes with the trackers' medium lookups per step (as between c0780af and
 spectralair38c: no texel interpolant, no split RGB flights, the box's air's optical depth per empty cube).
 
+``--lane-directions`` adds the spectral mode with directions from the R, G, B tables ("lane channels", as chroma38),
+with the lane that lends its table picked uniformly ("uniform lanes") and with each lane's table bilinear ("bilinear
+lanes") instead of the renders' draw (``kernel/plugins/lane_directions.py``: one lane's own table, picked by
+throughput); ``--uniform-lanes`` the second alone; ``--independent-wavelengths`` the spectral mode without the
+stratified wavelengths; ``--as-main`` both undone (main 7ce4129's spectral mode); ``--mix a,b,c,d`` (repeatable) the
+wavelengths drawn from that mixture of Mitsuba's density, xbar, ybar and zbar.
+
 ``--phase``: the mixture plugin alone in ``llvm_ad_spectral``, ``eval_pdf`` and ``sample`` on the demo
 supercell's five species (their tables at "test" quality, a random 16^3 weight grid) at random directions and
 wavelengths: ns per lane with the tables every 25 nm (``spectral_values``) against the R, G, B tables
