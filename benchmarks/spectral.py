@@ -33,6 +33,13 @@ the tables every 25 nm (with ``--atmosphere none`` only: the box's air by wavele
 ``--medium-lookups`` adds both modes with the trackers' medium lookups per step (as between c0780af and
 spectralair38c: no texel interpolant, no split RGB flights, the box's air's optical depth per empty cube).
 
+``--lane-directions`` adds the spectral mode with directions from the R, G, B tables ("lane channels", as chroma38),
+with the lane that lends its table picked uniformly ("uniform lanes") and with each lane's table bilinear ("bilinear
+lanes") instead of the renders' draw (``kernel/plugins/lane_directions.py``: one lane's own table, picked by
+throughput); ``--uniform-lanes`` the second alone; ``--independent-wavelengths`` the spectral mode without the
+stratified wavelengths; ``--as-main`` both undone (main 7ce4129's spectral mode); ``--mix a,b,c,d`` (repeatable) the
+wavelengths drawn from that mixture of Mitsuba's density, xbar, ybar and zbar.
+
 ``--phase``: the mixture plugin alone in ``llvm_ad_spectral``, ``eval_pdf`` and ``sample`` on the demo
 supercell's five species (their tables at "test" quality, a random 16^3 weight grid) at random directions and
 wavelengths: ns per lane with the tables every 25 nm (``spectral_values``) against the R, G, B tables
@@ -162,6 +169,21 @@ def main(argv=None):
     ap.add_argument("--before-chroma", action="store_true",
                     help="also the spectral mode with directions from the phase's channel-mean density ('mean density'), "
                          "with Mitsuba's wavelengths ('mitsuba wavelengths') and with both ('before chroma38')")
+    ap.add_argument("--lane-directions", action="store_true",
+                    help="also the spectral mode with directions from the R, G, B tables in the throughput's shares "
+                         "('lane channels', as chroma38), from one lane's table picked uniformly ('uniform lanes') and "
+                         "from the lanes' tables bilinear in wavelength ('bilinear lanes')")
+    ap.add_argument("--independent-wavelengths", action="store_true",
+                    help="also the spectral mode with each sample's wavelengths independent of the pixel's others "
+                         "('independent wavelengths'; ``lanes.STRATIFIED_WAVELENGTHS`` False)")
+    ap.add_argument("--as-main", action="store_true",
+                    help="also the spectral mode as before spectralmis38: directions from the R, G, B tables "
+                         "('lane channels') and each sample's wavelengths its own ('independent wavelengths')")
+    ap.add_argument("--uniform-lanes", action="store_true",
+                    help="also the spectral mode with the lane that draws a direction picked uniformly")
+    ap.add_argument("--mix", action="append", default=[],
+                    help="also the spectral mode with the wavelengths drawn from this mixture of Mitsuba's density, "
+                         "xbar, ybar, zbar (4 weights, e.g. 0.8,0.1,0.05,0.05; repeatable; ``wavelengths.MIX``)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
     ap.add_argument("--firefly-k", type=float, default=10.0,
                     help="a firefly: a cloud pixel with one pass > k x the median of its passes in a channel")
@@ -190,6 +212,17 @@ def main(argv=None):
     if args.before_chroma:
         for name in ("mean density", "mitsuba wavelengths", "before chroma38"):
             modes[f"spectral, {name}"] = "llvm_ad_spectral"
+    if args.lane_directions:
+        for name in ("lane channels", "uniform lanes", "bilinear lanes"):
+            modes[f"spectral, {name}"] = "llvm_ad_spectral"
+    if args.independent_wavelengths:
+        modes["spectral, independent wavelengths"] = "llvm_ad_spectral"
+    if args.as_main:
+        modes["spectral, as main"] = "llvm_ad_spectral"
+    if args.uniform_lanes and not args.lane_directions:
+        modes["spectral, uniform lanes"] = "llvm_ad_spectral"
+    for m in args.mix:
+        modes[f"spectral, mix {m}"] = "llvm_ad_spectral"
     if args.without_box_air:
         modes["rgb, no box air"] = "llvm_ad_rgb"
         modes["spectral, no box air"] = "llvm_ad_spectral"
@@ -247,15 +280,80 @@ def patched(mode: str):
         for suffixes, patch in ((("3 nodes",), three_nodes), (("no box air",), no_box_air), (("linear",), linear),
                                 (("twice",), phase_twice), (("lookups",), medium_lookups),
                                 (("mean density", "before chroma38"), mean_density),
-                                (("mitsuba wavelengths", "before chroma38"), mitsuba_wavelengths)):
+                                (("mitsuba wavelengths", "before chroma38"), mitsuba_wavelengths),
+                                (("lane channels", "as main"), lane_channels), (("uniform lanes",), uniform_lanes),
+                                (("bilinear lanes",), bilinear_lanes),
+                                (("independent wavelengths", "as main"), independent_wavelengths)):
             stack.enter_context(patch(mode.endswith(suffixes)))
+        if " mix " in mode:
+            stack.enter_context(wavelength_mix(tuple(float(x) for x in mode.split(" mix ")[1].split(","))))
         yield
+
+
+@contextlib.contextmanager
+def independent_wavelengths(on: bool):
+    """With ``on``: each sample's wavelength uniform its own (as before spectralmis38), not stratified over the
+    pixel's samples in the pass (``wavelengths.stratified``)."""
+    if not on:
+        yield
+        return
+    from weather_mi.kernel.plugins import lanes
+    lanes.STRATIFIED_WAVELENGTHS = False
+    try:
+        yield
+    finally:
+        lanes.STRATIFIED_WAVELENGTHS = True
+
+
+@contextlib.contextmanager
+def wavelength_mix(mix):
+    """The spectral paths' wavelengths drawn from the mixture ``mix`` (``wavelengths.MIX``) for the block."""
+    from weather_mi.kernel.plugins import wavelengths
+    own = wavelengths.MIX
+    wavelengths.MIX = mix
+    wavelengths._CACHE.clear()
+    try:
+        yield
+    finally:
+        wavelengths.MIX = own
+        wavelengths._CACHE.clear()
 
 
 @contextlib.contextmanager
 def mean_density(on: bool):
     """With ``on``: the spectral mode's directions drawn from the phase function's channel-mean density (as before
     chroma38), not from its R, G, B densities in the throughput's shares (``lane_channels``)."""
+    with _path_loop_set(on, by_lane=False, own_lanes=False):
+        yield
+
+
+@contextlib.contextmanager
+def lane_channels(on: bool):
+    """With ``on``: the spectral mode's directions drawn from the phase's R, G, B densities in the throughput's
+    shares by wavelength (``lane_channels``, chroma38), not from one lane's own table (``lane_directions``)."""
+    with _path_loop_set(on, own_lanes=False):
+        yield
+
+
+@contextlib.contextmanager
+def uniform_lanes(on: bool):
+    """With ``on``: the lane whose table draws the direction picked with probability 1/4 each (hero wavelength
+    sampling's uniform choice), not in proportion to its throughput (``lane_directions.shares``)."""
+    with _path_loop_set(on, lane_shares="uniform"):
+        yield
+
+
+@contextlib.contextmanager
+def bilinear_lanes(on: bool):
+    """With ``on``: each lane's table bilinear in wavelength (its two nodes; 4 packet loads a lane) instead of one
+    node a lane picked at each vertex (``lane_directions.pick_nodes``)."""
+    with _path_loop_set(on, lane_nodes="bilinear"):
+        yield
+
+
+@contextlib.contextmanager
+def _path_loop_set(on: bool, **attributes):
+    """With ``on``: ``attributes`` set on every ``PathLoop`` after its own set-up."""
     if not on:
         yield
         return
@@ -264,7 +362,8 @@ def mean_density(on: bool):
 
     def init(self, *args):
         own(self, *args)
-        self.by_lane = False
+        for k, v in attributes.items():
+            setattr(self, k, v)
     path_loop.PathLoop.__init__ = init
     try:
         yield

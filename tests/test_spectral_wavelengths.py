@@ -70,3 +70,18 @@ def test_redrawn_wavelengths_estimate_the_colour_matching_integrals(variant_rest
         se = xyz.std(axis=0) / np.sqrt(n)
         assert np.all(np.abs(xyz.mean(axis=0) - want) < 3 * se + 1e-4), (xyz.mean(axis=0), want, se)
     assert new.std(axis=0)[2] < 0.5 * old.std(axis=0)[2]
+
+
+def test_mitsubas_weight_in_closed_form_is_the_samplers_own(variant_restored):
+    """``mitsuba_weight`` (what ``redrawn`` divides by, from the sensor's wavelengths) equals the weight Mitsuba's
+    ``sample_rgb_spectrum`` returns with them, bit for bit, and is 1 / the written-out density (``mitsuba_pdf``,
+    1 / (0.0039398 / cosh^2)) to 1e-4; a wrong constant (the lane shifted by 1 nm) fails the first check."""
+    import mitsuba as mi
+    from weather_mi.kernel.plugins import wavelengths as wl
+    wm.set_variant(SPECTRAL)
+    u = mi.Float(np.random.default_rng(5).random(1 << 14))
+    lam, w = mi.sample_rgb_spectrum(mi.Spectrum(u, 0.5 * u, 0.25 + 0.5 * u, 1.0 - u))
+    got = np.array(wl.mitsuba_weight(lam))
+    assert np.array_equal(got, np.array(w))
+    np.testing.assert_allclose(got, 1.0 / wl.mitsuba_pdf(np.array(lam)), rtol=1e-4)
+    assert not np.array_equal(np.array(wl.mitsuba_weight(lam + 1.0)), np.array(w))

@@ -58,6 +58,10 @@ def samples(args, spec, vol, pixels=None) -> np.ndarray:
     return np.concatenate(got).reshape(-1, n_pix, 3)
 
 
+class _Traced(Exception):
+    """The traced sample is done: the render that ran it stops here."""
+
+
 def trace(args, spec, vol, pixel: int, pass_i: int, sample: int) -> None:
     """Sample ``sample`` of pass ``pass_i`` in ``pixel`` alone, loops evaluated: its lanes after every stage."""
     import drjit as dr
@@ -72,7 +76,7 @@ def trace(args, spec, vol, pixel: int, pass_i: int, sample: int) -> None:
         for s in STAGES:
             before = np.array([float(p.throughput[i][0]) for i in range(4)])
             out = getattr(self, s)(*((sampler, p) if s in ("roulette", "free_flight") else
-                                     (p, v) if s in ("emitters_hit", "vertex") else (sampler, p, v)))
+                                     (p, v) if s == "emitters_hit" else (sampler, p, v)))
             v = out if s == "free_flight" else v
             after = np.array([float(p.throughput[i][0]) for i in range(4)])
             if np.all(before > 0) and np.all(after > 0):
@@ -91,14 +95,15 @@ def trace(args, spec, vol, pixel: int, pass_i: int, sample: int) -> None:
         medium = sensor.get_medium()
         launch = lanes._Launch(sensor, medium, scene.integrator()._path_loop(scene, medium), w, h, mi.UInt32([pixel]),
                                1, mi.UInt32([sample]),
-                               mi.UInt64(np.array([lanes._splitmix64(passes.pass_seed(args.seed, pass_i))], np.uint64)))
+                               mi.UInt64(np.array([lanes._splitmix64(passes.pass_seed(args.seed, pass_i))], np.uint64)),
+                               mi.Float([1.0 / (args.spp // args.passes)]) if lanes.STRATIFIED_WAVELENGTHS else None)
         print("the sample's XYZ", launch.run(lanes.job_sampler_class(), 1, 1, 0)[0])
-        raise StopIteration
+        raise _Traced  # (not StopIteration: raised inside the passes' generator it would become a RuntimeError)
     own_body, own_passes = path_loop.PathLoop.body, passes.render_passes
     path_loop.PathLoop.body, passes.render_passes = body, one
     try:
         render_reference(spec, vol, spp=args.spp, passes=args.passes, progress=False, variant="llvm_ad_spectral")
-    except StopIteration:
+    except _Traced:
         pass
     finally:
         path_loop.PathLoop.body, passes.render_passes = own_body, own_passes

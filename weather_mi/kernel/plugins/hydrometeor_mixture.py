@@ -67,7 +67,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..jitarrays import aligned_empty, aligned_float
-from . import air_levels, grid_lookup
+from . import air_levels, grid_lookup, linear_segment
 from .mixture_tables import (GUIDE_THETA0, alias_table, angle_warp, channel_mean_pdf, common_nodes,  # noqa: F401
                              guide_table, prepare_tables, segment_masses)
 from . import spectral_air_weights, spectral_albedo
@@ -490,21 +490,9 @@ class HydrometeorMixture:
         v1 = _gather(self.nodes, idx + 1)
         f0 = _gather(self.table4, k)
         f1 = _gather(self.table4, k + 4 * self.n_species)
-        # invert the segment's linear density: f0 x + (f1 - f0) x^2 / (2 dv) = r (f0 + f1) dv / 2,
-        # x in [0, dv] (stable root)
-        dmu = v1 - v0
-        rr = r * 0.5 * (f0 + f1) * dmu
-        a = (f1 - f0) / (2.0 * dmu)
-        disc = dr.maximum(f0 * f0 + 4.0 * a * rr, 0.0)
-        x = dr.select(f0 + dr.sqrt(disc) > 0.0, 2.0 * rr / (f0 + dr.sqrt(disc)), r * dmu)
-        x = dr.clip(x, 0.0, dmu)
-        v = dr.clip(v0 + x, 0.0, 2.0)
-        cos_theta = 1.0 - v
-        sin_theta = dr.safe_sqrt(v * (2.0 - v))
-        sin_phi, cos_phi = dr.sincos(2.0 * dr.pi * sample2.y)
-        wo = mei.to_world(mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, -cos_theta))
+        v, t = linear_segment.invert(v0, v1, f0, f1, r)  # v within the segment, from its linear density
+        wo = linear_segment.direction(mei, v, sample2.y)
         # value and pdf where v was drawn: same weights, same segment (no search, no second lookup)
-        t = dr.clip(x / dr.maximum(dmu, 1e-30), 0.0, 1.0)
         if self.spectral_grid is not None:  # the lanes' values from the tables by wavelength
             value, pdf = self._mix_at(w, idx, t, mei, wo)
         else:

@@ -19,6 +19,7 @@ from . import wavelengths
 
 MAX_JOBS_PER_LAUNCH = 1 << 22  # persistent lanes: samples per kernel launch (12 bytes of radiance each)
 CUDA_LANES = 1 << 20           # lanes of a launch off LLVM: a GPU wants ~10^5-10^6 threads in flight
+STRATIFIED_WAVELENGTHS = True  # spectral: a pixel's samples in a pass stratified in wavelength (.wavelengths)
 
 _JOB_SAMPLERS: dict = {}
 _PCG_MULT = 0x5851F42D4C957F2D
@@ -95,9 +96,11 @@ class _Launch:
     selected pixel) of all passes in order: its pass's key (the PCG32 state; its high bits | the
     sample's number make the stream) and its sample number in the pass."""
 
-    def __init__(self, sensor, medium, path_loop, width, height, pix_list, n_pix, layer_number, layer_key):
+    def __init__(self, sensor, medium, path_loop, width, height, pix_list, n_pix, layer_number, layer_key,
+                 layer_inv_spp=None):
         self.sensor, self.medium, self.loop = sensor, medium, path_loop
         self.pix_list, self.layer_number, self.layer_key = pix_list, layer_number, layer_key
+        self.layer_inv_spp = layer_inv_spp  # spectral: 1 / its pass's spp, for the stratified wavelengths
         self.size = [dr.opaque(mi.UInt32, v) for v in (width, height)]
         self.n_sel = dr.opaque(mi.UInt32, n_pix)
         self.n_all = dr.opaque(mi.UInt32, width * height)
@@ -145,7 +148,11 @@ class _Launch:
             u_wavelength = sampler.next_1d(start)
             ray, ray_weight = sensor.sample_ray(sensor.shutter_open(), u_wavelength, pos * self.inv_size,
                                                 mi.Point2f(0.5, 0.5), start)
-            if mi.is_spectral:  # the path's wavelengths drawn for colour (.wavelengths)
+            if mi.is_spectral:  # the path's wavelengths drawn for colour (.wavelengths), stratified in the pass
+                if self.layer_inv_spp is not None:
+                    inv_spp = dr.gather(mi.Float, self.layer_inv_spp, layer, start)
+                    u_wavelength = wavelengths.stratified(key, pixel, dr.gather(mi.UInt32, self.layer_number, layer,
+                                                                                 start), inv_spp)
                 ray, ray_weight = wavelengths.redrawn(ray, ray_weight, u_wavelength, start)
             new = loop.initial(ray, medium, start)
             for name in type(path).DRJIT_STRUCT:  # the new samples' paths in the lanes that start one
@@ -200,8 +207,10 @@ def render_passes(integrator, scene, passes, lanes: int | None = None, max_jobs:
     layer_number = mi.UInt32(np.concatenate([np.arange(n) for n in spps]).astype(np.uint32))
     layer_key = mi.UInt64(np.array([_splitmix64(int(seed)) for _, seed in passes], np.uint64)[layer_pass])
     medium = sensor.get_medium()
+    inv_spp = mi.Float((1.0 / np.asarray(spps, np.float64))[layer_pass].astype(np.float32)) \
+        if mi.is_spectral and STRATIFIED_WAVELENGTHS else None
     launch = _Launch(sensor, medium, integrator._path_loop(scene, medium), width, height, pix_list, n_pix,
-                     layer_number, layer_key)
+                     layer_number, layer_key, inv_spp)
     job_sampler = job_sampler_class()
     lanes = int(lanes) if lanes is not None else default_lanes()
     total = len(layer_pass)

@@ -8,7 +8,7 @@ import functools
 import drjit as dr
 import mitsuba as mi
 
-from . import lane_channels, mvnee, sun
+from . import lane_channels, lane_directions, mvnee, sun
 from .medium_setup import phase_ctx, scattering_event
 from .path_state import Vertex, path_state_class
 from .trackers import delta_tracking, shadow_transmittance
@@ -57,6 +57,12 @@ class PathLoop:
         # not with sun guiding, the aureole or multiple-vertex NEE, whose pdfs take the channel mean)
         self.by_lane = (has_medium and integ.channels == "history" and hasattr(phase, "sample_channel")
                         and mi.is_spectral and not (self.guiding or self.aureole or self.mvnee))
+        # ... and where the phase has its tables by wavelength, from one lane's own table (.lane_directions)
+        self.own_lanes = self.by_lane and lane_directions.applies(phase)
+        self.lane_shares = "throughput"  # each lane's probability of lending its table (lane_directions.SHARES)
+        self.lane_nodes = "picked"  # each lane's table at one wavelength node a vertex, or "bilinear"
+        if self.own_lanes:
+            lane_directions.prepare(phase)  # its tables, before the loop is traced
         self.rr_cap = 0.95 if integ.rr_mode == "volpath" else 1.0
         self.c_em = c_em = integ.emitter_nee
         self.c_sky = c_em if sun_mode != "none" else 1.0          # share of shadow rays towards the scene's emitters
@@ -101,7 +107,7 @@ class PathLoop:
         self.roulette(sampler, p)
         v = self.free_flight(sampler, p)
         self.emitters_hit(p, v)
-        self.vertex(p, v)
+        self.vertex(sampler, p, v)
         self.nee(sampler, p, v)
         self.aureole_nee(sampler, p, v)
         self.sample_phase(sampler, p, v)
@@ -173,7 +179,7 @@ class PathLoop:
         v.active_surface &= p.si.is_valid()
         v.bsdf = p.si.bsdf(p.ray)
 
-    def vertex(self, p, v):
+    def vertex(self, sampler, p, v):
         """The vertex of emitter sampling (a real collision or a smooth surface) and the channel
         probabilities alpha of history-aware channel sampling (in proportion to the throughput)."""
         v.act_e_surf = v.active_surface & mi.has_flag(v.bsdf.flags(), mi.BSDFFlags.Smooth) & (p.depth + 1 < self.max_depth)
@@ -182,10 +188,15 @@ class PathLoop:
         ref = dr.select(v.act_scatter, _as_interaction(v.mei), ref)
         v.ref = dr.select(v.act_e_surf, _as_interaction(p.si), ref)
         v.eps = mi.Float(0.0)  # probability of a sun-guided continuation at this vertex
-        v.alpha = None
+        v.alpha, v.lane_vertex = None, None
         if self.by_channel:
             t_sum = dr.sum(p.throughput)
             v.alpha = p.throughput * dr.select(t_sum > 0.0, dr.rcp(t_sum), 0.0)
+        elif self.own_lanes:  # the lanes' shares (.lane_directions)
+            v.alpha = lane_directions.shares(p.throughput, self.lane_shares)
+            # the lanes' weights (and one node a lane) for the vertex's draw and its NEE
+            u = sampler.next_1d(v.act_scatter) if self.lane_nodes == "picked" else None
+            v.lane_vertex = lane_directions.at_vertex(self.phase, v.mei, u)
         elif self.by_lane:  # the R, G, B densities' shares (.lane_channels)
             v.alpha = lane_channels.channel_shares(p.throughput, p.ray.wavelengths, self.phase.channel_nm)
 
@@ -195,8 +206,9 @@ class PathLoop:
         bsdf_val, bsdf_pdf = v.bsdf.eval_pdf(self.bsdf_ctx, p.si, p.si.to_local(d), v.act_e_surf)
         if not self.has_medium:
             return bsdf_val, bsdf_pdf
-        if self.by_lane:  # (no guiding: the continuation's density is the channels')
-            ph_val, ph_pdf = lane_channels.eval_pdf(self.phase, v.mei, d, v.alpha)
+        if self.by_lane:  # (no guiding: the continuation's density is the lanes' or the channels')
+            ph_val, ph_pdf = lane_directions.eval_pdf(self.phase, v.mei, d, v.alpha, v.lane_vertex) \
+                if self.own_lanes else lane_channels.eval_pdf(self.phase, v.mei, d, v.alpha)
             return dr.select(v.act_e_surf, bsdf_val, ph_val), dr.select(v.act_e_surf, bsdf_pdf, ph_pdf)
         ph_val, ph_pdf = self.phase.eval_pdf(phase_ctx(sampler), v.mei, d, v.act_scatter)
         ph_pdf = sun.continuation_pdf(self.integ, self.phase, sampler, v.mei, d, ph_val, ph_pdf, v.alpha, v.eps,
@@ -314,6 +326,9 @@ class PathLoop:
             in_disk = toward_sun & (u_g < 0.5 * v.eps) if self.sun_mode == "disk" else mi.Bool(False)
             mei_s = sun.about_sun(integ, v.mei, toward_sun)
         ph_pdf = None  # with channels, the channel mixture's pdf follows from the values
+        if self.own_lanes:  # (no guiding): one lane's own table, q = sum_j c_j g_j(wo)
+            return lane_directions.sample(phase, mei_s, v.alpha, sampler.next_1d(act_scatter),
+                                          sampler.next_1d(act_scatter), sampler.next_2d(act_scatter), v.lane_vertex)
         if self.by_channel or self.by_lane:
             u = sampler.next_1d(act_scatter)
             alpha = v.alpha

@@ -54,11 +54,12 @@ class Vertex:
     ============  ============================================  ===============================================
     free_flight   act_scatter, active_surface, mei              (its own)
     emitters_hit  active_surface (&= a valid surface), bsdf     active_surface
-    vertex        act_e_surf, act_e, ref, eps (0), alpha        active_surface, bsdf, act_scatter, mei
+    vertex        act_e_surf, act_e, ref, eps (0), alpha,       active_surface, bsdf, act_scatter, mei
+                  lane_vertex
     nee           eps (sun guiding)                             act_e, act_e_surf, act_scatter, ref, bsdf, mei,
-                                                                alpha, eps
+                                                                alpha, lane_vertex, eps
     aureole_nee   eps_a                                         act_scatter, mei, alpha (``mvnee.chain``: mei)
-    sample_phase  act_scatter (&= a phase pdf > 0)              act_scatter, mei, alpha, eps, eps_a
+    sample_phase  act_scatter (&= a phase pdf > 0)              act_scatter, mei, alpha, lane_vertex, eps, eps_a
     sample_bsdf   --                                            active_surface, bsdf, act_scatter
     ============  ============================================  ===============================================
     """
@@ -72,13 +73,14 @@ class Vertex:
     ref: mi.Interaction3f                # the vertex's position (m, world) for emitter sampling
     eps: mi.Float                        # probability of a sun-guided continuation here (0 without guiding)
     alpha: mi.Spectrum | None            # channel probabilities (throughput / its sum); None: no channel sampling
+    lane_vertex: object | None           # each lane's weights and table node (.lane_directions.LaneVertex)
     eps_a: mi.Float                      # probability of the aureole estimator here (0 without it)
     __slots__ = tuple(__annotations__)
 
     # (stage, the fields it sets), in the order PathLoop.body runs the stages
     STAGES = (("free_flight", ("act_scatter", "active_surface", "mei")),
               ("emitters_hit", ("active_surface", "bsdf")),
-              ("vertex", ("act_e_surf", "act_e", "ref", "eps", "alpha")),
+              ("vertex", ("act_e_surf", "act_e", "ref", "eps", "alpha", "lane_vertex")),
               ("nee", ("eps",)),
               ("aureole_nee", ("eps_a",)),
               ("sample_phase", ("act_scatter",)),

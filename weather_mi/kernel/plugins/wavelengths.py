@@ -72,13 +72,44 @@ def sample_colour(u, active=True):
     return LAMBDA_NM[0] + (mi.Float(i) + x) * GRID_NM, p
 
 
+def pixel_uniform(key, pixel):
+    """A uniform number in [0, 1) per (pass key (UInt64), pixel (UInt32)): murmur3's 32-bit finaliser of their
+    bits, independent of the samples' own PCG32 streams."""
+    h = mi.UInt32(key) ^ (mi.UInt32(key >> 32) * 0x9E3779B9) ^ (pixel * 0x85EBCA6B)
+    h ^= h >> 16
+    h *= 0x85EBCA6B
+    h ^= h >> 13
+    h *= 0xC2B2AE35
+    h ^= h >> 16
+    return mi.Float(h >> 8) * (1.0 / (1 << 24))
+
+
+def stratified(key, pixel, k, inv_spp):
+    """The wavelength uniform of sample ``k`` (UInt32) of ``pixel`` in a pass of 1 / ``inv_spp`` samples a pixel
+    (pass key ``key``): frac(r + k / (4 spp)) with r = :func:`pixel_uniform` (a randomly shifted rank-1 lattice).
+    Each sample's uniform is uniform (r is); with the 4 lanes shifted by 1/4 (``redrawn``) the pass's 4 spp
+    wavelengths of a pixel are r + (k + l spp) / (4 spp), evenly spaced in the density's cumulative, one in each of
+    4 spp strata: the wavelength sampling's share of a pixel's colour noise falls faster than 1 / sqrt(spp).
+    Passes stay independent (r is drawn per pass)."""
+    u = pixel_uniform(key, pixel) + mi.Float(k) * (0.25 * inv_spp)
+    return u - dr.floor(u)
+
+
+def mitsuba_weight(lam_nm):
+    """1 / p_M of wavelengths ``lam_nm`` (a Spectrum, nm) as Mitsuba's ``sample_rgb_spectrum`` returns it with
+    them, in closed form (Mitsuba 3.9.1, include/mitsuba/core/spectrum.h): 253.82 cosh^2(0.0072 (lambda - 538)),
+    the same float32 operations on the same wavelengths."""
+    c = dr.cosh(0.0072 * (lam_nm - 538.0))
+    return 253.82 * c * c
+
+
 def redrawn(ray, weight, sample, active):
     """``ray`` and its sensor weight with the 4 wavelengths the sensor drew from ``sample`` (its wavelength
     sample, Mitsuba's density) replaced by the 4 drawn from :func:`colour_pdf` with the same stratified
-    uniforms: weight x p_M(old) / p(new)."""
+    uniforms: weight x p_M(old) / p(new), p_M(old) from the sensor's wavelengths (:func:`mitsuba_weight`)."""
     shifted = [sample + 0.25 * i for i in range(4)]
     shifted = [dr.select(s >= 1.0, s - 1.0, s) for s in shifted]  # Mitsuba's sample_shifted
-    _, w_m = mi.sample_rgb_spectrum(mi.Spectrum(*shifted))  # 1 / p_M of the sensor's wavelengths
+    w_m = mitsuba_weight(ray.wavelengths)  # 1 / p_M of the sensor's wavelengths
     lam, pdf = [], []
     for s in shifted:
         x, p = sample_colour(s, active)
