@@ -155,7 +155,7 @@ def eye_air_input(mi, spec, bbox, reuse, shadow: bool = True) -> EyeAir | None:
     return EyeAir(**fixed, to_sun=mi.Vector3f(*(op(v) for v in spec.sun.to_sun)),
                   irradiance=mi.Color3f(*(op(v) for v in spec.sun.irradiance)),
                   diffuse=diffuse_input(mi, spec, reuse, height_grid(), sun_table(atm).rgb[-1, -1]),
-                  shadow=bool(shadow), sky_air=spec.sky is not None and spec.sky.kind == "air",
+                  shadow=bool(shadow), sky_air=spec.has_air_sky,
                   width=int(spec.width), height=int(spec.height))
 
 

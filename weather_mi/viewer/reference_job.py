@@ -129,7 +129,7 @@ def with_air(recipe: VolumeRecipe, scale, spec: SceneSpec):
     from ..optics.air.inside import scene_air
     # a coarser sun table and 33 points a ray (the slicer's, slicing/eye_air.py): S within ~1% at an eighth of
     # the time, so that the first estimate comes soon
-    sky_air = spec.sky is not None and spec.sky.kind == "air"  # the air's own sky (its envmap: kernel.air_sky)
+    sky_air = spec.has_air_sky  # the air's own sky (its envmap: kernel.air_sky)
     air = eye_air(spec, vol, sky_air, wide_sun_table(spec.atmosphere, spec.sun.mu0, n_mu=EYE_AIR_MU), EYE_AIR_SAMPLES)
     return scene_air(vol, spec.atmosphere), lambda img: with_eye_air(img, spec, vol, sky_air, air=air)
 
