@@ -290,15 +290,14 @@ class ReferenceJob:
 
     def cancel(self, wait: bool = True) -> None:
         """Terminate the child (SIGTERM, SIGKILL after JOIN_TIMEOUT_S) and reap it; no update follows.
-        Idempotent. ``wait=False``: the SIGTERM now, the reaping on a thread of its own (the viewer's event loop
+        Idempotent. ``wait=False``: the SIGTERM and the reaping on a thread of its own (the viewer's event loop
         does not wait for a child at the lowest priority to end on a loaded machine: 0.3 s measured)."""
         self._cancelled = True
         self._finished = True
         if self._proc is not None:
             if wait:
                 self._stop_process()
-            elif self._proc.is_alive():
-                self._proc.terminate()
+            else:  # a dead child is reaped there too (join(0))
                 threading.Thread(target=self._stop_process, name="reference-reaper", daemon=True).start()
         self._close_conn()
 
