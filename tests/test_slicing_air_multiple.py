@@ -82,16 +82,21 @@ def test_the_box_airs_path_radiance_is_disorts(elevation):
 
 
 def test_the_mean_intensity_follows_the_sun_and_is_dark_below_the_horizon():
-    """J(h) (``air_multiple.mean_intensity``) between its cosine nodes is linear between DISORT's at the nodes, at
-    a node it is DISORT's (``skylight.diffuse_source_table``), it grows with the sun's height at the ground, and
-    it is 0 with the sun below the horizon."""
+    """J(h) (``air_multiple.mean_intensity``) halfway between two cosine nodes is the mean of its values at the
+    nodes (linear between them), and within 2.5 % of DISORT's own J at that cosine
+    (``skylight.diffuse_source_table``; the linear rule's error is 1.4 % at mu0 0.25 with these nodes: the test
+    of their spacing); it grows with the sun's height at the ground, and it is 0 with the sun below the
+    horizon."""
     from weather_mi.optics.air.inside import CHANNEL_NM
     from weather_mi.optics.air.skylight import diffuse_source_table
     from weather_mi.slicing.air_multiple import MU_NODES, mean_intensity
     atm, h = Atmosphere(), np.array([0.0, 3000.0, 12000.0])
-    at_node = mean_intensity(atm, MU_NODES[4], h)
-    table = diffuse_source_table(atm, MU_NODES[4], 0.0, 0.15, CHANNEL_NM)
-    expected = np.stack([np.interp(h, table.heights_m, table.rgb[0][:, c]) for c in range(3)], axis=1)
-    np.testing.assert_allclose(at_node, expected, rtol=1e-6)
+    mid = 0.5 * (MU_NODES[4] + MU_NODES[5])
+    between = mean_intensity(atm, mid, h)
+    nodes = 0.5 * (mean_intensity(atm, MU_NODES[4], h) + mean_intensity(atm, MU_NODES[5], h))
+    np.testing.assert_allclose(between, nodes, rtol=1e-12)
+    table = diffuse_source_table(atm, mid, 0.0, 0.15, CHANNEL_NM)
+    disort = np.stack([np.interp(h, table.heights_m, table.rgb[0][:, c]) for c in range(3)], axis=1)
+    np.testing.assert_allclose(between, disort, rtol=0.025)
     assert np.all(mean_intensity(atm, 0.9, h)[0] > mean_intensity(atm, 0.2, h)[0])
     assert np.all(mean_intensity(atm, -0.05, h) == 0.0)

@@ -135,11 +135,15 @@ def test_the_newest_request_wins_drafts_then_a_refine(cumulus_storm):
     assert last.url.startswith("data:image/jpeg;base64,")
 
 
-def test_a_button_held_on_the_view_holds_the_refine_back_until_released(cumulus_storm):
+def test_a_button_held_on_the_view_holds_the_refine_back_until_released(cumulus_storm, monkeypatch):
     """Issue 38's slider stall: a refine cannot be interrupted, so while the mouse button is held (a drag that may go
-    on) the loop waits HOLD_IDLE_S of idle input before refining, not IDLE_S; released, the refine follows."""
-    from weather_mi.viewer.frames import HOLD_IDLE_S, IDLE_S, FrameLoop
-    assert HOLD_IDLE_S >= 4 * IDLE_S
+    on) the loop waits HOLD_IDLE_S of idle input before refining, not IDLE_S; released, the refine follows. The
+    hold is made 60 s here (the loop reads the module's HOLD_IDLE_S at run time), so that a refine before the
+    release, or one within 30 s after it, is the hold's rule and not the machine's speed."""
+    from weather_mi.viewer import frames as frames_module
+    from weather_mi.viewer.frames import IDLE_S, FrameLoop
+    assert frames_module.HOLD_IDLE_S >= 4 * IDLE_S
+    monkeypatch.setattr(frames_module, "HOLD_IDLE_S", 60.0)
     frames = []
     loop = FrameLoop(cumulus_storm, lambda f: frames.append((time.perf_counter(), f)))
     try:
@@ -147,19 +151,18 @@ def test_a_button_held_on_the_view_holds_the_refine_back_until_released(cumulus_
         loop.render(base)  # compile first
         loop.render(base, draft=True)
         loop.hold(True)
-        t_input = time.perf_counter()
         loop.submit(base.updated(sun_azimuth=300.0), seq=1, interactive=True)
         time.sleep(4 * IDLE_S)
         assert frames and all(f.draft for _, f in frames)          # the draft, and no refine while held
         loop.hold(False)
-        t_end = time.perf_counter() + 60
-        while not any(not f.draft for _, f in frames) and time.perf_counter() < t_end:
+        t_release = time.perf_counter()
+        while not any(not f.draft for _, f in frames) and time.perf_counter() < t_release + 30:
             time.sleep(0.05)
     finally:
         loop.stop()
     refined = [(t, f) for t, f in frames if not f.draft]
-    assert refined and refined[0][1].state.sun_azimuth == 300.0 and refined[0][1].seq == 1
-    assert refined[0][0] - t_input >= 4 * IDLE_S                 # not before the release
+    assert refined, "no refine within 30 s of the release (the held 60 s still applied)"
+    assert refined[0][1].state.sun_azimuth == 300.0 and refined[0][1].seq == 1
 
 
 def test_reference_metrics_wait_for_the_refined_frame_and_never_render():

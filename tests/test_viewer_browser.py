@@ -114,21 +114,21 @@ def test_a_slider_changes_the_frame(page):
     assert lat and all(0 < x < 30000 for x in lat)
 
 
-def test_a_slider_held_still_is_not_refined_until_released(page):
-    """Issue 38's slider stall: pressing a slider moves the sun; held still there, the view stays a draft (a refine
-    cannot be interrupted, and the drag may go on), and is refined once the button is released."""
-    from weather_mi.viewer.frames import HOLD_IDLE_S
+def test_a_slider_pressed_and_held_gives_a_draft_and_is_refined_once_released(page):
+    """Issue 38's slider stall, as far as a browser can tell it: pressing a slider moves the sun at once (a draft
+    frame), and the view is refined once the button is released. That no refine comes while the button is held
+    (the page's ``hold`` message, ``FrameLoop.hold``) is tests/test_viewer.py's: here a refine held back and a
+    refine that is merely slow (1-3 s on a loaded machine) read the same."""
     box = page.locator(".wm-sun-azimuth input").first.bounding_box()
     n0 = page.evaluate("window.wmStats.frames")
     page.mouse.move(box["x"] + box["width"] * 0.3, box["y"] + box["height"] / 2)
     page.mouse.down()
     try:
         wait_frames(page, n0 + 1, 60)
-        time.sleep(0.5 * HOLD_IDLE_S)   # twice IDLE_S and more: the refine would have come
-        assert "(draft)" in status(page)
+        assert "(draft)" in status(page)    # the press's first frame is a draft
     finally:
         page.mouse.up()
-    wait_idle(page, 1.0)
+    wait_idle(page, 1.0)                    # the refine
     assert "(draft)" not in status(page)
 
 

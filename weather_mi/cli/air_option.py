@@ -48,13 +48,14 @@ def resolve(args) -> None:
     """``--atmosphere`` and ``--sky`` where the command left them to the defaults (None): "clear" and "air" where
     the atmosphere is on by default (except with ``--integrator volpath`` or ``--legacy``, whose sun is one of
     the scene's emitters, and a tiled render, ``--tile-size``: there "none"), else "none" and "sunsky"."""
+    from ..scene.spec import default_sky
     on = getattr(args, ON_BY_DEFAULT, False)
     if args.atmosphere is None:
         own_sun = getattr(args, "integrator", "majorant") != "volpath" and not getattr(args, "legacy", False)
         tiled = getattr(args, "tile_size", None) is not None  # render --tile-size has no atmosphere yet
         args.atmosphere = "clear" if on and own_sun and not tiled else "none"
     if args.sky is None:
-        args.sky = "air" if on and args.atmosphere == "clear" else "sunsky"
+        args.sky = default_sky(args.atmosphere) if on else "sunsky"
     elif on and args.atmosphere == "clear" and args.sky == "sunsky":
         import sys
         print("note: --sky sunsky with --atmosphere clear counts the air in the box twice (Hosek-Wilkie's sky holds "

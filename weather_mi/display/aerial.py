@@ -170,12 +170,14 @@ class SpectralChannels:
 def _diffuse_table(spec, band_nm=None):
     """The diffuse light's mean intensity by height (``optics.air.skylight.diffuse_source_table``) for ``spec``'s
     atmosphere, sun and ground (albedo: its channel mean); None with the sun below the horizon. ``band_nm``: at
-    those wavelengths (None: linear sRGB)."""
+    those wavelengths (None: linear sRGB). The sun's cosine is the raw mu0 (plane-parallel), where the slicer's J
+    (``slicing.air_multiple.diffuse_input``) takes Kasten-Young's ``effective_mu0``: they differ by over 1 % below 20
+    deg of elevation (0.113 against 0.105 at 6 deg)."""
+    from ..kernel.air_sky import ground_boundary
     from ..optics.air.skylight import diffuse_source_table
     if spec.sun.mu0 <= 0.0:
         return None
-    ground = 0.0 if spec.ground is None else max(float(spec.ground.height), 0.0)
-    albedo = 0.0 if spec.ground is None else float(np.mean(spec.ground.albedo))
+    ground, albedo = ground_boundary(spec)
     return diffuse_source_table(spec.atmosphere, float(spec.sun.mu0), ground, albedo, band_nm)
 
 

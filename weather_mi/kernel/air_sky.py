@@ -66,8 +66,9 @@ def exit_heights(bbox, reference_m: float, zenith_deg, azimuth_deg) -> np.ndarra
     return np.minimum(float(reference_m) + np.nan_to_num(rise, nan=np.inf, posinf=np.inf), float(z1))
 
 
-def _ground(spec) -> tuple[float, float]:
-    """(The flat ground's height, at least sea level; its mean albedo): the 1-D atmosphere's lower boundary."""
+def ground_boundary(spec) -> tuple[float, float]:
+    """(The flat ground's height (m), at least sea level; its mean albedo; (0, 0) without a ground): the 1-D
+    atmosphere's lower boundary (DISORT's surface), the same for the path tracer's sky and the slicer's."""
     if spec.ground is None:
         return 0.0, 0.0
     return max(float(spec.ground.height), 0.0), float(np.mean(spec.ground.albedo))
@@ -80,7 +81,7 @@ def _sky(spec, bbox, reference_m: float | None = None, size=ENV_SIZE):
     atm, sun = spec.atmosphere, spec.sun
     if atm is None:
         raise ValueError("--sky air is the clear atmosphere's own sky: it needs an atmosphere (--atmosphere clear)")
-    ground, albedo = _ground(spec)
+    ground, albedo = ground_boundary(spec)
     ref = ground if reference_m is None else max(float(reference_m), ground)
     top = max(float(bbox[1][2]), ref)
     levels = np.unique(np.r_[np.arange(ref, top, LEVEL_STEP_M), top])
@@ -123,10 +124,6 @@ def open_ground_sky(spec, bbox) -> tuple[np.ndarray, np.ndarray]:
     return horizontal_irradiance(bitmap), table.diffuse_rgb[0] * np.asarray(spec.sun.irradiance, np.float64)
 
 
-# the sun's cosines of :func:`sky_irradiance`'s nodes (denser low: the skylight changes fastest near the horizon)
-SKYLIGHT_MU_NODES = np.array([0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.85, 1.0])
-
-
 @functools.lru_cache(maxsize=64)
 def _skylight_node(atm, mu0: float, ground_m: float, albedo: float) -> np.ndarray:
     """DISORT's diffuse downward flux at the ground (RGB, per unit luminance irradiance of the sun above the air)
@@ -139,21 +136,16 @@ def _skylight_node(atm, mu0: float, ground_m: float, albedo: float) -> np.ndarra
 def sky_irradiance(spec) -> np.ndarray:
     """The air's sky's irradiance (RGB, W/m^2: times ``spec.sun.irradiance``) on a horizontal plane at the envmap's
     reference point (the ground, at least sea level; module docstring): linear in the sun's cos(zenith) between
-    ``SKYLIGHT_MU_NODES`` (under the lowest node its value times mu0 / the node's; 0 with the sun below the
-    horizon, as the envmap's)."""
+    ``optics.air.sun_nodes.MU_NODES`` (``between_nodes``: under the lowest node its value times mu0 / the
+    node's; 0 with the sun below the horizon, as the envmap's)."""
+    from ..optics.air.sun_nodes import between_nodes
     if spec.atmosphere is None:
         raise ValueError("--sky air is the clear atmosphere's own sky: it needs an atmosphere (--atmosphere clear)")
-    mu0, nodes = float(spec.sun.mu0), SKYLIGHT_MU_NODES
+    mu0 = float(spec.sun.mu0)
     if mu0 <= 0.0:
         return np.zeros(3)
-    ground, albedo = _ground(spec)
-    at = lambda k: _skylight_node(spec.atmosphere, float(nodes[k]), round(ground, 3), round(albedo, 6))  # noqa: E731
-    if mu0 <= nodes[0]:
-        e = at(0) * mu0 / nodes[0]
-    else:
-        k = int(np.clip(np.searchsorted(nodes, mu0) - 1, 0, nodes.size - 2))
-        u = (mu0 - nodes[k]) / (nodes[k + 1] - nodes[k])
-        e = (1.0 - u) * at(k) + u * at(k + 1)
+    ground, albedo = ground_boundary(spec)
+    e = between_nodes(mu0, lambda node: _skylight_node(spec.atmosphere, node, round(ground, 3), round(albedo, 6)))
     return e * np.asarray(spec.sun.irradiance, np.float64)
 
 
@@ -169,5 +161,5 @@ def horizontal_irradiance(bitmap: np.ndarray) -> np.ndarray:
     return 2.0 * np.pi * np.trapezoid(ring, zen[up], axis=0)
 
 
-__all__ = ["EMITTER_NEE", "SKYLIGHT_MU_NODES", "sky_irradiance", "air_sky_dict", "sky_bitmap", "open_ground_sky", "exit_heights", "pixel_directions",
-           "horizontal_irradiance", "ENV_SIZE"]
+__all__ = ["EMITTER_NEE", "ground_boundary", "sky_irradiance", "air_sky_dict", "sky_bitmap", "open_ground_sky",
+           "exit_heights", "pixel_directions", "horizontal_irradiance", "ENV_SIZE"]

@@ -486,7 +486,7 @@ def scene_dict(spec: SceneSpec, vol: OpticalVolume, integrator: dict) -> dict:
         box["interior"] = {"type": "ref", "id": "weather_medium"}
         if _inside(spec.camera.origin, medium_box(vol, floor)):
             sensor["medium"] = {"type": "ref", "id": "weather_medium"}
-    if spec.sky is not None and spec.sky.kind == "air":  # the air's diffuse sky into the box, not seen directly
+    if spec.has_air_sky:  # the air's diffuse sky into the box, not seen directly
         if spec.sun.mu0 > 0.0:  # spectral variants: the envmap's RGB upsampled by Mitsuba (kernel.air_sky)
             from .air_sky import EMITTER_NEE, air_sky_dict
             d["sky"] = air_sky_dict(spec, vol.bbox)

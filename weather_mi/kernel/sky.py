@@ -18,7 +18,7 @@ def _ground_height(spec: SceneSpec):
 
 def _no_model(spec: SceneSpec) -> bool:
     """No sky model here: no sky, or the air's (module docstring)."""
-    return spec.sky is None or spec.sky.kind == "air"
+    return spec.sky is None or spec.has_air_sky
 
 
 def _sky_emitter(spec: SceneSpec, cache: dict | None):
@@ -108,7 +108,7 @@ def sky_irradiance_horizontal(spec: SceneSpec, n: int = 1 << 14, cache: dict | N
     """Irradiance (W/m^2, RGB) of the sky on a horizontal surface: pi L for a constant sky; for the
     Hosek-Wilkie sky, pi x the mean radiance over cosine-distributed directions (stratified); for the air's,
     ``air_sky.sky_irradiance`` (module docstring)."""
-    if spec.sky is not None and spec.sky.kind == "air":
+    if spec.has_air_sky:
         from .air_sky import sky_irradiance
         return sky_irradiance(spec)
     if _no_model(spec):

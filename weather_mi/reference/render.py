@@ -102,7 +102,7 @@ def render_reference(spec: SceneSpec, vol: OpticalVolume, *args, options: Refere
         spp_list = plan_passes(spec, o.spp, o.passes)
         cloud, transmittance = _cloud_pixels(spec, vol)
         # render to a target: the passes past the planned ones cover the cloud pixels only, or every pixel (None)
-        target = _target(o, cloud) if o.target_pixels == "cloud" else None
+        target = _target(o, cloud)
         pass_options = PassOptions(o, planned=len(spp_list),
                                    target_pixels=None if target is None else np.flatnonzero(target.ravel()))
         key = _render_key(spec, vol, spp_list, o, worker_variant if client is not None else None)
@@ -159,8 +159,8 @@ class _Run:
 
     @property
     def target(self) -> np.ndarray | None:
-        """The pixels the passes past the planned ones render (a render to a target: the cloud pixels, or every
-        pixel with ``target_pixels="all"``), or None."""
+        """The pixels the passes past the planned ones render (a render to a target with ``target_pixels="cloud"``:
+        the cloud pixels), or None (every pixel: no target, or ``target_pixels="all"``)."""
         return _target(self.job.options.estimator, self.cloud)
 
     def per_pass(self, i: int) -> int:
@@ -234,11 +234,11 @@ class _Run:
 
 
 def _target(o: ReferenceOptions, cloud: np.ndarray) -> np.ndarray | None:
-    """The pixels (H, W) the passes of a render to a target add render (``o.target_pixels``: the ``cloud`` pixels, or
-    every pixel), or None without a target."""
-    if o.target_rse is None:
+    """The pixels (H, W) the passes of a render to a target add render when they are fewer than all: the ``cloud``
+    pixels with ``o.target_pixels == "cloud"``; None (every pixel) without a target or with ``"all"``."""
+    if o.target_rse is None or o.target_pixels != "cloud":
         return None
-    return cloud if o.target_pixels == "cloud" else np.ones_like(cloud)
+    return cloud
 
 
 def _cloud_pixels(spec: SceneSpec, vol: OpticalVolume):

@@ -138,6 +138,13 @@ class Sky:
             raise ValueError(f"Sky turbidity must be in [1, 10], got {self.turbidity}")
 
 
+def default_sky(atmosphere: str) -> str:
+    """The sky's kind a scene takes when none is asked for (``render``'s ``--sky`` left to its default, the
+    viewer's "auto"), by the atmosphere ("clear" or "none"): the air's own sky with the clear atmosphere
+    (Hosek-Wilkie's sea-level sky would count the box's air twice), ``sunsky`` without it."""
+    return "air" if atmosphere == "clear" else "sunsky"
+
+
 @dataclass(frozen=True)
 class Ground:
     """A flat Lambertian ground.
@@ -211,7 +218,7 @@ class SceneSpec:
     def __post_init__(self):
         if self.atmosphere is not None and not isinstance(self.atmosphere, Atmosphere):
             raise ValueError(f"SceneSpec atmosphere must be an optics.air.Atmosphere or None, got {self.atmosphere!r}")
-        if self.sky is not None and self.sky.kind == "air" and self.atmosphere is None:
+        if self.has_air_sky and self.atmosphere is None:
             raise ValueError("SceneSpec sky 'air' is the clear atmosphere's own sky: it needs an atmosphere")
         object.__setattr__(self, "width", _positive_int(self.width, "Image size (width, pixels)"))
         object.__setattr__(self, "height", _positive_int(self.height, "Image size (height, pixels)"))
@@ -222,6 +229,12 @@ class SceneSpec:
         if self.rays is not None and self.rays.film_size != (self.width, self.height):
             raise ValueError(f"the ray table is for a {self.rays.film_size[0]} x {self.rays.film_size[1]} image, "
                              f"the scene is {self.width} x {self.height}")
+
+    @property
+    def has_air_sky(self) -> bool:
+        """Whether the sky is the clear atmosphere's own (``Sky("air")``: ``kernel.air_sky``), not a sky model
+        or none."""
+        return self.sky is not None and self.sky.kind == "air"
 
     def to_dict(self) -> dict:
         """A JSON-serialisable description (for image metadata and checkpoints; a ray table as its digest,

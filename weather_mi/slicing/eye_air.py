@@ -151,11 +151,13 @@ def eye_air_input(mi, spec, bbox, reuse, shadow: bool = True) -> EyeAir | None:
     import drjit as dr
     op = lambda v: dr.opaque(mi.Float, float(v))  # noqa: E731
     floor = None if spec.ground is None else float(spec.ground.height)
-    fixed = reuse("eye air", (atm, floor), lambda: _fixed_inputs(mi, atm, bbox, floor))
+    # per atmosphere and ground: the uploaded tables, and the J table's heights and unit (the sun above the air)
+    fixed, heights, sun_top = reuse("eye air", (atm, floor), lambda: (_fixed_inputs(mi, atm, bbox, floor),
+                                                                      height_grid(), sun_table(atm).rgb[-1, -1]))
     return EyeAir(**fixed, to_sun=mi.Vector3f(*(op(v) for v in spec.sun.to_sun)),
                   irradiance=mi.Color3f(*(op(v) for v in spec.sun.irradiance)),
-                  diffuse=diffuse_input(mi, spec, reuse, height_grid(), sun_table(atm).rgb[-1, -1]),
-                  shadow=bool(shadow), sky_air=spec.sky is not None and spec.sky.kind == "air",
+                  diffuse=diffuse_input(mi, spec, reuse, heights, sun_top),
+                  shadow=bool(shadow), sky_air=spec.has_air_sky,
                   width=int(spec.width), height=int(spec.height))
 
 

@@ -6,6 +6,7 @@ the reference; a change of the slicer's approximation knobs keeps it, to compare
 """
 from __future__ import annotations
 
+import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -39,6 +40,7 @@ class ReferencePanel:
         self._overlay = None         # (key, data URL) of the last B or difference picture
         self._denoised = None        # (reference Image, its denoised radiance)
         self._waiting = None         # (reference Image, its cloud RSE): metrics that wait for the refined frame
+        self._waiting_lock = threading.Lock()  # ``refined`` runs on the frame loop's thread and the event loop's
         self._generation = 0         # counts the cancels: metrics of a cancelled reference are not shown
         self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="weather-mi metrics")
         w = pn.widgets
@@ -115,10 +117,12 @@ class ReferencePanel:
         the newest reference estimate that waits for one are computed against it (metrics thread). Never a
         render of their own: a full-quality frame holds the slicer's render lock for 1-3 s, and each reference
         pass during a drag of a slicer knob (which keeps the reference) stalled the drag that long."""
-        waiting = self._waiting
-        if waiting is None or frame is None or frame.draft or frame.state != self.session.state:
+        if frame is None or frame.draft or frame.state != self.session.state:
             return
-        self._waiting = None
+        with self._waiting_lock:  # taken by one thread only
+            waiting, self._waiting = self._waiting, None
+        if waiting is None:
+            return
         self._executor.submit(self._update_metrics, waiting[0], frame, waiting[1], self._generation)
 
     def _update_metrics(self, ref_img, f, rse=None, generation=None):

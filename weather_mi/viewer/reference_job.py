@@ -129,7 +129,7 @@ def with_air(recipe: VolumeRecipe, scale, spec: SceneSpec):
     from ..optics.air.inside import scene_air
     # a coarser sun table and 33 points a ray (the slicer's, slicing/eye_air.py): S within ~1% at an eighth of
     # the time, so that the first estimate comes soon
-    sky_air = spec.sky is not None and spec.sky.kind == "air"  # the air's own sky (its envmap: kernel.air_sky)
+    sky_air = spec.has_air_sky  # the air's own sky (its envmap: kernel.air_sky)
     air = eye_air(spec, vol, sky_air, wide_sun_table(spec.atmosphere, spec.sun.mu0, n_mu=EYE_AIR_MU), EYE_AIR_SAMPLES)
     return scene_air(vol, spec.atmosphere), lambda img: with_eye_air(img, spec, vol, sky_air, air=air)
 
@@ -290,15 +290,14 @@ class ReferenceJob:
 
     def cancel(self, wait: bool = True) -> None:
         """Terminate the child (SIGTERM, SIGKILL after JOIN_TIMEOUT_S) and reap it; no update follows.
-        Idempotent. ``wait=False``: the SIGTERM now, the reaping on a thread of its own (the viewer's event loop
+        Idempotent. ``wait=False``: the SIGTERM and the reaping on a thread of its own (the viewer's event loop
         does not wait for a child at the lowest priority to end on a loaded machine: 0.3 s measured)."""
         self._cancelled = True
         self._finished = True
         if self._proc is not None:
             if wait:
                 self._stop_process()
-            elif self._proc.is_alive():
-                self._proc.terminate()
+            else:  # a dead child is reaped there too (join(0))
                 threading.Thread(target=self._stop_process, name="reference-reaper", daemon=True).start()
         self._close_conn()
 

@@ -16,7 +16,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 
 from ..optics.air.atmosphere import Atmosphere
-from ..scene.spec import Camera, Ground, SceneSpec, Sky, Sun
+from ..scene.spec import Camera, Ground, SceneSpec, Sky, Sun, default_sky
 from ..io.sources import kind
 from ..slicing.modes import MODES, SliceMode, SliceParams
 
@@ -150,12 +150,9 @@ class ViewState:
         return Atmosphere(aod_550=self.aod, ozone_atm_cm=self.ozone, water_vapour_cm=self.water_vapour)
 
     def sky_kind(self) -> str:
-        """The sky's kind: ``sky``, its "auto" resolved as ``render``'s default (``cli.air_option.resolve``): the
-        air's own sky with the clear atmosphere (Hosek-Wilkie's sea-level sky would count the box's air twice),
-        sunsky without it."""
-        if self.sky != "auto":
-            return self.sky
-        return "air" if self.atmosphere == "clear" else "sunsky"
+        """The sky's kind: ``sky``, its "auto" resolved as ``render``'s default (``scene.spec.default_sky``, as
+        ``cli.air_option.resolve``)."""
+        return default_sky(self.atmosphere) if self.sky == "auto" else self.sky
 
     def spec(self, frame, ground_m: float, width: int | None = None, height: int | None = None) -> SceneSpec:
         """The SceneSpec of this view (``width``/``height``: another resolution of the same view)."""
