@@ -40,7 +40,7 @@ import mitsuba as mi
 
 from . import linear_segment, spectral_air_weights
 from .mixture_tables import alias_table, segment_masses
-from .spectral_phase import _decoded, decode16, encode16, pack_half_nodes
+from .spectral_phase import _decoded, decode16, encode16, pack_half_nodes, picked_node
 from ..jitarrays import aligned_uint
 
 SHARES = ("throughput", "uniform")  # c_l: in proportion to the lanes' throughput (the renders'), or 1/4 each
@@ -125,15 +125,7 @@ def pick_nodes(phase, wavelengths, u):
     ``spectral_phase.picked_value``). Independent of the direction: the lane's table at that node is an unbiased
     estimate of its bilinear one, and the vertex's draw and its next-event estimate use the same (module
     docstring)."""
-    lo, inv_step, k = phase.spectral_grid
-    out = []
-    for lane in range(4):
-        x = dr.clip((wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
-        j = mi.UInt32(x)
-        ul = u + 0.25 * lane
-        ul = dr.select(ul >= 1.0, ul - 1.0, ul)
-        out.append(dr.select(ul < x - mi.Float(j), j + 1, j))
-    return out
+    return [picked_node(phase.spectral_grid, wavelengths[lane], u, lane) for lane in range(4)]
 
 
 def _values(phase, lane_w, idx, t, wavelengths, nodes=None):

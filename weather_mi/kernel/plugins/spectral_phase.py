@@ -201,6 +201,18 @@ def hash_uniform(p, wo):
     return mi.Float(h >> 8) * (1.0 / (1 << 24))
 
 
+def picked_node(grid, wavelength, u, lane: int):
+    """Lane ``lane``'s wavelength node (mi.UInt32) on ``grid`` (lo, 1 / step, k): of the two that bracket
+    ``wavelength``, the upper with probability equal to its linear weight, from the lane's uniform frac(``u`` +
+    lane / 4) (the 4 lanes stratified)."""
+    lo, inv_step, k = grid
+    x = dr.clip((wavelength - lo) * inv_step, 0.0, k - 1.0001)
+    j = mi.UInt32(x)
+    ul = u + 0.25 * lane
+    ul = dr.select(ul >= 1.0, ul - 1.0, ul)
+    return dr.select(ul < x - mi.Float(j), j + 1, j)  # P(j + 1) = the lane's weight of node j + 1
+
+
 def picked_value(codes, grid, n_species: int, w, idx, t, wavelengths, u, gather4, lane_w=None, flat=(),
                  flat_table=None):
     """mi.Spectrum: as :func:`spectral_value`, but each lane reads ONE of its two bracketing wavelength nodes,
@@ -209,7 +221,7 @@ def picked_value(codes, grid, n_species: int, w, idx, t, wavelengths, u, gather4
     from :func:`pack_half_nodes` (``codes``, a flat UInt32; the species other than ``flat``): two
     16-byte packets a lane from a table a fifth the size of :func:`pack_spectral`'s (it stays in the caches).
     The pdf (:func:`spectral_pdf`) is unchanged: sampling stays exact."""
-    lo, inv_step, k = grid
+    k = grid[2]
     n = dr.width(codes) // (4 * k)  # versine nodes
     shared = {}
     for f, s in enumerate(flat):  # the species the same at every wavelength: read once (flat_table)
@@ -218,11 +230,7 @@ def picked_value(codes, grid, n_species: int, w, idx, t, wavelengths, u, gather4
     rest = [s for s in range(n_species) if s not in shared]
     out = []
     for lane in range(4):
-        x = dr.clip((wavelengths[lane] - lo) * inv_step, 0.0, k - 1.0001)
-        j = mi.UInt32(x)
-        ul = u + 0.25 * lane
-        ul = dr.select(ul >= 1.0, ul - 1.0, ul)
-        j = dr.select(ul < x - mi.Float(j), j + 1, j)  # P(j + 1) = the lane's weight of node j + 1
+        j = picked_node(grid, wavelengths[lane], u, lane)
         near, far = (dr.gather(mi.Vector4u, codes, j * n + idx + d) for d in (0, 1))
         ws = w if lane_w is None else lane_w[lane]
         acc = mi.Float(0.0)
