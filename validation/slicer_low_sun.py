@@ -3,7 +3,7 @@
 
 Views: ``validation/calibrate_slicer.py``'s held-out storms (the real WRF supercell, the WRF Tibetan Plateau
 file, BOMEX, RICO; from --data) front-, side- (and back-) lit at the calibration size (64 x 48), the sun moved
-down to --elevations (default 4 and 8 deg). Each view twice:
+down to --elevations (default 4 and 8 deg; "today": each view's own sun, front/side 35, back 20). Each view twice:
 
 * ``--atmosphere clear`` (RGB mode): the path tracer with the air inside the box in its medium (molecules from
   the storm's rho_air, ``optics.air.inside.with_box_air``) and along the eye rays outside it
@@ -54,7 +54,7 @@ from weather_mi.optics.air import Atmosphere  # noqa: E402
 from weather_mi.optics.air.inside import with_box_air  # noqa: E402
 from weather_mi.optics.volume import optical_volume  # noqa: E402
 from weather_mi.slicing import MODES, SliceParams, SliceRenderer  # noqa: E402
-from weather_mi.study.runs import DATA_SCENES, StudyConfig, eye_transmittance, low_sun_view  # noqa: E402
+from weather_mi.study.runs import DATA_SCENES, StudyConfig, eye_transmittance, low_sun_view, view  # noqa: E402
 from validation.calibrate_slicer import cache_name, read_fitted  # noqa: E402
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -131,9 +131,15 @@ def print_spectral(rows: list, width: int, height: int, plan: str) -> None:
              "refs": "the RGB reference against the spectral"}
     for label, text in texts.items():
         if rows:
-            print(f"\n{text}: median CIEDE2000 {np.median([r[label][0] for r in rows]):.2f}, "
-                  f"mean {np.mean([r[label][0] for r in rows]):.2f}, "
-                  f"median FLIP {np.median([r[label][1] for r in rows]):.3f}")
+            de, flip = [r[label][0] for r in rows], [r[label][1] for r in rows]
+            print(f"\n{text}: median CIEDE2000 {np.median(de):.2f}, mean {np.mean(de):.2f}, worst {max(de):.2f}, "
+                  f"median FLIP {np.median(flip):.3f}, worst {max(flip):.3f}")
+
+
+def elevations_of(text: str, vol, lighting: str, cfg: StudyConfig) -> list:
+    """The sun elevations (deg) of --elevations: comma-separated numbers, "today" the view's own (``study.runs.view``:
+    front and side 35, back 20) as ``slicer_air_tables.py``'s table "today, air"."""
+    return [view(vol, lighting, cfg).sun.elevation if e == "today" else float(e) for e in text.split(",")]
 
 
 def parse_args(argv=None):
@@ -141,7 +147,8 @@ def parse_args(argv=None):
     ap.add_argument("--data", default=str(DEFAULT_DATA))
     ap.add_argument("--size", default="64x48")
     ap.add_argument("--spp", type=int, default=64)
-    ap.add_argument("--elevations", default="4,8")
+    ap.add_argument("--elevations", default="4,8",
+                    help="sun elevations (deg), comma-separated; \"today\": each view's own (front/side 35, back 20)")
     ap.add_argument("--scenes", default="wrf-supercell,wrf-plateau,bomex,rico")
     ap.add_argument("--lightings", default="front,side")
     ap.add_argument("--target-rse", type=float, default=None,
@@ -185,7 +192,7 @@ def main(argv=None) -> int:
         slicer = SliceRenderer(vol, MODES["per-species/multiple"], slices=128)
         before = SliceRenderer(vol, MODES["per-species/multiple"], slices=128, eye_air=False)
         for lighting in args.lightings.split(","):
-            for elevation in (float(e) for e in args.elevations.split(",")):
+            for elevation in elevations_of(args.elevations, vol, lighting, cfg):
                 row = {"scene": name, "lighting": lighting, "elevation": elevation}
                 if args.spectral:
                     spec = low_sun_view(vol, lighting, cfg, elevation, Atmosphere())
