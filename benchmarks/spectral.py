@@ -184,6 +184,9 @@ def main(argv=None):
     ap.add_argument("--mix", action="append", default=[],
                     help="also the spectral mode with the wavelengths drawn from this mixture of Mitsuba's density, "
                          "xbar, ybar, zbar (4 weights, e.g. 0.8,0.1,0.05,0.05; repeatable; ``wavelengths.MIX``)")
+    ap.add_argument("--rebuilt-tables", action="store_true",
+                    help="also the spectral mode with its phase tables by wavelength and their alias tables built "
+                         "anew for each render (as before spectralcost38b: not kept across renders)")
     ap.add_argument("--lanes", type=int, default=1 << 20)
     ap.add_argument("--firefly-k", type=float, default=10.0,
                     help="a firefly: a cloud pixel with one pass > k x the median of its passes in a channel")
@@ -221,6 +224,8 @@ def main(argv=None):
         modes["spectral, as main"] = "llvm_ad_spectral"
     if args.uniform_lanes and not args.lane_directions:
         modes["spectral, uniform lanes"] = "llvm_ad_spectral"
+    if args.rebuilt_tables:
+        modes["spectral, tables rebuilt"] = "llvm_ad_spectral"
     for m in args.mix:
         modes[f"spectral, mix {m}"] = "llvm_ad_spectral"
     if args.without_box_air:
@@ -282,12 +287,25 @@ def patched(mode: str):
                                 (("mean density", "before chroma38"), mean_density),
                                 (("mitsuba wavelengths", "before chroma38"), mitsuba_wavelengths),
                                 (("lane channels", "as main"), lane_channels), (("uniform lanes",), uniform_lanes),
-                                (("bilinear lanes",), bilinear_lanes),
+                                (("bilinear lanes",), bilinear_lanes), (("tables rebuilt",), tables_rebuilt),
                                 (("independent wavelengths", "as main"), independent_wavelengths)):
             stack.enter_context(patch(mode.endswith(suffixes)))
         if " mix " in mode:
             stack.enter_context(wavelength_mix(tuple(float(x) for x in mode.split(" mix ")[1].split(","))))
         yield
+
+
+@contextlib.contextmanager
+def tables_rebuilt(on: bool):
+    """With ``on``: the spectral phase tables (``kernel.medium.spectral_phase_values``) and the lanes' alias tables
+    (``lane_directions._host_tables``) not found among those kept from earlier renders: built anew for this render,
+    as every render did before spectralcost38b (the renders after it find them again)."""
+    if on:
+        from weather_mi.kernel import medium
+        from weather_mi.kernel.plugins import lane_directions
+        medium._SPECTRAL_VALUES.clear()
+        lane_directions._HOST.clear()
+    yield
 
 
 @contextlib.contextmanager
