@@ -41,7 +41,7 @@ def cached(refs: Path, tag: str, size: str, air: bool) -> Image:
     """The cached reference of ``tag`` (``calibrate_slicer.cache_name`` of any ``rse`` plan, seed 0): of several,
     the lowest RSE; SystemExit naming the pattern when there is none."""
     suffix = f"_{AIR_REFERENCES}_reference.exr" if air else "_reference.exr"
-    pattern = re.compile(re.escape(f"{tag}_{size}_rse") + r"([0-9.]+)" + re.escape(suffix) + "$")
+    pattern = re.compile(re.escape(f"{tag}_{size}_rse") + r"([0-9.e+-]+)" + re.escape(suffix) + "$")
     found = sorted((float(m.group(1)), p) for p in refs.iterdir() if (m := pattern.match(p.name)))
     if not found:
         raise SystemExit(f"slicer_air_tables: no reference {tag}_{size}_rse*{suffix} in {refs} "
@@ -59,13 +59,14 @@ def rows_of(args, columns: dict) -> list:
             raise SystemExit(f"slicer_air_tables: {Path(args.data) / DATA_SCENES[name][0]} absent (--data)")
         hyd, vol = storm(name, Path(args.data), cfg)
         slicer = SliceRenderer(vol, MODES["per-species/multiple"], slices=128)
+        # the cloud mask: the camera (study.runs.view) is the same for every lighting, sun and air
+        mask = metrics.cloud_mask(eye_transmittance(vol, view(vol, "front", cfg), 128))
         for lighting in args.lightings.split(","):
             for table, elevation, air in TABLES:
                 el = view(vol, lighting, cfg).sun.elevation if elevation is None else elevation
                 spec = low_sun_view(vol, lighting, cfg, el, Atmosphere() if air else None)
                 tag = f"{name}_{lighting}_{el:g}deg_{'clear' if air else 'none'}"
                 ref = cached(Path(args.refs), tag, args.size, air)
-                mask = metrics.cloud_mask(eye_transmittance(vol, spec, 128))
                 row = {"table": table, "view": f"{name} {lighting} {el:g}",
                        "rse": (ref.metadata.get("noise") or {}).get("rse_mean", float("nan"))}
                 for label, params in columns.items():
