@@ -8,6 +8,7 @@ from ..optics.forward_peak import is_grey
 from ..optics.periodic import pad_levels, padded_bbox
 from ..optics.scattering_coefficients import scattering_coefficients
 from ..optics.volume import OpticalVolume
+from .kept import Kept, digest
 from .jitarrays import aligned_empty
 from .variant import ensure_registered
 
@@ -242,34 +243,26 @@ def spectral_phase_values(vol: OpticalVolume, nodes, species=None) -> np.ndarray
     if air is not None:  # the air's two components after the species (``kernel.spectral_air``)
         from .spectral_air import air_stacks
         stacks = list(stacks) + air_stacks(air, SPECTRAL_NM)
-    key = _tables_digest(stacks, (cone, cut), nodes)
-    values = _SPECTRAL_VALUES.get(key)
-    if values is None:
-        stacks = [[truncated_table(t, cone, f) for t in stack] if f > 0 else stack
-                  for stack, f in zip(stacks, cut + [0.0] * (len(stacks) - len(cut)))]
-        values = _SPECTRAL_VALUES[key] = prepare_spectral(nodes, stacks)
-        while len(_SPECTRAL_VALUES) > SPECTRAL_VALUES_KEPT:
-            _SPECTRAL_VALUES.pop(next(iter(_SPECTRAL_VALUES)))
-    return values.copy()
+
+    def make():  # the delta-M truncation and the node resampling, once per digest
+        cut_stacks = [[truncated_table(t, cone, f) for t in stack] if f > 0 else stack
+                      for stack, f in zip(stacks, cut + [0.0] * (len(stacks) - len(cut)))]
+        return prepare_spectral(nodes, cut_stacks)
+    return _SPECTRAL_VALUES.get(_tables_digest(stacks, (cone, cut), nodes), make).copy()
 
 
-_SPECTRAL_VALUES: dict = {}  # :func:`spectral_phase_values`' results by :func:`_tables_digest`, oldest first
-SPECTRAL_VALUES_KEPT = 4     # ... at most this many (S N K float32: ~1 MB for 7 species, 1828 nodes, 21 nm)
+# :func:`spectral_phase_values`' results by :func:`_tables_digest` (S N K float32: ~1 MB for 7 species, 1828 nodes,
+# 21 nm): a volume's tables are made anew per render; their delta-M truncation and the node resampling, ~0.2 s for
+# the demo's 5 species at 21 wavelengths, then run once
+_SPECTRAL_VALUES = Kept(4)
 
 
 def _tables_digest(stacks, extra, nodes) -> str:
-    """SHA-1 of the tables' angles and values, ``extra`` (repr) and ``nodes``: what :func:`spectral_phase_values`
-    computes from (a volume's tables are made anew per render; their delta-M truncation and the node resampling,
-    ~0.2 s for the demo's 5 species at 21 wavelengths, then run once)."""
-    import hashlib
-    h = hashlib.sha1(repr(extra).encode())
-    for stack in stacks:
-        for t in stack:
-            for a in (t.theta, t.values, t.wavelengths_m):
-                h.update(np.ascontiguousarray(np.asarray(a, np.float64)).tobytes())
-        h.update(b"|")
-    h.update(np.ascontiguousarray(np.asarray(nodes, np.float64)).tobytes())
-    return h.hexdigest()
+    """The digest of what :func:`spectral_phase_values` computes from: the tables' angles, values and wavelengths,
+    ``extra`` (the truncation) and ``nodes``."""
+    arrays = [np.ascontiguousarray(np.asarray(a, np.float64)) for stack in stacks for t in stack
+              for a in (t.theta, t.values, t.wavelengths_m)]
+    return digest(extra, [len(stack) for stack in stacks], *arrays, np.ascontiguousarray(np.asarray(nodes, np.float64)))
 
 
 def medium_dict(vol: OpticalVolume, air_in_grid: bool = True) -> dict:

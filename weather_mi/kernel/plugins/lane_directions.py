@@ -33,7 +33,6 @@ and pdf come from the codes (2 packet loads a lane, its node at two versine node
 density the draw has to float rounding; the codes' tables integrate to 1 within 2^-11 (tests/test_lane_directions)."""
 from __future__ import annotations
 
-import hashlib
 
 import numpy as np
 
@@ -44,9 +43,9 @@ from . import linear_segment, spectral_air_weights
 from .mixture_tables import alias_table, segment_masses
 from .spectral_phase import _decoded, decode16, encode16, pack_half_nodes, picked_node
 from ..jitarrays import aligned_uint
+from ..kept import Kept, digest
 
-_HOST: dict = {}  # :func:`_host_tables`' tables by their inputs' digest, oldest first
-HOST_KEPT = 4     # ... at most this many (about 2 MB each for 7 species, 21 wavelengths, 1828 nodes)
+_HOST = Kept(4)  # :func:`_host_tables`' tables by their inputs' digest (about 2 MB each for 7 species, 21 nm, 1828 nodes)
 SHARES = ("throughput", "uniform")  # c_l: in proportion to the lanes' throughput (the renders'), or 1/4 each
 
 
@@ -78,18 +77,13 @@ def alias_tables(nodes: np.ndarray, values: np.ndarray) -> np.ndarray:
 
 def _host_tables(values: np.ndarray, flat: tuple, nodes: np.ndarray):
     """(node values (K S N,), alias tables (K S (N - 1) x 2,)) as numpy float32, kept by the bytes of their inputs
-    (:data:`_HOST`, the last :data:`HOST_KEPT`): a phase object is built per render, and the alias tables' Python
+    (:data:`_HOST`, the last 4): a phase object is built per render, and the alias tables' Python
     loops (147 tables of 1827 segments, ~0.3 s) would otherwise run again for the same tables every render."""
-    key = hashlib.sha1(b"".join((values.tobytes(), repr((values.shape, flat, nodes.shape)).encode(),
-                                 nodes.tobytes()))).hexdigest()
-    tables = _HOST.get(key)
-    if tables is None:
+    def make():
         exact = node_values(values, flat)
-        tables = _HOST[key] = (np.ascontiguousarray(np.transpose(exact, (2, 0, 1))).ravel(),
-                               alias_tables(nodes, exact).ravel())
-        while len(_HOST) > HOST_KEPT:
-            _HOST.pop(next(iter(_HOST)))
-    return tables
+        return (np.ascontiguousarray(np.transpose(exact, (2, 0, 1))).ravel(), alias_tables(nodes, exact).ravel())
+    return _HOST.get(digest(np.ascontiguousarray(values), (values.shape, flat, nodes.shape),
+                            np.ascontiguousarray(nodes)), make)
 
 
 def prepare(phase):
